@@ -1,0 +1,56 @@
+//! The motion contract: what producers (G-code interpreter, keypad modes) hand to the
+//! planner. Everything is in integer step space so that interpolation is exact; the
+//! planner converts rates and accelerations with the settings' steps/mm.
+//!
+//! Kept tiny and stable on purpose: several modules depend on these types.
+
+/// Number of axes: X, Y and Z (the pen).
+pub const AXES: usize = 3;
+/// Axis indices into [`StepPos`].
+pub const X: usize = 0;
+pub const Y: usize = 1;
+pub const Z: usize = 2;
+
+/// An absolute machine position in steps.
+pub type StepPos = [i32; AXES];
+
+/// The shape of one move, from the current position to [`Move::target`], in step space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Path {
+    /// A straight line (X, Y and Z together).
+    Line,
+    /// A circular arc in the XY plane. `center` is relative to the start point, in steps.
+    /// `turns` counts extra full turns (a full circle is `target == start`, `turns = 0`
+    /// is interpreted by the planner as one whole revolution, as G2/G3 do).
+    Arc { center: [i32; 2], ccw: bool, turns: u16 },
+    /// An axis-aligned elliptical arc in the XY plane: semi-axes `a` (X) and `b` (Y) in
+    /// steps, `center` relative to the start point (which must lie on the ellipse).
+    Ellipse { center: [i32; 2], a: i32, b: i32, ccw: bool },
+    /// y = amp * sin(omega * u + phase) - amp * sin(phase), with u = x - x_start in
+    /// steps; the curve starts at the current position and runs to `target` X.
+    /// Units: `amp` in steps, `omega` in radians per step, `phase` in radians.
+    Sine { amp: f32, omega: f32, phase: f32 },
+}
+
+/// How fast a move runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Feed {
+    /// As fast as the axis limits allow (G0).
+    Rapid,
+    /// Path speed in mm/min (G1/G2/G3 with G94).
+    MmPerMin(f32),
+}
+
+/// One planner input.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Move {
+    /// Absolute end position in steps.
+    pub target: StepPos,
+    pub path: Path,
+    pub feed: Feed,
+    /// Source line number (G-code N word or stream line), for reports. 0 if none.
+    pub line: u32,
+}
