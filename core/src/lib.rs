@@ -17,3 +17,4 @@ pub mod machine;
 pub mod motion;
 pub mod protocol;
 pub mod settings;
+pub mod settings_store;
