@@ -169,6 +169,17 @@ pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
     out
 }
 
+/// Largest step coordinate accepted (2^30): leaves headroom for the planner's
+/// differences and sums in `i32`.
+pub const MAX_STEPS: f32 = 1_073_741_824.0;
+
+/// True if `p` (machine mm) converts to steps without leaving the safe range.
+pub fn in_step_range(p: &[f32; AXES], s: &Settings) -> bool {
+    p.iter()
+        .enumerate()
+        .all(|(axis, &v)| libm::fabsf(v * s.steps_per_mm(axis)) < MAX_STEPS)
+}
+
 /// Allowed machine range of `axis` with soft limits, or `None` if unchecked.
 /// Axes homed toward - live in [0, travel], axes homed toward + in [-travel, 0]
 /// (Grbl's convention); axes without a switch ($214) are not checked.
@@ -667,6 +678,9 @@ impl Interp {
         if b.any_value() {
             return Err(Status::UnusedWords.into());
         }
+        if !planned.iter().all(|p| in_step_range(p, s)) {
+            return Err(Status::InvalidTarget.into());
+        }
         if s.soft_limits() && !planned.iter().all(|p| within_travel(p, s)) {
             return Err(Reject::SoftLimit);
         }
@@ -760,6 +774,9 @@ impl Interp {
         }
         if !any {
             return Err(Status::NoAxisWords);
+        }
+        if !in_step_range(&target, s) {
+            return Err(Status::InvalidTarget);
         }
         if s.soft_limits() && !within_travel(&target, s) {
             return Err(Status::TravelExceeded);

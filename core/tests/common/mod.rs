@@ -45,8 +45,9 @@ impl FakePlanner {
         let done = match head {
             Command::Move(mv) => {
                 for (p, t) in self.pos.iter_mut().zip(mv.target.iter()) {
-                    let d = (t - *p).clamp(-self.rate, self.rate);
-                    *p += d;
+                    let d = (i64::from(*t) - i64::from(*p))
+                        .clamp(-i64::from(self.rate), i64::from(self.rate));
+                    *p = (i64::from(*p) + d) as i32;
                 }
                 self.pos == mv.target
             }
