@@ -209,10 +209,8 @@ impl Protocol {
     pub fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
         let mut used = 0;
         for &b in bytes {
-            if !self.realtime(b, m, now_ms) {
-                if self.rx.push_back(b).is_err() {
-                    break;
-                }
+            if !self.realtime(b, m, now_ms) && self.rx.push_back(b).is_err() {
+                break;
             }
             used += 1;
         }

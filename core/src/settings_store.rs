@@ -75,9 +75,11 @@ impl<E> From<sequential_storage::Error<E>> for StoreError<E> {
     }
 }
 
+type Map<F> = MapStorage<u8, F, Cache<Uncached, Uncached, Uncached, u8>>;
+
 /// The store over a flash region.
 pub struct SettingsStore<F: NorFlash> {
-    map: Option<MapStorage<u8, F, Cache<Uncached, Uncached, Uncached, u8>>>,
+    map: Option<Map<F>>,
     range: Range<u32>,
     buf: [u8; BUF_LEN],
 }

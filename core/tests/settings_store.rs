@@ -134,7 +134,10 @@ impl NorFlash for CutFlash {
     }
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), MockError> {
         let r = self.range(offset, bytes.len())?;
-        assert!(r.start % 2 == 0 && bytes.len() % 2 == 0, "unaligned write");
+        assert!(
+            r.start.is_multiple_of(2) && bytes.len().is_multiple_of(2),
+            "unaligned write"
+        );
         for (w, i) in bytes.chunks(2).zip(r.clone().step_by(2)) {
             let old = [self.mem[i], self.mem[i + 1]];
             assert!(
@@ -154,7 +157,7 @@ impl NorFlash for CutFlash {
             self.mem[r.start + 2 * k + 1] = bytes[2 * k + 1];
         }
         if cut {
-            if self.mode == Cut::Prefix && bytes.len() % 4 != 0 && words > 0 {
+            if self.mode == Cut::Prefix && !bytes.len().is_multiple_of(4) && words > 0 {
                 // Byte order: the odd byte of the middle word lands too.
                 self.mem[r.start + 2 * done] = bytes[2 * done];
             } else if matches!(self.mode, Cut::TornWord | Cut::RandomErase) && done < words {

@@ -464,7 +464,9 @@ impl Machine {
 
     /// 0x18: stop everything, keep position if it is known.
     pub fn soft_reset<M: MotionControl>(&mut self, m: &mut M) {
-        let lost = self.homing.is_some() || (!m.is_idle() && !(m.is_holding() && !m.is_moving()));
+        // Position is lost if steps were cut off mid-move (a hold at rest keeps it).
+        let held_at_rest = m.is_holding() && !m.is_moving();
+        let lost = self.homing.is_some() || (!m.is_idle() && !held_at_rest);
         let was_homing = self.homing.is_some();
         m.clear();
         m.set_overrides(100, 100);
