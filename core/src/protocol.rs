@@ -255,6 +255,11 @@ impl Protocol {
         self.welcome();
     }
 
+    /// Queue a `[MSG:...]` line (e.g. the settings store's load report at boot).
+    pub fn notify(&mut self, text: &str) {
+        self.say(format_args!("[MSG:{}]", text));
+    }
+
     /// Update the input levels (e-stop, limits, feed hold, cycle start).
     pub fn set_inputs<M: MotionControl>(&mut self, inputs: Inputs, m: &mut M, now_ms: u32) {
         self.machine.set_inputs(inputs, m, now_ms);
@@ -602,8 +607,10 @@ impl Protocol {
         let rx_free = self.rx_free();
         let blocks_free = m.free();
         let speed = m.speed() / scale;
-        let spindle = if self.machine.interp().modal().pen_down {
-            1
+        // The pen is the spindle: report S while it is down.
+        let interp = self.machine.interp();
+        let spindle = if interp.modal().pen_down {
+            libm::roundf(interp.spindle()) as i32
         } else {
             0
         };

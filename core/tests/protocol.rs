@@ -451,3 +451,34 @@ fn long_lines_get_error_11() {
         "[MSG:Job started]\r\nok\r\n"
     );
 }
+
+#[test]
+fn work_position_reports_pen_speed_and_notifications() {
+    let (mut p, mut m) = boot();
+    send(
+        &mut p,
+        &mut m,
+        "$10=0\nG10 L2 P1 X2 Y3\nG0 X5 Y5\nM3 S250\n",
+    );
+    m.run_all();
+    let out = send(&mut p, &mut m, "?");
+    assert!(
+        out.starts_with("<Idle|WPos:5.000,5.000,-2.000|FS:0,250|"),
+        "{out}"
+    );
+    p.notify("Stored data corrupt, defaults restored");
+    assert_eq!(
+        drain(&mut p),
+        "[MSG:Stored data corrupt, defaults restored]\r\n"
+    );
+}
+
+#[test]
+fn busy_follows_motion() {
+    let (mut p, mut m) = boot();
+    assert!(!p.machine().busy(&m));
+    send(&mut p, &mut m, "G0 X1\n");
+    assert!(p.machine().busy(&m));
+    m.run_all();
+    assert!(!p.machine().busy(&m));
+}

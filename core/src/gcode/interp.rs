@@ -256,6 +256,10 @@ impl Interp {
     pub fn position(&self) -> &[f32; AXES] {
         &self.pos
     }
+    /// Last programmed S value.
+    pub fn spindle(&self) -> f32 {
+        self.spindle
+    }
     /// Feed in mm/min as programmed (0 if undefined).
     pub fn feed(&self) -> f32 {
         self.feed
@@ -1116,6 +1120,33 @@ mod tests {
                 turns: 0
             }
         );
+    }
+
+    #[test]
+    fn arcs_with_unequal_resolution_become_ellipses_in_step_space() {
+        let mut s = Settings::default();
+        s.set(101, 40.0).unwrap();
+        let mut it = Interp::new();
+        let m = moves(&run(&mut it, &s, "G3 X10 Y0 I5 F300").unwrap())[0];
+        assert_eq!(m.target, [800, 0, 0]);
+        assert_eq!(
+            m.path,
+            Path::Ellipse {
+                center: [400, 0],
+                a: 400,
+                b: 200,
+                ccw: true
+            }
+        );
+    }
+
+    #[test]
+    fn targets_beyond_the_step_range_are_refused() {
+        let s = Settings::default();
+        let mut it = Interp::new();
+        assert_eq!(run(&mut it, &s, "G0 X99999999"), err(Status::InvalidTarget));
+        assert_eq!(it.jog(b"X99999999F10", &s), Err(Status::InvalidTarget));
+        assert_eq!(it, Interp::new());
     }
 
     #[test]

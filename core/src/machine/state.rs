@@ -220,12 +220,13 @@ impl Machine {
             RunState::Home
         } else if self.locked {
             RunState::Alarm
+        } else if self.jogging {
+            // Including the deceleration of a jog cancel, as Grbl reports it.
+            RunState::Jog
         } else if self.paused || m.is_holding() || self.hold {
             RunState::Hold {
                 complete: !m.is_moving(),
             }
-        } else if self.jogging {
-            RunState::Jog
         } else if self.check_mode {
             RunState::Check
         } else if !m.is_idle() {
