@@ -25,10 +25,10 @@ pub const RX_BUFFER_SIZE: usize = 128;
 /// Longest line after cleaning (Grbl's limit); longer lines get `error:11`.
 pub const LINE_MAX: usize = 80;
 /// Output buffer size.
-pub const OUT_CAP: usize = 512;
+pub const OUT_CAP: usize = 640;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
-const OUT_RESERVE: usize = 200;
+const OUT_RESERVE: usize = 256;
 /// Number of `$N` startup lines.
 pub const STARTUP_LINES: usize = 2;
 /// Status reports between repeated `WCO:` / `Ov:` fields.
