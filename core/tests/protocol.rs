@@ -527,3 +527,40 @@ fn huge_positions_never_overrun_the_output() {
     }
     assert_eq!(p.truncated(), 0);
 }
+
+#[test]
+fn keypad_moves_and_abort_keep_the_interpreter_in_step() {
+    let (mut p, mut m) = boot();
+    m.rate = 8;
+    let mv = Move {
+        target: [800, 800, 0],
+        path: Path::Line,
+        feed: Feed::MmPerMin(300.0),
+        line: 0,
+    };
+    p.machine_mut().queue(Command::Move(mv), &mut m, 0).unwrap();
+    assert_eq!(drain(&mut p), "");
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "[MSG:Job started]\r\n");
+    m.step();
+    p.machine_mut().stop_and_clear(&mut m);
+    p.poll(&mut m, 0);
+    assert!(m.queue.is_empty());
+    assert_eq!(m.pos, [8, 8, 0]);
+    assert_eq!(p.machine().state(&m), RunState::Idle);
+    // G-code continues from where the abort stopped.
+    send(&mut p, &mut m, "G91 G0 X1\n");
+    assert_eq!(moves(&m).last().unwrap().target, [88, 8, 0]);
+    // Refused in alarm.
+    send(&mut p, &mut m, "\x18");
+    p.set_inputs(
+        Inputs {
+            estop: true,
+            ..Inputs::default()
+        },
+        &mut m,
+        0,
+    );
+    let r = p.machine_mut().queue(Command::Move(mv), &mut m, 0);
+    assert_eq!(r, Err(inkstep_core::gcode::Status::SystemLocked));
+}

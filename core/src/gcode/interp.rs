@@ -1140,6 +1140,42 @@ mod tests {
         );
     }
 
+    proptest::proptest! {
+        /// R-form arcs: the centre is equidistant from both ends, on the side that
+        /// gives at most half a turn for positive R and at least half for negative R.
+        #[test]
+        fn r_form_centres_are_consistent(
+            x0 in -100.0f32..100.0, y0 in -100.0f32..100.0,
+            dx in -50.0f32..50.0, dy in -50.0f32..50.0,
+            extra in 0.0f32..50.0, neg in proptest::bool::ANY, ccw in proptest::bool::ANY,
+        ) {
+            let chord = libm::hypotf(dx, dy);
+            proptest::prop_assume!(chord > 0.5);
+            let r = chord / 2.0 + extra + 0.01;
+            let s = Settings::default();
+            let mut it = Interp::new();
+            run(&mut it, &s, &std::format!("G0 X{x0:.4} Y{y0:.4}")).unwrap();
+            let start = *it.position();
+            let line = std::format!("G{} X{:.4} Y{:.4} R{}{:.4} F100", if ccw { 3 } else { 2 }, x0 + dx, y0 + dy, if neg { "-" } else { "" }, r);
+            let o = run(&mut it, &s, &line).unwrap();
+            let m = moves(&o)[0];
+            let Path::Arc { center, ccw: dir, .. } = m.path else { panic!("not an arc") };
+            proptest::prop_assert_eq!(dir, ccw);
+            let spm = s.steps_per_mm(0);
+            let c = [start[0] + center[0] as f32 / spm, start[1] + center[1] as f32 / spm];
+            let end = it.position();
+            let r0 = libm::hypotf(start[0] - c[0], start[1] - c[1]);
+            let r1 = libm::hypotf(end[0] - c[0], end[1] - c[1]);
+            proptest::prop_assert!((r0 - r1).abs() < 2.0 / spm, "r0 {} r1 {}", r0, r1);
+            // Which side: cross product of chord and centre offset.
+            let cross = dx * (c[1] - start[1]) - dy * (c[0] - start[0]);
+            let short = (cross > 0.0) == ccw; // centre left of travel for a short CCW arc
+            if extra > 0.5 {
+                proptest::prop_assert_eq!(short, !neg, "cross {}", cross);
+            }
+        }
+    }
+
     #[test]
     fn targets_beyond_the_step_range_are_refused() {
         let s = Settings::default();

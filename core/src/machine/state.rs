@@ -536,6 +536,67 @@ impl Machine {
         }
     }
 
+    /// Queue a command made outside G-code (the keypad's drawing modes). Refused in
+    /// alarm, homing, jogging or check mode; a line target outside travel with soft
+    /// limits on is refused with `error:15` semantics ([`Status::TravelExceeded`]);
+    /// shapes check their own extent with [`crate::gcode::interp::within_travel`].
+    /// The interpreter continues from the command's end point.
+    pub fn queue<M: MotionControl>(
+        &mut self,
+        cmd: Command,
+        m: &mut M,
+        now_ms: u32,
+    ) -> Result<(), Status> {
+        if self.locked || self.homing.is_some() {
+            return Err(Status::SystemLocked);
+        }
+        if self.jogging || self.check_mode {
+            return Err(Status::IdleError);
+        }
+        if let Command::Move(mv) = &cmd {
+            let end = to_mm(&mv.target, &self.settings);
+            if self.settings.soft_limits()
+                && !crate::gcode::interp::within_travel(&end, &self.settings)
+            {
+                return Err(Status::TravelExceeded);
+            }
+        }
+        m.push(cmd).map_err(|_| Status::Overflow)?;
+        if let Command::Move(mv) = cmd {
+            self.interp.sync_position(&mv.target, &self.settings);
+            if !self.job.running {
+                self.job = Job {
+                    running: true,
+                    start_ms: now_ms,
+                    moves: 0,
+                    ending: false,
+                };
+                self.event(Event::JobStarted);
+            }
+            self.job.moves = self.job.moves.wrapping_add(1);
+        }
+        Ok(())
+    }
+
+    /// Stop cleanly and forget the rest (the keypad's abort): decelerate to rest, then
+    /// drop the queue; the position stays exact.
+    pub fn stop_and_clear<M: MotionControl>(&mut self, m: &mut M) {
+        self.pause_pending = false;
+        self.paused = false;
+        self.hold = false;
+        self.hold_by_pin = false;
+        self.job = Job::default();
+        if m.is_idle() && !m.is_holding() {
+            return;
+        }
+        if self.jogging {
+            self.jog_cancel(m);
+        } else {
+            self.stop_then_clear = true;
+            m.hold();
+        }
+    }
+
     /// 0x85: stop a jog (decelerate, then drop the rest of the jog queue).
     pub fn jog_cancel<M: MotionControl>(&mut self, m: &mut M) {
         if self.jogging && !self.jog_cancel {
