@@ -564,3 +564,72 @@ fn keypad_moves_and_abort_keep_the_interpreter_in_step() {
     let r = p.machine_mut().queue(Command::Move(mv), &mut m, 0);
     assert_eq!(r, Err(inkstep_core::gcode::Status::SystemLocked));
 }
+
+#[test]
+fn hundred_thousand_lines_in_usb_packets_lose_and_duplicate_nothing() {
+    // Send-response would be too slow to matter here; use character counting with
+    // the bytes cut into 64-byte USB packets that the protocol may only partly take.
+    let started = std::time::Instant::now();
+    let (mut p, mut m) = boot();
+    m.cap = 15;
+    let n = 100_000;
+    let lines: Vec<String> = (0..n)
+        .map(|i| i + 1) // line 0 would be X0 Y0: no motion from the origin
+        .map(|i| {
+            format!(
+                "G1 X{:.3} Y{:.3} F3000",
+                (i % 997) as f32 * 0.125,
+                (i % 89) as f32 * 0.25
+            )
+        })
+        .collect();
+    let mut in_flight = std::collections::VecDeque::new();
+    let mut wire: Vec<u8> = Vec::new(); // bytes written by the sender, not yet read
+    let mut next = 0;
+    let mut acks = 0;
+    let mut pending = String::new();
+    while acks < n {
+        while next < n {
+            let len = lines[next].len() + 1;
+            if in_flight.iter().sum::<usize>() + len > RX_BUFFER_SIZE {
+                break;
+            }
+            wire.extend_from_slice(lines[next].as_bytes());
+            wire.push(b'\n');
+            in_flight.push_back(len);
+            next += 1;
+        }
+        let packet = wire.len().min(64);
+        let taken = p.receive(&wire[..packet], &mut m, 0);
+        wire.drain(..taken);
+        p.poll(&mut m, 0);
+        pending.push_str(&drain(&mut p));
+        while let Some(end) = pending.find("\r\n") {
+            let resp: String = pending.drain(..end + 2).collect();
+            match resp.trim_end() {
+                "ok" => {
+                    in_flight.pop_front();
+                    acks += 1;
+                }
+                "[MSG:Job started]" => {}
+                other => panic!("unexpected {other:?}"),
+            }
+        }
+        m.step();
+    }
+    m.run_all();
+    let mv = moves(&m);
+    assert_eq!(mv.len(), n, "one move per line");
+    for (i, mv) in mv.iter().enumerate() {
+        let i = i + 1;
+        let x = ((i % 997) as f32 * 0.125 * 80.0).round() as i32;
+        let y = ((i % 89) as f32 * 0.25 * 80.0).round() as i32;
+        assert_eq!(mv.target, [x, y, 0], "line {i}");
+    }
+    let last = n;
+    assert_eq!(
+        m.pos,
+        [((last % 997) * 10) as i32, ((last % 89) * 20) as i32, 0]
+    );
+    println!("100000 lines streamed in {:?}", started.elapsed());
+}
