@@ -157,13 +157,20 @@ fn hold_resume_keeps_position_and_reports_hold_states() {
     m.rate = 10;
     send(&mut p, &mut m, "G1 X10 F600\n");
     m.step();
-    send(&mut p, &mut m, "!");
+    p.receive(b"!", &mut m, 0);
+    p.receive(b"?", &mut m, 0);
+    let out = drain(&mut p);
+    assert!(
+        out.starts_with("<Hold:1|MPos:0.125,"),
+        "decelerating: {out}"
+    );
+    m.step();
     let out = send(&mut p, &mut m, "?");
-    assert!(out.starts_with("<Hold:0|MPos:0.125,"), "{out}");
+    assert!(out.starts_with("<Hold:0|MPos:0.250,"), "{out}");
     for _ in 0..5 {
         m.step();
     }
-    assert_eq!(m.pos[0], 10, "no step while held");
+    assert_eq!(m.pos[0], 20, "no step once at rest");
     send(&mut p, &mut m, "~");
     m.run_all();
     assert_eq!(m.pos, [800, 0, 0]);
@@ -275,6 +282,10 @@ fn soft_limits_reject_before_any_step() {
     assert_eq!(t, [8000], "the target outside travel was never queued");
     assert_eq!(send(&mut p, &mut m, "G0 X1\n"), "error:9\r\n");
     assert!(send(&mut p, &mut m, "$J=G91 X-500 F100\n").ends_with("error:9\r\n"));
+    // The move under way decelerates to rest, then the queue is dropped.
+    m.step();
+    p.poll(&mut m, 0);
+    assert!(m.queue.is_empty());
     send(&mut p, &mut m, "$X\n");
     assert_eq!(send(&mut p, &mut m, "$J=G91 X-500 F100\n"), "error:15\r\n");
 }
@@ -343,10 +354,13 @@ fn jog_and_jog_cancel() {
     m.step();
     p.poll(&mut m, 0);
     assert!(m.queue.is_empty());
-    assert!(send(&mut p, &mut m, "?").starts_with("<Idle|MPos:0.100,"));
+    assert!(
+        send(&mut p, &mut m, "?").starts_with("<Idle|MPos:0.200,"),
+        "one step to decelerate"
+    );
     // The interpreter continues from where the jog stopped.
     send(&mut p, &mut m, "G91 G0 X1\n");
-    assert_eq!(moves(&m).last().unwrap().target, [88, 0, 0]);
+    assert_eq!(moves(&m).last().unwrap().target, [96, 0, 0]);
     assert_eq!(
         send(&mut p, &mut m, "$J=G91 X1 F10\n"),
         "error:8\r\n",
@@ -544,13 +558,23 @@ fn keypad_moves_and_abort_keep_the_interpreter_in_step() {
     assert_eq!(drain(&mut p), "[MSG:Job started]\r\n");
     m.step();
     p.machine_mut().stop_and_clear(&mut m);
+    // Cycle start cannot undo an abort, and G-code waits until the stop is done.
+    p.receive(b"~", &mut m, 0);
+    assert!(m.holding);
+    p.receive(b"G4 P0\n", &mut m, 0);
     p.poll(&mut m, 0);
-    assert!(m.queue.is_empty());
-    assert_eq!(m.pos, [8, 8, 0]);
+    assert!(drain(&mut p).is_empty(), "the line waits");
+    assert_eq!(m.queue.len(), 1);
+    m.step();
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "ok\r\n");
+    assert_eq!(m.queue.len(), 1, "only the dwell is queued");
+    m.run_all();
+    assert_eq!(m.pos, [16, 16, 0], "one step of deceleration");
     assert_eq!(p.machine().state(&m), RunState::Idle);
     // G-code continues from where the abort stopped.
     send(&mut p, &mut m, "G91 G0 X1\n");
-    assert_eq!(moves(&m).last().unwrap().target, [88, 8, 0]);
+    assert_eq!(moves(&m).last().unwrap().target, [96, 16, 0]);
     // Refused in alarm.
     send(&mut p, &mut m, "\x18");
     p.set_inputs(

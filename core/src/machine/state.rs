@@ -241,9 +241,11 @@ impl Machine {
         self.homing.is_some() || m.is_moving()
     }
 
-    /// G-code lines are taken only when this holds: after M0 they wait for cycle start.
+    /// G-code lines are taken only when this holds: after M0 they wait for cycle
+    /// start, and during a stop that will drop the queue they wait until it is done
+    /// (otherwise they would be answered `ok` and then dropped).
     pub fn can_accept(&self) -> bool {
-        !self.pause_pending && !self.paused
+        !self.pause_pending && !self.paused && !self.stop_then_clear && !self.jog_cancel
     }
 
     fn idle_or_alarm<M: MotionControl>(&self, m: &M) -> bool {
@@ -525,7 +527,8 @@ impl Machine {
 
     /// `~` or the cycle-start pin.
     pub fn cycle_start<M: MotionControl>(&mut self, m: &mut M) {
-        if self.locked || self.homing.is_some() {
+        // A stop that drops the queue cannot be resumed.
+        if self.locked || self.homing.is_some() || self.stop_then_clear || self.jog_cancel {
             return;
         }
         if self.hold || self.paused || m.is_holding() {
