@@ -657,3 +657,25 @@ fn hundred_thousand_lines_in_usb_packets_lose_and_duplicate_nothing() {
     );
     println!("100000 lines streamed in {:?}", started.elapsed());
 }
+
+#[test]
+fn an_alarm_during_a_jog_cancel_leaves_nothing_pending() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "$J=G91 X10 F500\n");
+    p.receive(b"\x85!", &mut m, 0);
+    p.set_inputs(
+        Inputs {
+            estop: true,
+            ..Inputs::default()
+        },
+        &mut m,
+        0,
+    );
+    p.set_inputs(Inputs::default(), &mut m, 0);
+    send(&mut p, &mut m, "\x18$X\n");
+    assert_eq!(p.machine().state(&m), RunState::Idle);
+    assert_eq!(
+        send(&mut p, &mut m, "G0 X1\n"),
+        "[MSG:Job started]\r\nok\r\n"
+    );
+}

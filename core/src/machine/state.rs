@@ -450,6 +450,9 @@ impl Machine {
         }
         self.homing = None;
         self.jogging = false;
+        self.jog_cancel = false;
+        self.hold = false;
+        self.hold_by_pin = false;
         self.job = Job::default();
         self.pause_pending = false;
         self.paused = false;
