@@ -112,7 +112,7 @@ fn axis_triplet<W: Write>(w: &mut W, v: &[f32; AXES], scale: f32) -> fmt::Result
         if i > 0 {
             w.write_char(',')?;
         }
-        write!(w, "{:.3}", x / scale)?;
+        crate::settings::write_fixed3(w, x / scale)?;
     }
     Ok(())
 }

@@ -577,7 +577,7 @@ impl Settings {
         let desc = TABLE.get(index)?;
         let v = *self.vals.get(index)?;
         Some(match desc.kind {
-            Kind::Float => write!(w, "${}={:.3}", desc.number, v),
+            Kind::Float => write!(w, "${}=", desc.number).and_then(|()| write_fixed3(w, v)),
             _ => write!(w, "${}={}", desc.number, v as i32),
         })
     }
@@ -633,6 +633,16 @@ impl Settings {
     }
 }
 
+/// Write `v` with three decimals (Grbl's report format) through integer formatting:
+/// core's float formatting would cost about 14 KB of flash on the Cortex-M3.
+/// Values round half away from zero; beyond +-9.2e15 they saturate.
+pub fn write_fixed3<W: fmt::Write>(w: &mut W, v: f32) -> fmt::Result {
+    let milli = libm::round(f64::from(v) * 1000.0) as i64;
+    let sign = if milli < 0 { "-" } else { "" };
+    let a = milli.unsigned_abs();
+    write!(w, "{}{}.{:03}", sign, a / 1000, a % 1000)
+}
+
 /// CRC-32 (IEEE, reflected, polynomial 0xEDB88320), bitwise: the image is small and
 /// written rarely, so a table is not worth its 1 KB of flash.
 pub fn crc32(data: &[u8]) -> u32 {
@@ -671,6 +681,23 @@ mod tests {
             for a in 0..3 {
                 assert!(index_of(base + a).is_some());
             }
+        }
+    }
+
+    #[test]
+    fn fixed_point_output_matches_three_decimal_rounding() {
+        for v in [
+            0.0f32, 1.0, -1.0, 0.0005, -0.0004, 123.456, -99.9996, 0.010, 1e9, -2.5e-4,
+        ] {
+            let mut a: heapless::String<40> = heapless::String::new();
+            write_fixed3(&mut a, v).unwrap();
+            let want = std::format!("{:.3}", f64::from(v));
+            let want = if want == "-0.000" {
+                "0.000".into()
+            } else {
+                want
+            };
+            assert_eq!(a.as_str(), want, "{v}");
         }
     }
 

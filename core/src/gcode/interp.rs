@@ -14,7 +14,7 @@ use super::Status;
 use crate::machine::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::{PenMode, Settings};
-use core::f32::consts::{FRAC_PI_2, PI, TAU};
+use core::f32::consts::{FRAC_PI_2, TAU};
 use core::fmt;
 use heapless::Vec;
 
@@ -935,7 +935,9 @@ fn arc_extremes(
 ) -> Vec<[f32; AXES], 5> {
     let mut pts: Vec<[f32; AXES], 5> = Vec::new();
     let _ = pts.push(*target);
-    for k in 0..4 {
+    // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
+    let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
+    for (k, (cs, sn)) in axes_dirs.into_iter().enumerate() {
         let angle = k as f32 * FRAC_PI_2;
         let from_start = if ccw {
             positive_sweep(angle - g.start_angle)
@@ -949,11 +951,9 @@ fn arc_extremes(
                 0.0
             };
             let z = start[2] + (target[2] - start[2]) * frac;
-            let (sn, cs) = (libm::sinf(angle), libm::cosf(angle));
             let _ = pts.push([g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z]);
         }
     }
-    let _ = PI;
     pts
 }
 
