@@ -451,11 +451,11 @@ impl Protocol {
             b"X" => need_rest(self.machine.unlock()),
             b"H" => need_rest(self.machine.start_homing(m)),
             b"RST=$" => {
-                need_rest(Ok(())).map(|()| self.machine.replace_settings(Settings::default()))
+                need_rest(Ok(())).map(|()| self.machine.replace_settings(Settings::default(), m))
             }
             b"RST=#" => need_rest(Ok(())).map(|()| self.machine.clear_coords()),
             b"RST=*" => need_rest(Ok(())).map(|()| {
-                self.machine.replace_settings(Settings::default());
+                self.machine.replace_settings(Settings::default(), m);
                 self.machine.clear_coords();
             }),
             _ => {

@@ -679,3 +679,18 @@ fn an_alarm_during_a_jog_cancel_leaves_nothing_pending() {
         "[MSG:Job started]\r\nok\r\n"
     );
 }
+
+#[test]
+fn changing_steps_per_mm_keeps_the_real_position() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "G0 X10\n");
+    m.run_all();
+    send(&mut p, &mut m, "$100=100\n");
+    assert!(send(&mut p, &mut m, "?").starts_with("<Idle|MPos:8.000,"));
+    send(&mut p, &mut m, "G91 G0 X1\n");
+    assert_eq!(
+        moves(&m).last().unwrap().target,
+        [900, 0, 0],
+        "1 mm from where it is"
+    );
+}

@@ -262,6 +262,8 @@ impl Machine {
         }
         self.settings.set(n, v)?;
         self.settings_dirty = true;
+        // Steps per mm may have changed: the planner's step position is the truth.
+        self.resync(m);
         Ok(())
     }
 
@@ -273,9 +275,10 @@ impl Machine {
     }
 
     /// Replace all settings (`$RST=$` or a loaded image).
-    pub fn replace_settings(&mut self, s: Settings) {
+    pub fn replace_settings<M: MotionControl>(&mut self, s: Settings, m: &M) {
         self.settings = s;
         self.settings_dirty = true;
+        self.resync(m);
     }
 
     /// Execute one cleaned G-code line. `None` means "not now": the block needs more
