@@ -284,16 +284,14 @@ impl Interp {
         self.pos = to_mm(steps, s);
     }
 
-    /// Soft reset: modal state back to defaults, keeping position and coordinates.
-    /// (Grbl also keeps the G92 offset across reset.)
+    /// Soft reset: modal state back to defaults (G0 G54 G17 G21 G90 G94 M5, F0) and
+    /// the G92 offset cleared, as Grbl re-initialises its parser; the position and
+    /// the stored coordinate data stay.
     pub fn reset_modal(&mut self) {
-        let inches = self.modal.inches;
-        self.modal = Modal {
-            inches,
-            ..Modal::default()
-        };
+        self.modal = Modal::default();
         self.feed = 0.0;
         self.spindle = 0.0;
+        self.g92 = [0.0; AXES];
     }
 
     /// `[GC:...]` body for `$G` (without brackets).
