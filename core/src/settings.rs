@@ -600,11 +600,14 @@ impl Settings {
     }
 
     /// Parse a byte image written by [`Settings::to_image`], checking everything.
+    /// An image from an older build with fewer (appended-to) settings loads too: the
+    /// settings it lacks take their defaults, so an update keeps the user's values.
     pub fn from_image(img: &[u8]) -> Result<Settings, ImageError> {
-        if img.len() != IMAGE_LEN {
+        let count = usize::from(*img.get(3).ok_or(ImageError::Length)?);
+        if count > COUNT || img.len() != 4 + 4 * count + 4 {
             return Err(ImageError::Length);
         }
-        let (body, tail) = img.split_at(IMAGE_LEN - 4);
+        let (body, tail) = img.split_at(img.len() - 4);
         let stored = u32::from_le_bytes(tail.try_into().map_err(|_| ImageError::Length)?);
         if crc32(body) != stored {
             return Err(ImageError::Checksum);
@@ -612,7 +615,7 @@ impl Settings {
         if body.get(..2) != Some(&MAGIC[..]) {
             return Err(ImageError::Magic);
         }
-        if body.get(2) != Some(&FORMAT_VERSION) || body.get(3) != Some(&(COUNT as u8)) {
+        if body.get(2) != Some(&FORMAT_VERSION) {
             return Err(ImageError::Version);
         }
         let mut s = Settings::default();
@@ -759,5 +762,21 @@ mod tests {
             }
         }
         assert_eq!(Settings::from_image(&img[..10]), Err(ImageError::Length));
+    }
+
+    #[test]
+    fn an_older_shorter_image_keeps_its_values_and_defaults_the_rest() {
+        let mut s = Settings::default();
+        s.set(100, 42.0).unwrap();
+        let full = s.to_image();
+        // The image an older build with only the first 30 settings would have written.
+        let n = 30;
+        let mut old = std::vec::Vec::from(&full[..4 + 4 * n]);
+        old[3] = n as u8;
+        let crc = crc32(&old);
+        old.extend_from_slice(&crc.to_le_bytes());
+        let loaded = Settings::from_image(&old).unwrap();
+        assert_eq!(loaded.steps_per_mm(0), 42.0);
+        assert_eq!(loaded, s, "the rest are defaults, as in s");
     }
 }

@@ -147,8 +147,10 @@ impl<F: NorFlash> SettingsStore<F> {
             return (0, LoadStatus::Corrupt);
         };
         match map.fetch_item::<&[u8]>(&mut self.buf, &key).await {
-            Ok(Some(bytes)) if bytes.len() == out.len() => {
-                out.copy_from_slice(bytes);
+            Ok(Some(bytes)) if bytes.len() <= out.len() => {
+                if let Some(dst) = out.get_mut(..bytes.len()) {
+                    dst.copy_from_slice(bytes);
+                }
                 (bytes.len(), LoadStatus::Loaded)
             }
             Ok(Some(_)) => (0, LoadStatus::Corrupt),
@@ -166,14 +168,17 @@ impl<F: NorFlash> SettingsStore<F> {
     /// reported as corrupt rather than taken for a first boot.
     pub async fn load_settings(&mut self) -> (Settings, LoadStatus) {
         let mut img = [0u8; IMAGE_LEN];
-        match self.fetch(KEY_SETTINGS, &mut img).await {
+        let fetched = self.fetch(KEY_SETTINGS, &mut img).await;
+        match fetched {
             (_, LoadStatus::Empty) if !self.region_blank().await => {
                 (Settings::default(), LoadStatus::Corrupt)
             }
-            (_, LoadStatus::Loaded) => match Settings::from_image(&img) {
-                Ok(s) => (s, LoadStatus::Loaded),
-                Err(_) => (Settings::default(), LoadStatus::Corrupt),
-            },
+            (len, LoadStatus::Loaded) => {
+                match Settings::from_image(img.get(..len).unwrap_or(&[])) {
+                    Ok(s) => (s, LoadStatus::Loaded),
+                    Err(_) => (Settings::default(), LoadStatus::Corrupt),
+                }
+            }
             (_, status) => (Settings::default(), status),
         }
     }
@@ -187,10 +192,11 @@ impl<F: NorFlash> SettingsStore<F> {
     pub async fn load_coords(&mut self) -> (Coords, LoadStatus) {
         let mut img = [0u8; COORDS_LEN];
         match self.fetch(KEY_COORDS, &mut img).await {
-            (_, LoadStatus::Loaded) => match coords_from_image(&img) {
+            (COORDS_LEN, LoadStatus::Loaded) => match coords_from_image(&img) {
                 Some(c) => (c, LoadStatus::Loaded),
                 None => (Coords::default(), LoadStatus::Corrupt),
             },
+            (_, LoadStatus::Loaded) => (Coords::default(), LoadStatus::Corrupt),
             (_, status) => (Coords::default(), status),
         }
     }
