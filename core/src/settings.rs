@@ -638,9 +638,11 @@ impl Settings {
 
 /// Write `v` with three decimals (Grbl's report format) through integer formatting:
 /// core's float formatting would cost about 14 KB of flash on the Cortex-M3.
-/// Values round half away from zero; beyond +-9.2e15 they saturate.
+/// Values round half away from zero. Computed in f32 (no double-precision routines in
+/// the image): exact to the last digit below 16,777 (2^24 thousandths), which covers
+/// any plotter; larger values keep f32's 7 significant digits.
 pub fn write_fixed3<W: fmt::Write>(w: &mut W, v: f32) -> fmt::Result {
-    let milli = libm::round(f64::from(v) * 1000.0) as i64;
+    let milli = libm::roundf(v * 1000.0) as i64;
     let sign = if milli < 0 { "-" } else { "" };
     let a = milli.unsigned_abs();
     write!(w, "{}{}.{:03}", sign, a / 1000, a % 1000)
@@ -690,7 +692,7 @@ mod tests {
     #[test]
     fn fixed_point_output_matches_three_decimal_rounding() {
         for v in [
-            0.0f32, 1.0, -1.0, 0.0005, -0.0004, 123.456, -99.9996, 0.010, 1e9, -2.5e-4,
+            0.0f32, 1.0, -1.0, 0.0005, -0.0004, 123.456, -99.9996, 0.010, 16_000.125, -2.5e-4,
         ] {
             let mut a: heapless::String<40> = heapless::String::new();
             write_fixed3(&mut a, v).unwrap();

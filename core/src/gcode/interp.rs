@@ -635,7 +635,7 @@ impl Interp {
                     let ccw = modal.motion == MotionMode::ArcCcw;
                     let g = arc_geometry(&mut b, &pos, &target, ccw, scale)?;
                     let dz = target[2] - pos[2];
-                    let arc_len = libm::hypotf(g.radius * g.sweep, dz);
+                    let arc_len = hypot(g.radius * g.sweep, dz);
                     let path = arc_path(&g, &pos, &target, ccw, s);
                     Some((arc_len, path, Some(g)))
                 }
@@ -806,6 +806,12 @@ fn rapid(p: &[f32; AXES], s: &Settings, line: u32) -> Command {
     })
 }
 
+/// sqrt(a^2 + b^2) in f32: libm's hypotf works in f64, which would pull the
+/// double-precision soft-float routines into the image for nothing here.
+fn hypot(a: f32, b: f32) -> f32 {
+    libm::sqrtf(a * a + b * b)
+}
+
 fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
     let mut sum = 0.0;
     for (x, y) in a.iter().zip(b.iter()) {
@@ -843,7 +849,7 @@ fn arc_geometry(
         let mut disc = 4.0 * r * r - dx * dx - dy * dy;
         if disc < 0.0 {
             // A half circle with a rounded radius: accept within the tolerance.
-            let chord = libm::hypotf(dx, dy);
+            let chord = hypot(dx, dy);
             if chord / 2.0 - libm::fabsf(r) > ARC_ABS_TOL {
                 return Err(Status::ArcRadiusError);
             }
@@ -851,7 +857,7 @@ fn arc_geometry(
         }
         // Offset of the centre from the chord midpoint, as a multiple of the chord
         // turned by 90 degrees; its sign picks the side (G2 with positive R: right).
-        let mut h = -libm::sqrtf(disc) / libm::hypotf(dx, dy);
+        let mut h = -libm::sqrtf(disc) / hypot(dx, dy);
         if ccw {
             h = -h;
         }
@@ -871,10 +877,10 @@ fn arc_geometry(
         return Err(Status::UnusedWords);
     }
     let center = [start[0] + ci, start[1] + cj];
-    let r_start = libm::hypotf(ci, cj);
-    let r_end = libm::hypotf(target[0] - center[0], target[1] - center[1]);
+    let r_start = hypot(ci, cj);
+    let r_end = hypot(target[0] - center[0], target[1] - center[1]);
     let dr = libm::fabsf(r_end - r_start);
-    if r_start <= 0.0 || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start)) {
+    if !r_start.is_finite() || !r_end.is_finite() || r_start <= 0.0 || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start)) {
         return Err(Status::InvalidTarget);
     }
     let a0 = libm::atan2f(-cj, -ci);
