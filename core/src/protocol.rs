@@ -246,6 +246,7 @@ impl Protocol {
             b'!' => self.machine.feed_hold(m),
             b'~' => self.machine.cycle_start(m),
             0x18 => self.soft_reset(m),
+            0x84 => self.machine.safety_door(m),
             0x85 => self.machine.jog_cancel(m),
             0x90..=0x97 => self.machine.override_command(b, m),
             // Other extended real-time bytes (door, spindle and coolant overrides)
@@ -639,6 +640,7 @@ impl Protocol {
                 RunState::Run => w.write_str("Run")?,
                 RunState::Hold { complete } => write!(w, "Hold:{}", if complete { 0 } else { 1 })?,
                 RunState::Jog => w.write_str("Jog")?,
+                RunState::Door { at_rest } => write!(w, "Door:{}", if at_rest { 0 } else { 2 })?,
                 RunState::Alarm => w.write_str("Alarm")?,
                 RunState::Home => w.write_str("Home")?,
                 RunState::Check => w.write_str("Check")?,

@@ -171,7 +171,7 @@ fn a_million_random_and_mutated_lines_never_panic() {
         // Now and then a real-time byte in the middle of a line.
         let mut reset = false;
         if r.below(50) == 0 && !bytes.is_empty() {
-            let rt = [b'?', b'!', b'~', 0x85, 0x91, 0x97, 0x18][r.below(7)];
+            let rt = [b'?', b'!', b'~', 0x84, 0x85, 0x91, 0x97, 0x18][r.below(8)];
             reset = rt == 0x18;
             let at = r.below(bytes.len());
             bytes.insert(at, rt);

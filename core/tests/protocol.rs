@@ -694,3 +694,24 @@ fn changing_steps_per_mm_keeps_the_real_position() {
         "1 mm from where it is"
     );
 }
+
+#[test]
+fn safety_door_holds_reports_door_and_resumes_on_cycle_start() {
+    let (mut p, mut m) = boot();
+    m.rate = 8;
+    send(&mut p, &mut m, "G1 X10 F600\n");
+    m.step();
+    p.receive(b"\x84?", &mut m, 0);
+    assert!(drain(&mut p).starts_with("<Door:2|"), "stopping");
+    m.step();
+    assert!(send(&mut p, &mut m, "?").starts_with("<Door:0|"));
+    m.step();
+    assert_eq!(m.pos[0], 16, "no step once at rest");
+    send(&mut p, &mut m, "~");
+    assert!(send(&mut p, &mut m, "?").starts_with("<Run|"));
+    // During homing the door aborts it.
+    m.run_all();
+    send(&mut p, &mut m, "$22=1\n$H\n");
+    let out = send(&mut p, &mut m, "\u{84}");
+    assert!(out.starts_with("ALARM:7"), "{out}");
+}

@@ -880,7 +880,11 @@ fn arc_geometry(
     let r_start = hypot(ci, cj);
     let r_end = hypot(target[0] - center[0], target[1] - center[1]);
     let dr = libm::fabsf(r_end - r_start);
-    if !r_start.is_finite() || !r_end.is_finite() || r_start <= 0.0 || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start)) {
+    if !r_start.is_finite()
+        || !r_end.is_finite()
+        || r_start <= 0.0
+        || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start))
+    {
         return Err(Status::InvalidTarget);
     }
     let a0 = libm::atan2f(-cj, -ci);

@@ -24,6 +24,7 @@ pub enum Alarm {
     SoftLimit = 2,
     AbortCycle = 3,
     HomingFailReset = 6,
+    HomingFailDoor = 7,
     HomingFailPullOff = 8,
     HomingFailApproach = 9,
     EStop = 10,
@@ -50,6 +51,12 @@ pub enum RunState {
         complete: bool,
     },
     Jog,
+    /// Safety door (0x84): `at_rest` false while stopping (Door:2), true once stopped
+    /// and ready to resume with cycle start (Door:0; there is no door switch to hold
+    /// it open).
+    Door {
+        at_rest: bool,
+    },
     Alarm,
     Home,
     Check,
@@ -107,6 +114,8 @@ pub struct Machine {
     homed: bool,
     /// Hold requested by `!` or the feed-hold pin, until `~`.
     hold: bool,
+    /// Safety door requested (0x84), until cycle start.
+    door: bool,
     /// The hold came from the feed-hold pin and ends when it is released.
     hold_by_pin: bool,
     /// M0 seen: hold once the queue has run empty.
@@ -140,6 +149,7 @@ impl Machine {
             homing: None,
             homed: false,
             hold: false,
+            door: false,
             hold_by_pin: false,
             pause_pending: false,
             paused: false,
@@ -220,6 +230,10 @@ impl Machine {
             RunState::Home
         } else if self.locked {
             RunState::Alarm
+        } else if self.door {
+            RunState::Door {
+                at_rest: !m.is_moving(),
+            }
         } else if self.jogging {
             // Including the deceleration of a jog cancel, as Grbl reports it.
             RunState::Jog
@@ -455,6 +469,7 @@ impl Machine {
         self.jogging = false;
         self.jog_cancel = false;
         self.hold = false;
+        self.door = false;
         self.hold_by_pin = false;
         self.job = Job::default();
         self.pause_pending = false;
@@ -485,6 +500,7 @@ impl Machine {
         self.jogging = false;
         self.jog_cancel = false;
         self.hold = false;
+        self.door = false;
         self.hold_by_pin = false;
         self.pause_pending = false;
         self.paused = false;
@@ -531,14 +547,34 @@ impl Machine {
         }
     }
 
+    /// 0x84, the safety door: like a feed hold reported as `Door`; during homing it
+    /// aborts with alarm 7, during a jog it cancels the jog.
+    pub fn safety_door<M: MotionControl>(&mut self, m: &mut M) {
+        if self.locked || self.check_mode {
+            return;
+        }
+        if self.homing.is_some() {
+            self.raise(Alarm::HomingFailDoor, m);
+            return;
+        }
+        self.door = true;
+        if self.jogging {
+            self.jog_cancel(m);
+        } else if !m.is_idle() {
+            self.hold = true;
+            m.hold();
+        }
+    }
+
     /// `~` or the cycle-start pin.
     pub fn cycle_start<M: MotionControl>(&mut self, m: &mut M) {
         // A stop that drops the queue cannot be resumed.
         if self.locked || self.homing.is_some() || self.stop_then_clear || self.jog_cancel {
             return;
         }
-        if self.hold || self.paused || m.is_holding() {
+        if self.hold || self.paused || self.door || m.is_holding() {
             self.hold = false;
+            self.door = false;
             self.hold_by_pin = false;
             self.paused = false;
             m.resume();
@@ -593,6 +629,7 @@ impl Machine {
         self.pause_pending = false;
         self.paused = false;
         self.hold = false;
+        self.door = false;
         self.hold_by_pin = false;
         self.job = Job::default();
         if m.is_idle() && !m.is_holding() {
