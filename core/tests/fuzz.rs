@@ -10,6 +10,7 @@ use inkstep_core::protocol::Protocol;
 use inkstep_core::settings::Settings;
 use std::time::Instant;
 
+/// Lines per run; `INKSTEP_FUZZ_LINES` and `INKSTEP_FUZZ_SEED` allow deeper runs.
 const LINES: usize = 1_000_000;
 const KNOWN_ERRORS: &[u32] = &[
     1, 2, 3, 4, 5, 6, 8, 9, 10, 11, 12, 15, 16, 20, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32,
@@ -158,7 +159,9 @@ fn make_line(r: &mut Rng) -> Vec<u8> {
 #[test]
 fn a_million_random_and_mutated_lines_never_panic() {
     let started = Instant::now();
-    let mut r = Rng(0x9E37_79B9_7F4A_7C15);
+    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<u64>().ok());
+    let lines = env("INKSTEP_FUZZ_LINES").map_or(LINES, |n| n as usize);
+    let mut r = Rng(env("INKSTEP_FUZZ_SEED").unwrap_or(0x9E37_79B9_7F4A_7C15) | 1);
     let mut p = Protocol::new(Settings::default());
     let mut m = FakePlanner::new(16);
     drain(&mut p);
@@ -166,7 +169,7 @@ fn a_million_random_and_mutated_lines_never_panic() {
     let mut realtime_injected = 0;
     let mut resets = 0;
     let mut pending = String::new();
-    for i in 0..LINES {
+    for i in 0..lines {
         let mut bytes = make_line(&mut r);
         // Now and then a real-time byte in the middle of a line.
         let mut reset = false;
@@ -252,7 +255,43 @@ fn a_million_random_and_mutated_lines_never_panic() {
     let tail = drain(&mut p);
     assert!(tail.ends_with("ok\r\n"), "{tail}");
     let elapsed = started.elapsed();
-    println!("fuzz: {LINES} lines ({realtime_injected} with a real-time byte, {resets} resets) in {elapsed:?}");
+    println!("fuzz: {lines} lines ({realtime_injected} with a real-time byte, {resets} resets) in {elapsed:?}");
     println!("fuzz responses: {counts:?}");
     assert!(counts.len() > 10, "the fuzz reached only {counts:?}");
+}
+
+#[test]
+fn rejected_blocks_change_nothing() {
+    use inkstep_core::gcode::parser::clean_line;
+    use inkstep_core::gcode::Interp;
+    let mut r = Rng(0x0DDB_1A5E_5BAD_5EED);
+    let mut s = Settings::default();
+    s.set(22, 1.0).unwrap();
+    s.set(20, 1.0).unwrap();
+    let mut it = Interp::new();
+    let (mut ok, mut rejected) = (0, 0);
+    for _ in 0..200_000 {
+        let raw = make_line(&mut r);
+        let mut line: heapless::Vec<u8, 256> = heapless::Vec::new();
+        if clean_line(&raw, &mut line).is_err() {
+            continue;
+        }
+        let before = it.clone();
+        match it.execute(&line, &s, 1) {
+            Ok(_) => ok += 1,
+            Err(_) => {
+                assert_eq!(
+                    it,
+                    before,
+                    "a rejected block changed state: {:?}",
+                    String::from_utf8_lossy(&line)
+                );
+                rejected += 1;
+            }
+        }
+        // Every accepted block leaves the position inside the travel (soft limits on).
+        assert!(inkstep_core::gcode::interp::within_travel(it.position(), &s) || ok == 0);
+    }
+    println!("interpreter: {ok} accepted, {rejected} rejected without side effects");
+    assert!(ok > 1000 && rejected > 1000);
 }
