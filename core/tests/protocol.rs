@@ -444,8 +444,12 @@ fn job_messages_pause_and_overrides() {
     );
     assert_eq!(moves(&m).len(), 1, "the line after M0 waits");
     assert_eq!(send(&mut p, &mut m, "~"), "ok\r\n", "the waiting line runs");
-    assert_eq!(send(&mut p, &mut m, "M2\n"), "ok\r\n");
+    p.receive(b"M2\n", &mut m, 0);
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "", "M2 waits for the motion before it");
     m.run_all();
+    p.poll(&mut m, 1500);
+    assert_eq!(drain(&mut p), "[MSG:Pgm End]\r\nok\r\n");
     p.poll(&mut m, 1500);
     assert_eq!(drain(&mut p), "[MSG:Job finished: 1.500 s, 2 moves]\r\n");
     send(&mut p, &mut m, "\u{91}\u{91}\u{96}");

@@ -326,10 +326,19 @@ impl Machine {
                 return Some(Ok(()));
             }
         };
+        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
+        // motion before it has finished, so its `ok` means "program done".
+        let ends = out.stop == Some(Stop::End);
+        if ends && !self.check_mode && !m.is_idle() {
+            return None;
+        }
         if !self.check_mode && out.cmds.len() > m.free() {
             return None;
         }
         self.interp = trial;
+        if ends {
+            self.event(Event::Msg("Pgm End"));
+        }
         if out.coords_changed {
             self.coords_dirty = true;
         }
