@@ -417,28 +417,43 @@ impl Protocol {
             self.machine.state(m),
             RunState::Idle | RunState::Alarm | RunState::Check
         );
-        let need_rest = |r: Result<(), Status>| if at_rest { r } else { Err(Status::IdleError) };
+        // Everything but help, $G, $C (checks itself) and jogging needs the machine at
+        // rest; refuse before doing anything.
+        let anytime = cmd.is_empty() || cmd == b"G" || cmd == b"C" || cmd.starts_with(b"J=");
+        if !anytime && !at_rest {
+            return Some(Err(Status::IdleError));
+        }
         Some(match cmd {
             b"" => {
                 self.say(format_args!("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"));
                 Ok(())
             }
-            b"$" => need_rest(Ok(())).map(|()| self.listing = Some(Listing::Settings(0))),
-            b"#" => need_rest(Ok(())).map(|()| self.listing = Some(Listing::Coords(0))),
-            b"N" => need_rest(Ok(())).map(|()| self.listing = Some(Listing::Startup(0))),
+            b"$" => {
+                self.listing = Some(Listing::Settings(0));
+                Ok(())
+            }
+            b"#" => {
+                self.listing = Some(Listing::Coords(0));
+                Ok(())
+            }
+            b"N" => {
+                self.listing = Some(Listing::Startup(0));
+                Ok(())
+            }
             b"G" => {
                 let mut s: String<96> = String::new();
                 let _ = self.machine.interp().write_modal(&mut s);
                 self.say(format_args!("[{}]", s));
                 Ok(())
             }
-            b"I" => need_rest(Ok(())).map(|()| {
+            b"I" => {
                 self.say(format_args!(
                     "[VER:1.1h.inkstep-{}:inkstep pen plotter]",
                     VERSION
                 ));
                 self.say(format_args!("[OPT:NL,{},{}]", m.capacity(), RX_BUFFER_SIZE));
-            }),
+                Ok(())
+            }
             b"C" => {
                 let was = self.machine.check_mode();
                 let r = self.machine.toggle_check(m);
@@ -449,16 +464,21 @@ impl Protocol {
                 }
                 r
             }
-            b"X" => need_rest(self.machine.unlock()),
-            b"H" => need_rest(self.machine.start_homing(m)),
+            b"X" => self.machine.unlock(),
+            b"H" => self.machine.start_homing(m),
             b"RST=$" => {
-                need_rest(Ok(())).map(|()| self.machine.replace_settings(Settings::default(), m))
+                self.machine.replace_settings(Settings::default(), m);
+                Ok(())
             }
-            b"RST=#" => need_rest(Ok(())).map(|()| self.machine.clear_coords()),
-            b"RST=*" => need_rest(Ok(())).map(|()| {
+            b"RST=#" => {
+                self.machine.clear_coords();
+                Ok(())
+            }
+            b"RST=*" => {
                 self.machine.replace_settings(Settings::default(), m);
                 self.machine.clear_coords();
-            }),
+                Ok(())
+            }
             _ => {
                 if let Some(body) = cmd.strip_prefix(b"J=") {
                     if m.free() == 0 {
@@ -466,9 +486,9 @@ impl Protocol {
                     }
                     self.machine.jog(body, m)
                 } else if let Some(rest) = cmd.strip_prefix(b"N") {
-                    need_rest(self.store_startup(rest))
+                    self.store_startup(rest)
                 } else {
-                    need_rest(self.set_setting(cmd, m))
+                    self.set_setting(cmd, m)
                 }
             }
         })

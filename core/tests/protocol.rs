@@ -719,3 +719,24 @@ fn safety_door_holds_reports_door_and_resumes_on_cycle_start() {
     let out = send(&mut p, &mut m, "\u{84}");
     assert!(out.starts_with("ALARM:7"), "{out}");
 }
+
+#[test]
+fn dollar_commands_while_running_are_refused_without_effect() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "G0 X10\n");
+    assert_eq!(send(&mut p, &mut m, "$N0=G21\n"), "error:8\r\n");
+    assert_eq!(
+        send(&mut p, &mut m, "$RST=*\n$$\n$#\n$I\n$X\n$100=10\n"),
+        "error:8\r\n".repeat(6)
+    );
+    assert!(
+        send(&mut p, &mut m, "$G\n").ends_with("ok\r\n"),
+        "$G works at any time"
+    );
+    m.run_all();
+    assert_eq!(
+        send(&mut p, &mut m, "$N\n"),
+        "$N0=\r\n$N1=\r\nok\r\n",
+        "nothing was stored"
+    );
+}
