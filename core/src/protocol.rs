@@ -19,7 +19,8 @@
 //!        p.machine_mut().set_coords(store.load_coords().await.0)
 //!        for i in 0..STARTUP_LINES { p.set_startup_line(i, &store.load_startup(i).await.0) }
 //! loop:  n = p.receive(&usb_rx[..], &mut planner, now_ms)   // drain only n bytes
-//!        p.poll(&mut planner, now_ms)
+//!        p.poll(&mut planner, now_ms)            // also every ms or so when idle:
+//!                                                  // homing and debounce run on time
 //!        usb_tx.write(&buf[..p.read_output(&mut buf)])
 //!        p.set_inputs(levels, &mut planner, now_ms)          // on any input change
 //!        busy_led.set(p.machine().busy(&planner))
