@@ -3,9 +3,18 @@
 //! `no_std` and allocation-free so that the firmware, the simulator and the host tests
 //! all run this one copy of the logic. Modules are grouped by responsibility:
 //! - geometry and the motion contract: [`motion`]
+//! - machine settings and their flash store: [`settings`], [`settings_store`]
+//! - G-code parsing and interpretation: [`gcode`]
+//! - machine state, safety and the planner interface: [`machine`]
+//! - the Grbl 1.1 serial protocol: [`protocol`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod gcode;
+pub mod machine;
 pub mod motion;
+pub mod protocol;
+pub mod settings;
+pub mod settings_store;
