@@ -10,6 +10,6 @@
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod hmi;
 pub mod keypad;
 pub mod motion;
-
