@@ -13,3 +13,4 @@
 pub mod hmi;
 pub mod keypad;
 pub mod motion;
+pub mod screens;
