@@ -165,9 +165,9 @@ impl Field {
     pub fn range_message(&self) -> String<28> {
         let mut s: String<28> = String::new();
         let _ = write!(s, "{}: ", self.label);
-        push_fixed(&mut s, self.min, self.decimals.min(1));
+        push_fixed(&mut s, self.min, self.decimals);
         let _ = s.push_str("..");
-        push_fixed(&mut s, self.max, self.decimals.min(1));
+        push_fixed(&mut s, self.max, self.decimals);
         let _ = write!(s, " {}", self.unit);
         s
     }
@@ -210,6 +210,17 @@ impl FormKind {
             FormKind::Ellipse => 2,
             FormKind::Sine => 3,
             FormKind::Star => 4,
+        }
+    }
+
+    /// A one-line reminder shown under the fields (when there is room).
+    pub fn note(self) -> &'static str {
+        match self {
+            FormKind::Line => "from the pen; *:sign #:.",
+            FormKind::Arc => "angle < 0: clockwise",
+            FormKind::Ellipse => "a along X, b along Y",
+            FormKind::Sine => "",
+            FormKind::Star => "S: diameter of the tips",
         }
     }
 
@@ -343,7 +354,7 @@ mod tests {
     fn out_of_range_keeps_the_old_value_and_explains() {
         let mut f = Field::new("R", "mm", 0.5, 100.0, 2, 20.0);
         typed(&mut f, &[Key::Digit(5), Key::Digit(0), Key::Digit(0)]);
-        assert_eq!(f.commit().unwrap_err().as_str(), "R: 0.5..100.0 mm");
+        assert_eq!(f.commit().unwrap_err().as_str(), "R: 0.50..100.00 mm");
         assert_eq!(f.value, 20.0);
         // A positive-only field ignores the sign key.
         let mut g = Field::new("a", "mm", 0.5, 100.0, 2, 3.0);

@@ -208,7 +208,7 @@ fn out_of_range_value_is_refused_with_a_message_and_a_beep() {
     b.keys(&[d(3)]);
     let a = b.number("500");
     assert_eq!(a, [Action::Beep(Beep::Error)]);
-    assert_eq!(b.hmi.toast(), Some("R: 0.5..100.0 mm"));
+    assert_eq!(b.hmi.toast(), Some("R: 0.50..100.00 mm"));
     let Page::Form(f) = b.hmi.page() else {
         panic!()
     };

@@ -210,6 +210,9 @@ impl Screens {
                     cell_right(d, Point::new(36, y), &BODY, &v, 9, current)?;
                     cell(d, Point::new(93, y + 1), &SMALL, f.unit, 7, false)?;
                 }
+                if fresh && form.fields.len() < ROW_Y.len() {
+                    cell(d, Point::new(0, 44), &SMALL, form.kind.note(), 25, false)?;
+                }
                 bottom_line(d, "D:ok C:del/esc A/B:field", hmi.toast())
             }
             Page::Preview { job, .. } => {
@@ -263,18 +266,18 @@ impl Screens {
                 let p = hmi.pos_mm(st);
                 let cfg = hmi.config();
                 let mut l: Line = String::new();
-                let _ = l.push('X');
+                let _ = l.push_str("X ");
                 push_fixed(&mut l, p[X], 2);
-                let _ = l.push_str(" Y");
+                let _ = l.push_str("  Y ");
                 push_fixed(&mut l, p[Y], 2);
                 cell(d, Point::new(0, ROW_Y[0]), &BODY, &l, 21, false)?;
                 l.clear();
-                let _ = l.push('Z');
+                let _ = l.push_str("Z ");
                 push_fixed(&mut l, p[2], 2);
                 let _ = l.push_str(if hmi.pen_is_down(st) {
-                    " pen down"
+                    "  pen down"
                 } else {
-                    " pen up"
+                    "  pen up"
                 });
                 cell(d, Point::new(0, ROW_Y[1]), &BODY, &l, 21, false)?;
                 l.clear();
@@ -439,7 +442,7 @@ impl Screens {
             false,
         )?;
         let mut l: Line = String::new();
-        let _ = write!(l, "F{:>5} mm/m", st.feed_mm_min.max(0.0) as u32);
+        let _ = write!(l, "F {:>4}mm/m", st.feed_mm_min.max(0.0) as u32);
         cell(d, Point::new(76, 31), &SMALL, &l, 10, false)?;
         // Teaching view: the feed direction now and the ones before it.
         l.clear();
@@ -450,9 +453,13 @@ impl Screens {
             hmi.feed_dirs().copied().collect();
         let mut previous = dirs.iter().rev().skip(usize::from(st.dir != [0, 0]));
         let _ = l.push_str("was");
-        for dir in previous.by_ref().take(2) {
+        for dir in previous.by_ref() {
+            let t = dir_text(*dir);
+            if l.len() + 1 + t.len() > 10 {
+                break;
+            }
             let _ = l.push(' ');
-            let _ = l.push_str(&dir_text(*dir));
+            let _ = l.push_str(&t);
         }
         cell(d, Point::new(76, 47), &SMALL, &l, 10, false)?;
         // Progress and state.
