@@ -39,7 +39,7 @@ where
     let end = s.char_indices().nth(chars).map_or(s.len(), |(i, _)| i);
     let shown = s.get(..end).unwrap_or("");
     let n = shown.chars().count();
-    let next = Text::with_baseline(shown, pos, style, Baseline::Top).draw(d)?;
+    Text::with_baseline(shown, pos, style, Baseline::Top).draw(d)?;
     let cw = font.character_size.width + font.character_spacing;
     let pad = chars.saturating_sub(n) as u32;
     if pad > 0 {
@@ -49,7 +49,6 @@ where
         );
         d.fill_solid(&r, bg)?;
     }
-    let _ = next;
     Ok(())
 }
 
