@@ -149,7 +149,7 @@ impl Field {
         if !self.editing {
             return Ok(self.value);
         }
-        let parsed = self.text.parse::<f32>().ok().filter(|v| v.is_finite());
+        let parsed = parse_decimal(&self.text);
         match parsed {
             Some(v) if v >= self.min && v <= self.max => {
                 self.value = v;
@@ -171,6 +171,40 @@ impl Field {
         let _ = write!(s, " {}", self.unit);
         s
     }
+}
+
+/// Parse what a field can hold: optional '-', digits, optional '.' and digits.
+/// Done by hand because core's float parser costs kilobytes of flash for input that is
+/// at most 8 characters; None for empty, lone "-" or "." and anything else.
+pub fn parse_decimal(text: &str) -> Option<f32> {
+    let (neg, body) = match text.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, text),
+    };
+    let mut mantissa: i64 = 0;
+    let mut scale: f32 = 1.0;
+    let mut digits = 0;
+    let mut after_dot = false;
+    for c in body.chars() {
+        match c {
+            '0'..='9' => {
+                mantissa = mantissa
+                    .checked_mul(10)?
+                    .checked_add(i64::from(c as u8 - b'0'))?;
+                digits += 1;
+                if after_dot {
+                    scale *= 10.0;
+                }
+            }
+            '.' if !after_dot => after_dot = true,
+            _ => return None,
+        }
+    }
+    if digits == 0 {
+        return None;
+    }
+    let v = mantissa as f32 / scale;
+    Some(if neg { -v } else { v })
 }
 
 /// The parameter forms, one per drawing mode.
@@ -323,6 +357,17 @@ mod tests {
     fn typed(f: &mut Field, keys: &[Key]) {
         for k in keys {
             assert_ne!(f.key(*k, false), FieldInput::Ignored);
+        }
+    }
+
+    #[test]
+    fn decimal_parser_accepts_field_text_only() {
+        assert_eq!(parse_decimal("12.5"), Some(12.5));
+        assert_eq!(parse_decimal("-0.25"), Some(-0.25));
+        assert_eq!(parse_decimal("7."), Some(7.0));
+        assert_eq!(parse_decimal(".5"), Some(0.5));
+        for bad in ["", "-", ".", "-.", "1.2.3", "1-2", "+3", "1e5"] {
+            assert_eq!(parse_decimal(bad), None, "{bad:?}");
         }
     }
 
