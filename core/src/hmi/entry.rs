@@ -6,8 +6,6 @@
 //! problem 5 (one key press filling every digit) cannot happen: a field changes only on
 //! Press events, and the form moves to the next field only on Enter.
 
-use core::fmt::Write;
-
 use heapless::{String, Vec};
 
 use super::fixed::push_fixed;
@@ -164,11 +162,13 @@ impl Field {
     /// "R: 0.50..100.00 mm"
     pub fn range_message(&self) -> String<28> {
         let mut s: String<28> = String::new();
-        let _ = write!(s, "{}: ", self.label);
+        let _ = s.push_str(self.label);
+        let _ = s.push_str(": ");
         push_fixed(&mut s, self.min, self.decimals);
         let _ = s.push_str("..");
         push_fixed(&mut s, self.max, self.decimals);
-        let _ = write!(s, " {}", self.unit);
+        let _ = s.push(' ');
+        let _ = s.push_str(self.unit);
         s
     }
 }
@@ -181,7 +181,7 @@ pub fn parse_decimal(text: &str) -> Option<f32> {
         Some(rest) => (true, rest),
         None => (false, text),
     };
-    let mut mantissa: i64 = 0;
+    let mut mantissa: u32 = 0;
     let mut scale: f32 = 1.0;
     let mut digits = 0;
     let mut after_dot = false;
@@ -190,7 +190,7 @@ pub fn parse_decimal(text: &str) -> Option<f32> {
             '0'..='9' => {
                 mantissa = mantissa
                     .checked_mul(10)?
-                    .checked_add(i64::from(c as u8 - b'0'))?;
+                    .checked_add(u32::from(c as u8 - b'0'))?;
                 digits += 1;
                 if after_dot {
                     scale *= 10.0;

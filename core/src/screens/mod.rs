@@ -17,19 +17,17 @@ pub mod plot;
 pub mod st7920;
 pub mod widgets;
 
-use core::fmt::Write;
-
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{Polyline, PrimitiveStyle, Rectangle};
+use embedded_graphics::primitives::{Line as Segment, PrimitiveStyle, Rectangle};
 use heapless::String;
 
 use crate::hmi::entry::FormKind;
-use crate::hmi::fixed::push_fixed;
+use crate::hmi::fixed::{push_fixed, push_uint};
 use crate::hmi::job::Job;
 use crate::hmi::{alarm_text, Hmi, Page, RunPhase, Status, MACHINE_MENU, MENU};
 use crate::motion::{X, Y};
-use fonts::{BIG, BODY, SMALL};
+use fonts::{BODY, SMALL};
 use plot::{Plot, Trace};
 use widgets::{arrow, bottom_line, cell, cell_right, progress, title_bar};
 
@@ -97,10 +95,19 @@ fn time_text(ms: u32) -> String<10> {
     let mut s = String::new();
     let tenths = ms / 100;
     if tenths < 600 {
-        let _ = write!(s, "{}.{}s", tenths / 10, tenths % 10);
+        push_uint(&mut s, tenths / 10, 0);
+        let _ = s.push('.');
+        push_uint(&mut s, tenths % 10, 0);
+        let _ = s.push('s');
     } else {
         let secs = ms / 1000;
-        let _ = write!(s, "{}m{:02}s", secs / 60, secs % 60);
+        push_uint(&mut s, secs / 60, 0);
+        let _ = s.push('m');
+        if secs % 60 < 10 {
+            let _ = s.push('0');
+        }
+        push_uint(&mut s, secs % 60, 0);
+        let _ = s.push('s');
     }
     s
 }
@@ -199,7 +206,9 @@ impl Screens {
             }
             Page::Form(form) => {
                 let mut right: String<6> = String::new();
-                let _ = write!(right, "{}/{}", form.cur + 1, form.fields.len());
+                push_uint(&mut right, form.cur as u32 + 1, 0);
+                let _ = right.push('/');
+                push_uint(&mut right, form.fields.len() as u32, 0);
                 title_bar(d, form.kind.title(), &right)?;
                 for (i, (f, y)) in form.fields.iter().zip(ROW_Y).enumerate() {
                     let current = i == form.cur;
@@ -251,7 +260,9 @@ impl Screens {
                     false,
                 )?;
                 let mut f: Line = String::new();
-                let _ = write!(f, "F {:>4} mm/m", hmi.jog_speed() as u32);
+                let _ = f.push_str("F ");
+                push_uint(&mut f, hmi.jog_speed() as u32, 4);
+                let _ = f.push_str(" mm/m");
                 cell(d, Point::new(52, 32), &BODY, &f, 12, false)?;
                 let pen = if hmi.pen_is_down(st) {
                     "Pen down"
@@ -288,20 +299,28 @@ impl Screens {
                 }
                 cell(d, Point::new(0, ROW_Y[2]), &BODY, &l, 21, false)?;
                 l.clear();
-                let _ = write!(l, "Draw F {:>4} mm/min", hmi.draw_feed() as u32);
+                let _ = l.push_str("Draw F ");
+                push_uint(&mut l, hmi.draw_feed() as u32, 4);
+                let _ = l.push_str(" mm/min");
                 cell(d, Point::new(0, ROW_Y[3]), &BODY, &l, 21, true)?;
                 let mut h: Line = String::new();
-                let _ = write!(h, "A/B:draw F  jog F {}", hmi.jog_speed() as u32);
+                let _ = h.push_str("A/B:draw F  jog F ");
+                push_uint(&mut h, hmi.jog_speed() as u32, 0);
                 bottom_line(d, &h, hmi.toast())
             }
             Page::Alarm { code } => {
                 let mut right: String<6> = String::new();
-                let _ = write!(right, "#{code}");
+                let _ = right.push('#');
+                push_uint(&mut right, u32::from(*code), 0);
                 title_bar(d, "!! ALARM", &right)?;
                 if fresh {
                     let text = alarm_text(*code);
-                    let x = (128 - 10 * text.len().min(12) as i32) / 2;
-                    cell(d, Point::new(x.max(0), 16), &BIG, text, 12, false)?;
+                    let n = text.len().min(19);
+                    let x = (128 - 6 * n as i32 - 12) / 2;
+                    let banner =
+                        Rectangle::new(Point::new(x, 17), Size::new(6 * n as u32 + 12, 16));
+                    d.fill_solid(&banner, ON)?;
+                    cell(d, Point::new(x + 6, 20), &BODY, text, n, true)?;
                 }
                 let p = hmi.pos_mm(st);
                 let mut l: Line = String::new();
@@ -327,7 +346,8 @@ impl Screens {
         D: DrawTarget<Color = BinaryColor>,
     {
         let mut t: Line = String::new();
-        let _ = write!(t, "{}: preview", job.name());
+        let _ = t.push_str(job.name());
+        let _ = t.push_str(": preview");
         title_bar(d, &t, "")?;
         PREVIEW_BOX
             .into_styled(PrimitiveStyle::with_stroke(ON, 1))
@@ -442,11 +462,14 @@ impl Screens {
             false,
         )?;
         let mut l: Line = String::new();
-        let _ = write!(l, "F {:>4}mm/m", st.feed_mm_min.max(0.0) as u32);
+        let _ = l.push_str("F ");
+        push_uint(&mut l, st.feed_mm_min.max(0.0) as u32, 4);
+        let _ = l.push_str("mm/m");
         cell(d, Point::new(76, 31), &SMALL, &l, 10, false)?;
         // Teaching view: the feed direction now and the ones before it.
         l.clear();
-        let _ = write!(l, "feed {}", dir_text(st.dir).as_str());
+        let _ = l.push_str("feed ");
+        let _ = l.push_str(&dir_text(st.dir));
         cell(d, Point::new(76, 39), &SMALL, &l, 10, false)?;
         l.clear();
         let dirs: heapless::Vec<[i8; 2], { crate::hmi::DIR_HISTORY }> =
@@ -476,12 +499,9 @@ impl Screens {
             RunPhase::Done { complete: true, .. } => "DONE",
             RunPhase::Done { .. } => "SHORT",
         };
-        let _ = write!(
-            l,
-            "{:>3}% {}",
-            libm::roundf(run.progress() * 100.0) as u32,
-            state
-        );
+        push_uint(&mut l, libm::roundf(run.progress() * 100.0) as u32, 3);
+        let _ = l.push_str("% ");
+        let _ = l.push_str(state);
         cell(d, Point::new(65, 56), &SMALL, &l, 12, false)
     }
 }
@@ -521,7 +541,10 @@ where
     for (i, (hotkey, label)) in items.enumerate().skip(top).take(rows) {
         let y = ROW_Y.get(i - top).copied().unwrap_or(0);
         let mut l: Line = String::new();
-        let _ = write!(l, " {hotkey} {label}");
+        let _ = l.push(' ');
+        push_uint(&mut l, u32::from(hotkey), 0);
+        let _ = l.push(' ');
+        let _ = l.push_str(label);
         cell(d, Point::new(0, y), &BODY, &l, 20, i == sel)?;
         shown += 1;
     }
@@ -562,21 +585,23 @@ fn boot<D>(d: &mut D) -> Result<(), D::Error>
 where
     D: DrawTarget<Color = BinaryColor>,
 {
-    cell(d, Point::new(29, 2), &BIG, "inkstep", 7, false)?;
-    // One period of a sine under the title: the report's signature curve.
-    let mut pts = [Point::zero(); 49];
-    for (i, p) in pts.iter_mut().enumerate() {
-        let x = 16 + i as i32 * 2;
-        let y = 31.0 - 6.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
-        *p = Point::new(x, libm::roundf(y) as i32);
+    // The name in an inverted banner, one period of the report's signature curve under it.
+    d.fill_solid(&Rectangle::new(Point::new(34, 4), Size::new(60, 16)), ON)?;
+    cell(d, Point::new(43, 7), &BODY, "inkstep", 7, true)?;
+    let mut prev: Option<Point> = None;
+    for i in 0..=48 {
+        let x = 16 + i * 2;
+        let y = 32.0 - 7.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
+        let p = Point::new(x, libm::roundf(y) as i32);
+        Segment::new(prev.unwrap_or(p), p)
+            .into_styled(PrimitiveStyle::with_stroke(ON, 1))
+            .draw(d)?;
+        prev = Some(p);
     }
-    Polyline::new(&pts)
-        .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-        .draw(d)?;
-    cell(d, Point::new(22, 40), &BODY, "pen plotter", 11, false)?;
+    cell(d, Point::new(31, 42), &BODY, "pen plotter", 11, false)?;
     cell(
         d,
-        Point::new(9, 54),
+        Point::new(9, 55),
         &SMALL,
         "STM32F103 + ST7920 LCD",
         22,

@@ -9,7 +9,7 @@
 use embedded_graphics::mono_font::{MonoFont, MonoTextStyleBuilder};
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{Line, PrimitiveStyle, Rectangle, Triangle};
+use embedded_graphics::primitives::{Line, PrimitiveStyle, Rectangle};
 use embedded_graphics::text::{Baseline, Text};
 
 use super::fonts::{BODY, SMALL};
@@ -155,20 +155,22 @@ where
     gap.into_styled(PrimitiveStyle::with_stroke(OFF, 1)).draw(d)
 }
 
-/// A direction arrow for (dx, dy) signs, fitted in a square `area` (Y up). A zero
-/// direction draws a small ring (stopped, no direction yet).
+/// A direction arrow for (dx, dy) signs, fitted in a square `area` (Y up): a 3-pixel
+/// shaft and a head, filled when `solid` (moving) or outlined (stopped). A zero
+/// direction draws a small square (no direction yet). Built from 1-pixel lines only, so
+/// embedded-graphics' thick-line and triangle fillers stay out of the firmware.
 pub fn arrow<D>(d: &mut D, area: Rectangle, dir: [i8; 2], solid: bool) -> Result<(), D::Error>
 where
     D: DrawTarget<Color = BinaryColor>,
 {
     let c = area.center();
-    let r = (area.size.width.min(area.size.height) / 2) as i32 - 2;
-    let stroke = PrimitiveStyle::with_stroke(ON, 3);
+    let thin = PrimitiveStyle::with_stroke(ON, 1);
     if dir == [0, 0] {
-        return embedded_graphics::primitives::Circle::with_center(c, 9)
+        return Rectangle::with_center(c, Size::new(9, 9))
             .into_styled(PrimitiveStyle::with_stroke(ON, 2))
             .draw(d);
     }
+    let r = (area.size.width.min(area.size.height) / 2) as f32 - 2.0;
     let (dx, dy) = (dir[0] as f32, -(dir[1] as f32));
     let n = libm::hypotf(dx, dy);
     let (ux, uy) = (dx / n, dy / n);
@@ -178,20 +180,29 @@ where
             c.y + libm::roundf(uy * along + ux * across) as i32,
         )
     };
-    let rf = r as f32;
-    let tip = at(rf, 0.0);
-    let head_base = rf * 0.15;
-    Line::new(at(-rf, 0.0), at(head_base, 0.0))
-        .into_styled(stroke)
-        .draw(d)?;
-    let head = Triangle::new(
-        tip,
-        at(head_base - 2.0, rf * 0.55),
-        at(head_base - 2.0, -rf * 0.55),
-    );
+    let base = r * 0.1;
+    let half = r * 0.55;
+    // Shaft: parallel lines half a pixel apart leave no gaps on diagonals.
+    for k in -3..=3 {
+        let o = k as f32 * 0.5;
+        Line::new(at(-r, o), at(base, o))
+            .into_styled(thin)
+            .draw(d)?;
+    }
+    let tip = at(r, 0.0);
     if solid {
-        head.into_styled(PrimitiveStyle::with_fill(ON)).draw(d)
+        // Fill the head with a fan of lines from the tip.
+        let steps = libm::ceilf(half * 4.0) as i32;
+        for k in -steps..=steps {
+            let across = half * k as f32 / steps as f32;
+            Line::new(tip, at(base, across)).into_styled(thin).draw(d)?;
+        }
+        Ok(())
     } else {
-        head.into_styled(PrimitiveStyle::with_stroke(ON, 1)).draw(d)
+        let (b1, b2) = (at(base, half), at(base, -half));
+        for (p, q) in [(tip, b1), (b1, b2), (b2, tip)] {
+            Line::new(p, q).into_styled(thin).draw(d)?;
+        }
+        Ok(())
     }
 }
