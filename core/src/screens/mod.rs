@@ -19,7 +19,7 @@ pub mod widgets;
 
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{Line as Segment, PrimitiveStyle, Rectangle};
+use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
 use heapless::String;
 
 use crate::hmi::entry::FormKind;
@@ -188,17 +188,17 @@ impl Screens {
                 Ok(())
             }
             Page::Menu { sel } => {
-                let items = MENU.iter().map(|(k, m)| (*k, m.label()));
-                list(d, "inkstep", st.state.name(), items, MENU.len(), *sel)?;
+                let item = |i: usize| MENU.get(i).map(|(k, m)| (*k, m.label()));
+                list(d, "inkstep", st.state.name(), &item, MENU.len(), *sel)?;
                 bottom_line(d, &position_hint(hmi, st), hmi.toast())
             }
             Page::Machine { sel } => {
-                let items = MACHINE_MENU.iter().map(|(k, m)| (*k, m.label()));
+                let item = |i: usize| MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()));
                 list(
                     d,
                     "Machine",
                     st.state.name(),
-                    items,
+                    &item,
                     MACHINE_MENU.len(),
                     *sel,
                 )?;
@@ -416,9 +416,7 @@ impl Screens {
         let px = plot.to_px(rel);
         if run.job.draws() && hmi.pen_is_down(st) {
             if let Some((a, b)) = self.trace.push(px) {
-                embedded_graphics::primitives::Line::new(a, b)
-                    .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-                    .draw(d)?;
+                widgets::line(d, a, b)?;
             }
         }
         if self.ticks != Some(px) {
@@ -523,11 +521,11 @@ fn position_hint(hmi: &Hmi, st: &Status) -> Line {
 }
 
 /// A scrolling list of (hotkey, label) with the selected row inverted.
-fn list<'a, D>(
+fn list<D>(
     d: &mut D,
     title: &str,
     right: &str,
-    items: impl Iterator<Item = (u8, &'a str)>,
+    item: &dyn Fn(usize) -> Option<(u8, &'static str)>,
     count: usize,
     sel: usize,
 ) -> Result<(), D::Error>
@@ -537,19 +535,16 @@ where
     title_bar(d, title, right)?;
     let rows = ROW_Y.len();
     let top = sel.saturating_sub(rows - 1).min(count.saturating_sub(rows));
-    let mut shown = 0;
-    for (i, (hotkey, label)) in items.enumerate().skip(top).take(rows) {
-        let y = ROW_Y.get(i - top).copied().unwrap_or(0);
+    for (row, y) in ROW_Y.iter().enumerate() {
+        let i = top + row;
         let mut l: Line = String::new();
-        let _ = l.push(' ');
-        push_uint(&mut l, u32::from(hotkey), 0);
-        let _ = l.push(' ');
-        let _ = l.push_str(label);
-        cell(d, Point::new(0, y), &BODY, &l, 20, i == sel)?;
-        shown += 1;
-    }
-    for y in ROW_Y.iter().skip(shown) {
-        cell(d, Point::new(0, *y), &BODY, "", 20, false)?;
+        if let Some((hotkey, label)) = item(i) {
+            let _ = l.push(' ');
+            push_uint(&mut l, u32::from(hotkey), 0);
+            let _ = l.push(' ');
+            let _ = l.push_str(label);
+        }
+        cell(d, Point::new(0, *y), &BODY, &l, 20, i == sel)?;
     }
     // Scroll bar in x 123..=125, rows 11..=50, painted pixel-exact.
     if count > rows {
@@ -593,9 +588,7 @@ where
         let x = 16 + i * 2;
         let y = 32.0 - 7.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
         let p = Point::new(x, libm::roundf(y) as i32);
-        Segment::new(prev.unwrap_or(p), p)
-            .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-            .draw(d)?;
+        widgets::line(d, prev.unwrap_or(p), p)?;
         prev = Some(p);
     }
     cell(d, Point::new(31, 42), &BODY, "pen plotter", 11, false)?;
