@@ -1,6 +1,7 @@
 //! Key sequences driven through the HMI, asserting the actions it issues.
 
 use super::*;
+use crate::hmi::entry::FormKind;
 use crate::keypad::{Keypad, KeypadConfig};
 use core::f32::consts::PI;
 
