@@ -104,6 +104,12 @@ impl Hmi {
     pub fn config(&self) -> &Config {
         &self.cfg
     }
+    /// New machine settings (e.g. after `$100=`); also resets the draw speed to the
+    /// configured one. Takes effect for the next job.
+    pub fn set_config(&mut self, cfg: Config) {
+        self.cfg = cfg;
+        self.draw_feed = cfg.draw_feed_mm_min;
+    }
     pub fn toast(&self) -> Option<&str> {
         self.toast.as_ref().map(|t| t.text.as_str())
     }

@@ -527,3 +527,19 @@ fn feed_direction_history_keeps_the_latest_changes() {
     let h: std::vec::Vec<[i8; 2]> = b.hmi.feed_dirs().copied().collect();
     assert_eq!(h, [[0, 1], [-1, 1], [-1, -1], [1, 0], [0, -1], [1, 1]]);
 }
+
+#[test]
+fn new_settings_apply_to_the_next_job() {
+    let mut b = Bench::new();
+    b.hmi.set_config(Config {
+        steps_per_mm: [40.0, 40.0, 100.0],
+        draw_feed_mm_min: 900.0,
+        ..cfg()
+    });
+    b.keys(&[d(2)]);
+    b.number("10");
+    b.number("0");
+    let m = moves(&b.keys(&[Key::Enter]));
+    assert_eq!(m[1].target, [400, 0, 0]);
+    assert_eq!(m[1].feed, Feed::MmPerMin(900.0));
+}
