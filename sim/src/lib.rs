@@ -1,0 +1,12 @@
+//! inkstep-sim: the firmware core on a PC, in virtual time.
+//!
+//! The simulator is wiring only: it feeds bytes, keys and timer interrupts to the same
+//! `inkstep-core` code the firmware runs, and records what comes out (responses, step
+//! events, LCD frames). Everything that decides anything lives in the core.
+
+pub mod bench;
+pub mod kinematics;
+pub mod paths;
+pub mod plot;
+pub mod render;
+pub mod trace;
