@@ -3,9 +3,13 @@
 //! `no_std` and allocation-free so that the firmware, the simulator and the host tests
 //! all run this one copy of the logic. Modules are grouped by responsibility:
 //! - geometry and the motion contract: [`motion`]
+//! - standalone use: [`keypad`] (scan and debounce), [`hmi`] (menus and drawing modes),
+//!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod keypad;
 pub mod motion;
+
