@@ -5,8 +5,10 @@
 //! events, LCD frames). Everything that decides anything lives in the core.
 
 pub mod bench;
+pub mod keys;
 pub mod kinematics;
 pub mod paths;
 pub mod plot;
+pub mod pty;
 pub mod render;
 pub mod trace;
