@@ -9,6 +9,7 @@ pub mod keys;
 pub mod kinematics;
 pub mod paths;
 pub mod plot;
+pub mod profiles;
 pub mod pty;
 pub mod render;
 pub mod trace;

@@ -116,10 +116,13 @@ pub struct ProfileCurves {
 }
 
 /// The profiles side by side: one column per profile, rows velocity, acceleration,
-/// position, with shared scales so they compare at a glance.
+/// position, with shared scales so they compare at a glance. Accelerations beyond
+/// `a_clip` (the impulses of a speed jump) are drawn clipped at the chart's edge.
 pub fn profiles_plot(
     profiles: &[ProfileCurves],
     units: [&str; 3],
+    t_label: &str,
+    a_clip: f64,
     title: &str,
     out: &Path,
 ) -> Result<(), Err> {
@@ -136,7 +139,11 @@ pub fn profiles_plot(
         .max(1e-9);
     let ranges = [
         range(profiles.iter().flat_map(|p| p.v.iter().copied())),
-        range(profiles.iter().flat_map(|p| p.a.iter().copied())),
+        range(
+            profiles
+                .iter()
+                .flat_map(|p| p.a.iter().map(|a| a.clamp(-a_clip, a_clip))),
+        ),
         range(profiles.iter().flat_map(|p| p.x.iter().copied())),
     ];
     let names = ["velocity", "acceleration", "position"];
@@ -147,7 +154,8 @@ pub fn profiles_plot(
     ];
     for (col, p) in profiles.iter().enumerate() {
         for row in 0..3 {
-            let ys = [&p.v, &p.a, &p.x][row];
+            let clipped: Vec<f64> = p.a.iter().map(|a| a.clamp(-a_clip, a_clip)).collect();
+            let ys = [&p.v, &clipped, &p.x][row];
             let (lo, hi) = ranges[row];
             let caption = if row == 0 {
                 format!("{}: {}", p.name, names[row])
@@ -162,7 +170,7 @@ pub fn profiles_plot(
                 .build_cartesian_2d(0.0..t_end, lo..hi)
                 .map_err(e)?;
             c.configure_mesh()
-                .x_desc("time (s)")
+                .x_desc(t_label)
                 .y_desc(units[row])
                 .x_labels(5)
                 .label_style(("sans-serif", 12))
