@@ -8,4 +8,5 @@
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod interp;
 pub mod motion;
