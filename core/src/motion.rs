@@ -23,10 +23,19 @@ pub enum Path {
     /// A circular arc in the XY plane. `center` is relative to the start point, in steps.
     /// `turns` counts extra full turns (a full circle is `target == start`, `turns = 0`
     /// is interpreted by the planner as one whole revolution, as G2/G3 do).
-    Arc { center: [i32; 2], ccw: bool, turns: u16 },
+    Arc {
+        center: [i32; 2],
+        ccw: bool,
+        turns: u16,
+    },
     /// An axis-aligned elliptical arc in the XY plane: semi-axes `a` (X) and `b` (Y) in
     /// steps, `center` relative to the start point (which must lie on the ellipse).
-    Ellipse { center: [i32; 2], a: i32, b: i32, ccw: bool },
+    Ellipse {
+        center: [i32; 2],
+        a: i32,
+        b: i32,
+        ccw: bool,
+    },
     /// y = amp * sin(omega * u + phase) - amp * sin(phase), with u = x - x_start in
     /// steps; the curve starts at the current position and runs to `target` X.
     /// Units: `amp` in steps, `omega` in radians per step, `phase` in radians.
