@@ -5,12 +5,19 @@
 //! - geometry and the motion contract: [`motion`]
 //! - standalone use: [`keypad`] (scan and debounce), [`hmi`] (menus and drawing modes),
 //!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
+//! - machine settings and their flash store: [`settings`], [`settings_store`]
+//! - G-code parsing and interpretation: [`gcode`]
+//! - machine state, safety and the planner interface: [`machine`]
+//! - the Grbl 1.1 serial protocol: [`protocol`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod gcode;
 pub mod interp;
 pub mod keypad;
+pub mod machine;
 pub mod motion;
-
+pub mod protocol;
+pub mod settings;
