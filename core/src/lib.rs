@@ -15,6 +15,7 @@
 #![forbid(unsafe_code)]
 
 pub mod gcode;
+pub mod hmi;
 pub mod interp;
 pub mod keypad;
 pub mod machine;
