@@ -7,6 +7,7 @@
 pub mod bench;
 pub mod keys;
 pub mod kinematics;
+pub mod lcd;
 pub mod paths;
 pub mod plot;
 pub mod profiles;
