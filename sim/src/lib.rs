@@ -13,4 +13,5 @@ pub mod plot;
 pub mod profiles;
 pub mod pty;
 pub mod render;
+pub mod sender;
 pub mod trace;
