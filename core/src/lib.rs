@@ -9,11 +9,14 @@
 //! - G-code parsing and interpretation: [`gcode`]
 //! - machine state, safety and the planner interface: [`machine`]
 //! - the Grbl 1.1 serial protocol: [`protocol`]
+//! - the wiring of protocol, keypad, HMI and planner shared by firmware and simulator:
+//!   [`controller`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod controller;
 pub mod gcode;
 pub mod hmi;
 pub mod interp;
