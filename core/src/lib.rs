@@ -10,3 +10,4 @@
 
 pub mod interp;
 pub mod motion;
+pub mod planner;

@@ -65,7 +65,12 @@ impl Interpolate for DdaLine {
         }
         self.done += 1;
         let mut d = [0i8; AXES];
-        let axes = self.err.iter_mut().zip(&self.len).zip(&self.dir).zip(d.iter_mut());
+        let axes = self
+            .err
+            .iter_mut()
+            .zip(&self.len)
+            .zip(&self.dir)
+            .zip(d.iter_mut());
         for (((err, &len), &dir), delta) in axes {
             *err += 2 * len;
             if *err >= 0 {
