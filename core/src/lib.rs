@@ -23,5 +23,6 @@ pub mod interp;
 pub mod keypad;
 pub mod machine;
 pub mod motion;
+pub mod planner;
 pub mod protocol;
 pub mod settings;

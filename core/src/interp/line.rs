@@ -65,11 +65,17 @@ impl Interpolate for DdaLine {
         }
         self.done += 1;
         let mut d = [0i8; AXES];
-        for i in 0..AXES {
-            self.err[i] += 2 * self.len[i];
-            if self.err[i] >= 0 {
-                self.err[i] -= 2 * self.major;
-                d[i] = self.dir[i];
+        let axes = self
+            .err
+            .iter_mut()
+            .zip(&self.len)
+            .zip(&self.dir)
+            .zip(d.iter_mut());
+        for (((err, &len), &dir), delta) in axes {
+            *err += 2 * len;
+            if *err >= 0 {
+                *err -= 2 * self.major;
+                *delta = dir;
             }
         }
         Some(Tick::from_deltas(d))
