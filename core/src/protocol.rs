@@ -57,6 +57,8 @@ pub struct Protocol {
     line_too_long: bool,
     /// A complete line waits in `line` for room in the planner.
     line_ready: bool,
+    /// The last line ended with CR: a following LF belongs to it.
+    after_cr: bool,
     out: Deque<u8, OUT_CAP>,
     status_requested: bool,
     listing: Option<Listing>,
@@ -108,6 +110,7 @@ impl Protocol {
             cleaner: LineCleaner::new(),
             line_too_long: false,
             line_ready: false,
+            after_cr: false,
             out: Deque::new(),
             status_requested: false,
             listing: None,
@@ -246,6 +249,7 @@ impl Protocol {
         self.cleaner.reset();
         self.line_too_long = false;
         self.line_ready = false;
+        self.after_cr = false;
         self.listing = None;
         self.lines_received = 0;
         self.startup_next = Some(0);
@@ -311,6 +315,11 @@ impl Protocol {
     /// Move bytes from the receive buffer into the line; true when a line is complete.
     fn frame_line(&mut self) -> bool {
         while let Some(b) = self.rx.pop_front() {
+            let lf_after_cr = b == b'\n' && self.after_cr;
+            self.after_cr = b == b'\r';
+            if lf_after_cr {
+                continue;
+            }
             if b == b'\n' || b == b'\r' {
                 self.cleaner.reset();
                 self.line_ready = true;
@@ -345,11 +354,12 @@ impl Protocol {
                 r
             }
             Some(_) => {
-                if !self.machine.is_locked() && !self.machine.can_accept(m) {
+                let line_no = self.lines_received.wrapping_add(1);
+                let Some(r) = self.machine.execute(&line, line_no, m, now_ms) else {
                     return false;
-                }
-                self.lines_received = self.lines_received.wrapping_add(1);
-                self.machine.execute(&line, self.lines_received, m, now_ms)
+                };
+                self.lines_received = line_no;
+                r
             }
         };
         self.flush_events();
@@ -476,7 +486,7 @@ impl Protocol {
         if !slot_exists {
             return Err(Status::InvalidStatement);
         }
-        crate::gcode::Block::parse(line)?;
+        self.machine.validate(line)?;
         let text = core::str::from_utf8(line).map_err(|_| Status::InvalidStatement)?;
         self.set_startup_line(idx, text);
         self.startup_dirty = true;
@@ -497,11 +507,10 @@ impl Protocol {
         if text.is_empty() {
             return true;
         }
-        if !self.machine.can_accept(m) {
+        let Some(r) = self.machine.execute(text.as_bytes(), 0, m, now_ms) else {
             self.startup_next = Some(i);
             return false;
-        }
-        let r = self.machine.execute(text.as_bytes(), 0, m, now_ms);
+        };
         self.flush_events();
         match r {
             Ok(()) => self.say(format_args!(">{}:ok", text)),

@@ -9,7 +9,7 @@
 
 use super::homing::{Homing, HomingError, Progress};
 use super::{Command, MotionControl};
-use crate::gcode::interp::{to_mm, MAX_COMMANDS};
+use crate::gcode::interp::to_mm;
 use crate::gcode::{Interp, Reject, Status, Stop};
 use crate::motion::{Move, AXES};
 use crate::settings::Settings;
@@ -240,10 +240,9 @@ impl Machine {
         self.homing.is_some() || m.is_moving()
     }
 
-    /// Room for the largest block: lines are only taken when this holds, so a full
-    /// queue leaves the line in the receive buffer (back-pressure).
-    pub fn can_accept<M: MotionControl>(&self, m: &M) -> bool {
-        !self.pause_pending && !self.paused && m.free() >= MAX_COMMANDS
+    /// G-code lines are taken only when this holds: after M0 they wait for cycle start.
+    pub fn can_accept(&self) -> bool {
+        !self.pause_pending && !self.paused
     }
 
     fn idle_or_alarm<M: MotionControl>(&self, m: &M) -> bool {
@@ -276,63 +275,80 @@ impl Machine {
         self.settings_dirty = true;
     }
 
-    /// Execute one cleaned G-code line. The caller checks [`Machine::can_accept`] first.
+    /// Execute one cleaned G-code line. `None` means "not now": the block needs more
+    /// free planner entries than there are, or an M0 pause is pending. Nothing has
+    /// changed then; the caller keeps the line and retries (back-pressure).
     pub fn execute<M: MotionControl>(
         &mut self,
         line: &[u8],
         line_no: u32,
         m: &mut M,
         now_ms: u32,
-    ) -> Result<(), Status> {
+    ) -> Option<Result<(), Status>> {
         if self.locked || self.homing.is_some() {
-            return Err(Status::SystemLocked);
+            return Some(Err(Status::SystemLocked));
         }
         if self.jogging {
-            return Err(Status::IdleError);
+            return Some(Err(Status::IdleError));
         }
-        match self.interp.execute(line, &self.settings, line_no) {
-            Ok(out) => {
-                if out.coords_changed {
-                    self.coords_dirty = true;
-                }
-                if self.check_mode {
-                    return Ok(());
-                }
-                let mut moved = false;
-                for cmd in out.cmds.iter() {
-                    if m.push(*cmd).is_err() {
-                        // can_accept() guarantees room; if a planner disagrees, stop
-                        // rather than lose a move silently.
-                        self.raise(Alarm::AbortCycle, m);
-                        return Ok(());
-                    }
-                    moved |= matches!(cmd, Command::Move(_));
-                    if let Command::Move(_) = cmd {
-                        self.job.moves = self.job.moves.wrapping_add(1);
-                    }
-                }
-                if moved && !self.job.running {
+        if !self.can_accept() {
+            return None;
+        }
+        // Interpret on a copy; commit only if the planner has room for the result.
+        let mut trial = self.interp.clone();
+        let result = trial.execute(line, &self.settings, line_no);
+        let out = match result {
+            Ok(out) => out,
+            Err(Reject::Error(e)) => return Some(Err(e)),
+            Err(Reject::SoftLimit) => {
+                // Grbl: the line is answered ok, motion stops, alarm 2 (no reset needed).
+                self.raise(Alarm::SoftLimit, m);
+                return Some(Ok(()));
+            }
+        };
+        if !self.check_mode && out.cmds.len() > m.free() {
+            return None;
+        }
+        self.interp = trial;
+        if out.coords_changed {
+            self.coords_dirty = true;
+        }
+        if self.check_mode {
+            return Some(Ok(()));
+        }
+        for cmd in out.cmds.iter() {
+            if m.push(*cmd).is_err() {
+                // free() promised room; if a planner disagrees, stop rather than
+                // lose a move silently.
+                self.raise(Alarm::AbortCycle, m);
+                return Some(Ok(()));
+            }
+            if let Command::Move(_) = cmd {
+                if !self.job.running {
                     self.job = Job {
                         running: true,
                         start_ms: now_ms,
-                        moves: 1,
+                        moves: 0,
                         ending: false,
                     };
                     self.event(Event::JobStarted);
                 }
-                match out.stop {
-                    Some(Stop::Pause) => self.pause_pending = true,
-                    Some(Stop::End) => self.job.ending = self.job.running,
-                    None => {}
-                }
-                Ok(())
+                self.job.moves = self.job.moves.wrapping_add(1);
             }
+        }
+        match out.stop {
+            Some(Stop::Pause) => self.pause_pending = true,
+            Some(Stop::End) => self.job.ending = self.job.running,
+            None => {}
+        }
+        Some(Ok(()))
+    }
+
+    /// Check a line (for `$N`) without running it or changing any state.
+    pub fn validate(&self, line: &[u8]) -> Result<(), Status> {
+        match self.interp.clone().execute(line, &self.settings, 0) {
             Err(Reject::Error(e)) => Err(e),
-            Err(Reject::SoftLimit) => {
-                // Grbl: the line is accepted, motion stops, alarm 2 (no reset needed).
-                self.raise(Alarm::SoftLimit, m);
-                Ok(())
-            }
+            _ => Ok(()),
         }
     }
 
