@@ -3,7 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use inkstep_sim::{kinematics, plot, profiles, trace::Trace};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -53,7 +53,7 @@ fn main() -> ExitCode {
     }
 }
 
-fn plot_trace(path: &PathBuf, out: &PathBuf, spm: f64) -> Result<ExitCode, String> {
+fn plot_trace(path: &Path, out: &Path, spm: f64) -> Result<ExitCode, String> {
     let trace = Trace::read_file(path).map_err(|e| format!("{}: {e}", path.display()))?;
     let k = kinematics::from_trace(&trace, [spm; 3], 0.001, 0.005);
     let name = path
@@ -64,7 +64,7 @@ fn plot_trace(path: &PathBuf, out: &PathBuf, spm: f64) -> Result<ExitCode, Strin
     Ok(ExitCode::SUCCESS)
 }
 
-fn plot_profiles(out: &PathBuf) -> Result<ExitCode, String> {
+fn plot_profiles(out: &Path) -> Result<ExitCode, String> {
     let p = profiles::THESIS;
     let profs: Vec<profiles::Profile> = profiles::FOUR
         .iter()

@@ -140,13 +140,16 @@ impl Profile {
         let n = (t_end / dt + 1e-6).floor() as usize + 1;
         let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
         let v: Vec<f64> = t.iter().map(|&t| self.speed(p, t)).collect();
-        let mut a = vec![0.0; n];
-        for i in 0..n {
-            let (i0, i1) = (i.saturating_sub(1), (i + 1).min(n - 1));
-            if i1 > i0 {
-                a[i] = (v[i1] - v[i0]) / ((i1 - i0) as f64 * dt);
-            }
-        }
+        let a: Vec<f64> = (0..n)
+            .map(|i| {
+                let (i0, i1) = (i.saturating_sub(1), (i + 1).min(n - 1));
+                if i1 > i0 {
+                    (v[i1] - v[i0]) / ((i1 - i0) as f64 * dt)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         let mut x = vec![0.0; n];
         for i in 1..n {
             x[i] = x[i - 1] + 0.5 * (v[i] + v[i - 1]) * dt;
