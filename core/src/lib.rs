@@ -25,4 +25,5 @@ pub mod machine;
 pub mod motion;
 pub mod planner;
 pub mod protocol;
+pub mod screens;
 pub mod settings;
