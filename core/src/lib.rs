@@ -11,3 +11,4 @@
 pub mod interp;
 pub mod motion;
 pub mod planner;
+pub mod stepper;
