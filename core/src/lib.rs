@@ -27,3 +27,4 @@ pub mod planner;
 pub mod protocol;
 pub mod screens;
 pub mod settings;
+pub mod stepper;

@@ -49,6 +49,8 @@ pub struct Conic {
     tail: Option<Line>,
     /// On the last lap, the trace runs along the target ray.
     on_ray: bool,
+    /// The point before the last tick (relative to the centre).
+    prev: (i64, i64),
     finished: bool,
 }
 
@@ -149,8 +151,39 @@ impl Conic {
             budget,
             tail: None,
             on_ray: false,
+            prev: (x, y),
             finished: false,
         })
+    }
+
+    /// Feed direction at the present point (step space, not normalised).
+    pub fn direction(&self) -> [f32; 2] {
+        let (tx, ty) = self.tangent(self.x, self.y);
+        [tx as f32, ty as f32]
+    }
+
+    /// Ideal path length of the last tick in mm (`spx`, `spy`: steps per mm): the
+    /// change of the parameter angle t (x = a cos t, y = b sin t) between the two points,
+    /// atan(cross/dot) ~ cross/dot for one step, times |dP/dt| at their midpoint. The
+    /// angles telescope, so the lengths of a whole arc add up to its true length.
+    pub fn last_tick_len(&self, spx: f64, spy: f64) -> f64 {
+        let (x1, y1) = self.prev;
+        let (x2, y2) = (self.x, self.y);
+        if self.tail.is_some() {
+            let (dx, dy) = ((x2 - x1) as f64 / spx, (y2 - y1) as f64 / spy);
+            return libm::sqrt(dx * dx + dy * dy);
+        }
+        let (a, b) = (self.a as f64, self.b as f64);
+        let cross = (x1 * y2 - x2 * y1) as f64;
+        let dot = a * (x1 * x2) as f64 + b * (y1 * y2) as f64;
+        if dot <= 0.0 {
+            return 0.0;
+        }
+        let dt = libm::atan2(cross.abs() * libm::sqrt(a * b), dot);
+        let (mx, my) = ((x1 + x2) as f64 * 0.5, (y1 + y2) as f64 * 0.5);
+        let vx = libm::sqrt(b / a) * my / spx;
+        let vy = libm::sqrt(a / b) * mx / spy;
+        dt * libm::sqrt(vx * vx + vy * vy)
     }
 
     fn f(&self, x: i64, y: i64) -> i64 {
@@ -259,13 +292,8 @@ impl Conic {
     fn start_tail(&mut self) -> Option<Tick> {
         let from = [self.x as i32, self.y as i32, 0];
         let to = [self.tx as i32, self.ty as i32, 0];
-        let mut tail = Line::new(from, to, self.method);
-        let t = tail.next_tick();
-        self.tail = Some(tail);
-        if t.is_none() {
-            self.finished = true;
-        }
-        t
+        self.tail = Some(Line::new(from, to, self.method));
+        self.next_tick()
     }
 }
 
@@ -276,8 +304,14 @@ impl Interpolate for Conic {
         }
         if let Some(tail) = self.tail.as_mut() {
             let t = tail.next_tick();
-            if t.is_none() {
-                self.finished = true;
+            match t {
+                Some(t) => {
+                    let d = t.deltas();
+                    self.prev = (self.x, self.y);
+                    self.x += i64::from(d[X]);
+                    self.y += i64::from(d[Y]);
+                }
+                None => self.finished = true,
             }
             return t;
         }
@@ -310,6 +344,7 @@ impl Interpolate for Conic {
             }
         }
         let t = tick_xy(sgn(nx - self.x), sgn(ny - self.y));
+        self.prev = (self.x, self.y);
         self.x = nx;
         self.y = ny;
         Some(t)

@@ -20,6 +20,10 @@ use crate::motion::{StepPos, X, Y};
 /// A function y = f(u), u = x - x_start in steps, y relative to the start in steps.
 pub trait Curve {
     fn eval(&self, u: f64) -> f64;
+    /// dy/du; a central difference unless the curve knows better.
+    fn slope(&self, u: f64) -> f64 {
+        self.eval(u + 0.25) * 2.0 - self.eval(u - 0.25) * 2.0
+    }
 }
 
 impl<F: Fn(f64) -> f64> Curve for F {
@@ -57,6 +61,9 @@ impl Sine {
 impl Curve for Sine {
     fn eval(&self, u: f64) -> f64 {
         self.amp * libm::sin(self.omega * u + self.phase) - self.offset
+    }
+    fn slope(&self, u: f64) -> f64 {
+        self.amp * self.omega * libm::cos(self.omega * u + self.phase)
     }
 }
 
@@ -108,6 +115,15 @@ impl<C: Curve> CurveTrace<C> {
         };
         t.plan_column();
         t
+    }
+
+    /// Feed direction at the present column (step space, not normalised).
+    pub fn direction(&self) -> [f32; 2] {
+        let u = (self.dir * self.k) as f64 + 0.5 * self.dir as f64;
+        [
+            self.dir as f32,
+            (self.dir as f64 * self.curve.slope(u)) as f32,
+        ]
     }
 
     fn at(&self, k2: i64) -> i64 {

@@ -131,6 +131,18 @@ impl Interp {
     }
 }
 
+impl Interp {
+    /// Feed direction (step space, XY) for curves; `None` for straight lines, whose
+    /// direction never changes.
+    pub fn direction(&self) -> Option<[f32; 2]> {
+        match self {
+            Interp::Line(_) => None,
+            Interp::Conic(c) => Some(c.direction()),
+            Interp::Sine(c) => Some(c.direction()),
+        }
+    }
+}
+
 impl Interpolate for Interp {
     fn next_tick(&mut self) -> Option<Tick> {
         match self {

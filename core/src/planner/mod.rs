@@ -14,6 +14,7 @@
 //! - a start speed below which motors may start and stop at once replaces zero;
 //! - curves (arcs, ellipses, sines) are single blocks, limited by their centripetal
 //!   acceleration, so they never slow down at chord joints.
+//!
 //! Planning uses the profile shape's effective acceleration, so S-curves plan right.
 
 pub mod geometry;

@@ -33,36 +33,29 @@ impl Shape {
             Shape::Cosine => a * 2.0 / PI,
         }
     }
-    /// Ramp duration for a speed change `dv` (>= 0) at peak acceleration `a`.
-    pub fn ramp_time(self, dv: f32, a: f32) -> f32 {
-        match self {
-            Shape::Trapezoid => dv / a,
-            Shape::Cosine => PI * dv / (2.0 * a),
-        }
-    }
 }
 
 /// One ramp from `v0` to `v1` lasting `t` seconds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Ramp {
-    v0: f32,
-    v1: f32,
-    t: f32,
+    v0: f64,
+    v1: f64,
+    t: f64,
 }
 
 impl Ramp {
-    fn new(shape: Shape, v0: f32, v1: f32, a: f32) -> Self {
-        Ramp {
-            v0,
-            v1,
-            t: shape.ramp_time((v1 - v0).abs(), a),
-        }
+    fn new(shape: Shape, v0: f64, v1: f64, a: f64) -> Self {
+        let t = match shape {
+            Shape::Trapezoid => (v1 - v0).abs() / a,
+            Shape::Cosine => core::f64::consts::PI * (v1 - v0).abs() / (2.0 * a),
+        };
+        Ramp { v0, v1, t }
     }
-    fn dist(&self) -> f32 {
+    fn dist(&self) -> f64 {
         0.5 * (self.v0 + self.v1) * self.t
     }
     /// Distance and speed `t` seconds into the ramp.
-    fn at(&self, shape: Shape, t: f32) -> (f32, f32) {
+    fn at(&self, shape: Shape, t: f64) -> (f64, f64) {
         if self.t <= 0.0 {
             return (0.0, self.v0);
         }
@@ -73,9 +66,9 @@ impl Ramp {
                 (self.v0 * t + 0.5 * acc * t * t, self.v0 + acc * t)
             }
             Shape::Cosine => {
-                let w = PI / self.t;
-                let s = self.v0 * t + 0.5 * dv * (t - libm::sinf(w * t) / w);
-                (s, self.v0 + 0.5 * dv * (1.0 - libm::cosf(w * t)))
+                let w = core::f64::consts::PI / self.t;
+                let s = self.v0 * t + 0.5 * dv * (t - libm::sin(w * t) / w);
+                (s, self.v0 + 0.5 * dv * (1.0 - libm::cos(w * t)))
             }
         }
     }
@@ -86,8 +79,8 @@ impl Ramp {
 pub struct Profile {
     shape: Shape,
     up: Ramp,
-    cruise_v: f32,
-    cruise_t: f32,
+    cruise_v: f64,
+    cruise_t: f64,
     down: Ramp,
 }
 
@@ -96,17 +89,21 @@ impl Profile {
     /// `v_max`, with peak acceleration `a`. If `v_exit` cannot be reached (too short to
     /// slow down, or to speed up), the profile ends at the closest reachable speed.
     pub fn new(shape: Shape, v0: f32, v_max: f32, v_exit: f32, a: f32, dist: f32) -> Self {
-        let a = if a > 0.0 { a } else { f32::MIN_POSITIVE };
-        let ae = shape.effective_accel(a);
-        let dist = dist.max(0.0);
-        let v0 = v0.max(0.0);
-        let v_max = v_max.max(0.0);
+        let a = if a > 0.0 {
+            f64::from(a)
+        } else {
+            f64::from(f32::MIN_POSITIVE)
+        };
+        let ae = f64::from(shape.effective_accel(1.0)) * a;
+        let dist = f64::from(dist.max(0.0));
+        let v0 = f64::from(v0.max(0.0));
+        let v_max = f64::from(v_max.max(0.0));
         // Exit speeds reachable over `dist` from v0 lie in [lo, hi].
-        let hi = libm::sqrtf(v0 * v0 + 2.0 * ae * dist);
-        let lo = libm::sqrtf((v0 * v0 - 2.0 * ae * dist).max(0.0));
-        let ve = v_exit.max(0.0).min(hi).max(lo);
+        let hi = libm::sqrt(v0 * v0 + 2.0 * ae * dist);
+        let lo = libm::sqrt((v0 * v0 - 2.0 * ae * dist).max(0.0));
+        let ve = f64::from(v_exit.max(0.0)).min(hi).max(lo);
         // Where an acceleration from v0 meets a deceleration to ve (>= both of them).
-        let meet = libm::sqrtf(ae * dist + 0.5 * (v0 * v0 + ve * ve));
+        let meet = libm::sqrt(ae * dist + 0.5 * (v0 * v0 + ve * ve));
         let peak = if meet <= v_max { meet } else { v_max.max(ve) };
         let up = Ramp::new(shape, v0, peak, a);
         let down = Ramp::new(shape, peak, ve, a);
@@ -122,19 +119,20 @@ impl Profile {
     }
 
     /// Total duration in seconds.
-    pub fn duration(&self) -> f32 {
+    pub fn duration(&self) -> f64 {
         self.up.t + self.cruise_t + self.down.t
     }
     /// Total distance.
-    pub fn distance(&self) -> f32 {
+    pub fn distance(&self) -> f64 {
         self.up.dist() + self.cruise_v * self.cruise_t + self.down.dist()
     }
     /// Speed at the end.
-    pub fn exit_speed(&self) -> f32 {
+    pub fn exit_speed(&self) -> f64 {
         self.down.v1
     }
     /// Distance covered and speed `t` seconds after the start (clamped to the end).
-    pub fn at(&self, t: f32) -> (f32, f32) {
+    /// Evaluated in f64: near the end of a long move f32 cannot resolve one step.
+    pub fn at(&self, t: f64) -> (f64, f64) {
         let t = t.max(0.0);
         if t < self.up.t {
             return self.up.at(self.shape, t);
@@ -180,18 +178,18 @@ mod tests {
         // 1 mm is too short to reach 50 mm/s: triangle peaking at sqrt(a d).
         let t = Profile::new(Shape::Trapezoid, 0.0, 50.0, 0.0, 500.0, 1.0);
         let (_, vp) = t.at(t.duration() / 2.0);
-        assert!((vp - 500f32.sqrt()).abs() < 1e-3);
+        assert!((vp - 500f64.sqrt()).abs() < 1e-3);
         assert!((t.distance() - 1.0).abs() < 1e-5);
     }
 
     #[test]
     fn from_any_state_brakes_when_too_fast() {
         // Feed hold: from 40 mm/s stop as soon as possible, with plenty of room.
-        let p = Profile::new(Shape::Trapezoid, 40.0, 40.0, 0.0, 500.0, 1000.0);
-        assert!(p.distance() <= 1000.0);
+        let p = Profile::new(Shape::Trapezoid, 40.0, 0.0, 0.0, 500.0, 1000.0);
+        assert!((p.distance() - 1.6).abs() < 1e-9 && p.exit_speed() == 0.0);
         // Too short to stop: ends at the lowest reachable speed.
         let q = Profile::new(Shape::Trapezoid, 40.0, 40.0, 0.0, 500.0, 1.0);
-        assert!((q.exit_speed() - (1600.0f32 - 1000.0).sqrt()).abs() < 1e-3);
+        assert!((q.exit_speed() - (1600.0f64 - 1000.0).sqrt()).abs() < 1e-3);
         assert!((q.distance() - 1.0).abs() < 1e-4);
         // Override lowered the maximum below the present speed.
         let r = Profile::new(Shape::Cosine, 40.0, 20.0, 20.0, 500.0, 100.0);
@@ -203,9 +201,9 @@ mod tests {
     fn speed_is_monotone_on_ramps_and_distance_never_decreases() {
         for shape in [Shape::Trapezoid, Shape::Cosine] {
             let p = Profile::new(shape, 5.0, 80.0, 10.0, 300.0, 40.0);
-            let mut last = -1.0;
+            let mut last = -1.0f64;
             for i in 0..=1000 {
-                let (s, _) = p.at(p.duration() * i as f32 / 1000.0);
+                let (s, _) = p.at(p.duration() * f64::from(i) / 1000.0);
                 assert!(s >= last - 1e-5);
                 last = s;
             }
