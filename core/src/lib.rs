@@ -10,7 +10,7 @@
 //! - machine state, safety and the planner interface: [`machine`]
 //! - the Grbl 1.1 serial protocol: [`protocol`]
 //! - the wiring of protocol, keypad, HMI and planner shared by firmware and simulator:
-//!   [`controller`]
+//!   [`controller`], and the planner behind the machine's motion trait: [`link`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
@@ -21,6 +21,7 @@ pub mod gcode;
 pub mod hmi;
 pub mod interp;
 pub mod keypad;
+pub mod link;
 pub mod machine;
 pub mod motion;
 pub mod planner;

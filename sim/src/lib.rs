@@ -5,6 +5,7 @@
 //! events, LCD frames). Everything that decides anything lives in the core.
 
 pub mod bench;
+pub mod board;
 pub mod keys;
 pub mod kinematics;
 pub mod lcd;
@@ -13,5 +14,6 @@ pub mod plot;
 pub mod profiles;
 pub mod pty;
 pub mod render;
+pub mod run;
 pub mod sender;
 pub mod trace;
