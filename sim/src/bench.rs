@@ -5,6 +5,8 @@
 //! Grbl's own figures from `shared/bench/README.md`, so that no expected number is
 //! written into the code.
 
+use crate::run::{run_gcode, RunResult};
+use crate::sender::Flow;
 use crate::trace::Trace;
 use serde::Deserialize;
 use std::path::Path;
@@ -207,6 +209,41 @@ pub fn markdown_table(rows: &[(GrblRow, Figures)]) -> String {
         ));
     }
     s
+}
+
+/// One reference program run and measured.
+pub struct BenchRun {
+    pub grbl: GrblRow,
+    pub ours: Figures,
+    pub run: RunResult,
+}
+
+/// Runs the program `grbl.program` of `bench_dir` and measures it against its ideal
+/// path. The programs set 80 steps/mm on X and Y at their head.
+pub fn run_program(bench_dir: &Path, grbl: &GrblRow) -> Result<BenchRun, String> {
+    let nc = bench_dir.join(&grbl.program);
+    let text = std::fs::read_to_string(&nc).map_err(|e| format!("{}: {e}", nc.display()))?;
+    let ideal = Ideal::read_file(&nc.with_extension("json"))?;
+    let run = run_gcode(&text, Flow::SendResponse);
+    let spmm = f64::from(run.settings.steps_per_mm(0));
+    let ours = analyse(&run.trace(), &ideal, spmm);
+    Ok(BenchRun {
+        grbl: grbl.clone(),
+        ours,
+        run,
+    })
+}
+
+/// Runs every program of the bench README.
+pub fn run_all(bench_dir: &Path) -> Result<Vec<BenchRun>, String> {
+    let readme = bench_dir.join("README.md");
+    let text =
+        std::fs::read_to_string(&readme).map_err(|e| format!("{}: {e}", readme.display()))?;
+    let rows = read_grbl_table(&text);
+    if rows.is_empty() {
+        return Err(format!("{}: no table of Grbl's figures", readme.display()));
+    }
+    rows.iter().map(|g| run_program(bench_dir, g)).collect()
 }
 
 #[cfg(test)]

@@ -2,7 +2,11 @@
 //! library; every command's work lives in a module of its own.
 
 use clap::{Parser, Subcommand};
-use inkstep_sim::{kinematics, plot, profiles, trace::Trace};
+use inkstep_sim::board::TICK_HZ;
+use inkstep_sim::render::Drawing;
+use inkstep_sim::sender::Flow;
+use inkstep_sim::trace::{ticks_to_us_string, Trace, TraceWriter};
+use inkstep_sim::{bench, kinematics, paths, plot, profiles, run};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -18,6 +22,28 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
+    /// Stream a G-code file through the protocol at full speed in virtual time.
+    Run {
+        file: PathBuf,
+        /// Write the step trace (t_us,x,y,z) as CSV.
+        #[arg(long)]
+        trace: Option<PathBuf>,
+        /// Write the drawing as PNG.
+        #[arg(long)]
+        png: Option<PathBuf>,
+        /// Write the drawing as SVG.
+        #[arg(long)]
+        svg: Option<PathBuf>,
+        /// Use character counting (128-byte buffer) instead of send-response.
+        #[arg(long)]
+        char_count: bool,
+    },
+    /// Run the reference programs of shared/bench and compare with Grbl's figures.
+    Bench {
+        /// Folder of the reference programs (default: ../shared/bench beside the repository).
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
     /// Plot path speed and per-axis acceleration of a step trace.
     Plot {
         trace: PathBuf,
@@ -37,6 +63,20 @@ enum Cmd {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let r = match cli.cmd {
+        Cmd::Run {
+            file,
+            trace,
+            png,
+            svg,
+            char_count,
+        } => cmd_run(
+            &file,
+            trace.as_deref(),
+            png.as_deref(),
+            svg.as_deref(),
+            char_count,
+        ),
+        Cmd::Bench { dir } => cmd_bench(dir),
         Cmd::Plot {
             trace,
             out,
@@ -51,6 +91,94 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+fn cmd_run(
+    file: &Path,
+    trace: Option<&Path>,
+    png: Option<&Path>,
+    svg: Option<&Path>,
+    char_count: bool,
+) -> Result<ExitCode, String> {
+    let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let flow = if char_count {
+        Flow::CharCount(inkstep_core::protocol::RX_BUFFER_SIZE)
+    } else {
+        Flow::SendResponse
+    };
+    let r = run::run_gcode(&text, flow);
+    if let Some(path) = trace {
+        let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut w =
+            TraceWriter::new(std::io::BufWriter::new(f), TICK_HZ).map_err(|e| e.to_string())?;
+        for e in &r.events {
+            w.row(r.rel(e.t), e.pos).map_err(|e| e.to_string())?;
+        }
+        w.finish().map_err(|e| e.to_string())?;
+    }
+    let spmm = [
+        f64::from(r.settings.steps_per_mm(0)),
+        f64::from(r.settings.steps_per_mm(1)),
+    ];
+    let drawing = Drawing::from_trace(&r.trace(), [0; 3], spmm);
+    if let Some(path) = png {
+        drawing.write_png(path, 1000)?;
+    }
+    if let Some(path) = svg {
+        std::fs::write(path, drawing.to_svg()).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    let steps: [u32; 3] =
+        [0, 1, 2].map(|a| r.events.iter().filter(|e| e.step & (1 << a) != 0).count() as u32);
+    println!(
+        "{}: {} lines, job time {} s, steps X {} Y {} Z {}, final position {},{},{}",
+        file.display(),
+        r.lines,
+        ticks_to_us_string(
+            r.events.last().map_or(0, |e| r.rel(e.t)),
+            TICK_HZ * 1_000_000
+        ),
+        steps[0],
+        steps[1],
+        steps[2],
+        r.final_pos[0],
+        r.final_pos[1],
+        r.final_pos[2]
+    );
+    for m in &r.messages {
+        println!("{m}");
+    }
+    for e in &r.errors {
+        eprintln!("line {}: {} -> {}", e.line_no, e.text, e.response);
+    }
+    for a in &r.alarms {
+        eprintln!("{a}");
+    }
+    if r.timed_out {
+        eprintln!("the job did not finish within the virtual time limit");
+    }
+    Ok(if r.ok() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {
+    let dir = dir.unwrap_or_else(|| paths::shared_dir().join("bench"));
+    let runs = bench::run_all(&dir)?;
+    let rows: Vec<(bench::GrblRow, bench::Figures)> = runs
+        .iter()
+        .map(|b| (b.grbl.clone(), b.ours.clone()))
+        .collect();
+    println!("{}", bench::markdown_table(&rows));
+    let failed = runs
+        .iter()
+        .any(|b| !b.run.ok() || !bench::goal_failures(&b.ours, &b.grbl).is_empty());
+    Ok(if failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
 }
 
 fn plot_trace(path: &Path, out: &Path, spm: f64) -> Result<ExitCode, String> {
@@ -75,10 +203,9 @@ fn plot_profiles(out: &Path) -> Result<ExitCode, String> {
         .iter()
         .map(|prof| {
             let [t, v, a, x] = prof.sample(&p, t_end / 2000.0, prof.total());
-            let ms = |v: Vec<f64>| v.into_iter().map(|t| t * 1e3).collect();
             plot::ProfileCurves {
                 name: format!("{} {:.2} ms", prof.ramp.name(), prof.total() * 1e3),
-                t: ms(t.clone()),
+                t: t.into_iter().map(|t| t * 1e3).collect(),
                 v,
                 a,
                 x,
