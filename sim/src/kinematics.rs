@@ -3,7 +3,7 @@
 //! Each axis's position is taken as the piecewise-linear curve through its step events
 //! (time, position after the step); the half-step offset of a stepped staircase cancels
 //! in the differences. Velocity and acceleration are central differences of that curve
-//! over a window `h`, sampled on a regular grid.
+//! over short windows, sampled on a regular grid.
 
 use crate::trace::Trace;
 
@@ -45,8 +45,16 @@ fn at(k: &[(f64, f64)], t: f64) -> f64 {
     p0 + (p1 - p0) * (t - t0) / (t1 - t0)
 }
 
-/// Samples every `dt` seconds with a difference window of `h` seconds.
-pub fn from_trace(trace: &Trace, steps_per_mm: [f64; 3], dt: f64, h: f64) -> Kinematics {
+/// Samples every `dt` seconds; velocity from central differences over `h` seconds,
+/// acceleration over `h_acc` (longer: the minor axis of a DDA line steps on the major
+/// axis's ticks, and that timing jitter grows with 1/h^2 in a second difference).
+pub fn from_trace(
+    trace: &Trace,
+    steps_per_mm: [f64; 3],
+    dt: f64,
+    h: f64,
+    h_acc: f64,
+) -> Kinematics {
     let end = trace.rows.last().map_or(0.0, |r| r.t_us * 1e-6);
     let ks: Vec<Vec<(f64, f64)>> = (0..3).map(|a| knots(trace, a)).collect();
     let mut out = Kinematics::default();
@@ -58,7 +66,7 @@ pub fn from_trace(trace: &Trace, steps_per_mm: [f64; 3], dt: f64, h: f64) -> Kin
             let x = |tt: f64| at(&ks[a], tt) / steps_per_mm[a];
             v[a] = (x(t + h) - x(t - h)) / (2.0 * h);
             out.vel[a].push(v[a]);
-            out.acc[a].push((x(t + h) - 2.0 * x(t) + x(t - h)) / (h * h));
+            out.acc[a].push((x(t + h_acc) - 2.0 * x(t) + x(t - h_acc)) / (h_acc * h_acc));
         }
         out.speed.push(v[0].hypot(v[1]));
         out.t_s.push(t);
@@ -86,7 +94,7 @@ mod tests {
     fn recovers_constant_acceleration() {
         // 500 mm/s^2 at 80 steps/mm.
         let t = accelerating(40_000.0, 4000);
-        let k = from_trace(&t, [80.0; 3], 0.001, 0.005);
+        let k = from_trace(&t, [80.0; 3], 0.001, 0.005, 0.01);
         // Away from the start and end, acceleration and speed are close to the truth.
         for (i, &ts) in k.t_s.iter().enumerate() {
             if (0.05..0.40).contains(&ts) {

@@ -16,4 +16,5 @@ pub mod pty;
 pub mod render;
 pub mod run;
 pub mod sender;
+pub mod serve;
 pub mod trace;

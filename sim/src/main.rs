@@ -44,6 +44,15 @@ enum Cmd {
         #[arg(long)]
         dir: Option<PathBuf>,
     },
+    /// Open a pseudo-terminal that behaves like the board's USB serial port; runs until killed.
+    Serve {
+        /// Also make this path a symlink to the port.
+        #[arg(long)]
+        link: Option<PathBuf>,
+        /// Run virtual time this many times faster than real time.
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+    },
     /// Plot path speed and per-axis acceleration of a step trace.
     Plot {
         trace: PathBuf,
@@ -77,6 +86,12 @@ fn main() -> ExitCode {
             char_count,
         ),
         Cmd::Bench { dir } => cmd_bench(dir),
+        Cmd::Serve { link, speed } => {
+            if !(speed > 0.0 && speed.is_finite()) {
+                return fail("--speed must be a positive number");
+            }
+            inkstep_sim::serve::serve(link.as_deref(), speed, || false).map(|()| ExitCode::SUCCESS)
+        }
         Cmd::Plot {
             trace,
             out,
@@ -91,6 +106,11 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+fn fail(msg: &str) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::from(2)
 }
 
 fn cmd_run(
@@ -183,7 +203,7 @@ fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {
 
 fn plot_trace(path: &Path, out: &Path, spm: f64) -> Result<ExitCode, String> {
     let trace = Trace::read_file(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let k = kinematics::from_trace(&trace, [spm; 3], 0.001, 0.005);
+    let k = kinematics::from_trace(&trace, [spm; 3], 0.001, 0.005, 0.02);
     let name = path
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
