@@ -8,6 +8,7 @@
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod analysis;
 pub mod interp;
 pub mod motion;
 pub mod planner;
