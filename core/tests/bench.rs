@@ -7,7 +7,8 @@
 //!
 //! The G-code reader here understands only what the four programs use ($ settings,
 //! G0-G3 with X Y I J F, G4, modal words); the product's interpreter is the protocol
-//! issue's. It rounds mm to the nearest step, as the interpreter will.
+//! issue's. Lines carry their exact end points (1/256 step, `Path::LineFine`), so
+//! steps follow the programmed path rather than the path between rounded ends.
 
 use inkstep_core::analysis::{Analyzer, Ideal, TraceStats};
 use inkstep_core::interp::Method;
@@ -87,8 +88,10 @@ fn read_program(text: &str) -> (PlannerConfig, Vec<Move>) {
         if !has_axis || motion == 4 {
             continue;
         }
-        let steps =
-            |mm: f64, axis: usize| (mm * f64::from(cfg.axes[axis].steps_per_mm)).round() as i32;
+        let q8 = |mm: f64, axis: usize| {
+            (mm * f64::from(cfg.axes[axis].steps_per_mm) * 256.0).round() as i32
+        };
+        let steps = |mm: f64, axis: usize| (f64::from(q8(mm, axis)) / 256.0).round() as i32;
         let t: StepPos = [
             steps(target[0], 0),
             steps(target[1], 1),
@@ -99,6 +102,10 @@ fn read_program(text: &str) -> (PlannerConfig, Vec<Move>) {
                 center: [steps(ij[0], 0), steps(ij[1], 1)],
                 ccw: motion == 3,
                 turns: 0,
+            },
+            _ if target[2] == pos[2] => Path::LineFine {
+                from: [q8(pos[0], 0), q8(pos[1], 1)],
+                to: [q8(target[0], 0), q8(target[1], 1)],
             },
             _ => Path::Line,
         };
