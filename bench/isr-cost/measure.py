@@ -1,0 +1,109 @@
+#!/usr/bin/env python3
+"""Count the instructions the real thumbv7m step-interrupt code executes, per call.
+
+Runs a Cortex-M3 ELF (bench/isr-cost, built for thumbv7m-none-eabi) in the unicorn
+emulator from its reset vector until it executes `bkpt`. Every basic block executed is
+counted exactly (capstone decodes each block once); blocks executed between the entry of
+a chosen function and the return to its caller are charged to that call. Emulation is
+deterministic, so the counts are the same on every run and every machine.
+
+Usage: measure.py ELF [--json OUT]
+The ELF exports `bench_tick` (the step interrupt's work for one step event) and
+`bench_prepare` (one call of the segment preparer), and a `BENCH_RESULT` record that
+its main fills in (steps executed per program).
+"""
+import argparse, json, struct, sys
+from elftools.elf.elffile import ELFFile
+from unicorn import Uc, UC_ARCH_ARM, UC_MODE_THUMB, UC_MODE_MCLASS, UC_HOOK_BLOCK, UC_HOOK_INTR
+from unicorn.arm_const import UC_ARM_REG_SP, UC_ARM_REG_LR, UC_ARM_REG_PC, UC_CPU_ARM_CORTEX_M3
+from capstone import Cs, CS_ARCH_ARM, CS_MODE_THUMB, CS_MODE_MCLASS
+
+FLASH, FLASH_SIZE = 0x0800_0000, 0x0010_0000
+RAM, RAM_SIZE = 0x2000_0000, 0x0010_0000
+PERIPH, PERIPH_SIZE = 0x4000_0000, 0x0010_0000      # GPIO/TIM registers: plain memory here
+SCS, SCS_SIZE = 0xE000_0000, 0x0010_0000            # core peripherals: plain memory here
+
+
+def symbols(elf):
+    tab = elf.get_section_by_name('.symtab')
+    return {s.name: (s['st_value'], s['st_size']) for s in tab.iter_symbols() if s.name}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument('elf')
+    ap.add_argument('--json')
+    ap.add_argument('--names', default='bench_tick,bench_prepare')
+    args = ap.parse_args()
+
+    with open(args.elf, 'rb') as f:
+        elf = ELFFile(f)
+        syms = symbols(elf)
+        uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
+        uc.ctl_set_cpu_model(UC_CPU_ARM_CORTEX_M3)
+        for base, size in ((FLASH, FLASH_SIZE), (RAM, RAM_SIZE), (PERIPH, PERIPH_SIZE), (SCS, SCS_SIZE)):
+            uc.mem_map(base, size)
+        for seg in elf.iter_segments():
+            if seg['p_type'] == 'PT_LOAD' and seg['p_filesz']:
+                uc.mem_write(seg['p_paddr'], seg.data())
+        image = bytes(uc.mem_read(FLASH, FLASH_SIZE))
+
+    sp, reset = struct.unpack_from('<II', image, 0)
+    names = args.names.split(',')
+    entries = {}
+    for n in names:
+        if n not in syms:
+            sys.exit(f'symbol {n} not found in {args.elf}')
+        entries[syms[n][0] & ~1] = n
+    cs = Cs(CS_ARCH_ARM, CS_MODE_THUMB | CS_MODE_MCLASS)
+    block_len = {}
+    stats = {n: {'calls': 0, 'total': 0, 'worst': 0, 'hist': {}} for n in names}
+    state = {'fn': None, 'ret': None, 'count': 0, 'all': 0}
+
+    def on_block(uc, addr, size, _):
+        n = block_len.get((addr, size))
+        if n is None:
+            code = bytes(uc.mem_read(addr, size))
+            n = sum(1 for _ in cs.disasm_lite(code, addr))
+            block_len[(addr, size)] = n
+        state['all'] += n
+        if state['fn'] is not None and addr == state['ret']:
+            s = stats[state['fn']]
+            c = state['count']
+            s['calls'] += 1
+            s['total'] += c
+            s['worst'] = max(s['worst'], c)
+            s['hist'][c] = s['hist'].get(c, 0) + 1
+            state['fn'] = None
+        if state['fn'] is None and addr in entries:
+            state['fn'] = entries[addr]
+            state['ret'] = uc.reg_read(UC_ARM_REG_LR) & ~1
+            state['count'] = 0
+        if state['fn'] is not None:
+            state['count'] += n
+
+    def on_intr(uc, intno, _):
+        uc.emu_stop()  # bkpt: the bench's main is done
+
+    uc.hook_add(UC_HOOK_BLOCK, on_block)
+    uc.hook_add(UC_HOOK_INTR, on_intr)
+    uc.reg_write(UC_ARM_REG_SP, sp)
+    uc.emu_start(reset | 1, 0xFFFF_FFFF, count=2_000_000_000)
+
+    result = {'instructions_total': state['all'], 'functions': {}}
+    for n, s in stats.items():
+        mean = s['total'] / s['calls'] if s['calls'] else 0.0
+        result['functions'][n] = {'calls': s['calls'], 'worst': s['worst'], 'mean': round(mean, 2), 'total': s['total']}
+    if 'BENCH_RESULT' in syms:
+        addr, size = syms['BENCH_RESULT']
+        words = struct.unpack(f'<{size // 4}I', bytes(uc.mem_read(addr, size)))
+        result['bench_result_words'] = list(words)
+    if args.json:
+        with open(args.json, 'w') as f:
+            json.dump(result, f, indent=1)
+    json.dump(result, sys.stdout, indent=1)
+    print()
+
+
+if __name__ == '__main__':
+    main()

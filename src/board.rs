@@ -1,0 +1,627 @@
+//! The Blue Pill board: the pin map and every peripheral's setup, in one place.
+//!
+//! This is the only module that knows which pin does what. Everything it hands out is
+//! a small owner of one job (step port, keypad matrix, LCD, USB, ...) whose methods are
+//! plain register accesses; all decisions are taken in `inkstep-core`.
+//!
+//! | pin      | signal                          | notes                                          |
+//! |----------|---------------------------------|------------------------------------------------|
+//! | PA0      | X STEP  (4-phase: X coil A)     | push-pull; all motion outputs share GPIOA so   |
+//! | PA1      | Y STEP  (4-phase: X coil B)     | one BSRR store sets every step/dir/coil bit    |
+//! | PA2      | Z STEP  (4-phase: X coil C)     |                                                |
+//! | PA3      | X DIR   (4-phase: X coil D)     |                                                |
+//! | PA4      | Y DIR   (4-phase: Y coil A)     |                                                |
+//! | PA5      | Z DIR   (4-phase: Y coil B)     |                                                |
+//! | PA6      | (4-phase: Y coil C)             | unused in step/dir mode                        |
+//! | PA7      | (4-phase: Y coil D)             | unused in step/dir mode                        |
+//! | PA8      | pen servo PWM (TIM1 CH1, 50 Hz) | 5 V servo signal is fine from 3.3 V            |
+//! | PA9      | stepper ENABLE                  | active low (A4988/DRV8825 /EN); `$4` inverts   |
+//! | PA10     | buzzer                          | active high, through a transistor              |
+//! | PA11/12  | USB D-/D+                       | CDC-ACM serial; PA12 pulled low at boot        |
+//! | PA13/14  | SWDIO/SWCLK                     | probe-rs; JTAG is disabled, SWD stays          |
+//! | PA15     | keypad column 3                 | open-drain, driven low to scan                 |
+//! | PB0      | E-STOP input (EXTI0)            | pull-up; wire NC to GND, open = stop           |
+//! | PB1      | X limit/home switch (EXTI1)     | pull-up; NC to GND, `$5` inverts               |
+//! | PB3      | Y limit/home switch (EXTI3)     | pull-up; NC to GND                             |
+//! | PB4      | feed hold / SYNC in (EXTI4)     | pull-up; low = pause (the seed's SYNC input)   |
+//! | PB5      | cycle start (EXTI5)             | pull-up; falling edge = resume                 |
+//! | PB6-PB9  | keypad rows 1-4                 | pull-up inputs, read together from GPIOB IDR   |
+//! | PB10     | keypad column 1                 | open-drain                                     |
+//! | PB11     | keypad column 2                 | open-drain                                     |
+//! | PB12     | LCD CS (ST7920 RS)              | active high                                    |
+//! | PB13     | LCD SCK (ST7920 E)              | SPI2, mode 3-compatible 0, 600 kHz             |
+//! | PB15     | LCD MOSI (ST7920 R/W)           | ST7920 PSB tied low (serial mode)              |
+//! | PC13     | busy LED (on board)             | active low                                     |
+//! | PC14     | keypad column 4                 | open-drain (low-speed pin, fine for a keypad)  |
+//! | PC15     | busy output                     | high while moving, for syncing controllers     |
+
+use embedded_hal::digital::{ErrorType, OutputPin};
+use embedded_hal_bus::spi::ExclusiveDevice;
+use fugit::ExtU32;
+use stm32f1xx_hal::{
+    flash::FlashExt,
+    gpio::{self, Edge, ErasedPin, ExtiPin, Input, OpenDrain, Output, PullUp, PushPull},
+    pac,
+    prelude::*,
+    rcc,
+    spi::{Mode, Phase, Polarity, Spi},
+    timer::{Channel, PwmChannel, Tim1NoRemap},
+    usb::{Peripheral, UsbBus, UsbBusType},
+    watchdog::IndependentWatchdog,
+};
+use usb_device::{bus::UsbBusAllocator, prelude::*};
+
+/// System clock: 72 MHz from the 8 MHz crystal (PLL x9), APB1 36 MHz, USB 48 MHz.
+pub const SYSCLK_HZ: u32 = 72_000_000;
+/// The step timer (TIM2) counts at this rate: APB1 timer clock 72 MHz / prescaler.
+pub const STEP_TIMER_HZ: u32 = 2_000_000;
+/// SPI clock for the ST7920 (its serial interface is specified to ~1 MHz at 5 V).
+pub const LCD_SPI_HZ: u32 = 600_000;
+/// Watchdog timeout: long enough for the slowest task period, short enough to matter.
+pub const WATCHDOG_MS: u32 = 500;
+
+/// GPIOA bit masks of the motion outputs.
+pub const STEP_MASK_X: u32 = 1 << 0;
+pub const STEP_MASK_Y: u32 = 1 << 1;
+pub const STEP_MASK_Z: u32 = 1 << 2;
+pub const DIR_SHIFT: u32 = 3;
+pub const MOTION_PINS: u32 = 0xFF;
+
+/// The step, direction and coil outputs on PA0-PA7 plus the driver enable on PA9.
+///
+/// Owns the HAL pins (so nothing else can take them) but writes GPIOA's BSRR directly:
+/// one store per interrupt, no read-modify-write, safe against preemption.
+pub struct StepPort {
+    _pins: [ErasedPin<Output<PushPull>>; 8],
+    enable: gpio::PA9<Output<PushPull>>,
+}
+
+impl StepPort {
+    /// Set the pins in `high` and clear the pins in `low` among PA0-PA7, in one store.
+    #[inline(always)]
+    pub fn write(&mut self, high: u8, low: u8) {
+        // SAFETY: BSRR is write-only and atomic per bit; this struct owns PA0-PA7.
+        unsafe {
+            (*pac::GPIOA::ptr())
+                .bsrr()
+                .write(|w| w.bits(u32::from(high) | (u32::from(low) << 16)));
+        }
+    }
+
+    /// Enable or disable the stepper drivers. `active_low` is true for A4988-style /EN.
+    pub fn set_drivers_enabled(&mut self, enabled: bool, active_low: bool) {
+        if enabled != active_low {
+            self.enable.set_high();
+        } else {
+            self.enable.set_low();
+        }
+    }
+}
+
+/// Disable every motor driver and drop all step/coil outputs, from any context.
+///
+/// Used by the panic handler and the e-stop: it touches only GPIOA's atomic set/reset
+/// register, so it cannot deadlock on a lock held by the code that failed. With the
+/// default `$4=0` (active-low enable) a high ENABLE pin means "disabled"; since the
+/// invert setting may be unknown in a panic, it also releases every coil (4-phase
+/// motors are then unpowered whatever the setting).
+pub fn emergency_outputs_off() {
+    // SAFETY: single atomic store to a write-only register.
+    unsafe {
+        (*pac::GPIOA::ptr())
+            .bsrr()
+            .write(|w| w.bits((1 << 9) | (MOTION_PINS << 16)));
+    }
+}
+
+/// TIM2 as the step timer: counts at [`STEP_TIMER_HZ`]; the update interrupt starts a
+/// step pulse, compare channel 1 ends it after the configured pulse width.
+pub struct StepTimer {
+    tim: pac::TIM2,
+}
+
+impl StepTimer {
+    fn new(tim: pac::TIM2) -> Self {
+        // SAFETY: enabling the TIM2 clock; RCC is otherwise owned by the HAL but this
+        // bit is not touched by it after freeze.
+        unsafe {
+            let rcc = &*pac::RCC::ptr();
+            rcc.apb1enr().modify(|_, w| w.tim2en().set_bit());
+            rcc.apb1rstr().modify(|_, w| w.tim2rst().set_bit());
+            rcc.apb1rstr().modify(|_, w| w.tim2rst().clear_bit());
+        }
+        let psc = SYSCLK_HZ / STEP_TIMER_HZ - 1;
+        tim.psc().write(|w| unsafe { w.bits(psc) });
+        tim.arr().write(|w| unsafe { w.bits(0xFFFF) });
+        // Apply the prescaler now, without taking an interrupt for it.
+        tim.egr().write(|w| w.ug().set_bit());
+        tim.sr().write(|w| unsafe { w.bits(0) });
+        // ARR is preloaded so a new period takes effect at the next update, never mid-count.
+        tim.cr1().write(|w| w.arpe().set_bit().urs().set_bit());
+        tim.dier().write(|w| w.uie().set_bit().cc1ie().set_bit());
+        Self { tim }
+    }
+
+    /// Set the pulse width in timer ticks (end-of-pulse compare value).
+    pub fn set_pulse_ticks(&mut self, ticks: u16) {
+        self.tim
+            .ccr1()
+            .write(|w| unsafe { w.bits(u32::from(ticks.max(1))) });
+    }
+
+    /// Program the period of the next step interval, in ticks (2..=65536).
+    #[inline(always)]
+    pub fn set_period(&mut self, ticks: u32) {
+        let arr = ticks.clamp(2, 0x1_0000) - 1;
+        self.tim.arr().write(|w| unsafe { w.bits(arr) });
+    }
+
+    pub fn start(&mut self) {
+        self.tim.cnt().write(|w| unsafe { w.bits(0) });
+        self.tim.cr1().modify(|_, w| w.cen().set_bit());
+    }
+
+    pub fn stop(&mut self) {
+        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+    }
+
+    pub fn is_running(&self) -> bool {
+        self.tim.cr1().read().cen().bit_is_set()
+    }
+
+    /// Which event raised the interrupt; clears the flags it reports.
+    #[inline(always)]
+    pub fn take_events(&mut self) -> (bool, bool) {
+        let sr = self.tim.sr().read();
+        let update = sr.uif().bit_is_set();
+        let compare = sr.cc1if().bit_is_set();
+        // rc_w0 bits: write 0 to clear exactly the ones we saw.
+        let mut clear = 0xFFFF_u32;
+        if update {
+            clear &= !1;
+        }
+        if compare {
+            clear &= !(1 << 1);
+        }
+        self.tim.sr().write(|w| unsafe { w.bits(clear) });
+        (update, compare)
+    }
+}
+
+/// The pen servo on PA8 (TIM1 CH1), 50 Hz.
+pub struct PenServo {
+    pwm: PwmChannel<pac::TIM1, 0>,
+}
+
+impl PenServo {
+    /// Set the pulse width in microseconds (typically 500..2500 for 0..180 degrees).
+    pub fn set_pulse_us(&mut self, us: u32) {
+        let max = u32::from(self.pwm.get_max_duty());
+        // 20 ms period: duty = us / 20000 of max.
+        let duty = (max * us.min(20_000)) / 20_000;
+        self.pwm.set_duty(duty as u16);
+    }
+}
+
+/// The 4x4 keypad: rows PB6-PB9 (pull-up inputs), columns PB10, PB11, PA15, PC14 (open drain).
+pub struct KeypadMatrix {
+    _rows: [ErasedPin<Input<PullUp>>; 4],
+    col1: gpio::PB10<Output<OpenDrain>>,
+    col2: gpio::PB11<Output<OpenDrain>>,
+    col3: gpio::PA15<Output<OpenDrain>>,
+    col4: gpio::PC14<Output<OpenDrain>>,
+}
+
+impl KeypadMatrix {
+    pub const COLUMNS: usize = 4;
+
+    /// Drive column `col` low (all others released). The rows settle within a few µs,
+    /// which is why the scan task reads them on its next tick rather than busy-waiting.
+    pub fn select_column(&mut self, col: usize) {
+        self.col1.set_high();
+        self.col2.set_high();
+        self.col3.set_high();
+        self.col4.set_high();
+        match col {
+            0 => self.col1.set_low(),
+            1 => self.col2.set_low(),
+            2 => self.col3.set_low(),
+            _ => self.col4.set_low(),
+        }
+    }
+
+    /// Row bits of the selected column: bit r set = key in row r pressed (active low).
+    pub fn read_rows(&self) -> u8 {
+        // SAFETY: read-only access to GPIOB's input register.
+        let idr = unsafe { (*pac::GPIOB::ptr()).idr().read().bits() };
+        (!(idr >> 6) & 0x0F) as u8
+    }
+}
+
+/// Safety and control inputs on EXTI.
+pub struct Inputs {
+    pub estop: gpio::PB0<Input<PullUp>>,
+    pub limit_x: gpio::PB1<Input<PullUp>>,
+    pub limit_y: gpio::PB3<Input<PullUp>>,
+    pub feed_hold: gpio::PB4<Input<PullUp>>,
+    pub cycle_start: gpio::PB5<Input<PullUp>>,
+}
+
+impl Inputs {
+    /// Raw levels: true = switch open / input high.
+    pub fn estop_open(&self) -> bool {
+        self.estop.is_high()
+    }
+    pub fn limit_x_open(&self) -> bool {
+        self.limit_x.is_high()
+    }
+    pub fn limit_y_open(&self) -> bool {
+        self.limit_y.is_high()
+    }
+    pub fn feed_hold_low(&self) -> bool {
+        self.feed_hold.is_low()
+    }
+}
+
+/// Busy LED (PC13, active low), busy output (PC15) and buzzer (PA10).
+pub struct Indicators {
+    led: gpio::PC13<Output<PushPull>>,
+    busy_out: gpio::PC15<Output<PushPull>>,
+    buzzer: gpio::PA10<Output<PushPull>>,
+}
+
+impl Indicators {
+    pub fn set_busy(&mut self, busy: bool) {
+        if busy {
+            self.led.set_low();
+            self.busy_out.set_high();
+        } else {
+            self.led.set_high();
+            self.busy_out.set_low();
+        }
+    }
+    pub fn set_buzzer(&mut self, on: bool) {
+        if on {
+            self.buzzer.set_high();
+        } else {
+            self.buzzer.set_low();
+        }
+    }
+}
+
+/// The ST7920 chip select is active high; embedded-hal-bus's ExclusiveDevice drives CS
+/// active low, so it gets an inverted view of PB12.
+pub struct ActiveHighCs(pub gpio::PB12<Output<PushPull>>);
+
+impl ErrorType for ActiveHighCs {
+    type Error = core::convert::Infallible;
+}
+
+impl OutputPin for ActiveHighCs {
+    fn set_low(&mut self) -> Result<(), Self::Error> {
+        self.0.set_high();
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Self::Error> {
+        self.0.set_low();
+        Ok(())
+    }
+}
+
+/// A pin that does nothing: the ST7920 module's reset is tied to VCC on most boards.
+pub struct NoPin;
+impl ErrorType for NoPin {
+    type Error = core::convert::Infallible;
+}
+impl OutputPin for NoPin {
+    fn set_low(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// A busy-wait delay for the LCD driver. Only the lowest-priority task uses it, so
+/// every other task preempts it.
+pub struct SpinDelay;
+impl embedded_hal::delay::DelayNs for SpinDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        // 72 cycles per µs; asm::delay waits at least the given cycle count.
+        cortex_m::asm::delay((ns / 1000 + 1) * (SYSCLK_HZ / 1_000_000));
+    }
+}
+
+pub type LcdSpi = ExclusiveDevice<Spi<pac::SPI2, u8>, ActiveHighCs, SpinDelay>;
+pub type Lcd = st7920::ST7920<LcdSpi, NoPin, NoPin>;
+
+pub type Usb = UsbDevice<'static, UsbBusType>;
+pub type UsbSerial = usbd_serial::SerialPort<'static, UsbBusType>;
+
+/// The settings sector: the last four 1 KB pages of the 64 KB part (memory.x keeps the
+/// program below it).
+pub const SETTINGS_FLASH_START: u32 = 0x0800_F000;
+pub const SETTINGS_FLASH_SIZE: u32 = 4 * 1024;
+pub const FLASH_PAGE_SIZE: u32 = 1024;
+
+/// Everything `init` hands to the RTIC app.
+pub struct Board {
+    pub step_port: StepPort,
+    pub step_timer: StepTimer,
+    pub servo: PenServo,
+    pub keypad: KeypadMatrix,
+    pub inputs: Inputs,
+    pub indicators: Indicators,
+    pub lcd: Lcd,
+    pub usb: Usb,
+    pub serial: UsbSerial,
+    pub watchdog: IndependentWatchdog,
+    pub flash: SettingsFlash,
+    pub sysclk_hz: u32,
+}
+
+/// Bring up the clocks and every peripheral. Called once from `init` with interrupts off.
+///
+/// `usb_bus` is the 'static home of the USB bus allocator (an RTIC init local).
+pub fn init(
+    dp: pac::Peripherals,
+    usb_bus: &'static mut Option<UsbBusAllocator<UsbBusType>>,
+) -> Board {
+    let mut flash = dp.FLASH.constrain();
+    let mut rcc = dp.RCC.freeze(
+        rcc::Config::hse(8.MHz())
+            .sysclk(SYSCLK_HZ.Hz())
+            .hclk(SYSCLK_HZ.Hz())
+            .pclk1(36.MHz())
+            .pclk2(72.MHz()),
+        &mut flash.acr,
+    );
+    let sysclk_hz = rcc.clocks.sysclk().raw();
+
+    let mut afio = dp.AFIO.constrain(&mut rcc);
+    let mut gpioa = dp.GPIOA.split(&mut rcc);
+    let mut gpiob = dp.GPIOB.split(&mut rcc);
+    let mut gpioc = dp.GPIOC.split(&mut rcc);
+    let mut exti = dp.EXTI;
+
+    // JTAG off, SWD on: frees PA15, PB3, PB4.
+    let (pa15, pb3, pb4) = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
+
+    // Drivers disabled first (ENABLE high = disabled for active-low drivers).
+    let enable = gpioa
+        .pa9
+        .into_push_pull_output_with_state(&mut gpioa.crh, gpio::PinState::High);
+    let step_port = StepPort {
+        _pins: [
+            gpioa.pa0.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa1.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa2.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa3.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa4.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa5.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa6.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa7.into_push_pull_output(&mut gpioa.crl).erase(),
+        ],
+        enable,
+    };
+
+    let step_timer = StepTimer::new(dp.TIM2);
+
+    let servo_pin = gpioa.pa8.into_alternate_push_pull(&mut gpioa.crh);
+    let mut pwm = dp
+        .TIM1
+        .pwm_hz::<Tim1NoRemap, _, _>(servo_pin, &mut afio.mapr, 50.Hz(), &mut rcc);
+    pwm.enable(Channel::C1);
+    let servo = PenServo { pwm: pwm.split() };
+
+    let keypad = KeypadMatrix {
+        _rows: [
+            gpiob.pb6.into_pull_up_input(&mut gpiob.crl).erase(),
+            gpiob.pb7.into_pull_up_input(&mut gpiob.crl).erase(),
+            gpiob.pb8.into_pull_up_input(&mut gpiob.crh).erase(),
+            gpiob.pb9.into_pull_up_input(&mut gpiob.crh).erase(),
+        ],
+        col1: gpiob
+            .pb10
+            .into_open_drain_output_with_state(&mut gpiob.crh, gpio::PinState::High),
+        col2: gpiob
+            .pb11
+            .into_open_drain_output_with_state(&mut gpiob.crh, gpio::PinState::High),
+        col3: pa15.into_open_drain_output_with_state(&mut gpioa.crh, gpio::PinState::High),
+        col4: gpioc
+            .pc14
+            .into_open_drain_output_with_state(&mut gpioc.crh, gpio::PinState::High),
+    };
+
+    let mut estop = gpiob.pb0.into_pull_up_input(&mut gpiob.crl);
+    let mut limit_x = gpiob.pb1.into_pull_up_input(&mut gpiob.crl);
+    let mut limit_y = pb3.into_pull_up_input(&mut gpiob.crl);
+    let mut feed_hold = pb4.into_pull_up_input(&mut gpiob.crl);
+    let mut cycle_start = gpiob.pb5.into_pull_up_input(&mut gpiob.crl);
+    // E-stop and limits: NC switches to GND, so opening (rising edge) is the event.
+    // Both edges are taken so that releasing is seen too.
+    estop.make_interrupt_source(&mut afio);
+    estop.trigger_on_edge(&mut exti, Edge::RisingFalling);
+    estop.enable_interrupt(&mut exti);
+    limit_x.make_interrupt_source(&mut afio);
+    limit_x.trigger_on_edge(&mut exti, Edge::RisingFalling);
+    limit_x.enable_interrupt(&mut exti);
+    limit_y.make_interrupt_source(&mut afio);
+    limit_y.trigger_on_edge(&mut exti, Edge::RisingFalling);
+    limit_y.enable_interrupt(&mut exti);
+    feed_hold.make_interrupt_source(&mut afio);
+    feed_hold.trigger_on_edge(&mut exti, Edge::RisingFalling);
+    feed_hold.enable_interrupt(&mut exti);
+    cycle_start.make_interrupt_source(&mut afio);
+    cycle_start.trigger_on_edge(&mut exti, Edge::Falling);
+    cycle_start.enable_interrupt(&mut exti);
+    let inputs = Inputs {
+        estop,
+        limit_x,
+        limit_y,
+        feed_hold,
+        cycle_start,
+    };
+
+    let mut indicators = Indicators {
+        led: gpioc.pc13.into_push_pull_output(&mut gpioc.crh),
+        busy_out: gpioc.pc15.into_push_pull_output(&mut gpioc.crh),
+        buzzer: gpioa.pa10.into_push_pull_output(&mut gpioa.crh),
+    };
+    indicators.set_busy(false);
+
+    // LCD on SPI2. The ST7920 samples on the rising edge with the clock idle low.
+    let sck = gpiob.pb13.into_alternate_push_pull(&mut gpiob.crh);
+    let mosi = gpiob.pb15.into_alternate_push_pull(&mut gpiob.crh);
+    let cs = ActiveHighCs(gpiob.pb12.into_push_pull_output(&mut gpiob.crh));
+    let spi = Spi::new(
+        dp.SPI2,
+        (
+            Some(sck),
+            None::<gpio::PB14<Input<gpio::Floating>>>,
+            Some(mosi),
+        ),
+        Mode {
+            polarity: Polarity::IdleLow,
+            phase: Phase::CaptureOnFirstTransition,
+        },
+        LCD_SPI_HZ.Hz(),
+        &mut rcc,
+    );
+    // ExclusiveDevice::new fails only if setting CS fails, which is infallible here.
+    let Ok(lcd_spi) = ExclusiveDevice::new(spi, cs, SpinDelay);
+    let lcd = st7920::ST7920::new(lcd_spi, NoPin, None, false);
+
+    // USB: force a re-enumeration by pulling D+ low briefly (the Blue Pill has a fixed
+    // pull-up on D+), then hand the pins to the USB peripheral.
+    let mut usb_dp = gpioa.pa12.into_push_pull_output(&mut gpioa.crh);
+    usb_dp.set_low();
+    cortex_m::asm::delay(sysclk_hz / 100);
+    let usb_dp = usb_dp.into_floating_input(&mut gpioa.crh);
+    let usb_periph = Peripheral {
+        usb: dp.USB,
+        pin_dm: gpioa.pa11,
+        pin_dp: usb_dp,
+    };
+    let bus: &'static UsbBusAllocator<UsbBusType> = usb_bus.insert(UsbBus::new(usb_periph));
+    let serial = usbd_serial::SerialPort::new(bus);
+    let usb = UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
+        .device_class(usbd_serial::USB_CLASS_CDC)
+        .strings(&[StringDescriptors::default()
+            .manufacturer("inkstep")
+            .product("inkstep pen plotter (Grbl 1.1)")
+            .serial_number("INKSTEP")])
+        // One language with three short strings cannot exceed the builder's limits.
+        .unwrap_or_else(|_| defmt::panic!("usb strings"))
+        .build();
+
+    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+    watchdog.start(WATCHDOG_MS.millis());
+
+    let flash = SettingsFlash::new(flash);
+
+    Board {
+        step_port,
+        step_timer,
+        servo,
+        keypad,
+        inputs,
+        indicators,
+        lcd,
+        usb,
+        serial,
+        watchdog,
+        flash,
+        sysclk_hz,
+    }
+}
+
+/// Read the EXTI pending bit of line `line` and clear it.
+pub fn exti_take_pending(line: u8) -> bool {
+    // SAFETY: PR is rc_w1; writing 1 clears only that line.
+    unsafe {
+        let exti = &*pac::EXTI::ptr();
+        let pending = exti.pr().read().bits() & (1 << line) != 0;
+        if pending {
+            exti.pr().write(|w| w.bits(1 << line));
+        }
+        pending
+    }
+}
+
+/// The settings pages of the internal flash as a NOR flash (embedded-storage traits),
+/// for the power-loss-safe store in the core.
+///
+/// Programming stalls instruction fetch from flash for the duration of a write (~50 µs
+/// per half-word) or erase (~20 ms per page), so the core only writes settings while idle.
+pub struct SettingsFlash {
+    flash: stm32f1xx_hal::flash::Parts,
+}
+
+impl SettingsFlash {
+    fn new(flash: stm32f1xx_hal::flash::Parts) -> Self {
+        Self { flash }
+    }
+
+    fn writer(&mut self) -> stm32f1xx_hal::flash::FlashWriter<'_> {
+        self.flash.writer(
+            stm32f1xx_hal::flash::SectorSize::Sz1K,
+            stm32f1xx_hal::flash::FlashSize::Sz64K,
+        )
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, defmt::Format)]
+pub struct FlashError;
+
+impl embedded_storage::nor_flash::NorFlashError for FlashError {
+    fn kind(&self) -> embedded_storage::nor_flash::NorFlashErrorKind {
+        embedded_storage::nor_flash::NorFlashErrorKind::Other
+    }
+}
+
+impl embedded_storage::nor_flash::ErrorType for SettingsFlash {
+    type Error = FlashError;
+}
+
+impl embedded_storage::nor_flash::ReadNorFlash for SettingsFlash {
+    const READ_SIZE: usize = 1;
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+        let end = offset.checked_add(bytes.len() as u32).ok_or(FlashError)?;
+        if end > SETTINGS_FLASH_SIZE {
+            return Err(FlashError);
+        }
+        let base = SETTINGS_FLASH_START - 0x0800_0000 + offset;
+        let writer = self.writer();
+        let data = writer.read(base, bytes.len()).map_err(|_| FlashError)?;
+        bytes.copy_from_slice(data);
+        Ok(())
+    }
+    fn capacity(&self) -> usize {
+        SETTINGS_FLASH_SIZE as usize
+    }
+}
+
+impl embedded_storage::nor_flash::NorFlash for SettingsFlash {
+    const WRITE_SIZE: usize = 2;
+    const ERASE_SIZE: usize = FLASH_PAGE_SIZE as usize;
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        if from > to || to > SETTINGS_FLASH_SIZE {
+            return Err(FlashError);
+        }
+        let base = SETTINGS_FLASH_START - 0x0800_0000;
+        self.writer()
+            .erase(base + from, (to - from) as usize)
+            .map_err(|_| FlashError)
+    }
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        let end = offset.checked_add(bytes.len() as u32).ok_or(FlashError)?;
+        if end > SETTINGS_FLASH_SIZE {
+            return Err(FlashError);
+        }
+        let base = SETTINGS_FLASH_START - 0x0800_0000;
+        self.writer()
+            .write(base + offset, bytes)
+            .map_err(|_| FlashError)
+    }
+}
