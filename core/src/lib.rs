@@ -16,6 +16,7 @@
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
+pub mod analysis;
 pub mod controller;
 pub mod gcode;
 pub mod hmi;

@@ -276,6 +276,14 @@ impl Conic {
 
     fn classic_candidate(&self) -> (i64, i64) {
         let (tx, ty) = self.tangent(self.x, self.y);
+        // On an axis the feed is along one axis only: a step across it would make no
+        // progress and can end a whole step off a circle whose radius is not an integer.
+        if tx == 0 && ty != 0 {
+            return (self.x, self.y + i64::from(sgn(ty)));
+        }
+        if ty == 0 && tx != 0 {
+            return (self.x + i64::from(sgn(tx)), self.y);
+        }
         let sx = if tx != 0 { sgn(tx) } else { -sgn(self.x) };
         let sy = if ty != 0 { sgn(ty) } else { -sgn(self.y) };
         let c1 = (self.x + i64::from(sx), self.y);

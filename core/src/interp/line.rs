@@ -132,11 +132,133 @@ impl Interpolate for ClassicLine {
     }
 }
 
+/// Largest |coordinate| (steps) for [`FineLine`], so that Q8 products fit in i64.
+const FINE_LIMIT: i64 = 1 << 21;
+
+/// XY line between ideal (sub-step) end points, in 1/256 step: at every integer
+/// major-axis coordinate the minor axis takes the integer nearest the ideal line
+/// (per-axis error <= 0.5 against the unrounded path). Incremental: the rounding
+/// remainder is kept as an exact integer, one add and compare per tick.
+#[derive(Clone, Debug)]
+pub struct FineLine {
+    /// Major axis index (0 = X, 1 = Y) and directions.
+    major: usize,
+    dir_maj: i64,
+    /// Present integer position (major, minor) and the integer target.
+    pos: (i64, i64),
+    end: (i64, i64),
+    /// Rounding state: desired minor `n`, remainder r in [0, 256 D), increment per step.
+    n: i64,
+    r: i64,
+    inc: i64,
+    den: i64,
+}
+
+impl FineLine {
+    /// `None` when the points are too far out or the ideal line has no length; use
+    /// [`DdaLine`] then.
+    pub fn new(start: StepPos, target: StepPos, from: [i32; 2], to: [i32; 2]) -> Option<Self> {
+        let f = [i64::from(from[0]), i64::from(from[1])];
+        let t = [i64::from(to[0]), i64::from(to[1])];
+        for v in [start[0], start[1], target[0], target[1]] {
+            if i64::from(v).abs() > FINE_LIMIT {
+                return None;
+            }
+        }
+        for v in f.iter().chain(t.iter()) {
+            if v.abs() > FINE_LIMIT * 256 {
+                return None;
+            }
+        }
+        let (dx, dy) = (t[0] - f[0], t[1] - f[1]);
+        let major = if dx.abs() >= dy.abs() { 0 } else { 1 };
+        let minor = 1 - major;
+        let d_maj = t[major] - f[major];
+        if d_maj == 0 {
+            return None;
+        }
+        let s = d_maj.signum();
+        let den = d_maj.abs();
+        let d_min = t[minor] - f[minor];
+        let p0 = (i64::from(start[major]), i64::from(start[minor]));
+        // L(m) * den, in Q8, at the start's major coordinate.
+        let ld = f[minor] * den + (p0.0 * 256 - f[major]) * d_min * s;
+        // n = floor((L + 128) / 256) = floor((L*den + 128 den) / (256 den)).
+        let q = 256 * den;
+        let num = ld + 128 * den;
+        let n = num.div_euclid(q);
+        let r = num.rem_euclid(q);
+        // Going one step along the major direction: L*den changes by 256 * d_min * s * dir,
+        // and dir = s along the major axis, so by 256 * d_min.
+        let dir_maj = if i64::from(target[major]) >= p0.0 {
+            1
+        } else {
+            -1
+        };
+        let inc = 256 * d_min * s * dir_maj;
+        Some(FineLine {
+            major,
+            dir_maj,
+            pos: p0,
+            end: (i64::from(target[major]), i64::from(target[minor])),
+            n,
+            r,
+            inc,
+            den: q,
+        })
+    }
+
+    fn tick(&self, d_maj: i64, d_min: i64) -> Tick {
+        let mut d = [0i8; AXES];
+        d[self.major] = d_maj as i8;
+        d[1 - self.major] = d_min as i8;
+        Tick::from_deltas(d)
+    }
+}
+
+impl Interpolate for FineLine {
+    fn next_tick(&mut self) -> Option<Tick> {
+        if self.pos.0 != self.end.0 {
+            // Desired minor at the next major coordinate.
+            let mut n = self.n;
+            let mut r = self.r + self.inc;
+            while r >= self.den {
+                r -= self.den;
+                n += 1;
+            }
+            while r < 0 {
+                r += self.den;
+                n -= 1;
+            }
+            let gap = n - self.pos.1;
+            if gap.abs() > 1 {
+                // Steeper than one step per column right at the start: catch up first.
+                let s = gap.signum();
+                self.pos.1 += s;
+                return Some(self.tick(0, s));
+            }
+            self.n = n;
+            self.r = r;
+            self.pos.0 += self.dir_maj;
+            self.pos.1 += gap;
+            return Some(self.tick(self.dir_maj, gap));
+        }
+        if self.pos.1 != self.end.1 {
+            // The target (the ideal end rounded) is a step off the line's last column.
+            let s = (self.end.1 - self.pos.1).signum();
+            self.pos.1 += s;
+            return Some(self.tick(0, s));
+        }
+        None
+    }
+}
+
 /// A line in either method.
 #[derive(Clone, Debug)]
 pub enum Line {
     Dda(DdaLine),
     Classic(ClassicLine),
+    Fine(FineLine),
 }
 
 impl Line {
@@ -153,6 +275,7 @@ impl Interpolate for Line {
         match self {
             Line::Dda(l) => l.next_tick(),
             Line::Classic(l) => l.next_tick(),
+            Line::Fine(l) => l.next_tick(),
         }
     }
 }
@@ -277,6 +400,43 @@ mod tests {
     }
 
     proptest! {
+        #[test]
+        fn fine_lines_follow_the_unrounded_line(fx in -400_000i32..400_000, fy in -400_000i32..400_000,
+                                                 tx in -400_000i32..400_000, ty in -400_000i32..400_000) {
+            let round = |q: i32| (f64::from(q) / 256.0).round() as i32;
+            let start = [round(fx), round(fy), 0];
+            let target = [round(tx), round(ty), 0];
+            prop_assume!((fx, fy) != (tx, ty));
+            let it = FineLine::new(start, target, [fx, fy], [tx, ty]).unwrap();
+            let pts = run(it, start);
+            prop_assert_eq!(*pts.last().unwrap(), target);
+            let (sx, sy) = (f64::from(fx) / 256.0, f64::from(fy) / 256.0);
+            let (ex, ey) = (f64::from(tx) / 256.0, f64::from(ty) / 256.0);
+            // Every position within half a step on both axes of some point of the ideal
+            // segment, except possibly one catch-up step at each end.
+            let mut off = 0;
+            for p in &pts {
+                let (px, py) = (f64::from(p[0]), f64::from(p[1]));
+                let (dx, dy) = (ex - sx, ey - sy);
+                let mut lo = 0.0f64;
+                let mut hi = 1.0f64;
+                for (d, w) in [(dx, px - sx), (dy, py - sy)] {
+                    if d.abs() < 1e-12 {
+                        if w.abs() > 0.5 + 1e-9 { lo = 2.0; }
+                        continue;
+                    }
+                    let (a, b) = ((w - 0.5 - 1e-9) / d, (w + 0.5 + 1e-9) / d);
+                    lo = lo.max(a.min(b));
+                    hi = hi.min(a.max(b));
+                }
+                if lo > hi { off += 1; }
+            }
+            prop_assert!(off <= 2, "{} positions off", off);
+            for w in pts.windows(2) {
+                prop_assert!((w[0][0] - w[1][0]).abs() <= 1 && (w[0][1] - w[1][1]).abs() <= 1);
+            }
+        }
+
         #[test]
         fn dda_lines_are_exact(start in pos(), target in pos()) {
             let pts = run(DdaLine::new(start, target), start);

@@ -110,6 +110,15 @@ impl Interp {
     pub fn new(start: StepPos, mv: &Move, method: Method) -> Result<Self, InterpError> {
         match mv.path {
             Path::Line => Ok(Interp::Line(line::Line::new(start, mv.target, method))),
+            Path::LineFine { from, to } => {
+                planar(start, mv.target)?;
+                Ok(Interp::Line(
+                    match (method, line::FineLine::new(start, mv.target, from, to)) {
+                        (Method::Dda, Some(l)) => line::Line::Fine(l),
+                        _ => line::Line::new(start, mv.target, method),
+                    },
+                ))
+            }
             Path::Arc { center, ccw, turns } => {
                 planar(start, mv.target)?;
                 conic::Conic::circle(start, center, mv.target, ccw, turns, method)

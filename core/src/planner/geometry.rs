@@ -67,7 +67,7 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
         (i64::from(mv.target[i]) - i64::from(start[i])) as f32 / sp(cfg, i)
     });
     match mv.path {
-        Path::Line => {
+        Path::Line | Path::LineFine { .. } => {
             let length = libm::sqrtf(d.iter().map(|c| c * c).sum());
             if length <= 0.0 {
                 return Err(GeometryError::Empty);
