@@ -29,6 +29,8 @@ pub trait StepSide {
     fn position(&self) -> StepPos;
     /// Steps are still to come: the timer runs or commands wait in the queue.
     fn is_running(&self) -> bool;
+    /// Step commands waiting for the interrupt.
+    fn queued(&self) -> usize;
     /// Stop at once (no further step) and drop every queued command; the position
     /// stays what was emitted.
     fn flush(&mut self);
@@ -38,6 +40,28 @@ pub trait StepSide {
 
 /// Non-move commands waiting behind moves, and moves behind them.
 const PENDING: usize = 32;
+/// How far ahead of the interrupt steps are prepared, seconds. Prepared steps are
+/// committed: a block that arrives later can only raise the speed of what is not yet
+/// prepared, so preparing far ahead starves the look-ahead while a stream starts.
+const HORIZON_S: f32 = 0.010;
+/// Fewest steps kept prepared (starting from rest, and at low speed).
+const MIN_AHEAD: usize = 16;
+
+/// A sink that takes at most `left` more commands.
+struct Bounded<'a, K: CmdSink> {
+    inner: &'a mut K,
+    left: usize,
+}
+
+impl<K: CmdSink> CmdSink for Bounded<'_, K> {
+    fn has_room(&self) -> bool {
+        self.left > 0 && self.inner.has_room()
+    }
+    fn push(&mut self, c: StepCmd) -> bool {
+        self.left = self.left.saturating_sub(1);
+        self.inner.push(c)
+    }
+}
 
 /// The planner's configuration from the machine settings.
 pub fn planner_config(s: &Settings) -> PlannerConfig {
@@ -131,7 +155,15 @@ impl<S: StepSide> Link<S> {
             return;
         }
         loop {
-            self.prep.fill(&mut self.planner, self.side.sink());
+            let cfg = self.planner.config();
+            let spmm = cfg.axes.iter().fold(0.0f32, |m, a| m.max(a.steps_per_mm));
+            let ahead = ((self.prep.speed() * spmm * HORIZON_S) as usize).max(MIN_AHEAD);
+            let left = ahead.saturating_sub(self.side.queued());
+            let mut sink = Bounded {
+                inner: self.side.sink(),
+                left,
+            };
+            self.prep.fill(&mut self.planner, &mut sink);
             if self.wait_left > 0 {
                 while self.wait_left > 0 && self.side.sink().has_room() {
                     let w = self.wait_left.min(u64::from(MAX_WAIT)) as u32;

@@ -42,6 +42,9 @@ impl StepSide for SimSide {
     fn is_running(&self) -> bool {
         self.exec.is_running() || !self.queue.is_empty()
     }
+    fn queued(&self) -> usize {
+        self.queue.len()
+    }
     fn flush(&mut self) {
         self.exec.halt();
         while self.queue.dequeue().is_some() {}

@@ -76,15 +76,19 @@ pub fn run_on(board: &mut Board, text: &str, flow: Flow) -> RunResult {
     let step = Board::ms_to_ticks(1);
     let mut timed_out = false;
     loop {
+        // Bytes cross both ways until neither side has anything more to say; only then
+        // does virtual time move on (USB latency is far below a step period).
         let out = board.usb_read();
+        let mut progressed = !out.is_empty();
         sender.received(&out);
         unsent.extend(sender.to_send());
         if !unsent.is_empty() {
             let n = board.usb_write(&unsent);
             unsent.drain(..n);
+            progressed |= n > 0;
         }
         let out = board.usb_read();
-        let progressed = !out.is_empty();
+        progressed |= !out.is_empty();
         sender.received(&out);
         if sender.done() && unsent.is_empty() && board.is_idle() {
             break;
