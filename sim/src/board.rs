@@ -12,6 +12,8 @@ use inkstep_core::controller::Controller;
 use inkstep_core::keypad::{Key, KEYMAP};
 use inkstep_core::link::{Link, StepSide};
 use inkstep_core::motion::StepPos;
+use inkstep_core::screens::framebuffer::FrameBuffer;
+use inkstep_core::screens::Screens;
 use inkstep_core::settings::Settings;
 use inkstep_core::stepper::drive::STEP_QUEUE;
 use inkstep_core::stepper::exec::Executor;
@@ -24,6 +26,15 @@ pub const TICK_HZ: u64 = 72_000_000;
 pub const SCAN_MS: u64 = 5;
 /// Longest stretch of virtual time without running the background tasks.
 const POLL_MS: u64 = 1;
+/// LCD refresh period (the firmware's lowest-priority task).
+pub const LCD_MS: u64 = 100;
+
+/// The LCD task's state: the core's retained screens and frame buffer.
+pub struct Lcd {
+    pub screens: Screens,
+    pub fb: FrameBuffer,
+    next: u64,
+}
 
 /// The executor and its queue: what the step-timer interrupt owns on the board.
 pub struct SimSide {
@@ -74,6 +85,8 @@ pub struct Board {
     /// Keys held on the simulated matrix.
     pub held: Vec<Key>,
     dir: [i8; 2],
+    /// The LCD, when the session shows it (off for plain G-code runs).
+    pub lcd: Option<Lcd>,
 }
 
 impl Board {
@@ -96,6 +109,27 @@ impl Board {
             first_motion: None,
             held: Vec::new(),
             dir: [0, 0],
+            lcd: None,
+        }
+    }
+
+    /// Turns the LCD task on.
+    pub fn with_lcd(mut self) -> Board {
+        self.lcd = Some(Lcd {
+            screens: Screens::new(),
+            fb: FrameBuffer::new(),
+            next: 0,
+        });
+        self
+    }
+
+    /// Redraws the LCD now (as its task would), so the frame buffer is current.
+    pub fn refresh_lcd(&mut self) {
+        let now = self.now_ms();
+        let st = self.ctl.status(&self.link);
+        if let Some(l) = self.lcd.as_mut() {
+            // Drawing into the frame buffer cannot fail (it is plain memory).
+            let _ = l.screens.render(self.ctl.hmi(), &st, now, &mut l.fb);
         }
     }
 
@@ -180,11 +214,17 @@ impl Board {
         loop {
             self.background();
             let next_poll = self.now + poll_ticks;
-            let t = [self.next_irq, Some(self.next_scan), Some(next_poll)]
-                .into_iter()
-                .flatten()
-                .min()
-                .unwrap_or(next_poll);
+            let next_lcd = self.lcd.as_ref().map(|l| l.next);
+            let t = [
+                self.next_irq,
+                Some(self.next_scan),
+                Some(next_poll),
+                next_lcd,
+            ]
+            .into_iter()
+            .flatten()
+            .min()
+            .unwrap_or(next_poll);
             if t > until {
                 self.now = until;
                 return;
@@ -216,6 +256,12 @@ impl Board {
             if self.next_scan == t {
                 self.scan();
                 self.next_scan = t + scan_ticks;
+            }
+            if next_lcd == Some(t) {
+                self.refresh_lcd();
+                if let Some(l) = self.lcd.as_mut() {
+                    l.next = t + Self::ms_to_ticks(LCD_MS);
+                }
             }
         }
     }

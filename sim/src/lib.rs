@@ -6,6 +6,7 @@
 
 pub mod bench;
 pub mod board;
+pub mod demo;
 pub mod keys;
 pub mod kinematics;
 pub mod lcd;

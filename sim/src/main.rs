@@ -3,10 +3,10 @@
 
 use clap::{Parser, Subcommand};
 use inkstep_sim::board::TICK_HZ;
-use inkstep_sim::render::Drawing;
+use inkstep_sim::render::{Drawing, Pen};
 use inkstep_sim::sender::Flow;
 use inkstep_sim::trace::{ticks_to_us_string, Trace, TraceWriter};
-use inkstep_sim::{bench, kinematics, paths, plot, profiles, run};
+use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -53,6 +53,16 @@ enum Cmd {
         #[arg(long, default_value_t = 1.0)]
         speed: f64,
     },
+    /// The standalone demo: boot, menu, sine with preview, star, then a G-code program;
+    /// writes LCD screens, the drawing (PNG, SVG) and prints a summary.
+    Demo {
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+        /// Play this keypad script instead of the demo's (see `keys` in the README:
+        /// key names, NUMBERS, KEY:MS holds, wait:MS, idle, lcd:NAME).
+        #[arg(long)]
+        keys: Option<String>,
+    },
     /// Plot path speed and per-axis acceleration of a step trace.
     Plot {
         trace: PathBuf,
@@ -86,6 +96,7 @@ fn main() -> ExitCode {
             char_count,
         ),
         Cmd::Bench { dir } => cmd_bench(dir),
+        Cmd::Demo { out, keys } => cmd_demo(&out, keys.as_deref()),
         Cmd::Serve { link, speed } => {
             if !(speed > 0.0 && speed.is_finite()) {
                 return fail("--speed must be a positive number");
@@ -140,7 +151,7 @@ fn cmd_run(
         f64::from(r.settings.steps_per_mm(0)),
         f64::from(r.settings.steps_per_mm(1)),
     ];
-    let drawing = Drawing::from_trace(&r.trace(), [0; 3], spmm);
+    let drawing = Drawing::from_trace(&r.trace(), [0; 3], spmm, Pen::from_settings(&r.settings));
     if let Some(path) = png {
         drawing.write_png(path, 1000)?;
     }
@@ -181,6 +192,42 @@ fn cmd_run(
     } else {
         ExitCode::FAILURE
     })
+}
+
+fn cmd_demo(out: &Path, keys: Option<&str>) -> Result<ExitCode, String> {
+    let started = std::time::Instant::now();
+    let s = match keys {
+        None => demo::demo(out)?,
+        Some(script) => {
+            std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+            let mut s = demo::Session::new();
+            s.play(script, out)?;
+            s.part("keypad script", 0);
+            demo::write_drawing(&s, out)?;
+            s
+        }
+    };
+    println!(
+        "inkstep demo: {} LCD screens, drawing.png and drawing.svg in {}",
+        s.shots.len(),
+        out.display()
+    );
+    for (what, a, b, steps) in &s.parts {
+        println!(
+            "  {what:<24} job time {:>7.3} s, {steps} steps",
+            (b - a) as f64 / TICK_HZ as f64
+        );
+    }
+    let pos = s.board.link.side().exec.position();
+    println!(
+        "  virtual time {:.1} s, final position {},{},{} steps; ran in {:.2} s",
+        s.board.now() as f64 / TICK_HZ as f64,
+        pos[0],
+        pos[1],
+        pos[2],
+        started.elapsed().as_secs_f64()
+    );
+    Ok(ExitCode::SUCCESS)
 }
 
 fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {

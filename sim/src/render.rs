@@ -1,8 +1,9 @@
 //! The finished drawing, rendered from a step trace as PNG and SVG.
 //!
 //! Owns only the picture: which rows are pen-down strokes and how they are scaled. The
-//! pen is down while Z <= 0 (Z above zero lifts the pen, the usual plotter convention;
-//! with a servo pen the trace's Z stays at 0 and everything counts as drawn).
+//! pen is down while Z is nearer the pen-down than the pen-up height of the settings
+//! ($206 / $205); a program that never moves Z (a servo pen, or a path test such as the
+//! bench programs) counts as drawn throughout.
 
 use crate::trace::Trace;
 use plotters::prelude::*;
@@ -16,15 +17,39 @@ pub struct Drawing {
     pub travel: Vec<[[f64; 2]; 2]>,
 }
 
+/// Pen heights in Z steps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pen {
+    pub up: i32,
+    pub down: i32,
+}
+
+impl Pen {
+    /// The Z-axis pen heights of the settings, in steps.
+    pub fn from_settings(s: &inkstep_core::settings::Settings) -> Pen {
+        let spmm = s.steps_per_mm(2);
+        Pen {
+            up: (s.pen_z_up() * spmm).round() as i32,
+            down: (s.pen_z_down() * spmm).round() as i32,
+        }
+    }
+
+    fn is_down(self, z: i32) -> bool {
+        (i64::from(z) - i64::from(self.down)).abs() < (i64::from(z) - i64::from(self.up)).abs()
+    }
+}
+
 impl Drawing {
-    pub fn from_trace(trace: &Trace, start: [i32; 3], steps_per_mm: [f64; 2]) -> Drawing {
+    pub fn from_trace(trace: &Trace, start: [i32; 3], steps_per_mm: [f64; 2], pen: Pen) -> Drawing {
         let mm = |p: [i32; 3]| [p[0] as f64 / steps_per_mm[0], p[1] as f64 / steps_per_mm[1]];
+        let z_moves = trace.rows.iter().any(|r| r.pos[2] != start[2]);
+        let down_at = |z: i32| !z_moves || pen.is_down(z);
         let mut d = Drawing::default();
         let mut prev = start;
         let mut current: Vec<[f64; 2]> = Vec::new();
         let mut up_from: Option<[f64; 2]> = None;
         for row in &trace.rows {
-            let down = prev[2] <= 0 && row.pos[2] <= 0;
+            let down = down_at(prev[2]) && down_at(row.pos[2]);
             let xy_moved = row.pos[0] != prev[0] || row.pos[1] != prev[1];
             if down {
                 if let Some(from) = up_from.take() {
@@ -55,7 +80,7 @@ impl Drawing {
         d
     }
 
-    /// Bounding box of the strokes and travel: (min, max), or a unit box when empty.
+    /// Bounding box of the strokes: (min, max), or a unit box when nothing was drawn.
     pub fn bounds(&self) -> ([f64; 2], [f64; 2]) {
         let mut lo = [f64::INFINITY; 2];
         let mut hi = [f64::NEG_INFINITY; 2];
@@ -174,6 +199,15 @@ mod tests {
         }
     }
 
+    const PEN: Pen = Pen { up: 1, down: 0 };
+
+    #[test]
+    fn without_z_motion_everything_is_drawn() {
+        let t = tr(&[[1, 0, 5], [2, 1, 5]]);
+        let d = Drawing::from_trace(&t, [0, 0, 5], [1.0, 1.0], PEN);
+        assert_eq!(d.strokes, vec![vec![[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]]);
+    }
+
     #[test]
     fn pen_up_splits_strokes_and_records_travel() {
         let t = tr(&[
@@ -184,7 +218,7 @@ mod tests {
             [5, 5, 0],
             [6, 5, 0],
         ]);
-        let d = Drawing::from_trace(&t, [0, 0, 0], [1.0, 1.0]);
+        let d = Drawing::from_trace(&t, [0, 0, 0], [1.0, 1.0], PEN);
         assert_eq!(
             d.strokes,
             vec![
@@ -194,6 +228,19 @@ mod tests {
         );
         assert_eq!(d.travel, vec![[[2.0, 0.0], [5.0, 5.0]]]);
         assert_eq!(d.bounds(), ([0.0, 0.0], [6.0, 5.0]));
+        // Travel does not widen the picture.
+        let far = tr(&[
+            [1, 0, 0],
+            [1, 0, 1],
+            [50, 50, 1],
+            [1, 0, 1],
+            [1, 0, 0],
+            [2, 0, 0],
+        ]);
+        assert_eq!(
+            Drawing::from_trace(&far, [0, 0, 0], [1.0, 1.0], PEN).bounds(),
+            ([0.0, 0.0], [2.0, 0.0])
+        );
         let svg = d.to_svg();
         assert_eq!(svg.matches("<polyline").count(), 2);
         assert_eq!(svg.matches("<line").count(), 1);
@@ -203,7 +250,7 @@ mod tests {
     #[test]
     fn png_is_written() {
         let t = tr(&[[80, 0, 0], [80, 80, 0], [0, 0, 0]]);
-        let d = Drawing::from_trace(&t, [0, 0, 0], [80.0, 80.0]);
+        let d = Drawing::from_trace(&t, [0, 0, 0], [80.0, 80.0], PEN);
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("d.png");
         d.write_png(&p, 200).unwrap();
