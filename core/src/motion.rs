@@ -20,6 +20,11 @@ pub type StepPos = [i32; AXES];
 pub enum Path {
     /// A straight line (X, Y and Z together).
     Line,
+    /// A straight XY line whose ideal end points lie between steps (G-code targets in
+    /// mm rarely fall on a step): `from` and `to` are the exact start and end in 1/256
+    /// step, absolute. Every step lands on the grid point nearest this ideal line, not
+    /// the line between the rounded ends; `target` must be `to` rounded (Z unchanged).
+    LineFine { from: [i32; 2], to: [i32; 2] },
     /// A circular arc in the XY plane. `center` is relative to the start point, in steps.
     /// `turns` counts extra full turns (a full circle is `target == start`, `turns = 0`
     /// is interpreted by the planner as one whole revolution, as G2/G3 do).

@@ -1,0 +1,556 @@
+//! Circles, circular arcs, ellipses and elliptical arcs (axis-aligned), traced on the
+//! implicit function F(x, y) = A x^2 + B y^2 - C relative to the centre
+//! (circle: A = B = 1, C = R^2; ellipse: A = b^2, B = a^2, C = a^2 b^2).
+//!
+//! The feed direction at each point comes from the tangent (-B y, A x) (CCW) or its
+//! negation (CW), which replaces the lab report's per-quadrant direction table and works
+//! in every quadrant and across quadrant boundaries.
+//! - DDA: the axis with the larger tangent component (the major axis) steps every
+//!   tick; the other axis takes the integer nearest to the curve at the new major
+//!   coordinate (a midpoint test on F), so per-axis error <= 0.5.
+//! - Classic: one axis per tick; if F >= 0 (on or outside) take the candidate step that
+//!   lowers F, otherwise the one that raises it. Within 1 step of the curve.
+//!
+//! The move ends when the trace reaches the target, or passes the ray from the centre
+//! through the target, for the required number of times (1 + extra turns; a full
+//! circle is target == start); if it passes the ray without meeting the target, a short
+//! straight tail goes to the integer target, so the end is exact even when rounding
+//! put the target a step off the traced curve. A tick budget bounds every
+//! trace, so hostile input cannot loop forever.
+
+use super::line::Line;
+use super::{sgn, tick_xy, InterpError, Interpolate, Method, Tick};
+use crate::motion::{StepPos, X, Y};
+
+/// Largest |coordinate| relative to the centre and largest semi-axis for ellipses, so
+/// that A x^2 + B y^2 and C fit comfortably in i64 (2^15^4 = 2^60).
+const ELLIPSE_LIMIT: i64 = 1 << 15;
+/// Largest radius for circles (R^2 well inside i64).
+const CIRCLE_LIMIT: i64 = 1 << 29;
+
+/// A conic arc interpolator.
+#[derive(Clone, Debug)]
+pub struct Conic {
+    a: i64,
+    b: i64,
+    c: i64,
+    /// Current point relative to the centre.
+    x: i64,
+    y: i64,
+    /// Target relative to the centre.
+    tx: i64,
+    ty: i64,
+    ccw: bool,
+    method: Method,
+    /// Ray crossings still needed before the end.
+    crossings: u32,
+    budget: u64,
+    /// Final straight piece to the exact target once the trace has arrived.
+    tail: Option<Line>,
+    /// On the last lap, the trace runs along the target ray.
+    on_ray: bool,
+    /// The point before the last tick (relative to the centre).
+    prev: (i64, i64),
+    finished: bool,
+}
+
+impl Conic {
+    /// Circular arc from `start` around `start + center` to `target`.
+    pub fn circle(
+        start: StepPos,
+        center: [i32; 2],
+        target: StepPos,
+        ccw: bool,
+        turns: u16,
+        method: Method,
+    ) -> Result<Self, InterpError> {
+        let x = -i64::from(center[0]);
+        let y = -i64::from(center[1]);
+        if x == 0 && y == 0 {
+            return Err(InterpError::Degenerate);
+        }
+        if x.abs() > CIRCLE_LIMIT || y.abs() > CIRCLE_LIMIT {
+            return Err(InterpError::TooLarge);
+        }
+        let c = x * x + y * y;
+        Self::build(start, center, target, 1, 1, c, ccw, turns, method)
+    }
+
+    /// Elliptical arc with semi-axes `a` (X) and `b` (Y) around `start + center`.
+    pub fn ellipse(
+        start: StepPos,
+        center: [i32; 2],
+        a: i32,
+        b: i32,
+        target: StepPos,
+        ccw: bool,
+        method: Method,
+    ) -> Result<Self, InterpError> {
+        let (a, b) = (i64::from(a), i64::from(b));
+        if a <= 0 || b <= 0 {
+            return Err(InterpError::Degenerate);
+        }
+        if a > ELLIPSE_LIMIT || b > ELLIPSE_LIMIT {
+            return Err(InterpError::TooLarge);
+        }
+        Self::build(
+            start,
+            center,
+            target,
+            b * b,
+            a * a,
+            a * a * b * b,
+            ccw,
+            0,
+            method,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn build(
+        start: StepPos,
+        center: [i32; 2],
+        target: StepPos,
+        a: i64,
+        b: i64,
+        c: i64,
+        ccw: bool,
+        turns: u16,
+        method: Method,
+    ) -> Result<Self, InterpError> {
+        let cx = i64::from(start[X]) + i64::from(center[0]);
+        let cy = i64::from(start[Y]) + i64::from(center[1]);
+        let (x, y) = (i64::from(start[X]) - cx, i64::from(start[Y]) - cy);
+        let (tx, ty) = (i64::from(target[X]) - cx, i64::from(target[Y]) - cy);
+        // Coordinates must stay small enough for the squared terms (any point of the
+        // trace stays within the conic's bounding box, which this bounds too).
+        let lim = if a == b { CIRCLE_LIMIT } else { ELLIPSE_LIMIT };
+        for v in [x, y, tx, ty] {
+            if v.abs() > 2 * lim {
+                return Err(InterpError::TooLarge);
+            }
+        }
+        if tx == 0 && ty == 0 {
+            return Err(InterpError::Degenerate);
+        }
+        // Budget: a generous multiple of the perimeter bound, per turn.
+        let span = (c / a.min(b)).max(1);
+        let r = isqrt(span as u64) + 2;
+        let budget = (16 * r + 64) * (u64::from(turns) + 1);
+        Ok(Conic {
+            a,
+            b,
+            c,
+            x,
+            y,
+            tx,
+            ty,
+            ccw,
+            method,
+            crossings: u32::from(turns) + 1,
+            budget,
+            tail: None,
+            on_ray: false,
+            prev: (x, y),
+            finished: false,
+        })
+    }
+
+    /// Feed direction at the present point (step space, not normalised).
+    pub fn direction(&self) -> [f32; 2] {
+        let (tx, ty) = self.tangent(self.x, self.y);
+        [tx as f32, ty as f32]
+    }
+
+    /// Ideal path length of the last tick in mm (`spx`, `spy`: steps per mm): the
+    /// change of the parameter angle t (x = a cos t, y = b sin t) between the two points,
+    /// atan(cross/dot) ~ cross/dot for one step, times |dP/dt| at their midpoint. The
+    /// angles telescope, so the lengths of a whole arc add up to its true length.
+    pub fn last_tick_len(&self, spx: f64, spy: f64) -> f64 {
+        let (x1, y1) = self.prev;
+        let (x2, y2) = (self.x, self.y);
+        if self.tail.is_some() {
+            let (dx, dy) = ((x2 - x1) as f64 / spx, (y2 - y1) as f64 / spy);
+            return libm::sqrt(dx * dx + dy * dy);
+        }
+        let (a, b) = (self.a as f64, self.b as f64);
+        let cross = (x1 * y2 - x2 * y1) as f64;
+        let dot = a * (x1 * x2) as f64 + b * (y1 * y2) as f64;
+        if dot <= 0.0 {
+            return 0.0;
+        }
+        let dt = libm::atan2(cross.abs() * libm::sqrt(a * b), dot);
+        let (mx, my) = ((x1 + x2) as f64 * 0.5, (y1 + y2) as f64 * 0.5);
+        let vx = libm::sqrt(b / a) * my / spx;
+        let vy = libm::sqrt(a / b) * mx / spy;
+        dt * libm::sqrt(vx * vx + vy * vy)
+    }
+
+    fn f(&self, x: i64, y: i64) -> i64 {
+        self.a * x * x + self.b * y * y - self.c
+    }
+
+    /// Tangent direction (not normalised) at (x, y) in the feed direction.
+    fn tangent(&self, x: i64, y: i64) -> (i64, i64) {
+        let (tx, ty) = (-self.b * y, self.a * x);
+        if self.ccw {
+            (tx, ty)
+        } else {
+            (-tx, -ty)
+        }
+    }
+
+    /// Signed position of `(x, y)` relative to the target ray: the cross product
+    /// target x p, oriented so that it grows in the feed direction.
+    fn side(&self, x: i64, y: i64) -> i128 {
+        let cr = i128::from(self.tx) * i128::from(y) - i128::from(self.ty) * i128::from(x);
+        if self.ccw {
+            cr
+        } else {
+            -cr
+        }
+    }
+
+    fn ahead(&self, x: i64, y: i64) -> bool {
+        i128::from(self.tx) * i128::from(x) + i128::from(self.ty) * i128::from(y) > 0
+    }
+
+    /// Nearest integer to the curve along the minor axis at major coordinate `m`,
+    /// starting the search from `near` (same sign branch). `x_major` says which axis
+    /// `m` belongs to; `branch` picks the side when `near` is 0 (the sign of the
+    /// tangent's minor component).
+    fn nearest_minor(&self, x_major: bool, m: i64, near: i64, branch: i64) -> i64 {
+        let (ca, cb) = if x_major {
+            (self.a, self.b)
+        } else {
+            (self.b, self.a)
+        };
+        // 4 F at (m, (2u + s)/2) = 4 ca m^2 + cb (2u + s)^2 - 4 C, increasing in u >= 0.
+        let g = |u2: i64| 4 * ca * m * m + cb * u2 * u2 - 4 * self.c;
+        let sign = if near < 0 || (near == 0 && branch < 0) {
+            -1
+        } else {
+            1
+        };
+        let mut u = near.abs();
+        for _ in 0..4 {
+            if g(2 * u + 1) <= 0 {
+                u += 1;
+            } else {
+                break;
+            }
+        }
+        for _ in 0..4 {
+            if u > 0 && g(2 * u - 1) > 0 {
+                u -= 1;
+            } else {
+                break;
+            }
+        }
+        sign * u
+    }
+
+    fn dda_candidate(&self) -> (i64, i64) {
+        let (tx, ty) = self.tangent(self.x, self.y);
+        let x_first = tx.abs() >= ty.abs();
+        for x_major in [x_first, !x_first] {
+            if x_major {
+                let s = if tx != 0 { sgn(tx) } else { -sgn(self.x) };
+                let nx = self.x + i64::from(s);
+                let ny = self.nearest_minor(true, nx, self.y, ty);
+                if (ny - self.y).abs() <= 1 {
+                    return (nx, ny);
+                }
+            } else {
+                let s = if ty != 0 { sgn(ty) } else { -sgn(self.y) };
+                let ny = self.y + i64::from(s);
+                let nx = self.nearest_minor(false, ny, self.x, tx);
+                if (nx - self.x).abs() <= 1 {
+                    return (nx, ny);
+                }
+            }
+        }
+        // Not reachable for a well-formed conic; move along the tangent to stay safe.
+        (self.x + i64::from(sgn(tx)), self.y + i64::from(sgn(ty)))
+    }
+
+    fn classic_candidate(&self) -> (i64, i64) {
+        let (tx, ty) = self.tangent(self.x, self.y);
+        // On an axis the feed is along one axis only: a step across it would make no
+        // progress and can end a whole step off a circle whose radius is not an integer.
+        if tx == 0 && ty != 0 {
+            return (self.x, self.y + i64::from(sgn(ty)));
+        }
+        if ty == 0 && tx != 0 {
+            return (self.x + i64::from(sgn(tx)), self.y);
+        }
+        let sx = if tx != 0 { sgn(tx) } else { -sgn(self.x) };
+        let sy = if ty != 0 { sgn(ty) } else { -sgn(self.y) };
+        let c1 = (self.x + i64::from(sx), self.y);
+        let c2 = (self.x, self.y + i64::from(sy));
+        let (f1, f2) = (self.f(c1.0, c1.1), self.f(c2.0, c2.1));
+        let inward_first = f1 <= f2;
+        if (self.f(self.x, self.y) >= 0) == inward_first {
+            c1
+        } else {
+            c2
+        }
+    }
+
+    fn start_tail(&mut self) -> Option<Tick> {
+        let from = [self.x as i32, self.y as i32, 0];
+        let to = [self.tx as i32, self.ty as i32, 0];
+        self.tail = Some(Line::new(from, to, self.method));
+        self.next_tick()
+    }
+}
+
+impl Interpolate for Conic {
+    fn next_tick(&mut self) -> Option<Tick> {
+        if self.finished {
+            return None;
+        }
+        if let Some(tail) = self.tail.as_mut() {
+            let t = tail.next_tick();
+            match t {
+                Some(t) => {
+                    let d = t.deltas();
+                    self.prev = (self.x, self.y);
+                    self.x += i64::from(d[X]);
+                    self.y += i64::from(d[Y]);
+                }
+                None => self.finished = true,
+            }
+            return t;
+        }
+        if self.budget == 0 {
+            return self.start_tail();
+        }
+        self.budget -= 1;
+        let (nx, ny) = match self.method {
+            Method::Dda => self.dda_candidate(),
+            Method::Classic => self.classic_candidate(),
+        };
+        // Does this tick reach or pass the target ray on the last lap?
+        let before = self.side(self.x, self.y);
+        let after = self.side(nx, ny);
+        if self.crossings == 1 && (nx, ny) == (self.tx, self.ty) {
+            self.finished = true;
+        } else if self.on_ray {
+            // Tracing along the ray (a flat stretch): leave for the target once the
+            // trace turns away from it.
+            if after != 0 || !self.ahead(nx, ny) {
+                return self.start_tail();
+            }
+        } else if before < 0 && after >= 0 && self.ahead(nx, ny) {
+            if self.crossings > 1 {
+                self.crossings -= 1;
+            } else if after > 0 {
+                return self.start_tail();
+            } else {
+                self.on_ray = true;
+            }
+        }
+        let t = tick_xy(sgn(nx - self.x), sgn(ny - self.y));
+        self.prev = (self.x, self.y);
+        self.x = nx;
+        self.y = ny;
+        Some(t)
+    }
+}
+
+/// Integer square root (floor).
+pub fn isqrt(v: u64) -> u64 {
+    if v < 2 {
+        return v;
+    }
+    let mut x = (libm::sqrt(v as f64)) as u64;
+    while x.saturating_mul(x) > v {
+        x -= 1;
+    }
+    while (x + 1).saturating_mul(x + 1) <= v {
+        x += 1;
+    }
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    fn run(mut c: Conic, start: StepPos) -> Vec<StepPos> {
+        let mut p = start;
+        let mut v = std::vec![p];
+        while let Some(t) = c.next_tick() {
+            t.apply(&mut p);
+            v.push(p);
+            assert!(v.len() < 10_000_000);
+        }
+        v
+    }
+
+    /// Does the unit-free square [p +- 0.5] (relative to the centre) meet the conic
+    /// A x^2 + B y^2 = C? F is convex: min at the clamped origin, max at a corner.
+    fn cell_meets(a: f64, b: f64, c: f64, x: f64, y: f64, half: f64) -> bool {
+        let f = |x: f64, y: f64| a * x * x + b * y * y - c;
+        let clamp = |v: f64| {
+            if v - half > 0.0 {
+                v - half
+            } else if v + half < 0.0 {
+                v + half
+            } else {
+                0.0
+            }
+        };
+        let fmin = f(clamp(x), clamp(y));
+        let fmax = [(-half, -half), (-half, half), (half, -half), (half, half)]
+            .iter()
+            .map(|&(dx, dy)| f(x + dx, y + dy))
+            .fold(f64::MIN, f64::max);
+        fmin <= 0.0 && fmax >= 0.0
+    }
+
+    fn dist_circle(x: f64, y: f64, r: f64) -> f64 {
+        ((x * x + y * y).sqrt() - r).abs()
+    }
+
+    #[test]
+    fn full_circle_returns_to_start_in_both_directions() {
+        for &ccw in &[true, false] {
+            for method in [Method::Dda, Method::Classic] {
+                let start = [100, 0, 0];
+                let c = Conic::circle(start, [-100, 0], start, ccw, 0, method).unwrap();
+                let pts = run(c, start);
+                assert_eq!(*pts.last().unwrap(), start);
+                // Visits all four quadrants: extremes of x and y reached.
+                assert_eq!(pts.iter().map(|p| p[1]).max(), Some(100));
+                assert_eq!(pts.iter().map(|p| p[1]).min(), Some(-100));
+                assert_eq!(pts.iter().map(|p| p[0]).min(), Some(-100));
+                if method == Method::Classic {
+                    // One axis per tick: 8 R ticks for a full circle.
+                    assert_eq!(pts.len() - 1, 800);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn quarter_arc_goes_the_requested_way() {
+        // From (10,0) around the origin to (0,10): CCW is the short way (first
+        // quadrant only), CW is the long way through the other three quadrants.
+        let start = [10, 0, 0];
+        let short = run(
+            Conic::circle(start, [-10, 0], [0, 10, 0], true, 0, Method::Dda).unwrap(),
+            start,
+        );
+        assert!(short.iter().all(|p| p[0] >= 0 && p[1] >= 0));
+        let long = run(
+            Conic::circle(start, [-10, 0], [0, 10, 0], false, 0, Method::Dda).unwrap(),
+            start,
+        );
+        assert!(long.iter().any(|p| p[0] < 0) && long.iter().any(|p| p[1] < 0));
+        assert_eq!(*long.last().unwrap(), [0, 10, 0]);
+    }
+
+    #[test]
+    fn extra_turns_add_whole_revolutions() {
+        let start = [50, 0, 0];
+        let one = run(
+            Conic::circle(start, [-50, 0], start, true, 0, Method::Dda).unwrap(),
+            start,
+        )
+        .len();
+        let three = run(
+            Conic::circle(start, [-50, 0], start, true, 2, Method::Dda).unwrap(),
+            start,
+        )
+        .len();
+        assert_eq!(three - 1, 3 * (one - 1));
+    }
+
+    #[test]
+    fn rejects_degenerate_and_oversized_input() {
+        assert_eq!(
+            Conic::circle([0; 3], [0, 0], [0; 3], true, 0, Method::Dda).err(),
+            Some(InterpError::Degenerate)
+        );
+        assert_eq!(
+            Conic::ellipse([0; 3], [-70000, 0], 70000, 10, [0; 3], true, Method::Dda).err(),
+            Some(InterpError::TooLarge)
+        );
+        assert_eq!(
+            Conic::ellipse([0; 3], [-5, 0], 5, 0, [0; 3], true, Method::Dda).err(),
+            Some(InterpError::Degenerate)
+        );
+    }
+
+    fn arc_case() -> impl Strategy<Value = (i32, i32, i32, f64, bool)> {
+        // centre offset (cx, cy) from the start, start angle comes from it; end angle.
+        (
+            1i32..3000,
+            -3000i32..3000,
+            -3000i32..3000,
+            0.0f64..std::f64::consts::TAU,
+            any::<bool>(),
+        )
+    }
+
+    proptest! {
+        #[test]
+        fn dda_arcs_stay_within_half_a_step_per_axis((_, cx, cy, end, ccw) in arc_case(), sx in -5000i32..5000, sy in -5000i32..5000) {
+            prop_assume!(cx != 0 || cy != 0);
+            let start = [sx, sy, 0];
+            let r = f64::from(cx).hypot(f64::from(cy));
+            let ox = f64::from(sx) + f64::from(cx);
+            let oy = f64::from(sy) + f64::from(cy);
+            let target = [(ox + r * end.cos()).round() as i32, (oy + r * end.sin()).round() as i32, 0];
+            let pts = run(Conic::circle(start, [cx, cy], target, ccw, 0, Method::Dda).unwrap(), start);
+            prop_assert_eq!(*pts.last().unwrap(), target);
+            for p in &pts {
+                let (x, y) = (f64::from(p[0]) - ox, f64::from(p[1]) - oy);
+                prop_assert!(cell_meets(1.0, 1.0, r * r, x, y, 0.5 + 1e-9), "{:?} r={}", p, r);
+            }
+            // Consecutive positions differ by at most one step per axis.
+            for w in pts.windows(2) {
+                prop_assert!((w[0][0] - w[1][0]).abs() <= 1 && (w[0][1] - w[1][1]).abs() <= 1);
+            }
+        }
+
+        #[test]
+        fn classic_arcs_stay_within_one_step((_, cx, cy, end, ccw) in arc_case()) {
+            prop_assume!(cx != 0 || cy != 0);
+            let start = [0, 0, 0];
+            let r = f64::from(cx).hypot(f64::from(cy));
+            let (ox, oy) = (f64::from(cx), f64::from(cy));
+            let target = [(ox + r * end.cos()).round() as i32, (oy + r * end.sin()).round() as i32, 0];
+            let mut c = Conic::circle(start, [cx, cy], target, ccw, 0, Method::Classic).unwrap();
+            let mut p = start;
+            while let Some(t) = c.next_tick() {
+                prop_assert_eq!(t.steps().count_ones(), 1);
+                t.apply(&mut p);
+                prop_assert!(dist_circle(f64::from(p[0]) - ox, f64::from(p[1]) - oy, r) < 1.0, "{:?}", p);
+            }
+            prop_assert_eq!(p, target);
+        }
+
+        #[test]
+        fn dda_ellipses_stay_within_half_a_step_per_axis(a in 1i32..4000, b in 1i32..4000, t0 in 0.0f64..std::f64::consts::TAU, t1 in 0.0f64..std::f64::consts::TAU, ccw in any::<bool>(), classic in any::<bool>()) {
+            let (af, bf) = (f64::from(a), f64::from(b));
+            // Start: the ideal point at angle t0, rounded; centre at the origin.
+            let sx = (af * t0.cos()).round() as i32;
+            let sy = (bf * t0.sin()).round() as i32;
+            let start = [sx, sy, 0];
+            let target = [(af * t1.cos()).round() as i32, (bf * t1.sin()).round() as i32, 0];
+            prop_assume!(target != [0, 0, 0]);
+            let method = if classic { Method::Classic } else { Method::Dda };
+            let pts = run(Conic::ellipse(start, [-sx, -sy], a, b, target, ccw, method).unwrap(), start);
+            prop_assert_eq!(*pts.last().unwrap(), target);
+            let half = if classic { 1.0 } else { 0.5 + 1e-9 };
+            for p in &pts {
+                prop_assert!(cell_meets(bf * bf, af * af, af * af * bf * bf, f64::from(p[0]), f64::from(p[1]), half), "{:?}", p);
+            }
+        }
+    }
+}

@@ -1,0 +1,278 @@
+//! y = f(x) traced column by column: the sine of the lab report (3.8) and any other
+//! function over [x1, x2].
+//!
+//! The walk samples f at every integer and half-integer x (two evaluations per
+//! column). From (k, Y_k), with Y_k the integer nearest f(k), it climbs at column k to
+//! the integer nearest f(k + 1/2) (the rows the curve enters before leaving the
+//! column), crosses to column k + 1 and climbs on to Y_{k+1}. Every visited grid point
+//! is then within half a step of the curve on both axes, provided f is monotonic on
+//! each half column (true for any sine with a period above two steps). In DDA mode
+//! the column crossing is merged with one climbing step into a diagonal tick; in
+//! classic mode every tick moves one axis.
+//!
+//! Evaluation uses f64 (libm); this runs in the segment-preparation task, never in
+//! the step interrupt.
+
+use super::line::Line;
+use super::{tick_xy, InterpError, Interpolate, Method, Tick};
+use crate::motion::{StepPos, X, Y};
+
+/// A function y = f(u), u = x - x_start in steps, y relative to the start in steps.
+pub trait Curve {
+    fn eval(&self, u: f64) -> f64;
+    /// dy/du; a central difference unless the curve knows better.
+    fn slope(&self, u: f64) -> f64 {
+        self.eval(u + 0.25) * 2.0 - self.eval(u - 0.25) * 2.0
+    }
+}
+
+impl<F: Fn(f64) -> f64> Curve for F {
+    fn eval(&self, u: f64) -> f64 {
+        self(u)
+    }
+}
+
+/// y = amp sin(omega u + phase) - amp sin(phase): passes through the start point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sine {
+    amp: f64,
+    omega: f64,
+    phase: f64,
+    offset: f64,
+}
+
+impl Sine {
+    pub fn new(amp: f64, omega: f64, phase: f64) -> Result<Self, InterpError> {
+        if !(amp.is_finite() && omega.is_finite() && phase.is_finite()) {
+            return Err(InterpError::Degenerate);
+        }
+        if amp.abs() > 1.0e9 {
+            return Err(InterpError::TooLarge);
+        }
+        Ok(Sine {
+            amp,
+            omega,
+            phase,
+            offset: amp * libm::sin(phase),
+        })
+    }
+}
+
+impl Curve for Sine {
+    fn eval(&self, u: f64) -> f64 {
+        self.amp * libm::sin(self.omega * u + self.phase) - self.offset
+    }
+    fn slope(&self, u: f64) -> f64 {
+        self.amp * self.omega * libm::cos(self.omega * u + self.phase)
+    }
+}
+
+/// Column walk along y = f(x) from the start's X to the target's X, then a straight
+/// tail to the exact integer target (nothing when the target is the curve's nearest
+/// point, which is the normal case).
+#[derive(Clone, Debug)]
+pub struct CurveTrace<C> {
+    curve: C,
+    /// +1 or -1: direction of x.
+    dir: i64,
+    /// Columns to walk.
+    cols: i64,
+    /// Current column (relative) and row (relative to the start).
+    k: i64,
+    y: i64,
+    /// Rows still to climb before the column crossing, and after it.
+    first: i64,
+    second: i64,
+    /// The crossing tick of the current column is still to come.
+    crossing: bool,
+    method: Method,
+    /// Exact target relative to the start.
+    end: (i64, i64),
+    tail: Option<Line>,
+}
+
+fn nearest(v: f64) -> i64 {
+    // Saturating conversion; NaN becomes 0.
+    libm::round(v) as i64
+}
+
+impl<C: Curve> CurveTrace<C> {
+    pub fn new(start: StepPos, target: StepPos, curve: C, method: Method) -> Self {
+        let dx = i64::from(target[X]) - i64::from(start[X]);
+        let dy = i64::from(target[Y]) - i64::from(start[Y]);
+        let mut t = CurveTrace {
+            curve,
+            dir: if dx < 0 { -1 } else { 1 },
+            cols: dx.abs(),
+            k: 0,
+            y: 0,
+            first: 0,
+            second: 0,
+            crossing: false,
+            method,
+            end: (dx, dy),
+            tail: None,
+        };
+        t.plan_column();
+        t
+    }
+
+    /// Feed direction at the present column (step space, not normalised).
+    pub fn direction(&self) -> [f32; 2] {
+        let u = (self.dir * self.k) as f64 + 0.5 * self.dir as f64;
+        [
+            self.dir as f32,
+            (self.dir as f64 * self.curve.slope(u)) as f32,
+        ]
+    }
+
+    fn at(&self, k2: i64) -> i64 {
+        // f at u = dir * k2 / 2.
+        nearest(self.curve.eval((self.dir * k2) as f64 * 0.5))
+    }
+
+    /// Sets up the climbs of column k -> k+1 (or the tail after the last column).
+    fn plan_column(&mut self) {
+        if self.k >= self.cols {
+            self.crossing = false;
+            let from = [0, self.y as i32, 0];
+            let to = [
+                (self.end.0 - self.dir * self.k) as i32,
+                self.end.1 as i32,
+                0,
+            ];
+            let to = [to[0].saturating_mul(self.dir as i32), to[1], 0];
+            self.tail = Some(Line::new(from, to, self.method));
+            return;
+        }
+        let mid = self.at(2 * self.k + 1);
+        let next = self.at(2 * self.k + 2);
+        self.first = mid - self.y;
+        self.second = next - mid;
+        self.crossing = true;
+    }
+
+    fn climb(v: &mut i64) -> i8 {
+        let s = super::sgn(*v);
+        *v -= i64::from(s);
+        s
+    }
+}
+
+impl<C: Curve> Interpolate for CurveTrace<C> {
+    fn next_tick(&mut self) -> Option<Tick> {
+        if let Some(tail) = self.tail.as_mut() {
+            return tail.next_tick().map(|t| {
+                // The tail was built in a frame where x grows with `dir`; flip back.
+                let d = t.deltas();
+                tick_xy(d[X] * self.dir as i8, d[Y])
+            });
+        }
+        let merge = self.method == Method::Dda;
+        // Climb at this column, keeping the last step to merge with the crossing when
+        // nothing is to be climbed after it.
+        let keep_one = merge && self.second == 0 && self.first != 0;
+        if self.first.abs() > i64::from(keep_one) {
+            let s = Self::climb(&mut self.first);
+            self.y += i64::from(s);
+            return Some(tick_xy(0, s));
+        }
+        if self.crossing {
+            self.crossing = false;
+            let mut sy = 0;
+            if merge {
+                if self.first != 0 {
+                    sy = Self::climb(&mut self.first);
+                } else if self.second != 0 {
+                    sy = Self::climb(&mut self.second);
+                }
+            }
+            self.y += i64::from(sy);
+            self.k += 1;
+            return Some(tick_xy(self.dir as i8, sy));
+        }
+        if self.second != 0 {
+            let s = Self::climb(&mut self.second);
+            self.y += i64::from(s);
+            return Some(tick_xy(0, s));
+        }
+        self.plan_column();
+        self.next_tick()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    fn run(mut it: impl Interpolate, start: StepPos) -> Vec<StepPos> {
+        let mut p = start;
+        let mut v = std::vec![p];
+        while let Some(t) = it.next_tick() {
+            t.apply(&mut p);
+            v.push(p);
+        }
+        v
+    }
+
+    /// Does the curve pass through the square [p +- half]? Dense sampling over the
+    /// square's x range (the curve is smooth at this scale).
+    fn near_curve(f: &dyn Fn(f64) -> f64, u: f64, y: f64, half: f64) -> bool {
+        let n = 16;
+        let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+        for i in 0..=n {
+            let v = f(u - half + 2.0 * half * f64::from(i) / f64::from(n));
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+        lo <= y + half + 1e-6 && hi >= y - half - 1e-6
+    }
+
+    proptest! {
+        #[test]
+        fn sine_trace_is_exact(amp in -2000.0f64..2000.0, omega in -0.3f64..0.3, phase in -7.0f64..7.0,
+                               dx in -1500i32..1500, classic in any::<bool>()) {
+            let s = Sine::new(amp, omega, phase).unwrap();
+            let start = [17, -40, 3];
+            let ideal_end = nearest(s.eval(f64::from(dx))) as i32;
+            let target = [17 + dx, -40 + ideal_end, 3];
+            let method = if classic { Method::Classic } else { Method::Dda };
+            let mut it = CurveTrace::new(start, target, s, method);
+            let mut p = start;
+            let f = |u: f64| s.eval(u);
+            while let Some(t) = it.next_tick() {
+                if classic {
+                    prop_assert_eq!(t.steps().count_ones(), 1);
+                }
+                t.apply(&mut p);
+                let u = f64::from(p[0] - 17);
+                prop_assert!(near_curve(&f, u, f64::from(p[1] + 40), 0.5), "{:?}", p);
+            }
+            prop_assert_eq!(p, target);
+        }
+    }
+
+    #[test]
+    fn arbitrary_function_reaches_an_off_curve_target_exactly() {
+        let f = |u: f64| 0.001 * u * u;
+        let start = [0, 0, 0];
+        let pts = run(CurveTrace::new(start, [-100, 12, 0], f, Method::Dda), start);
+        assert_eq!(*pts.last().unwrap(), [-100, 12, 0]);
+        // y = 10 at x = -100 on the curve, then the tail climbs two more steps.
+        assert!(pts.contains(&[-100, 10, 0]));
+    }
+
+    #[test]
+    fn shallow_parts_step_diagonally_like_bresenham() {
+        let f = |u: f64| 0.5 * u;
+        let pts = run(CurveTrace::new([0; 3], [10, 5, 0], f, Method::Dda), [0; 3]);
+        assert_eq!(pts.len() - 1, 10);
+        let classic = run(
+            CurveTrace::new([0; 3], [10, 5, 0], f, Method::Classic),
+            [0; 3],
+        );
+        assert_eq!(classic.len() - 1, 15);
+    }
+}

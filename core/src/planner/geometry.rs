@@ -1,0 +1,367 @@
+//! What the planner needs to know about one move's shape, in millimetres: its length,
+//! the tangent where it starts and ends (for junctions), the path acceleration and
+//! speed that every axis can follow along it (Grbl's per-axis semantics: a path
+//! direction u limits acceleration to min_i a_i / |u_i| and speed to min_i v_i / |u_i|),
+//! and for curves the centripetal limit v^2 <= a * r_min.
+//!
+//! Lengths of curves are integrated numerically (Simpson); floating point is fine
+//! here because this runs once per move in the planning task.
+
+use super::PlannerConfig;
+use crate::motion::{Move, Path, StepPos, AXES, X, Y, Z};
+use core::f32::consts::{PI, TAU};
+
+/// The planner's view of one move.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geometry {
+    /// Path length in mm.
+    pub length: f32,
+    /// Unit tangent at the start and at the end (mm space).
+    pub unit_start: [f32; AXES],
+    pub unit_end: [f32; AXES],
+    /// Largest path acceleration every axis can follow along the whole move, mm/s^2.
+    pub accel: f32,
+    /// Largest path speed every axis can follow (axis max rates, centripetal), mm/s.
+    pub speed_limit: f32,
+}
+
+/// Why a move has no usable geometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeometryError {
+    /// The move goes nowhere (or its curve has no length).
+    Empty,
+    /// Parameters that make no sense (zero radius, Z change on a planar curve...).
+    Invalid,
+}
+
+/// Per-axis limits along direction `u` (unit, mm space): (accel, speed).
+fn axis_limits(cfg: &PlannerConfig, u: [f32; AXES]) -> (f32, f32) {
+    let mut acc = f32::INFINITY;
+    let mut spd = f32::INFINITY;
+    for (ax, &c) in cfg.axes.iter().zip(u.iter()) {
+        let c = c.abs();
+        if c > 1e-9 {
+            acc = acc.min(ax.accel / c);
+            spd = spd.min(ax.max_rate / 60.0 / c);
+        }
+    }
+    (acc, spd)
+}
+
+fn normalize(v: [f32; AXES]) -> [f32; AXES] {
+    let n = libm::sqrtf(v.iter().map(|c| c * c).sum());
+    if n > 0.0 {
+        [v[0] / n, v[1] / n, v[2] / n]
+    } else {
+        [0.0; AXES]
+    }
+}
+
+fn sp(cfg: &PlannerConfig, axis: usize) -> f32 {
+    cfg.axes[axis].steps_per_mm.max(1e-6)
+}
+
+/// Geometry of `mv` starting at `start`.
+pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometry, GeometryError> {
+    let d: [f32; AXES] = core::array::from_fn(|i| {
+        (i64::from(mv.target[i]) - i64::from(start[i])) as f32 / sp(cfg, i)
+    });
+    match mv.path {
+        Path::Line | Path::LineFine { .. } => {
+            let length = libm::sqrtf(d.iter().map(|c| c * c).sum());
+            if length <= 0.0 {
+                return Err(GeometryError::Empty);
+            }
+            let u = normalize(d);
+            let (accel, speed_limit) = axis_limits(cfg, u);
+            Ok(Geometry {
+                length,
+                unit_start: u,
+                unit_end: u,
+                accel,
+                speed_limit,
+            })
+        }
+        Path::Arc { center, ccw, turns } => {
+            planar(start, mv)?;
+            let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
+            let p0 = (-center[0] as f32 / sx, -center[1] as f32 / sy);
+            let p1 = (d[X] + p0.0, d[Y] + p0.1);
+            let r = libm::hypotf(p0.0, p0.1);
+            if r <= 0.0 {
+                return Err(GeometryError::Invalid);
+            }
+            let a0 = libm::atan2f(p0.1, p0.0);
+            let a1 = libm::atan2f(p1.1, p1.0);
+            let sweep = sweep(a0, a1, ccw, mv.target == start) + TAU * f32::from(turns);
+            let sign = if ccw { 1.0 } else { -1.0 };
+            let tangent = |a: f32| [-libm::sinf(a) * sign, libm::cosf(a) * sign, 0.0];
+            let (us, ue) = (tangent(a0), tangent(a1));
+            let (mut accel, mut speed) = axis_limits(cfg, us);
+            let (a2, s2) = axis_limits(cfg, ue);
+            accel = accel.min(a2);
+            speed = speed.min(s2);
+            // Axis-aligned tangents inside the sweep (at position angles k * pi/2).
+            for k in 0..4 {
+                let at = k as f32 * PI / 2.0;
+                let off = if ccw { wrap(at - a0) } else { wrap(a0 - at) };
+                if off <= sweep {
+                    let (a3, s3) = axis_limits(cfg, tangent(at));
+                    accel = accel.min(a3);
+                    speed = speed.min(s3);
+                }
+            }
+            let centripetal = libm::sqrtf(accel * r);
+            Ok(Geometry {
+                length: r * sweep,
+                unit_start: us,
+                unit_end: ue,
+                accel,
+                speed_limit: speed.min(centripetal),
+            })
+        }
+        Path::Ellipse { center, a, b, ccw } => {
+            planar(start, mv)?;
+            if a <= 0 || b <= 0 {
+                return Err(GeometryError::Invalid);
+            }
+            let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
+            let (af, bf) = (a as f32, b as f32);
+            let p0 = (-center[0] as f32, -center[1] as f32);
+            let p1 = (
+                p0.0 + (mv.target[X] - start[X]) as f32,
+                p0.1 + (mv.target[Y] - start[Y]) as f32,
+            );
+            let t0 = libm::atan2f(p0.1 / bf, p0.0 / af);
+            let t1 = libm::atan2f(p1.1 / bf, p1.0 / af);
+            let sweep = sweep(t0, t1, ccw, mv.target == start);
+            let sign = if ccw { 1.0 } else { -1.0 };
+            let vel = |t: f32| {
+                [
+                    -af * libm::sinf(t) / sx * sign,
+                    bf * libm::cosf(t) / sy * sign,
+                    0.0,
+                ]
+            };
+            let param = |i: u32, n: u32| t0 + sign * sweep * i as f32 / n as f32;
+            let (length, accel, speed) = integrate(cfg, 128, |i, n| vel(param(i, n)), sweep);
+            // Smallest radius of curvature of an ellipse: min(a^2/b, b^2/a) (steps).
+            let r_min = (af * af / bf).min(bf * bf / af) / sx.max(sy);
+            Ok(Geometry {
+                length,
+                unit_start: normalize(vel(t0)),
+                unit_end: normalize(vel(t0 + sign * sweep)),
+                accel,
+                speed_limit: speed.min(libm::sqrtf(accel * r_min)),
+            })
+        }
+        Path::Sine { amp, omega, phase } => {
+            planar(start, mv)?;
+            let dx = (i64::from(mv.target[X]) - i64::from(start[X])) as f32;
+            if dx == 0.0 || !(amp.is_finite() && omega.is_finite() && phase.is_finite()) {
+                return Err(GeometryError::Invalid);
+            }
+            let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
+            let dir = dx.signum();
+            let slope = |u: f32| amp * omega * libm::cosf(omega * u + phase);
+            let vel = |u: f32| [dir / sx, dir * slope(u) / sy, 0.0];
+            let periods = (omega.abs() * dx.abs() / TAU) as u32;
+            let n = (periods.saturating_mul(16)).clamp(64, 4096) & !1;
+            let (length, accel, speed) =
+                integrate(cfg, n, |i, n| vel(dx * i as f32 / n as f32), dx.abs());
+            let curv = (amp * omega * omega).abs();
+            let r_min = if curv > 0.0 {
+                1.0 / curv / sx.max(sy)
+            } else {
+                f32::INFINITY
+            };
+            Ok(Geometry {
+                length,
+                unit_start: normalize(vel(0.0)),
+                unit_end: normalize(vel(dx)),
+                accel,
+                speed_limit: speed.min(libm::sqrtf(accel * r_min)),
+            })
+        }
+    }
+}
+
+fn planar(start: StepPos, mv: &Move) -> Result<(), GeometryError> {
+    if start[Z] == mv.target[Z] {
+        Ok(())
+    } else {
+        Err(GeometryError::Invalid)
+    }
+}
+
+/// Angle wrapped into [0, 2 pi).
+fn wrap(a: f32) -> f32 {
+    let w = a % TAU;
+    if w < 0.0 {
+        w + TAU
+    } else {
+        w
+    }
+}
+
+/// Angle swept from `a0` to `a1` in the given direction, in (0, 2 pi]; a closed curve
+/// (`full`) sweeps 2 pi.
+fn sweep(a0: f32, a1: f32, ccw: bool, full: bool) -> f32 {
+    if full {
+        return TAU;
+    }
+    let s = if ccw { wrap(a1 - a0) } else { wrap(a0 - a1) };
+    if s <= 0.0 {
+        TAU
+    } else {
+        s
+    }
+}
+
+/// Simpson integral of |vel(t)| over a parameter span `span` sampled at n (even)
+/// intervals, plus the tightest per-axis limits over the samples.
+fn integrate(
+    cfg: &PlannerConfig,
+    n: u32,
+    vel: impl Fn(u32, u32) -> [f32; AXES],
+    span: f32,
+) -> (f32, f32, f32) {
+    let mut sum = 0.0f32;
+    let mut accel = f32::INFINITY;
+    let mut speed = f32::INFINITY;
+    for i in 0..=n {
+        let v = vel(i, n);
+        let m = libm::sqrtf(v.iter().map(|c| c * c).sum());
+        let w = if i == 0 || i == n {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        sum += w * m;
+        let (a, s) = axis_limits(cfg, normalize(v));
+        accel = accel.min(a);
+        speed = speed.min(s);
+    }
+    (sum * span / (3.0 * n as f32), accel, speed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Feed;
+
+    fn mv(target: StepPos, path: Path) -> Move {
+        Move {
+            target,
+            path,
+            feed: Feed::MmPerMin(3000.0),
+            line: 0,
+        }
+    }
+
+    #[test]
+    fn diagonal_line_accelerates_faster_along_the_path() {
+        let cfg = PlannerConfig::default();
+        let g = of_move(&cfg, [0; 3], &mv([800, 800, 0], Path::Line)).unwrap();
+        assert!((g.length - 200f32.sqrt()).abs() < 1e-4);
+        assert!((g.accel - 500.0 * 2f32.sqrt()).abs() < 0.1);
+        assert!((g.speed_limit - 5000.0 / 60.0 * 2f32.sqrt()).abs() < 0.1);
+    }
+
+    #[test]
+    fn full_circle_length_and_limits() {
+        let cfg = PlannerConfig::default();
+        // R = 20 mm at 80 steps/mm, centre to the right of the start, clockwise.
+        let g = of_move(
+            &cfg,
+            [0; 3],
+            &mv(
+                [0; 3],
+                Path::Arc {
+                    center: [1600, 0],
+                    ccw: false,
+                    turns: 0,
+                },
+            ),
+        )
+        .unwrap();
+        assert!((g.length - TAU * 20.0).abs() < 1e-3);
+        assert!((g.accel - 500.0).abs() < 1e-3);
+        // Centripetal limit sqrt(500 * 20) = 100 mm/s, axis limit 83.3 mm/s.
+        assert!((g.speed_limit - 5000.0 / 60.0).abs() < 1e-3);
+        // Tangent at the start points up (clockwise around a centre on the right).
+        assert!((g.unit_start[1] - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn quarter_arc_and_ellipse_and_sine_lengths() {
+        let cfg = PlannerConfig::default();
+        let q = of_move(
+            &cfg,
+            [800, 0, 0],
+            &mv(
+                [0, 800, 0],
+                Path::Arc {
+                    center: [-800, 0],
+                    ccw: true,
+                    turns: 0,
+                },
+            ),
+        )
+        .unwrap();
+        assert!((q.length - PI * 10.0 / 2.0).abs() < 1e-3);
+        // Circle as an ellipse a = b: same length.
+        let e = of_move(
+            &cfg,
+            [800, 0, 0],
+            &mv(
+                [800, 0, 0],
+                Path::Ellipse {
+                    center: [-800, 0],
+                    a: 800,
+                    b: 800,
+                    ccw: true,
+                },
+            ),
+        )
+        .unwrap();
+        assert!((e.length - TAU * 10.0).abs() < 1e-2);
+        // Ellipse a = 2b: perimeter ~ 9.6884 b (Ramanujan).
+        let e2 = of_move(
+            &cfg,
+            [1600, 0, 0],
+            &mv(
+                [1600, 0, 0],
+                Path::Ellipse {
+                    center: [-1600, 0],
+                    a: 1600,
+                    b: 800,
+                    ccw: false,
+                },
+            ),
+        )
+        .unwrap();
+        assert!((e2.length - 96.884).abs() < 0.05, "{}", e2.length);
+        // Flat sine: length equals the X travel.
+        let s = of_move(
+            &cfg,
+            [0; 3],
+            &mv(
+                [800, 0, 0],
+                Path::Sine {
+                    amp: 0.0,
+                    omega: 0.1,
+                    phase: 0.0,
+                },
+            ),
+        )
+        .unwrap();
+        assert!((s.length - 10.0).abs() < 1e-4);
+        assert_eq!(
+            of_move(&cfg, [0; 3], &mv([0; 3], Path::Line)),
+            Err(GeometryError::Empty)
+        );
+    }
+}

@@ -1,0 +1,469 @@
+//! Look-ahead planner: a queue of blocks whose entry speeds are re-planned every time
+//! a move is added, so the machine only slows where the path needs it.
+//!
+//! Owns: the block queue, junction speeds, the reverse/forward planning passes and the
+//! feed and rapid overrides. It knows nothing about time slices or steps; the step
+//! engine pops the oldest block and asks [`Planner::exit_speed`] how fast it may leave.
+//!
+//! Semantics follow Grbl's documented behaviour (settings $110.. max rate in mm/min,
+//! $120.. acceleration in mm/s^2, $11 junction deviation), written from the maths:
+//! - along direction u, path acceleration is min_i a_i/|u_i|, speed min_i v_i/|u_i|;
+//! - at a junction with angle theta between the incoming and outgoing directions, the
+//!   speed is limited to v^2 = a_j * delta * sin(theta/2) / (1 - sin(theta/2)), where
+//!   a_j is the per-axis acceleration limit along the change of direction;
+//! - a start speed below which motors may start and stop at once replaces zero;
+//! - curves (arcs, ellipses, sines) are single blocks, limited by their centripetal
+//!   acceleration, so they never slow down at chord joints.
+//!
+//! Planning uses the profile shape's effective acceleration, so S-curves plan right.
+
+pub mod geometry;
+pub mod profile;
+
+use crate::interp::Method;
+use crate::motion::{Feed, Move, StepPos, AXES};
+use heapless::Deque;
+pub use profile::{Profile, Shape};
+
+/// Look-ahead depth.
+pub const PLANNER_BLOCKS: usize = 24;
+
+/// Limits of one axis, in Grbl's units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AxisConfig {
+    /// $100..: steps per mm.
+    pub steps_per_mm: f32,
+    /// $110..: maximum rate, mm/min.
+    pub max_rate: f32,
+    /// $120..: acceleration, mm/s^2.
+    pub accel: f32,
+}
+
+/// Everything the planner and step engine need from the settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PlannerConfig {
+    pub axes: [AxisConfig; AXES],
+    /// $11: junction deviation, mm.
+    pub junction_deviation: f32,
+    /// Path speed (mm/s) below which the motors start and stop without a ramp.
+    pub start_speed: f32,
+    /// Ramp shape: trapezoid or cosine S-curve.
+    pub shape: Shape,
+    /// Interpolation method.
+    pub method: Method,
+}
+
+impl Default for PlannerConfig {
+    /// The reference settings of the benchmark programs: 80 steps/mm, 5000 mm/min,
+    /// 500 mm/s^2 on X and Y, junction deviation 0.01 mm, no start speed.
+    fn default() -> Self {
+        let xy = AxisConfig {
+            steps_per_mm: 80.0,
+            max_rate: 5000.0,
+            accel: 500.0,
+        };
+        let z = AxisConfig {
+            steps_per_mm: 80.0,
+            max_rate: 1000.0,
+            accel: 200.0,
+        };
+        PlannerConfig {
+            axes: [xy, xy, z],
+            junction_deviation: 0.01,
+            start_speed: 0.0,
+            shape: Shape::Trapezoid,
+            method: Method::Dda,
+        }
+    }
+}
+
+/// One planned move.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Block {
+    pub mv: Move,
+    /// Where the move starts (steps).
+    pub start: StepPos,
+    /// Path length, mm.
+    pub length: f32,
+    /// Path acceleration limit (peak), mm/s^2.
+    pub accel: f32,
+    /// Requested speed before overrides, mm/s.
+    pub nominal: f32,
+    /// Axis and curvature speed limit, mm/s.
+    pub limit: f32,
+    /// Junction limit on the entry speed, mm/s.
+    pub max_entry: f32,
+    /// Planned entry speed, mm/s.
+    pub entry: f32,
+}
+
+impl Block {
+    pub fn is_rapid(&self) -> bool {
+        self.mv.feed == Feed::Rapid
+    }
+}
+
+/// Why a move was not queued.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PlanError {
+    /// The queue is full: try again after the step engine took a block.
+    Full,
+    /// The move's geometry is invalid.
+    Invalid,
+}
+
+/// The look-ahead planner.
+#[derive(Debug)]
+pub struct Planner {
+    cfg: PlannerConfig,
+    blocks: Deque<Block, PLANNER_BLOCKS>,
+    /// Where the next queued move starts.
+    next_start: StepPos,
+    /// Direction and speed limit at the end of the last queued move, if the machine
+    /// will still be moving when it ends (None after a stop).
+    prev: Option<([f32; AXES], f32)>,
+    feed_override: f32,
+    rapid_override: f32,
+    /// Highest exit speed the block in execution can still reach (mm/s).
+    head_cap: f32,
+    generation: u32,
+}
+
+impl Planner {
+    pub fn new(cfg: PlannerConfig, position: StepPos) -> Self {
+        Planner {
+            cfg,
+            blocks: Deque::new(),
+            next_start: position,
+            prev: None,
+            feed_override: 1.0,
+            rapid_override: 1.0,
+            head_cap: cfg.start_speed,
+            generation: 0,
+        }
+    }
+
+    pub fn config(&self) -> &PlannerConfig {
+        &self.cfg
+    }
+    /// Queued blocks (not counting the one in execution).
+    pub fn len(&self) -> usize {
+        self.blocks.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.blocks.is_empty()
+    }
+    pub fn is_full(&self) -> bool {
+        self.blocks.is_full()
+    }
+    /// Free slots, for the protocol's `Bf:` report.
+    pub fn free(&self) -> usize {
+        PLANNER_BLOCKS - self.blocks.len()
+    }
+    /// Changes every time planned speeds may have changed; the step engine rebuilds
+    /// its profile when it sees a new value.
+    pub fn generation(&self) -> u32 {
+        self.generation
+    }
+    /// Where the next move will start.
+    pub fn end_position(&self) -> StepPos {
+        self.next_start
+    }
+
+    /// Queues a move. Zero-length moves are accepted and dropped.
+    pub fn push(&mut self, mv: &Move) -> Result<(), PlanError> {
+        if self.blocks.is_full() {
+            return Err(PlanError::Full);
+        }
+        let g = match geometry::of_move(&self.cfg, self.next_start, mv) {
+            Ok(g) => g,
+            Err(geometry::GeometryError::Empty) => return Ok(()),
+            Err(geometry::GeometryError::Invalid) => return Err(PlanError::Invalid),
+        };
+        let nominal = match mv.feed {
+            Feed::Rapid => f32::INFINITY,
+            Feed::MmPerMin(f) if f > 0.0 && f.is_finite() => f / 60.0,
+            Feed::MmPerMin(_) => return Err(PlanError::Invalid),
+        };
+        let floor = self.cfg.start_speed;
+        let max_entry = match self.prev {
+            None => floor,
+            Some((u_prev, prev_limit)) => {
+                let v = junction_speed(&self.cfg, u_prev, g.unit_start, self.cfg.shape);
+                v.min(prev_limit)
+                    .min(g.speed_limit)
+                    .min(nominal)
+                    .max(floor.min(g.speed_limit))
+            }
+        };
+        let accel = g.accel;
+        let block = Block {
+            mv: *mv,
+            start: self.next_start,
+            length: g.length,
+            accel,
+            nominal,
+            limit: g.speed_limit,
+            max_entry,
+            entry: floor,
+        };
+        self.prev = Some((g.unit_end, g.speed_limit.min(nominal)));
+        self.next_start = mv.target;
+        // Cannot fail: checked for room above.
+        let _ = self.blocks.push_back(block);
+        self.replan();
+        Ok(())
+    }
+
+    /// Takes the oldest block for execution.
+    pub fn pop(&mut self) -> Option<Block> {
+        let b = self.blocks.pop_front();
+        if b.is_some() {
+            self.generation = self.generation.wrapping_add(1);
+        }
+        b
+    }
+
+    /// The machine came to a stop with nothing queued: the next move starts from rest.
+    pub fn note_stopped(&mut self) {
+        if self.blocks.is_empty() {
+            self.prev = None;
+        }
+    }
+
+    /// Speed the block in execution should leave at: the next block's planned entry
+    /// (or the start speed when nothing follows).
+    pub fn exit_speed(&self) -> f32 {
+        self.blocks
+            .front()
+            .map(|b| b.entry)
+            .unwrap_or(self.cfg.start_speed)
+    }
+
+    /// The step engine reports the fastest exit its block can still reach; the
+    /// forward pass starts from it.
+    pub fn set_head_cap(&mut self, cap: f32) {
+        if (cap - self.head_cap).abs() > 1e-3 {
+            self.head_cap = cap;
+            self.replan();
+        }
+    }
+
+    /// Maximum speed of `b` with the overrides applied (mm/s).
+    pub fn max_speed(&self, b: &Block) -> f32 {
+        let ovr = if b.is_rapid() {
+            self.rapid_override
+        } else {
+            self.feed_override
+        };
+        (b.nominal * ovr).min(b.limit)
+    }
+
+    /// Feed override in percent (Grbl: 10..200).
+    pub fn set_feed_override(&mut self, percent: u16) {
+        self.feed_override = f32::from(percent.clamp(10, 200)) / 100.0;
+        self.replan();
+    }
+    /// Rapid override in percent (Grbl: 25, 50, 100).
+    pub fn set_rapid_override(&mut self, percent: u16) {
+        self.rapid_override = f32::from(percent.clamp(1, 100)) / 100.0;
+        self.replan();
+    }
+    pub fn feed_override(&self) -> u16 {
+        (self.feed_override * 100.0 + 0.5) as u16
+    }
+
+    /// Effective (planning) acceleration of a block.
+    pub fn plan_accel(&self, b: &Block) -> f32 {
+        self.cfg.shape.effective_accel(b.accel)
+    }
+
+    /// Drops every queued block (after a hold, for abort) and restarts from `position`.
+    pub fn clear(&mut self, position: StepPos) {
+        self.blocks.clear();
+        self.next_start = position;
+        self.prev = None;
+        self.head_cap = self.cfg.start_speed;
+        self.generation = self.generation.wrapping_add(1);
+    }
+
+    /// Reverse pass (every block must be able to slow to the next one's entry), then
+    /// forward pass (and to reach it from the previous one's).
+    fn replan(&mut self) {
+        let floor = self.cfg.start_speed;
+        let n = self.blocks.len();
+        let mut next_entry = floor;
+        for i in (0..n).rev() {
+            let (ovr_max, ae) = match self.blocks.get(i) {
+                Some(b) => (self.max_speed(b), self.plan_accel(b)),
+                None => continue,
+            };
+            if let Some(b) = self.blocks.get_mut(i) {
+                let reach = libm::sqrtf(next_entry * next_entry + 2.0 * ae * b.length);
+                b.entry = b.max_entry.min(ovr_max).min(reach);
+                next_entry = b.entry;
+            }
+        }
+        let mut cap = self.head_cap.max(floor);
+        for i in 0..n {
+            let ae = match self.blocks.get(i) {
+                Some(b) => self.plan_accel(b),
+                None => continue,
+            };
+            if let Some(b) = self.blocks.get_mut(i) {
+                if b.entry > cap {
+                    b.entry = cap;
+                }
+                cap = libm::sqrtf(b.entry * b.entry + 2.0 * ae * b.length);
+            }
+        }
+        self.generation = self.generation.wrapping_add(1);
+    }
+}
+
+/// Junction speed limit (mm/s) between direction `u1` (end of the previous move) and
+/// `u2` (start of the next), from the junction deviation.
+pub fn junction_speed(cfg: &PlannerConfig, u1: [f32; AXES], u2: [f32; AXES], shape: Shape) -> f32 {
+    let dot: f32 = u1.iter().zip(u2.iter()).map(|(a, b)| a * b).sum();
+    if dot > 0.999_999 {
+        return f32::INFINITY; // straight on
+    }
+    if dot < -0.999_999 {
+        return cfg.start_speed; // full reversal
+    }
+    // theta: angle between the reversed incoming and the outgoing direction.
+    let sin_half = libm::sqrtf(0.5 * (1.0 + dot));
+    let mut j = [0.0f32; AXES];
+    for (k, v) in j.iter_mut().enumerate() {
+        *v = u2[k] - u1[k];
+    }
+    let n = libm::sqrtf(j.iter().map(|c| c * c).sum());
+    let mut a = f32::INFINITY;
+    for (ax, c) in cfg.axes.iter().zip(j.iter()) {
+        let c = (c / n).abs();
+        if c > 1e-9 {
+            a = a.min(ax.accel / c);
+        }
+    }
+    let a = shape.effective_accel(a);
+    libm::sqrtf(a * cfg.junction_deviation * sin_half / (1.0 - sin_half))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Path;
+
+    fn line(x: i32, y: i32, f: f32) -> Move {
+        Move {
+            target: [x, y, 0],
+            path: Path::Line,
+            feed: Feed::MmPerMin(f),
+            line: 0,
+        }
+    }
+
+    #[test]
+    fn right_angle_junction_matches_the_deviation_rule() {
+        let cfg = PlannerConfig::default();
+        let v = junction_speed(&cfg, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], Shape::Trapezoid);
+        // theta = 90 deg: sin(45) = 0.7071; a along (-1, 1)/sqrt2 = 500 * sqrt2.
+        let s = 0.5f32.sqrt();
+        let expect = (500.0 * 2f32.sqrt() * 0.01 * s / (1.0 - s)).sqrt();
+        assert!((v - expect).abs() < 1e-3, "{v} vs {expect}");
+        assert_eq!(
+            junction_speed(&cfg, [1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], Shape::Trapezoid),
+            0.0
+        );
+        assert!(
+            junction_speed(&cfg, [1.0, 0.0, 0.0], [1.0, 0.0, 0.0], Shape::Trapezoid).is_infinite()
+        );
+    }
+
+    #[test]
+    fn collinear_moves_keep_speed_and_the_queue_ends_at_rest() {
+        let mut p = Planner::new(PlannerConfig::default(), [0; 3]);
+        for i in 1..=10 {
+            p.push(&line(800 * i, 0, 3000.0)).unwrap();
+        }
+        // Middle blocks enter at full speed (50 mm/s); the first from rest.
+        assert_eq!(p.blocks.get(0).unwrap().entry, 0.0);
+        assert!((p.blocks.get(5).unwrap().entry - 50.0).abs() < 1e-3);
+        // The last block (10 mm) must be able to stop: entry <= sqrt(2 a d) = 100.
+        let last = p.blocks.get(9).unwrap();
+        assert!(last.entry <= (2.0 * 500.0 * 10.0f32).sqrt() + 1e-3);
+        // Every block can decelerate to its successor's entry.
+        for i in 0..9 {
+            let (a, b) = (p.blocks.get(i).unwrap(), p.blocks.get(i + 1).unwrap());
+            assert!(b.entry * b.entry <= a.entry * a.entry + 2.0 * a.accel * a.length + 1e-2);
+            assert!(a.entry * a.entry <= b.entry * b.entry + 2.0 * a.accel * a.length + 1e-2);
+        }
+    }
+
+    #[test]
+    fn look_ahead_spans_many_short_blocks() {
+        // 20 collinear 0.5 mm moves: full speed needs more than one block to reach.
+        let mut p = Planner::new(PlannerConfig::default(), [0; 3]);
+        for i in 1..=20 {
+            p.push(&line(40 * i, 0, 3000.0)).unwrap();
+        }
+        let entries: std::vec::Vec<f32> = (0..20).map(|i| p.blocks.get(i).unwrap().entry).collect();
+        // Symmetric triangle: rises then falls, peak sqrt(a * L) = sqrt(500*10) in the middle.
+        assert!(entries[10] > 60.0 || (entries[10] - 50.0).abs() < 1e-3);
+        assert!(entries[1] > entries[0] && entries[19] < entries[15]);
+    }
+
+    #[test]
+    fn overrides_scale_feed_but_not_past_axis_limits() {
+        let mut p = Planner::new(PlannerConfig::default(), [0; 3]);
+        p.push(&line(8000, 0, 3000.0)).unwrap();
+        let b = *p.blocks.front().unwrap();
+        assert!((p.max_speed(&b) - 50.0).abs() < 1e-4);
+        p.set_feed_override(150);
+        assert!((p.max_speed(&b) - 75.0).abs() < 1e-4);
+        p.set_feed_override(200);
+        assert!((p.max_speed(&b) - 5000.0 / 60.0).abs() < 1e-3);
+        p.set_feed_override(10);
+        assert!((p.max_speed(&b) - 5.0).abs() < 1e-4);
+        assert_eq!(p.feed_override(), 10);
+    }
+
+    #[test]
+    fn start_speed_replaces_zero_and_full_queue_pushes_back() {
+        let cfg = PlannerConfig {
+            start_speed: 2.0,
+            ..PlannerConfig::default()
+        };
+        let mut p = Planner::new(cfg, [0; 3]);
+        for i in 0..PLANNER_BLOCKS as i32 {
+            let (x, y) = if i % 2 == 0 { (800, 0) } else { (0, 0) };
+            p.push(&line(x, y, 3000.0)).unwrap();
+        }
+        assert_eq!(p.push(&line(5, 5, 3000.0)), Err(PlanError::Full));
+        // Reversals: junction speed is the start speed.
+        assert!(p.blocks.iter().all(|b| (b.entry - 2.0).abs() < 1e-4));
+        assert_eq!(p.exit_speed(), 2.0);
+    }
+
+    #[test]
+    fn invalid_moves_are_rejected() {
+        let mut p = Planner::new(PlannerConfig::default(), [0; 3]);
+        let bad = Move {
+            target: [0, 0, 5],
+            path: Path::Arc {
+                center: [10, 0],
+                ccw: true,
+                turns: 0,
+            },
+            feed: Feed::Rapid,
+            line: 0,
+        };
+        assert_eq!(p.push(&bad), Err(PlanError::Invalid));
+        assert_eq!(p.push(&line(10, 0, -5.0)), Err(PlanError::Invalid));
+        assert_eq!(p.push(&line(0, 0, 100.0)), Ok(()));
+        assert!(p.is_empty());
+    }
+}

@@ -1,0 +1,213 @@
+//! Velocity profiles of one block: ramp, cruise, ramp, from any current state.
+//!
+//! Owns the speed-versus-time law and nothing else. Two ramp shapes:
+//! - [`Shape::Trapezoid`]: constant acceleration `a` (Grbl's behaviour).
+//! - [`Shape::Cosine`]: the thesis's S-curve (seed 001, ch. 3),
+//!   v(t) = v0 + (v1 - v0)/2 (1 - cos(pi t / T)): acceleration is continuous and peaks
+//!   at `a` in the middle of the ramp, so T = pi |v1 - v0| / (2 a).
+//!
+//! Both ramps cover (v0 + v1)/2 * T, so a cosine ramp needs the distance of a
+//! trapezoid ramp at the "effective" acceleration 2a/pi. The planner therefore plans
+//! with [`Shape::effective_accel`] and one formula serves both shapes.
+//!
+//! A profile is built from the present state (speed `v0` with `dist` left to go) so the
+//! step engine can rebuild it at any time: after a re-plan, a feed hold, or an override.
+
+use core::f32::consts::PI;
+
+/// Ramp shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Shape {
+    #[default]
+    Trapezoid,
+    /// Jerk-limited cosine ramp (S-curve).
+    Cosine,
+}
+
+impl Shape {
+    /// The constant acceleration that covers the same distance per ramp.
+    pub fn effective_accel(self, a: f32) -> f32 {
+        match self {
+            Shape::Trapezoid => a,
+            Shape::Cosine => a * 2.0 / PI,
+        }
+    }
+}
+
+/// One ramp from `v0` to `v1` lasting `t` seconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Ramp {
+    v0: f64,
+    v1: f64,
+    t: f64,
+}
+
+impl Ramp {
+    fn new(shape: Shape, v0: f64, v1: f64, a: f64) -> Self {
+        let t = match shape {
+            Shape::Trapezoid => (v1 - v0).abs() / a,
+            Shape::Cosine => core::f64::consts::PI * (v1 - v0).abs() / (2.0 * a),
+        };
+        Ramp { v0, v1, t }
+    }
+    fn dist(&self) -> f64 {
+        0.5 * (self.v0 + self.v1) * self.t
+    }
+    /// Distance and speed `t` seconds into the ramp.
+    fn at(&self, shape: Shape, t: f64) -> (f64, f64) {
+        if self.t <= 0.0 {
+            return (0.0, self.v0);
+        }
+        let dv = self.v1 - self.v0;
+        match shape {
+            Shape::Trapezoid => {
+                let acc = dv / self.t;
+                (self.v0 * t + 0.5 * acc * t * t, self.v0 + acc * t)
+            }
+            Shape::Cosine => {
+                let w = core::f64::consts::PI / self.t;
+                let s = self.v0 * t + 0.5 * dv * (t - libm::sin(w * t) / w);
+                (s, self.v0 + 0.5 * dv * (1.0 - libm::cos(w * t)))
+            }
+        }
+    }
+}
+
+/// A ramp-cruise-ramp profile over a known distance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Profile {
+    shape: Shape,
+    up: Ramp,
+    cruise_v: f64,
+    cruise_t: f64,
+    down: Ramp,
+}
+
+impl Profile {
+    /// Fastest profile from speed `v0` over `dist` that ends at `v_exit`, never above
+    /// `v_max`, with peak acceleration `a`. If `v_exit` cannot be reached (too short to
+    /// slow down, or to speed up), the profile ends at the closest reachable speed.
+    pub fn new(shape: Shape, v0: f32, v_max: f32, v_exit: f32, a: f32, dist: f32) -> Self {
+        let a = if a > 0.0 {
+            f64::from(a)
+        } else {
+            f64::from(f32::MIN_POSITIVE)
+        };
+        let ae = f64::from(shape.effective_accel(1.0)) * a;
+        let dist = f64::from(dist.max(0.0));
+        let v0 = f64::from(v0.max(0.0));
+        let v_max = f64::from(v_max.max(0.0));
+        // Exit speeds reachable over `dist` from v0 lie in [lo, hi].
+        let hi = libm::sqrt(v0 * v0 + 2.0 * ae * dist);
+        let lo = libm::sqrt((v0 * v0 - 2.0 * ae * dist).max(0.0));
+        let ve = f64::from(v_exit.max(0.0)).min(hi).max(lo);
+        // Where an acceleration from v0 meets a deceleration to ve (>= both of them).
+        let meet = libm::sqrt(ae * dist + 0.5 * (v0 * v0 + ve * ve));
+        let peak = if meet <= v_max { meet } else { v_max.max(ve) };
+        let up = Ramp::new(shape, v0, peak, a);
+        let down = Ramp::new(shape, peak, ve, a);
+        let cruise_d = (dist - up.dist() - down.dist()).max(0.0);
+        let cruise_t = if peak > 0.0 { cruise_d / peak } else { 0.0 };
+        Profile {
+            shape,
+            up,
+            cruise_v: peak,
+            cruise_t,
+            down,
+        }
+    }
+
+    /// Total duration in seconds.
+    pub fn duration(&self) -> f64 {
+        self.up.t + self.cruise_t + self.down.t
+    }
+    /// Total distance.
+    pub fn distance(&self) -> f64 {
+        self.up.dist() + self.cruise_v * self.cruise_t + self.down.dist()
+    }
+    /// Speed at the end.
+    pub fn exit_speed(&self) -> f64 {
+        self.down.v1
+    }
+    /// Distance covered and speed `t` seconds after the start (clamped to the end).
+    /// Evaluated in f64: near the end of a long move f32 cannot resolve one step.
+    pub fn at(&self, t: f64) -> (f64, f64) {
+        let t = t.max(0.0);
+        if t < self.up.t {
+            return self.up.at(self.shape, t);
+        }
+        let d_up = self.up.dist();
+        let t = t - self.up.t;
+        if t < self.cruise_t {
+            return (d_up + self.cruise_v * t, self.cruise_v);
+        }
+        let d_cr = self.cruise_v * self.cruise_t;
+        let t = (t - self.cruise_t).min(self.down.t);
+        let (d, v) = self.down.at(self.shape, t);
+        (d_up + d_cr + d, v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thesis_worked_example_reaches_20_khz_at_two_seconds() {
+        // 1 s cosine ramp to 100 rev/s, 500 rev in total, 200 pulses per rev.
+        // Peak acceleration of a 1 s cosine ramp of 100 rev/s: pi * 100 / 2.
+        let a = PI * 100.0 / 2.0;
+        let p = Profile::new(Shape::Cosine, 0.0, 100.0, 0.0, a, 500.0);
+        assert!((p.duration() - 6.0).abs() < 1e-3, "{}", p.duration());
+        let (s, v) = p.at(2.0);
+        assert!((v * 200.0 - 20_000.0).abs() < 1.0, "{}", v * 200.0);
+        // 50 rev in the ramp, then one second of cruise.
+        assert!((s - 150.0).abs() < 1e-2, "{}", s);
+        let (_, v_half) = p.at(0.5);
+        assert!((v_half - 50.0).abs() < 1e-3);
+        let (s_end, v_end) = p.at(6.0);
+        assert!((s_end - 500.0).abs() < 1e-2 && v_end.abs() < 1e-3);
+    }
+
+    #[test]
+    fn trapezoid_and_triangle() {
+        // 100 mm at up to 50 mm/s with 500 mm/s^2: 0.1 s ramps, 2.1 s total.
+        let p = Profile::new(Shape::Trapezoid, 0.0, 50.0, 0.0, 500.0, 100.0);
+        assert!((p.duration() - 2.1).abs() < 1e-4);
+        // 1 mm is too short to reach 50 mm/s: triangle peaking at sqrt(a d).
+        let t = Profile::new(Shape::Trapezoid, 0.0, 50.0, 0.0, 500.0, 1.0);
+        let (_, vp) = t.at(t.duration() / 2.0);
+        assert!((vp - 500f64.sqrt()).abs() < 1e-3);
+        assert!((t.distance() - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn from_any_state_brakes_when_too_fast() {
+        // Feed hold: from 40 mm/s stop as soon as possible, with plenty of room.
+        let p = Profile::new(Shape::Trapezoid, 40.0, 0.0, 0.0, 500.0, 1000.0);
+        assert!((p.distance() - 1.6).abs() < 1e-9 && p.exit_speed() == 0.0);
+        // Too short to stop: ends at the lowest reachable speed.
+        let q = Profile::new(Shape::Trapezoid, 40.0, 40.0, 0.0, 500.0, 1.0);
+        assert!((q.exit_speed() - (1600.0f64 - 1000.0).sqrt()).abs() < 1e-3);
+        assert!((q.distance() - 1.0).abs() < 1e-4);
+        // Override lowered the maximum below the present speed.
+        let r = Profile::new(Shape::Cosine, 40.0, 20.0, 20.0, 500.0, 100.0);
+        assert!((r.at(r.duration() * 0.5).1 - 20.0).abs() < 1e-3);
+        assert!((r.distance() - 100.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn speed_is_monotone_on_ramps_and_distance_never_decreases() {
+        for shape in [Shape::Trapezoid, Shape::Cosine] {
+            let p = Profile::new(shape, 5.0, 80.0, 10.0, 300.0, 40.0);
+            let mut last = -1.0f64;
+            for i in 0..=1000 {
+                let (s, _) = p.at(p.duration() * f64::from(i) / 1000.0);
+                assert!(s >= last - 1e-5);
+                last = s;
+            }
+            assert!((last - 40.0).abs() < 1e-3);
+        }
+    }
+}
