@@ -1,20 +1,93 @@
 //! inkstep firmware: thin RTIC wiring between the Blue Pill's peripherals (`board`) and
-//! the hardware-free core (`inkstep-core`).
+//! the hardware-free core (`inkstep-core`). Every decision is the core's: the tasks
+//! here only move bytes, pins and time between the hardware and the same `Controller`
+//! and `Link` that the simulator drives.
 //!
 //! Priorities (higher preempts lower), as in DESIGN.md:
-//!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3)
-//!   6  step timer (TIM2): executes prepared step events, integer work only
-//!   5  USB (moves bytes between the endpoint and the SPSC queues), segment preparation
-//!   4  protocol / G-code, feed-hold and cycle-start inputs
-//!   3  keypad scan (every 5 ms) and the watchdog
+//!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3): outputs off at once
+//!   6  step timer (TIM2): the core's `Executor`, integer work only
+//!   5  USB (endpoint <-> SPSC byte queues) and segment preparation (`Link::fill`)
+//!   4  protocol / G-code / machine state, feed-hold and cycle-start inputs
+//!   3  keypad scan (one column every 5 ms), buzzer, the watchdog
 //!   1  LCD refresh: the only task that waits (on its SPI); everything preempts it
 //!   0  idle: WFI
 #![no_std]
 #![no_main]
 
-use inkstep::board;
-
+use core::cell::RefCell;
+use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use critical_section::Mutex;
 use defmt_rtt as _;
+use heapless::spsc::{Consumer, Producer};
+use inkstep::board;
+use inkstep_core::link::StepSide;
+use inkstep_core::motion::StepPos;
+use inkstep_core::stepper::exec::Executor;
+use inkstep_core::stepper::phase4::Phase4;
+use inkstep_core::stepper::StepCmd;
+
+/// Step commands between segment preparation and the step interrupt (4 bytes each).
+const STEP_QUEUE: usize = 256;
+/// USB byte queues. RX holds more than Grbl's 128-byte character-counting window.
+const USB_RX: usize = 256;
+const USB_TX: usize = 512;
+
+/// Latched by the e-stop (and an armed hard limit): the step interrupt halts the
+/// executor and emits nothing until the machine is reset.
+static HALT: AtomicBool = AtomicBool::new(false);
+/// Hard limits stop stepping at once only when `$21` is on and no homing cycle runs.
+static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
+/// Output polarity and mode, set by the protocol task from the settings.
+static STEP_INVERT: AtomicU8 = AtomicU8::new(0);
+static DIR_INVERT: AtomicU8 = AtomicU8::new(0);
+static FOUR_PHASE: AtomicBool = AtomicBool::new(false);
+/// Axes' last step directions (bit set = negative) for the LCD's teaching view.
+static LAST_DIR: AtomicU8 = AtomicU8::new(0);
+static LAST_STEPPED: AtomicU8 = AtomicU8::new(0);
+
+/// What the step interrupt owns, shared with the preparation side through short
+/// critical sections (position reads, flush at abort, re-zeroing at rest).
+struct Stepper {
+    exec: Executor,
+    rx: Consumer<'static, StepCmd>,
+}
+
+static STEPPER: Mutex<RefCell<Option<Stepper>>> = Mutex::new(RefCell::new(None));
+
+fn with_stepper<R>(f: impl FnOnce(&mut Stepper) -> R) -> Option<R> {
+    critical_section::with(|cs| STEPPER.borrow_ref_mut(cs).as_mut().map(f))
+}
+
+/// The link's view of the interrupt side on the board.
+pub struct BoardSide {
+    tx: Producer<'static, StepCmd>,
+}
+
+impl StepSide for BoardSide {
+    type Sink = Producer<'static, StepCmd>;
+    fn sink(&mut self) -> &mut Self::Sink {
+        &mut self.tx
+    }
+    fn position(&self) -> StepPos {
+        with_stepper(|s| s.exec.position()).unwrap_or([0; 3])
+    }
+    fn is_running(&self) -> bool {
+        with_stepper(|s| s.exec.is_running()).unwrap_or(false) || self.tx.len() > 0
+    }
+    fn queued(&self) -> usize {
+        self.tx.len()
+    }
+    fn flush(&mut self) {
+        with_stepper(|s| {
+            s.exec.halt();
+            while s.rx.dequeue().is_some() {}
+            s.exec.reset();
+        });
+    }
+    fn set_position(&mut self, p: StepPos) {
+        with_stepper(|s| s.exec.set_position(p));
+    }
+}
 
 /// A fault must leave every motor driver disabled, whatever caused it.
 #[cortex_m_rt::exception]
@@ -45,58 +118,131 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3, SPI1, I2C1_EV])]
 mod app {
-    use inkstep::board;
+    use super::*;
+    use heapless::spsc::Queue;
+    use inkstep_core::controller::Controller;
+    use inkstep_core::link::Link;
+    use inkstep_core::machine::{Inputs, MotionControl};
+    use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
+    use inkstep_core::settings::{OutputMode, PenMode, Settings};
+    use inkstep_core::settings_store::{block_on, BlockingFlash, SettingsStore, STORE_RANGE};
+    use inkstep_core::stepper::prep::PrepConfig;
     use rtic_monotonics::systick::prelude::*;
     use stm32f1xx_hal::usb::UsbBusType;
     use usb_device::bus::UsbBusAllocator;
 
     systick_monotonic!(Mono, 1_000);
 
+    type Store = SettingsStore<BlockingFlash<board::SettingsFlash>>;
+
     #[shared]
     struct Shared {
+        ctl: Controller,
+        link: Link<BoardSide>,
         usb: board::Usb,
         serial: board::UsbSerial,
-        indicators: board::Indicators,
     }
 
     #[local]
     struct Local {
         step_port: board::StepPort,
         step_timer: board::StepTimer,
+        phase4: Phase4,
+        /// Direction pins to output when the running pulse ends.
+        next_dir: u8,
         servo: board::PenServo,
         keypad: board::KeypadMatrix,
         inputs: board::Inputs,
-        lcd: board::Lcd,
+        indicators: board::Indicators,
+        lcd_spi: board::LcdSpi,
         watchdog: stm32f1xx_hal::watchdog::IndependentWatchdog,
+        store: Store,
+        usb_rx_in: Producer<'static, u8>,
+        usb_rx_out: Consumer<'static, u8>,
+        usb_tx_in: Producer<'static, u8>,
+        usb_tx_out: Consumer<'static, u8>,
     }
 
-    #[init(local = [usb_bus: Option<UsbBusAllocator<UsbBusType>> = None])]
+    #[init(local = [
+        usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
+        steps: Queue<StepCmd, STEP_QUEUE> = Queue::new(),
+        usb_rxq: Queue<u8, USB_RX> = Queue::new(),
+        usb_txq: Queue<u8, USB_TX> = Queue::new(),
+    ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let b = board::init(cx.device, cx.local.usb_bus);
         Mono::start(cx.core.SYST, b.sysclk_hz);
-        defmt::info!(
-            "inkstep {} up, sysclk {} Hz",
-            env!("CARGO_PKG_VERSION"),
-            b.sysclk_hz
-        );
+
+        // Settings from flash; a corrupt store falls back to defaults and says so.
+        let mut store = match SettingsStore::new(BlockingFlash(b.flash), STORE_RANGE) {
+            Some(s) => s,
+            None => defmt::panic!("settings flash range"),
+        };
+        let (settings, load) = block_on(store.load_settings());
+        let (coords, _) = block_on(store.load_coords());
+        let mut ctl = Controller::new(settings.clone(), 0);
+        if let Some(msg) = load.message() {
+            defmt::warn!("settings: {}", msg);
+            ctl.protocol_mut().notify(msg);
+        }
+        ctl.protocol_mut().machine_mut().set_coords(coords);
+        for i in 0..2 {
+            let (line, _) = block_on(store.load_startup(i));
+            ctl.protocol_mut().set_startup_line(i, line.as_str());
+        }
+
+        let (steps_tx, steps_rx) = cx.local.steps.split();
+        critical_section::with(|cs| {
+            STEPPER.borrow_ref_mut(cs).replace(Stepper {
+                exec: Executor::new([0; 3], 0x1_0000),
+                rx: steps_rx,
+            })
+        });
+        let prep = PrepConfig { timer_hz: board::STEP_TIMER_HZ, ..PrepConfig::default() };
+        let link = Link::new(&settings, prep, BoardSide { tx: steps_tx });
+        let (usb_rx_in, usb_rx_out) = cx.local.usb_rxq.split();
+        let (usb_tx_in, usb_tx_out) = cx.local.usb_txq.split();
+
+        let mut step_port = b.step_port;
+        let mut step_timer = b.step_timer;
+        apply_output_settings(&settings, &mut step_port, &mut step_timer);
+
+        defmt::info!("inkstep {} up, sysclk {} Hz", env!("CARGO_PKG_VERSION"), b.sysclk_hz);
+        prepare::spawn().ok();
+        protocol::spawn().ok();
         keypad_scan::spawn().ok();
         lcd_refresh::spawn().ok();
         (
-            Shared {
-                usb: b.usb,
-                serial: b.serial,
-                indicators: b.indicators,
-            },
+            Shared { ctl, link, usb: b.usb, serial: b.serial },
             Local {
-                step_port: b.step_port,
-                step_timer: b.step_timer,
+                step_port,
+                step_timer,
+                phase4: Phase4::default(),
+                next_dir: 0,
                 servo: b.servo,
                 keypad: b.keypad,
                 inputs: b.inputs,
-                lcd: b.lcd,
+                indicators: b.indicators,
+                lcd_spi: b.lcd_spi,
                 watchdog: b.watchdog,
+                store,
+                usb_rx_in,
+                usb_rx_out,
+                usb_tx_in,
+                usb_tx_out,
             },
         )
+    }
+
+    /// Output polarity, mode, pulse width and driver enable from the settings.
+    fn apply_output_settings(s: &Settings, port: &mut board::StepPort, timer: &mut board::StepTimer) {
+        STEP_INVERT.store(s.step_invert_mask(), Ordering::Relaxed);
+        DIR_INVERT.store(s.dir_invert_mask(), Ordering::Relaxed);
+        FOUR_PHASE.store(s.output_mode() == OutputMode::FourPhase, Ordering::Relaxed);
+        HARD_LIMITS_ARMED.store(s.hard_limits(), Ordering::Relaxed);
+        let ticks = u32::from(s.step_pulse_us()) * (board::STEP_TIMER_HZ / 1_000_000);
+        timer.set_pulse_ticks(ticks.min(0xFFFF) as u16);
+        port.set_drivers_enabled(true, !s.invert_enable());
     }
 
     #[idle]
@@ -106,69 +252,322 @@ mod app {
         }
     }
 
-    /// Emergency stop: highest priority. Outputs off first, then tell the core.
+    /// Emergency stop: highest priority. Drivers off and steps halted before anything
+    /// else; the protocol task raises the alarm when it next reads the inputs (<= 1 ms).
     #[task(binds = EXTI0, priority = 7)]
     fn estop(_: estop::Context) {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
-            defmt::warn!("e-stop");
+            HALT.store(true, Ordering::SeqCst);
+            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
         }
     }
 
-    #[task(binds = TIM2, priority = 6, local = [step_port, step_timer])]
+    /// Limit switches: with hard limits armed, stop stepping at once like the e-stop
+    /// (drivers stay enabled so the position is held); the machine raises the alarm.
+    #[task(binds = EXTI1, priority = 7)]
+    fn limit_x(_: limit_x::Context) {
+        if board::exti_take_pending(1) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
+            HALT.store(true, Ordering::SeqCst);
+            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+        }
+    }
+
+    #[task(binds = EXTI3, priority = 7)]
+    fn limit_y(_: limit_y::Context) {
+        if board::exti_take_pending(3) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
+            HALT.store(true, Ordering::SeqCst);
+            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+        }
+    }
+
+    /// The step timer. Update event: emit the step pulses of the command whose wait
+    /// just ended and program the next wait. Compare event (pulse width later): end
+    /// the pulses, then set the direction pins for the next command, so direction
+    /// changes never fall inside a pulse. A software pend with the timer stopped
+    /// starts it when prepared steps are waiting.
+    #[task(binds = TIM2, priority = 6, local = [step_port, step_timer, phase4, next_dir, finishing: bool = false])]
     fn step(cx: step::Context) {
-        let (_update, compare) = cx.local.step_timer.take_events();
-        if compare {
-            cx.local.step_port.write(
-                0,
-                (board::STEP_MASK_X | board::STEP_MASK_Y | board::STEP_MASK_Z) as u8,
-            );
+        let port = cx.local.step_port;
+        let timer = cx.local.step_timer;
+        let (update, compare) = timer.take_events();
+        let four_phase = FOUR_PHASE.load(Ordering::Relaxed);
+        let step_inv = STEP_INVERT.load(Ordering::Relaxed) & 0b111;
+        let dir_inv = DIR_INVERT.load(Ordering::Relaxed) & 0b111;
+        if compare && !four_phase {
+            let dir = (*cx.local.next_dir ^ dir_inv) & 0b111;
+            let dir_bits = dir << board::DIR_SHIFT;
+            let dir_clear = !dir_bits & (0b111 << board::DIR_SHIFT);
+            // Idle level of the step pins is the inverted one.
+            port.write(step_inv | dir_bits, (!step_inv & 0b111) | dir_clear);
         }
-    }
-
-    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial])]
-    fn usb_rx(cx: usb_rx::Context) {
-        (cx.shared.usb, cx.shared.serial).lock(|usb, serial| {
-            if usb.poll(&mut [serial]) {
-                let mut buf = [0u8; 64];
-                if let Ok(n) = serial.read(&mut buf) {
-                    let _ = serial.write(buf.get(..n).unwrap_or(&[]));
+        critical_section::with(|cs| {
+            let mut guard = STEPPER.borrow_ref_mut(cs);
+            let Some(st) = guard.as_mut() else { return };
+            if HALT.load(Ordering::Relaxed) {
+                st.exec.halt();
+                timer.stop();
+                return;
+            }
+            if update && timer.is_running() {
+                if core::mem::take(cx.local.finishing) {
+                    // The last pulse has ended: stop, unless new commands wait.
+                    timer.stop();
+                } else {
+                    let out = st.exec.on_interrupt(&mut st.rx);
+                    if out.step != 0 {
+                        if four_phase {
+                            let tick = inkstep_core::interp::Tick(out.step | (out.dir << 3));
+                            let coils = cx.local.phase4.step(tick);
+                            let bits = (coils[0] & 0x0F) | ((coils[1] & 0x0F) << 4);
+                            port.write(bits, !bits);
+                        } else {
+                            port.write(out.step ^ step_inv, out.step & step_inv);
+                        }
+                        LAST_STEPPED.store(out.step, Ordering::Relaxed);
+                        LAST_DIR.store(out.dir, Ordering::Relaxed);
+                    }
+                    *cx.local.next_dir = out.dir;
+                    if out.reload == 0 {
+                        // Run one more short period so the compare event ends the pulse.
+                        *cx.local.finishing = true;
+                        timer.set_period(2 * timer.pulse_ticks() + 16);
+                    } else {
+                        timer.set_period(out.reload);
+                    }
+                    return;
+                }
+            }
+            if !timer.is_running() {
+                if let Some(out) = st.exec.start(&mut st.rx) {
+                    // Direction first; the first pulse comes one wait later.
+                    *cx.local.next_dir = out.dir;
+                    let d = (out.dir ^ dir_inv) & 0b111;
+                    port.write(d << board::DIR_SHIFT, (!d & 0b111) << board::DIR_SHIFT);
+                    timer.set_period(out.reload);
+                    timer.start();
                 }
             }
         });
     }
 
-    #[task(binds = EXTI4, priority = 4, local = [inputs])]
-    fn control_inputs(cx: control_inputs::Context) {
-        if board::exti_take_pending(4) {
-            defmt::info!("feed hold input low: {}", cx.local.inputs.feed_hold_low());
+    /// USB: poll the device, take bytes from the endpoint only while the RX queue has
+    /// room (so a full queue NAKs the host instead of dropping), send queued output.
+    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial], local = [usb_rx_in, usb_tx_out])]
+    fn usb_lp(cx: usb_lp::Context) {
+        let rx = cx.local.usb_rx_in;
+        let tx = cx.local.usb_tx_out;
+        (cx.shared.usb, cx.shared.serial).lock(|usb, serial| {
+            usb.poll(&mut [serial]);
+            let mut buf = [0u8; 64];
+            let room = rx.capacity() - rx.len();
+            if room >= buf.len() {
+                if let Ok(n) = serial.read(&mut buf) {
+                    for &b in buf.iter().take(n) {
+                        let _ = rx.enqueue(b);
+                    }
+                }
+            }
+            let mut out = [0u8; 64];
+            let mut n = 0;
+            while n < out.len() {
+                match tx.peek() {
+                    Some(&b) => {
+                        out[n] = b;
+                        n += 1;
+                        tx.dequeue();
+                    }
+                    None => break,
+                }
+            }
+            if n > 0 {
+                // The CDC class buffers what the endpoint cannot take yet; bytes it
+                // refuses are dropped only if the host stopped reading.
+                let _ = serial.write(out.get(..n).unwrap_or(&[]));
+            }
+        });
+    }
+
+    /// Segment preparation: keep ~10 ms of step commands queued ahead of the interrupt
+    /// and start the timer when it is idle and commands wait.
+    #[task(priority = 5, shared = [link])]
+    async fn prepare(mut cx: prepare::Context) {
+        loop {
+            let kick = cx.shared.link.lock(|link| {
+                link.fill();
+                link.side().queued() > 0
+            });
+            if kick && !HALT.load(Ordering::Relaxed) {
+                rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+            }
+            Mono::delay(1.millis()).await;
         }
     }
 
-    #[task(priority = 3, local = [keypad, watchdog])]
-    async fn keypad_scan(cx: keypad_scan::Context) {
-        let mut col = 0usize;
+    /// The protocol, the machine state and the G-code interpreter, every millisecond:
+    /// inputs, received bytes (only those the protocol takes: back-pressure), the
+    /// periodic work, replies, the busy LED, the pen servo and settings persistence.
+    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: heapless::Vec<u8, 64> = heapless::Vec::new(), save_pending: bool = false, pen: Option<bool> = None])]
+    async fn protocol(mut cx: protocol::Context) {
         loop {
+            let now = Mono::now().ticks();
+            let pins = cx.local.inputs;
+            let carry = cx.local.carry;
+            while !carry.is_full() {
+                match cx.local.usb_rx_out.dequeue() {
+                    Some(b) => {
+                        let _ = carry.push(b);
+                    }
+                    None => break,
+                }
+            }
+            let tx = &mut *cx.local.usb_tx_in;
+            let (busy, settings_changed, pen_down, settings) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let s = ctl.protocol().machine().settings();
+                let inputs = Inputs {
+                    estop: pins.estop_open() != s.invert_inputs(),
+                    limits: [pins.limit_x_open() != s.invert_limits(), pins.limit_y_open() != s.invert_limits(), false],
+                    feed_hold: pins.feed_hold_low(),
+                    cycle_start: pins.cycle_start_low(),
+                };
+                ctl.protocol_mut().set_inputs(inputs, link, now);
+                let taken = ctl.usb_rx(carry, link, now);
+                let taken = taken.min(carry.len());
+                carry.copy_within(taken.., 0);
+                carry.truncate(carry.len() - taken);
+                ctl.poll(link, now);
+                let mut out = [0u8; 64];
+                let room = (tx.capacity() - tx.len()).min(out.len());
+                let n = ctl.usb_tx(&mut out[..room]);
+                for &b in out.iter().take(n) {
+                    let _ = tx.enqueue(b);
+                }
+                let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
+                if changed {
+                    let s = ctl.protocol().machine().settings().clone();
+                    link.configure(&s);
+                }
+                let busy = ctl.take_outputs().busy_led;
+                (busy, changed, link.pen_down(), ctl.protocol().machine().settings().clone())
+            });
+            rtic::pend(stm32f1xx_hal::pac::Interrupt::USB_LP_CAN_RX0);
+            // A reset from the alarm (soft reset / $X) clears the latched halt.
+            if HALT.load(Ordering::Relaxed) && !cx.shared.ctl.lock(|c| c.protocol().machine().alarm().is_some()) {
+                HALT.store(false, Ordering::SeqCst);
+            }
+            if settings_changed {
+                *cx.local.save_pending = true;
+            }
+            if *cx.local.pen != Some(pen_down) && settings.pen_mode() == PenMode::Servo {
+                cx.local.servo.set_pulse_us(settings.pen_servo_pulse_us(pen_down));
+                *cx.local.pen = Some(pen_down);
+            }
+            // Flash writes stall the CPU (instruction fetch waits), so only at rest.
+            if *cx.local.save_pending && !busy {
+                *cx.local.save_pending = false;
+                if block_on(cx.local.store.save_settings(&settings)).is_err() {
+                    defmt::warn!("settings save failed");
+                }
+            }
+            let _ = busy;
+            Mono::delay(1.millis()).await;
+        }
+    }
+
+    /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.
+    #[task(binds = EXTI4, priority = 4, shared = [ctl, link], local = [])]
+    fn feed_hold(mut cx: feed_hold::Context) {
+        if board::exti_take_pending(4) {
+            let now = Mono::now().ticks();
+            (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let mut i = ctl.protocol().machine().inputs();
+                i.feed_hold = board::Inputs::read_feed_hold_low();
+                ctl.protocol_mut().set_inputs(i, link, now);
+            });
+        }
+    }
+
+    #[task(binds = EXTI9_5, priority = 4, shared = [ctl, link])]
+    fn cycle_start(mut cx: cycle_start::Context) {
+        if board::exti_take_pending(5) {
+            let now = Mono::now().ticks();
+            (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let mut i = ctl.protocol().machine().inputs();
+                i.cycle_start = board::Inputs::read_cycle_start_low();
+                ctl.protocol_mut().set_inputs(i, link, now);
+            });
+        }
+    }
+
+    /// The keypad: drive the column the scanner asks for, read its rows one scan
+    /// period later (no busy wait for the lines to settle), hand them to the core.
+    /// Also plays the buzzer patterns and feeds the watchdog.
+    #[task(priority = 3, shared = [ctl, link], local = [keypad, watchdog, indicators])]
+    async fn keypad_scan(mut cx: keypad_scan::Context) {
+        let mut beep: &'static [u16] = &[];
+        let mut beep_left_ms: u32 = 0;
+        loop {
+            let col = cx.shared.ctl.lock(|c| c.keypad().column());
             cx.local.keypad.select_column(col);
             Mono::delay(5.millis()).await;
             let rows = cx.local.keypad.read_rows();
-            if rows != 0 {
-                defmt::debug!("key col {} rows {:04b}", col, rows);
+            let now = Mono::now().ticks();
+            let out = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                ctl.key_scan(rows, link, now);
+                ctl.take_outputs()
+            });
+            cx.local.indicators.set_busy(out.busy_led);
+            if let Some(b) = out.beep {
+                beep = b.pattern();
+                beep_left_ms = 0;
             }
-            col = (col + 1) % board::KeypadMatrix::COLUMNS;
+            // Buzzer: step through the on/off pattern in 5 ms ticks.
+            if beep_left_ms == 0 {
+                match beep.split_first() {
+                    Some((&ms, rest)) => {
+                        // Even number of entries left = this one is an "on" time.
+                        cx.local.indicators.set_buzzer(beep.len() % 2 == 1);
+                        beep_left_ms = u32::from(ms);
+                        beep = rest;
+                    }
+                    None => cx.local.indicators.set_buzzer(false),
+                }
+            }
+            beep_left_ms = beep_left_ms.saturating_sub(5);
             cx.local.watchdog.feed();
         }
     }
 
-    #[task(priority = 1, local = [lcd, servo])]
-    async fn lcd_refresh(cx: lcd_refresh::Context) {
-        let mut delay = board::SpinDelay;
-        if cx.local.lcd.init(&mut delay).is_err() {
-            defmt::warn!("LCD init failed");
+    /// The LCD at 10 Hz, lowest priority: take a snapshot of the HMI and the status
+    /// under a short lock, draw it into the frame buffer, send only the changed words.
+    /// The SPI waits here are the only blocking waits in the firmware; every other
+    /// task preempts them.
+    #[task(priority = 1, shared = [ctl, link], local = [lcd_spi, screens: Screens = Screens::new(), fb: FrameBuffer = FrameBuffer::new()])]
+    async fn lcd_refresh(mut cx: lcd_refresh::Context) {
+        let spi = cx.local.lcd_spi;
+        {
+            // The st7920 crate brings the controller up in graphics mode; after that
+            // only the changed bytes are sent (core::screens::st7920).
+            let mut lcd = ::st7920::ST7920::new(&mut *spi, board::NoPin, None::<board::NoPin>, false);
+            if lcd.init(&mut board::SpinDelay).is_err() {
+                defmt::warn!("LCD init failed");
+            }
         }
-        cx.local.servo.set_pulse_us(1000);
+        cx.local.fb.mark_all_dirty();
         loop {
-            let _ = cx.local.lcd.flush(&mut delay);
+            let now = Mono::now().ticks();
+            let dir = LAST_DIR.load(Ordering::Relaxed);
+            let stepped = LAST_STEPPED.load(Ordering::Relaxed);
+            let sign = |a: u8| if stepped & (1 << a) == 0 { 0 } else if dir & (1 << a) != 0 { -1 } else { 1 };
+            let (hmi, status) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                ctl.note_direction([sign(0), sign(1)]);
+                (ctl.hmi().clone(), ctl.status(link))
+            });
+            let _ = cx.local.screens.render(&hmi, &status, now, cx.local.fb);
+            use embedded_hal::spi::SpiDevice;
+            if st7920::flush(cx.local.fb, |bytes| spi.write(bytes)).is_err() {
+                defmt::warn!("LCD write failed");
+            }
             Mono::delay(100.millis()).await;
         }
     }
