@@ -11,6 +11,24 @@
 //! planner queue waits, and so does everything behind it. Responses collect in an
 //! output buffer drained with [`Protocol::read_output`]; work that produces output
 //! only starts when the buffer has room for it, so responses are never truncated.
+//!
+//! Driving it (firmware protocol task, simulator loop), all from one context:
+//! ```text
+//! boot:  (settings, st) = store.load_settings().await
+//!        p = Protocol::new(settings); if let Some(t) = st.message() { p.notify(t) }
+//!        p.machine_mut().set_coords(store.load_coords().await.0)
+//!        for i in 0..STARTUP_LINES { p.set_startup_line(i, &store.load_startup(i).await.0) }
+//! loop:  n = p.receive(&usb_rx[..], &mut planner, now_ms)   // drain only n bytes
+//!        p.poll(&mut planner, now_ms)            // also every ms or so when idle:
+//!                                                  // homing and debounce run on time
+//!        usb_tx.write(&buf[..p.read_output(&mut buf)])
+//!        p.set_inputs(levels, &mut planner, now_ms)          // on any input change
+//!        busy_led.set(p.machine().busy(&planner))
+//!        when !busy: save what take_settings_dirty / take_coords_dirty /
+//!                    take_startup_dirty report (flash writes stall the CPU)
+//! ```
+//! The e-stop interrupt stops the step engine itself before the protocol task
+//! learns of it through `set_inputs`.
 
 use crate::gcode::{LineCleaner, Status};
 use crate::machine::state::Event;
@@ -25,10 +43,10 @@ pub const RX_BUFFER_SIZE: usize = 128;
 /// Longest line after cleaning (Grbl's limit); longer lines get `error:11`.
 pub const LINE_MAX: usize = 80;
 /// Output buffer size.
-pub const OUT_CAP: usize = 512;
+pub const OUT_CAP: usize = 640;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
-const OUT_RESERVE: usize = 200;
+const OUT_RESERVE: usize = 256;
 /// Number of `$N` startup lines.
 pub const STARTUP_LINES: usize = 2;
 /// Status reports between repeated `WCO:` / `Ov:` fields.
@@ -95,7 +113,7 @@ fn axis_triplet<W: Write>(w: &mut W, v: &[f32; AXES], scale: f32) -> fmt::Result
         if i > 0 {
             w.write_char(',')?;
         }
-        write!(w, "{:.3}", x / scale)?;
+        crate::settings::write_fixed3(w, x / scale)?;
     }
     Ok(())
 }
@@ -209,10 +227,8 @@ impl Protocol {
     pub fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
         let mut used = 0;
         for &b in bytes {
-            if !self.realtime(b, m, now_ms) {
-                if self.rx.push_back(b).is_err() {
-                    break;
-                }
+            if !self.realtime(b, m, now_ms) && self.rx.push_back(b).is_err() {
+                break;
             }
             used += 1;
         }
@@ -231,6 +247,7 @@ impl Protocol {
             b'!' => self.machine.feed_hold(m),
             b'~' => self.machine.cycle_start(m),
             0x18 => self.soft_reset(m),
+            0x84 => self.machine.safety_door(m),
             0x85 => self.machine.jog_cancel(m),
             0x90..=0x97 => self.machine.override_command(b, m),
             // Other extended real-time bytes (door, spindle and coolant overrides)
@@ -255,6 +272,11 @@ impl Protocol {
         self.startup_next = Some(0);
         self.flush_events();
         self.welcome();
+    }
+
+    /// Queue a `[MSG:...]` line (e.g. the settings store's load report at boot).
+    pub fn notify(&mut self, text: &str) {
+        self.say(format_args!("[MSG:{}]", text));
     }
 
     /// Update the input levels (e-stop, limits, feed hold, cycle start).
@@ -396,28 +418,43 @@ impl Protocol {
             self.machine.state(m),
             RunState::Idle | RunState::Alarm | RunState::Check
         );
-        let need_rest = |r: Result<(), Status>| if at_rest { r } else { Err(Status::IdleError) };
+        // Everything but help, $G, $C (checks itself) and jogging needs the machine at
+        // rest; refuse before doing anything.
+        let anytime = cmd.is_empty() || cmd == b"G" || cmd == b"C" || cmd.starts_with(b"J=");
+        if !anytime && !at_rest {
+            return Some(Err(Status::IdleError));
+        }
         Some(match cmd {
             b"" => {
                 self.say(format_args!("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"));
                 Ok(())
             }
-            b"$" => need_rest(Ok(())).map(|()| self.listing = Some(Listing::Settings(0))),
-            b"#" => need_rest(Ok(())).map(|()| self.listing = Some(Listing::Coords(0))),
-            b"N" => need_rest(Ok(())).map(|()| self.listing = Some(Listing::Startup(0))),
+            b"$" => {
+                self.listing = Some(Listing::Settings(0));
+                Ok(())
+            }
+            b"#" => {
+                self.listing = Some(Listing::Coords(0));
+                Ok(())
+            }
+            b"N" => {
+                self.listing = Some(Listing::Startup(0));
+                Ok(())
+            }
             b"G" => {
                 let mut s: String<96> = String::new();
                 let _ = self.machine.interp().write_modal(&mut s);
                 self.say(format_args!("[{}]", s));
                 Ok(())
             }
-            b"I" => need_rest(Ok(())).map(|()| {
+            b"I" => {
                 self.say(format_args!(
                     "[VER:1.1h.inkstep-{}:inkstep pen plotter]",
                     VERSION
                 ));
                 self.say(format_args!("[OPT:NL,{},{}]", m.capacity(), RX_BUFFER_SIZE));
-            }),
+                Ok(())
+            }
             b"C" => {
                 let was = self.machine.check_mode();
                 let r = self.machine.toggle_check(m);
@@ -428,16 +465,21 @@ impl Protocol {
                 }
                 r
             }
-            b"X" => need_rest(self.machine.unlock()),
-            b"H" => need_rest(self.machine.start_homing(m)),
+            b"X" => self.machine.unlock(),
+            b"H" => self.machine.start_homing(m),
             b"RST=$" => {
-                need_rest(Ok(())).map(|()| self.machine.replace_settings(Settings::default()))
+                self.machine.replace_settings(Settings::default(), m);
+                Ok(())
             }
-            b"RST=#" => need_rest(Ok(())).map(|()| self.machine.clear_coords()),
-            b"RST=*" => need_rest(Ok(())).map(|()| {
-                self.machine.replace_settings(Settings::default());
+            b"RST=#" => {
                 self.machine.clear_coords();
-            }),
+                Ok(())
+            }
+            b"RST=*" => {
+                self.machine.replace_settings(Settings::default(), m);
+                self.machine.clear_coords();
+                Ok(())
+            }
             _ => {
                 if let Some(body) = cmd.strip_prefix(b"J=") {
                     if m.free() == 0 {
@@ -445,9 +487,9 @@ impl Protocol {
                     }
                     self.machine.jog(body, m)
                 } else if let Some(rest) = cmd.strip_prefix(b"N") {
-                    need_rest(self.store_startup(rest))
+                    self.store_startup(rest)
                 } else {
-                    need_rest(self.set_setting(cmd, m))
+                    self.set_setting(cmd, m)
                 }
             }
         })
@@ -604,8 +646,10 @@ impl Protocol {
         let rx_free = self.rx_free();
         let blocks_free = m.free();
         let speed = m.speed() / scale;
-        let spindle = if self.machine.interp().modal().pen_down {
-            1
+        // The pen is the spindle: report S while it is down.
+        let interp = self.machine.interp();
+        let spindle = if interp.modal().pen_down {
+            libm::roundf(interp.spindle()) as i32
         } else {
             0
         };
@@ -617,6 +661,7 @@ impl Protocol {
                 RunState::Run => w.write_str("Run")?,
                 RunState::Hold { complete } => write!(w, "Hold:{}", if complete { 0 } else { 1 })?,
                 RunState::Jog => w.write_str("Jog")?,
+                RunState::Door { at_rest } => write!(w, "Door:{}", if at_rest { 0 } else { 2 })?,
                 RunState::Alarm => w.write_str("Alarm")?,
                 RunState::Home => w.write_str("Home")?,
                 RunState::Check => w.write_str("Check")?,

@@ -577,7 +577,7 @@ impl Settings {
         let desc = TABLE.get(index)?;
         let v = *self.vals.get(index)?;
         Some(match desc.kind {
-            Kind::Float => write!(w, "${}={:.3}", desc.number, v),
+            Kind::Float => write!(w, "${}=", desc.number).and_then(|()| write_fixed3(w, v)),
             _ => write!(w, "${}={}", desc.number, v as i32),
         })
     }
@@ -600,11 +600,14 @@ impl Settings {
     }
 
     /// Parse a byte image written by [`Settings::to_image`], checking everything.
+    /// An image from an older build with fewer (appended-to) settings loads too: the
+    /// settings it lacks take their defaults, so an update keeps the user's values.
     pub fn from_image(img: &[u8]) -> Result<Settings, ImageError> {
-        if img.len() != IMAGE_LEN {
+        let count = usize::from(*img.get(3).ok_or(ImageError::Length)?);
+        if count > COUNT || img.len() != 4 + 4 * count + 4 {
             return Err(ImageError::Length);
         }
-        let (body, tail) = img.split_at(IMAGE_LEN - 4);
+        let (body, tail) = img.split_at(img.len() - 4);
         let stored = u32::from_le_bytes(tail.try_into().map_err(|_| ImageError::Length)?);
         if crc32(body) != stored {
             return Err(ImageError::Checksum);
@@ -612,7 +615,7 @@ impl Settings {
         if body.get(..2) != Some(&MAGIC[..]) {
             return Err(ImageError::Magic);
         }
-        if body.get(2) != Some(&FORMAT_VERSION) || body.get(3) != Some(&(COUNT as u8)) {
+        if body.get(2) != Some(&FORMAT_VERSION) {
             return Err(ImageError::Version);
         }
         let mut s = Settings::default();
@@ -631,6 +634,18 @@ impl Settings {
         }
         Ok(s)
     }
+}
+
+/// Write `v` with three decimals (Grbl's report format) through integer formatting:
+/// core's float formatting would cost about 14 KB of flash on the Cortex-M3.
+/// Values round half away from zero. Computed in f32 (no double-precision routines in
+/// the image): exact to the last digit below 16,777 (2^24 thousandths), which covers
+/// any plotter; larger values keep f32's 7 significant digits.
+pub fn write_fixed3<W: fmt::Write>(w: &mut W, v: f32) -> fmt::Result {
+    let milli = libm::roundf(v * 1000.0) as i64;
+    let sign = if milli < 0 { "-" } else { "" };
+    let a = milli.unsigned_abs();
+    write!(w, "{}{}.{:03}", sign, a / 1000, a % 1000)
 }
 
 /// CRC-32 (IEEE, reflected, polynomial 0xEDB88320), bitwise: the image is small and
@@ -671,6 +686,23 @@ mod tests {
             for a in 0..3 {
                 assert!(index_of(base + a).is_some());
             }
+        }
+    }
+
+    #[test]
+    fn fixed_point_output_matches_three_decimal_rounding() {
+        for v in [
+            0.0f32, 1.0, -1.0, 0.0005, -0.0004, 123.456, -99.9996, 0.010, 16_000.125, -2.5e-4,
+        ] {
+            let mut a: heapless::String<40> = heapless::String::new();
+            write_fixed3(&mut a, v).unwrap();
+            let want = std::format!("{:.3}", f64::from(v));
+            let want = if want == "-0.000" {
+                "0.000".into()
+            } else {
+                want
+            };
+            assert_eq!(a.as_str(), want, "{v}");
         }
     }
 
@@ -732,5 +764,21 @@ mod tests {
             }
         }
         assert_eq!(Settings::from_image(&img[..10]), Err(ImageError::Length));
+    }
+
+    #[test]
+    fn an_older_shorter_image_keeps_its_values_and_defaults_the_rest() {
+        let mut s = Settings::default();
+        s.set(100, 42.0).unwrap();
+        let full = s.to_image();
+        // The image an older build with only the first 30 settings would have written.
+        let n = 30;
+        let mut old = std::vec::Vec::from(&full[..4 + 4 * n]);
+        old[3] = n as u8;
+        let crc = crc32(&old);
+        old.extend_from_slice(&crc.to_le_bytes());
+        let loaded = Settings::from_image(&old).unwrap();
+        assert_eq!(loaded.steps_per_mm(0), 42.0);
+        assert_eq!(loaded, s, "the rest are defaults, as in s");
     }
 }

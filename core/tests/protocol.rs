@@ -157,13 +157,20 @@ fn hold_resume_keeps_position_and_reports_hold_states() {
     m.rate = 10;
     send(&mut p, &mut m, "G1 X10 F600\n");
     m.step();
-    send(&mut p, &mut m, "!");
+    p.receive(b"!", &mut m, 0);
+    p.receive(b"?", &mut m, 0);
+    let out = drain(&mut p);
+    assert!(
+        out.starts_with("<Hold:1|MPos:0.125,"),
+        "decelerating: {out}"
+    );
+    m.step();
     let out = send(&mut p, &mut m, "?");
-    assert!(out.starts_with("<Hold:0|MPos:0.125,"), "{out}");
+    assert!(out.starts_with("<Hold:0|MPos:0.250,"), "{out}");
     for _ in 0..5 {
         m.step();
     }
-    assert_eq!(m.pos[0], 10, "no step while held");
+    assert_eq!(m.pos[0], 20, "no step once at rest");
     send(&mut p, &mut m, "~");
     m.run_all();
     assert_eq!(m.pos, [800, 0, 0]);
@@ -275,6 +282,10 @@ fn soft_limits_reject_before_any_step() {
     assert_eq!(t, [8000], "the target outside travel was never queued");
     assert_eq!(send(&mut p, &mut m, "G0 X1\n"), "error:9\r\n");
     assert!(send(&mut p, &mut m, "$J=G91 X-500 F100\n").ends_with("error:9\r\n"));
+    // The move under way decelerates to rest, then the queue is dropped.
+    m.step();
+    p.poll(&mut m, 0);
+    assert!(m.queue.is_empty());
     send(&mut p, &mut m, "$X\n");
     assert_eq!(send(&mut p, &mut m, "$J=G91 X-500 F100\n"), "error:15\r\n");
 }
@@ -343,10 +354,13 @@ fn jog_and_jog_cancel() {
     m.step();
     p.poll(&mut m, 0);
     assert!(m.queue.is_empty());
-    assert!(send(&mut p, &mut m, "?").starts_with("<Idle|MPos:0.100,"));
+    assert!(
+        send(&mut p, &mut m, "?").starts_with("<Idle|MPos:0.200,"),
+        "one step to decelerate"
+    );
     // The interpreter continues from where the jog stopped.
     send(&mut p, &mut m, "G91 G0 X1\n");
-    assert_eq!(moves(&m).last().unwrap().target, [88, 0, 0]);
+    assert_eq!(moves(&m).last().unwrap().target, [96, 0, 0]);
     assert_eq!(
         send(&mut p, &mut m, "$J=G91 X1 F10\n"),
         "error:8\r\n",
@@ -430,8 +444,12 @@ fn job_messages_pause_and_overrides() {
     );
     assert_eq!(moves(&m).len(), 1, "the line after M0 waits");
     assert_eq!(send(&mut p, &mut m, "~"), "ok\r\n", "the waiting line runs");
-    assert_eq!(send(&mut p, &mut m, "M2\n"), "ok\r\n");
+    p.receive(b"M2\n", &mut m, 0);
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "", "M2 waits for the motion before it");
     m.run_all();
+    p.poll(&mut m, 1500);
+    assert_eq!(drain(&mut p), "[MSG:Pgm End]\r\nok\r\n");
     p.poll(&mut m, 1500);
     assert_eq!(drain(&mut p), "[MSG:Job finished: 1.500 s, 2 moves]\r\n");
     send(&mut p, &mut m, "\u{91}\u{91}\u{96}");
@@ -449,5 +467,276 @@ fn long_lines_get_error_11() {
     assert_eq!(
         send(&mut p, &mut m, "G0 X1\n"),
         "[MSG:Job started]\r\nok\r\n"
+    );
+}
+
+#[test]
+fn work_position_reports_pen_speed_and_notifications() {
+    let (mut p, mut m) = boot();
+    send(
+        &mut p,
+        &mut m,
+        "$10=0\nG10 L2 P1 X2 Y3\nG0 X5 Y5\nM3 S250\n",
+    );
+    m.run_all();
+    let out = send(&mut p, &mut m, "?");
+    assert!(
+        out.starts_with("<Idle|WPos:5.000,5.000,-2.000|FS:0,250|"),
+        "{out}"
+    );
+    p.notify("Stored data corrupt, defaults restored");
+    assert_eq!(
+        drain(&mut p),
+        "[MSG:Stored data corrupt, defaults restored]\r\n"
+    );
+}
+
+#[test]
+fn busy_follows_motion() {
+    let (mut p, mut m) = boot();
+    assert!(!p.machine().busy(&m));
+    send(&mut p, &mut m, "G0 X1\n");
+    assert!(p.machine().busy(&m));
+    m.run_all();
+    assert!(!p.machine().busy(&m));
+}
+
+#[test]
+fn ram_budget_of_the_protocol() {
+    use inkstep_core::gcode::Interp;
+    use inkstep_core::machine::Machine;
+    let sizes = (
+        std::mem::size_of::<Protocol>(),
+        std::mem::size_of::<Machine>(),
+        std::mem::size_of::<Interp>(),
+        std::mem::size_of::<Settings>(),
+    );
+    println!(
+        "RAM: Protocol {} B (Machine {} B, Interp {} B, Settings {} B)",
+        sizes.0, sizes.1, sizes.2, sizes.3
+    );
+    // DESIGN.md budgets 16 KB of RAM for everything; the protocol may take 2 KB.
+    assert!(sizes.0 <= 2048, "{sizes:?}");
+}
+
+#[test]
+fn huge_positions_never_overrun_the_output() {
+    let (mut p, mut m) = boot();
+    send(
+        &mut p,
+        &mut m,
+        "$100=0.001\n$101=0.001\n$102=0.001\nG10 L2 P1 X-999999999 Y-999999999 Z-999999999\n",
+    );
+    m.pos = [-1_000_000_000; 3];
+    p.set_inputs(
+        Inputs {
+            limits: [true; 3],
+            feed_hold: true,
+            cycle_start: true,
+            estop: false,
+        },
+        &mut m,
+        0,
+    );
+    for _ in 0..50 {
+        p.receive(b"?", &mut m, 0);
+        p.poll(&mut m, 0);
+        drain(&mut p);
+    }
+    assert_eq!(p.truncated(), 0);
+}
+
+#[test]
+fn keypad_moves_and_abort_keep_the_interpreter_in_step() {
+    let (mut p, mut m) = boot();
+    m.rate = 8;
+    let mv = Move {
+        target: [800, 800, 0],
+        path: Path::Line,
+        feed: Feed::MmPerMin(300.0),
+        line: 0,
+    };
+    p.machine_mut().queue(Command::Move(mv), &mut m, 0).unwrap();
+    assert_eq!(drain(&mut p), "");
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "[MSG:Job started]\r\n");
+    m.step();
+    p.machine_mut().stop_and_clear(&mut m);
+    // Cycle start cannot undo an abort, and G-code waits until the stop is done.
+    p.receive(b"~", &mut m, 0);
+    assert!(m.holding);
+    p.receive(b"G4 P0\n", &mut m, 0);
+    p.poll(&mut m, 0);
+    assert!(drain(&mut p).is_empty(), "the line waits");
+    assert_eq!(m.queue.len(), 1);
+    m.step();
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "ok\r\n");
+    assert_eq!(m.queue.len(), 1, "only the dwell is queued");
+    m.run_all();
+    assert_eq!(m.pos, [16, 16, 0], "one step of deceleration");
+    assert_eq!(p.machine().state(&m), RunState::Idle);
+    // G-code continues from where the abort stopped.
+    send(&mut p, &mut m, "G91 G0 X1\n");
+    assert_eq!(moves(&m).last().unwrap().target, [96, 16, 0]);
+    // Refused in alarm.
+    send(&mut p, &mut m, "\x18");
+    p.set_inputs(
+        Inputs {
+            estop: true,
+            ..Inputs::default()
+        },
+        &mut m,
+        0,
+    );
+    let r = p.machine_mut().queue(Command::Move(mv), &mut m, 0);
+    assert_eq!(r, Err(inkstep_core::gcode::Status::SystemLocked));
+}
+
+#[test]
+fn hundred_thousand_lines_in_usb_packets_lose_and_duplicate_nothing() {
+    // Send-response would be too slow to matter here; use character counting with
+    // the bytes cut into 64-byte USB packets that the protocol may only partly take.
+    let started = std::time::Instant::now();
+    let (mut p, mut m) = boot();
+    m.cap = 15;
+    let n = 100_000;
+    let lines: Vec<String> = (0..n)
+        .map(|i| i + 1) // line 0 would be X0 Y0: no motion from the origin
+        .map(|i| {
+            format!(
+                "G1 X{:.3} Y{:.3} F3000",
+                (i % 997) as f32 * 0.125,
+                (i % 89) as f32 * 0.25
+            )
+        })
+        .collect();
+    let mut in_flight = std::collections::VecDeque::new();
+    let mut wire: Vec<u8> = Vec::new(); // bytes written by the sender, not yet read
+    let mut next = 0;
+    let mut acks = 0;
+    let mut pending = String::new();
+    while acks < n {
+        while next < n {
+            let len = lines[next].len() + 1;
+            if in_flight.iter().sum::<usize>() + len > RX_BUFFER_SIZE {
+                break;
+            }
+            wire.extend_from_slice(lines[next].as_bytes());
+            wire.push(b'\n');
+            in_flight.push_back(len);
+            next += 1;
+        }
+        let packet = wire.len().min(64);
+        let taken = p.receive(&wire[..packet], &mut m, 0);
+        wire.drain(..taken);
+        p.poll(&mut m, 0);
+        pending.push_str(&drain(&mut p));
+        while let Some(end) = pending.find("\r\n") {
+            let resp: String = pending.drain(..end + 2).collect();
+            match resp.trim_end() {
+                "ok" => {
+                    in_flight.pop_front();
+                    acks += 1;
+                }
+                "[MSG:Job started]" => {}
+                other => panic!("unexpected {other:?}"),
+            }
+        }
+        m.step();
+    }
+    m.run_all();
+    let mv = moves(&m);
+    assert_eq!(mv.len(), n, "one move per line");
+    for (i, mv) in mv.iter().enumerate() {
+        let i = i + 1;
+        let x = ((i % 997) as f32 * 0.125 * 80.0).round() as i32;
+        let y = ((i % 89) as f32 * 0.25 * 80.0).round() as i32;
+        assert_eq!(mv.target, [x, y, 0], "line {i}");
+    }
+    let last = n;
+    assert_eq!(
+        m.pos,
+        [((last % 997) * 10) as i32, ((last % 89) * 20) as i32, 0]
+    );
+    println!("100000 lines streamed in {:?}", started.elapsed());
+}
+
+#[test]
+fn an_alarm_during_a_jog_cancel_leaves_nothing_pending() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "$J=G91 X10 F500\n");
+    p.receive(b"\x85!", &mut m, 0);
+    p.set_inputs(
+        Inputs {
+            estop: true,
+            ..Inputs::default()
+        },
+        &mut m,
+        0,
+    );
+    p.set_inputs(Inputs::default(), &mut m, 0);
+    send(&mut p, &mut m, "\x18$X\n");
+    assert_eq!(p.machine().state(&m), RunState::Idle);
+    assert_eq!(
+        send(&mut p, &mut m, "G0 X1\n"),
+        "[MSG:Job started]\r\nok\r\n"
+    );
+}
+
+#[test]
+fn changing_steps_per_mm_keeps_the_real_position() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "G0 X10\n");
+    m.run_all();
+    send(&mut p, &mut m, "$100=100\n");
+    assert!(send(&mut p, &mut m, "?").starts_with("<Idle|MPos:8.000,"));
+    send(&mut p, &mut m, "G91 G0 X1\n");
+    assert_eq!(
+        moves(&m).last().unwrap().target,
+        [900, 0, 0],
+        "1 mm from where it is"
+    );
+}
+
+#[test]
+fn safety_door_holds_reports_door_and_resumes_on_cycle_start() {
+    let (mut p, mut m) = boot();
+    m.rate = 8;
+    send(&mut p, &mut m, "G1 X10 F600\n");
+    m.step();
+    p.receive(b"\x84?", &mut m, 0);
+    assert!(drain(&mut p).starts_with("<Door:2|"), "stopping");
+    m.step();
+    assert!(send(&mut p, &mut m, "?").starts_with("<Door:0|"));
+    m.step();
+    assert_eq!(m.pos[0], 16, "no step once at rest");
+    send(&mut p, &mut m, "~");
+    assert!(send(&mut p, &mut m, "?").starts_with("<Run|"));
+    // During homing the door aborts it.
+    m.run_all();
+    send(&mut p, &mut m, "$22=1\n$H\n");
+    let out = send(&mut p, &mut m, "\u{84}");
+    assert!(out.starts_with("ALARM:7"), "{out}");
+}
+
+#[test]
+fn dollar_commands_while_running_are_refused_without_effect() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "G0 X10\n");
+    assert_eq!(send(&mut p, &mut m, "$N0=G21\n"), "error:8\r\n");
+    assert_eq!(
+        send(&mut p, &mut m, "$RST=*\n$$\n$#\n$I\n$X\n$100=10\n"),
+        "error:8\r\n".repeat(6)
+    );
+    assert!(
+        send(&mut p, &mut m, "$G\n").ends_with("ok\r\n"),
+        "$G works at any time"
+    );
+    m.run_all();
+    assert_eq!(
+        send(&mut p, &mut m, "$N\n"),
+        "$N0=\r\n$N1=\r\nok\r\n",
+        "nothing was stored"
     );
 }

@@ -14,7 +14,7 @@ use super::Status;
 use crate::machine::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::{PenMode, Settings};
-use core::f32::consts::{FRAC_PI_2, PI, TAU};
+use core::f32::consts::{FRAC_PI_2, TAU};
 use core::fmt;
 use heapless::Vec;
 
@@ -169,6 +169,17 @@ pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
     out
 }
 
+/// Largest step coordinate accepted (2^30): leaves headroom for the planner's
+/// differences and sums in `i32`.
+pub const MAX_STEPS: f32 = 1_073_741_824.0;
+
+/// True if `p` (machine mm) converts to steps without leaving the safe range.
+pub fn in_step_range(p: &[f32; AXES], s: &Settings) -> bool {
+    p.iter()
+        .enumerate()
+        .all(|(axis, &v)| libm::fabsf(v * s.steps_per_mm(axis)) < MAX_STEPS)
+}
+
 /// Allowed machine range of `axis` with soft limits, or `None` if unchecked.
 /// Axes homed toward - live in [0, travel], axes homed toward + in [-travel, 0]
 /// (Grbl's convention); axes without a switch ($214) are not checked.
@@ -245,6 +256,10 @@ impl Interp {
     pub fn position(&self) -> &[f32; AXES] {
         &self.pos
     }
+    /// Last programmed S value.
+    pub fn spindle(&self) -> f32 {
+        self.spindle
+    }
     /// Feed in mm/min as programmed (0 if undefined).
     pub fn feed(&self) -> f32 {
         self.feed
@@ -269,16 +284,14 @@ impl Interp {
         self.pos = to_mm(steps, s);
     }
 
-    /// Soft reset: modal state back to defaults, keeping position and coordinates.
-    /// (Grbl also keeps the G92 offset across reset.)
+    /// Soft reset: modal state back to defaults (G0 G54 G17 G21 G90 G94 M5, F0) and
+    /// the G92 offset cleared, as Grbl re-initialises its parser; the position and
+    /// the stored coordinate data stay.
     pub fn reset_modal(&mut self) {
-        let inches = self.modal.inches;
-        self.modal = Modal {
-            inches,
-            ..Modal::default()
-        };
+        self.modal = Modal::default();
         self.feed = 0.0;
         self.spindle = 0.0;
+        self.g92 = [0.0; AXES];
     }
 
     /// `[GC:...]` body for `$G` (without brackets).
@@ -622,7 +635,7 @@ impl Interp {
                     let ccw = modal.motion == MotionMode::ArcCcw;
                     let g = arc_geometry(&mut b, &pos, &target, ccw, scale)?;
                     let dz = target[2] - pos[2];
-                    let arc_len = libm::hypotf(g.radius * g.sweep, dz);
+                    let arc_len = hypot(g.radius * g.sweep, dz);
                     let path = arc_path(&g, &pos, &target, ccw, s);
                     Some((arc_len, path, Some(g)))
                 }
@@ -666,6 +679,9 @@ impl Interp {
         }
         if b.any_value() {
             return Err(Status::UnusedWords.into());
+        }
+        if !planned.iter().all(|p| in_step_range(p, s)) {
+            return Err(Status::InvalidTarget.into());
         }
         if s.soft_limits() && !planned.iter().all(|p| within_travel(p, s)) {
             return Err(Reject::SoftLimit);
@@ -761,6 +777,9 @@ impl Interp {
         if !any {
             return Err(Status::NoAxisWords);
         }
+        if !in_step_range(&target, s) {
+            return Err(Status::InvalidTarget);
+        }
         if s.soft_limits() && !within_travel(&target, s) {
             return Err(Status::TravelExceeded);
         }
@@ -785,6 +804,12 @@ fn rapid(p: &[f32; AXES], s: &Settings, line: u32) -> Command {
         feed: Feed::Rapid,
         line,
     })
+}
+
+/// sqrt(a^2 + b^2) in f32: libm's hypotf works in f64, which would pull the
+/// double-precision soft-float routines into the image for nothing here.
+fn hypot(a: f32, b: f32) -> f32 {
+    libm::sqrtf(a * a + b * b)
 }
 
 fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
@@ -824,7 +849,7 @@ fn arc_geometry(
         let mut disc = 4.0 * r * r - dx * dx - dy * dy;
         if disc < 0.0 {
             // A half circle with a rounded radius: accept within the tolerance.
-            let chord = libm::hypotf(dx, dy);
+            let chord = hypot(dx, dy);
             if chord / 2.0 - libm::fabsf(r) > ARC_ABS_TOL {
                 return Err(Status::ArcRadiusError);
             }
@@ -832,7 +857,7 @@ fn arc_geometry(
         }
         // Offset of the centre from the chord midpoint, as a multiple of the chord
         // turned by 90 degrees; its sign picks the side (G2 with positive R: right).
-        let mut h = -libm::sqrtf(disc) / libm::hypotf(dx, dy);
+        let mut h = -libm::sqrtf(disc) / hypot(dx, dy);
         if ccw {
             h = -h;
         }
@@ -852,10 +877,14 @@ fn arc_geometry(
         return Err(Status::UnusedWords);
     }
     let center = [start[0] + ci, start[1] + cj];
-    let r_start = libm::hypotf(ci, cj);
-    let r_end = libm::hypotf(target[0] - center[0], target[1] - center[1]);
+    let r_start = hypot(ci, cj);
+    let r_end = hypot(target[0] - center[0], target[1] - center[1]);
     let dr = libm::fabsf(r_end - r_start);
-    if r_start <= 0.0 || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start)) {
+    if !r_start.is_finite()
+        || !r_end.is_finite()
+        || r_start <= 0.0
+        || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start))
+    {
         return Err(Status::InvalidTarget);
     }
     let a0 = libm::atan2f(-cj, -ci);
@@ -914,7 +943,9 @@ fn arc_extremes(
 ) -> Vec<[f32; AXES], 5> {
     let mut pts: Vec<[f32; AXES], 5> = Vec::new();
     let _ = pts.push(*target);
-    for k in 0..4 {
+    // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
+    let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
+    for (k, (cs, sn)) in axes_dirs.into_iter().enumerate() {
         let angle = k as f32 * FRAC_PI_2;
         let from_start = if ccw {
             positive_sweep(angle - g.start_angle)
@@ -928,11 +959,9 @@ fn arc_extremes(
                 0.0
             };
             let z = start[2] + (target[2] - start[2]) * frac;
-            let (sn, cs) = (libm::sinf(angle), libm::cosf(angle));
             let _ = pts.push([g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z]);
         }
     }
-    let _ = PI;
     pts
 }
 
@@ -1099,6 +1128,69 @@ mod tests {
                 turns: 0
             }
         );
+    }
+
+    #[test]
+    fn arcs_with_unequal_resolution_become_ellipses_in_step_space() {
+        let mut s = Settings::default();
+        s.set(101, 40.0).unwrap();
+        let mut it = Interp::new();
+        let m = moves(&run(&mut it, &s, "G3 X10 Y0 I5 F300").unwrap())[0];
+        assert_eq!(m.target, [800, 0, 0]);
+        assert_eq!(
+            m.path,
+            Path::Ellipse {
+                center: [400, 0],
+                a: 400,
+                b: 200,
+                ccw: true
+            }
+        );
+    }
+
+    proptest::proptest! {
+        /// R-form arcs: the centre is equidistant from both ends, on the side that
+        /// gives at most half a turn for positive R and at least half for negative R.
+        #[test]
+        fn r_form_centres_are_consistent(
+            x0 in -100.0f32..100.0, y0 in -100.0f32..100.0,
+            dx in -50.0f32..50.0, dy in -50.0f32..50.0,
+            extra in 0.0f32..50.0, neg in proptest::bool::ANY, ccw in proptest::bool::ANY,
+        ) {
+            let chord = libm::hypotf(dx, dy);
+            proptest::prop_assume!(chord > 0.5);
+            let r = chord / 2.0 + extra + 0.01;
+            let s = Settings::default();
+            let mut it = Interp::new();
+            run(&mut it, &s, &std::format!("G0 X{x0:.4} Y{y0:.4}")).unwrap();
+            let start = *it.position();
+            let line = std::format!("G{} X{:.4} Y{:.4} R{}{:.4} F100", if ccw { 3 } else { 2 }, x0 + dx, y0 + dy, if neg { "-" } else { "" }, r);
+            let o = run(&mut it, &s, &line).unwrap();
+            let m = moves(&o)[0];
+            let Path::Arc { center, ccw: dir, .. } = m.path else { panic!("not an arc") };
+            proptest::prop_assert_eq!(dir, ccw);
+            let spm = s.steps_per_mm(0);
+            let c = [start[0] + center[0] as f32 / spm, start[1] + center[1] as f32 / spm];
+            let end = it.position();
+            let r0 = libm::hypotf(start[0] - c[0], start[1] - c[1]);
+            let r1 = libm::hypotf(end[0] - c[0], end[1] - c[1]);
+            proptest::prop_assert!((r0 - r1).abs() < 2.0 / spm, "r0 {} r1 {}", r0, r1);
+            // Which side: cross product of chord and centre offset.
+            let cross = dx * (c[1] - start[1]) - dy * (c[0] - start[0]);
+            let short = (cross > 0.0) == ccw; // centre left of travel for a short CCW arc
+            if extra > 0.5 {
+                proptest::prop_assert_eq!(short, !neg, "cross {}", cross);
+            }
+        }
+    }
+
+    #[test]
+    fn targets_beyond_the_step_range_are_refused() {
+        let s = Settings::default();
+        let mut it = Interp::new();
+        assert_eq!(run(&mut it, &s, "G0 X99999999"), err(Status::InvalidTarget));
+        assert_eq!(it.jog(b"X99999999F10", &s), Err(Status::InvalidTarget));
+        assert_eq!(it, Interp::new());
     }
 
     #[test]

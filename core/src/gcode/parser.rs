@@ -142,7 +142,7 @@ fn code_of(value: f32) -> Result<Code, Status> {
         return Err(Status::UnsupportedCommand);
     }
     let hundredths = libm::roundf(value * 100.0) as u32;
-    if hundredths % 10 != 0 {
+    if !hundredths.is_multiple_of(10) {
         return Err(Status::CommandValueNotInteger);
     }
     Ok((hundredths / 10) as Code)

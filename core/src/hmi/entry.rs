@@ -6,8 +6,6 @@
 //! problem 5 (one key press filling every digit) cannot happen: a field changes only on
 //! Press events, and the form moves to the next field only on Enter.
 
-use core::fmt::Write;
-
 use heapless::{String, Vec};
 
 use super::fixed::push_fixed;
@@ -149,7 +147,7 @@ impl Field {
         if !self.editing {
             return Ok(self.value);
         }
-        let parsed = self.text.parse::<f32>().ok().filter(|v| v.is_finite());
+        let parsed = parse_decimal(&self.text);
         match parsed {
             Some(v) if v >= self.min && v <= self.max => {
                 self.value = v;
@@ -164,13 +162,49 @@ impl Field {
     /// "R: 0.50..100.00 mm"
     pub fn range_message(&self) -> String<28> {
         let mut s: String<28> = String::new();
-        let _ = write!(s, "{}: ", self.label);
-        push_fixed(&mut s, self.min, self.decimals.min(1));
+        let _ = s.push_str(self.label);
+        let _ = s.push_str(": ");
+        push_fixed(&mut s, self.min, self.decimals);
         let _ = s.push_str("..");
-        push_fixed(&mut s, self.max, self.decimals.min(1));
-        let _ = write!(s, " {}", self.unit);
+        push_fixed(&mut s, self.max, self.decimals);
+        let _ = s.push(' ');
+        let _ = s.push_str(self.unit);
         s
     }
+}
+
+/// Parse what a field can hold: optional '-', digits, optional '.' and digits.
+/// Done by hand because core's float parser costs kilobytes of flash for input that is
+/// at most 8 characters; None for empty, lone "-" or "." and anything else.
+pub fn parse_decimal(text: &str) -> Option<f32> {
+    let (neg, body) = match text.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, text),
+    };
+    let mut mantissa: u32 = 0;
+    let mut scale: f32 = 1.0;
+    let mut digits = 0;
+    let mut after_dot = false;
+    for c in body.chars() {
+        match c {
+            '0'..='9' => {
+                mantissa = mantissa
+                    .checked_mul(10)?
+                    .checked_add(u32::from(c as u8 - b'0'))?;
+                digits += 1;
+                if after_dot {
+                    scale *= 10.0;
+                }
+            }
+            '.' if !after_dot => after_dot = true,
+            _ => return None,
+        }
+    }
+    if digits == 0 {
+        return None;
+    }
+    let v = mantissa as f32 / scale;
+    Some(if neg { -v } else { v })
 }
 
 /// The parameter forms, one per drawing mode.
@@ -210,6 +244,17 @@ impl FormKind {
             FormKind::Ellipse => 2,
             FormKind::Sine => 3,
             FormKind::Star => 4,
+        }
+    }
+
+    /// A one-line reminder shown under the fields (when there is room).
+    pub fn note(self) -> &'static str {
+        match self {
+            FormKind::Line => "from the pen; *:sign #:.",
+            FormKind::Arc => "angle < 0: clockwise",
+            FormKind::Ellipse => "a along X, b along Y",
+            FormKind::Sine => "",
+            FormKind::Star => "S: diameter of the tips",
         }
     }
 
@@ -316,6 +361,17 @@ mod tests {
     }
 
     #[test]
+    fn decimal_parser_accepts_field_text_only() {
+        assert_eq!(parse_decimal("12.5"), Some(12.5));
+        assert_eq!(parse_decimal("-0.25"), Some(-0.25));
+        assert_eq!(parse_decimal("7."), Some(7.0));
+        assert_eq!(parse_decimal(".5"), Some(0.5));
+        for bad in ["", "-", ".", "-.", "1.2.3", "1-2", "+3", "1e5"] {
+            assert_eq!(parse_decimal(bad), None, "{bad:?}");
+        }
+    }
+
+    #[test]
     fn typing_replaces_the_default_and_commits_in_range() {
         let mut f = Field::new("R", "mm", 0.5, 100.0, 2, 20.0);
         assert_eq!(f.display().as_str(), "20.00");
@@ -343,7 +399,7 @@ mod tests {
     fn out_of_range_keeps_the_old_value_and_explains() {
         let mut f = Field::new("R", "mm", 0.5, 100.0, 2, 20.0);
         typed(&mut f, &[Key::Digit(5), Key::Digit(0), Key::Digit(0)]);
-        assert_eq!(f.commit().unwrap_err().as_str(), "R: 0.5..100.0 mm");
+        assert_eq!(f.commit().unwrap_err().as_str(), "R: 0.50..100.00 mm");
         assert_eq!(f.value, 20.0);
         // A positive-only field ignores the sign key.
         let mut g = Field::new("a", "mm", 0.5, 100.0, 2, 3.0);

@@ -14,144 +14,21 @@
 
 pub mod entry;
 pub mod fixed;
+pub mod io;
 pub mod job;
+pub mod menu;
+pub mod page;
 
-use heapless::{Deque, String, Vec};
+pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
+pub use menu::{MachineItem, MenuItem, MACHINE_MENU, MENU};
+pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
+
+use heapless::{Deque, String};
 
 use crate::keypad::{Key, KeyEvent, KeyKind};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
-use entry::{FieldInput, Form, FormKind, FormMemory, DEFAULT_PARAMS};
+use entry::{FieldInput, Form, FormMemory, DEFAULT_PARAMS};
 use job::Job;
-
-/// Machine parameters the HMI needs (the integrator copies them from the settings).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Config {
-    /// Steps per mm of X, Y and Z (the pen axis).
-    pub steps_per_mm: [f32; 3],
-    /// Pen axis position (mm) with the pen lifted / on the paper.
-    pub pen_up_mm: f32,
-    pub pen_down_mm: f32,
-    /// Path speed of the drawing modes.
-    pub draw_feed_mm_min: f32,
-}
-
-impl Default for Config {
-    fn default() -> Self {
-        Config {
-            steps_per_mm: [80.0, 80.0, 100.0],
-            pen_up_mm: 5.0,
-            pen_down_mm: 0.0,
-            draw_feed_mm_min: 600.0,
-        }
-    }
-}
-
-/// The machine state as the HMI needs it (Grbl's states, simplified).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum MachineState {
-    Idle,
-    Run,
-    Hold,
-    Jog,
-    Homing,
-    /// Alarm with Grbl's alarm code.
-    Alarm(u8),
-}
-
-impl MachineState {
-    pub fn name(self) -> &'static str {
-        match self {
-            MachineState::Idle => "Idle",
-            MachineState::Run => "Run",
-            MachineState::Hold => "Hold",
-            MachineState::Jog => "Jog",
-            MachineState::Homing => "Home",
-            MachineState::Alarm(_) => "Alarm",
-        }
-    }
-
-    /// Whether the axes are (or may be) moving.
-    pub fn moving(self) -> bool {
-        matches!(
-            self,
-            MachineState::Run | MachineState::Jog | MachineState::Homing
-        )
-    }
-}
-
-/// A snapshot of the machine, passed with every call.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Status {
-    pub state: MachineState,
-    /// Position in steps, in the planner's coordinates (what Move targets use).
-    pub pos: StepPos,
-    /// Current path speed.
-    pub feed_mm_min: f32,
-    /// No move is queued or executing.
-    pub queue_empty: bool,
-    /// Direction of the latest step on X and Y (-1, 0, +1).
-    pub dir: [i8; 2],
-}
-
-impl Status {
-    /// An idle machine at `pos` with nothing queued.
-    pub fn idle_at(pos: StepPos) -> Self {
-        Status {
-            state: MachineState::Idle,
-            pos,
-            feed_mm_min: 0.0,
-            queue_empty: true,
-            dir: [0, 0],
-        }
-    }
-}
-
-/// Buzzer patterns.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Beep {
-    /// A job finished.
-    Done,
-    /// Refused input or a job that stopped early.
-    Error,
-    /// An alarm was raised.
-    Alarm,
-}
-
-/// What the integrator must do, in the order given.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Action {
-    /// Append a move to the planner queue.
-    Queue(Move),
-    /// Start (or retarget) continuous jogging in `dir` (signs of X, Y) at this speed.
-    JogStart {
-        dir: [i8; 2],
-        feed_mm_min: f32,
-    },
-    /// Stop jogging (decelerate, then flush the jog).
-    JogStop,
-    /// Feed hold (decelerate to a stop, keep the queue).
-    FeedHold,
-    /// Resume after a feed hold.
-    Resume,
-    /// Feed hold, wait until stopped, then clear the queue; the position stays known.
-    Abort,
-    /// Run the homing cycle.
-    Home,
-    /// Make the current position the origin (0, 0).
-    SetOrigin,
-    /// Clear an alarm (like Grbl's `$X`).
-    Unlock,
-    Beep(Beep),
-    /// Busy LED on/off (on while the axes move).
-    BusyLed(bool),
-}
-
-/// The actions of one call (a job start is the largest: up to 8 moves).
-pub type Actions = Vec<Action, 10>;
 
 /// Jog speeds selectable with speed + / speed -.
 pub const JOG_SPEEDS: [f32; 7] = [50.0, 100.0, 200.0, 400.0, 800.0, 1500.0, 3000.0];
@@ -165,163 +42,6 @@ pub const BOOT_MS: u32 = 1500;
 const TOAST_MS: u32 = 2500;
 /// A job counts as stopped early if the machine sits idle this long short of its end.
 const SETTLE_MS: u32 = 1000;
-
-/// Main menu entries.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MenuItem {
-    Jog,
-    Draw(FormKind),
-    Pen,
-    Replay,
-    Machine,
-    Status,
-}
-
-/// The main menu: (hotkey digit, entry).
-pub const MENU: [(u8, MenuItem); 10] = [
-    (1, MenuItem::Jog),
-    (2, MenuItem::Draw(FormKind::Line)),
-    (3, MenuItem::Draw(FormKind::Arc)),
-    (4, MenuItem::Draw(FormKind::Ellipse)),
-    (5, MenuItem::Draw(FormKind::Sine)),
-    (6, MenuItem::Draw(FormKind::Star)),
-    (7, MenuItem::Pen),
-    (8, MenuItem::Replay),
-    (9, MenuItem::Machine),
-    (0, MenuItem::Status),
-];
-
-impl MenuItem {
-    pub fn label(self) -> &'static str {
-        match self {
-            MenuItem::Jog => "Jog (manual)",
-            MenuItem::Draw(FormKind::Line) => "Line",
-            MenuItem::Draw(FormKind::Arc) => "Arc / circle",
-            MenuItem::Draw(FormKind::Ellipse) => "Ellipse",
-            MenuItem::Draw(FormKind::Sine) => "Sine curve",
-            MenuItem::Draw(FormKind::Star) => "Star",
-            MenuItem::Pen => "Pen up/down",
-            MenuItem::Replay => "Replay last",
-            MenuItem::Machine => "Machine...",
-            MenuItem::Status => "Status/setup",
-        }
-    }
-}
-
-/// The machine submenu.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MachineItem {
-    GoOrigin,
-    SetOrigin,
-    Home,
-}
-
-pub const MACHINE_MENU: [(u8, MachineItem); 3] = [
-    (1, MachineItem::GoOrigin),
-    (2, MachineItem::SetOrigin),
-    (3, MachineItem::Home),
-];
-
-impl MachineItem {
-    pub fn label(self) -> &'static str {
-        match self {
-            MachineItem::GoOrigin => "Go to origin",
-            MachineItem::SetOrigin => "Set origin here",
-            MachineItem::Home => "Homing cycle",
-        }
-    }
-}
-
-/// Jog page state.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct JogPage {
-    /// The held direction key and its direction, while jogging.
-    pub active: Option<(Key, [i8; 2])>,
-    /// The latest direction (shown as the arrow).
-    pub last_dir: [i8; 2],
-}
-
-/// Where a running job is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RunPhase {
-    /// Queued or moving (the machine state says whether held).
-    Running,
-    /// Abort sent; waiting for the machine to stop.
-    Stopping,
-    /// Finished after `ms`; `complete` = reached its end point.
-    Done { ms: u32, complete: bool },
-}
-
-/// A job being drawn.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RunPage {
-    pub job: Job,
-    pub start: StepPos,
-    pub end: StepPos,
-    pub started_ms: u32,
-    pub phase: RunPhase,
-    /// Path covered so far (sum of position changes) and the job's length, in mm.
-    pub traveled_mm: f32,
-    pub length_mm: f32,
-    last_pos: StepPos,
-    idle_since: Option<u32>,
-}
-
-impl RunPage {
-    /// Fraction done, 0..=1.
-    pub fn progress(&self) -> f32 {
-        match self.phase {
-            RunPhase::Done { complete: true, .. } => 1.0,
-            _ if self.length_mm > 0.0 => (self.traveled_mm / self.length_mm).clamp(0.0, 0.99),
-            _ => 0.0,
-        }
-    }
-
-    pub fn elapsed_ms(&self, now_ms: u32) -> u32 {
-        match self.phase {
-            RunPhase::Done { ms, .. } => ms,
-            _ => now_ms.wrapping_sub(self.started_ms),
-        }
-    }
-}
-
-/// What is on the screen.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Page {
-    Boot,
-    Menu {
-        sel: usize,
-    },
-    Machine {
-        sel: usize,
-    },
-    Jog(JogPage),
-    Form(Form),
-    /// The curve preview before drawing; `form` is where Back returns.
-    Preview {
-        job: Job,
-        form: Option<FormKind>,
-    },
-    Run(RunPage),
-    Status,
-    Alarm {
-        code: u8,
-    },
-    Error {
-        title: &'static str,
-        text: String<28>,
-    },
-}
-
-/// A short message on the bottom line.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Toast {
-    pub text: String<28>,
-    until_ms: u32,
-}
-
-/// Feed directions remembered for the teaching view.
-pub const DIR_HISTORY: usize = 6;
 
 /// The HMI state machine.
 #[derive(Clone, Debug)]
@@ -337,22 +57,6 @@ pub struct Hmi {
     busy: bool,
     alarm_latched: bool,
     toast: Option<Toast>,
-}
-
-/// The Grbl alarm texts shown on the alarm page.
-pub fn alarm_text(code: u8) -> &'static str {
-    match code {
-        1 => "Hard limit",
-        2 => "Soft limit",
-        3 => "Reset in motion",
-        4 | 5 => "Probe fail",
-        6 => "Homing: reset",
-        7 => "Homing: door",
-        8 => "Homing: pull-off",
-        9 => "Homing: no switch",
-        10 => "Emergency stop",
-        _ => "Alarm",
-    }
 }
 
 fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
@@ -399,6 +103,12 @@ impl Hmi {
     }
     pub fn config(&self) -> &Config {
         &self.cfg
+    }
+    /// New machine settings (e.g. after `$100=`); also resets the draw speed to the
+    /// configured one. Takes effect for the next job.
+    pub fn set_config(&mut self, cfg: Config) {
+        self.cfg = cfg;
+        self.draw_feed = cfg.draw_feed_mm_min;
     }
     pub fn toast(&self) -> Option<&str> {
         self.toast.as_ref().map(|t| t.text.as_str())

@@ -1,6 +1,7 @@
 //! Key sequences driven through the HMI, asserting the actions it issues.
 
 use super::*;
+use crate::hmi::entry::FormKind;
 use crate::keypad::{Keypad, KeypadConfig};
 use core::f32::consts::PI;
 
@@ -208,7 +209,7 @@ fn out_of_range_value_is_refused_with_a_message_and_a_beep() {
     b.keys(&[d(3)]);
     let a = b.number("500");
     assert_eq!(a, [Action::Beep(Beep::Error)]);
-    assert_eq!(b.hmi.toast(), Some("R: 0.5..100.0 mm"));
+    assert_eq!(b.hmi.toast(), Some("R: 0.50..100.00 mm"));
     let Page::Form(f) = b.hmi.page() else {
         panic!()
     };
@@ -525,4 +526,20 @@ fn feed_direction_history_keeps_the_latest_changes() {
     }
     let h: std::vec::Vec<[i8; 2]> = b.hmi.feed_dirs().copied().collect();
     assert_eq!(h, [[0, 1], [-1, 1], [-1, -1], [1, 0], [0, -1], [1, 1]]);
+}
+
+#[test]
+fn new_settings_apply_to_the_next_job() {
+    let mut b = Bench::new();
+    b.hmi.set_config(Config {
+        steps_per_mm: [40.0, 40.0, 100.0],
+        draw_feed_mm_min: 900.0,
+        ..cfg()
+    });
+    b.keys(&[d(2)]);
+    b.number("10");
+    b.number("0");
+    let m = moves(&b.keys(&[Key::Enter]));
+    assert_eq!(m[1].target, [400, 0, 0]);
+    assert_eq!(m[1].feed, Feed::MmPerMin(900.0));
 }

@@ -24,6 +24,7 @@ pub enum Alarm {
     SoftLimit = 2,
     AbortCycle = 3,
     HomingFailReset = 6,
+    HomingFailDoor = 7,
     HomingFailPullOff = 8,
     HomingFailApproach = 9,
     EStop = 10,
@@ -50,6 +51,12 @@ pub enum RunState {
         complete: bool,
     },
     Jog,
+    /// Safety door (0x84): `at_rest` false while stopping (Door:2), true once stopped
+    /// and ready to resume with cycle start (Door:0; there is no door switch to hold
+    /// it open).
+    Door {
+        at_rest: bool,
+    },
     Alarm,
     Home,
     Check,
@@ -107,6 +114,8 @@ pub struct Machine {
     homed: bool,
     /// Hold requested by `!` or the feed-hold pin, until `~`.
     hold: bool,
+    /// Safety door requested (0x84), until cycle start.
+    door: bool,
     /// The hold came from the feed-hold pin and ends when it is released.
     hold_by_pin: bool,
     /// M0 seen: hold once the queue has run empty.
@@ -140,6 +149,7 @@ impl Machine {
             homing: None,
             homed: false,
             hold: false,
+            door: false,
             hold_by_pin: false,
             pause_pending: false,
             paused: false,
@@ -220,12 +230,17 @@ impl Machine {
             RunState::Home
         } else if self.locked {
             RunState::Alarm
+        } else if self.door {
+            RunState::Door {
+                at_rest: !m.is_moving(),
+            }
+        } else if self.jogging {
+            // Including the deceleration of a jog cancel, as Grbl reports it.
+            RunState::Jog
         } else if self.paused || m.is_holding() || self.hold {
             RunState::Hold {
                 complete: !m.is_moving(),
             }
-        } else if self.jogging {
-            RunState::Jog
         } else if self.check_mode {
             RunState::Check
         } else if !m.is_idle() {
@@ -240,9 +255,11 @@ impl Machine {
         self.homing.is_some() || m.is_moving()
     }
 
-    /// G-code lines are taken only when this holds: after M0 they wait for cycle start.
+    /// G-code lines are taken only when this holds: after M0 they wait for cycle
+    /// start, and during a stop that will drop the queue they wait until it is done
+    /// (otherwise they would be answered `ok` and then dropped).
     pub fn can_accept(&self) -> bool {
-        !self.pause_pending && !self.paused
+        !self.pause_pending && !self.paused && !self.stop_then_clear && !self.jog_cancel
     }
 
     fn idle_or_alarm<M: MotionControl>(&self, m: &M) -> bool {
@@ -259,6 +276,8 @@ impl Machine {
         }
         self.settings.set(n, v)?;
         self.settings_dirty = true;
+        // Steps per mm may have changed: the planner's step position is the truth.
+        self.resync(m);
         Ok(())
     }
 
@@ -270,9 +289,10 @@ impl Machine {
     }
 
     /// Replace all settings (`$RST=$` or a loaded image).
-    pub fn replace_settings(&mut self, s: Settings) {
+    pub fn replace_settings<M: MotionControl>(&mut self, s: Settings, m: &M) {
         self.settings = s;
         self.settings_dirty = true;
+        self.resync(m);
     }
 
     /// Execute one cleaned G-code line. `None` means "not now": the block needs more
@@ -306,10 +326,19 @@ impl Machine {
                 return Some(Ok(()));
             }
         };
+        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
+        // motion before it has finished, so its `ok` means "program done".
+        let ends = out.stop == Some(Stop::End);
+        if ends && !self.check_mode && !m.is_idle() {
+            return None;
+        }
         if !self.check_mode && out.cmds.len() > m.free() {
             return None;
         }
         self.interp = trial;
+        if ends {
+            self.event(Event::Msg("Pgm End"));
+        }
         if out.coords_changed {
             self.coords_dirty = true;
         }
@@ -447,6 +476,10 @@ impl Machine {
         }
         self.homing = None;
         self.jogging = false;
+        self.jog_cancel = false;
+        self.hold = false;
+        self.door = false;
+        self.hold_by_pin = false;
         self.job = Job::default();
         self.pause_pending = false;
         self.paused = false;
@@ -464,7 +497,9 @@ impl Machine {
 
     /// 0x18: stop everything, keep position if it is known.
     pub fn soft_reset<M: MotionControl>(&mut self, m: &mut M) {
-        let lost = self.homing.is_some() || (!m.is_idle() && !(m.is_holding() && !m.is_moving()));
+        // Position is lost if steps were cut off mid-move (a hold at rest keeps it).
+        let held_at_rest = m.is_holding() && !m.is_moving();
+        let lost = self.homing.is_some() || (!m.is_idle() && !held_at_rest);
         let was_homing = self.homing.is_some();
         m.clear();
         m.set_overrides(100, 100);
@@ -474,6 +509,7 @@ impl Machine {
         self.jogging = false;
         self.jog_cancel = false;
         self.hold = false;
+        self.door = false;
         self.hold_by_pin = false;
         self.pause_pending = false;
         self.paused = false;
@@ -520,16 +556,99 @@ impl Machine {
         }
     }
 
-    /// `~` or the cycle-start pin.
-    pub fn cycle_start<M: MotionControl>(&mut self, m: &mut M) {
-        if self.locked || self.homing.is_some() {
+    /// 0x84, the safety door: like a feed hold reported as `Door`; during homing it
+    /// aborts with alarm 7, during a jog it cancels the jog.
+    pub fn safety_door<M: MotionControl>(&mut self, m: &mut M) {
+        if self.locked || self.check_mode {
             return;
         }
-        if self.hold || self.paused || m.is_holding() {
+        if self.homing.is_some() {
+            self.raise(Alarm::HomingFailDoor, m);
+            return;
+        }
+        self.door = true;
+        if self.jogging {
+            self.jog_cancel(m);
+        } else if !m.is_idle() {
+            self.hold = true;
+            m.hold();
+        }
+    }
+
+    /// `~` or the cycle-start pin.
+    pub fn cycle_start<M: MotionControl>(&mut self, m: &mut M) {
+        // A stop that drops the queue cannot be resumed.
+        if self.locked || self.homing.is_some() || self.stop_then_clear || self.jog_cancel {
+            return;
+        }
+        if self.hold || self.paused || self.door || m.is_holding() {
             self.hold = false;
+            self.door = false;
             self.hold_by_pin = false;
             self.paused = false;
             m.resume();
+        }
+    }
+
+    /// Queue a command made outside G-code (the keypad's drawing modes). Refused in
+    /// alarm, homing, jogging or check mode; a line target outside travel with soft
+    /// limits on is refused with `error:15` semantics ([`Status::TravelExceeded`]);
+    /// shapes check their own extent with [`crate::gcode::interp::within_travel`].
+    /// The interpreter continues from the command's end point.
+    pub fn queue<M: MotionControl>(
+        &mut self,
+        cmd: Command,
+        m: &mut M,
+        now_ms: u32,
+    ) -> Result<(), Status> {
+        if self.locked || self.homing.is_some() {
+            return Err(Status::SystemLocked);
+        }
+        if self.jogging || self.check_mode {
+            return Err(Status::IdleError);
+        }
+        if let Command::Move(mv) = &cmd {
+            let end = to_mm(&mv.target, &self.settings);
+            if self.settings.soft_limits()
+                && !crate::gcode::interp::within_travel(&end, &self.settings)
+            {
+                return Err(Status::TravelExceeded);
+            }
+        }
+        m.push(cmd).map_err(|_| Status::Overflow)?;
+        if let Command::Move(mv) = cmd {
+            self.interp.sync_position(&mv.target, &self.settings);
+            if !self.job.running {
+                self.job = Job {
+                    running: true,
+                    start_ms: now_ms,
+                    moves: 0,
+                    ending: false,
+                };
+                self.event(Event::JobStarted);
+            }
+            self.job.moves = self.job.moves.wrapping_add(1);
+        }
+        Ok(())
+    }
+
+    /// Stop cleanly and forget the rest (the keypad's abort): decelerate to rest, then
+    /// drop the queue; the position stays exact.
+    pub fn stop_and_clear<M: MotionControl>(&mut self, m: &mut M) {
+        self.pause_pending = false;
+        self.paused = false;
+        self.hold = false;
+        self.door = false;
+        self.hold_by_pin = false;
+        self.job = Job::default();
+        if m.is_idle() && !m.is_holding() {
+            return;
+        }
+        if self.jogging {
+            self.jog_cancel(m);
+        } else {
+            self.stop_then_clear = true;
+            m.hold();
         }
     }
 

@@ -6,13 +6,13 @@
 //! - [`SMALL`] 5x8 for hints, units and the message line: 25 columns, still clean
 //!   glyphs with one pixel between characters. Nothing that must be read while the
 //!   machine moves uses it.
-//! - [`BIG`] 10x20 only for the boot title.
 //!
 //! 4x6 was rejected: its digits are 3 pixels wide, "8", "0" and "B" blur together on
-//! this panel, and STN response smear makes changing values unreadable.
+//! this panel, and STN response smear makes changing values unreadable. A 10x20 title
+//! font was tried for the boot and alarm pages and dropped: 2.4 KB of flash for two
+//! words; inverted 6x10 banners do the job.
 
 use embedded_graphics::mono_font::{ascii, MonoFont};
 
 pub const BODY: MonoFont<'static> = ascii::FONT_6X10;
 pub const SMALL: MonoFont<'static> = ascii::FONT_5X8;
-pub const BIG: MonoFont<'static> = ascii::FONT_10X20;

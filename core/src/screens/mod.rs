@@ -17,19 +17,17 @@ pub mod plot;
 pub mod st7920;
 pub mod widgets;
 
-use core::fmt::Write;
-
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{Polyline, PrimitiveStyle, Rectangle};
+use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
 use heapless::String;
 
 use crate::hmi::entry::FormKind;
-use crate::hmi::fixed::push_fixed;
+use crate::hmi::fixed::{push_fixed, push_uint};
 use crate::hmi::job::Job;
 use crate::hmi::{alarm_text, Hmi, Page, RunPhase, Status, MACHINE_MENU, MENU};
 use crate::motion::{X, Y};
-use fonts::{BIG, BODY, SMALL};
+use fonts::{BODY, SMALL};
 use plot::{Plot, Trace};
 use widgets::{arrow, bottom_line, cell, cell_right, progress, title_bar};
 
@@ -97,10 +95,19 @@ fn time_text(ms: u32) -> String<10> {
     let mut s = String::new();
     let tenths = ms / 100;
     if tenths < 600 {
-        let _ = write!(s, "{}.{}s", tenths / 10, tenths % 10);
+        push_uint(&mut s, tenths / 10, 0);
+        let _ = s.push('.');
+        push_uint(&mut s, tenths % 10, 0);
+        let _ = s.push('s');
     } else {
         let secs = ms / 1000;
-        let _ = write!(s, "{}m{:02}s", secs / 60, secs % 60);
+        push_uint(&mut s, secs / 60, 0);
+        let _ = s.push('m');
+        if secs % 60 < 10 {
+            let _ = s.push('0');
+        }
+        push_uint(&mut s, secs % 60, 0);
+        let _ = s.push('s');
     }
     s
 }
@@ -181,17 +188,17 @@ impl Screens {
                 Ok(())
             }
             Page::Menu { sel } => {
-                let items = MENU.iter().map(|(k, m)| (*k, m.label()));
-                list(d, "inkstep", st.state.name(), items, MENU.len(), *sel)?;
+                let item = |i: usize| MENU.get(i).map(|(k, m)| (*k, m.label()));
+                list(d, "inkstep", st.state.name(), &item, MENU.len(), *sel)?;
                 bottom_line(d, &position_hint(hmi, st), hmi.toast())
             }
             Page::Machine { sel } => {
-                let items = MACHINE_MENU.iter().map(|(k, m)| (*k, m.label()));
+                let item = |i: usize| MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()));
                 list(
                     d,
                     "Machine",
                     st.state.name(),
-                    items,
+                    &item,
                     MACHINE_MENU.len(),
                     *sel,
                 )?;
@@ -199,7 +206,9 @@ impl Screens {
             }
             Page::Form(form) => {
                 let mut right: String<6> = String::new();
-                let _ = write!(right, "{}/{}", form.cur + 1, form.fields.len());
+                push_uint(&mut right, form.cur as u32 + 1, 0);
+                let _ = right.push('/');
+                push_uint(&mut right, form.fields.len() as u32, 0);
                 title_bar(d, form.kind.title(), &right)?;
                 for (i, (f, y)) in form.fields.iter().zip(ROW_Y).enumerate() {
                     let current = i == form.cur;
@@ -209,6 +218,9 @@ impl Screens {
                     let _ = v.push(if current && f.editing() { '_' } else { ' ' });
                     cell_right(d, Point::new(36, y), &BODY, &v, 9, current)?;
                     cell(d, Point::new(93, y + 1), &SMALL, f.unit, 7, false)?;
+                }
+                if fresh && form.fields.len() < ROW_Y.len() {
+                    cell(d, Point::new(0, 44), &SMALL, form.kind.note(), 25, false)?;
                 }
                 bottom_line(d, "D:ok C:del/esc A/B:field", hmi.toast())
             }
@@ -248,7 +260,9 @@ impl Screens {
                     false,
                 )?;
                 let mut f: Line = String::new();
-                let _ = write!(f, "F {:>4} mm/m", hmi.jog_speed() as u32);
+                let _ = f.push_str("F ");
+                push_uint(&mut f, hmi.jog_speed() as u32, 4);
+                let _ = f.push_str(" mm/m");
                 cell(d, Point::new(52, 32), &BODY, &f, 12, false)?;
                 let pen = if hmi.pen_is_down(st) {
                     "Pen down"
@@ -263,18 +277,18 @@ impl Screens {
                 let p = hmi.pos_mm(st);
                 let cfg = hmi.config();
                 let mut l: Line = String::new();
-                let _ = l.push('X');
+                let _ = l.push_str("X ");
                 push_fixed(&mut l, p[X], 2);
-                let _ = l.push_str(" Y");
+                let _ = l.push_str("  Y ");
                 push_fixed(&mut l, p[Y], 2);
                 cell(d, Point::new(0, ROW_Y[0]), &BODY, &l, 21, false)?;
                 l.clear();
-                let _ = l.push('Z');
+                let _ = l.push_str("Z ");
                 push_fixed(&mut l, p[2], 2);
                 let _ = l.push_str(if hmi.pen_is_down(st) {
-                    " pen down"
+                    "  pen down"
                 } else {
-                    " pen up"
+                    "  pen up"
                 });
                 cell(d, Point::new(0, ROW_Y[1]), &BODY, &l, 21, false)?;
                 l.clear();
@@ -285,20 +299,28 @@ impl Screens {
                 }
                 cell(d, Point::new(0, ROW_Y[2]), &BODY, &l, 21, false)?;
                 l.clear();
-                let _ = write!(l, "Draw F {:>4} mm/min", hmi.draw_feed() as u32);
+                let _ = l.push_str("Draw F ");
+                push_uint(&mut l, hmi.draw_feed() as u32, 4);
+                let _ = l.push_str(" mm/min");
                 cell(d, Point::new(0, ROW_Y[3]), &BODY, &l, 21, true)?;
                 let mut h: Line = String::new();
-                let _ = write!(h, "A/B:draw F  jog F {}", hmi.jog_speed() as u32);
+                let _ = h.push_str("A/B:draw F  jog F ");
+                push_uint(&mut h, hmi.jog_speed() as u32, 0);
                 bottom_line(d, &h, hmi.toast())
             }
             Page::Alarm { code } => {
                 let mut right: String<6> = String::new();
-                let _ = write!(right, "#{code}");
+                let _ = right.push('#');
+                push_uint(&mut right, u32::from(*code), 0);
                 title_bar(d, "!! ALARM", &right)?;
                 if fresh {
                     let text = alarm_text(*code);
-                    let x = (128 - 10 * text.len().min(12) as i32) / 2;
-                    cell(d, Point::new(x.max(0), 16), &BIG, text, 12, false)?;
+                    let n = text.len().min(19);
+                    let x = (128 - 6 * n as i32 - 12) / 2;
+                    let banner =
+                        Rectangle::new(Point::new(x, 17), Size::new(6 * n as u32 + 12, 16));
+                    d.fill_solid(&banner, ON)?;
+                    cell(d, Point::new(x + 6, 20), &BODY, text, n, true)?;
                 }
                 let p = hmi.pos_mm(st);
                 let mut l: Line = String::new();
@@ -324,7 +346,8 @@ impl Screens {
         D: DrawTarget<Color = BinaryColor>,
     {
         let mut t: Line = String::new();
-        let _ = write!(t, "{}: preview", job.name());
+        let _ = t.push_str(job.name());
+        let _ = t.push_str(": preview");
         title_bar(d, &t, "")?;
         PREVIEW_BOX
             .into_styled(PrimitiveStyle::with_stroke(ON, 1))
@@ -393,9 +416,7 @@ impl Screens {
         let px = plot.to_px(rel);
         if run.job.draws() && hmi.pen_is_down(st) {
             if let Some((a, b)) = self.trace.push(px) {
-                embedded_graphics::primitives::Line::new(a, b)
-                    .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-                    .draw(d)?;
+                widgets::line(d, a, b)?;
             }
         }
         if self.ticks != Some(px) {
@@ -439,20 +460,27 @@ impl Screens {
             false,
         )?;
         let mut l: Line = String::new();
-        let _ = write!(l, "F{:>5} mm/m", st.feed_mm_min.max(0.0) as u32);
+        let _ = l.push_str("F ");
+        push_uint(&mut l, st.feed_mm_min.max(0.0) as u32, 4);
+        let _ = l.push_str("mm/m");
         cell(d, Point::new(76, 31), &SMALL, &l, 10, false)?;
         // Teaching view: the feed direction now and the ones before it.
         l.clear();
-        let _ = write!(l, "feed {}", dir_text(st.dir).as_str());
+        let _ = l.push_str("feed ");
+        let _ = l.push_str(&dir_text(st.dir));
         cell(d, Point::new(76, 39), &SMALL, &l, 10, false)?;
         l.clear();
         let dirs: heapless::Vec<[i8; 2], { crate::hmi::DIR_HISTORY }> =
             hmi.feed_dirs().copied().collect();
         let mut previous = dirs.iter().rev().skip(usize::from(st.dir != [0, 0]));
         let _ = l.push_str("was");
-        for dir in previous.by_ref().take(2) {
+        for dir in previous.by_ref() {
+            let t = dir_text(*dir);
+            if l.len() + 1 + t.len() > 10 {
+                break;
+            }
             let _ = l.push(' ');
-            let _ = l.push_str(&dir_text(*dir));
+            let _ = l.push_str(&t);
         }
         cell(d, Point::new(76, 47), &SMALL, &l, 10, false)?;
         // Progress and state.
@@ -469,12 +497,9 @@ impl Screens {
             RunPhase::Done { complete: true, .. } => "DONE",
             RunPhase::Done { .. } => "SHORT",
         };
-        let _ = write!(
-            l,
-            "{:>3}% {}",
-            libm::roundf(run.progress() * 100.0) as u32,
-            state
-        );
+        push_uint(&mut l, libm::roundf(run.progress() * 100.0) as u32, 3);
+        let _ = l.push_str("% ");
+        let _ = l.push_str(state);
         cell(d, Point::new(65, 56), &SMALL, &l, 12, false)
     }
 }
@@ -496,11 +521,11 @@ fn position_hint(hmi: &Hmi, st: &Status) -> Line {
 }
 
 /// A scrolling list of (hotkey, label) with the selected row inverted.
-fn list<'a, D>(
+fn list<D>(
     d: &mut D,
     title: &str,
     right: &str,
-    items: impl Iterator<Item = (u8, &'a str)>,
+    item: &dyn Fn(usize) -> Option<(u8, &'static str)>,
     count: usize,
     sel: usize,
 ) -> Result<(), D::Error>
@@ -510,16 +535,16 @@ where
     title_bar(d, title, right)?;
     let rows = ROW_Y.len();
     let top = sel.saturating_sub(rows - 1).min(count.saturating_sub(rows));
-    let mut shown = 0;
-    for (i, (hotkey, label)) in items.enumerate().skip(top).take(rows) {
-        let y = ROW_Y.get(i - top).copied().unwrap_or(0);
+    for (row, y) in ROW_Y.iter().enumerate() {
+        let i = top + row;
         let mut l: Line = String::new();
-        let _ = write!(l, " {hotkey} {label}");
-        cell(d, Point::new(0, y), &BODY, &l, 20, i == sel)?;
-        shown += 1;
-    }
-    for y in ROW_Y.iter().skip(shown) {
-        cell(d, Point::new(0, *y), &BODY, "", 20, false)?;
+        if let Some((hotkey, label)) = item(i) {
+            let _ = l.push(' ');
+            push_uint(&mut l, u32::from(hotkey), 0);
+            let _ = l.push(' ');
+            let _ = l.push_str(label);
+        }
+        cell(d, Point::new(0, *y), &BODY, &l, 20, i == sel)?;
     }
     // Scroll bar in x 123..=125, rows 11..=50, painted pixel-exact.
     if count > rows {
@@ -555,21 +580,21 @@ fn boot<D>(d: &mut D) -> Result<(), D::Error>
 where
     D: DrawTarget<Color = BinaryColor>,
 {
-    cell(d, Point::new(29, 2), &BIG, "inkstep", 7, false)?;
-    // One period of a sine under the title: the report's signature curve.
-    let mut pts = [Point::zero(); 49];
-    for (i, p) in pts.iter_mut().enumerate() {
-        let x = 16 + i as i32 * 2;
-        let y = 31.0 - 6.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
-        *p = Point::new(x, libm::roundf(y) as i32);
+    // The name in an inverted banner, one period of the report's signature curve under it.
+    d.fill_solid(&Rectangle::new(Point::new(34, 4), Size::new(60, 16)), ON)?;
+    cell(d, Point::new(43, 7), &BODY, "inkstep", 7, true)?;
+    let mut prev: Option<Point> = None;
+    for i in 0..=48 {
+        let x = 16 + i * 2;
+        let y = 32.0 - 7.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
+        let p = Point::new(x, libm::roundf(y) as i32);
+        widgets::line(d, prev.unwrap_or(p), p)?;
+        prev = Some(p);
     }
-    Polyline::new(&pts)
-        .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-        .draw(d)?;
-    cell(d, Point::new(22, 40), &BODY, "pen plotter", 11, false)?;
+    cell(d, Point::new(31, 42), &BODY, "pen plotter", 11, false)?;
     cell(
         d,
-        Point::new(9, 54),
+        Point::new(9, 55),
         &SMALL,
         "STM32F103 + ST7920 LCD",
         22,
@@ -679,5 +704,37 @@ mod tests {
             screens.render(&hmi, &st, 2200, &mut fb).unwrap();
             assert!(!fb.is_dirty(), "page {:?} repainted", hmi.page());
         }
+    }
+
+    /// Rebuilding the drawing page (after an LCD reset) restores exactly what the
+    /// incremental refreshes painted, trace included.
+    #[test]
+    fn rebuilt_drawing_page_matches_the_incremental_one() {
+        let mut hmi = Hmi::new(Config::default(), 0);
+        let mut st = Status::idle_at([0, 0, 500]);
+        hmi.tick(&st, 2000);
+        press(&mut hmi, &st, Key::Digit(6), 2100); // star
+        press(&mut hmi, &st, Key::Enter, 2200);
+        press(&mut hmi, &st, Key::Enter, 2300);
+        let mut fb = FrameBuffer::new();
+        let mut screens = Screens::new();
+        st.state = MachineState::Run;
+        st.queue_empty = false;
+        let Page::Run(run) = hmi.page().clone() else {
+            panic!("not drawing")
+        };
+        for i in 0..=40u32 {
+            let p = run.job.point_at(i as f32 / 50.0);
+            st.pos = [(p[0] * 80.0) as i32, (p[1] * 80.0) as i32, 0];
+            st.dir = [1, -1];
+            hmi.tick(&st, 2400 + i * 100);
+            screens.render(&hmi, &st, 2400 + i * 100, &mut fb).unwrap();
+        }
+        assert!(screens.trace().len() > 10);
+        let mut rebuilt = screens.clone();
+        rebuilt.invalidate();
+        let mut fresh = FrameBuffer::new();
+        rebuilt.render(&hmi, &st, 6400, &mut fresh).unwrap();
+        assert!(fresh.bytes() == fb.bytes());
     }
 }

@@ -9,9 +9,10 @@
 
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{Line, PrimitiveStyle, Rectangle};
+use embedded_graphics::primitives::Rectangle;
 use heapless::Vec;
 
+use super::widgets::line;
 use crate::hmi::job::Job;
 
 /// Maps job millimetres (relative to the job start) to screen pixels.
@@ -145,11 +146,10 @@ impl Trace {
     where
         D: DrawTarget<Color = BinaryColor>,
     {
-        let style = PrimitiveStyle::with_stroke(BinaryColor::On, 1);
         let mut prev: Option<Point> = None;
         for &(x, y) in &self.pts {
             let p = Point::new(x as i32, y as i32);
-            Line::new(prev.unwrap_or(p), p).into_styled(style).draw(d)?;
+            line(d, prev.unwrap_or(p), p)?;
             prev = Some(p);
         }
         Ok(())

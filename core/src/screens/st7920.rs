@@ -133,6 +133,25 @@ pub fn pending_bytes(fb: &FrameBuffer) -> usize {
     spans(fb).map(|s| s.bytes()).sum()
 }
 
+/// Send every dirty span through `send` (one call per span, at most
+/// [`MAX_SPAN_BYTES`] bytes each, e.g. a blocking SPI write or a DMA transfer awaited by
+/// the caller), then mark the buffer clean. On an error the buffer stays dirty, so the
+/// next flush resends everything not confirmed. Returns the bytes sent.
+pub fn flush<E>(
+    fb: &mut FrameBuffer,
+    mut send: impl FnMut(&[u8]) -> Result<(), E>,
+) -> Result<usize, E> {
+    let mut buf = [0u8; MAX_SPAN_BYTES];
+    let mut total = 0;
+    for span in spans(fb) {
+        let n = encode(fb, span, &mut buf);
+        send(buf.get(..n).unwrap_or(&[]))?;
+        total += n;
+    }
+    fb.mark_clean();
+    Ok(total)
+}
+
 /// Time to clock `bytes` out at [`SPI_HZ`], in microseconds.
 pub fn transfer_us(bytes: usize) -> u32 {
     ((bytes as u64 * 8 * 1_000_000).div_ceil(SPI_HZ as u64)) as u32
@@ -210,5 +229,25 @@ mod tests {
             &out[..n],
             [0xF8, 0x80, 0x10, 0xF8, 0x80, 0x90, 0xFA, 0xF0, 0x00, 0xFA, 0x00, 0x00]
         );
+    }
+
+    #[test]
+    fn flush_sends_each_span_once_and_cleans_only_on_success() {
+        let mut fb = FrameBuffer::new();
+        fb.mark_clean();
+        fb.set(0, 0, true);
+        fb.set(127, 63, true);
+        let failed: Result<usize, ()> = flush(&mut fb, |_| Err(()));
+        assert!(failed.is_err() && fb.is_dirty());
+        let mut sent = std::vec::Vec::new();
+        let n = flush(&mut fb, |b: &[u8]| {
+            sent.push(b.to_vec());
+            Ok::<(), ()>(())
+        })
+        .unwrap();
+        assert_eq!(sent.len(), 2);
+        assert_eq!(n, sent.iter().map(|b| b.len()).sum::<usize>());
+        assert!(!fb.is_dirty());
+        assert_eq!(flush(&mut fb, |_| Err(())), Ok::<usize, ()>(0));
     }
 }

@@ -9,7 +9,7 @@
 use embedded_graphics::mono_font::{MonoFont, MonoTextStyleBuilder};
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{Line, PrimitiveStyle, Rectangle, Triangle};
+use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
 use embedded_graphics::text::{Baseline, Text};
 
 use super::fonts::{BODY, SMALL};
@@ -39,7 +39,7 @@ where
     let end = s.char_indices().nth(chars).map_or(s.len(), |(i, _)| i);
     let shown = s.get(..end).unwrap_or("");
     let n = shown.chars().count();
-    let next = Text::with_baseline(shown, pos, style, Baseline::Top).draw(d)?;
+    Text::with_baseline(shown, pos, style, Baseline::Top).draw(d)?;
     let cw = font.character_size.width + font.character_spacing;
     let pad = chars.saturating_sub(n) as u32;
     if pad > 0 {
@@ -49,7 +49,6 @@ where
         );
         d.fill_solid(&r, bg)?;
     }
-    let _ = next;
     Ok(())
 }
 
@@ -156,20 +155,58 @@ where
     gap.into_styled(PrimitiveStyle::with_stroke(OFF, 1)).draw(d)
 }
 
-/// A direction arrow for (dx, dy) signs, fitted in a square `area` (Y up). A zero
-/// direction draws a small ring (stopped, no direction yet).
+/// A 1-pixel line from `a` to `b` (Bresenham). embedded-graphics' styled `Line` carries
+/// the thick-line machinery for any stroke width; the screens only need thin lines.
+pub fn line<D>(d: &mut D, a: Point, b: Point) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    let (dx, dy) = ((b.x - a.x).abs(), -(b.y - a.y).abs());
+    let (sx, sy) = (
+        if a.x < b.x { 1 } else { -1 },
+        if a.y < b.y { 1 } else { -1 },
+    );
+    let mut p = a;
+    let mut err = dx + dy;
+    let mut done = false;
+    let pixels = core::iter::from_fn(move || {
+        if done {
+            return None;
+        }
+        let here = p;
+        if here == b {
+            done = true;
+        } else {
+            let e2 = 2 * err;
+            if e2 >= dy {
+                err += dy;
+                p.x += sx;
+            }
+            if e2 <= dx {
+                err += dx;
+                p.y += sy;
+            }
+        }
+        Some(Pixel(here, ON))
+    });
+    d.draw_iter(pixels)
+}
+
+/// A direction arrow for (dx, dy) signs, fitted in a square `area` (Y up): a 3-pixel
+/// shaft and a head, filled when `solid` (moving) or outlined (stopped). A zero
+/// direction draws a small square (no direction yet). Built from 1-pixel lines only, so
+/// embedded-graphics' thick-line and triangle fillers stay out of the firmware.
 pub fn arrow<D>(d: &mut D, area: Rectangle, dir: [i8; 2], solid: bool) -> Result<(), D::Error>
 where
     D: DrawTarget<Color = BinaryColor>,
 {
     let c = area.center();
-    let r = (area.size.width.min(area.size.height) / 2) as i32 - 2;
-    let stroke = PrimitiveStyle::with_stroke(ON, 3);
     if dir == [0, 0] {
-        return embedded_graphics::primitives::Circle::with_center(c, 9)
+        return Rectangle::with_center(c, Size::new(9, 9))
             .into_styled(PrimitiveStyle::with_stroke(ON, 2))
             .draw(d);
     }
+    let r = (area.size.width.min(area.size.height) / 2) as f32 - 2.0;
     let (dx, dy) = (dir[0] as f32, -(dir[1] as f32));
     let n = libm::hypotf(dx, dy);
     let (ux, uy) = (dx / n, dy / n);
@@ -179,20 +216,50 @@ where
             c.y + libm::roundf(uy * along + ux * across) as i32,
         )
     };
-    let rf = r as f32;
-    let tip = at(rf, 0.0);
-    let head_base = rf * 0.15;
-    Line::new(at(-rf, 0.0), at(head_base, 0.0))
-        .into_styled(stroke)
-        .draw(d)?;
-    let head = Triangle::new(
-        tip,
-        at(head_base - 2.0, rf * 0.55),
-        at(head_base - 2.0, -rf * 0.55),
-    );
+    let base = r * 0.1;
+    let half = r * 0.55;
+    // Shaft: parallel lines half a pixel apart leave no gaps on diagonals.
+    for k in -3..=3 {
+        let o = k as f32 * 0.5;
+        line(d, at(-r, o), at(base, o))?;
+    }
+    let tip = at(r, 0.0);
     if solid {
-        head.into_styled(PrimitiveStyle::with_fill(ON)).draw(d)
+        // Fill the head with a fan of lines from the tip.
+        let steps = libm::ceilf(half * 4.0) as i32;
+        for k in -steps..=steps {
+            let across = half * k as f32 / steps as f32;
+            line(d, tip, at(base, across))?;
+        }
+        Ok(())
     } else {
-        head.into_styled(PrimitiveStyle::with_stroke(ON, 1)).draw(d)
+        let (b1, b2) = (at(base, half), at(base, -half));
+        for (p, q) in [(tip, b1), (b1, b2), (b2, tip)] {
+            line(d, p, q)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::screens::framebuffer::FrameBuffer;
+
+    #[test]
+    fn thin_line_covers_both_ends_with_one_pixel_per_major_step() {
+        for (a, b) in [
+            (Point::new(3, 4), Point::new(40, 17)),
+            (Point::new(40, 17), Point::new(3, 4)),
+            (Point::new(10, 50), Point::new(12, 5)),
+            (Point::new(7, 7), Point::new(7, 7)),
+        ] {
+            let mut fb = FrameBuffer::new();
+            line(&mut fb, a, b).unwrap();
+            let on = fb.bytes().iter().map(|b| b.count_ones()).sum::<u32>();
+            let major = (b.x - a.x).abs().max((b.y - a.y).abs()) as u32 + 1;
+            assert_eq!(on, major, "{a:?} -> {b:?}");
+            assert!(fb.pixel(a.x as usize, a.y as usize) && fb.pixel(b.x as usize, b.y as usize));
+        }
     }
 }

@@ -13,6 +13,8 @@ pub struct FakePlanner {
     pub cap: usize,
     pub pos: StepPos,
     pub holding: bool,
+    /// A hold was requested while moving: one more step() to come to rest.
+    pub stopping: bool,
     pub rate: i32,
     pub overrides: (u8, u8),
     pub clears: u32,
@@ -27,6 +29,7 @@ impl FakePlanner {
             cap,
             pos: [0; 3],
             holding: false,
+            stopping: false,
             rate: 1_000_000,
             overrides: (100, 100),
             clears: 0,
@@ -37,7 +40,10 @@ impl FakePlanner {
     /// Advance the head command.
     pub fn step(&mut self) {
         if self.holding {
-            return;
+            if !self.stopping {
+                return;
+            }
+            self.stopping = false;
         }
         let Some(head) = self.queue.front() else {
             return;
@@ -45,8 +51,9 @@ impl FakePlanner {
         let done = match head {
             Command::Move(mv) => {
                 for (p, t) in self.pos.iter_mut().zip(mv.target.iter()) {
-                    let d = (t - *p).clamp(-self.rate, self.rate);
-                    *p += d;
+                    let d = (i64::from(*t) - i64::from(*p))
+                        .clamp(-i64::from(self.rate), i64::from(self.rate));
+                    *p = (i64::from(*p) + d) as i32;
                 }
                 self.pos == mv.target
             }
@@ -83,20 +90,25 @@ impl MotionControl for FakePlanner {
         self.cap
     }
     fn hold(&mut self) {
+        if !self.holding {
+            self.stopping = !self.queue.is_empty();
+        }
         self.holding = true;
     }
     fn resume(&mut self) {
         self.holding = false;
+        self.stopping = false;
     }
     fn is_holding(&self) -> bool {
         self.holding
     }
     fn is_moving(&self) -> bool {
-        !self.holding && !self.queue.is_empty()
+        !self.queue.is_empty() && (!self.holding || self.stopping)
     }
     fn clear(&mut self) {
         self.queue.clear();
         self.holding = false;
+        self.stopping = false;
         self.clears += 1;
     }
     fn set_overrides(&mut self, feed: u8, rapid: u8) {
