@@ -156,6 +156,16 @@ impl StepTimer {
         self.tim.arr().write(|w| unsafe { w.bits(arr) });
     }
 
+    /// Start an idle timer with a first period of `ticks` (2..=65536): the period is
+    /// loaded at once (update generation, which raises no interrupt with URS set) so
+    /// the preloaded ARR does not delay it by one period.
+    pub fn start_with_period(&mut self, ticks: u32) {
+        self.set_period(ticks);
+        self.tim.egr().write(|w| w.ug().set_bit());
+        self.tim.sr().write(|w| unsafe { w.bits(!1) });
+        self.tim.cr1().modify(|_, w| w.cen().set_bit());
+    }
+
     pub fn start(&mut self) {
         self.tim.cnt().write(|w| unsafe { w.bits(0) });
         self.tim.cr1().modify(|_, w| w.cen().set_bit());

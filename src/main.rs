@@ -5,6 +5,7 @@
 //!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3)
 //!   6  step timer (TIM2): executes prepared step events, integer work only
 //!   5  USB (moves bytes between the endpoint and the SPSC queues), segment preparation
+//!      (planner blocks -> timed step commands in the SPSC step queue)
 //!   4  protocol / G-code, feed-hold and cycle-start inputs
 //!   3  keypad scan (every 5 ms) and the watchdog
 //!   1  LCD refresh: the only task that waits (on its SPI); everything preempts it
@@ -45,15 +46,47 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3, SPI1, I2C1_EV])]
 mod app {
+    use core::sync::atomic::{AtomicBool, Ordering};
+    use heapless::spsc::{Consumer, Producer, Queue};
     use inkstep::board;
+    use inkstep_core::planner::{Planner, PlannerConfig};
+    use inkstep_core::stepper::drive::STEP_QUEUE;
+    use inkstep_core::stepper::exec::{Executor, IsrOut};
+    use inkstep_core::stepper::prep::{Prep, PrepConfig};
+    use inkstep_core::stepper::StepCmd;
     use rtic_monotonics::systick::prelude::*;
     use stm32f1xx_hal::usb::UsbBusType;
     use usb_device::bus::UsbBusAllocator;
 
     systick_monotonic!(Mono, 1_000);
 
+    /// Latched by the e-stop input (priority 7); the step interrupt checks it before
+    /// every pulse and halts the executor, so no step follows it.
+    static ESTOP: AtomicBool = AtomicBool::new(false);
+    /// Feed hold / cycle start requests for the segment preparation.
+    static HOLD_REQ: AtomicBool = AtomicBool::new(false);
+    static RESUME_REQ: AtomicBool = AtomicBool::new(false);
+
+    /// Step pulse width: 2 us at the 2 MHz step-timer clock (A4988/DRV8825 need 1-2 us).
+    const PULSE_TICKS: u16 = 4;
+    const STEP_ALL: u8 = (board::STEP_MASK_X | board::STEP_MASK_Y | board::STEP_MASK_Z) as u8;
+
+    /// The step interrupt's state: the executor runs one event ahead of the hardware,
+    /// because TIM2's ARR is preloaded (a period written now applies after the next
+    /// update). `next` holds the step to pulse at the next update.
+    pub struct StepIsr {
+        exec: Executor,
+        rx: Consumer<'static, StepCmd>,
+        next: IsrOut,
+        /// Direction pins for the step after the present one, written when its pulse ends.
+        dir_after: u8,
+    }
+
     #[shared]
     struct Shared {
+        /// The look-ahead planner: the protocol and keypad tasks push moves, the segment
+        /// preparation pops blocks.
+        planner: Planner,
         usb: board::Usb,
         serial: board::UsbSerial,
         indicators: board::Indicators,
@@ -63,6 +96,9 @@ mod app {
     struct Local {
         step_port: board::StepPort,
         step_timer: board::StepTimer,
+        step_isr: StepIsr,
+        prep: Prep,
+        steps_tx: Producer<'static, StepCmd>,
         servo: board::PenServo,
         keypad: board::KeypadMatrix,
         inputs: board::Inputs,
@@ -70,9 +106,25 @@ mod app {
         watchdog: stm32f1xx_hal::watchdog::IndependentWatchdog,
     }
 
-    #[init(local = [usb_bus: Option<UsbBusAllocator<UsbBusType>> = None])]
+    #[init(local = [
+        usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
+        steps: Queue<StepCmd, STEP_QUEUE> = Queue::new(),
+    ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let b = board::init(cx.device, cx.local.usb_bus);
+        let mut b = board::init(cx.device, cx.local.usb_bus);
+        b.step_timer.set_pulse_ticks(PULSE_TICKS);
+        let (steps_tx, steps_rx) = cx.local.steps.split();
+        let cfg = PlannerConfig::default();
+        let prep_cfg = PrepConfig {
+            timer_hz: board::STEP_TIMER_HZ,
+            ..PrepConfig::default()
+        };
+        let step_isr = StepIsr {
+            exec: Executor::new([0; 3], 0x1_0000),
+            rx: steps_rx,
+            next: IsrOut::default(),
+            dir_after: 0,
+        };
         Mono::start(cx.core.SYST, b.sysclk_hz);
         defmt::info!(
             "inkstep {} up, sysclk {} Hz",
@@ -81,8 +133,10 @@ mod app {
         );
         keypad_scan::spawn().ok();
         lcd_refresh::spawn().ok();
+        segment_prep::spawn().ok();
         (
             Shared {
+                planner: Planner::new(cfg, [0; 3]),
                 usb: b.usb,
                 serial: b.serial,
                 indicators: b.indicators,
@@ -90,6 +144,9 @@ mod app {
             Local {
                 step_port: b.step_port,
                 step_timer: b.step_timer,
+                step_isr,
+                prep: Prep::new(prep_cfg, [0; 3]),
+                steps_tx,
                 servo: b.servo,
                 keypad: b.keypad,
                 inputs: b.inputs,
@@ -106,23 +163,98 @@ mod app {
         }
     }
 
-    /// Emergency stop: highest priority. Outputs off first, then tell the core.
+    /// Emergency stop: highest priority. Outputs off first, then latch the stop that
+    /// the step interrupt honours before its next pulse.
     #[task(binds = EXTI0, priority = 7)]
     fn estop(_: estop::Context) {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
+            ESTOP.store(true, Ordering::SeqCst);
+            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
             defmt::warn!("e-stop");
         }
     }
 
-    #[task(binds = TIM2, priority = 6, local = [step_port, step_timer])]
+    /// The step timer. Update event: pulse the step pins of the pending event and
+    /// program the period after the next one. Compare event (pulse width later): step
+    /// pins low and the direction for the next step. A software pend starts an idle
+    /// timer. Integer work only (inkstep_core::stepper::exec).
+    #[task(binds = TIM2, priority = 6, local = [step_port, step_timer, step_isr])]
     fn step(cx: step::Context) {
-        let (_update, compare) = cx.local.step_timer.take_events();
+        let step::LocalResources {
+            step_port: port,
+            step_timer: timer,
+            step_isr: s,
+            ..
+        } = cx.local;
+        let (update, compare) = timer.take_events();
+        if ESTOP.load(Ordering::SeqCst) {
+            s.exec.halt();
+            timer.stop();
+            port.write(0, STEP_ALL);
+            return;
+        }
         if compare {
-            cx.local.step_port.write(
-                0,
-                (board::STEP_MASK_X | board::STEP_MASK_Y | board::STEP_MASK_Z) as u8,
+            let d = s.dir_after & 0b111;
+            port.write(
+                d << board::DIR_SHIFT,
+                STEP_ALL | ((!d & 0b111) << board::DIR_SHIFT),
             );
+        }
+        if update && timer.is_running() {
+            let now = s.next;
+            if now.step != 0 {
+                port.write(now.step, 0);
+            }
+            s.dir_after = now.dir;
+            if now.reload == 0 {
+                timer.stop();
+                return;
+            }
+            // Fetch the event after this one; its period starts at the next update.
+            s.next = s.exec.on_interrupt(&mut s.rx);
+            if s.next.reload != 0 {
+                timer.set_period(s.next.reload);
+            }
+        } else if !timer.is_running() {
+            // Start: the first event's wait runs now, the one after it is preloaded.
+            if let Some(first) = s.exec.start(&mut s.rx) {
+                let d = first.dir & 0b111;
+                port.write(d << board::DIR_SHIFT, (!d & 0b111) << board::DIR_SHIFT);
+                timer.start_with_period(first.reload);
+                s.next = s.exec.on_interrupt(&mut s.rx);
+                if s.next.reload != 0 {
+                    timer.set_period(s.next.reload);
+                }
+            }
+        }
+    }
+
+    /// Segment preparation: keeps the step queue full from the planner, every
+    /// millisecond, and applies feed hold / cycle start requests.
+    #[task(priority = 5, shared = [planner, indicators], local = [prep, steps_tx])]
+    async fn segment_prep(mut cx: segment_prep::Context) {
+        loop {
+            let prep = &mut *cx.local.prep;
+            let tx = &mut *cx.local.steps_tx;
+            let busy = cx.shared.planner.lock(|planner| {
+                if HOLD_REQ.swap(false, Ordering::AcqRel) {
+                    prep.hold();
+                }
+                if RESUME_REQ.swap(false, Ordering::AcqRel) {
+                    prep.resume(planner);
+                }
+                prep.fill(planner, tx);
+                !prep.is_idle(planner)
+            });
+            // Busy output / LED follows motion (queued steps count as motion).
+            let busy = busy || !tx.is_empty();
+            cx.shared.indicators.lock(|ind| ind.set_busy(busy));
+            if !tx.is_empty() {
+                // Starts the timer if it is idle (the interrupt ignores it otherwise).
+                rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+            }
+            Mono::delay(1.millis()).await;
         }
     }
 
@@ -138,10 +270,17 @@ mod app {
         });
     }
 
+    /// Feed-hold input (the seed's SYNC: pause while low): hold on low, resume on high.
     #[task(binds = EXTI4, priority = 4, local = [inputs])]
     fn control_inputs(cx: control_inputs::Context) {
         if board::exti_take_pending(4) {
-            defmt::info!("feed hold input low: {}", cx.local.inputs.feed_hold_low());
+            let low = cx.local.inputs.feed_hold_low();
+            if low {
+                HOLD_REQ.store(true, Ordering::Release);
+            } else {
+                RESUME_REQ.store(true, Ordering::Release);
+            }
+            defmt::info!("feed hold input low: {}", low);
         }
     }
 
