@@ -106,7 +106,7 @@ impl Controller {
         let state = match self.protocol.machine().state(m) {
             RunState::Idle | RunState::Check => MachineState::Idle,
             RunState::Run => MachineState::Run,
-            RunState::Hold { .. } => MachineState::Hold,
+            RunState::Hold { .. } | RunState::Door { .. } => MachineState::Hold,
             RunState::Jog => MachineState::Jog,
             RunState::Home => MachineState::Homing,
             RunState::Alarm => {

@@ -3,12 +3,12 @@
 //! `no_std` and allocation-free so that the firmware, the simulator and the host tests
 //! all run this one copy of the logic. Modules are grouped by responsibility:
 //! - geometry and the motion contract: [`motion`]
-//! - standalone use: [`keypad`] (scan and debounce), [`hmi`] (menus and drawing modes),
-//!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
 //! - machine settings and their flash store: [`settings`], [`settings_store`]
 //! - G-code parsing and interpretation: [`gcode`]
 //! - machine state, safety and the planner interface: [`machine`]
 //! - the Grbl 1.1 serial protocol: [`protocol`]
+//! - standalone use: [`keypad`] (scan and debounce), [`hmi`] (menus and drawing modes),
+//!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
 //! - the wiring of protocol, keypad, HMI and planner shared by firmware and simulator:
 //!   [`controller`], and the planner behind the machine's motion trait: [`link`]
 //!
@@ -29,4 +29,5 @@ pub mod planner;
 pub mod protocol;
 pub mod screens;
 pub mod settings;
+pub mod settings_store;
 pub mod stepper;

@@ -10,7 +10,7 @@ use crate::board::{Board, StepEvent, TICK_HZ};
 use crate::keys::{parse, Step, TAP_MS};
 use crate::lcd;
 use crate::render::{Drawing, Pen};
-use crate::run::run_on;
+use crate::run::run_on_with;
 use crate::sender::Flow;
 use crate::trace::{Row, Trace};
 use inkstep_core::settings::Settings;
@@ -76,10 +76,7 @@ impl Session {
                     }
                 }
                 Step::Lcd { name } => {
-                    self.board.refresh_lcd();
-                    let path = out.join(format!("{name}.png"));
-                    let fb = &self.board.lcd.as_ref().expect("the session has an LCD").fb;
-                    lcd::save_png(|x, y| fb.pixel(x, y), &path)?;
+                    let path = snapshot(&mut self.board, &out.join(format!("{name}.png")))?;
                     self.shots.push(path);
                 }
             }
@@ -87,9 +84,27 @@ impl Session {
         Ok(())
     }
 
-    /// Streams G-code over the simulated USB port; returns the sender's complaints.
-    pub fn stream(&mut self, gcode: &str) -> Vec<String> {
-        let r = run_on(&mut self.board, gcode, Flow::SendResponse);
+    /// Streams G-code over the simulated USB port, writing the LCD as `shot` (name in
+    /// `out`) `shot_ms` after the stream starts; returns the sender's complaints.
+    pub fn stream(
+        &mut self,
+        gcode: &str,
+        shot: Option<(u64, &str, &Path)>,
+    ) -> Result<Vec<String>, String> {
+        let start = self.board.now();
+        let mut pending = shot;
+        let mut written: Option<Result<PathBuf, String>> = None;
+        let r = run_on_with(&mut self.board, gcode, Flow::SendResponse, &mut |b| {
+            if let Some((ms, name, out)) = pending {
+                if b.now() >= start + Board::ms_to_ticks(ms) {
+                    pending = None;
+                    written = Some(snapshot(b, &out.join(format!("{name}.png"))));
+                }
+            }
+        });
+        if let Some(w) = written {
+            self.shots.push(w?);
+        }
         self.events.extend(r.events.iter().copied());
         let mut bad: Vec<String> = r
             .errors
@@ -97,7 +112,7 @@ impl Session {
             .map(|e| format!("line {}: {} -> {}", e.line_no, e.text, e.response))
             .collect();
         bad.extend(r.alarms);
-        bad
+        Ok(bad)
     }
 
     /// Marks the step events since `from` as one part of the session.
@@ -137,6 +152,14 @@ impl Default for Session {
     }
 }
 
+/// Refreshes the LCD and writes it to `path`.
+fn snapshot(board: &mut Board, path: &Path) -> Result<PathBuf, String> {
+    board.refresh_lcd();
+    let fb = &board.lcd.as_ref().ok_or("the session has no LCD")?.fb;
+    lcd::save_png(|x, y| fb.pixel(x, y), path)?;
+    Ok(path.to_path_buf())
+}
+
 /// Writes the drawing as PNG and SVG into `out`.
 pub fn write_drawing(s: &Session, out: &Path) -> Result<[PathBuf; 2], String> {
     let d = s.drawing();
@@ -155,12 +178,12 @@ pub fn demo(out: &Path) -> Result<Session, String> {
     s.play(DEMO_KEYS, out)?;
     s.part("keypad: sine and star", mark);
     let mark = s.events.len();
-    let bad = s.stream(FLOWER);
+    let bad = s.stream(FLOWER, Some((6000, "12_gcode_running", out)))?;
     if !bad.is_empty() {
         return Err(format!("the demo's G-code was refused: {}", bad.join("; ")));
     }
     s.part("G-code: flower", mark);
-    s.play("wait:300 lcd:12_after_gcode", out)?;
+    s.play("wait:300 lcd:13_after_gcode", out)?;
     write_drawing(&s, out)?;
     Ok(s)
 }

@@ -5,9 +5,11 @@
 //! 11 ms in all); the others lengthen their cruise to arrive at the same place, which is
 //! how the thesis compares them.
 //!
-//! These are analysis models for the plot, not firmware: the staircase and exponential
-//! ramps are never run by the planner. Each profile is a velocity law of its ramp;
-//! position and acceleration are integrated / differentiated numerically.
+//! The linear and S-curve profiles are the planner's own ([`inkstep_core::planner::Profile`]
+//! with the trapezoid and cosine shapes), so the plot shows what the firmware runs. The
+//! staircase and exponential ramps are analysis models for the comparison only; the
+//! planner never runs them. Position and acceleration are integrated / differentiated
+//! numerically from the speed.
 
 /// The thesis's parameters.
 #[derive(Clone, Copy, Debug)]
@@ -169,6 +171,27 @@ pub const FOUR: [Ramp; 4] = [
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_planner_profiles_agree_with_the_ramp_laws() {
+        let p = THESIS;
+        for ramp in [Ramp::Linear, Ramp::Cosine] {
+            let prof = Profile::same_distance(ramp, &p);
+            assert!(
+                (prof.total() - (2.0 * prof.t_ramp + prof.t_cruise)).abs() < 2e-6,
+                "{}",
+                ramp.name()
+            );
+            for i in 0..=20 {
+                let t = prof.t_ramp * i as f64 / 20.0;
+                assert!(
+                    (prof.speed(&p, t) - ramp.speed(&p, t)).abs() < 1e-3,
+                    "{} at {t}",
+                    ramp.name()
+                );
+            }
+        }
+    }
 
     #[test]
     fn linear_profile_is_the_thesis_numbers() {

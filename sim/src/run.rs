@@ -69,6 +69,17 @@ pub fn run_gcode(text: &str, flow: Flow) -> RunResult {
 
 /// Streams `text` to `board` (which may have run before).
 pub fn run_on(board: &mut Board, text: &str, flow: Flow) -> RunResult {
+    run_on_with(board, text, flow, &mut |_| {})
+}
+
+/// As [`run_on`], calling `each_ms` with the board after every millisecond of virtual
+/// time (for snapshots while a stream runs).
+pub fn run_on_with(
+    board: &mut Board,
+    text: &str,
+    flow: Flow,
+    each_ms: &mut dyn FnMut(&mut Board),
+) -> RunResult {
     let mut sender = Sender::new(text, flow);
     let mut events = Vec::new();
     let mut unsent: Vec<u8> = Vec::new();
@@ -100,6 +111,7 @@ pub fn run_on(board: &mut Board, text: &str, flow: Flow) -> RunResult {
         if !progressed {
             let until = board.now() + step;
             board.run_until(until, &mut |e| events.push(e));
+            each_ms(board);
         }
     }
     let lines = sender.total_lines();
