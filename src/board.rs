@@ -253,6 +253,16 @@ impl KeypadMatrix {
     }
 }
 
+/// Raw input levels, read together.
+#[derive(Clone, Copy, Debug, defmt::Format)]
+pub struct InputLevels {
+    pub estop_open: bool,
+    pub limit_x_open: bool,
+    pub limit_y_open: bool,
+    pub feed_hold_low: bool,
+    pub cycle_start_low: bool,
+}
+
 /// Safety and control inputs on EXTI.
 pub struct Inputs {
     pub estop: gpio::PB0<Input<PullUp>>,
@@ -278,6 +288,18 @@ impl Inputs {
     }
     pub fn cycle_start_low(&self) -> bool {
         self.cycle_start.is_low()
+    }
+    /// All input levels in one read of GPIOB (usable from any context).
+    pub fn levels() -> InputLevels {
+        // SAFETY: read-only access to GPIOB's input register.
+        let idr = unsafe { (*pac::GPIOB::ptr()).idr().read().bits() };
+        InputLevels {
+            estop_open: idr & (1 << 0) != 0,
+            limit_x_open: idr & (1 << 1) != 0,
+            limit_y_open: idr & (1 << 3) != 0,
+            feed_hold_low: idr & (1 << 4) == 0,
+            cycle_start_low: idr & (1 << 5) == 0,
+        }
     }
     /// The feed-hold level read straight from GPIOB, for the EXTI handler (which does
     /// not own the pins). Low = hold.

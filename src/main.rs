@@ -14,16 +14,15 @@
 #![no_std]
 #![no_main]
 
-use core::cell::RefCell;
-use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
-use critical_section::Mutex;
+use core::sync::atomic::{AtomicBool, Ordering};
 use defmt_rtt as _;
 use heapless::spsc::{Consumer, Producer};
 use inkstep::board;
+use inkstep::steps::{
+    self, BoardSide, StepOutput, DIR_INVERT, FOUR_PHASE, HALT, LAST_DIR, LAST_STEPPED, STEP_INVERT,
+};
 use inkstep_core::link::StepSide;
-use inkstep_core::motion::StepPos;
 use inkstep_core::stepper::exec::Executor;
-use inkstep_core::stepper::phase4::Phase4;
 use inkstep_core::stepper::StepCmd;
 
 /// Step commands between segment preparation and the step interrupt (4 bytes each).
@@ -32,62 +31,8 @@ const STEP_QUEUE: usize = 256;
 const USB_RX: usize = 256;
 const USB_TX: usize = 512;
 
-/// Latched by the e-stop (and an armed hard limit): the step interrupt halts the
-/// executor and emits nothing until the machine is reset.
-static HALT: AtomicBool = AtomicBool::new(false);
-/// Hard limits stop stepping at once only when `$21` is on and no homing cycle runs.
+/// Hard limits stop stepping at once only when `$21` is on.
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
-/// Output polarity and mode, set by the protocol task from the settings.
-static STEP_INVERT: AtomicU8 = AtomicU8::new(0);
-static DIR_INVERT: AtomicU8 = AtomicU8::new(0);
-static FOUR_PHASE: AtomicBool = AtomicBool::new(false);
-/// Axes' last step directions (bit set = negative) for the LCD's teaching view.
-static LAST_DIR: AtomicU8 = AtomicU8::new(0);
-static LAST_STEPPED: AtomicU8 = AtomicU8::new(0);
-
-/// What the step interrupt owns, shared with the preparation side through short
-/// critical sections (position reads, flush at abort, re-zeroing at rest).
-struct Stepper {
-    exec: Executor,
-    rx: Consumer<'static, StepCmd>,
-}
-
-static STEPPER: Mutex<RefCell<Option<Stepper>>> = Mutex::new(RefCell::new(None));
-
-fn with_stepper<R>(f: impl FnOnce(&mut Stepper) -> R) -> Option<R> {
-    critical_section::with(|cs| STEPPER.borrow_ref_mut(cs).as_mut().map(f))
-}
-
-/// The link's view of the interrupt side on the board.
-pub struct BoardSide {
-    tx: Producer<'static, StepCmd>,
-}
-
-impl StepSide for BoardSide {
-    type Sink = Producer<'static, StepCmd>;
-    fn sink(&mut self) -> &mut Self::Sink {
-        &mut self.tx
-    }
-    fn position(&self) -> StepPos {
-        with_stepper(|s| s.exec.position()).unwrap_or([0; 3])
-    }
-    fn is_running(&self) -> bool {
-        with_stepper(|s| s.exec.is_running()).unwrap_or(false) || self.tx.len() > 0
-    }
-    fn queued(&self) -> usize {
-        self.tx.len()
-    }
-    fn flush(&mut self) {
-        with_stepper(|s| {
-            s.exec.halt();
-            while s.rx.dequeue().is_some() {}
-            s.exec.reset();
-        });
-    }
-    fn set_position(&mut self, p: StepPos) {
-        with_stepper(|s| s.exec.set_position(p));
-    }
-}
 
 /// A fault must leave every motor driver disabled, whatever caused it.
 #[cortex_m_rt::exception]
@@ -122,7 +67,7 @@ mod app {
     use heapless::spsc::Queue;
     use inkstep_core::controller::Controller;
     use inkstep_core::link::Link;
-    use inkstep_core::machine::{Inputs, MotionControl};
+    use inkstep_core::machine::Inputs;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
     use inkstep_core::settings::{OutputMode, PenMode, Settings};
     use inkstep_core::settings_store::{block_on, BlockingFlash, SettingsStore, STORE_RANGE};
@@ -145,11 +90,7 @@ mod app {
 
     #[local]
     struct Local {
-        step_port: board::StepPort,
-        step_timer: board::StepTimer,
-        phase4: Phase4,
-        /// Direction pins to output when the running pulse ends.
-        next_dir: u8,
+        step_out: StepOutput,
         servo: board::PenServo,
         keypad: board::KeypadMatrix,
         inputs: board::Inputs,
@@ -175,8 +116,9 @@ mod app {
 
         // Settings from flash; a corrupt store falls back to defaults and says so.
         let mut store = match SettingsStore::new(BlockingFlash(b.flash), STORE_RANGE) {
-            Some(s) => s,
-            None => defmt::panic!("settings flash range"),
+            Ok(s) => s,
+            // STORE_RANGE is a constant that fits the chip; this cannot happen.
+            Err(_) => defmt::panic!("settings flash range"),
         };
         let (settings, load) = block_on(store.load_settings());
         let (coords, _) = block_on(store.load_coords());
@@ -192,13 +134,11 @@ mod app {
         }
 
         let (steps_tx, steps_rx) = cx.local.steps.split();
-        critical_section::with(|cs| {
-            STEPPER.borrow_ref_mut(cs).replace(Stepper {
-                exec: Executor::new([0; 3], 0x1_0000),
-                rx: steps_rx,
-            })
-        });
-        let prep = PrepConfig { timer_hz: board::STEP_TIMER_HZ, ..PrepConfig::default() };
+        steps::install(Executor::new([0; 3], 0x1_0000), steps_rx);
+        let prep = PrepConfig {
+            timer_hz: board::STEP_TIMER_HZ,
+            ..PrepConfig::default()
+        };
         let link = Link::new(&settings, prep, BoardSide { tx: steps_tx });
         let (usb_rx_in, usb_rx_out) = cx.local.usb_rxq.split();
         let (usb_tx_in, usb_tx_out) = cx.local.usb_txq.split();
@@ -207,18 +147,24 @@ mod app {
         let mut step_timer = b.step_timer;
         apply_output_settings(&settings, &mut step_port, &mut step_timer);
 
-        defmt::info!("inkstep {} up, sysclk {} Hz", env!("CARGO_PKG_VERSION"), b.sysclk_hz);
+        defmt::info!(
+            "inkstep {} up, sysclk {} Hz",
+            env!("CARGO_PKG_VERSION"),
+            b.sysclk_hz
+        );
         prepare::spawn().ok();
         protocol::spawn().ok();
         keypad_scan::spawn().ok();
         lcd_refresh::spawn().ok();
         (
-            Shared { ctl, link, usb: b.usb, serial: b.serial },
+            Shared {
+                ctl,
+                link,
+                usb: b.usb,
+                serial: b.serial,
+            },
             Local {
-                step_port,
-                step_timer,
-                phase4: Phase4::default(),
-                next_dir: 0,
+                step_out: StepOutput::new(step_port, step_timer),
                 servo: b.servo,
                 keypad: b.keypad,
                 inputs: b.inputs,
@@ -235,7 +181,11 @@ mod app {
     }
 
     /// Output polarity, mode, pulse width and driver enable from the settings.
-    fn apply_output_settings(s: &Settings, port: &mut board::StepPort, timer: &mut board::StepTimer) {
+    fn apply_output_settings(
+        s: &Settings,
+        port: &mut board::StepPort,
+        timer: &mut board::StepTimer,
+    ) {
         STEP_INVERT.store(s.step_invert_mask(), Ordering::Relaxed);
         DIR_INVERT.store(s.dir_invert_mask(), Ordering::Relaxed);
         FOUR_PHASE.store(s.output_mode() == OutputMode::FourPhase, Ordering::Relaxed);
@@ -281,74 +231,10 @@ mod app {
         }
     }
 
-    /// The step timer. Update event: emit the step pulses of the command whose wait
-    /// just ended and program the next wait. Compare event (pulse width later): end
-    /// the pulses, then set the direction pins for the next command, so direction
-    /// changes never fall inside a pulse. A software pend with the timer stopped
-    /// starts it when prepared steps are waiting.
-    #[task(binds = TIM2, priority = 6, local = [step_port, step_timer, phase4, next_dir, finishing: bool = false])]
+    /// The step timer: the core's executor, see `inkstep::steps`.
+    #[task(binds = TIM2, priority = 6, local = [step_out])]
     fn step(cx: step::Context) {
-        let port = cx.local.step_port;
-        let timer = cx.local.step_timer;
-        let (update, compare) = timer.take_events();
-        let four_phase = FOUR_PHASE.load(Ordering::Relaxed);
-        let step_inv = STEP_INVERT.load(Ordering::Relaxed) & 0b111;
-        let dir_inv = DIR_INVERT.load(Ordering::Relaxed) & 0b111;
-        if compare && !four_phase {
-            let dir = (*cx.local.next_dir ^ dir_inv) & 0b111;
-            let dir_bits = dir << board::DIR_SHIFT;
-            let dir_clear = !dir_bits & (0b111 << board::DIR_SHIFT);
-            // Idle level of the step pins is the inverted one.
-            port.write(step_inv | dir_bits, (!step_inv & 0b111) | dir_clear);
-        }
-        critical_section::with(|cs| {
-            let mut guard = STEPPER.borrow_ref_mut(cs);
-            let Some(st) = guard.as_mut() else { return };
-            if HALT.load(Ordering::Relaxed) {
-                st.exec.halt();
-                timer.stop();
-                return;
-            }
-            if update && timer.is_running() {
-                if core::mem::take(cx.local.finishing) {
-                    // The last pulse has ended: stop, unless new commands wait.
-                    timer.stop();
-                } else {
-                    let out = st.exec.on_interrupt(&mut st.rx);
-                    if out.step != 0 {
-                        if four_phase {
-                            let tick = inkstep_core::interp::Tick(out.step | (out.dir << 3));
-                            let coils = cx.local.phase4.step(tick);
-                            let bits = (coils[0] & 0x0F) | ((coils[1] & 0x0F) << 4);
-                            port.write(bits, !bits);
-                        } else {
-                            port.write(out.step ^ step_inv, out.step & step_inv);
-                        }
-                        LAST_STEPPED.store(out.step, Ordering::Relaxed);
-                        LAST_DIR.store(out.dir, Ordering::Relaxed);
-                    }
-                    *cx.local.next_dir = out.dir;
-                    if out.reload == 0 {
-                        // Run one more short period so the compare event ends the pulse.
-                        *cx.local.finishing = true;
-                        timer.set_period(2 * timer.pulse_ticks() + 16);
-                    } else {
-                        timer.set_period(out.reload);
-                    }
-                    return;
-                }
-            }
-            if !timer.is_running() {
-                if let Some(out) = st.exec.start(&mut st.rx) {
-                    // Direction first; the first pulse comes one wait later.
-                    *cx.local.next_dir = out.dir;
-                    let d = (out.dir ^ dir_inv) & 0b111;
-                    port.write(d << board::DIR_SHIFT, (!d & 0b111) << board::DIR_SHIFT);
-                    timer.set_period(out.reload);
-                    timer.start();
-                }
-            }
-        });
+        cx.local.step_out.on_interrupt();
     }
 
     /// USB: poll the device, take bytes from the endpoint only while the RX queue has
@@ -397,8 +283,8 @@ mod app {
                 link.fill();
                 link.side().queued() > 0
             });
-            if kick && !HALT.load(Ordering::Relaxed) {
-                rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+            if kick {
+                steps::kick();
             }
             Mono::delay(1.millis()).await;
         }
@@ -411,8 +297,8 @@ mod app {
     async fn protocol(mut cx: protocol::Context) {
         loop {
             let now = Mono::now().ticks();
-            let pins = cx.local.inputs;
-            let carry = cx.local.carry;
+            let pins = &mut *cx.local.inputs;
+            let carry = &mut *cx.local.carry;
             while !carry.is_full() {
                 match cx.local.usb_rx_out.dequeue() {
                     Some(b) => {
@@ -422,44 +308,61 @@ mod app {
                 }
             }
             let tx = &mut *cx.local.usb_tx_in;
-            let (busy, settings_changed, pen_down, settings) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let s = ctl.protocol().machine().settings();
-                let inputs = Inputs {
-                    estop: pins.estop_open() != s.invert_inputs(),
-                    limits: [pins.limit_x_open() != s.invert_limits(), pins.limit_y_open() != s.invert_limits(), false],
-                    feed_hold: pins.feed_hold_low(),
-                    cycle_start: pins.cycle_start_low(),
-                };
-                ctl.protocol_mut().set_inputs(inputs, link, now);
-                let taken = ctl.usb_rx(carry, link, now);
-                let taken = taken.min(carry.len());
-                carry.copy_within(taken.., 0);
-                carry.truncate(carry.len() - taken);
-                ctl.poll(link, now);
-                let mut out = [0u8; 64];
-                let room = (tx.capacity() - tx.len()).min(out.len());
-                let n = ctl.usb_tx(&mut out[..room]);
-                for &b in out.iter().take(n) {
-                    let _ = tx.enqueue(b);
-                }
-                let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
-                if changed {
-                    let s = ctl.protocol().machine().settings().clone();
-                    link.configure(&s);
-                }
-                let busy = ctl.take_outputs().busy_led;
-                (busy, changed, link.pen_down(), ctl.protocol().machine().settings().clone())
-            });
+            let (busy, settings_changed, pen_down, settings) =
+                (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                    let s = ctl.protocol().machine().settings();
+                    let inputs = Inputs {
+                        estop: pins.estop_open() != s.invert_inputs(),
+                        limits: [
+                            pins.limit_x_open() != s.invert_limits(),
+                            pins.limit_y_open() != s.invert_limits(),
+                            false,
+                        ],
+                        feed_hold: pins.feed_hold_low(),
+                        cycle_start: pins.cycle_start_low(),
+                    };
+                    ctl.protocol_mut().set_inputs(inputs, link, now);
+                    let taken = ctl.usb_rx(carry, link, now);
+                    let taken = taken.min(carry.len());
+                    carry.copy_within(taken.., 0);
+                    carry.truncate(carry.len() - taken);
+                    ctl.poll(link, now);
+                    let mut out = [0u8; 64];
+                    let room = (tx.capacity() - tx.len()).min(out.len());
+                    let n = ctl.usb_tx(&mut out[..room]);
+                    for &b in out.iter().take(n) {
+                        let _ = tx.enqueue(b);
+                    }
+                    let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
+                    if changed {
+                        let s = ctl.protocol().machine().settings().clone();
+                        link.configure(&s);
+                    }
+                    let busy = ctl.take_outputs().busy_led;
+                    (
+                        busy,
+                        changed,
+                        link.pen_down(),
+                        ctl.protocol().machine().settings().clone(),
+                    )
+                });
             rtic::pend(stm32f1xx_hal::pac::Interrupt::USB_LP_CAN_RX0);
             // A reset from the alarm (soft reset / $X) clears the latched halt.
-            if HALT.load(Ordering::Relaxed) && !cx.shared.ctl.lock(|c| c.protocol().machine().alarm().is_some()) {
+            if HALT.load(Ordering::Relaxed)
+                && !cx
+                    .shared
+                    .ctl
+                    .lock(|c| c.protocol().machine().alarm().is_some())
+            {
                 HALT.store(false, Ordering::SeqCst);
             }
             if settings_changed {
                 *cx.local.save_pending = true;
             }
             if *cx.local.pen != Some(pen_down) && settings.pen_mode() == PenMode::Servo {
-                cx.local.servo.set_pulse_us(settings.pen_servo_pulse_us(pen_down));
+                cx.local
+                    .servo
+                    .set_pulse_us(settings.pen_servo_pulse_us(pen_down));
                 *cx.local.pen = Some(pen_down);
             }
             // Flash writes stall the CPU (instruction fetch waits), so only at rest.
@@ -475,7 +378,7 @@ mod app {
     }
 
     /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.
-    #[task(binds = EXTI4, priority = 4, shared = [ctl, link], local = [])]
+    #[task(binds = EXTI4, priority = 4, shared = [ctl, link])]
     fn feed_hold(mut cx: feed_hold::Context) {
         if board::exti_take_pending(4) {
             let now = Mono::now().ticks();
@@ -542,30 +445,42 @@ mod app {
     /// under a short lock, draw it into the frame buffer, send only the changed words.
     /// The SPI waits here are the only blocking waits in the firmware; every other
     /// task preempts them.
-    #[task(priority = 1, shared = [ctl, link], local = [lcd_spi, screens: Screens = Screens::new(), fb: FrameBuffer = FrameBuffer::new()])]
+    #[task(priority = 1, shared = [ctl, link], local = [lcd_spi])]
     async fn lcd_refresh(mut cx: lcd_refresh::Context) {
         let spi = cx.local.lcd_spi;
+        // Retained state of the screens and the 1 KB frame buffer live in this task.
+        let mut screens = Screens::new();
+        let mut fb = FrameBuffer::new();
         {
             // The st7920 crate brings the controller up in graphics mode; after that
             // only the changed bytes are sent (core::screens::st7920).
-            let mut lcd = ::st7920::ST7920::new(&mut *spi, board::NoPin, None::<board::NoPin>, false);
+            let mut lcd =
+                ::st7920::ST7920::new(&mut *spi, board::NoPin, None::<board::NoPin>, false);
             if lcd.init(&mut board::SpinDelay).is_err() {
                 defmt::warn!("LCD init failed");
             }
         }
-        cx.local.fb.mark_all_dirty();
+        fb.mark_all_dirty();
         loop {
             let now = Mono::now().ticks();
             let dir = LAST_DIR.load(Ordering::Relaxed);
             let stepped = LAST_STEPPED.load(Ordering::Relaxed);
-            let sign = |a: u8| if stepped & (1 << a) == 0 { 0 } else if dir & (1 << a) != 0 { -1 } else { 1 };
+            let sign = |a: u8| {
+                if stepped & (1 << a) == 0 {
+                    0
+                } else if dir & (1 << a) != 0 {
+                    -1
+                } else {
+                    1
+                }
+            };
             let (hmi, status) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
                 ctl.note_direction([sign(0), sign(1)]);
                 (ctl.hmi().clone(), ctl.status(link))
             });
-            let _ = cx.local.screens.render(&hmi, &status, now, cx.local.fb);
+            let _ = screens.render(&hmi, &status, now, &mut fb);
             use embedded_hal::spi::SpiDevice;
-            if st7920::flush(cx.local.fb, |bytes| spi.write(bytes)).is_err() {
+            if st7920::flush(&mut fb, |bytes| spi.write(bytes)).is_err() {
                 defmt::warn!("LCD write failed");
             }
             Mono::delay(100.millis()).await;
