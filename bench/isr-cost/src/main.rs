@@ -1,27 +1,170 @@
+//! Interrupt-cost bench: runs the firmware's real step path on a Cortex-M3 (in the
+//! unicorn emulator, see measure.py) over the reference programs in bench/*.nc.
+//!
+//! The programs go through the core's protocol and G-code interpreter into the link
+//! (planner + segment preparation), whose step commands cross the same SPSC queue to
+//! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
+//! interrupt body with its register accesses. The emulator has no timer, so before each
+//! call the bench sets the status flag the hardware would (update, then compare one
+//! pulse later). measure.py charges every instruction executed inside `bench_isr` and
+//! `bench_prepare` to that call.
 #![no_std]
 #![no_main]
+
 use defmt_rtt as _;
+use heapless::spsc::Queue;
+use inkstep::board::{self, StepPins};
+use inkstep::steps::{self, BoardSide, StepOutput};
+use inkstep_core::controller::Controller;
+use inkstep_core::link::{Link, StepSide};
+use inkstep_core::settings::Settings;
+use inkstep_core::stepper::exec::Executor;
+use inkstep_core::stepper::prep::PrepConfig;
+use inkstep_core::stepper::StepCmd;
+use stm32f1xx_hal::{gpio::PinState, pac, prelude::*};
 
+const PROGRAMS: [&[u8]; 4] = [
+    include_bytes!("../../star.nc"),
+    include_bytes!("../../circle.nc"),
+    include_bytes!("../../sine.nc"),
+    include_bytes!("../../spiral.nc"),
+];
+
+/// Per program: step events, interrupts, final X, final Y (read by measure.py).
 #[no_mangle]
-pub static mut BENCH_RESULT: [u32; 4] = [0; 4];
+pub static mut BENCH_RESULT: [u32; 16] = [0; 16];
 
+/// The protocol's replies (last 1 KB), for measure.py to show when a program fails.
+#[no_mangle]
+pub static mut BENCH_LOG: [u8; 1024] = [0; 1024];
+static mut LOG_AT: usize = 0;
+
+fn log(bytes: &[u8]) {
+    // SAFETY: single-threaded bench.
+    unsafe {
+        let buf = &mut *core::ptr::addr_of_mut!(BENCH_LOG);
+        let at = &mut *core::ptr::addr_of_mut!(LOG_AT);
+        for &b in bytes {
+            if let Some(slot) = buf.get_mut(*at % 1024) {
+                *slot = b;
+            }
+            *at += 1;
+        }
+    }
+}
+
+const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
+const UIF: u32 = 1;
+const CC1IF: u32 = 1 << 1;
+
+/// One TIM2 interrupt, exactly as the firmware runs it.
 #[inline(never)]
 #[no_mangle]
-pub extern "C" fn bench_tick(x: u32) -> u32 {
-    let mut a = x;
-    for i in 0..(x % 5) {
-        a = a.wrapping_mul(3).wrapping_add(i);
-    }
-    a
+pub extern "C" fn bench_isr(out: &mut StepOutput) {
+    out.on_interrupt();
+}
+
+/// One run of segment preparation, as the firmware's prepare task does it.
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn bench_prepare(link: &mut Link<BoardSide>) {
+    link.fill();
+}
+
+fn raise(flags: u32) {
+    // SAFETY: the emulator maps the timer registers as plain memory.
+    unsafe { core::ptr::write_volatile(TIM2_SR, flags) }
 }
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
-    let mut s = 0;
-    for i in 0..10 {
-        s += bench_tick(core::hint::black_box(i));
+    // SAFETY: nothing else owns the peripherals in this bench.
+    let dp = unsafe { pac::Peripherals::steal() };
+    let mut rcc = dp.RCC.constrain();
+    let mut gpioa = dp.GPIOA.split(&mut rcc);
+    let pins = StepPins {
+        pins: [
+            gpioa.pa0.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa1.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa2.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa3.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa4.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa5.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa6.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa7.into_push_pull_output(&mut gpioa.crl).erase(),
+        ],
+        enable: gpioa.pa9.into_push_pull_output_with_state(&mut gpioa.crh, PinState::High),
+    };
+    let (port, mut timer) = board::step_outputs(pins, dp.TIM2);
+    timer.set_pulse_ticks(10 * 72);
+    let mut out = StepOutput::new(port, timer);
+
+    static mut QUEUES: [Queue<StepCmd, 256>; 4] = [const { Queue::new() }; 4];
+    let settings = Settings::default();
+    let prep = PrepConfig { timer_hz: board::STEP_TIMER_HZ, ..PrepConfig::default() };
+
+    for (p, prog) in PROGRAMS.iter().enumerate() {
+        // Each program runs on a freshly booted machine, as in the simulator's runs.
+        // SAFETY: each queue is split once, before anything else uses it.
+        let queue = unsafe { &mut (*core::ptr::addr_of_mut!(QUEUES))[p] };
+        let (tx, rx) = queue.split();
+        steps::install(Executor::new([0; 3], 0x1_0000), rx);
+        let mut link = Link::new(&settings, prep, BoardSide { tx });
+        let mut ctl = Controller::new(settings.clone(), 0);
+        let (mut sent, mut ticks, mut events, mut irqs) = (0usize, 0u64, 0u32, 0u32);
+        let mut sink = [0u8; 128];
+        loop {
+            let now = (ticks / 72_000) as u32;
+            if sent < prog.len() {
+                sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut link, now);
+            }
+            loop {
+                let n = ctl.usb_tx(&mut sink);
+                if n == 0 {
+                    break;
+                }
+                log(sink.get(..n).unwrap_or(&[]));
+            }
+            ctl.poll(&mut link, now);
+            if ctl.protocol_mut().machine_mut().take_settings_dirty() {
+                let s = ctl.protocol().machine().settings().clone();
+                link.configure(&s);
+            }
+            bench_prepare(&mut link);
+            // Start the timer as the firmware's kick does (a pend with no flags).
+            raise(0);
+            bench_isr(&mut out);
+            // Run interrupts until the prepared commands are used up.
+            while out.timer.is_running() {
+                let before = steps::position();
+                raise(UIF);
+                bench_isr(&mut out);
+                raise(CC1IF);
+                bench_isr(&mut out);
+                irqs += 2;
+                if steps::position() != before {
+                    events += 1;
+                }
+                ticks += 2000;
+                if link.side().queued() < 32 {
+                    break;
+                }
+            }
+            let done = sent >= prog.len() && !out.timer.is_running() && link.side().queued() == 0;
+            if done && inkstep_core::machine::MotionControl::is_idle(&link) {
+                break;
+            }
+        }
+        let pos = steps::position();
+        // SAFETY: single-threaded bench; measure.py reads this after the run.
+        unsafe {
+            let r = &mut *core::ptr::addr_of_mut!(BENCH_RESULT);
+            r[4 * p] = events;
+            r[4 * p + 1] = irqs;
+            r[4 * p + 2] = pos[0] as u32;
+            r[4 * p + 3] = pos[1] as u32;
+        }
     }
-    unsafe { BENCH_RESULT[0] = s };
     loop {
         cortex_m::asm::bkpt();
     }
