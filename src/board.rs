@@ -110,7 +110,13 @@ pub struct StepPins {
 /// The step port and step timer from their pins and TIM2. Separate from [`init`] so
 /// that the interrupt-cost bench (bench/isr-cost) builds the very same parts.
 pub fn step_outputs(pins: StepPins, tim2: pac::TIM2) -> (StepPort, StepTimer) {
-    (StepPort { _pins: pins.pins, enable: pins.enable }, StepTimer::new(tim2))
+    (
+        StepPort {
+            _pins: pins.pins,
+            enable: pins.enable,
+        },
+        StepTimer::new(tim2),
+    )
 }
 
 /// Disable every motor driver and drop all step/coil outputs, from any context.
@@ -462,7 +468,9 @@ pub fn init(
                 gpioa.pa7.into_push_pull_output(&mut gpioa.crl).erase(),
             ],
             // Drivers disabled first (ENABLE high = disabled for active-low drivers).
-            enable: gpioa.pa9.into_push_pull_output_with_state(&mut gpioa.crh, gpio::PinState::High),
+            enable: gpioa
+                .pa9
+                .into_push_pull_output_with_state(&mut gpioa.crh, gpio::PinState::High),
         },
         dp.TIM2,
     );

@@ -93,7 +93,9 @@ fn main() -> ! {
             gpioa.pa6.into_push_pull_output(&mut gpioa.crl).erase(),
             gpioa.pa7.into_push_pull_output(&mut gpioa.crl).erase(),
         ],
-        enable: gpioa.pa9.into_push_pull_output_with_state(&mut gpioa.crh, PinState::High),
+        enable: gpioa
+            .pa9
+            .into_push_pull_output_with_state(&mut gpioa.crh, PinState::High),
     };
     let (port, mut timer) = board::step_outputs(pins, dp.TIM2);
     timer.set_pulse_ticks(10 * 72);
@@ -101,7 +103,10 @@ fn main() -> ! {
 
     static mut QUEUES: [Queue<StepCmd, 256>; 4] = [const { Queue::new() }; 4];
     let settings = Settings::default();
-    let prep = PrepConfig { timer_hz: board::STEP_TIMER_HZ, ..PrepConfig::default() };
+    let prep = PrepConfig {
+        timer_hz: board::STEP_TIMER_HZ,
+        ..PrepConfig::default()
+    };
 
     for (p, prog) in PROGRAMS.iter().enumerate() {
         // Each program runs on a freshly booted machine, as in the simulator's runs.
