@@ -35,7 +35,6 @@ fn check(program: &str) {
 }
 
 #[test]
-#[ignore = "motion issue: 0.739 step max deviation; the DDA runs between targets rounded to whole steps, so a vertex's rounding adds to the line's half step (run with --ignored)"]
 fn star() {
     check("star.nc");
 }
@@ -46,7 +45,6 @@ fn circle() {
 }
 
 #[test]
-#[ignore = "motion issue: 3.3746 s > Grbl's 3.2240 s and 0.867 step max deviation (rounded segment ends, see star) (run with --ignored)"]
 fn sine() {
     check("sine.nc");
 }
