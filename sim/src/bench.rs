@@ -2,7 +2,7 @@
 //!
 //! Owns the ideal-path JSON format of `shared/bench/*.json`, the figures we compare with
 //! Grbl (job time, max/rms deviation, steps per axis, final position) and the reading of
-//! Grbl's own figures from `shared/bench/README.md`, so that no expected number is
+//! Grbl's own figures from the bench README (`shared/bench/README.md`), so that no expected number is
 //! written into the code.
 
 use crate::run::{run_gcode, RunResult};
@@ -236,7 +236,7 @@ pub fn run_program(bench_dir: &Path, grbl: &GrblRow) -> Result<BenchRun, String>
 
 /// Runs every program of the bench README.
 pub fn run_all(bench_dir: &Path) -> Result<Vec<BenchRun>, String> {
-    let readme = bench_dir.join("README.md");
+    let readme = crate::paths::grbl_figures(bench_dir);
     let text =
         std::fs::read_to_string(&readme).map_err(|e| format!("{}: {e}", readme.display()))?;
     let rows = read_grbl_table(&text);
@@ -366,9 +366,8 @@ mod tests {
 
     #[test]
     fn reads_the_shared_bench_readme() {
-        let path = crate::paths::shared_dir().join("bench/README.md");
-        let text =
-            std::fs::read_to_string(&path).expect("shared/bench/README.md beside the repository");
+        let path = crate::paths::grbl_figures(&crate::paths::bench_dir());
+        let text = std::fs::read_to_string(&path).expect("Grbl's figures of the bench");
         let rows = read_grbl_table(&text);
         let names: Vec<&str> = rows.iter().map(|r| r.program.as_str()).collect();
         assert_eq!(names, ["star.nc", "circle.nc", "sine.nc", "spiral.nc"]);

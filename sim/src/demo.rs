@@ -153,7 +153,7 @@ impl Default for Session {
 }
 
 /// Refreshes the LCD and writes it to `path`.
-fn snapshot(board: &mut Board, path: &Path) -> Result<PathBuf, String> {
+pub fn snapshot(board: &mut Board, path: &Path) -> Result<PathBuf, String> {
     board.refresh_lcd();
     let fb = &board.lcd.as_ref().ok_or("the session has no LCD")?.fb;
     lcd::save_png(|x, y| fb.pixel(x, y), path)?;

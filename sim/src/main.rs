@@ -2,7 +2,8 @@
 //! library; every command's work lives in a module of its own.
 
 use clap::{Parser, Subcommand};
-use inkstep_sim::board::TICK_HZ;
+use inkstep_core::settings::Settings;
+use inkstep_sim::board::{Board, TICK_HZ};
 use inkstep_sim::render::{Drawing, Pen};
 use inkstep_sim::sender::Flow;
 use inkstep_sim::trace::{ticks_to_us_string, Trace, TraceWriter};
@@ -34,13 +35,20 @@ enum Cmd {
         /// Write the drawing as SVG.
         #[arg(long)]
         svg: Option<PathBuf>,
+        /// Write the LCD as PNGs into this folder while the file runs.
+        #[arg(long)]
+        lcd: Option<PathBuf>,
+        /// With --lcd: one screen every this many milliseconds of virtual time.
+        #[arg(long, default_value_t = 1000)]
+        lcd_every: u64,
         /// Use character counting (128-byte buffer) instead of send-response.
         #[arg(long)]
         char_count: bool,
     },
     /// Run the reference programs of shared/bench and compare with Grbl's figures.
     Bench {
-        /// Folder of the reference programs (default: ../shared/bench beside the repository).
+        /// Folder of the reference programs (default: ../shared/bench beside the
+        /// repository, else the repository's bench/).
         #[arg(long)]
         dir: Option<PathBuf>,
     },
@@ -87,14 +95,18 @@ fn main() -> ExitCode {
             trace,
             png,
             svg,
+            lcd,
+            lcd_every,
             char_count,
-        } => cmd_run(
-            &file,
-            trace.as_deref(),
-            png.as_deref(),
-            svg.as_deref(),
-            char_count,
-        ),
+        } => {
+            let outs = RunOutputs {
+                trace: trace.as_deref(),
+                png: png.as_deref(),
+                svg: svg.as_deref(),
+                lcd: lcd.as_deref(),
+            };
+            cmd_run(&file, outs, lcd_every.max(1), char_count)
+        }
         Cmd::Bench { dir } => cmd_bench(dir),
         Cmd::Demo { out, keys } => cmd_demo(&out, keys.as_deref()),
         Cmd::Serve { link, speed } => {
@@ -124,20 +136,57 @@ fn fail(msg: &str) -> ExitCode {
     ExitCode::from(2)
 }
 
+struct RunOutputs<'a> {
+    trace: Option<&'a Path>,
+    png: Option<&'a Path>,
+    svg: Option<&'a Path>,
+    lcd: Option<&'a Path>,
+}
+
 fn cmd_run(
     file: &Path,
-    trace: Option<&Path>,
-    png: Option<&Path>,
-    svg: Option<&Path>,
+    outs: RunOutputs,
+    lcd_every: u64,
     char_count: bool,
 ) -> Result<ExitCode, String> {
+    let RunOutputs {
+        trace,
+        png,
+        svg,
+        lcd,
+    } = outs;
     let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
     let flow = if char_count {
         Flow::CharCount(inkstep_core::protocol::RX_BUFFER_SIZE)
     } else {
         Flow::SendResponse
     };
-    let r = run::run_gcode(&text, flow);
+    let r = match lcd {
+        None => run::run_gcode(&text, flow),
+        Some(dir) => {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            let mut board = Board::new(Settings::default()).with_lcd();
+            let every = Board::ms_to_ticks(lcd_every);
+            let mut next = 0u64;
+            let mut n = 0u32;
+            let mut failed: Option<String> = None;
+            let mut shoot = |b: &mut Board, force: bool| {
+                if (force || b.now() >= next) && failed.is_none() {
+                    n += 1;
+                    if let Err(e) = demo::snapshot(b, &dir.join(format!("lcd_{n:04}.png"))) {
+                        failed = Some(e);
+                    }
+                    next = b.now() + every;
+                }
+            };
+            let r = run::run_on_with(&mut board, &text, flow, &mut |b| shoot(b, false));
+            shoot(&mut board, true);
+            if let Some(e) = failed {
+                return Err(e);
+            }
+            r
+        }
+    };
     if let Some(path) = trace {
         let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let mut w =
@@ -231,7 +280,7 @@ fn cmd_demo(out: &Path, keys: Option<&str>) -> Result<ExitCode, String> {
 }
 
 fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {
-    let dir = dir.unwrap_or_else(|| paths::shared_dir().join("bench"));
+    let dir = dir.unwrap_or_else(paths::bench_dir);
     let runs = bench::run_all(&dir)?;
     let rows: Vec<(bench::GrblRow, bench::Figures)> = runs
         .iter()
