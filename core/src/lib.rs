@@ -12,4 +12,5 @@ pub mod analysis;
 pub mod interp;
 pub mod motion;
 pub mod planner;
+pub mod refprog;
 pub mod stepper;
