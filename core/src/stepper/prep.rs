@@ -376,11 +376,7 @@ fn advance_window(a: &mut Active, cfg: &PrepConfig) {
     let t1_abs = a.prof_t0 + (t1 * hz + 0.5) as u64;
     let (s0, t0_abs) = (a.win.s1, a.win.t1_abs);
     let ds = s1.saturating_sub(s0);
-    let k = if ds > 0 {
-        ((t1_abs - t0_abs) << 32) / ds
-    } else {
-        0
-    };
+    let k = ((t1_abs - t0_abs) << 32).checked_div(ds).unwrap_or(0);
     let v = if t1 > t0 {
         (ds as f32 / Q as f32) / (t1 - t0) as f32
     } else {
