@@ -17,6 +17,47 @@ pub struct Drawing {
     pub travel: Vec<[[f64; 2]; 2]>,
 }
 
+/// Largest distance (mm) an SVG polyline may stray from the step positions: below a
+/// step (1/80 mm), so the file keeps the drawing but not every stair of the grid.
+pub const SVG_TOLERANCE_MM: f64 = 0.01;
+
+/// Douglas-Peucker simplification of a polyline within `tol`.
+pub fn simplify(pts: &[[f64; 2]], tol: f64) -> Vec<[f64; 2]> {
+    if pts.len() < 3 {
+        return pts.to_vec();
+    }
+    let mut keep = vec![false; pts.len()];
+    keep[0] = true;
+    keep[pts.len() - 1] = true;
+    let mut stack = vec![(0, pts.len() - 1)];
+    while let Some((a, b)) = stack.pop() {
+        let (pa, pb) = (pts[a], pts[b]);
+        let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+        let len = dx.hypot(dy);
+        let mut worst = (0.0, a);
+        for (i, p) in pts.iter().enumerate().take(b).skip(a + 1) {
+            let d = if len == 0.0 {
+                (p[0] - pa[0]).hypot(p[1] - pa[1])
+            } else {
+                ((p[0] - pa[0]) * dy - (p[1] - pa[1]) * dx).abs() / len
+            };
+            if d > worst.0 {
+                worst = (d, i);
+            }
+        }
+        if worst.0 > tol {
+            keep[worst.1] = true;
+            stack.push((a, worst.1));
+            stack.push((worst.1, b));
+        }
+    }
+    pts.iter()
+        .zip(keep)
+        .filter(|(_, k)| *k)
+        .map(|(p, _)| *p)
+        .collect()
+}
+
 /// Pen heights in Z steps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Pen {
@@ -133,8 +174,9 @@ impl Drawing {
             .unwrap();
         }
         for stroke in &self.strokes {
+            let stroke = simplify(stroke, SVG_TOLERANCE_MM);
             s.push_str(r##"<polyline fill="none" stroke="#1a3a8a" stroke-width="0.3" stroke-linejoin="round" stroke-linecap="round" points=""##);
-            for p in stroke {
+            for p in &stroke {
                 write!(s, "{:.4},{:.4} ", p[0], -p[1]).unwrap();
             }
             s.push_str("\"/>\n");
@@ -245,6 +287,38 @@ mod tests {
         assert_eq!(svg.matches("<polyline").count(), 2);
         assert_eq!(svg.matches("<line").count(), 1);
         assert!(svg.contains("6.0000,-5.0000"));
+    }
+
+    #[test]
+    fn simplification_keeps_corners_and_drops_stairs() {
+        // A staircase along a diagonal within 0.0125 of it, then a corner.
+        let mut pts = Vec::new();
+        for i in 0..10 {
+            let f = f64::from(i) * 0.0125;
+            pts.push([f, f]);
+            pts.push([f + 0.0125, f]);
+        }
+        pts.push([0.125, 0.125]);
+        pts.push([0.125, 1.0]);
+        let s = simplify(&pts, 0.01);
+        assert_eq!(s.first(), pts.first());
+        assert_eq!(s.last(), Some(&[0.125, 1.0]));
+        assert!(s.contains(&[0.125, 0.125]) || s.len() <= 4, "{s:?}");
+        assert!(s.len() < 6, "{s:?}");
+        for p in &pts {
+            // Every original point is within the tolerance of the simplified line.
+            let d = s
+                .windows(2)
+                .map(|w| seg(*p, w[0], w[1]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(d <= 0.01 + 1e-12, "{p:?} {d}");
+        }
+    }
+
+    fn seg(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+        (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
     }
 
     #[test]
