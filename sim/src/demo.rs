@@ -187,3 +187,36 @@ pub fn demo(out: &Path) -> Result<Session, String> {
     write_drawing(&s, out)?;
     Ok(s)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use inkstep_core::hmi::MachineState;
+    use inkstep_core::machine::MotionControl;
+
+    #[test]
+    fn abort_mid_drawing_stops_cleanly_where_the_pen_is() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = Session::new();
+        // Star of 30 mm, then C (abort) one second into the drawing.
+        s.play(
+            "wait:1800 6 30 enter wait:200 enter wait:1000 back wait:1500",
+            dir.path(),
+        )
+        .unwrap();
+        let st = s.board.ctl.status(&s.board.link);
+        assert_eq!(st.state, MachineState::Idle, "{st:?}");
+        assert!(s.board.link.is_idle());
+        assert!(s.board.is_idle());
+        // The position is the executor's count, the last step of the trace.
+        assert_eq!(st.pos, s.events.last().unwrap().pos);
+        // It stopped part-way: the star's 142 mm were not all drawn.
+        let steps: u32 = s.events.iter().map(|e| e.step.count_ones()).sum();
+        assert!(steps > 100 && steps < 5000, "{steps}");
+        // And the machine takes G-code afterwards, from where it is.
+        let bad = s.stream("G91 G1 X5 F1200\n", None).unwrap();
+        assert!(bad.is_empty(), "{bad:?}");
+        let end = s.board.link.side().exec.position();
+        assert_eq!(end[0], st.pos[0] + 400);
+    }
+}
