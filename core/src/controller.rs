@@ -83,6 +83,16 @@ impl Controller {
         o
     }
 
+    /// The settings changed (the caller saw `take_settings_dirty`): the HMI takes the
+    /// new steps/mm and pen heights, keeping the draw speed the user chose.
+    pub fn settings_changed(&mut self) {
+        let cfg = hmi::Config {
+            draw_feed_mm_min: self.hmi.draw_feed(),
+            ..hmi_config(self.protocol.machine().settings())
+        };
+        self.hmi.set_config(cfg);
+    }
+
     /// Records the direction of the latest step (the step engine's direction bits).
     pub fn note_direction(&mut self, dir: [i8; 2]) {
         self.dir = dir;

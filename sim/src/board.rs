@@ -184,6 +184,7 @@ impl Board {
         if self.ctl.protocol_mut().machine_mut().take_settings_dirty() {
             let s = self.ctl.protocol().machine().settings().clone();
             self.link.configure(&s);
+            self.ctl.settings_changed();
         }
         self.link.fill();
         if self.next_irq.is_none() {
