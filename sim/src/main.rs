@@ -6,7 +6,7 @@ use inkstep_core::settings::Settings;
 use inkstep_sim::board::{Board, TICK_HZ};
 use inkstep_sim::render::{Drawing, Pen};
 use inkstep_sim::sender::Flow;
-use inkstep_sim::trace::{ticks_to_us_string, Trace, TraceWriter};
+use inkstep_sim::trace::{Trace, TraceWriter};
 use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -210,13 +210,10 @@ fn cmd_run(
     let steps: [u32; 3] =
         [0, 1, 2].map(|a| r.events.iter().filter(|e| e.step & (1 << a) != 0).count() as u32);
     println!(
-        "{}: {} lines, job time {} s, steps X {} Y {} Z {}, final position {},{},{}",
+        "{}: {} lines, job time {:.4} s, steps X {} Y {} Z {}, final position {},{},{}",
         file.display(),
         r.lines,
-        ticks_to_us_string(
-            r.events.last().map_or(0, |e| r.rel(e.t)),
-            TICK_HZ * 1_000_000
-        ),
+        r.job_time_s(),
         steps[0],
         steps[1],
         steps[2],
