@@ -80,6 +80,18 @@ pub const LEGEND: [[&str; COLS]; ROWS] = [
 ];
 
 impl Key {
+    /// The legend printed on this key.
+    pub fn label(self) -> &'static str {
+        for (r, row) in KEYMAP.iter().enumerate() {
+            for (c, k) in row.iter().enumerate() {
+                if *k == self {
+                    return LEGEND.get(r).and_then(|l| l.get(c)).copied().unwrap_or("?");
+                }
+            }
+        }
+        "?"
+    }
+
     /// Whether holding this key auto-repeats. Digits never do (one press, one digit).
     pub fn repeats(self) -> bool {
         matches!(self, Key::Back | Key::Up | Key::Down)

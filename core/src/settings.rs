@@ -535,6 +535,16 @@ impl Settings {
     pub fn pen_down_angle(&self) -> f32 {
         self.v(203)
     }
+    /// RC-servo pulse width for the pen position, µs: 0..180 degrees maps linearly onto
+    /// 500..2500 µs, the range most hobby servos accept.
+    pub fn pen_servo_pulse_us(&self, down: bool) -> u32 {
+        let angle = if down {
+            self.pen_down_angle()
+        } else {
+            self.pen_up_angle()
+        };
+        500 + (angle.clamp(0.0, 180.0) * (2000.0 / 180.0)) as u32
+    }
     pub fn pen_lift_ms(&self) -> u32 {
         self.v(204) as u32
     }

@@ -104,6 +104,18 @@ pub enum Beep {
     Alarm,
 }
 
+impl Beep {
+    /// The buzzer pattern: alternating on and off times in ms, starting with on.
+    /// Distinct by ear: one short chirp, two quick beeps, three long ones.
+    pub fn pattern(self) -> &'static [u16] {
+        match self {
+            Beep::Done => &[150],
+            Beep::Error => &[80, 80, 80],
+            Beep::Alarm => &[300, 150, 300, 150, 300],
+        }
+    }
+}
+
 /// What the integrator must do, in the order given.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
