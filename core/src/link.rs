@@ -187,6 +187,10 @@ impl<S: StepSide> Link<S> {
             if !self.prep.is_idle(&self.planner) {
                 return;
             }
+            if matches!(self.pending.front(), Some(Command::Pen { .. })) && self.side.is_running() {
+                // The pen moves only once the steps before it have been made.
+                return;
+            }
             let Some(cmd) = self.pending.pop_front() else {
                 return;
             };

@@ -76,3 +76,34 @@ fn soft_reset_at_rest_keeps_the_position() {
     assert!(!t.contains("ALARM"), "{t}");
     assert!(status(&mut b).starts_with("<Idle|MPos:5.000,5.000,0.000"));
 }
+
+#[test]
+fn servo_pen_moves_after_the_steps_before_it_and_waits_its_lift_time() {
+    let mut b = Board::new(Settings::default());
+    let mut ev = Vec::new();
+    // $201=1: servo pen; $204: lift time 150 ms by default.
+    b.usb_write(b"$201=1\n");
+    assert!(b.run_to_idle(Board::ms_to_ticks(1_000), &mut |e| ev.push(e)));
+    b.usb_write(b"G21 G90\nM3\nG1 X10 F3000\nM5\nG1 X0\n");
+    let mut pen_up_at_pos = None;
+    let mut last_down = true;
+    for _ in 0..5_000 {
+        run_ms(&mut b, 1, &mut ev);
+        if last_down && !b.link.pen_down() && pen_up_at_pos.is_none() && !ev.is_empty() {
+            pen_up_at_pos = Some(b.link.side().exec.position());
+        }
+        last_down = b.link.pen_down();
+        if b.is_idle() && ev.last().map(|e| e.pos) == Some([0, 0, 0]) {
+            break;
+        }
+    }
+    let pos = pen_up_at_pos.expect("the pen was lifted");
+    assert_eq!(
+        pos,
+        [800, 0, 0],
+        "the pen lifts at the end of the line, not before"
+    );
+    let turn = ev.iter().position(|e| e.pos[0] == 800).unwrap();
+    let gap = (ev[turn + 1].t - ev[turn].t) as f64 / inkstep_sim::board::TICK_HZ as f64;
+    assert!((0.15..0.2).contains(&gap), "lift time {gap}");
+}
