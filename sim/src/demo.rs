@@ -9,7 +9,7 @@
 use crate::board::{Board, StepEvent, TICK_HZ};
 use crate::keys::{parse, Step, TAP_MS};
 use crate::lcd;
-use crate::render::{Drawing, Pen};
+use crate::render::Drawing;
 use crate::run::run_on_with;
 use crate::sender::Flow;
 use crate::trace::{Row, Trace};
@@ -140,9 +140,7 @@ impl Session {
 
     /// The drawing of everything the pen put on paper.
     pub fn drawing(&self) -> Drawing {
-        let s = self.board.ctl.protocol().machine().settings();
-        let spmm = [f64::from(s.steps_per_mm(0)), f64::from(s.steps_per_mm(1))];
-        Drawing::from_trace(&self.trace(), [0; 3], spmm, Pen::from_settings(s))
+        crate::run::drawing(&self.events, self.board.ctl.protocol().machine().settings())
     }
 }
 

@@ -4,7 +4,6 @@
 use clap::{Parser, Subcommand};
 use inkstep_core::settings::Settings;
 use inkstep_sim::board::{Board, TICK_HZ};
-use inkstep_sim::render::{Drawing, Pen};
 use inkstep_sim::sender::Flow;
 use inkstep_sim::trace::{Trace, TraceWriter};
 use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
@@ -196,11 +195,7 @@ fn cmd_run(
         }
         w.finish().map_err(|e| e.to_string())?;
     }
-    let spmm = [
-        f64::from(r.settings.steps_per_mm(0)),
-        f64::from(r.settings.steps_per_mm(1)),
-    ];
-    let drawing = Drawing::from_trace(&r.trace(), [0; 3], spmm, Pen::from_settings(&r.settings));
+    let drawing = r.drawing();
     if let Some(path) = png {
         drawing.write_png(path, 1000)?;
     }

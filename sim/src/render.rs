@@ -2,8 +2,9 @@
 //!
 //! Owns only the picture: which rows are pen-down strokes and how they are scaled. The
 //! pen is down while Z is nearer the pen-down than the pen-up height of the settings
-//! ($206 / $205); a program that never moves Z (a servo pen, or a path test such as the
-//! bench programs) counts as drawn throughout.
+//! ($206 / $205); a program that never moves Z (a path test such as the bench programs)
+//! counts as drawn throughout. With a servo pen the step events carry the pen's state
+//! ([`Drawing::from_moves`]).
 
 use crate::trace::Trace;
 use plotters::prelude::*;
@@ -75,23 +76,40 @@ impl Pen {
         }
     }
 
-    fn is_down(self, z: i32) -> bool {
+    pub fn is_down(self, z: i32) -> bool {
         (i64::from(z) - i64::from(self.down)).abs() < (i64::from(z) - i64::from(self.up)).abs()
     }
 }
 
 impl Drawing {
+    /// From a trace, with a Z-axis pen (see the module comment): a step draws when the
+    /// pen is down before and after it.
     pub fn from_trace(trace: &Trace, start: [i32; 3], steps_per_mm: [f64; 2], pen: Pen) -> Drawing {
-        let mm = |p: [i32; 3]| [p[0] as f64 / steps_per_mm[0], p[1] as f64 / steps_per_mm[1]];
         let z_moves = trace.rows.iter().any(|r| r.pos[2] != start[2]);
-        let down_at = |z: i32| !z_moves || pen.is_down(z);
+        let down = |z: i32| !z_moves || pen.is_down(z);
+        let mut prev_z = start[2];
+        let moves = trace.rows.iter().map(|r| {
+            let d = down(prev_z) && down(r.pos[2]);
+            prev_z = r.pos[2];
+            (r.pos, d)
+        });
+        Drawing::from_moves(start, moves, steps_per_mm)
+    }
+
+    /// From positions in steps, each with whether the step that reached it drew (for a
+    /// servo pen, its state as the step engine saw it).
+    pub fn from_moves(
+        start: [i32; 3],
+        moves: impl IntoIterator<Item = ([i32; 3], bool)>,
+        steps_per_mm: [f64; 2],
+    ) -> Drawing {
+        let mm = |p: [i32; 3]| [p[0] as f64 / steps_per_mm[0], p[1] as f64 / steps_per_mm[1]];
         let mut d = Drawing::default();
         let mut prev = start;
         let mut current: Vec<[f64; 2]> = Vec::new();
         let mut up_from: Option<[f64; 2]> = None;
-        for row in &trace.rows {
-            let down = down_at(prev[2]) && down_at(row.pos[2]);
-            let xy_moved = row.pos[0] != prev[0] || row.pos[1] != prev[1];
+        for (pos, down) in moves {
+            let xy_moved = pos[0] != prev[0] || pos[1] != prev[1];
             if down {
                 if let Some(from) = up_from.take() {
                     if from != mm(prev) {
@@ -102,7 +120,7 @@ impl Drawing {
                     current.push(mm(prev));
                 }
                 if xy_moved {
-                    current.push(mm(row.pos));
+                    current.push(mm(pos));
                 }
             } else {
                 if current.len() > 1 {
@@ -113,10 +131,15 @@ impl Drawing {
                     up_from = Some(mm(prev));
                 }
             }
-            prev = row.pos;
+            prev = pos;
         }
         if current.len() > 1 {
             d.strokes.push(current);
+        }
+        if let Some(from) = up_from {
+            if from != mm(prev) {
+                d.travel.push([from, mm(prev)]);
+            }
         }
         d
     }
