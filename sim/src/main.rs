@@ -10,6 +10,16 @@ use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// `println!` that ends the program quietly when stdout is closed (`| head`).
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if writeln!(std::io::stdout(), $($t)*).is_err() {
+            std::process::exit(0);
+        }
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "cargo sim",
@@ -204,7 +214,7 @@ fn cmd_run(
     }
     let steps: [u32; 3] =
         [0, 1, 2].map(|a| r.events.iter().filter(|e| e.step & (1 << a) != 0).count() as u32);
-    println!(
+    say!(
         "{}: {} lines, job time {:.4} s, steps X {} Y {} Z {}, final position {},{},{}",
         file.display(),
         r.lines,
@@ -217,7 +227,7 @@ fn cmd_run(
         r.final_pos[2]
     );
     for m in &r.messages {
-        println!("{m}");
+        say!("{m}");
     }
     for e in &r.errors {
         eprintln!("line {}: {} -> {}", e.line_no, e.text, e.response);
@@ -248,19 +258,19 @@ fn cmd_demo(out: &Path, keys: Option<&str>) -> Result<ExitCode, String> {
             s
         }
     };
-    println!(
+    say!(
         "inkstep demo: {} LCD screens, drawing.png and drawing.svg in {}",
         s.shots.len(),
         out.display()
     );
     for (what, a, b, steps) in &s.parts {
-        println!(
+        say!(
             "  {what:<24} job time {:>7.3} s, {steps} steps",
             (b - a) as f64 / TICK_HZ as f64
         );
     }
     let pos = s.board.link.side().exec.position();
-    println!(
+    say!(
         "  virtual time {:.1} s, final position {},{},{} steps; ran in {:.2} s",
         s.board.now() as f64 / TICK_HZ as f64,
         pos[0],
@@ -278,7 +288,7 @@ fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {
         .iter()
         .map(|b| (b.grbl.clone(), b.ours.clone()))
         .collect();
-    println!("{}", bench::markdown_table(&rows));
+    say!("{}", bench::markdown_table(&rows));
     let failed = runs
         .iter()
         .any(|b| !b.run.ok() || !bench::goal_failures(&b.ours, &b.grbl).is_empty());
@@ -296,7 +306,7 @@ fn plot_trace(path: &Path, out: &Path, spm: f64) -> Result<ExitCode, String> {
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
     plot::trace_plot(&k, &format!("{name}: speed and acceleration"), out)?;
-    println!("wrote {}", out.display());
+    say!("wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }
 
@@ -332,9 +342,9 @@ fn plot_profiles(out: &Path) -> Result<ExitCode, String> {
         &title,
         out,
     )?;
-    println!("wrote {}", out.display());
+    say!("wrote {}", out.display());
     for prof in &profs {
-        println!(
+        say!(
             "{:<20} ramp {:.3} ms, cruise {:.3} ms, total {:.3} ms",
             prof.ramp.name(),
             prof.t_ramp * 1e3,
