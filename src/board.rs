@@ -101,6 +101,18 @@ impl StepPort {
     }
 }
 
+/// The motion output pins, configured as push-pull outputs.
+pub struct StepPins {
+    pub pins: [ErasedPin<Output<PushPull>>; 8],
+    pub enable: gpio::PA9<Output<PushPull>>,
+}
+
+/// The step port and step timer from their pins and TIM2. Separate from [`init`] so
+/// that the interrupt-cost bench (bench/isr-cost) builds the very same parts.
+pub fn step_outputs(pins: StepPins, tim2: pac::TIM2) -> (StepPort, StepTimer) {
+    (StepPort { _pins: pins.pins, enable: pins.enable }, StepTimer::new(tim2))
+}
+
 /// Disable every motor driver and drop all step/coil outputs, from any context.
 ///
 /// Used by the panic handler and the e-stop: it touches only GPIOA's atomic set/reset
@@ -437,25 +449,23 @@ pub fn init(
     // JTAG off, SWD on: frees PA15, PB3, PB4.
     let (pa15, pb3, pb4) = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
 
-    // Drivers disabled first (ENABLE high = disabled for active-low drivers).
-    let enable = gpioa
-        .pa9
-        .into_push_pull_output_with_state(&mut gpioa.crh, gpio::PinState::High);
-    let step_port = StepPort {
-        _pins: [
-            gpioa.pa0.into_push_pull_output(&mut gpioa.crl).erase(),
-            gpioa.pa1.into_push_pull_output(&mut gpioa.crl).erase(),
-            gpioa.pa2.into_push_pull_output(&mut gpioa.crl).erase(),
-            gpioa.pa3.into_push_pull_output(&mut gpioa.crl).erase(),
-            gpioa.pa4.into_push_pull_output(&mut gpioa.crl).erase(),
-            gpioa.pa5.into_push_pull_output(&mut gpioa.crl).erase(),
-            gpioa.pa6.into_push_pull_output(&mut gpioa.crl).erase(),
-            gpioa.pa7.into_push_pull_output(&mut gpioa.crl).erase(),
-        ],
-        enable,
-    };
-
-    let step_timer = StepTimer::new(dp.TIM2);
+    let (step_port, step_timer) = step_outputs(
+        StepPins {
+            pins: [
+                gpioa.pa0.into_push_pull_output(&mut gpioa.crl).erase(),
+                gpioa.pa1.into_push_pull_output(&mut gpioa.crl).erase(),
+                gpioa.pa2.into_push_pull_output(&mut gpioa.crl).erase(),
+                gpioa.pa3.into_push_pull_output(&mut gpioa.crl).erase(),
+                gpioa.pa4.into_push_pull_output(&mut gpioa.crl).erase(),
+                gpioa.pa5.into_push_pull_output(&mut gpioa.crl).erase(),
+                gpioa.pa6.into_push_pull_output(&mut gpioa.crl).erase(),
+                gpioa.pa7.into_push_pull_output(&mut gpioa.crl).erase(),
+            ],
+            // Drivers disabled first (ENABLE high = disabled for active-low drivers).
+            enable: gpioa.pa9.into_push_pull_output_with_state(&mut gpioa.crh, gpio::PinState::High),
+        },
+        dp.TIM2,
+    );
 
     let servo_pin = gpioa.pa8.into_alternate_push_pull(&mut gpioa.crh);
     let mut pwm = dp

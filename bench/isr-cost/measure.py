@@ -8,7 +8,7 @@ a chosen function and the return to its caller are charged to that call. Emulati
 deterministic, so the counts are the same on every run and every machine.
 
 Usage: measure.py ELF [--json OUT]
-The ELF exports `bench_tick` (the step interrupt's work for one step event) and
+The ELF exports `bench_isr` (one whole TIM2 interrupt of the firmware) and
 `bench_prepare` (one call of the segment preparer), and a `BENCH_RESULT` record that
 its main fills in (steps executed per program).
 """
@@ -21,6 +21,7 @@ from capstone import Cs, CS_ARCH_ARM, CS_MODE_THUMB, CS_MODE_MCLASS
 FLASH, FLASH_SIZE = 0x0800_0000, 0x0010_0000
 RAM, RAM_SIZE = 0x2000_0000, 0x0010_0000
 PERIPH, PERIPH_SIZE = 0x4000_0000, 0x0010_0000      # GPIO/TIM registers: plain memory here
+BITBAND, BITBAND_SIZE = 0x4200_0000, 0x0200_0000    # peripheral bit-band alias (the HAL uses it)
 SCS, SCS_SIZE = 0xE000_0000, 0x0010_0000            # core peripherals: plain memory here
 
 
@@ -33,7 +34,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('elf')
     ap.add_argument('--json')
-    ap.add_argument('--names', default='bench_tick,bench_prepare')
+    ap.add_argument('--names', default='bench_isr,bench_prepare')
     args = ap.parse_args()
 
     with open(args.elf, 'rb') as f:
@@ -41,7 +42,7 @@ def main():
         syms = symbols(elf)
         uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
         uc.ctl_set_cpu_model(UC_CPU_ARM_CORTEX_M3)
-        for base, size in ((FLASH, FLASH_SIZE), (RAM, RAM_SIZE), (PERIPH, PERIPH_SIZE), (SCS, SCS_SIZE)):
+        for base, size in ((FLASH, FLASH_SIZE), (RAM, RAM_SIZE), (PERIPH, PERIPH_SIZE), (BITBAND, BITBAND_SIZE), (SCS, SCS_SIZE)):
             uc.mem_map(base, size)
         for seg in elf.iter_segments():
             if seg['p_type'] == 'PT_LOAD' and seg['p_filesz']:
@@ -98,6 +99,9 @@ def main():
         addr, size = syms['BENCH_RESULT']
         words = struct.unpack(f'<{size // 4}I', bytes(uc.mem_read(addr, size)))
         result['bench_result_words'] = list(words)
+    if 'BENCH_LOG' in syms:
+        addr, size = syms['BENCH_LOG']
+        result['protocol_log_tail'] = bytes(uc.mem_read(addr, size)).rstrip(b'\0').decode('ascii', 'replace')
     if args.json:
         with open(args.json, 'w') as f:
             json.dump(result, f, indent=1)

@@ -1,180 +1,170 @@
-//! Interrupt-cost harness: runs the four reference programs (bench/*.nc) through the
-//! real core code built for thumbv7m - planner, segment preparation, and the step
-//! interrupt's work exactly as the firmware's TIM2 handler does it (register accesses
-//! included, at the real TIM2/GPIOA addresses) - so `measure.py` can count the
-//! instructions of every call in an emulator.
+//! Interrupt-cost bench: runs the firmware's real step path on a Cortex-M3 (in the
+//! unicorn emulator, see measure.py) over the reference programs in bench/*.nc.
 //!
-//! Measured functions: `bench_tick` (the update interrupt: pulse, fetch the next event,
-//! program the period), `bench_pulse_end` (the compare interrupt: step pins low,
-//! directions for the next step) and `bench_prepare` (one run of the segment
-//! preparation). `BENCH_RESULT` = [steps, update interrupts, commands prepared, prepare
-//! calls, programs, final X of the last program, final Y, 0].
+//! The programs go through the core's protocol and G-code interpreter into the link
+//! (planner + segment preparation), whose step commands cross the same SPSC queue to
+//! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
+//! interrupt body with its register accesses. The emulator has no timer, so before each
+//! call the bench sets the status flag the hardware would (update, then compare one
+//! pulse later). measure.py charges every instruction executed inside `bench_isr` and
+//! `bench_prepare` to that call.
 #![no_std]
 #![no_main]
 
-use core::ptr::{addr_of_mut, read_volatile, write_volatile};
-use core::sync::atomic::{AtomicBool, Ordering};
 use defmt_rtt as _;
-use heapless::spsc::{Consumer, Producer, Queue};
-use inkstep_core::planner::{Planner, PlannerConfig};
-use inkstep_core::refprog::RefProgram;
-use inkstep_core::stepper::drive::STEP_QUEUE;
-use inkstep_core::stepper::exec::{Executor, IsrOut};
-use inkstep_core::stepper::prep::{Prep, PrepConfig};
+use heapless::spsc::Queue;
+use inkstep::board::{self, StepPins};
+use inkstep::steps::{self, BoardSide, StepOutput};
+use inkstep_core::controller::Controller;
+use inkstep_core::link::{Link, StepSide};
+use inkstep_core::settings::Settings;
+use inkstep_core::stepper::exec::Executor;
+use inkstep_core::stepper::prep::PrepConfig;
 use inkstep_core::stepper::StepCmd;
+use stm32f1xx_hal::{gpio::PinState, pac, prelude::*};
 
-/// The reference programs without their trailing `G4 P0` lines (build.rs strips them:
-/// they only keep a streaming sender busy, and flash is tight).
-const PROGRAMS: [&str; 4] = [
-    include_str!(concat!(env!("OUT_DIR"), "/star.nc")),
-    include_str!(concat!(env!("OUT_DIR"), "/circle.nc")),
-    include_str!(concat!(env!("OUT_DIR"), "/sine.nc")),
-    include_str!(concat!(env!("OUT_DIR"), "/spiral.nc")),
+const PROGRAMS: [&[u8]; 4] = [
+    include_bytes!("../../star.nc"),
+    include_bytes!("../../circle.nc"),
+    include_bytes!("../../sine.nc"),
+    include_bytes!("../../spiral.nc"),
 ];
 
+/// Per program: step events, interrupts, final X, final Y (read by measure.py).
+#[no_mangle]
+pub static mut BENCH_RESULT: [u32; 16] = [0; 16];
+
+/// The protocol's replies (last 1 KB), for measure.py to show when a program fails.
+#[no_mangle]
+pub static mut BENCH_LOG: [u8; 1024] = [0; 1024];
+static mut LOG_AT: usize = 0;
+
+fn log(bytes: &[u8]) {
+    // SAFETY: single-threaded bench.
+    unsafe {
+        let buf = &mut *core::ptr::addr_of_mut!(BENCH_LOG);
+        let at = &mut *core::ptr::addr_of_mut!(LOG_AT);
+        for &b in bytes {
+            if let Some(slot) = buf.get_mut(*at % 1024) {
+                *slot = b;
+            }
+            *at += 1;
+        }
+    }
+}
+
 const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
-const TIM2_ARR: *mut u32 = 0x4000_002C as *mut u32;
-const GPIOA_BSRR: *mut u32 = 0x4001_0810 as *mut u32;
-const STEP_ALL: u32 = 0b111;
-const DIR_SHIFT: u32 = 3;
+const UIF: u32 = 1;
+const CC1IF: u32 = 1 << 1;
 
-#[no_mangle]
-pub static mut BENCH_RESULT: [u32; 8] = [0; 8];
-static ESTOP: AtomicBool = AtomicBool::new(false);
-static mut STEPS: Queue<StepCmd, STEP_QUEUE> = Queue::new();
-
-/// The firmware's step-interrupt state (see src/main.rs).
-pub struct Isr {
-    exec: Executor,
-    rx: Consumer<'static, StepCmd>,
-    next: IsrOut,
-    dir_after: u8,
-}
-
-/// Update interrupt: the firmware's TIM2 update path. Returns 0 when the timer stops.
+/// One TIM2 interrupt, exactly as the firmware runs it.
 #[inline(never)]
 #[no_mangle]
-pub fn bench_tick(s: &mut Isr) -> u32 {
-    // SAFETY: plain register accesses at the real addresses (emulated memory here).
-    unsafe {
-        let sr = read_volatile(TIM2_SR);
-        write_volatile(TIM2_SR, !(sr & 0b11));
-    }
-    if ESTOP.load(Ordering::SeqCst) {
-        s.exec.halt();
-        return 0;
-    }
-    let now = s.next;
-    if now.step != 0 {
-        // SAFETY: as above.
-        unsafe { write_volatile(GPIOA_BSRR, u32::from(now.step)) };
-    }
-    s.dir_after = now.dir;
-    if now.reload == 0 {
-        return 0;
-    }
-    s.next = s.exec.on_interrupt(&mut s.rx);
-    if s.next.reload != 0 {
-        // SAFETY: as above.
-        unsafe { write_volatile(TIM2_ARR, s.next.reload.clamp(2, 0x1_0000) - 1) };
-    }
-    1
+pub extern "C" fn bench_isr(out: &mut StepOutput) {
+    out.on_interrupt();
 }
 
-/// Compare interrupt: end of the pulse, directions for the next step.
+/// One run of segment preparation, as the firmware's prepare task does it.
 #[inline(never)]
 #[no_mangle]
-pub fn bench_pulse_end(s: &mut Isr) {
-    let d = u32::from(s.dir_after & 0b111);
-    // SAFETY: as above.
-    unsafe {
-        let sr = read_volatile(TIM2_SR);
-        write_volatile(TIM2_SR, !(sr & 0b11));
-        write_volatile(
-            GPIOA_BSRR,
-            (d << DIR_SHIFT) | ((STEP_ALL | ((!d & 0b111) << DIR_SHIFT)) << 16),
-        );
-    }
+pub extern "C" fn bench_prepare(link: &mut Link<BoardSide>) {
+    link.fill();
 }
 
-/// One run of the segment preparation; returns the commands it queued.
-#[inline(never)]
-#[no_mangle]
-pub fn bench_prepare(
-    prep: &mut Prep,
-    planner: &mut Planner,
-    tx: &mut Producer<'static, StepCmd>,
-) -> u32 {
-    let before = tx.len();
-    prep.fill(planner, tx);
-    (tx.len() - before) as u32
+fn raise(flags: u32) {
+    // SAFETY: the emulator maps the timer registers as plain memory.
+    unsafe { core::ptr::write_volatile(TIM2_SR, flags) }
 }
 
 #[cortex_m_rt::entry]
 fn main() -> ! {
-    // SAFETY: the only reference to the queue, taken once.
-    let q = unsafe { &mut *addr_of_mut!(STEPS) };
-    let (mut tx, rx) = q.split();
-    let mut isr = Isr {
-        exec: Executor::new([0; 3], 0x1_0000),
-        rx,
-        next: IsrOut::default(),
-        dir_after: 0,
+    // SAFETY: nothing else owns the peripherals in this bench.
+    let dp = unsafe { pac::Peripherals::steal() };
+    let mut rcc = dp.RCC.constrain();
+    let mut gpioa = dp.GPIOA.split(&mut rcc);
+    let pins = StepPins {
+        pins: [
+            gpioa.pa0.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa1.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa2.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa3.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa4.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa5.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa6.into_push_pull_output(&mut gpioa.crl).erase(),
+            gpioa.pa7.into_push_pull_output(&mut gpioa.crl).erase(),
+        ],
+        enable: gpioa.pa9.into_push_pull_output_with_state(&mut gpioa.crh, PinState::High),
     };
-    let mut r = [0u32; 8];
-    for text in PROGRAMS {
-        let prog = RefProgram::new(text, PlannerConfig::default());
-        let mut planner = Planner::new(prog.config(), [0; 3]);
-        let mut prep = Prep::new(
-            PrepConfig {
-                timer_hz: 2_000_000,
-                ..PrepConfig::default()
-            },
-            [0; 3],
-        );
-        isr.exec = Executor::new([0; 3], 0x1_0000);
-        let mut moves = prog.peekable();
-        let mut running = false;
+    let (port, mut timer) = board::step_outputs(pins, dp.TIM2);
+    timer.set_pulse_ticks(10 * 72);
+    let mut out = StepOutput::new(port, timer);
+
+    static mut QUEUES: [Queue<StepCmd, 256>; 4] = [const { Queue::new() }; 4];
+    let settings = Settings::default();
+    let prep = PrepConfig { timer_hz: board::STEP_TIMER_HZ, ..PrepConfig::default() };
+
+    for (p, prog) in PROGRAMS.iter().enumerate() {
+        // Each program runs on a freshly booted machine, as in the simulator's runs.
+        // SAFETY: each queue is split once, before anything else uses it.
+        let queue = unsafe { &mut (*core::ptr::addr_of_mut!(QUEUES))[p] };
+        let (tx, rx) = queue.split();
+        steps::install(Executor::new([0; 3], 0x1_0000), rx);
+        let mut link = Link::new(&settings, prep, BoardSide { tx });
+        let mut ctl = Controller::new(settings.clone(), 0);
+        let (mut sent, mut ticks, mut events, mut irqs) = (0usize, 0u64, 0u32, 0u32);
+        let mut sink = [0u8; 128];
         loop {
-            while !planner.is_full() {
-                match moves.next() {
-                    Some(m) => {
-                        let _ = planner.push(&m);
-                    }
-                    None => break,
+            let now = (ticks / 72_000) as u32;
+            if sent < prog.len() {
+                sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut link, now);
+            }
+            loop {
+                let n = ctl.usb_tx(&mut sink);
+                if n == 0 {
+                    break;
+                }
+                log(sink.get(..n).unwrap_or(&[]));
+            }
+            ctl.poll(&mut link, now);
+            if ctl.protocol_mut().machine_mut().take_settings_dirty() {
+                let s = ctl.protocol().machine().settings().clone();
+                link.configure(&s);
+            }
+            bench_prepare(&mut link);
+            // Start the timer as the firmware's kick does (a pend with no flags).
+            raise(0);
+            bench_isr(&mut out);
+            // Run interrupts until the prepared commands are used up.
+            while out.timer.is_running() {
+                let before = steps::position();
+                raise(UIF);
+                bench_isr(&mut out);
+                raise(CC1IF);
+                bench_isr(&mut out);
+                irqs += 2;
+                if steps::position() != before {
+                    events += 1;
+                }
+                ticks += 2000;
+                if link.side().queued() < 32 {
+                    break;
                 }
             }
-            if tx.len() < STEP_QUEUE / 2 {
-                r[2] += bench_prepare(&mut prep, &mut planner, &mut tx);
-                r[3] += 1;
+            let done = sent >= prog.len() && !out.timer.is_running() && link.side().queued() == 0;
+            if done && inkstep_core::machine::MotionControl::is_idle(&link) {
+                break;
             }
-            if !running {
-                match isr.exec.start(&mut isr.rx) {
-                    Some(first) => {
-                        isr.dir_after = first.dir;
-                        isr.next = isr.exec.on_interrupt(&mut isr.rx);
-                        running = true;
-                    }
-                    None if prep.is_idle(&planner) && moves.peek().is_none() => break,
-                    None => continue,
-                }
-            }
-            if isr.next.step != 0 {
-                r[0] += 1;
-            }
-            r[1] += 1;
-            if bench_tick(&mut isr) == 0 {
-                running = false;
-            }
-            bench_pulse_end(&mut isr);
         }
-        r[4] += 1;
-        let p = isr.exec.position();
-        r[5] = p[0] as u32;
-        r[6] = p[1] as u32;
+        let pos = steps::position();
+        // SAFETY: single-threaded bench; measure.py reads this after the run.
+        unsafe {
+            let r = &mut *core::ptr::addr_of_mut!(BENCH_RESULT);
+            r[4 * p] = events;
+            r[4 * p + 1] = irqs;
+            r[4 * p + 2] = pos[0] as u32;
+            r[4 * p + 3] = pos[1] as u32;
+        }
     }
-    // SAFETY: single-threaded; the emulator reads the record after the breakpoint.
-    unsafe { *addr_of_mut!(BENCH_RESULT) = r };
     loop {
         cortex_m::asm::bkpt();
     }
