@@ -37,8 +37,6 @@ pub struct Controller {
     keypad: Keypad,
     hmi: Hmi,
     outputs: Outputs,
-    /// A keypad abort waits for the hold to come to rest, then resets.
-    abort_pending: bool,
     /// Latest step direction on X and Y (-1, 0, +1), for the teaching view.
     dir: [i8; 2],
 }
@@ -61,7 +59,6 @@ impl Controller {
             keypad: Keypad::new(KeypadConfig::default()),
             hmi: Hmi::new(cfg, now_ms),
             outputs: Outputs::default(),
-            abort_pending: false,
             dir: [0, 0],
         }
     }
@@ -84,6 +81,16 @@ impl Controller {
         let o = self.outputs;
         self.outputs.beep = None;
         o
+    }
+
+    /// The settings changed (the caller saw `take_settings_dirty`): the HMI takes the
+    /// new steps/mm and pen heights, keeping the draw speed the user chose.
+    pub fn settings_changed(&mut self) {
+        let cfg = hmi::Config {
+            draw_feed_mm_min: self.hmi.draw_feed(),
+            ..hmi_config(self.protocol.machine().settings())
+        };
+        self.hmi.set_config(cfg);
     }
 
     /// Records the direction of the latest step (the step engine's direction bits).
@@ -128,7 +135,7 @@ impl Controller {
         for ev in events {
             let st = self.status(m);
             let actions = self.hmi.key(ev, &st, now_ms);
-            self.apply(&actions, m);
+            self.apply(&actions, m, now_ms);
         }
     }
 
@@ -136,30 +143,25 @@ impl Controller {
     /// completion of a keypad abort, the busy LED.
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         self.protocol.poll(m, now_ms);
-        if self.abort_pending && !m.is_moving() {
-            // At rest in a hold: a soft reset drops the queue and keeps the position.
-            self.abort_pending = false;
-            self.protocol.machine_mut().soft_reset(m);
-        }
         let st = self.status(m);
         let actions = self.hmi.tick(&st, now_ms);
-        self.apply(&actions, m);
+        self.apply(&actions, m, now_ms);
     }
 
-    fn apply<M: MotionControl>(&mut self, actions: &[Action], m: &mut M) {
+    fn apply<M: MotionControl>(&mut self, actions: &[Action], m: &mut M, now_ms: u32) {
         for a in actions {
-            self.apply_one(a, m);
+            self.apply_one(a, m, now_ms);
         }
     }
 
-    fn apply_one<M: MotionControl>(&mut self, a: &Action, m: &mut M) {
+    fn apply_one<M: MotionControl>(&mut self, a: &Action, m: &mut M, now_ms: u32) {
         let machine = self.protocol.machine_mut();
         match *a {
             Action::Queue(mv) => {
-                // The HMI only starts a job when idle with an empty queue, and a job
-                // fits the planner queue; a refusal here would be a planner bug, so
-                // it becomes an error beep rather than a silently dropped move.
-                if m.push(Command::Move(mv)).is_err() {
+                // Through the machine state: the same locks and soft limits as G-code,
+                // and the interpreter continues from the move's end. The HMI only
+                // starts a job that fits the queue; a refusal is shown as an error beep.
+                if machine.queue(Command::Move(mv), m, now_ms).is_err() {
                     self.outputs.beep = Some(Beep::Error);
                 }
             }
@@ -180,10 +182,7 @@ impl Controller {
             Action::JogStop => machine.jog_cancel(m),
             Action::FeedHold => machine.feed_hold(m),
             Action::Resume => machine.cycle_start(m),
-            Action::Abort => {
-                machine.feed_hold(m);
-                self.abort_pending = true;
-            }
+            Action::Abort => machine.stop_and_clear(m),
             Action::Home => {
                 if machine.start_homing(m).is_err() {
                     self.outputs.beep = Some(Beep::Error);

@@ -27,6 +27,7 @@ pub mod machine;
 pub mod motion;
 pub mod planner;
 pub mod protocol;
+pub mod refprog;
 pub mod screens;
 pub mod settings;
 pub mod settings_store;

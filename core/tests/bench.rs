@@ -5,15 +5,15 @@
 //!
 //! Run: cargo test -p inkstep-core --target host-tuple --profile host --test bench -- --nocapture
 //!
-//! The G-code reader here understands only what the four programs use ($ settings,
-//! G0-G3 with X Y I J F, G4, modal words); the product's interpreter is the protocol
-//! issue's. Lines carry their exact end points (1/256 step, `Path::LineFine`), so
-//! steps follow the programmed path rather than the path between rounded ends.
+//! The programs are read by `inkstep_core::refprog` (only what they use); lines carry
+//! their exact end points (1/256 step, `Path::LineFine`), so steps follow the
+//! programmed path rather than the path between rounded ends.
 
 use inkstep_core::analysis::{Analyzer, Ideal, TraceStats};
 use inkstep_core::interp::Method;
-use inkstep_core::motion::{Feed, Move, Path, StepPos};
+use inkstep_core::motion::{Move, StepPos};
 use inkstep_core::planner::PlannerConfig;
+use inkstep_core::refprog::RefProgram;
 use inkstep_core::stepper::drive::VirtualMachine;
 use inkstep_core::stepper::prep::PrepConfig;
 use std::fs;
@@ -24,105 +24,8 @@ fn bench_dir() -> std::path::PathBuf {
 
 /// Settings and moves of a program.
 fn read_program(text: &str) -> (PlannerConfig, Vec<Move>) {
-    let mut cfg = PlannerConfig::default();
-    let mut moves = Vec::new();
-    let mut pos = [0.0f64; 3];
-    let mut feed = 0.0f32;
-    let mut motion = 0u32;
-    // Settings come first, so steps/mm are known before any move.
-    for line in text.lines() {
-        let line = line.trim();
-        if let Some(rest) = line.strip_prefix('$') {
-            let (k, v) = rest.split_once('=').expect("setting");
-            let v: f32 = v.parse().expect("value");
-            match k {
-                "100" | "101" | "102" => {
-                    cfg.axes[k.as_bytes()[2] as usize - b'0' as usize].steps_per_mm = v
-                }
-                "110" | "111" | "112" => {
-                    cfg.axes[k.as_bytes()[2] as usize - b'0' as usize].max_rate = v
-                }
-                "120" | "121" | "122" => {
-                    cfg.axes[k.as_bytes()[2] as usize - b'0' as usize].accel = v
-                }
-                "11" => cfg.junction_deviation = v,
-                _ => {}
-            }
-            continue;
-        }
-        let mut words = Vec::new();
-        let bytes: Vec<char> = line.chars().filter(|c| !c.is_whitespace()).collect();
-        let mut i = 0;
-        while i < bytes.len() {
-            let letter = bytes[i].to_ascii_uppercase();
-            let mut j = i + 1;
-            while j < bytes.len()
-                && (bytes[j].is_ascii_digit() || bytes[j] == '.' || bytes[j] == '-')
-            {
-                j += 1;
-            }
-            let num: f64 = bytes[i + 1..j]
-                .iter()
-                .collect::<String>()
-                .parse()
-                .expect("number");
-            words.push((letter, num));
-            i = j;
-        }
-        let mut target = pos;
-        let mut ij = [0.0f64; 2];
-        let mut has_axis = false;
-        for &(l, n) in &words {
-            match l {
-                'G' if n <= 3.0 => motion = n as u32,
-                'G' if n == 4.0 => motion = 4,
-                'X' => (target[0], has_axis) = (n, true),
-                'Y' => (target[1], has_axis) = (n, true),
-                'Z' => (target[2], has_axis) = (n, true),
-                'I' => ij[0] = n,
-                'J' => ij[1] = n,
-                'F' => feed = n as f32,
-                _ => {}
-            }
-        }
-        if !has_axis || motion == 4 {
-            continue;
-        }
-        let q8 = |mm: f64, axis: usize| {
-            (mm * f64::from(cfg.axes[axis].steps_per_mm) * 256.0).round() as i32
-        };
-        let steps = |mm: f64, axis: usize| (f64::from(q8(mm, axis)) / 256.0).round() as i32;
-        let t: StepPos = [
-            steps(target[0], 0),
-            steps(target[1], 1),
-            steps(target[2], 2),
-        ];
-        let path = match motion {
-            2 | 3 => Path::Arc {
-                center: [steps(ij[0], 0), steps(ij[1], 1)],
-                ccw: motion == 3,
-                turns: 0,
-            },
-            _ if target[2] == pos[2] => Path::LineFine {
-                from: [q8(pos[0], 0), q8(pos[1], 1)],
-                to: [q8(target[0], 0), q8(target[1], 1)],
-            },
-            _ => Path::Line,
-        };
-        let feed = if motion == 0 {
-            Feed::Rapid
-        } else {
-            Feed::MmPerMin(feed)
-        };
-        moves.push(Move {
-            target: t,
-            path,
-            feed,
-            line: moves.len() as u32 + 1,
-        });
-        pos = target;
-    }
-    (cfg, moves)
+    let p = RefProgram::new(text, PlannerConfig::default());
+    (p.config(), p.collect())
 }
 
 /// Grbl's row for a program from bench/GRBL.md: (job time, max deviation).

@@ -94,3 +94,16 @@ fn keypad_jog_moves_while_held_and_stops_on_release() {
     scan(&mut c, &mut m, &[], t0 + 300, t0 + 400);
     assert!(m.holding || m.clears > 0, "jog not stopped");
 }
+
+#[test]
+fn settings_changes_reach_the_hmi() {
+    let mut m = FakePlanner::new(16);
+    let mut c = Controller::new(Settings::default(), 0);
+    let line = b"$100=40\n";
+    assert_eq!(c.usb_rx(line, &mut m, 0), line.len());
+    c.poll(&mut m, 1);
+    assert!(text(&mut c).ends_with("ok\r\n"));
+    assert!(c.protocol_mut().machine_mut().take_settings_dirty());
+    c.settings_changed();
+    assert_eq!(c.hmi().config().steps_per_mm[X], 40.0);
+}

@@ -1,13 +1,14 @@
 //! Bench analysis: measures a step trace against the ideal path of a reference program.
 //!
 //! Owns the ideal-path JSON format of `shared/bench/*.json`, the figures we compare with
-//! Grbl (job time, max/rms deviation, steps per axis, final position) and the reading of
-//! Grbl's own figures from `shared/bench/README.md`, so that no expected number is
-//! written into the code.
+//! Grbl (job time, max/rms deviation, steps per axis, final position; measured with the
+//! core's `analysis`) and the reading of Grbl's own figures from the bench README, so
+//! that no expected number is written into the code.
 
 use crate::run::{run_gcode, RunResult};
 use crate::sender::Flow;
 use crate::trace::Trace;
+use inkstep_core::analysis::{self, Analyzer};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -25,31 +26,13 @@ impl Ideal {
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
     }
 
-    /// Distance of the point `p` (mm) from the path, in mm.
-    pub fn distance_mm(&self, p: [f64; 2]) -> f64 {
+    /// The core's view of the path, for its [`Analyzer`].
+    pub fn as_core(&self) -> analysis::Ideal<'_> {
         match self {
-            Ideal::Circle { c, r } => ((p[0] - c[0]).hypot(p[1] - c[1]) - r).abs(),
-            Ideal::Poly { pts } => {
-                if pts.len() == 1 {
-                    return (p[0] - pts[0][0]).hypot(p[1] - pts[0][1]);
-                }
-                pts.windows(2)
-                    .map(|w| segment_distance(p, w[0], w[1]))
-                    .fold(f64::INFINITY, f64::min)
-            }
+            Ideal::Poly { pts } => analysis::Ideal::Poly(pts),
+            Ideal::Circle { c, r } => analysis::Ideal::Circle { c: *c, r: *r },
         }
     }
-}
-
-fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
-    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
-    let len2 = dx * dx + dy * dy;
-    let t = if len2 == 0.0 {
-        0.0
-    } else {
-        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
-    };
-    (p[0] - (a[0] + t * dx)).hypot(p[1] - (a[1] + t * dy))
 }
 
 /// What we measure of one run.
@@ -64,33 +47,27 @@ pub struct Figures {
     pub final_pos: [i32; 3],
 }
 
-/// Measures `trace` against `ideal`, with `steps_per_mm` on X and Y. The start position
-/// (before the first row) is taken as the origin, as in the reference programs.
+/// Measures `trace` against `ideal`, with `steps_per_mm` on X and Y, through the core's
+/// [`Analyzer`] (deviation, steps, end position). The start position (before the first
+/// row) is the origin, as in the reference programs; the job time is the last row's
+/// time, which counts from the first motion (Grbl: "stepper start to the last step").
 pub fn analyse(trace: &Trace, ideal: &Ideal, steps_per_mm: f64) -> Figures {
+    let mut a = Analyzer::new(ideal.as_core(), [steps_per_mm; 2], [0; 3]);
     let mut prev = [0i32; 3];
-    let mut steps = [0u64; 3];
-    let mut max_dev: f64 = 0.0;
-    let mut sum2 = 0.0;
     for row in &trace.rows {
-        for a in 0..3 {
-            steps[a] += (row.pos[a] - prev[a]).unsigned_abs() as u64;
-        }
+        let mask = (0..3)
+            .filter(|&i| row.pos[i] != prev[i])
+            .fold(0u8, |m, i| m | 1 << i);
+        a.step(row.t_us / 1e6, mask, row.pos);
         prev = row.pos;
-        let p = [
-            row.pos[0] as f64 / steps_per_mm,
-            row.pos[1] as f64 / steps_per_mm,
-        ];
-        let d = ideal.distance_mm(p) * steps_per_mm;
-        max_dev = max_dev.max(d);
-        sum2 += d * d;
     }
-    let n = trace.rows.len().max(1) as f64;
+    let s = a.finish();
     Figures {
         job_time_s: trace.rows.last().map_or(0.0, |r| r.t_us / 1e6),
-        max_dev,
-        rms_dev: (sum2 / n).sqrt(),
-        steps,
-        final_pos: prev,
+        max_dev: s.max_dev,
+        rms_dev: s.rms_dev,
+        steps: s.steps,
+        final_pos: s.end,
     }
 }
 
@@ -236,7 +213,7 @@ pub fn run_program(bench_dir: &Path, grbl: &GrblRow) -> Result<BenchRun, String>
 
 /// Runs every program of the bench README.
 pub fn run_all(bench_dir: &Path) -> Result<Vec<BenchRun>, String> {
-    let readme = bench_dir.join("README.md");
+    let readme = crate::paths::grbl_figures(bench_dir);
     let text =
         std::fs::read_to_string(&readme).map_err(|e| format!("{}: {e}", readme.display()))?;
     let rows = read_grbl_table(&text);
@@ -282,23 +259,6 @@ mod tests {
     }
 
     #[test]
-    fn distances() {
-        let c = Ideal::Circle {
-            c: [20.0, 0.0],
-            r: 20.0,
-        };
-        assert!((c.distance_mm([0.0, 0.0])).abs() < 1e-12);
-        assert!((c.distance_mm([20.0, 0.0]) - 20.0).abs() < 1e-12);
-        let p = Ideal::Poly {
-            pts: vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]],
-        };
-        assert!((p.distance_mm([5.0, 1.0]) - 1.0).abs() < 1e-12);
-        assert!((p.distance_mm([11.0, 5.0]) - 1.0).abs() < 1e-12);
-        // Beyond the end of a segment the end point is nearest.
-        assert!((p.distance_mm([-3.0, 4.0]) - 5.0).abs() < 1e-12);
-    }
-
-    #[test]
     fn staircase_on_a_diagonal() {
         // Line (0,0)->(2,2) mm at 1 step/mm, drawn one axis at a time: the off-diagonal
         // corners are 1/sqrt(2) step away.
@@ -324,9 +284,11 @@ mod tests {
         let ideal = Ideal::Poly {
             pts: vec![[0.0, 0.0], [1.0, 0.0]],
         };
-        let t = trace(&[(1.0, [1, 0, 0]), (2.0, [0, 0, -3]), (3.0, [1, 0, 0])]);
+        // Out, back with the pen going down, out again: one step per axis per row.
+        let t = trace(&[(1.0, [1, 0, 0]), (2.0, [0, 0, -1]), (3.0, [1, 0, 0])]);
         let f = analyse(&t, &ideal, 1.0);
-        assert_eq!(f.steps, [3, 0, 6]);
+        assert_eq!(f.steps, [3, 0, 2]);
+        assert_eq!(f.final_pos, [1, 0, 0]);
     }
 
     const README: &str = "\
@@ -366,9 +328,8 @@ mod tests {
 
     #[test]
     fn reads_the_shared_bench_readme() {
-        let path = crate::paths::shared_dir().join("bench/README.md");
-        let text =
-            std::fs::read_to_string(&path).expect("shared/bench/README.md beside the repository");
+        let path = crate::paths::grbl_figures(&crate::paths::bench_dir());
+        let text = std::fs::read_to_string(&path).expect("Grbl's figures of the bench");
         let rows = read_grbl_table(&text);
         let names: Vec<&str> = rows.iter().map(|r| r.program.as_str()).collect();
         assert_eq!(names, ["star.nc", "circle.nc", "sine.nc", "spiral.nc"]);

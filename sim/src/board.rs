@@ -66,12 +66,14 @@ impl StepSide for SimSide {
     }
 }
 
-/// One step event: virtual time in timer ticks, axes stepped, position after it.
+/// One step event: virtual time in timer ticks, axes stepped, position after it, and
+/// whether the servo pen was down (always false with a Z-axis pen).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StepEvent {
     pub t: u64,
     pub step: u8,
     pub pos: StepPos,
+    pub servo_down: bool,
 }
 
 pub struct Board {
@@ -184,6 +186,7 @@ impl Board {
         if self.ctl.protocol_mut().machine_mut().take_settings_dirty() {
             let s = self.ctl.protocol().machine().settings().clone();
             self.link.configure(&s);
+            self.ctl.settings_changed();
         }
         self.link.fill();
         if self.next_irq.is_none() {
@@ -235,10 +238,12 @@ impl Board {
                 let o = side.exec.on_interrupt(&mut side.queue);
                 if o.step != 0 {
                     let pos = side.exec.position();
+                    let servo_down = self.link.pen_down();
                     on_step(StepEvent {
                         t,
                         step: o.step,
                         pos,
+                        servo_down,
                     });
                     for (a, d) in self.dir.iter_mut().enumerate() {
                         if o.step & (1 << a) != 0 {

@@ -9,7 +9,7 @@
 use crate::board::{Board, StepEvent, TICK_HZ};
 use crate::keys::{parse, Step, TAP_MS};
 use crate::lcd;
-use crate::render::{Drawing, Pen};
+use crate::render::Drawing;
 use crate::run::run_on_with;
 use crate::sender::Flow;
 use crate::trace::{Row, Trace};
@@ -140,9 +140,7 @@ impl Session {
 
     /// The drawing of everything the pen put on paper.
     pub fn drawing(&self) -> Drawing {
-        let s = self.board.ctl.protocol().machine().settings();
-        let spmm = [f64::from(s.steps_per_mm(0)), f64::from(s.steps_per_mm(1))];
-        Drawing::from_trace(&self.trace(), [0; 3], spmm, Pen::from_settings(s))
+        crate::run::drawing(&self.events, self.board.ctl.protocol().machine().settings())
     }
 }
 
@@ -153,7 +151,7 @@ impl Default for Session {
 }
 
 /// Refreshes the LCD and writes it to `path`.
-fn snapshot(board: &mut Board, path: &Path) -> Result<PathBuf, String> {
+pub fn snapshot(board: &mut Board, path: &Path) -> Result<PathBuf, String> {
     board.refresh_lcd();
     let fb = &board.lcd.as_ref().ok_or("the session has no LCD")?.fb;
     lcd::save_png(|x, y| fb.pixel(x, y), path)?;
@@ -186,4 +184,37 @@ pub fn demo(out: &Path) -> Result<Session, String> {
     s.play("wait:300 lcd:13_after_gcode", out)?;
     write_drawing(&s, out)?;
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use inkstep_core::hmi::MachineState;
+    use inkstep_core::machine::MotionControl;
+
+    #[test]
+    fn abort_mid_drawing_stops_cleanly_where_the_pen_is() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut s = Session::new();
+        // Star of 30 mm, then C (abort) one second into the drawing.
+        s.play(
+            "wait:1800 6 30 enter wait:200 enter wait:1000 back wait:1500",
+            dir.path(),
+        )
+        .unwrap();
+        let st = s.board.ctl.status(&s.board.link);
+        assert_eq!(st.state, MachineState::Idle, "{st:?}");
+        assert!(s.board.link.is_idle());
+        assert!(s.board.is_idle());
+        // The position is the executor's count, the last step of the trace.
+        assert_eq!(st.pos, s.events.last().unwrap().pos);
+        // It stopped part-way: the star's 142 mm were not all drawn.
+        let steps: u32 = s.events.iter().map(|e| e.step.count_ones()).sum();
+        assert!(steps > 100 && steps < 5000, "{steps}");
+        // And the machine takes G-code afterwards, from where it is.
+        let bad = s.stream("G91 G1 X5 F1200\n", None).unwrap();
+        assert!(bad.is_empty(), "{bad:?}");
+        let end = s.board.link.side().exec.position();
+        assert_eq!(end[0], st.pos[0] + 400);
+    }
 }

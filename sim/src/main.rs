@@ -2,13 +2,23 @@
 //! library; every command's work lives in a module of its own.
 
 use clap::{Parser, Subcommand};
-use inkstep_sim::board::TICK_HZ;
-use inkstep_sim::render::{Drawing, Pen};
+use inkstep_core::settings::Settings;
+use inkstep_sim::board::{Board, TICK_HZ};
 use inkstep_sim::sender::Flow;
-use inkstep_sim::trace::{ticks_to_us_string, Trace, TraceWriter};
+use inkstep_sim::trace::{Trace, TraceWriter};
 use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+/// `println!` that ends the program quietly when stdout is closed (`| head`).
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if writeln!(std::io::stdout(), $($t)*).is_err() {
+            std::process::exit(0);
+        }
+    }};
+}
 
 #[derive(Parser)]
 #[command(
@@ -34,13 +44,20 @@ enum Cmd {
         /// Write the drawing as SVG.
         #[arg(long)]
         svg: Option<PathBuf>,
+        /// Write the LCD as PNGs into this folder while the file runs.
+        #[arg(long)]
+        lcd: Option<PathBuf>,
+        /// With --lcd: one screen every this many milliseconds of virtual time.
+        #[arg(long, default_value_t = 1000)]
+        lcd_every: u64,
         /// Use character counting (128-byte buffer) instead of send-response.
         #[arg(long)]
         char_count: bool,
     },
     /// Run the reference programs of shared/bench and compare with Grbl's figures.
     Bench {
-        /// Folder of the reference programs (default: ../shared/bench beside the repository).
+        /// Folder of the reference programs (default: ../shared/bench beside the
+        /// repository, else the repository's bench/).
         #[arg(long)]
         dir: Option<PathBuf>,
     },
@@ -87,14 +104,18 @@ fn main() -> ExitCode {
             trace,
             png,
             svg,
+            lcd,
+            lcd_every,
             char_count,
-        } => cmd_run(
-            &file,
-            trace.as_deref(),
-            png.as_deref(),
-            svg.as_deref(),
-            char_count,
-        ),
+        } => {
+            let outs = RunOutputs {
+                trace: trace.as_deref(),
+                png: png.as_deref(),
+                svg: svg.as_deref(),
+                lcd: lcd.as_deref(),
+            };
+            cmd_run(&file, outs, lcd_every.max(1), char_count)
+        }
         Cmd::Bench { dir } => cmd_bench(dir),
         Cmd::Demo { out, keys } => cmd_demo(&out, keys.as_deref()),
         Cmd::Serve { link, speed } => {
@@ -124,20 +145,57 @@ fn fail(msg: &str) -> ExitCode {
     ExitCode::from(2)
 }
 
+struct RunOutputs<'a> {
+    trace: Option<&'a Path>,
+    png: Option<&'a Path>,
+    svg: Option<&'a Path>,
+    lcd: Option<&'a Path>,
+}
+
 fn cmd_run(
     file: &Path,
-    trace: Option<&Path>,
-    png: Option<&Path>,
-    svg: Option<&Path>,
+    outs: RunOutputs,
+    lcd_every: u64,
     char_count: bool,
 ) -> Result<ExitCode, String> {
+    let RunOutputs {
+        trace,
+        png,
+        svg,
+        lcd,
+    } = outs;
     let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
     let flow = if char_count {
         Flow::CharCount(inkstep_core::protocol::RX_BUFFER_SIZE)
     } else {
         Flow::SendResponse
     };
-    let r = run::run_gcode(&text, flow);
+    let r = match lcd {
+        None => run::run_gcode(&text, flow),
+        Some(dir) => {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            let mut board = Board::new(Settings::default()).with_lcd();
+            let every = Board::ms_to_ticks(lcd_every);
+            let mut next = 0u64;
+            let mut n = 0u32;
+            let mut failed: Option<String> = None;
+            let mut shoot = |b: &mut Board, force: bool| {
+                if (force || b.now() >= next) && failed.is_none() {
+                    n += 1;
+                    if let Err(e) = demo::snapshot(b, &dir.join(format!("lcd_{n:04}.png"))) {
+                        failed = Some(e);
+                    }
+                    next = b.now() + every;
+                }
+            };
+            let r = run::run_on_with(&mut board, &text, flow, &mut |b| shoot(b, false));
+            shoot(&mut board, true);
+            if let Some(e) = failed {
+                return Err(e);
+            }
+            r
+        }
+    };
     if let Some(path) = trace {
         let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let mut w =
@@ -147,11 +205,7 @@ fn cmd_run(
         }
         w.finish().map_err(|e| e.to_string())?;
     }
-    let spmm = [
-        f64::from(r.settings.steps_per_mm(0)),
-        f64::from(r.settings.steps_per_mm(1)),
-    ];
-    let drawing = Drawing::from_trace(&r.trace(), [0; 3], spmm, Pen::from_settings(&r.settings));
+    let drawing = r.drawing();
     if let Some(path) = png {
         drawing.write_png(path, 1000)?;
     }
@@ -160,14 +214,11 @@ fn cmd_run(
     }
     let steps: [u32; 3] =
         [0, 1, 2].map(|a| r.events.iter().filter(|e| e.step & (1 << a) != 0).count() as u32);
-    println!(
-        "{}: {} lines, job time {} s, steps X {} Y {} Z {}, final position {},{},{}",
+    say!(
+        "{}: {} lines, job time {:.4} s, steps X {} Y {} Z {}, final position {},{},{}",
         file.display(),
         r.lines,
-        ticks_to_us_string(
-            r.events.last().map_or(0, |e| r.rel(e.t)),
-            TICK_HZ * 1_000_000
-        ),
+        r.job_time_s(),
         steps[0],
         steps[1],
         steps[2],
@@ -176,7 +227,7 @@ fn cmd_run(
         r.final_pos[2]
     );
     for m in &r.messages {
-        println!("{m}");
+        say!("{m}");
     }
     for e in &r.errors {
         eprintln!("line {}: {} -> {}", e.line_no, e.text, e.response);
@@ -207,19 +258,19 @@ fn cmd_demo(out: &Path, keys: Option<&str>) -> Result<ExitCode, String> {
             s
         }
     };
-    println!(
+    say!(
         "inkstep demo: {} LCD screens, drawing.png and drawing.svg in {}",
         s.shots.len(),
         out.display()
     );
     for (what, a, b, steps) in &s.parts {
-        println!(
+        say!(
             "  {what:<24} job time {:>7.3} s, {steps} steps",
             (b - a) as f64 / TICK_HZ as f64
         );
     }
     let pos = s.board.link.side().exec.position();
-    println!(
+    say!(
         "  virtual time {:.1} s, final position {},{},{} steps; ran in {:.2} s",
         s.board.now() as f64 / TICK_HZ as f64,
         pos[0],
@@ -231,13 +282,13 @@ fn cmd_demo(out: &Path, keys: Option<&str>) -> Result<ExitCode, String> {
 }
 
 fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {
-    let dir = dir.unwrap_or_else(|| paths::shared_dir().join("bench"));
+    let dir = dir.unwrap_or_else(paths::bench_dir);
     let runs = bench::run_all(&dir)?;
     let rows: Vec<(bench::GrblRow, bench::Figures)> = runs
         .iter()
         .map(|b| (b.grbl.clone(), b.ours.clone()))
         .collect();
-    println!("{}", bench::markdown_table(&rows));
+    say!("{}", bench::markdown_table(&rows));
     let failed = runs
         .iter()
         .any(|b| !b.run.ok() || !bench::goal_failures(&b.ours, &b.grbl).is_empty());
@@ -255,7 +306,7 @@ fn plot_trace(path: &Path, out: &Path, spm: f64) -> Result<ExitCode, String> {
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
     plot::trace_plot(&k, &format!("{name}: speed and acceleration"), out)?;
-    println!("wrote {}", out.display());
+    say!("wrote {}", out.display());
     Ok(ExitCode::SUCCESS)
 }
 
@@ -291,9 +342,9 @@ fn plot_profiles(out: &Path) -> Result<ExitCode, String> {
         &title,
         out,
     )?;
-    println!("wrote {}", out.display());
+    say!("wrote {}", out.display());
     for prof in &profs {
-        println!(
+        say!(
             "{:<20} ramp {:.3} ms, cruise {:.3} ms, total {:.3} ms",
             prof.ramp.name(),
             prof.t_ramp * 1e3,

@@ -2,8 +2,9 @@
 //!
 //! Owns only the picture: which rows are pen-down strokes and how they are scaled. The
 //! pen is down while Z is nearer the pen-down than the pen-up height of the settings
-//! ($206 / $205); a program that never moves Z (a servo pen, or a path test such as the
-//! bench programs) counts as drawn throughout.
+//! ($206 / $205); a program that never moves Z (a path test such as the bench programs)
+//! counts as drawn throughout. With a servo pen the step events carry the pen's state
+//! ([`Drawing::from_moves`]).
 
 use crate::trace::Trace;
 use plotters::prelude::*;
@@ -15,6 +16,47 @@ use std::path::Path;
 pub struct Drawing {
     pub strokes: Vec<Vec<[f64; 2]>>,
     pub travel: Vec<[[f64; 2]; 2]>,
+}
+
+/// Largest distance (mm) an SVG polyline may stray from the step positions: below a
+/// step (1/80 mm), so the file keeps the drawing but not every stair of the grid.
+pub const SVG_TOLERANCE_MM: f64 = 0.01;
+
+/// Douglas-Peucker simplification of a polyline within `tol`.
+pub fn simplify(pts: &[[f64; 2]], tol: f64) -> Vec<[f64; 2]> {
+    if pts.len() < 3 {
+        return pts.to_vec();
+    }
+    let mut keep = vec![false; pts.len()];
+    keep[0] = true;
+    keep[pts.len() - 1] = true;
+    let mut stack = vec![(0, pts.len() - 1)];
+    while let Some((a, b)) = stack.pop() {
+        let (pa, pb) = (pts[a], pts[b]);
+        let (dx, dy) = (pb[0] - pa[0], pb[1] - pa[1]);
+        let len = dx.hypot(dy);
+        let mut worst = (0.0, a);
+        for (i, p) in pts.iter().enumerate().take(b).skip(a + 1) {
+            let d = if len == 0.0 {
+                (p[0] - pa[0]).hypot(p[1] - pa[1])
+            } else {
+                ((p[0] - pa[0]) * dy - (p[1] - pa[1]) * dx).abs() / len
+            };
+            if d > worst.0 {
+                worst = (d, i);
+            }
+        }
+        if worst.0 > tol {
+            keep[worst.1] = true;
+            stack.push((a, worst.1));
+            stack.push((worst.1, b));
+        }
+    }
+    pts.iter()
+        .zip(keep)
+        .filter(|(_, k)| *k)
+        .map(|(p, _)| *p)
+        .collect()
 }
 
 /// Pen heights in Z steps.
@@ -34,23 +76,40 @@ impl Pen {
         }
     }
 
-    fn is_down(self, z: i32) -> bool {
+    pub fn is_down(self, z: i32) -> bool {
         (i64::from(z) - i64::from(self.down)).abs() < (i64::from(z) - i64::from(self.up)).abs()
     }
 }
 
 impl Drawing {
+    /// From a trace, with a Z-axis pen (see the module comment): a step draws when the
+    /// pen is down before and after it.
     pub fn from_trace(trace: &Trace, start: [i32; 3], steps_per_mm: [f64; 2], pen: Pen) -> Drawing {
-        let mm = |p: [i32; 3]| [p[0] as f64 / steps_per_mm[0], p[1] as f64 / steps_per_mm[1]];
         let z_moves = trace.rows.iter().any(|r| r.pos[2] != start[2]);
-        let down_at = |z: i32| !z_moves || pen.is_down(z);
+        let down = |z: i32| !z_moves || pen.is_down(z);
+        let mut prev_z = start[2];
+        let moves = trace.rows.iter().map(|r| {
+            let d = down(prev_z) && down(r.pos[2]);
+            prev_z = r.pos[2];
+            (r.pos, d)
+        });
+        Drawing::from_moves(start, moves, steps_per_mm)
+    }
+
+    /// From positions in steps, each with whether the step that reached it drew (for a
+    /// servo pen, its state as the step engine saw it).
+    pub fn from_moves(
+        start: [i32; 3],
+        moves: impl IntoIterator<Item = ([i32; 3], bool)>,
+        steps_per_mm: [f64; 2],
+    ) -> Drawing {
+        let mm = |p: [i32; 3]| [p[0] as f64 / steps_per_mm[0], p[1] as f64 / steps_per_mm[1]];
         let mut d = Drawing::default();
         let mut prev = start;
         let mut current: Vec<[f64; 2]> = Vec::new();
         let mut up_from: Option<[f64; 2]> = None;
-        for row in &trace.rows {
-            let down = down_at(prev[2]) && down_at(row.pos[2]);
-            let xy_moved = row.pos[0] != prev[0] || row.pos[1] != prev[1];
+        for (pos, down) in moves {
+            let xy_moved = pos[0] != prev[0] || pos[1] != prev[1];
             if down {
                 if let Some(from) = up_from.take() {
                     if from != mm(prev) {
@@ -61,7 +120,7 @@ impl Drawing {
                     current.push(mm(prev));
                 }
                 if xy_moved {
-                    current.push(mm(row.pos));
+                    current.push(mm(pos));
                 }
             } else {
                 if current.len() > 1 {
@@ -72,10 +131,15 @@ impl Drawing {
                     up_from = Some(mm(prev));
                 }
             }
-            prev = row.pos;
+            prev = pos;
         }
         if current.len() > 1 {
             d.strokes.push(current);
+        }
+        if let Some(from) = up_from {
+            if from != mm(prev) {
+                d.travel.push([from, mm(prev)]);
+            }
         }
         d
     }
@@ -133,8 +197,9 @@ impl Drawing {
             .unwrap();
         }
         for stroke in &self.strokes {
+            let stroke = simplify(stroke, SVG_TOLERANCE_MM);
             s.push_str(r##"<polyline fill="none" stroke="#1a3a8a" stroke-width="0.3" stroke-linejoin="round" stroke-linecap="round" points=""##);
-            for p in stroke {
+            for p in &stroke {
                 write!(s, "{:.4},{:.4} ", p[0], -p[1]).unwrap();
             }
             s.push_str("\"/>\n");
@@ -245,6 +310,38 @@ mod tests {
         assert_eq!(svg.matches("<polyline").count(), 2);
         assert_eq!(svg.matches("<line").count(), 1);
         assert!(svg.contains("6.0000,-5.0000"));
+    }
+
+    #[test]
+    fn simplification_keeps_corners_and_drops_stairs() {
+        // A staircase along a diagonal within 0.0125 of it, then a corner.
+        let mut pts = Vec::new();
+        for i in 0..10 {
+            let f = f64::from(i) * 0.0125;
+            pts.push([f, f]);
+            pts.push([f + 0.0125, f]);
+        }
+        pts.push([0.125, 0.125]);
+        pts.push([0.125, 1.0]);
+        let s = simplify(&pts, 0.01);
+        assert_eq!(s.first(), pts.first());
+        assert_eq!(s.last(), Some(&[0.125, 1.0]));
+        assert!(s.contains(&[0.125, 0.125]) || s.len() <= 4, "{s:?}");
+        assert!(s.len() < 6, "{s:?}");
+        for p in &pts {
+            // Every original point is within the tolerance of the simplified line.
+            let d = s
+                .windows(2)
+                .map(|w| seg(*p, w[0], w[1]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(d <= 0.01 + 1e-12, "{p:?} {d}");
+        }
+    }
+
+    fn seg(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
+        (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
     }
 
     #[test]

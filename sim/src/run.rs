@@ -6,9 +6,10 @@
 //! and virtual time advances while both wait. The result carries every step event.
 
 use crate::board::{Board, StepEvent, TICK_HZ};
+use crate::render::{Drawing, Pen};
 use crate::sender::{Flow, LineError, Sender};
 use crate::trace::{Row, Trace};
-use inkstep_core::settings::Settings;
+use inkstep_core::settings::{PenMode, Settings};
 
 /// Virtual time after which a run is abandoned (a job that never ends).
 const TIME_LIMIT_S: u64 = 3600;
@@ -55,8 +56,34 @@ impl RunResult {
             .map_or(0.0, |e| self.rel(e.t) as f64 / TICK_HZ as f64)
     }
 
+    /// What the pen drew.
+    pub fn drawing(&self) -> Drawing {
+        drawing(&self.events, &self.settings)
+    }
+
     pub fn ok(&self) -> bool {
         self.errors.is_empty() && self.alarms.is_empty() && !self.timed_out
+    }
+}
+
+/// The drawing of step events from the origin: a Z-axis pen by its height, a servo pen
+/// by the state the events carry.
+pub fn drawing(events: &[StepEvent], s: &Settings) -> Drawing {
+    let spmm = [f64::from(s.steps_per_mm(0)), f64::from(s.steps_per_mm(1))];
+    match s.pen_mode() {
+        PenMode::Servo => {
+            Drawing::from_moves([0; 3], events.iter().map(|e| (e.pos, e.servo_down)), spmm)
+        }
+        PenMode::ZAxis => {
+            let rows = events
+                .iter()
+                .map(|e| Row {
+                    t_us: 0.0,
+                    pos: e.pos,
+                })
+                .collect();
+            Drawing::from_trace(&Trace { rows }, [0; 3], spmm, Pen::from_settings(s))
+        }
     }
 }
 
@@ -162,6 +189,27 @@ mod tests {
         assert_eq!(lines, [2, 3]);
         assert!(r.errors.iter().all(|e| e.response.starts_with("error:")));
         assert!(!r.ok());
+    }
+
+    #[test]
+    fn drawings_follow_the_pen_of_either_kind() {
+        let g = "G21 G90\nG0 X5\nM3\nG1 X10 F1200\nM5\nG0 X0 Y5\nM3\nG1 Y10\nM5\nG0 X0 Y0\n";
+        for setup in ["", "$201=1\n"] {
+            let r = run_gcode(&format!("{setup}{g}"), Flow::SendResponse);
+            assert!(r.ok(), "{setup}: {:?} {:?}", r.errors, r.alarms);
+            let d = r.drawing();
+            let ends: Vec<_> = d
+                .strokes
+                .iter()
+                .map(|s| (s[0], *s.last().unwrap()))
+                .collect();
+            assert_eq!(
+                ends,
+                [([5.0, 0.0], [10.0, 0.0]), ([0.0, 5.0], [0.0, 10.0])],
+                "{setup}"
+            );
+            assert_eq!(d.travel.len(), 3, "{setup}: {:?}", d.travel);
+        }
     }
 
     #[test]

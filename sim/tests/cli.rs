@@ -31,6 +31,7 @@ fn run_writes_a_trace_of_step_events_and_the_drawing() {
         dir.path().join("t.png"),
         dir.path().join("t.svg"),
     );
+    let lcd = dir.path().join("lcd");
     let out = sim(&[
         "run",
         s(&g),
@@ -40,6 +41,10 @@ fn run_writes_a_trace_of_step_events_and_the_drawing() {
         s(&png),
         "--svg",
         s(&svg),
+        "--lcd",
+        s(&lcd),
+        "--lcd-every",
+        "500",
     ]);
     assert!(
         out.status.success(),
@@ -84,6 +89,17 @@ fn run_writes_a_trace_of_step_events_and_the_drawing() {
     assert!(w > 100 && h > 20);
     assert!(std::fs::read_to_string(&svg).unwrap().contains("<polyline"));
     assert!(String::from_utf8_lossy(&out.stdout).contains("final position 0,0,0"));
+    // LCD screens every 500 ms of the run, and one at the end.
+    let shots = std::fs::read_dir(&lcd).unwrap().count();
+    let t_end = rows.last().unwrap().0 / 1e6;
+    assert!(
+        shots >= (t_end / 0.5) as usize && shots <= (t_end / 0.5) as usize + 3,
+        "{shots} for {t_end} s"
+    );
+    assert_eq!(
+        png_size(&lcd.join("lcd_0001.png")),
+        png_size(&lcd.join(format!("lcd_{shots:04}.png")))
+    );
 }
 
 #[test]

@@ -5,11 +5,11 @@
 //! no step wasted (the same step counts as Grbl).
 
 use inkstep_sim::bench::{goal_failures, read_grbl_table, run_program, GrblRow};
-use inkstep_sim::paths::shared_dir;
+use inkstep_sim::paths::{bench_dir, grbl_figures};
 
 fn grbl(program: &str) -> GrblRow {
-    let dir = shared_dir().join("bench");
-    let text = std::fs::read_to_string(dir.join("README.md")).expect("shared/bench/README.md");
+    let dir = bench_dir();
+    let text = std::fs::read_to_string(grbl_figures(&dir)).expect("Grbl's figures");
     read_grbl_table(&text)
         .into_iter()
         .find(|r| r.program == program)
@@ -18,7 +18,7 @@ fn grbl(program: &str) -> GrblRow {
 
 fn check(program: &str) {
     let g = grbl(program);
-    let b = run_program(&shared_dir().join("bench"), &g).unwrap();
+    let b = run_program(&bench_dir(), &g).unwrap();
     assert!(
         b.run.ok(),
         "{program}: errors {:?} alarms {:?}",
@@ -35,7 +35,6 @@ fn check(program: &str) {
 }
 
 #[test]
-#[ignore = "motion issue: 0.739 step max deviation; the DDA runs between targets rounded to whole steps, so a vertex's rounding adds to the line's half step (run with --ignored)"]
 fn star() {
     check("star.nc");
 }
@@ -46,7 +45,6 @@ fn circle() {
 }
 
 #[test]
-#[ignore = "motion issue: 3.3746 s > Grbl's 3.2240 s and 0.867 step max deviation (rounded segment ends, see star) (run with --ignored)"]
 fn sine() {
     check("sine.nc");
 }

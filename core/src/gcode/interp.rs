@@ -160,6 +160,21 @@ pub fn to_steps(mm: &[f32; AXES], s: &Settings) -> StepPos {
     out
 }
 
+/// The path of a straight move: in the XY plane, the exact (unrounded) end points in
+/// 1/256 step, so the steps follow the programmed line rather than the line between
+/// the rounded ends (motion's `Path::LineFine`); with Z moving, a plain line.
+fn line_path(from: &[f32; AXES], to: &[f32; AXES], s: &Settings) -> Path {
+    if from[2] != to[2] {
+        return Path::Line;
+    }
+    let q8 =
+        |p: &[f32; AXES], axis: usize| libm::roundf(p[axis] * s.steps_per_mm(axis) * 256.0) as i32;
+    Path::LineFine {
+        from: [q8(from, 0), q8(from, 1)],
+        to: [q8(to, 0), q8(to, 1)],
+    }
+}
+
 /// Step position to machine mm.
 pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
     let mut out = [0.0; AXES];
@@ -622,9 +637,11 @@ impl Interp {
 
         if motion_cmd {
             let len_and_path = match modal.motion {
-                MotionMode::Rapid | MotionMode::Linear if has_axis => {
-                    Some((path_length(&pos, &target), Path::Line, None))
-                }
+                MotionMode::Rapid | MotionMode::Linear if has_axis => Some((
+                    path_length(&pos, &target),
+                    line_path(&pos, &target, s),
+                    None,
+                )),
                 MotionMode::ArcCw | MotionMode::ArcCcw => {
                     if !has_axis {
                         return Err(Status::NoAxisWords.into());
@@ -995,11 +1012,16 @@ mod tests {
         let s = Settings::default(); // 80 step/mm on X and Y
         let mut it = Interp::new();
         let o = run(&mut it, &s, "G1 X10.0031 Y-0.00624 F600").unwrap();
+        // The rounded target, and the exact ends in 1/256 step for the interpolator:
+        // 10.0031 mm = 800.248 steps, -0.00624 mm = -0.4992 steps.
         assert_eq!(
             moves(&o),
             [Move {
                 target: [800, 0, 0],
-                path: Path::Line,
+                path: Path::LineFine {
+                    from: [0, 0],
+                    to: [204864, -128]
+                },
                 feed: Feed::MmPerMin(600.0),
                 line: 7
             }]

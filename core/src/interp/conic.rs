@@ -162,6 +162,23 @@ impl Conic {
         [tx as f32, ty as f32]
     }
 
+    /// Radius in steps if this is a circle.
+    pub fn circle_radius(&self) -> Option<f64> {
+        (self.a == self.b).then(|| libm::sqrt(self.c as f64))
+    }
+
+    /// The last tick is part of the straight tail to the target.
+    pub fn in_tail(&self) -> bool {
+        self.tail.is_some()
+    }
+
+    /// Cross product of the points before and after the last tick (relative to the
+    /// centre): R^2 times the angle it turned, for a circle.
+    pub fn last_cross(&self) -> i64 {
+        let (x1, y1) = self.prev;
+        x1 * self.y - self.x * y1
+    }
+
     /// Ideal path length of the last tick in mm (`spx`, `spy`: steps per mm): the
     /// change of the parameter angle t (x = a cos t, y = b sin t) between the two points,
     /// atan(cross/dot) ~ cross/dot for one step, times |dP/dt| at their midpoint. The

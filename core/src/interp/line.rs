@@ -270,6 +270,18 @@ impl Line {
     }
 }
 
+impl Line {
+    /// Ticks that advance along the line (the major-axis count for DDA, every step for
+    /// classic). A fine line may add a catch-up step at either end.
+    pub fn ticks(&self) -> u64 {
+        match self {
+            Line::Dda(l) => l.major.unsigned_abs(),
+            Line::Classic(l) => l.len.iter().map(|v| v.unsigned_abs()).sum(),
+            Line::Fine(l) => (l.end.0 - l.pos.0).unsigned_abs(),
+        }
+    }
+}
+
 impl Interpolate for Line {
     fn next_tick(&mut self) -> Option<Tick> {
         match self {

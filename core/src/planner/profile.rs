@@ -54,11 +54,26 @@ impl Ramp {
     fn dist(&self) -> f64 {
         0.5 * (self.v0 + self.v1) * self.t
     }
-    /// Distance and speed `t` seconds into the ramp.
+    /// Distance and speed `t` seconds into the ramp. The second half is evaluated
+    /// backwards from the end (a ramp run backwards is the reverse ramp), so the
+    /// distance left near the end keeps full precision with f32 sine/cosine.
     fn at(&self, shape: Shape, t: f64) -> (f64, f64) {
         if self.t <= 0.0 {
             return (0.0, self.v0);
         }
+        if t > 0.5 * self.t {
+            let rev = Ramp {
+                v0: self.v1,
+                v1: self.v0,
+                t: self.t,
+            };
+            let (d, v) = rev.forward(shape, (self.t - t).max(0.0));
+            return (self.dist() - d, v);
+        }
+        self.forward(shape, t)
+    }
+
+    fn forward(&self, shape: Shape, t: f64) -> (f64, f64) {
         let dv = self.v1 - self.v0;
         match shape {
             Shape::Trapezoid => {
@@ -91,14 +106,14 @@ impl Profile {
     /// Fastest profile from speed `v0` over `dist` that ends at `v_exit`, never above
     /// `v_max`, with peak acceleration `a`. If `v_exit` cannot be reached (too short to
     /// slow down, or to speed up), the profile ends at the closest reachable speed.
-    pub fn new(shape: Shape, v0: f32, v_max: f32, v_exit: f32, a: f32, dist: f32) -> Self {
+    pub fn new(shape: Shape, v0: f32, v_max: f32, v_exit: f32, a: f32, dist: f64) -> Self {
         let a = if a > 0.0 {
             f64::from(a)
         } else {
             f64::from(f32::MIN_POSITIVE)
         };
         let ae = f64::from(shape.effective_accel(1.0)) * a;
-        let dist = f64::from(dist.max(0.0));
+        let dist = dist.max(0.0);
         let v0 = f64::from(v0.max(0.0));
         let v_max = f64::from(v_max.max(0.0));
         // Exit speeds reachable over `dist` from v0 lie in [lo, hi].

@@ -9,8 +9,9 @@
 //! 1/sum|t_i| (classic) of the unit tangent t in steps per mm), so the path speed is
 //! constant along curves and a diagonal step takes
 //! sqrt(2) times as long as an axial one. The tick's time is found by inverting the
-//! profile's distance law on short windows (linear inside a 0.5 ms window) and rounded
-//! to whole timer ticks against an absolute clock, so rounding never accumulates.
+//! profile's distance law on short windows (linear inside a 2 ms window) against an
+//! absolute timer clock, so rounding never accumulates. Floating point runs once per
+//! window; per tick, lines and circles take only integer adds and one multiply.
 //!
 //! The profile is rebuilt from the present state whenever the planner's generation
 //! changes (a new block, an override), and for feed hold (brake to rest, possibly over
@@ -46,25 +47,60 @@ impl Default for PrepConfig {
     fn default() -> Self {
         PrepConfig {
             timer_hz: 72_000_000,
-            window_s: 0.0005,
+            window_s: 0.002,
         }
     }
+}
+
+/// Distance unit of the per-tick path: 2^-32 mm, fine enough that rounding each
+/// tick's length adds up to far less than a step over any block.
+const Q: f64 = (1u64 << 32) as f64;
+
+/// How each tick's length is found.
+#[derive(Clone, Copy, Debug)]
+enum TickLen {
+    /// Constant (lines), in Q units.
+    Const(u64),
+    /// Circle: |cross(prev, next)| * m >> 16, with m = 2^48 / (R steps * steps/mm).
+    Circle(u64),
+    /// Anything else: from the curve's tangent (floating point).
+    Curve,
+}
+
+/// One inversion window of the profile, in integers: a tick at distance `s` (Q units
+/// from the block start) happens at t0 + (s - s0) * k >> 32 timer ticks.
+#[derive(Clone, Copy, Debug, Default)]
+struct Window {
+    /// Window end time, seconds from the profile start.
+    t1: f64,
+    s0: u64,
+    s1: u64,
+    t0_abs: u64,
+    t1_abs: u64,
+    /// Timer ticks per mm (= per Q unit with 32 fractional bits).
+    k: u64,
+    /// Mean speed in the window, mm/s.
+    v: f32,
 }
 
 #[derive(Clone, Debug)]
 struct Active {
     block: Block,
     interp: Interp,
-    /// Constant tick length (lines), mm.
-    line_ds: Option<f64>,
-    /// Path length covered by queued ticks, mm from the block start.
-    s: f64,
+    len: TickLen,
+    /// Path length covered by queued ticks, Q units from the block start.
+    s: u64,
+    /// The length the ticks add up to (Q units).
+    len_q: u64,
+    /// Ticks left along a line: the last one lands exactly on `len_q`.
+    ticks_left: Option<u64>,
     prof: Profile,
-    /// Block distance and absolute timer tick where the profile starts.
-    prof_s0: f64,
+    /// Block distance (Q units) and absolute timer tick where the profile starts.
+    prof_s0: u64,
     prof_t0: u64,
-    /// Inversion window (seconds and mm relative to the profile start).
-    win: [f64; 4],
+    /// The profile is exhausted (later ticks run at its exit speed).
+    prof_done: bool,
+    win: Window,
     pending: Option<Tick>,
 }
 
@@ -83,6 +119,8 @@ pub struct Prep {
     pos: StepPos,
     /// Blocks whose interpolation was rejected (skipped without moving).
     skipped: u32,
+    /// Wait before the last queued step, timer ticks.
+    last_wait: u64,
 }
 
 impl Prep {
@@ -96,6 +134,7 @@ impl Prep {
             hold: HoldState::Running,
             pos: position,
             skipped: 0,
+            last_wait: 1,
         }
     }
 
@@ -136,7 +175,7 @@ impl Prep {
             self.hold = HoldState::Running;
             if let Some(a) = self.active.as_ref() {
                 let ae = planner.plan_accel(&a.block);
-                let rest = (f64::from(a.block.length) - a.s).max(0.0) as f32;
+                let rest = (a.len_q.saturating_sub(a.s) as f64 / Q) as f32;
                 planner.set_head_cap(libm::sqrtf(self.v_last * self.v_last + 2.0 * ae * rest));
             }
             self.generation = planner.generation().wrapping_sub(1);
@@ -170,35 +209,52 @@ impl Prep {
             };
             let Some(tick) = a.pending.take().or_else(|| a.interp.next_tick()) else {
                 // Block done: carry the speed into the next one.
-                self.v_last = speed_at_distance(&a.prof, a.s - a.prof_s0) as f32;
+                self.v_last = if a.prof_done {
+                    a.prof.exit_speed() as f32
+                } else {
+                    a.win.v
+                };
                 self.active = None;
                 continue;
             };
-            let ds = match (a.line_ds, &a.interp) {
-                (Some(ds), _) => ds,
-                (None, Interp::Conic(c)) => c.last_tick_len(
+            let ds = match (a.len, &a.interp) {
+                (TickLen::Const(q), _) => q,
+                (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
+                    (c.last_cross().unsigned_abs().saturating_mul(m)) >> 16
+                }
+                (_, Interp::Conic(c)) => to_q(c.last_tick_len(
                     f64::from(cfg.axes[X].steps_per_mm),
                     f64::from(cfg.axes[Y].steps_per_mm),
-                ),
-                (None, _) => curve_ds(&cfg, a.interp.direction().unwrap_or([1.0, 0.0])),
+                )),
+                (_, interp) => to_q(curve_ds(&cfg, interp.direction().unwrap_or([1.0, 0.0]))),
             };
-            let s_new = a.s + ds;
-            let hz = f64::from(self.cfg.timer_hz);
-            let Some((t_rel, v)) = invert(
-                &a.prof,
-                &mut a.win,
-                s_new - a.prof_s0,
-                self.cfg.window_s,
-                self.hold,
-                self.v_last,
-            ) else {
-                // Braked to rest before this tick: keep it for the resume.
-                a.pending = Some(tick);
-                self.hold = HoldState::Held;
-                self.v_last = 0.0;
-                return;
+            let mut s_new = a.s + ds;
+            if let Some(n) = a.ticks_left.as_mut() {
+                if *n == 1 {
+                    s_new = a.len_q;
+                }
+                *n = n.saturating_sub(1);
+            }
+            // Integer fast path: the tick falls in the present (or a later) window.
+            while s_new > a.win.s1 && !a.prof_done {
+                advance_window(a, &self.cfg);
+            }
+            let (abs, v) = if s_new <= a.win.s1 {
+                // off * k stays below 2^32 times the window's length in timer ticks.
+                let off = s_new.saturating_sub(a.win.s0);
+                (a.win.t0_abs + (off.wrapping_mul(a.win.k) >> 32), a.win.v)
+            } else {
+                // Past the profile's end: a hold stops here; otherwise (a catch-up step
+                // of a fine line, curve length rounding) go on at the last step's rate.
+                let v_end = a.prof.exit_speed() as f32;
+                if self.hold != HoldState::Running && v_end < 1e-3 {
+                    a.pending = Some(tick);
+                    self.hold = HoldState::Held;
+                    self.v_last = 0.0;
+                    return;
+                }
+                (self.t_last.max(a.win.t1_abs) + self.last_wait, self.v_last)
             };
-            let abs = a.prof_t0 + (t_rel * hz + 0.5) as u64;
             let mut wait = abs.saturating_sub(self.t_last).max(1);
             // Long pauses: pure waits first.
             while wait > u64::from(MAX_WAIT) {
@@ -216,6 +272,7 @@ impl Prep {
             }
             sink.push(StepCmd::new(tick, wait as u32));
             self.t_last += wait;
+            self.last_wait = wait;
             a.s = s_new;
             tick.apply(&mut self.pos);
             self.v_last = v;
@@ -233,20 +290,35 @@ impl Prep {
             };
             match Interp::new(self.pos, &block.mv, cfg.method) {
                 Ok(interp) => {
-                    let line_ds = match interp.direction() {
-                        Some(_) => None,
-                        None => Some(line_tick_len(cfg, self.pos, block.mv.target)),
+                    let line_len = line_length(cfg, self.pos, block.mv.target);
+                    let (len_q, ticks_left) = match &interp {
+                        Interp::Line(l) => (to_q(line_len), Some(l.ticks())),
+                        _ => (to_q(f64::from(block.length)), None),
+                    };
+                    let len = match &interp {
+                        Interp::Line(l) => TickLen::Const(len_q / l.ticks().max(1)),
+                        Interp::Conic(c) => match c.circle_radius() {
+                            Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
+                                let sp = f64::from(cfg.axes[X].steps_per_mm.max(1e-6));
+                                TickLen::Circle((Q * 65536.0 / (r * sp) + 0.5) as u64)
+                            }
+                            _ => TickLen::Curve,
+                        },
+                        Interp::Sine(_) => TickLen::Curve,
                     };
                     let ae = planner.plan_accel(&block);
                     self.active = Some(Active {
                         block,
                         interp,
-                        line_ds,
-                        s: 0.0,
+                        len,
+                        s: 0,
+                        len_q,
+                        ticks_left,
                         prof: Profile::new(cfg.shape, 0.0, 0.0, 0.0, 1.0, 0.0),
-                        prof_s0: 0.0,
+                        prof_s0: 0,
                         prof_t0: self.t_last,
-                        win: [0.0; 4],
+                        prof_done: false,
+                        win: Window::default(),
                         pending: None,
                     });
                     let v = self.v_last;
@@ -270,7 +342,7 @@ impl Prep {
         } else {
             (0.0, 0.0)
         };
-        let rest = (f64::from(a.block.length) - a.s).max(0.0) as f32;
+        let rest = a.len_q.saturating_sub(a.s) as f64 / Q;
         let v0 = if self.hold == HoldState::Running {
             self.v_last.max(cfg.start_speed)
         } else {
@@ -279,31 +351,60 @@ impl Prep {
         a.prof = Profile::new(cfg.shape, v0, v_max, v_exit, a.block.accel, rest);
         a.prof_s0 = a.s;
         a.prof_t0 = self.t_last;
-        a.win = [0.0; 4];
+        a.prof_done = false;
+        a.win = Window {
+            s0: a.s,
+            s1: a.s,
+            t0_abs: self.t_last,
+            t1_abs: self.t_last,
+            ..Window::default()
+        };
     }
 }
 
-/// Tick length of a line, mm: path length over the number of ticks.
-fn line_tick_len(cfg: &PlannerConfig, from: StepPos, to: StepPos) -> f64 {
+fn to_q(mm: f64) -> u64 {
+    (mm * Q + 0.5) as u64
+}
+
+/// Moves the window on by the configured length (floating point, once per window).
+fn advance_window(a: &mut Active, cfg: &PrepConfig) {
+    let dur = a.prof.duration();
+    let t0 = a.win.t1;
+    let t1 = (t0 + f64::from(cfg.window_s)).min(dur);
+    let hz = f64::from(cfg.timer_hz);
+    let s1 = a.prof_s0 + to_q(a.prof.at(t1).0);
+    let t1_abs = a.prof_t0 + (t1 * hz + 0.5) as u64;
+    let (s0, t0_abs) = (a.win.s1, a.win.t1_abs);
+    let ds = s1.saturating_sub(s0);
+    let k = ((t1_abs - t0_abs) << 32).checked_div(ds).unwrap_or(0);
+    let v = if t1 > t0 {
+        (ds as f32 / Q as f32) / (t1 - t0) as f32
+    } else {
+        a.win.v
+    };
+    a.win = Window {
+        t1,
+        s0,
+        s1: s1.max(s0),
+        t0_abs,
+        t1_abs,
+        k,
+        v,
+    };
+    if t1 >= dur {
+        a.prof_done = true;
+    }
+}
+
+/// Length of a line, mm.
+fn line_length(cfg: &PlannerConfig, from: StepPos, to: StepPos) -> f64 {
     let mut len2 = 0.0f64;
-    let mut major = 0i64;
-    let mut sum = 0i64;
     for i in 0..AXES {
         let d = i64::from(to[i]) - i64::from(from[i]);
         let mm = d as f64 / f64::from(cfg.axes[i].steps_per_mm.max(1e-6));
         len2 += mm * mm;
-        major = major.max(d.abs());
-        sum += d.abs();
     }
-    let ticks = match cfg.method {
-        crate::interp::Method::Dda => major,
-        crate::interp::Method::Classic => sum,
-    };
-    if ticks == 0 {
-        0.0
-    } else {
-        libm::sqrt(len2) / ticks as f64
-    }
+    libm::sqrt(len2)
 }
 
 /// Ideal path length per tick along a curve with feed direction `t` (steps), mm.
@@ -321,62 +422,4 @@ fn curve_ds(cfg: &PlannerConfig, t: [f32; 2]) -> f64 {
     } else {
         0.0
     }
-}
-
-/// Speed of the profile where it has covered `d`.
-fn speed_at_distance(p: &Profile, d: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0f64, p.duration());
-    for _ in 0..40 {
-        let mid = 0.5 * (lo + hi);
-        if p.at(mid).0 < d {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    p.at(hi).1
-}
-
-/// Time (s, from the profile start) and speed at which the profile covers `d` mm.
-/// `None` when a hold brings the profile to rest before `d`.
-fn invert(
-    p: &Profile,
-    win: &mut [f64; 4],
-    d: f64,
-    window: f32,
-    hold: HoldState,
-    v_last: f32,
-) -> Option<(f64, f32)> {
-    let dur = p.duration();
-    let total = p.distance();
-    if d > total {
-        let v_end = p.exit_speed();
-        if hold != HoldState::Running && v_end < 1e-3 {
-            return None;
-        }
-        // Past the planned distance (rounding of curve lengths, a fraction of a step):
-        // continue at the exit speed or, when that is zero, at the last tick's speed.
-        let v = v_end.max(f64::from(v_last)).max(1e-3);
-        let t = (d - total) / v;
-        return Some((dur + t, v_end as f32));
-    }
-    let step = f64::from(window);
-    while d > win[3] && win[2] < dur {
-        win[0] = win[2];
-        win[1] = win[3];
-        win[2] = (win[0] + step).min(dur);
-        win[3] = p.at(win[2]).0;
-    }
-    let (t0, s0, t1, s1) = (win[0], win[1], win[2], win[3]);
-    let t = if s1 > s0 {
-        t0 + (d - s0) / (s1 - s0) * (t1 - t0)
-    } else {
-        t1
-    };
-    let v = if t1 > t0 {
-        ((s1 - s0) / (t1 - t0)) as f32
-    } else {
-        p.at(t).1 as f32
-    };
-    Some((t, v))
 }
