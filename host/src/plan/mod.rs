@@ -1,0 +1,73 @@
+//! Pen-path planning: the one entry point that turns strokes in any order
+//! into strokes in drawing order. Euler joining first (strokes meeting at
+//! junctions become single trails), then ordering and orientation. The
+//! result is never worse than the strokes as given: if the search loses to
+//! the natural order (it cannot, but the guard makes it a guarantee), the
+//! natural order is returned.
+
+pub mod euler;
+pub mod order;
+
+use crate::geom::{pen_up_travel, Pt, Stroke};
+pub use order::Effort;
+
+#[derive(Clone, Copy, Debug)]
+pub struct PlanOptions {
+    /// Strokes may be drawn backwards (off keeps calligraphic direction).
+    pub reverse: bool,
+    /// Join strokes that share end points with Euler walks.
+    pub join: bool,
+    /// End points closer than this (drawing units) are one junction.
+    pub join_tol: f64,
+    pub effort: Effort,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        PlanOptions {
+            reverse: true,
+            join: true,
+            join_tol: 1e-3,
+            effort: Effort::default(),
+        }
+    }
+}
+
+/// Orders (and orients, joins) strokes to reduce pen-up travel from `start`.
+pub fn plan(strokes: &[Stroke], start: Pt, opt: &PlanOptions) -> Vec<Stroke> {
+    let strokes: Vec<Stroke> = strokes.iter().filter(|s| !s.is_empty()).cloned().collect();
+    let joined = if opt.join {
+        euler::join(&strokes, opt.join_tol, opt.reverse)
+    } else {
+        strokes.clone()
+    };
+    let planned = order_strokes(&joined, start, opt.reverse, opt.effort);
+    if pen_up_travel(&planned, start) <= pen_up_travel(&strokes, start) {
+        planned
+    } else {
+        strokes
+    }
+}
+
+/// Orders and orients strokes without joining them.
+pub fn order_strokes(strokes: &[Stroke], start: Pt, reverse: bool, effort: Effort) -> Vec<Stroke> {
+    let ends: Vec<(Pt, Pt)> = strokes.iter().map(|s| (s[0], *s.last().unwrap())).collect();
+    let p = order::Problem::new(&ends, start, reverse);
+    let t = p.solve(effort);
+    apply(strokes, &t)
+}
+
+/// The strokes in the tour's order and orientation.
+pub fn apply(strokes: &[Stroke], t: &order::Tour) -> Vec<Stroke> {
+    t.order
+        .iter()
+        .zip(&t.rev)
+        .map(|(&i, &r)| {
+            let mut s = strokes[i].clone();
+            if r {
+                s.reverse();
+            }
+            s
+        })
+        .collect()
+}
