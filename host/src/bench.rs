@@ -43,7 +43,12 @@ fn row(name: &str, s: &[Stroke], start: Pt, t0: Instant) -> Row {
 /// Runs every method; `vpype` is the command to call (None skips it).
 pub fn run(text: &str, opts: &PlanOptions, vpype: Option<&str>) -> Result<Vec<Row>> {
     let (strokes, start) = bench_strokes(text)?;
-    let mut rows = vec![row("natural (writing order)", &strokes, start, Instant::now())];
+    let mut rows = vec![row(
+        "natural (writing order)",
+        &strokes,
+        start,
+        Instant::now(),
+    )];
     let t0 = Instant::now();
     let ends: Vec<_> = strokes.iter().map(|s| (s[0], *s.last().unwrap())).collect();
     let greedy = plan::apply(&strokes, &Problem::new(&ends, start, opts.reverse).greedy());
@@ -113,7 +118,10 @@ pub fn to_svg(strokes: &[Stroke], w: f64, h: f64) -> String {
 /// The table as printed.
 pub fn table(rows: &[Row]) -> String {
     let nat = rows[0].travel;
-    let vp = rows.iter().find(|r| r.name.starts_with("vpype")).map(|r| r.travel);
+    let vp = rows
+        .iter()
+        .find(|r| r.name.starts_with("vpype"))
+        .map(|r| r.travel);
     let mut s = String::new();
     let _ = writeln!(
         s,

@@ -70,9 +70,6 @@ mod tests {
         ];
         assert_eq!(pen_up_travel(&s, Pt::new(0.0, 0.0)), 5.0 + 4.0);
         assert_eq!(pen_down_length(&s), 17.0);
-        assert_eq!(
-            bounds(&s),
-            Some((Pt::new(0.0, 0.0), Pt::new(10.0, 4.0)))
-        );
+        assert_eq!(bounds(&s), Some((Pt::new(0.0, 0.0), Pt::new(10.0, 4.0))));
     }
 }

@@ -62,8 +62,14 @@ fn flatten_path(data: &usvg::tiny_skia_path::Path, ts: Transform, tol: f64, out:
                 let c = map(c);
                 let p3 = map(p);
                 // Degree elevation: the quadratic as a cubic.
-                let c1 = Pt::new(p0.x + 2.0 / 3.0 * (c.x - p0.x), p0.y + 2.0 / 3.0 * (c.y - p0.y));
-                let c2 = Pt::new(p3.x + 2.0 / 3.0 * (c.x - p3.x), p3.y + 2.0 / 3.0 * (c.y - p3.y));
+                let c1 = Pt::new(
+                    p0.x + 2.0 / 3.0 * (c.x - p0.x),
+                    p0.y + 2.0 / 3.0 * (c.y - p0.y),
+                );
+                let c2 = Pt::new(
+                    p3.x + 2.0 / 3.0 * (c.x - p3.x),
+                    p3.y + 2.0 / 3.0 * (c.y - p3.y),
+                );
                 flatten_cubic([p0, c1, c2, p3], tol, &mut cur);
             }
             PathSegment::CubicTo(c1, c2, p) => {
@@ -90,7 +96,9 @@ pub fn flatten_cubic(c: [Pt; 4], tol: f64, out: &mut Stroke) {
 }
 
 fn flatten_rec(c: [Pt; 4], tol: f64, out: &mut Stroke, depth: u32) {
-    if depth >= 24 || (dist_to_segment(c[1], c[0], c[3]) <= tol && dist_to_segment(c[2], c[0], c[3]) <= tol) {
+    if depth >= 24
+        || (dist_to_segment(c[1], c[0], c[3]) <= tol && dist_to_segment(c[2], c[0], c[3]) <= tol)
+    {
         out.push(c[3]);
         return;
     }
@@ -134,7 +142,12 @@ mod tests {
 
     #[test]
     fn cubic_flattening_stays_within_tolerance() {
-        let c = [Pt::new(0.0, 0.0), Pt::new(10.0, 40.0), Pt::new(50.0, -30.0), Pt::new(60.0, 5.0)];
+        let c = [
+            Pt::new(0.0, 0.0),
+            Pt::new(10.0, 40.0),
+            Pt::new(50.0, -30.0),
+            Pt::new(60.0, 5.0),
+        ];
         for tol in [1.0, 0.1, 0.01] {
             let mut s = vec![c[0]];
             flatten_cubic(c, tol, &mut s);

@@ -98,7 +98,10 @@ mod tests {
         for c in "一帆风顺中国地质大学写字机器人".chars() {
             let g = glyph(c).unwrap();
             assert!(!g.is_empty());
-            assert!(g.iter().flatten().all(|p| (-0.1..1.1).contains(&p.x) && (-0.1..1.1).contains(&p.y)));
+            assert!(g
+                .iter()
+                .flatten()
+                .all(|p| (-0.1..1.1).contains(&p.x) && (-0.1..1.1).contains(&p.y)));
         }
         assert!(glyph('A').is_none());
     }

@@ -64,8 +64,12 @@ fn parse_path(d: &str) -> Vec<Vec<(f64, f64)>> {
             b'L' => (false, &tok[1..]),
             _ => (false, tok),
         };
-        let Some((x, y)) = xy.split_once(',') else { continue };
-        let (Ok(x), Ok(y)) = (x.parse::<f64>(), y.parse::<f64>()) else { continue };
+        let Some((x, y)) = xy.split_once(',') else {
+            continue;
+        };
+        let (Ok(x), Ok(y)) = (x.parse::<f64>(), y.parse::<f64>()) else {
+            continue;
+        };
         if new || out.is_empty() {
             out.push(Vec::new());
         }
@@ -127,7 +131,10 @@ mod tests {
         assert!((stem[0].y - 28.0 / BOX).abs() < 1e-12);
         assert!((stem[1].y - 7.0 / BOX).abs() < 1e-12);
         for c in ('0'..='9').chain('A'..='Z').chain('a'..='z') {
-            assert!(glyph("futural", c).is_some_and(|(s, _)| !s.is_empty()), "{c}");
+            assert!(
+                glyph("futural", c).is_some_and(|(s, _)| !s.is_empty()),
+                "{c}"
+            );
         }
         assert!(glyph("futural", ' ').is_none());
         assert!(glyph("nope", 'A').is_none());

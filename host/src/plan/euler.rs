@@ -167,7 +167,10 @@ fn pair_greedy_undirected(
             .iter()
             .enumerate()
             .map(|(k, &v)| (k, pts[u].dist(pts[v])))
-            .fold((usize::MAX, f64::INFINITY), |b, c| if c.1 < b.1 { c } else { b });
+            .fold(
+                (usize::MAX, f64::INFINITY),
+                |b, c| if c.1 < b.1 { c } else { b },
+            );
         let v = odd.swap_remove(k);
         edges.push((u, v, None));
     }
@@ -184,7 +187,10 @@ fn pair_greedy_directed(
             .iter()
             .enumerate()
             .map(|(k, &v)| (k, pts[u].dist(pts[v])))
-            .fold((usize::MAX, f64::INFINITY), |b, c| if c.1 < b.1 { c } else { b });
+            .fold(
+                (usize::MAX, f64::INFINITY),
+                |b, c| if c.1 < b.1 { c } else { b },
+            );
         let v = to.swap_remove(k);
         edges.push((u, v, None));
     }
@@ -207,7 +213,10 @@ impl NodeMap {
     }
 
     fn cell(&self, p: Pt) -> (i64, i64) {
-        ((p.x / self.tol).floor() as i64, (p.y / self.tol).floor() as i64)
+        (
+            (p.x / self.tol).floor() as i64,
+            (p.y / self.tol).floor() as i64,
+        )
     }
 
     fn id(&mut self, p: Pt) -> usize {

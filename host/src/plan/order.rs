@@ -17,11 +17,17 @@ const EPS: f64 = 1e-9;
 
 /// Stroke end points and the start of the pen: all ordering needs to know.
 pub struct Problem {
-    a: Vec<Pt>,
-    b: Vec<Pt>,
-    start: Pt,
+    /// End points: 2i is stroke i's start, 2i + 1 its end, 2n the pen start.
+    pts: Vec<Pt>,
+    /// Full distance matrix over `pts` when it is small enough to keep.
+    dm: Option<Vec<f64>>,
     reversible: bool,
 }
+
+/// Largest stroke count for which the distance matrix is kept (~16 MB).
+const MATRIX_MAX: usize = 700;
+
+type Id = usize;
 
 /// A tour: stroke indices in drawing order, and whether each is drawn reversed.
 #[derive(Clone, Debug, PartialEq)]
@@ -44,7 +50,7 @@ pub struct Effort {
 impl Default for Effort {
     fn default() -> Self {
         Effort {
-            kicks: 300,
+            kicks: 200,
             time_limit: Duration::from_secs(3),
             window: 9,
         }
@@ -53,36 +59,46 @@ impl Default for Effort {
 
 impl Problem {
     pub fn new(ends: &[(Pt, Pt)], start: Pt, reversible: bool) -> Self {
+        let mut pts: Vec<Pt> = ends.iter().flat_map(|e| [e.0, e.1]).collect();
+        pts.push(start);
+        let dm = (ends.len() <= MATRIX_MAX).then(|| {
+            pts.iter()
+                .flat_map(|a| pts.iter().map(move |b| a.dist(*b)))
+                .collect()
+        });
         Problem {
-            a: ends.iter().map(|e| e.0).collect(),
-            b: ends.iter().map(|e| e.1).collect(),
-            start,
+            pts,
+            dm,
             reversible,
         }
     }
 
     pub fn len(&self) -> usize {
-        self.a.len()
+        self.pts.len() / 2
     }
 
     pub fn is_empty(&self) -> bool {
-        self.a.is_empty()
+        self.len() == 0
     }
 
-    fn entry(&self, i: usize, r: bool) -> Pt {
-        if r {
-            self.b[i]
-        } else {
-            self.a[i]
+    fn start(&self) -> Id {
+        self.pts.len() - 1
+    }
+
+    #[inline]
+    fn d(&self, u: Id, v: Id) -> f64 {
+        match &self.dm {
+            Some(m) => m[u * self.pts.len() + v],
+            None => self.pts[u].dist(self.pts[v]),
         }
     }
 
-    fn exit(&self, i: usize, r: bool) -> Pt {
-        if r {
-            self.a[i]
-        } else {
-            self.b[i]
-        }
+    fn entry(&self, i: usize, r: bool) -> Id {
+        2 * i + r as usize
+    }
+
+    fn exit(&self, i: usize, r: bool) -> Id {
+        2 * i + !r as usize
     }
 
     pub fn natural(&self) -> Tour {
@@ -93,10 +109,10 @@ impl Problem {
     }
 
     pub fn cost(&self, t: &Tour) -> f64 {
-        let mut at = self.start;
+        let mut at = self.start();
         let mut c = 0.0;
         for (k, &i) in t.order.iter().enumerate() {
-            c += at.dist(self.entry(i, t.rev[k]));
+            c += self.d(at, self.entry(i, t.rev[k]));
             at = self.exit(i, t.rev[k]);
         }
         c
@@ -110,16 +126,16 @@ impl Problem {
             order: Vec::with_capacity(n),
             rev: Vec::with_capacity(n),
         };
-        let mut at = self.start;
+        let mut at = self.start();
         for _ in 0..n {
             let mut best = (f64::INFINITY, 0, false);
             for i in (0..n).filter(|&i| free[i]) {
-                let d = at.dist(self.a[i]);
+                let d = self.d(at, 2 * i);
                 if d < best.0 {
                     best = (d, i, false);
                 }
                 if self.reversible {
-                    let d = at.dist(self.b[i]);
+                    let d = self.d(at, 2 * i + 1);
                     if d < best.0 {
                         best = (d, i, true);
                     }
@@ -182,17 +198,17 @@ impl Problem {
         }
     }
 
-    fn ent(&self, t: &Tour, k: usize) -> Pt {
+    fn ent(&self, t: &Tour, k: usize) -> Id {
         self.entry(t.order[k], t.rev[k])
     }
 
-    fn ext(&self, t: &Tour, k: usize) -> Pt {
+    fn ext(&self, t: &Tour, k: usize) -> Id {
         self.exit(t.order[k], t.rev[k])
     }
 
-    fn before(&self, t: &Tour, k: usize) -> Pt {
+    fn before(&self, t: &Tour, k: usize) -> Id {
         if k == 0 {
-            self.start
+            self.start()
         } else {
             self.ext(t, k - 1)
         }
@@ -209,13 +225,13 @@ impl Problem {
         for i in 0..n {
             let p = self.before(t, i);
             let ei = self.ent(t, i);
-            let d_pi = p.dist(ei);
+            let d_pi = self.d(p, ei);
             for j in i..n {
                 let xj = self.ext(t, j);
-                let mut delta = p.dist(xj) - d_pi;
+                let mut delta = self.d(p, xj) - d_pi;
                 if j + 1 < n {
                     let q = self.ent(t, j + 1);
-                    delta += ei.dist(q) - xj.dist(q);
+                    delta += self.d(ei, q) - self.d(xj, q);
                 }
                 if delta < -EPS {
                     t.order[i..=j].reverse();
@@ -267,16 +283,16 @@ impl Problem {
         let p = self.before(t, i);
         let (si, se) = (self.ent(t, i), self.ext(t, e));
         let next = (e + 1 < n).then(|| self.ent(t, e + 1));
-        let gain = p.dist(si) + next.map_or(0.0, |q| se.dist(q) - p.dist(q));
+        let gain = self.d(p, si) + next.map_or(0.0, |q| self.d(se, q) - self.d(p, q));
         let mut best: Option<(f64, usize, bool)> = None;
         for g in (0..=n).filter(|&g| g < i || g > i + len) {
             let x = self.before(t, g);
             let y = (g < n).then(|| self.ent(t, g));
-            let base = y.map_or(0.0, |y| x.dist(y));
-            let fwd = x.dist(si) + y.map_or(0.0, |y| se.dist(y)) - base;
+            let base = y.map_or(0.0, |y| self.d(x, y));
+            let fwd = self.d(x, si) + y.map_or(0.0, |y| self.d(se, y)) - base;
             let mut cand = (fwd, false);
             if self.reversible {
-                let bwd = x.dist(se) + y.map_or(0.0, |y| si.dist(y)) - base;
+                let bwd = self.d(x, se) + y.map_or(0.0, |y| self.d(si, y)) - base;
                 if bwd < fwd {
                     cand = (bwd, true);
                 }
@@ -310,40 +326,50 @@ impl Problem {
         let q = (s + w < t.order.len()).then(|| self.ent(t, s + w));
         let items: Vec<usize> = t.order[s..s + w].to_vec();
         let fixed: Vec<bool> = t.rev[s..s + w].to_vec();
-        let orients: &[bool] = if self.reversible { &[false, true] } else { &[false] };
         let o_of = |k: usize, o: usize| if self.reversible { o == 1 } else { fixed[k] };
-        let no = orients.len();
+        let no = if self.reversible { 2 } else { 1 };
         let full = (1usize << w) - 1;
         let idx = |m: usize, k: usize, o: usize| (m * w + k) * no + o;
-        let mut dp = vec![f64::INFINITY; (full + 1) * w * no];
-        let mut par = vec![u16::MAX; (full + 1) * w * no];
+        // Distances between every exit and every entry in the window, once.
+        let ks = w * no;
+        let mut d = vec![0.0; ks * ks];
+        for a in 0..ks {
+            let x = self.exit(items[a / no], o_of(a / no, a % no));
+            for b in 0..ks {
+                d[a * ks + b] = self.d(x, self.entry(items[b / no], o_of(b / no, b % no)));
+            }
+        }
+        let mut dp = vec![f64::INFINITY; (full + 1) * ks];
+        let mut par = vec![u16::MAX; (full + 1) * ks];
         for k in 0..w {
             for o in 0..no {
-                dp[idx(1 << k, k, o)] = p.dist(self.entry(items[k], o_of(k, o)));
+                dp[idx(1 << k, k, o)] = self.d(p, self.entry(items[k], o_of(k, o)));
             }
         }
         for m in 1..=full {
-            for k in (0..w).filter(|&k| m & (1 << k) != 0) {
-                for o in 0..no {
-                    let v = dp[idx(m, k, o)];
-                    if !v.is_finite() {
+            for a in 0..ks {
+                let k = a / no;
+                let v = dp[m * ks + a];
+                if m & (1 << k) == 0 || !v.is_finite() {
+                    continue;
+                }
+                let row = &d[a * ks..(a + 1) * ks];
+                for (b, &dab) in row.iter().enumerate() {
+                    let k2 = b / no;
+                    if m & (1 << k2) != 0 {
                         continue;
                     }
-                    let x = self.exit(items[k], o_of(k, o));
-                    for k2 in (0..w).filter(|&k2| m & (1 << k2) == 0) {
-                        for o2 in 0..no {
-                            let c = v + x.dist(self.entry(items[k2], o_of(k2, o2)));
-                            let j = idx(m | (1 << k2), k2, o2);
-                            if c < dp[j] {
-                                dp[j] = c;
-                                par[j] = (k * no + o) as u16;
-                            }
-                        }
+                    let j = (m | (1 << k2)) * ks + b;
+                    let c = v + dab;
+                    if c < dp[j] {
+                        dp[j] = c;
+                        par[j] = a as u16;
                     }
                 }
             }
         }
-        let tail = |k: usize, o: usize| q.map_or(0.0, |q| self.exit(items[k], o_of(k, o)).dist(q));
+        let tail =
+            |k: usize, o: usize| q.map_or(0.0, |q| self.d(self.exit(items[k], o_of(k, o)), q));
         let mut best = (f64::INFINITY, 0, 0);
         for k in 0..w {
             for o in 0..no {
@@ -353,11 +379,11 @@ impl Problem {
                 }
             }
         }
-        let mut current = p.dist(self.ent(t, s));
+        let mut current = self.d(p, self.ent(t, s));
         for k in s..s + w - 1 {
-            current += self.ext(t, k).dist(self.ent(t, k + 1));
+            current += self.d(self.ext(t, k), self.ent(t, k + 1));
         }
-        current += q.map_or(0.0, |q| self.ext(t, s + w - 1).dist(q));
+        current += q.map_or(0.0, |q| self.d(self.ext(t, s + w - 1), q));
         if best.0 >= current - EPS {
             return false;
         }
@@ -426,7 +452,11 @@ mod tests {
     fn reversal_finds_the_zero_gap_tour() {
         // Three collinear segments given out of order and backwards.
         let p = Problem::new(
-            &[seg(3.0, 0.0, 2.0, 0.0), seg(0.0, 0.0, 1.0, 0.0), seg(5.0, 0.0, 4.0, 0.0)],
+            &[
+                seg(3.0, 0.0, 2.0, 0.0),
+                seg(0.0, 0.0, 1.0, 0.0),
+                seg(5.0, 0.0, 4.0, 0.0),
+            ],
             Pt::new(0.0, 0.0),
             true,
         );
@@ -463,10 +493,18 @@ mod tests {
         permute(&mut perm, 0, &mut |o| {
             for mask in 0..64u32 {
                 let rev = (0..6).map(|k| mask & (1 << k) != 0).collect();
-                best = best.min(p.cost(&Tour { order: o.to_vec(), rev }));
+                best = best.min(p.cost(&Tour {
+                    order: o.to_vec(),
+                    rev,
+                }));
             }
         });
-        assert!((p.cost(&t) - best).abs() < 1e-9, "{} vs {}", p.cost(&t), best);
+        assert!(
+            (p.cost(&t) - best).abs() < 1e-9,
+            "{} vs {}",
+            p.cost(&t),
+            best
+        );
     }
 
     fn permute(v: &mut Vec<usize>, k: usize, f: &mut dyn FnMut(&[usize])) {
