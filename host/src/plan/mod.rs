@@ -41,12 +41,29 @@ pub fn plan(strokes: &[Stroke], start: Pt, opt: &PlanOptions) -> Vec<Stroke> {
     } else {
         strokes.clone()
     };
-    let planned = order_strokes(&joined, start, opt.reverse, opt.effort);
+    let mut planned = order_strokes(&joined, start, opt.reverse, opt.effort);
+    if opt.join {
+        planned = merge_touching(planned);
+    }
     if pen_up_travel(&planned, start) <= pen_up_travel(&strokes, start) {
         planned
     } else {
         strokes
     }
+}
+
+/// Draws consecutive strokes that meet exactly as one (no pen lift).
+pub fn merge_touching(strokes: Vec<Stroke>) -> Vec<Stroke> {
+    let mut out: Vec<Stroke> = Vec::with_capacity(strokes.len());
+    for s in strokes {
+        match out.last_mut() {
+            Some(prev) if s.len() > 1 && prev.len() > 1 && prev.last() == s.first() => {
+                prev.extend_from_slice(&s[1..])
+            }
+            _ => out.push(s),
+        }
+    }
+    out
 }
 
 /// Orders and orients strokes without joining them.

@@ -153,12 +153,16 @@ impl Problem {
     /// and the greedy tours, then iterated local search from the better one.
     pub fn solve(&self, effort: Effort) -> Tour {
         let deadline = Instant::now() + effort.time_limit;
-        let mut best = self.natural();
+        let mut best = self.greedy();
         self.local_search(&mut best, effort.window, deadline);
-        let mut g = self.greedy();
-        self.local_search(&mut g, effort.window, deadline);
-        if self.cost(&g) < self.cost(&best) {
-            best = g;
+        // The natural order as a second start (small sets; for large ones it
+        // would eat the time budget) or at least as a floor.
+        let mut nat = self.natural();
+        if self.len() <= MATRIX_MAX {
+            self.local_search(&mut nat, effort.window, deadline);
+        }
+        if self.cost(&nat) < self.cost(&best) {
+            best = nat;
         }
         let mut best_cost = self.cost(&best);
         let mut rng = XorShift(0x9E37_79B9_7F4A_7C15);
@@ -186,10 +190,12 @@ impl Problem {
     pub fn local_search(&self, t: &mut Tour, window: usize, deadline: Instant) {
         loop {
             let mut improved = false;
-            while Instant::now() < deadline && (self.two_opt(t) | self.or_opt(t)) {
+            while Instant::now() < deadline
+                && (self.two_opt(t, deadline) | self.or_opt(t, deadline))
+            {
                 improved = true;
             }
-            if window > 1 && Instant::now() < deadline && self.window_dp(t, window) {
+            if window > 1 && Instant::now() < deadline && self.window_dp(t, window, deadline) {
                 improved = true;
             }
             if !improved || Instant::now() >= deadline {
@@ -216,13 +222,16 @@ impl Problem {
 
     /// One first-improvement pass of segment reversal (which also reverses
     /// every stroke inside; j == i is a single flip). Needs reversible strokes.
-    pub fn two_opt(&self, t: &mut Tour) -> bool {
+    pub fn two_opt(&self, t: &mut Tour, deadline: Instant) -> bool {
         if !self.reversible {
             return false;
         }
         let n = t.order.len();
         let mut improved = false;
         for i in 0..n {
+            if i % 64 == 0 && Instant::now() >= deadline {
+                break;
+            }
             let p = self.before(t, i);
             let ei = self.ent(t, i);
             let d_pi = self.d(p, ei);
@@ -249,12 +258,15 @@ impl Problem {
 
     /// One first-improvement pass moving chains of 1..=3 strokes elsewhere,
     /// reversed too when strokes are reversible.
-    pub fn or_opt(&self, t: &mut Tour) -> bool {
+    pub fn or_opt(&self, t: &mut Tour, deadline: Instant) -> bool {
         let n = t.order.len();
         let mut improved = false;
         for len in 1..=3usize {
             let mut i = 0;
             while i + len <= n {
+                if i % 64 == 0 && Instant::now() >= deadline {
+                    return improved;
+                }
                 if let Some((g, rev)) = self.best_insertion(t, i, len) {
                     let mut seg_o: Vec<usize> = t.order.drain(i..i + len).collect();
                     let mut seg_r: Vec<bool> = t.rev.drain(i..i + len).collect();
@@ -308,7 +320,7 @@ impl Problem {
     /// Exact re-ordering of every window of `w` consecutive strokes, with the
     /// stroke before and after the window fixed: DP over subsets x last
     /// stroke x orientation. Returns whether any window improved.
-    pub fn window_dp(&self, t: &mut Tour, w: usize) -> bool {
+    pub fn window_dp(&self, t: &mut Tour, w: usize, deadline: Instant) -> bool {
         let n = t.order.len();
         let w = w.min(n).min(12);
         if w < 2 {
@@ -316,6 +328,9 @@ impl Problem {
         }
         let mut improved = false;
         for s in 0..=n - w {
+            if Instant::now() >= deadline {
+                break;
+            }
             improved |= self.solve_window(t, s, w);
         }
         improved
@@ -486,7 +501,7 @@ mod tests {
         let ends: Vec<_> = (0..6).map(|_| seg(r(), r(), r(), r())).collect();
         let p = Problem::new(&ends, Pt::new(0.0, 0.0), true);
         let mut t = p.natural();
-        p.window_dp(&mut t, 6);
+        p.window_dp(&mut t, 6, Instant::now() + Duration::from_secs(60));
         // Brute force over all orders and orientations.
         let mut best = f64::INFINITY;
         let mut perm: Vec<usize> = (0..6).collect();
