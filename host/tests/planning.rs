@@ -98,10 +98,10 @@ proptest! {
             parent[ra] = rb;
         }
         let mut odd: HashMap<usize, usize> = HashMap::new();
-        for v in 0..16 {
-            if deg[v] > 0 {
+        for (v, &d) in deg.iter().enumerate() {
+            if d > 0 {
                 let r = find(&mut parent, v);
-                *odd.entry(r).or_default() += deg[v] % 2;
+                *odd.entry(r).or_default() += d % 2;
             }
         }
         let expect: usize = odd.values().map(|&o| (o / 2).max(1)).sum();
