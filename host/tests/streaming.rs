@@ -1,124 +1,14 @@
-//! The streamer against an in-process fake Grbl that models the 128-byte
-//! receive buffer: it counts every non-real-time byte that arrives, consumes
-//! lines slowly (so the buffer really fills), and records any overflow.
+//! The streamer against the in-process fake Grbl (tests/common), which
+//! records any overflow of the 128-byte receive buffer.
 
+mod common;
+
+use common::FakeGrbl;
 use inkstep_host::stream::grbl::Status;
-use inkstep_host::stream::streamer::{prepare, stream, Config, Line, Observer, Outcome, Transport};
-use std::collections::VecDeque;
-use std::io;
-use std::sync::atomic::{AtomicBool, Ordering};
+use inkstep_host::stream::streamer::{prepare, stream, Config, Line, Observer, Outcome};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Duration;
-
-struct FakeGrbl {
-    rx: Vec<u8>,
-    out: VecDeque<u8>,
-    max_fill: usize,
-    overflow: bool,
-    received: Vec<String>,
-    realtime: Vec<u8>,
-    state: String,
-    motion: u32,
-    tick: u64,
-    /// Set `stop` once this many lines were executed.
-    stop_after: Option<(usize, Arc<AtomicBool>)>,
-}
-
-impl FakeGrbl {
-    fn new() -> Self {
-        FakeGrbl {
-            rx: Vec::new(),
-            out: VecDeque::new(),
-            max_fill: 0,
-            overflow: false,
-            received: Vec::new(),
-            realtime: Vec::new(),
-            state: "Idle".into(),
-            motion: 0,
-            tick: 0,
-            stop_after: None,
-        }
-    }
-    fn say(&mut self, s: &str) {
-        self.out.extend(s.bytes());
-        self.out.extend(b"\r\n");
-    }
-}
-
-impl Transport for FakeGrbl {
-    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
-        for &b in bytes {
-            match b {
-                b'?' => {
-                    self.realtime.push(b);
-                    let s = format!(
-                        "<{}|MPos:0.000,0.000,0.000|Bf:15,{}>",
-                        self.state,
-                        128 - self.rx.len()
-                    );
-                    self.say(&s);
-                }
-                b'!' => {
-                    self.realtime.push(b);
-                    self.state = "Hold:0".into();
-                }
-                0x18 => {
-                    self.realtime.push(b);
-                    self.rx.clear();
-                    self.motion = 0;
-                    self.state = "Idle".into();
-                    self.say("Grbl 1.1h ['$' for help]");
-                }
-                _ => {
-                    self.rx.push(b);
-                    self.max_fill = self.max_fill.max(self.rx.len());
-                    if self.rx.len() > 128 {
-                        self.overflow = true;
-                    }
-                }
-            }
-        }
-        Ok(())
-    }
-
-    fn recv(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        self.tick += 1;
-        // Execute one line every third poll, unless held or in alarm.
-        let running = !self.state.starts_with("Hold") && !self.state.starts_with("Alarm");
-        if running && self.tick.is_multiple_of(3) {
-            if let Some(i) = self.rx.iter().position(|&b| b == b'\n') {
-                let line: Vec<u8> = self.rx.drain(..=i).collect();
-                let text = String::from_utf8_lossy(&line[..line.len() - 1]).to_string();
-                self.received.push(text.clone());
-                if text.contains("G999") {
-                    self.say("error:20");
-                } else if text.contains("LIMIT") {
-                    self.state = "Alarm".into();
-                    self.say("ALARM:1");
-                } else {
-                    self.say("ok");
-                    self.motion += 2;
-                    self.state = "Run".into();
-                }
-                if let Some((n, flag)) = &self.stop_after {
-                    if self.received.len() >= *n {
-                        flag.store(true, Ordering::SeqCst);
-                    }
-                }
-            } else if self.motion > 0 {
-                self.motion -= 1;
-                if self.motion == 0 && self.state == "Run" {
-                    self.state = "Idle".into();
-                }
-            }
-        }
-        let n = buf.len().min(self.out.len());
-        for (i, b) in self.out.drain(..n).enumerate() {
-            buf[i] = b;
-        }
-        Ok(n)
-    }
-}
 
 #[derive(Default)]
 struct Log {
