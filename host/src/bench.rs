@@ -54,8 +54,20 @@ pub fn run(text: &str, opts: &PlanOptions, vpype: Option<&str>) -> Result<Vec<Ro
     let greedy = plan::apply(&strokes, &Problem::new(&ends, start, opts.reverse).greedy());
     rows.push(row("greedy nearest end", &greedy, start, t0));
     let t0 = Instant::now();
+    let mut quick = *opts;
+    quick.effort.kicks = 0;
+    let ours = plan::plan(&strokes, start, &quick);
+    rows.push(row("inkstep, local search only", &ours, start, t0));
+    let t0 = Instant::now();
     let ours = plan::plan(&strokes, start, opts);
-    rows.push(row("inkstep plan", &ours, start, t0));
+    rows.push(row("inkstep plan (default)", &ours, start, t0));
+    let t0 = Instant::now();
+    let keep = PlanOptions {
+        reverse: false,
+        ..*opts
+    };
+    let ours = plan::plan(&strokes, start, &keep);
+    rows.push(row("inkstep --keep-direction", &ours, start, t0));
     if let Some(cmd) = vpype {
         match run_vpype(cmd, &strokes) {
             Ok((s, ms)) => {
