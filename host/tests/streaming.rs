@@ -191,3 +191,41 @@ fn prepare_strips_and_rejects_oversized_lines() {
     let long = format!("G1 X{}\n", "1".repeat(130));
     assert!(prepare(&long, 128).unwrap_err().contains("line 1"));
 }
+
+#[test]
+fn a_larger_advertised_buffer_is_used_and_respected() {
+    let lines = prepare(&program(300), 128).unwrap();
+    let mut g = FakeGrbl::new();
+    g.rx_cap = 256;
+    let mut log = Log::default();
+    let out = stream(&mut g, &lines, &cfg(), &AtomicBool::new(false), &mut log).unwrap();
+    assert_eq!(out, Outcome::Done { lines: 301 });
+    assert!(!g.overflow);
+    assert!(g.max_fill > 200, "{}", g.max_fill);
+    assert!(log.messages.iter().any(|m| m.contains("256 bytes")));
+}
+
+#[test]
+fn a_broken_link_is_reported_with_the_line() {
+    let lines = prepare(&program(300), 128).unwrap();
+    let mut g = FakeGrbl::new();
+    g.break_after = Some(40);
+    let out = stream(
+        &mut g,
+        &lines,
+        &cfg(),
+        &AtomicBool::new(false),
+        &mut Log::default(),
+    )
+    .unwrap();
+    match out {
+        Outcome::Disconnected {
+            file_line: Some(l),
+            error,
+        } => {
+            assert_eq!(l, lines[40].file_line);
+            assert!(error.contains("link broken"));
+        }
+        o => panic!("{o:?}"),
+    }
+}

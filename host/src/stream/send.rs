@@ -115,6 +115,10 @@ pub fn run(file: &Path, port: &str, baud: u32, status_hz: f64) -> Result<()> {
         Outcome::Locked { state } => {
             bail!("controller is in {state}: unlock with $X (or home with $H) first")
         }
+        Outcome::Disconnected { file_line, error } => {
+            let at = file_line.map_or(String::new(), |l| format!(" at line {l}"));
+            bail!("{name}: connection lost{at}: {error}")
+        }
     }
 }
 

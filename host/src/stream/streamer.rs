@@ -39,7 +39,8 @@ pub struct Line {
 
 #[derive(Clone, Debug)]
 pub struct Config {
-    /// The controller's receive buffer (Grbl: 128).
+    /// The controller's receive buffer (Grbl: 128); a different size that the
+    /// controller advertises in `Bf:` when idle replaces it.
     pub rx_size: usize,
     pub status_interval: Duration,
     /// After the last `ok`, wait until the machine reports Idle.
@@ -79,6 +80,11 @@ pub enum Outcome {
     Interrupted { file_line: Option<usize> },
     /// The controller was already in alarm before the first line.
     Locked { state: String },
+    /// The port failed mid-stream.
+    Disconnected {
+        file_line: Option<usize>,
+        error: String,
+    },
 }
 
 /// Lines worth sending: comments and spaces removed (Grbl ignores spaces,
@@ -132,6 +138,8 @@ impl Rx {
 }
 
 /// Streams `lines`; `stop` set (by Ctrl-C) ends it with hold and reset.
+/// A transport failure after the hello (cable pulled, simulator gone) is
+/// `Outcome::Disconnected` naming the oldest unanswered line.
 pub fn stream<T: Transport>(
     t: &mut T,
     lines: &[Line],
@@ -139,7 +147,27 @@ pub fn stream<T: Transport>(
     stop: &AtomicBool,
     obs: &mut dyn Observer,
 ) -> io::Result<Outcome> {
+    let mut at: Option<Option<usize>> = None;
+    match stream_inner(t, lines, cfg, stop, obs, &mut at) {
+        Err(e) if at.is_some() => Ok(Outcome::Disconnected {
+            file_line: at.flatten(),
+            error: e.to_string(),
+        }),
+        r => r,
+    }
+}
+
+/// `at` becomes Some once the hello is done, holding the oldest unanswered line.
+fn stream_inner<T: Transport>(
+    t: &mut T,
+    lines: &[Line],
+    cfg: &Config,
+    stop: &AtomicBool,
+    obs: &mut dyn Observer,
+    at: &mut Option<Option<usize>>,
+) -> io::Result<Outcome> {
     let mut rx = Rx { acc: Vec::new() };
+    let mut rx_size = cfg.rx_size;
     // Hello: the controller must answer a status request, and not be in alarm.
     t.send(b"?")?;
     let t0 = Instant::now();
@@ -151,6 +179,16 @@ pub fn stream<T: Transport>(
                     obs.status(&s);
                     if s.state.starts_with("Alarm") {
                         return Ok(Outcome::Locked { state: s.state });
+                    }
+                    // At rest the controller's free receive bytes (Bf:) are
+                    // its buffer size: use what it advertises if every line fits.
+                    let longest = lines.iter().map(|l| l.text.len() + 1).max().unwrap_or(0);
+                    if let (true, Some((_, free))) = (s.state == "Idle", s.buffer) {
+                        let free = free as usize;
+                        if free >= 16 && free >= longest && free != rx_size {
+                            obs.message(&format!("receive buffer {free} bytes (from Bf:)"));
+                            rx_size = free;
+                        }
                     }
                     break 'hello;
                 }
@@ -182,13 +220,14 @@ pub fn stream<T: Transport>(
     let mut stale: Option<usize> = None;
     obs.progress(0, lines.len());
     loop {
+        *at = Some(in_flight.front().map(|f| lines[f.0].file_line));
         if stop.load(Ordering::Relaxed) {
             let at = in_flight.front().map(|f| lines[f.0].file_line);
             hold_and_reset(t, &mut rx, cfg, obs)?;
             return Ok(Outcome::Interrupted { file_line: at });
         }
         // A line costs its bytes plus the newline.
-        while next < lines.len() && used + (lines[next].text.len() + 1) <= cfg.rx_size {
+        while next < lines.len() && used + (lines[next].text.len() + 1) <= rx_size {
             let l = &lines[next];
             let mut bytes = Vec::with_capacity(l.text.len() + 1);
             bytes.extend_from_slice(l.text.as_bytes());

@@ -23,6 +23,10 @@ pub struct FakeGrbl {
     pub tick: u64,
     /// Set `stop` once this many lines were executed.
     pub stop_after: Option<(usize, Arc<AtomicBool>)>,
+    /// Receive buffer size (what `Bf:` advertises at rest).
+    pub rx_cap: usize,
+    /// The link breaks once this many lines were executed.
+    pub break_after: Option<usize>,
 }
 
 impl FakeGrbl {
@@ -38,6 +42,8 @@ impl FakeGrbl {
             motion: 0,
             tick: 0,
             stop_after: None,
+            rx_cap: 128,
+            break_after: None,
         }
     }
     fn say(&mut self, s: &str) {
@@ -55,7 +61,7 @@ impl Transport for FakeGrbl {
                     let s = format!(
                         "<{}|MPos:0.000,0.000,0.000|Bf:15,{}>",
                         self.state,
-                        128 - self.rx.len()
+                        self.rx_cap - self.rx.len()
                     );
                     self.say(&s);
                 }
@@ -73,7 +79,7 @@ impl Transport for FakeGrbl {
                 _ => {
                     self.rx.push(b);
                     self.max_fill = self.max_fill.max(self.rx.len());
-                    if self.rx.len() > 128 {
+                    if self.rx.len() > self.rx_cap {
                         self.overflow = true;
                     }
                 }
@@ -84,6 +90,9 @@ impl Transport for FakeGrbl {
 
     fn recv(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         self.tick += 1;
+        if self.break_after.is_some_and(|n| self.received.len() >= n) {
+            return Err(io::Error::new(io::ErrorKind::BrokenPipe, "link broken"));
+        }
         // Execute one line every third poll, unless held or in alarm.
         let running = !self.state.starts_with("Hold") && !self.state.starts_with("Alarm");
         if running && self.tick.is_multiple_of(3) {
