@@ -18,13 +18,25 @@ struct Serial(Box<dyn serialport::SerialPort>);
 impl Transport for Serial {
     fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.0.write_all(bytes)?;
-        self.0.flush()
+        loop {
+            match self.0.flush() {
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                r => return r,
+            }
+        }
     }
     fn recv(&mut self, buf: &mut [u8]) -> io::Result<usize> {
         match self.0.read(buf) {
             Ok(n) => Ok(n),
+            // A timeout is just "nothing yet"; EINTR comes with Ctrl-C,
+            // which the streamer handles through its stop flag.
             Err(e)
-                if e.kind() == io::ErrorKind::TimedOut || e.kind() == io::ErrorKind::WouldBlock =>
+                if matches!(
+                    e.kind(),
+                    io::ErrorKind::TimedOut
+                        | io::ErrorKind::WouldBlock
+                        | io::ErrorKind::Interrupted
+                ) =>
             {
                 Ok(0)
             }
