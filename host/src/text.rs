@@ -47,6 +47,8 @@ pub fn layout(text: &str, size: f64, font: &str) -> Result<Layout> {
                 (g, 1.0)
             } else if let Some(g) = hershey::glyph(font, ch) {
                 g
+            } else if let Some(g) = cjk_punctuation(ch, font) {
+                (g, 1.0)
             } else {
                 missing.push(ch);
                 continue;
@@ -72,6 +74,29 @@ pub fn layout(text: &str, size: f64, font: &str) -> Result<Layout> {
         ((lines.len() - 1) as f64 * LINE_PITCH + 1.0) * size
     };
     Ok(out)
+}
+
+/// Chinese punctuation, which the medians do not cover, in a full box:
+/// full-width ASCII forms and quotes from the Hershey font, the ideographic
+/// full stop as a small circle.
+fn cjk_punctuation(ch: char, font: &str) -> Option<Vec<Stroke>> {
+    let ascii = match ch {
+        '\u{FF01}'..='\u{FF5E}' => char::from_u32(ch as u32 - 0xFEE0)?,
+        '\u{3001}' => ',',
+        '\u{201C}' | '\u{201D}' => '"',
+        '\u{2018}' | '\u{2019}' => '\'',
+        '\u{3002}' => {
+            let circle = (0..=16)
+                .map(|k| {
+                    let a = k as f64 * std::f64::consts::TAU / 16.0;
+                    Pt::new(0.2 + 0.07 * a.cos(), 0.2 + 0.07 * a.sin())
+                })
+                .collect();
+            return Some(vec![circle]);
+        }
+        _ => return None,
+    };
+    hershey::glyph(font, ascii).map(|(g, _)| g)
 }
 
 #[cfg(test)]
@@ -107,6 +132,10 @@ mod tests {
         let b = bounds(&l.strokes[l.char_starts[1]..]).unwrap();
         assert!(a.0.y > b.1.y);
         assert!((l.height - 22.5).abs() < 1e-9);
+        // Chinese punctuation takes a full box.
+        let p = layout("你好，世界！。", 10.0, "futural").unwrap();
+        assert_eq!(p.char_starts.len(), 7);
+        assert!((p.width - 70.0).abs() < 1e-9);
         let err = layout("A\u{1F600}", 10.0, "futural").unwrap_err();
         assert!(err.to_string().contains('\u{1F600}'));
         assert!(layout("A", 10.0, "nope").is_err());
