@@ -20,10 +20,12 @@ pub fn join(strokes: &[Stroke], tol: f64, reversible: bool) -> Vec<Stroke> {
     let mut nodes = NodeMap::new(tol);
     // edge e: (from node, to node, stroke index or None for virtual)
     let mut edges: Vec<(usize, usize, Option<usize>)> = Vec::new();
-    let mut out: Vec<Stroke> = Vec::new();
+    // (smallest input index in the trail, trail): sorted at the end so that
+    // unjoined strokes keep their input order (the planner's "natural").
+    let mut out: Vec<(usize, Stroke)> = Vec::new();
     for (i, s) in strokes.iter().enumerate() {
         if s.len() < 2 {
-            out.push(s.clone());
+            out.push((i, s.clone()));
             continue;
         }
         let u = nodes.id(s[0]);
@@ -87,7 +89,8 @@ pub fn join(strokes: &[Stroke], tol: f64, reversible: bool) -> Vec<Stroke> {
             split_at_virtual(&circuit, &edges, strokes, &mut out);
         }
     }
-    out
+    out.sort_by_key(|t| t.0);
+    out.into_iter().map(|t| t.1).collect()
 }
 
 /// Iterative Hierholzer: the closed walk from `start` over unused edges.
@@ -123,20 +126,23 @@ fn split_at_virtual(
     walk: &[(usize, bool)],
     edges: &[(usize, usize, Option<usize>)],
     strokes: &[Stroke],
-    out: &mut Vec<Stroke>,
+    out: &mut Vec<(usize, Stroke)>,
 ) {
     let first_virtual = walk.iter().position(|&(e, _)| edges[e].2.is_none());
     let rot = first_virtual.map_or(0, |k| k + 1);
     let mut trail: Stroke = Vec::new();
+    let mut first = usize::MAX;
     for k in 0..walk.len() {
         let (e, fwd) = walk[(rot + k) % walk.len()];
         match edges[e].2 {
             None => {
                 if !trail.is_empty() {
-                    out.push(std::mem::take(&mut trail));
+                    out.push((first, std::mem::take(&mut trail)));
+                    first = usize::MAX;
                 }
             }
             Some(i) => {
+                first = first.min(i);
                 let s = &strokes[i];
                 let pts: Box<dyn Iterator<Item = &Pt>> = if fwd {
                     Box::new(s.iter())
@@ -153,7 +159,7 @@ fn split_at_virtual(
         }
     }
     if !trail.is_empty() {
-        out.push(trail);
+        out.push((first, trail));
     }
 }
 
@@ -273,5 +279,15 @@ mod tests {
         let out = join(&strokes, 1e-6, false);
         assert_eq!(out.len(), 1);
         assert_eq!(out[0], s(&[(0.0, 0.0), (1.0, 0.0), (2.0, 0.0), (1.0, 0.0)]));
+    }
+
+    #[test]
+    fn strokes_without_junctions_keep_their_order() {
+        let strokes: Vec<Stroke> = (0..6)
+            .map(|k| s(&[(k as f64 * 3.0, 0.0), (k as f64 * 3.0 + 1.0, 0.0)]))
+            .rev()
+            .collect();
+        assert_eq!(join(&strokes, 1e-6, true), strokes);
+        assert_eq!(join(&strokes, 1e-6, false), strokes);
     }
 }

@@ -522,6 +522,31 @@ mod tests {
         );
     }
 
+    #[test]
+    fn directed_window_dp_matches_brute_force() {
+        let mut rng = XorShift(777);
+        let mut r = || rng.below(1000) as f64 / 10.0;
+        let ends: Vec<_> = (0..7).map(|_| seg(r(), r(), r(), r())).collect();
+        let p = Problem::new(&ends, Pt::new(0.0, 0.0), false);
+        let mut t = p.natural();
+        p.window_dp(&mut t, 7, Instant::now() + Duration::from_secs(60));
+        let mut best = f64::INFINITY;
+        let mut perm: Vec<usize> = (0..7).collect();
+        permute(&mut perm, 0, &mut |o| {
+            best = best.min(p.cost(&Tour {
+                order: o.to_vec(),
+                rev: vec![false; 7],
+            }));
+        });
+        assert!(t.rev.iter().all(|r| !r));
+        assert!(
+            (p.cost(&t) - best).abs() < 1e-9,
+            "{} vs {}",
+            p.cost(&t),
+            best
+        );
+    }
+
     fn permute(v: &mut Vec<usize>, k: usize, f: &mut dyn FnMut(&[usize])) {
         if k == v.len() {
             f(v);
