@@ -1,6 +1,6 @@
 //! Reading G-code back: a small parser for the dialect the tool writes and
-//! simple sender files (G0/G1, G20/G21, G90/G91, G92 ignored, M3/M5, Z pen),
-//! used by the preview and by the Grbl-compatibility check. It is not the
+//! for sender files (G0-G3 with I/J or R arcs flattened, G20/G21, G90/G91,
+//! M3/M5 or a Z pen), used by the preview and by the Grbl-compatibility check. It is not the
 //! firmware's interpreter (that lives in inkstep-core); it only needs the
 //! XY path and whether the pen is down.
 
@@ -98,9 +98,10 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
     let mut out = Vec::new();
     for (k, ws) in lines.iter().enumerate() {
         let (mut x, mut y, mut nz) = (None, None, None);
+        let (mut i, mut j, mut r) = (0.0, 0.0, None);
         for &(c, v) in ws {
             match (c, v) {
-                ('G', g) if g == 0.0 || g == 1.0 => motion = g as u8,
+                ('G', g) if g == 0.0 || g == 1.0 || g == 2.0 || g == 3.0 => motion = g as u8,
                 ('G', 20.0) => scale = 25.4,
                 ('G', 21.0) => scale = 1.0,
                 ('G', 90.0) => absolute = true,
@@ -110,6 +111,9 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
                 ('X', v) => x = Some(v * scale),
                 ('Y', v) => y = Some(v * scale),
                 ('Z', v) => nz = Some(v * scale),
+                ('I', v) => i = v * scale,
+                ('J', v) => j = v * scale,
+                ('R', v) => r = Some(v * scale),
                 _ => {}
             }
         }
@@ -125,11 +129,27 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
             Pt::new(pos.x + x.unwrap_or(0.0), pos.y + y.unwrap_or(0.0))
         };
         let down = if uses_m3 { m3 } else { z < zmid };
-        let kind = if motion == 1 && down {
+        let kind = if motion != 0 && down {
             MoveKind::Draw
         } else {
             MoveKind::Travel
         };
+        if motion == 2 || motion == 3 {
+            let pts = arc_points(pos, to, i, j, r, motion == 2, 0.01)
+                .map_err(|e| anyhow::anyhow!("line {}: {e}", k + 1))?;
+            let mut from = pos;
+            for p in pts {
+                out.push(Move {
+                    from,
+                    to: p,
+                    kind,
+                    line: k + 1,
+                });
+                from = p;
+            }
+            pos = to;
+            continue;
+        }
         out.push(Move {
             from: pos,
             to,
@@ -139,6 +159,86 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
         pos = to;
     }
     Ok(out)
+}
+
+/// Points after `from` along a G2 (`cw`) or G3 arc in the XY plane to `to`,
+/// with the centre at `from + (i, j)` or from the radius `r` (negative: the
+/// arc longer than half a circle), each chord within `tol` of the arc. The
+/// last point is `to` exactly.
+pub fn arc_points(
+    from: Pt,
+    to: Pt,
+    i: f64,
+    j: f64,
+    r: Option<f64>,
+    cw: bool,
+    tol: f64,
+) -> Result<Vec<Pt>> {
+    let centre = match r {
+        None => Pt::new(from.x + i, from.y + j),
+        Some(r) => {
+            let (dx, dy) = (to.x - from.x, to.y - from.y);
+            let d = dx.hypot(dy);
+            if d == 0.0 {
+                bail!("R-form arc with coincident end points");
+            }
+            let h2 = r * r - d * d / 4.0;
+            if h2 < -1e-9 * r * r.max(1.0) {
+                bail!("arc radius {r} too small for the chord {d}");
+            }
+            // Offset of the centre from the chord midpoint, to the right of
+            // the chord for a clockwise arc of at most half a turn.
+            let mut h = h2.max(0.0).sqrt() / d;
+            if !cw {
+                h = -h;
+            }
+            if r < 0.0 {
+                h = -h;
+            }
+            Pt::new(from.x + dx / 2.0 + dy * h, from.y + dy / 2.0 - dx * h)
+        }
+    };
+    let rad = from.dist(centre);
+    let a0 = (from.y - centre.y).atan2(from.x - centre.x);
+    let a1 = (to.y - centre.y).atan2(to.x - centre.x);
+    let tau = std::f64::consts::TAU;
+    let mut sweep = a1 - a0;
+    if cw {
+        while sweep >= 0.0 {
+            sweep -= tau;
+        }
+        if sweep <= -tau {
+            sweep += tau;
+        }
+        // Same start and end with I/J: a full circle.
+        if from.dist(to) < 1e-9 {
+            sweep = -tau;
+        }
+    } else {
+        while sweep <= 0.0 {
+            sweep += tau;
+        }
+        if sweep >= tau {
+            sweep -= tau;
+        }
+        if from.dist(to) < 1e-9 {
+            sweep = tau;
+        }
+    }
+    let step = if rad > tol {
+        2.0 * (1.0 - tol / rad).acos()
+    } else {
+        tau
+    };
+    let n = ((sweep.abs() / step).ceil() as usize).clamp(1, 100_000);
+    let mut pts: Vec<Pt> = (1..n)
+        .map(|k| {
+            let a = a0 + sweep * k as f64 / n as f64;
+            Pt::new(centre.x + rad * a.cos(), centre.y + rad * a.sin())
+        })
+        .collect();
+    pts.push(to);
+    Ok(pts)
 }
 
 /// Checks that every line is plain Grbl 1.1 G-code of the kind this tool
@@ -190,6 +290,38 @@ mod tests {
         assert_eq!(m[1].to, Pt::new(25.4, 25.4));
         assert_eq!(m[2].kind, MoveKind::Travel);
         assert_eq!(m[2].line, 6);
+    }
+
+    #[test]
+    fn arcs_in_both_forms_follow_the_circle() {
+        // Quarter circles of radius 10 about the origin, from (10,0) to (0,10).
+        let ccw = parse("G0 X10 Y0\nM3\nG3 X0 Y10 I-10 J0\n").unwrap();
+        let cw_r = parse("G0 X10 Y0\nM3\nG2 X0 Y10 R-10\n").unwrap();
+        for (moves, quarter) in [(&ccw, 1.0), (&cw_r, 3.0)] {
+            let arc: Vec<_> = moves.iter().filter(|m| m.kind == MoveKind::Draw).collect();
+            assert!(arc.len() > 10);
+            assert_eq!(arc.last().unwrap().to, Pt::new(0.0, 10.0));
+            let mut len = 0.0;
+            for m in &arc {
+                assert!((m.to.dist(Pt::new(0.0, 0.0)) - 10.0).abs() < 1e-9);
+                len += m.from.dist(m.to);
+            }
+            // Chord length just under the arc length (quarter or three quarters).
+            let arc_len = quarter * std::f64::consts::FRAC_PI_2 * 10.0;
+            assert!(
+                len < arc_len && len > arc_len * (1.0 - 1e-3),
+                "{len} {arc_len}"
+            );
+        }
+        // A full circle with I/J.
+        let full = parse("G0 X5 Y0\nM3\nG2 X5 Y0 I-5 J0\n").unwrap();
+        let len: f64 = full
+            .iter()
+            .filter(|m| m.kind == MoveKind::Draw)
+            .map(|m| m.from.dist(m.to))
+            .sum();
+        assert!((len - std::f64::consts::TAU * 5.0).abs() < 0.05, "{len}");
+        assert!(parse("G2 X100 Y0 R1").is_err());
     }
 
     #[test]
