@@ -69,12 +69,20 @@ pub fn words(line: &str) -> Result<Vec<(char, f64)>> {
 }
 
 /// The XY moves of a program, with pen state. With no M3 in the file the
-/// pen is taken to be Z: down below the middle of the Z values used.
+/// pen is taken to be Z: down below the middle of the Z values used; with
+/// neither, every feed move (G1-G3) draws.
 pub fn parse(text: &str) -> Result<Vec<Move>> {
     let lines: Vec<Vec<(char, f64)>> = text
         .lines()
         .enumerate()
-        .map(|(k, l)| words(l).map_err(|e| anyhow::anyhow!("line {}: {e}", k + 1)))
+        .map(|(k, l)| {
+            // Grbl system commands ($...) and tape marks (%) move nothing.
+            let t = strip_comment(l);
+            if t.starts_with('$') || t.starts_with('%') {
+                return Ok(Vec::new());
+            }
+            words(l).map_err(|e| anyhow::anyhow!("line {}: {e}", k + 1))
+        })
         .collect::<Result<_>>()?;
     let uses_m3 = lines
         .iter()
@@ -128,7 +136,12 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
         } else {
             Pt::new(pos.x + x.unwrap_or(0.0), pos.y + y.unwrap_or(0.0))
         };
-        let down = if uses_m3 { m3 } else { z < zmid };
+        // No pen commands at all: every feed move draws.
+        let down = if uses_m3 {
+            m3
+        } else {
+            zs.is_empty() || z < zmid
+        };
         let kind = if motion != 0 && down {
             MoveKind::Draw
         } else {
@@ -283,13 +296,13 @@ mod tests {
 
     #[test]
     fn relative_inches_and_z_pen() {
-        let m = parse("G20 G91\nG0 X1\nG1 Z-1\nG1 Y1\nG0 Z1\nG1 X1\n").unwrap();
+        let m = parse("$100=80\n%\nG20 G91\nG0 X1\nG1 Z-1\nG1 Y1\nG0 Z1\nG1 X1\n").unwrap();
         assert_eq!(m.len(), 3);
         assert_eq!(m[0].to, Pt::new(25.4, 0.0));
         assert_eq!(m[1].kind, MoveKind::Draw);
         assert_eq!(m[1].to, Pt::new(25.4, 25.4));
         assert_eq!(m[2].kind, MoveKind::Travel);
-        assert_eq!(m[2].line, 6);
+        assert_eq!(m[2].line, 8);
     }
 
     #[test]
@@ -322,6 +335,12 @@ mod tests {
             .sum();
         assert!((len - std::f64::consts::TAU * 5.0).abs() < 0.05, "{len}");
         assert!(parse("G2 X100 Y0 R1").is_err());
+        // No pen commands: feed moves draw, rapids travel.
+        let plain = parse("G0 X1\nG1 X2\n").unwrap();
+        assert_eq!(
+            (plain[0].kind, plain[1].kind),
+            (MoveKind::Travel, MoveKind::Draw)
+        );
     }
 
     #[test]
