@@ -95,9 +95,9 @@ enum PenMode {
 struct OutArgs {
     #[arg(long, value_enum, default_value = "m3")]
     pen: PenMode,
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, allow_negative_numbers = true)]
     z_up: f64,
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     z_down: f64,
     /// Z feed for pen drops (mm/min).
     #[arg(long, default_value_t = 600.0)]
@@ -109,7 +109,7 @@ struct OutArgs {
     #[arg(long, default_value_t = 0.0)]
     dwell: f64,
     /// Pen start position "X,Y" in mm (the plan starts there, the job ends there).
-    #[arg(long, default_value = "0,0", value_parser = parse_pt)]
+    #[arg(long, default_value = "0,0", value_parser = parse_pt, allow_hyphen_values = true)]
     start: Pt,
     /// Keep the strokes in the given order (no planning).
     #[arg(long)]
