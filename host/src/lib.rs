@@ -1,0 +1,14 @@
+//! inkstep-host: the PC side of inkstep. The binary (main.rs) is only the
+//! command line; everything it does lives in these modules so tests and the
+//! benchmark reach it directly.
+
+pub mod bench;
+pub mod font;
+pub mod gcode_in;
+pub mod gcode_out;
+pub mod geom;
+pub mod plan;
+pub mod preview;
+pub mod stream;
+pub mod svg_in;
+pub mod text;
