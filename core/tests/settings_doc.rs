@@ -1,4 +1,5 @@
-//! docs/grbl.md carries the settings table; this test keeps it equal to the code.
+//! README.md and docs/grbl.md carry the settings table; this test keeps both equal to
+//! the code.
 //! Regenerate with `INKSTEP_BLESS=1 cargo test -p inkstep-core --test settings_doc ...`.
 
 use inkstep_core::settings::{Kind, TABLE};
@@ -25,21 +26,26 @@ fn table() -> String {
     s
 }
 
-#[test]
-fn settings_table_in_docs_matches_the_code() {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/grbl.md");
-    let doc = std::fs::read_to_string(path).expect("docs/grbl.md");
+fn check(file: &str) {
+    let path = format!("{}/../{file}", env!("CARGO_MANIFEST_DIR"));
+    let doc = std::fs::read_to_string(&path).expect(file);
     let start = doc.find(BEGIN).expect("begin marker") + BEGIN.len();
     let end = doc.find(END).expect("end marker");
     let want = table();
     if std::env::var_os("INKSTEP_BLESS").is_some() {
         let new = format!("{}{}{}", &doc[..start], want, &doc[end..]);
-        std::fs::write(path, new).expect("write docs/grbl.md");
+        std::fs::write(&path, new).expect(file);
         return;
     }
-    assert_eq!(
-        &doc[start..end],
-        want,
-        "docs/grbl.md is stale: rerun with INKSTEP_BLESS=1"
-    );
+    assert_eq!(&doc[start..end], want, "{file} is stale: rerun with INKSTEP_BLESS=1");
+}
+
+#[test]
+fn settings_table_in_docs_matches_the_code() {
+    check("docs/grbl.md");
+}
+
+#[test]
+fn settings_table_in_readme_matches_the_code() {
+    check("README.md");
 }
