@@ -14,3 +14,4 @@ pub mod motion;
 pub mod planner;
 pub mod refprog;
 pub mod stepper;
+pub mod trig;

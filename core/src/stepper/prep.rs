@@ -192,7 +192,8 @@ impl Prep {
     }
 
     /// Prepares commands until `sink` is full, the path ends, or a hold comes to rest.
-    pub fn fill(&mut self, planner: &mut Planner, sink: &mut impl CmdSink) {
+    /// `dyn`: one copy compiled in the core (size-optimised), not one per caller.
+    pub fn fill(&mut self, planner: &mut Planner, sink: &mut dyn CmdSink) {
         let cfg = *planner.config();
         while sink.has_room() {
             if self.hold == HoldState::Held {
@@ -296,7 +297,7 @@ impl Prep {
                         _ => (to_q(f64::from(block.length)), None),
                     };
                     let len = match &interp {
-                        Interp::Line(l) => TickLen::Const(len_q / l.ticks().max(1)),
+                        Interp::Line(l) => TickLen::Const(to_q(line_len / l.ticks().max(1) as f64)),
                         Interp::Conic(c) => match c.circle_radius() {
                             Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
                                 let sp = f64::from(cfg.axes[X].steps_per_mm.max(1e-6));
@@ -376,7 +377,12 @@ fn advance_window(a: &mut Active, cfg: &PrepConfig) {
     let t1_abs = a.prof_t0 + (t1 * hz + 0.5) as u64;
     let (s0, t0_abs) = (a.win.s1, a.win.t1_abs);
     let ds = s1.saturating_sub(s0);
-    let k = ((t1_abs - t0_abs) << 32).checked_div(ds).unwrap_or(0);
+    // f64 rather than a u64 division: the planning maths already links it.
+    let k = if ds > 0 {
+        ((t1_abs - t0_abs) as f64 * Q / ds as f64) as u64
+    } else {
+        0
+    };
     let v = if t1 > t0 {
         (ds as f32 / Q as f32) / (t1 - t0) as f32
     } else {
