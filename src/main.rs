@@ -87,6 +87,9 @@ mod app {
         /// The look-ahead planner: the protocol and keypad tasks push moves, the segment
         /// preparation pops blocks.
         planner: Planner,
+        /// The step interrupt's state. Only TIM2 (the ceiling) writes it, lock-free;
+        /// lower tasks lock it briefly to read the machine position (`exec.position()`).
+        step_isr: StepIsr,
         usb: board::Usb,
         serial: board::UsbSerial,
         indicators: board::Indicators,
@@ -96,7 +99,6 @@ mod app {
     struct Local {
         step_port: board::StepPort,
         step_timer: board::StepTimer,
-        step_isr: StepIsr,
         prep: Prep,
         steps_tx: Producer<'static, StepCmd>,
         servo: board::PenServo,
@@ -137,6 +139,7 @@ mod app {
         (
             Shared {
                 planner: Planner::new(cfg, [0; 3]),
+                step_isr,
                 usb: b.usb,
                 serial: b.serial,
                 indicators: b.indicators,
@@ -144,7 +147,6 @@ mod app {
             Local {
                 step_port: b.step_port,
                 step_timer: b.step_timer,
-                step_isr,
                 prep: Prep::new(prep_cfg, [0; 3]),
                 steps_tx,
                 servo: b.servo,
@@ -179,14 +181,19 @@ mod app {
     /// program the period after the next one. Compare event (pulse width later): step
     /// pins low and the direction for the next step. A software pend starts an idle
     /// timer. Integer work only (inkstep_core::stepper::exec).
-    #[task(binds = TIM2, priority = 6, local = [step_port, step_timer, step_isr])]
-    fn step(cx: step::Context) {
+    #[task(binds = TIM2, priority = 6, local = [step_port, step_timer], shared = [step_isr])]
+    fn step(mut cx: step::Context) {
         let step::LocalResources {
             step_port: port,
             step_timer: timer,
-            step_isr: s,
             ..
         } = cx.local;
+        // Priority 6 is this resource's ceiling: the lock costs nothing.
+        cx.shared.step_isr.lock(|s| step_isr_work(s, port, timer));
+    }
+
+    #[inline(always)]
+    fn step_isr_work(s: &mut StepIsr, port: &mut board::StepPort, timer: &mut board::StepTimer) {
         let (update, compare) = timer.take_events();
         if ESTOP.load(Ordering::SeqCst) {
             s.exec.halt();
