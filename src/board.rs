@@ -29,7 +29,7 @@
 //! | PB10     | keypad column 1                 | open-drain                                     |
 //! | PB11     | keypad column 2                 | open-drain                                     |
 //! | PB12     | LCD CS (ST7920 RS)              | active high                                    |
-//! | PB13     | LCD SCK (ST7920 E)              | SPI2, mode 3-compatible 0, 600 kHz             |
+//! | PB13     | LCD SCK (ST7920 E)              | SPI2 mode 0, 281 kHz                           |
 //! | PB15     | LCD MOSI (ST7920 R/W)           | ST7920 PSB tied low (serial mode)              |
 //! | PC13     | busy LED (on board)             | active low                                     |
 //! | PC14     | keypad column 4                 | open-drain (low-speed pin, fine for a keypad)  |
@@ -53,10 +53,13 @@ use usb_device::{bus::UsbBusAllocator, prelude::*};
 
 /// System clock: 72 MHz from the 8 MHz crystal (PLL x9), APB1 36 MHz, USB 48 MHz.
 pub const SYSCLK_HZ: u32 = 72_000_000;
-/// The step timer (TIM2) counts at this rate: APB1 timer clock 72 MHz / prescaler.
-pub const STEP_TIMER_HZ: u32 = 2_000_000;
-/// SPI clock for the ST7920 (its serial interface is specified to ~1 MHz at 5 V).
-pub const LCD_SPI_HZ: u32 = 600_000;
+/// The step timer (TIM2) counts at the full timer clock (APB1 x2 = 72 MHz, prescaler 1):
+/// waits are exact to 14 ns; longer waits than 16 bits are split by the core's executor.
+pub const STEP_TIMER_HZ: u32 = 72_000_000;
+/// SPI clock for the ST7920: the HAL picks 36 MHz / 128 = 281 kHz, so one 24-bit
+/// serial write (85 µs) outlasts the controller's 72 µs execution time and the bytes
+/// can stream back to back without delays (see core::screens::st7920).
+pub const LCD_SPI_HZ: u32 = 300_000;
 /// Watchdog timeout: long enough for the slowest task period, short enough to matter.
 pub const WATCHDOG_MS: u32 = 500;
 
@@ -136,8 +139,10 @@ impl StepTimer {
         // Apply the prescaler now, without taking an interrupt for it.
         tim.egr().write(|w| w.ug().set_bit());
         tim.sr().write(|w| unsafe { w.bits(0) });
-        // ARR is preloaded so a new period takes effect at the next update, never mid-count.
-        tim.cr1().write(|w| w.arpe().set_bit().urs().set_bit());
+        // No ARR preload: the reload written in the update interrupt is the length of
+        // the period that has just begun (the executor's contract). `set_period`
+        // guards against a count that has already passed the new value.
+        tim.cr1().write(|w| w.arpe().clear_bit().urs().set_bit());
         tim.dier().write(|w| w.uie().set_bit().cc1ie().set_bit());
         Self { tim }
     }
@@ -154,16 +159,16 @@ impl StepTimer {
     pub fn set_period(&mut self, ticks: u32) {
         let arr = ticks.clamp(2, 0x1_0000) - 1;
         self.tim.arr().write(|w| unsafe { w.bits(arr) });
+        // Interrupt latency already counted past the new end: end the period now
+        // rather than wrapping through 65536 ticks.
+        if self.tim.cnt().read().bits() >= arr {
+            self.tim.cnt().write(|w| unsafe { w.bits(arr) });
+        }
     }
 
-    /// Start an idle timer with a first period of `ticks` (2..=65536): the period is
-    /// loaded at once (update generation, which raises no interrupt with URS set) so
-    /// the preloaded ARR does not delay it by one period.
-    pub fn start_with_period(&mut self, ticks: u32) {
-        self.set_period(ticks);
-        self.tim.egr().write(|w| w.ug().set_bit());
-        self.tim.sr().write(|w| unsafe { w.bits(!1) });
-        self.tim.cr1().modify(|_, w| w.cen().set_bit());
+    /// The compare value that ends each pulse, in ticks.
+    pub fn pulse_ticks(&self) -> u32 {
+        self.tim.ccr1().read().bits()
     }
 
     pub fn start(&mut self) {
@@ -248,6 +253,16 @@ impl KeypadMatrix {
     }
 }
 
+/// Raw input levels, read together.
+#[derive(Clone, Copy, Debug, defmt::Format)]
+pub struct InputLevels {
+    pub estop_open: bool,
+    pub limit_x_open: bool,
+    pub limit_y_open: bool,
+    pub feed_hold_low: bool,
+    pub cycle_start_low: bool,
+}
+
 /// Safety and control inputs on EXTI.
 pub struct Inputs {
     pub estop: gpio::PB0<Input<PullUp>>,
@@ -270,6 +285,32 @@ impl Inputs {
     }
     pub fn feed_hold_low(&self) -> bool {
         self.feed_hold.is_low()
+    }
+    pub fn cycle_start_low(&self) -> bool {
+        self.cycle_start.is_low()
+    }
+    /// All input levels in one read of GPIOB (usable from any context).
+    pub fn levels() -> InputLevels {
+        // SAFETY: read-only access to GPIOB's input register.
+        let idr = unsafe { (*pac::GPIOB::ptr()).idr().read().bits() };
+        InputLevels {
+            estop_open: idr & (1 << 0) != 0,
+            limit_x_open: idr & (1 << 1) != 0,
+            limit_y_open: idr & (1 << 3) != 0,
+            feed_hold_low: idr & (1 << 4) == 0,
+            cycle_start_low: idr & (1 << 5) == 0,
+        }
+    }
+    /// The feed-hold level read straight from GPIOB, for the EXTI handler (which does
+    /// not own the pins). Low = hold.
+    pub fn read_feed_hold_low() -> bool {
+        // SAFETY: read-only access to GPIOB's input register.
+        unsafe { (*pac::GPIOB::ptr()).idr().read().bits() & (1 << 4) == 0 }
+    }
+    /// The cycle-start level straight from GPIOB. Low = pressed.
+    pub fn read_cycle_start_low() -> bool {
+        // SAFETY: read-only access to GPIOB's input register.
+        unsafe { (*pac::GPIOB::ptr()).idr().read().bits() & (1 << 5) == 0 }
     }
 }
 
@@ -343,7 +384,6 @@ impl embedded_hal::delay::DelayNs for SpinDelay {
 }
 
 pub type LcdSpi = ExclusiveDevice<Spi<pac::SPI2, u8>, ActiveHighCs, SpinDelay>;
-pub type Lcd = st7920::ST7920<LcdSpi, NoPin, NoPin>;
 
 pub type Usb = UsbDevice<'static, UsbBusType>;
 pub type UsbSerial = usbd_serial::SerialPort<'static, UsbBusType>;
@@ -362,7 +402,7 @@ pub struct Board {
     pub keypad: KeypadMatrix,
     pub inputs: Inputs,
     pub indicators: Indicators,
-    pub lcd: Lcd,
+    pub lcd_spi: LcdSpi,
     pub usb: Usb,
     pub serial: UsbSerial,
     pub watchdog: IndependentWatchdog,
@@ -500,7 +540,6 @@ pub fn init(
     );
     // ExclusiveDevice::new fails only if setting CS fails, which is infallible here.
     let Ok(lcd_spi) = ExclusiveDevice::new(spi, cs, SpinDelay);
-    let lcd = st7920::ST7920::new(lcd_spi, NoPin, None, false);
 
     // USB: force a re-enumeration by pulling D+ low briefly (the Blue Pill has a fixed
     // pull-up on D+), then hand the pins to the USB peripheral.
@@ -537,7 +576,7 @@ pub fn init(
         keypad,
         inputs,
         indicators,
-        lcd,
+        lcd_spi,
         usb,
         serial,
         watchdog,

@@ -1,21 +1,38 @@
 //! inkstep firmware: thin RTIC wiring between the Blue Pill's peripherals (`board`) and
-//! the hardware-free core (`inkstep-core`).
+//! the hardware-free core (`inkstep-core`). Every decision is the core's: the tasks
+//! here only move bytes, pins and time between the hardware and the same `Controller`
+//! and `Link` that the simulator drives.
 //!
 //! Priorities (higher preempts lower), as in DESIGN.md:
-//!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3)
-//!   6  step timer (TIM2): executes prepared step events, integer work only
-//!   5  USB (moves bytes between the endpoint and the SPSC queues), segment preparation
-//!      (planner blocks -> timed step commands in the SPSC step queue)
-//!   4  protocol / G-code, feed-hold and cycle-start inputs
-//!   3  keypad scan (every 5 ms) and the watchdog
+//!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3): outputs off at once
+//!   6  step timer (TIM2): the core's `Executor`, integer work only
+//!   5  USB (endpoint <-> SPSC byte queues) and segment preparation (`Link::fill`)
+//!   4  protocol / G-code / machine state, feed-hold and cycle-start inputs
+//!   3  keypad scan (one column every 5 ms), buzzer, the watchdog
 //!   1  LCD refresh: the only task that waits (on its SPI); everything preempts it
 //!   0  idle: WFI
 #![no_std]
 #![no_main]
 
-use inkstep::board;
-
+use core::sync::atomic::{AtomicBool, Ordering};
 use defmt_rtt as _;
+use heapless::spsc::{Consumer, Producer};
+use inkstep::board;
+use inkstep::steps::{
+    self, BoardSide, StepOutput, DIR_INVERT, FOUR_PHASE, HALT, LAST_DIR, LAST_STEPPED, STEP_INVERT,
+};
+use inkstep_core::link::StepSide;
+use inkstep_core::stepper::exec::Executor;
+use inkstep_core::stepper::StepCmd;
+
+/// Step commands between segment preparation and the step interrupt (4 bytes each).
+const STEP_QUEUE: usize = 256;
+/// USB byte queues. RX holds more than Grbl's 128-byte character-counting window.
+const USB_RX: usize = 256;
+const USB_TX: usize = 512;
+
+/// Hard limits stop stepping at once only when `$21` is on.
+static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
 
 /// A fault must leave every motor driver disabled, whatever caused it.
 #[cortex_m_rt::exception]
@@ -46,116 +63,136 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3, SPI1, I2C1_EV])]
 mod app {
-    use core::sync::atomic::{AtomicBool, Ordering};
-    use heapless::spsc::{Consumer, Producer, Queue};
-    use inkstep::board;
-    use inkstep_core::planner::{Planner, PlannerConfig};
-    use inkstep_core::stepper::drive::STEP_QUEUE;
-    use inkstep_core::stepper::exec::{Executor, IsrOut};
-    use inkstep_core::stepper::prep::{Prep, PrepConfig};
-    use inkstep_core::stepper::StepCmd;
+    use super::*;
+    use heapless::spsc::Queue;
+    use inkstep_core::controller::Controller;
+    use inkstep_core::link::Link;
+    use inkstep_core::machine::Inputs;
+    use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
+    use inkstep_core::settings::{OutputMode, PenMode, Settings};
+    use inkstep_core::settings_store::{block_on, BlockingFlash, SettingsStore, STORE_RANGE};
+    use inkstep_core::stepper::prep::PrepConfig;
     use rtic_monotonics::systick::prelude::*;
     use stm32f1xx_hal::usb::UsbBusType;
     use usb_device::bus::UsbBusAllocator;
 
     systick_monotonic!(Mono, 1_000);
 
-    /// Latched by the e-stop input (priority 7); the step interrupt checks it before
-    /// every pulse and halts the executor, so no step follows it.
-    static ESTOP: AtomicBool = AtomicBool::new(false);
-    /// Feed hold / cycle start requests for the segment preparation.
-    static HOLD_REQ: AtomicBool = AtomicBool::new(false);
-    static RESUME_REQ: AtomicBool = AtomicBool::new(false);
-
-    /// Step pulse width: 2 us at the 2 MHz step-timer clock (A4988/DRV8825 need 1-2 us).
-    const PULSE_TICKS: u16 = 4;
-    const STEP_ALL: u8 = (board::STEP_MASK_X | board::STEP_MASK_Y | board::STEP_MASK_Z) as u8;
-
-    /// The step interrupt's state: the executor runs one event ahead of the hardware,
-    /// because TIM2's ARR is preloaded (a period written now applies after the next
-    /// update). `next` holds the step to pulse at the next update.
-    pub struct StepIsr {
-        exec: Executor,
-        rx: Consumer<'static, StepCmd>,
-        next: IsrOut,
-        /// Direction pins for the step after the present one, written when its pulse ends.
-        dir_after: u8,
-    }
+    type Store = SettingsStore<BlockingFlash<board::SettingsFlash>>;
 
     #[shared]
     struct Shared {
-        /// The look-ahead planner: the protocol and keypad tasks push moves, the segment
-        /// preparation pops blocks.
-        planner: Planner,
-        /// The step interrupt's state. Only TIM2 (the ceiling) writes it, lock-free;
-        /// lower tasks lock it briefly to read the machine position (`exec.position()`).
-        step_isr: StepIsr,
+        ctl: Controller,
+        link: Link<BoardSide>,
         usb: board::Usb,
         serial: board::UsbSerial,
-        indicators: board::Indicators,
     }
 
     #[local]
     struct Local {
-        step_port: board::StepPort,
-        step_timer: board::StepTimer,
-        prep: Prep,
-        steps_tx: Producer<'static, StepCmd>,
+        step_out: StepOutput,
         servo: board::PenServo,
         keypad: board::KeypadMatrix,
         inputs: board::Inputs,
-        lcd: board::Lcd,
+        indicators: board::Indicators,
+        lcd_spi: board::LcdSpi,
         watchdog: stm32f1xx_hal::watchdog::IndependentWatchdog,
+        store: Store,
+        usb_rx_in: Producer<'static, u8>,
+        usb_rx_out: Consumer<'static, u8>,
+        usb_tx_in: Producer<'static, u8>,
+        usb_tx_out: Consumer<'static, u8>,
     }
 
     #[init(local = [
         usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
         steps: Queue<StepCmd, STEP_QUEUE> = Queue::new(),
+        usb_rxq: Queue<u8, USB_RX> = Queue::new(),
+        usb_txq: Queue<u8, USB_TX> = Queue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let mut b = board::init(cx.device, cx.local.usb_bus);
-        b.step_timer.set_pulse_ticks(PULSE_TICKS);
+        let b = board::init(cx.device, cx.local.usb_bus);
+        Mono::start(cx.core.SYST, b.sysclk_hz);
+
+        // Settings from flash; a corrupt store falls back to defaults and says so.
+        let mut store = match SettingsStore::new(BlockingFlash(b.flash), STORE_RANGE) {
+            Ok(s) => s,
+            // STORE_RANGE is a constant that fits the chip; this cannot happen.
+            Err(_) => defmt::panic!("settings flash range"),
+        };
+        let (settings, load) = block_on(store.load_settings());
+        let (coords, _) = block_on(store.load_coords());
+        let mut ctl = Controller::new(settings.clone(), 0);
+        if let Some(msg) = load.message() {
+            defmt::warn!("settings: {}", msg);
+            ctl.protocol_mut().notify(msg);
+        }
+        ctl.protocol_mut().machine_mut().set_coords(coords);
+        for i in 0..2 {
+            let (line, _) = block_on(store.load_startup(i));
+            ctl.protocol_mut().set_startup_line(i, line.as_str());
+        }
+
         let (steps_tx, steps_rx) = cx.local.steps.split();
-        let cfg = PlannerConfig::default();
-        let prep_cfg = PrepConfig {
+        steps::install(Executor::new([0; 3], 0x1_0000), steps_rx);
+        let prep = PrepConfig {
             timer_hz: board::STEP_TIMER_HZ,
             ..PrepConfig::default()
         };
-        let step_isr = StepIsr {
-            exec: Executor::new([0; 3], 0x1_0000),
-            rx: steps_rx,
-            next: IsrOut::default(),
-            dir_after: 0,
-        };
-        Mono::start(cx.core.SYST, b.sysclk_hz);
+        let link = Link::new(&settings, prep, BoardSide { tx: steps_tx });
+        let (usb_rx_in, usb_rx_out) = cx.local.usb_rxq.split();
+        let (usb_tx_in, usb_tx_out) = cx.local.usb_txq.split();
+
+        let mut step_port = b.step_port;
+        let mut step_timer = b.step_timer;
+        apply_output_settings(&settings, &mut step_port, &mut step_timer);
+
         defmt::info!(
             "inkstep {} up, sysclk {} Hz",
             env!("CARGO_PKG_VERSION"),
             b.sysclk_hz
         );
+        prepare::spawn().ok();
+        protocol::spawn().ok();
         keypad_scan::spawn().ok();
         lcd_refresh::spawn().ok();
-        segment_prep::spawn().ok();
         (
             Shared {
-                planner: Planner::new(cfg, [0; 3]),
-                step_isr,
+                ctl,
+                link,
                 usb: b.usb,
                 serial: b.serial,
-                indicators: b.indicators,
             },
             Local {
-                step_port: b.step_port,
-                step_timer: b.step_timer,
-                prep: Prep::new(prep_cfg, [0; 3]),
-                steps_tx,
+                step_out: StepOutput::new(step_port, step_timer),
                 servo: b.servo,
                 keypad: b.keypad,
                 inputs: b.inputs,
-                lcd: b.lcd,
+                indicators: b.indicators,
+                lcd_spi: b.lcd_spi,
                 watchdog: b.watchdog,
+                store,
+                usb_rx_in,
+                usb_rx_out,
+                usb_tx_in,
+                usb_tx_out,
             },
         )
+    }
+
+    /// Output polarity, mode, pulse width and driver enable from the settings.
+    fn apply_output_settings(
+        s: &Settings,
+        port: &mut board::StepPort,
+        timer: &mut board::StepTimer,
+    ) {
+        STEP_INVERT.store(s.step_invert_mask(), Ordering::Relaxed);
+        DIR_INVERT.store(s.dir_invert_mask(), Ordering::Relaxed);
+        FOUR_PHASE.store(s.output_mode() == OutputMode::FourPhase, Ordering::Relaxed);
+        HARD_LIMITS_ARMED.store(s.hard_limits(), Ordering::Relaxed);
+        let ticks = u32::from(s.step_pulse_us()) * (board::STEP_TIMER_HZ / 1_000_000);
+        timer.set_pulse_ticks(ticks.min(0xFFFF) as u16);
+        port.set_drivers_enabled(true, !s.invert_enable());
     }
 
     #[idle]
@@ -165,156 +202,287 @@ mod app {
         }
     }
 
-    /// Emergency stop: highest priority. Outputs off first, then latch the stop that
-    /// the step interrupt honours before its next pulse.
+    /// Emergency stop: highest priority. Drivers off and steps halted before anything
+    /// else; the protocol task raises the alarm when it next reads the inputs (<= 1 ms).
     #[task(binds = EXTI0, priority = 7)]
     fn estop(_: estop::Context) {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
-            ESTOP.store(true, Ordering::SeqCst);
+            HALT.store(true, Ordering::SeqCst);
             rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
-            defmt::warn!("e-stop");
         }
     }
 
-    /// The step timer. Update event: pulse the step pins of the pending event and
-    /// program the period after the next one. Compare event (pulse width later): step
-    /// pins low and the direction for the next step. A software pend starts an idle
-    /// timer. Integer work only (inkstep_core::stepper::exec).
-    #[task(binds = TIM2, priority = 6, local = [step_port, step_timer], shared = [step_isr])]
-    fn step(mut cx: step::Context) {
-        let step::LocalResources {
-            step_port: port,
-            step_timer: timer,
-            ..
-        } = cx.local;
-        // Priority 6 is this resource's ceiling: the lock costs nothing.
-        cx.shared.step_isr.lock(|s| step_isr_work(s, port, timer));
+    /// Limit switches: with hard limits armed, stop stepping at once like the e-stop
+    /// (drivers stay enabled so the position is held); the machine raises the alarm.
+    #[task(binds = EXTI1, priority = 7)]
+    fn limit_x(_: limit_x::Context) {
+        if board::exti_take_pending(1) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
+            HALT.store(true, Ordering::SeqCst);
+            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+        }
     }
 
-    #[inline(always)]
-    fn step_isr_work(s: &mut StepIsr, port: &mut board::StepPort, timer: &mut board::StepTimer) {
-        let (update, compare) = timer.take_events();
-        if ESTOP.load(Ordering::SeqCst) {
-            s.exec.halt();
-            timer.stop();
-            port.write(0, STEP_ALL);
-            return;
+    #[task(binds = EXTI3, priority = 7)]
+    fn limit_y(_: limit_y::Context) {
+        if board::exti_take_pending(3) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
+            HALT.store(true, Ordering::SeqCst);
+            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
         }
-        if compare {
-            let d = s.dir_after & 0b111;
-            port.write(
-                d << board::DIR_SHIFT,
-                STEP_ALL | ((!d & 0b111) << board::DIR_SHIFT),
-            );
-        }
-        if update && timer.is_running() {
-            let now = s.next;
-            if now.step != 0 {
-                port.write(now.step, 0);
-            }
-            s.dir_after = now.dir;
-            if now.reload == 0 {
-                timer.stop();
-                return;
-            }
-            // Fetch the event after this one; its period starts at the next update.
-            s.next = s.exec.on_interrupt(&mut s.rx);
-            if s.next.reload != 0 {
-                timer.set_period(s.next.reload);
-            }
-        } else if !timer.is_running() {
-            // Start: the first event's wait runs now, the one after it is preloaded.
-            if let Some(first) = s.exec.start(&mut s.rx) {
-                let d = first.dir & 0b111;
-                port.write(d << board::DIR_SHIFT, (!d & 0b111) << board::DIR_SHIFT);
-                timer.start_with_period(first.reload);
-                s.next = s.exec.on_interrupt(&mut s.rx);
-                if s.next.reload != 0 {
-                    timer.set_period(s.next.reload);
+    }
+
+    /// The step timer: the core's executor, see `inkstep::steps`.
+    #[task(binds = TIM2, priority = 6, local = [step_out])]
+    fn step(cx: step::Context) {
+        cx.local.step_out.on_interrupt();
+    }
+
+    /// USB: poll the device, take bytes from the endpoint only while the RX queue has
+    /// room (so a full queue NAKs the host instead of dropping), send queued output.
+    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial], local = [usb_rx_in, usb_tx_out])]
+    fn usb_lp(cx: usb_lp::Context) {
+        let rx = cx.local.usb_rx_in;
+        let tx = cx.local.usb_tx_out;
+        (cx.shared.usb, cx.shared.serial).lock(|usb, serial| {
+            usb.poll(&mut [serial]);
+            let mut buf = [0u8; 64];
+            let room = rx.capacity() - rx.len();
+            if room >= buf.len() {
+                if let Ok(n) = serial.read(&mut buf) {
+                    for &b in buf.iter().take(n) {
+                        let _ = rx.enqueue(b);
+                    }
                 }
             }
-        }
+            let mut out = [0u8; 64];
+            let mut n = 0;
+            while n < out.len() {
+                match tx.peek() {
+                    Some(&b) => {
+                        out[n] = b;
+                        n += 1;
+                        tx.dequeue();
+                    }
+                    None => break,
+                }
+            }
+            if n > 0 {
+                // The CDC class buffers what the endpoint cannot take yet; bytes it
+                // refuses are dropped only if the host stopped reading.
+                let _ = serial.write(out.get(..n).unwrap_or(&[]));
+            }
+        });
     }
 
-    /// Segment preparation: keeps the step queue full from the planner, every
-    /// millisecond, and applies feed hold / cycle start requests.
-    #[task(priority = 5, shared = [planner, indicators], local = [prep, steps_tx])]
-    async fn segment_prep(mut cx: segment_prep::Context) {
+    /// Segment preparation: keep ~10 ms of step commands queued ahead of the interrupt
+    /// and start the timer when it is idle and commands wait.
+    #[task(priority = 5, shared = [link])]
+    async fn prepare(mut cx: prepare::Context) {
         loop {
-            let prep = &mut *cx.local.prep;
-            let tx = &mut *cx.local.steps_tx;
-            let busy = cx.shared.planner.lock(|planner| {
-                if HOLD_REQ.swap(false, Ordering::AcqRel) {
-                    prep.hold();
-                }
-                if RESUME_REQ.swap(false, Ordering::AcqRel) {
-                    prep.resume(planner);
-                }
-                prep.fill(planner, tx);
-                !prep.is_idle(planner)
+            let kick = cx.shared.link.lock(|link| {
+                link.fill();
+                link.side().queued() > 0
             });
-            // Busy output / LED follows motion (queued steps count as motion).
-            let busy = busy || !tx.is_empty();
-            cx.shared.indicators.lock(|ind| ind.set_busy(busy));
-            if !tx.is_empty() {
-                // Starts the timer if it is idle (the interrupt ignores it otherwise).
-                rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+            if kick {
+                steps::kick();
             }
             Mono::delay(1.millis()).await;
         }
     }
 
-    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial])]
-    fn usb_rx(cx: usb_rx::Context) {
-        (cx.shared.usb, cx.shared.serial).lock(|usb, serial| {
-            if usb.poll(&mut [serial]) {
-                let mut buf = [0u8; 64];
-                if let Ok(n) = serial.read(&mut buf) {
-                    let _ = serial.write(buf.get(..n).unwrap_or(&[]));
+    /// The protocol, the machine state and the G-code interpreter, every millisecond:
+    /// inputs, received bytes (only those the protocol takes: back-pressure), the
+    /// periodic work, replies, the busy LED, the pen servo and settings persistence.
+    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: heapless::Vec<u8, 64> = heapless::Vec::new(), save_pending: bool = false, pen: Option<bool> = None])]
+    async fn protocol(mut cx: protocol::Context) {
+        loop {
+            let now = Mono::now().ticks();
+            let pins = &mut *cx.local.inputs;
+            let carry = &mut *cx.local.carry;
+            while !carry.is_full() {
+                match cx.local.usb_rx_out.dequeue() {
+                    Some(b) => {
+                        let _ = carry.push(b);
+                    }
+                    None => break,
                 }
             }
-        });
-    }
-
-    /// Feed-hold input (the seed's SYNC: pause while low): hold on low, resume on high.
-    #[task(binds = EXTI4, priority = 4, local = [inputs])]
-    fn control_inputs(cx: control_inputs::Context) {
-        if board::exti_take_pending(4) {
-            let low = cx.local.inputs.feed_hold_low();
-            if low {
-                HOLD_REQ.store(true, Ordering::Release);
-            } else {
-                RESUME_REQ.store(true, Ordering::Release);
+            let tx = &mut *cx.local.usb_tx_in;
+            let (busy, settings_changed, pen_down, settings) =
+                (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                    let s = ctl.protocol().machine().settings();
+                    let inputs = Inputs {
+                        estop: pins.estop_open() != s.invert_inputs(),
+                        limits: [
+                            pins.limit_x_open() != s.invert_limits(),
+                            pins.limit_y_open() != s.invert_limits(),
+                            false,
+                        ],
+                        feed_hold: pins.feed_hold_low(),
+                        cycle_start: pins.cycle_start_low(),
+                    };
+                    ctl.protocol_mut().set_inputs(inputs, link, now);
+                    let taken = ctl.usb_rx(carry, link, now);
+                    let taken = taken.min(carry.len());
+                    carry.copy_within(taken.., 0);
+                    carry.truncate(carry.len() - taken);
+                    ctl.poll(link, now);
+                    let mut out = [0u8; 64];
+                    let room = (tx.capacity() - tx.len()).min(out.len());
+                    let n = ctl.usb_tx(&mut out[..room]);
+                    for &b in out.iter().take(n) {
+                        let _ = tx.enqueue(b);
+                    }
+                    let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
+                    if changed {
+                        let s = ctl.protocol().machine().settings().clone();
+                        link.configure(&s);
+                    }
+                    let busy = ctl.take_outputs().busy_led;
+                    (
+                        busy,
+                        changed,
+                        link.pen_down(),
+                        ctl.protocol().machine().settings().clone(),
+                    )
+                });
+            rtic::pend(stm32f1xx_hal::pac::Interrupt::USB_LP_CAN_RX0);
+            // A reset from the alarm (soft reset / $X) clears the latched halt.
+            if HALT.load(Ordering::Relaxed)
+                && !cx
+                    .shared
+                    .ctl
+                    .lock(|c| c.protocol().machine().alarm().is_some())
+            {
+                HALT.store(false, Ordering::SeqCst);
             }
-            defmt::info!("feed hold input low: {}", low);
+            if settings_changed {
+                *cx.local.save_pending = true;
+            }
+            if *cx.local.pen != Some(pen_down) && settings.pen_mode() == PenMode::Servo {
+                cx.local
+                    .servo
+                    .set_pulse_us(settings.pen_servo_pulse_us(pen_down));
+                *cx.local.pen = Some(pen_down);
+            }
+            // Flash writes stall the CPU (instruction fetch waits), so only at rest.
+            if *cx.local.save_pending && !busy {
+                *cx.local.save_pending = false;
+                if block_on(cx.local.store.save_settings(&settings)).is_err() {
+                    defmt::warn!("settings save failed");
+                }
+            }
+            let _ = busy;
+            Mono::delay(1.millis()).await;
         }
     }
 
-    #[task(priority = 3, local = [keypad, watchdog])]
-    async fn keypad_scan(cx: keypad_scan::Context) {
-        let mut col = 0usize;
+    /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.
+    #[task(binds = EXTI4, priority = 4, shared = [ctl, link])]
+    fn feed_hold(mut cx: feed_hold::Context) {
+        if board::exti_take_pending(4) {
+            let now = Mono::now().ticks();
+            (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let mut i = ctl.protocol().machine().inputs();
+                i.feed_hold = board::Inputs::read_feed_hold_low();
+                ctl.protocol_mut().set_inputs(i, link, now);
+            });
+        }
+    }
+
+    #[task(binds = EXTI9_5, priority = 4, shared = [ctl, link])]
+    fn cycle_start(mut cx: cycle_start::Context) {
+        if board::exti_take_pending(5) {
+            let now = Mono::now().ticks();
+            (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let mut i = ctl.protocol().machine().inputs();
+                i.cycle_start = board::Inputs::read_cycle_start_low();
+                ctl.protocol_mut().set_inputs(i, link, now);
+            });
+        }
+    }
+
+    /// The keypad: drive the column the scanner asks for, read its rows one scan
+    /// period later (no busy wait for the lines to settle), hand them to the core.
+    /// Also plays the buzzer patterns and feeds the watchdog.
+    #[task(priority = 3, shared = [ctl, link], local = [keypad, watchdog, indicators])]
+    async fn keypad_scan(mut cx: keypad_scan::Context) {
+        let mut beep: &'static [u16] = &[];
+        let mut beep_left_ms: u32 = 0;
         loop {
+            let col = cx.shared.ctl.lock(|c| c.keypad().column());
             cx.local.keypad.select_column(col);
             Mono::delay(5.millis()).await;
             let rows = cx.local.keypad.read_rows();
-            if rows != 0 {
-                defmt::debug!("key col {} rows {:04b}", col, rows);
+            let now = Mono::now().ticks();
+            let out = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                ctl.key_scan(rows, link, now);
+                ctl.take_outputs()
+            });
+            cx.local.indicators.set_busy(out.busy_led);
+            if let Some(b) = out.beep {
+                beep = b.pattern();
+                beep_left_ms = 0;
             }
-            col = (col + 1) % board::KeypadMatrix::COLUMNS;
+            // Buzzer: step through the on/off pattern in 5 ms ticks.
+            if beep_left_ms == 0 {
+                match beep.split_first() {
+                    Some((&ms, rest)) => {
+                        // Even number of entries left = this one is an "on" time.
+                        cx.local.indicators.set_buzzer(beep.len() % 2 == 1);
+                        beep_left_ms = u32::from(ms);
+                        beep = rest;
+                    }
+                    None => cx.local.indicators.set_buzzer(false),
+                }
+            }
+            beep_left_ms = beep_left_ms.saturating_sub(5);
             cx.local.watchdog.feed();
         }
     }
 
-    #[task(priority = 1, local = [lcd, servo])]
-    async fn lcd_refresh(cx: lcd_refresh::Context) {
-        let mut delay = board::SpinDelay;
-        if cx.local.lcd.init(&mut delay).is_err() {
-            defmt::warn!("LCD init failed");
+    /// The LCD at 10 Hz, lowest priority: take a snapshot of the HMI and the status
+    /// under a short lock, draw it into the frame buffer, send only the changed words.
+    /// The SPI waits here are the only blocking waits in the firmware; every other
+    /// task preempts them.
+    #[task(priority = 1, shared = [ctl, link], local = [lcd_spi])]
+    async fn lcd_refresh(mut cx: lcd_refresh::Context) {
+        let spi = cx.local.lcd_spi;
+        // Retained state of the screens and the 1 KB frame buffer live in this task.
+        let mut screens = Screens::new();
+        let mut fb = FrameBuffer::new();
+        {
+            // The st7920 crate brings the controller up in graphics mode; after that
+            // only the changed bytes are sent (core::screens::st7920).
+            let mut lcd =
+                ::st7920::ST7920::new(&mut *spi, board::NoPin, None::<board::NoPin>, false);
+            if lcd.init(&mut board::SpinDelay).is_err() {
+                defmt::warn!("LCD init failed");
+            }
         }
-        cx.local.servo.set_pulse_us(1000);
+        fb.mark_all_dirty();
         loop {
-            let _ = cx.local.lcd.flush(&mut delay);
+            let now = Mono::now().ticks();
+            let dir = LAST_DIR.load(Ordering::Relaxed);
+            let stepped = LAST_STEPPED.load(Ordering::Relaxed);
+            let sign = |a: u8| {
+                if stepped & (1 << a) == 0 {
+                    0
+                } else if dir & (1 << a) != 0 {
+                    -1
+                } else {
+                    1
+                }
+            };
+            let (hmi, status) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                ctl.note_direction([sign(0), sign(1)]);
+                (ctl.hmi().clone(), ctl.status(link))
+            });
+            let _ = screens.render(&hmi, &status, now, &mut fb);
+            use embedded_hal::spi::SpiDevice;
+            if st7920::flush(&mut fb, |bytes| spi.write(bytes)).is_err() {
+                defmt::warn!("LCD write failed");
+            }
             Mono::delay(100.millis()).await;
         }
     }

@@ -9,15 +9,33 @@
 //! - measurement of step traces against an ideal path: [`analysis`]
 //! - the benchmark programs' G-code subset: [`refprog`]
 //! - compact sine/cosine/arctangent for planning code: [`trig`]
+//! - machine settings and their flash store: [`settings`], [`settings_store`]
+//! - G-code parsing and interpretation: [`gcode`]
+//! - machine state, safety and the planner interface: [`machine`]
+//! - the Grbl 1.1 serial protocol: [`protocol`]
+//! - standalone use: [`keypad`] (scan and debounce), [`hmi`] (menus and drawing modes),
+//!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
+//! - the wiring of protocol, keypad, HMI and planner shared by firmware and simulator:
+//!   [`controller`], and the planner behind the machine's motion trait: [`link`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 
 pub mod analysis;
+pub mod controller;
+pub mod gcode;
+pub mod hmi;
 pub mod interp;
+pub mod keypad;
+pub mod link;
+pub mod machine;
 pub mod motion;
 pub mod planner;
+pub mod protocol;
 pub mod refprog;
+pub mod screens;
+pub mod settings;
+pub mod settings_store;
 pub mod stepper;
 pub mod trig;

@@ -1,1 +1,305 @@
-fn main() {}
+//! `cargo sim ...`: the simulator's command line. Parses arguments and calls the
+//! library; every command's work lives in a module of its own.
+
+use clap::{Parser, Subcommand};
+use inkstep_sim::board::TICK_HZ;
+use inkstep_sim::render::{Drawing, Pen};
+use inkstep_sim::sender::Flow;
+use inkstep_sim::trace::{ticks_to_us_string, Trace, TraceWriter};
+use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "cargo sim",
+    about = "inkstep's simulator: the firmware core on a PC, in virtual time"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Stream a G-code file through the protocol at full speed in virtual time.
+    Run {
+        file: PathBuf,
+        /// Write the step trace (t_us,x,y,z) as CSV.
+        #[arg(long)]
+        trace: Option<PathBuf>,
+        /// Write the drawing as PNG.
+        #[arg(long)]
+        png: Option<PathBuf>,
+        /// Write the drawing as SVG.
+        #[arg(long)]
+        svg: Option<PathBuf>,
+        /// Use character counting (128-byte buffer) instead of send-response.
+        #[arg(long)]
+        char_count: bool,
+    },
+    /// Run the reference programs of shared/bench and compare with Grbl's figures.
+    Bench {
+        /// Folder of the reference programs (default: ../shared/bench beside the repository).
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
+    /// Open a pseudo-terminal that behaves like the board's USB serial port; runs until killed.
+    Serve {
+        /// Also make this path a symlink to the port.
+        #[arg(long)]
+        link: Option<PathBuf>,
+        /// Run virtual time this many times faster than real time.
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+    },
+    /// The standalone demo: boot, menu, sine with preview, star, then a G-code program;
+    /// writes LCD screens, the drawing (PNG, SVG) and prints a summary.
+    Demo {
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+        /// Play this keypad script instead of the demo's (see `keys` in the README:
+        /// key names, NUMBERS, KEY:MS holds, wait:MS, idle, lcd:NAME).
+        #[arg(long)]
+        keys: Option<String>,
+    },
+    /// Plot path speed and per-axis acceleration of a step trace.
+    Plot {
+        trace: PathBuf,
+        #[arg(short, long, default_value = "speed.png")]
+        out: PathBuf,
+        /// Steps per mm of X, Y, Z.
+        #[arg(long, default_value_t = 80.0)]
+        steps_per_mm: f64,
+    },
+    /// Plot the thesis's four acceleration profiles over the same distance.
+    Profiles {
+        #[arg(short, long, default_value = "profiles.png")]
+        out: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let r = match cli.cmd {
+        Cmd::Run {
+            file,
+            trace,
+            png,
+            svg,
+            char_count,
+        } => cmd_run(
+            &file,
+            trace.as_deref(),
+            png.as_deref(),
+            svg.as_deref(),
+            char_count,
+        ),
+        Cmd::Bench { dir } => cmd_bench(dir),
+        Cmd::Demo { out, keys } => cmd_demo(&out, keys.as_deref()),
+        Cmd::Serve { link, speed } => {
+            if !(speed > 0.0 && speed.is_finite()) {
+                return fail("--speed must be a positive number");
+            }
+            inkstep_sim::serve::serve(link.as_deref(), speed, || false).map(|()| ExitCode::SUCCESS)
+        }
+        Cmd::Plot {
+            trace,
+            out,
+            steps_per_mm,
+        } => plot_trace(&trace, &out, steps_per_mm),
+        Cmd::Profiles { out } => plot_profiles(&out),
+    };
+    match r {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn fail(msg: &str) -> ExitCode {
+    eprintln!("error: {msg}");
+    ExitCode::from(2)
+}
+
+fn cmd_run(
+    file: &Path,
+    trace: Option<&Path>,
+    png: Option<&Path>,
+    svg: Option<&Path>,
+    char_count: bool,
+) -> Result<ExitCode, String> {
+    let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let flow = if char_count {
+        Flow::CharCount(inkstep_core::protocol::RX_BUFFER_SIZE)
+    } else {
+        Flow::SendResponse
+    };
+    let r = run::run_gcode(&text, flow);
+    if let Some(path) = trace {
+        let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut w =
+            TraceWriter::new(std::io::BufWriter::new(f), TICK_HZ).map_err(|e| e.to_string())?;
+        for e in &r.events {
+            w.row(r.rel(e.t), e.pos).map_err(|e| e.to_string())?;
+        }
+        w.finish().map_err(|e| e.to_string())?;
+    }
+    let spmm = [
+        f64::from(r.settings.steps_per_mm(0)),
+        f64::from(r.settings.steps_per_mm(1)),
+    ];
+    let drawing = Drawing::from_trace(&r.trace(), [0; 3], spmm, Pen::from_settings(&r.settings));
+    if let Some(path) = png {
+        drawing.write_png(path, 1000)?;
+    }
+    if let Some(path) = svg {
+        std::fs::write(path, drawing.to_svg()).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    let steps: [u32; 3] =
+        [0, 1, 2].map(|a| r.events.iter().filter(|e| e.step & (1 << a) != 0).count() as u32);
+    println!(
+        "{}: {} lines, job time {} s, steps X {} Y {} Z {}, final position {},{},{}",
+        file.display(),
+        r.lines,
+        ticks_to_us_string(
+            r.events.last().map_or(0, |e| r.rel(e.t)),
+            TICK_HZ * 1_000_000
+        ),
+        steps[0],
+        steps[1],
+        steps[2],
+        r.final_pos[0],
+        r.final_pos[1],
+        r.final_pos[2]
+    );
+    for m in &r.messages {
+        println!("{m}");
+    }
+    for e in &r.errors {
+        eprintln!("line {}: {} -> {}", e.line_no, e.text, e.response);
+    }
+    for a in &r.alarms {
+        eprintln!("{a}");
+    }
+    if r.timed_out {
+        eprintln!("the job did not finish within the virtual time limit");
+    }
+    Ok(if r.ok() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+fn cmd_demo(out: &Path, keys: Option<&str>) -> Result<ExitCode, String> {
+    let started = std::time::Instant::now();
+    let s = match keys {
+        None => demo::demo(out)?,
+        Some(script) => {
+            std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+            let mut s = demo::Session::new();
+            s.play(script, out)?;
+            s.part("keypad script", 0);
+            demo::write_drawing(&s, out)?;
+            s
+        }
+    };
+    println!(
+        "inkstep demo: {} LCD screens, drawing.png and drawing.svg in {}",
+        s.shots.len(),
+        out.display()
+    );
+    for (what, a, b, steps) in &s.parts {
+        println!(
+            "  {what:<24} job time {:>7.3} s, {steps} steps",
+            (b - a) as f64 / TICK_HZ as f64
+        );
+    }
+    let pos = s.board.link.side().exec.position();
+    println!(
+        "  virtual time {:.1} s, final position {},{},{} steps; ran in {:.2} s",
+        s.board.now() as f64 / TICK_HZ as f64,
+        pos[0],
+        pos[1],
+        pos[2],
+        started.elapsed().as_secs_f64()
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {
+    let dir = dir.unwrap_or_else(|| paths::shared_dir().join("bench"));
+    let runs = bench::run_all(&dir)?;
+    let rows: Vec<(bench::GrblRow, bench::Figures)> = runs
+        .iter()
+        .map(|b| (b.grbl.clone(), b.ours.clone()))
+        .collect();
+    println!("{}", bench::markdown_table(&rows));
+    let failed = runs
+        .iter()
+        .any(|b| !b.run.ok() || !bench::goal_failures(&b.ours, &b.grbl).is_empty());
+    Ok(if failed {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn plot_trace(path: &Path, out: &Path, spm: f64) -> Result<ExitCode, String> {
+    let trace = Trace::read_file(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let k = kinematics::from_trace(&trace, [spm; 3], 0.001, 0.005, 0.02);
+    let name = path
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    plot::trace_plot(&k, &format!("{name}: speed and acceleration"), out)?;
+    println!("wrote {}", out.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+fn plot_profiles(out: &Path) -> Result<ExitCode, String> {
+    let p = profiles::THESIS;
+    let profs: Vec<profiles::Profile> = profiles::FOUR
+        .iter()
+        .map(|&r| profiles::Profile::same_distance(r, &p))
+        .collect();
+    let t_end = profs.iter().map(|p| p.total()).fold(0.0, f64::max);
+    let curves: Vec<plot::ProfileCurves> = profs
+        .iter()
+        .map(|prof| {
+            let [t, v, a, x] = prof.sample(&p, t_end / 2000.0, prof.total());
+            plot::ProfileCurves {
+                name: format!("{} {:.2} ms", prof.ramp.name(), prof.total() * 1e3),
+                t: t.into_iter().map(|t| t * 1e3).collect(),
+                v,
+                a,
+                x,
+            }
+        })
+        .collect();
+    let title = format!(
+        "Acceleration profiles over the same distance ({} -> {} mm/s, {} mm/s² limit; speed jumps clipped)",
+        p.v_start, p.v_max, p.a_max
+    );
+    plot::profiles_plot(
+        &curves,
+        ["mm/s", "mm/s²", "mm"],
+        "time (ms)",
+        1.5 * p.a_max,
+        &title,
+        out,
+    )?;
+    println!("wrote {}", out.display());
+    for prof in &profs {
+        println!(
+            "{:<20} ramp {:.3} ms, cruise {:.3} ms, total {:.3} ms",
+            prof.ramp.name(),
+            prof.t_ramp * 1e3,
+            prof.t_cruise * 1e3,
+            prof.total() * 1e3
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,208 @@
+//! The controller: the glue the firmware's tasks and the simulator share, so that
+//! neither carries its own copy of it.
+//!
+//! It ties the Grbl [`Protocol`] (and through it the [`Machine`](crate::machine::Machine))
+//! to the keypad scanner and the standalone [`Hmi`], all driving one planner through
+//! the [`MotionControl`] trait. Its methods are the entry points of the firmware's
+//! tasks: bytes from USB ([`Controller::usb_rx`]), bytes to USB ([`Controller::usb_tx`]),
+//! one keypad column scan ([`Controller::key_scan`]), and the periodic background work
+//! ([`Controller::poll`]). The HMI's [`Action`]s are carried out here, in order, through
+//! the machine state so that keypad motion obeys the same rules as G-code.
+//!
+//! Owned by the simulator's issue; kept small on purpose: no decision of the protocol,
+//! the planner or the HMI is made here, only their wiring.
+
+use crate::hmi::{self, Action, Beep, Hmi, MachineState};
+use crate::keypad::{Keypad, KeypadConfig};
+use crate::machine::{Command, MotionControl, RunState};
+use crate::motion::{X, Y, Z};
+use crate::protocol::Protocol;
+use crate::settings::Settings;
+use core::fmt::Write;
+use heapless::String;
+
+/// Jog moves run this far (mm) unless stopped; key release stops them.
+const JOG_REACH_MM: f32 = 1000.0;
+
+/// Outputs of the controller that the firmware drives (buzzer, busy LED).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Outputs {
+    pub busy_led: bool,
+    /// The latest beep to play, taken by the buzzer task.
+    pub beep: Option<Beep>,
+}
+
+pub struct Controller {
+    protocol: Protocol,
+    keypad: Keypad,
+    hmi: Hmi,
+    outputs: Outputs,
+    /// A keypad abort waits for the hold to come to rest, then resets.
+    abort_pending: bool,
+    /// Latest step direction on X and Y (-1, 0, +1), for the teaching view.
+    dir: [i8; 2],
+}
+
+/// The HMI's view of the machine's configuration, from the settings.
+pub fn hmi_config(s: &Settings) -> hmi::Config {
+    hmi::Config {
+        steps_per_mm: [s.steps_per_mm(X), s.steps_per_mm(Y), s.steps_per_mm(Z)],
+        pen_up_mm: s.pen_z_up(),
+        pen_down_mm: s.pen_z_down(),
+        ..hmi::Config::default()
+    }
+}
+
+impl Controller {
+    pub fn new(settings: Settings, now_ms: u32) -> Controller {
+        let cfg = hmi_config(&settings);
+        Controller {
+            protocol: Protocol::new(settings),
+            keypad: Keypad::new(KeypadConfig::default()),
+            hmi: Hmi::new(cfg, now_ms),
+            outputs: Outputs::default(),
+            abort_pending: false,
+            dir: [0, 0],
+        }
+    }
+
+    pub fn protocol(&self) -> &Protocol {
+        &self.protocol
+    }
+    pub fn protocol_mut(&mut self) -> &mut Protocol {
+        &mut self.protocol
+    }
+    pub fn hmi(&self) -> &Hmi {
+        &self.hmi
+    }
+    pub fn keypad(&self) -> &Keypad {
+        &self.keypad
+    }
+
+    /// Takes the outputs: the beep is handed out once.
+    pub fn take_outputs(&mut self) -> Outputs {
+        let o = self.outputs;
+        self.outputs.beep = None;
+        o
+    }
+
+    /// Records the direction of the latest step (the step engine's direction bits).
+    pub fn note_direction(&mut self, dir: [i8; 2]) {
+        self.dir = dir;
+    }
+
+    /// USB bytes in; returns how many were taken (the rest stay in the endpoint).
+    pub fn usb_rx<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
+        self.protocol.receive(bytes, m, now_ms)
+    }
+
+    /// USB bytes out.
+    pub fn usb_tx(&mut self, buf: &mut [u8]) -> usize {
+        self.protocol.read_output(buf)
+    }
+
+    /// The machine as the HMI sees it.
+    pub fn status<M: MotionControl>(&self, m: &M) -> hmi::Status {
+        let state = match self.protocol.machine().state(m) {
+            RunState::Idle | RunState::Check => MachineState::Idle,
+            RunState::Run => MachineState::Run,
+            RunState::Hold { .. } | RunState::Door { .. } => MachineState::Hold,
+            RunState::Jog => MachineState::Jog,
+            RunState::Home => MachineState::Homing,
+            RunState::Alarm => {
+                MachineState::Alarm(self.protocol.machine().alarm().map_or(0, |a| a.code()))
+            }
+        };
+        hmi::Status {
+            state,
+            pos: m.position(),
+            feed_mm_min: m.speed(),
+            queue_empty: m.queued() == 0,
+            dir: self.dir,
+        }
+    }
+
+    /// One keypad column scan: `rows` read while [`Keypad::column`] was driven.
+    pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) {
+        let events = self.keypad.feed(rows, now_ms);
+        for ev in events {
+            let st = self.status(m);
+            let actions = self.hmi.key(ev, &st, now_ms);
+            self.apply(&actions, m);
+        }
+    }
+
+    /// Background work: the protocol's lines and messages, the HMI's timers, the
+    /// completion of a keypad abort, the busy LED.
+    pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
+        self.protocol.poll(m, now_ms);
+        if self.abort_pending && !m.is_moving() {
+            // At rest in a hold: a soft reset drops the queue and keeps the position.
+            self.abort_pending = false;
+            self.protocol.machine_mut().soft_reset(m);
+        }
+        let st = self.status(m);
+        let actions = self.hmi.tick(&st, now_ms);
+        self.apply(&actions, m);
+    }
+
+    fn apply<M: MotionControl>(&mut self, actions: &[Action], m: &mut M) {
+        for a in actions {
+            self.apply_one(a, m);
+        }
+    }
+
+    fn apply_one<M: MotionControl>(&mut self, a: &Action, m: &mut M) {
+        let machine = self.protocol.machine_mut();
+        match *a {
+            Action::Queue(mv) => {
+                // The HMI only starts a job when idle with an empty queue, and a job
+                // fits the planner queue; a refusal here would be a planner bug, so
+                // it becomes an error beep rather than a silently dropped move.
+                if m.push(Command::Move(mv)).is_err() {
+                    self.outputs.beep = Some(Beep::Error);
+                }
+            }
+            Action::JogStart { dir, feed_mm_min } => {
+                let mut body: String<64> = String::new();
+                let _ = write!(body, "G91G21");
+                for (axis, name) in [(X, 'X'), (Y, 'Y')] {
+                    let d = dir[axis];
+                    if d != 0 {
+                        let _ = write!(body, "{}{:.1}", name, f32::from(d) * JOG_REACH_MM);
+                    }
+                }
+                let _ = write!(body, "F{:.0}", feed_mm_min);
+                if machine.jog(body.as_bytes(), m).is_err() {
+                    self.outputs.beep = Some(Beep::Error);
+                }
+            }
+            Action::JogStop => machine.jog_cancel(m),
+            Action::FeedHold => machine.feed_hold(m),
+            Action::Resume => machine.cycle_start(m),
+            Action::Abort => {
+                machine.feed_hold(m);
+                self.abort_pending = true;
+            }
+            Action::Home => {
+                if machine.start_homing(m).is_err() {
+                    self.outputs.beep = Some(Beep::Error);
+                }
+            }
+            Action::SetOrigin => {
+                if m.is_idle() {
+                    let p = m.position();
+                    m.set_position([0, 0, p[Z]]);
+                    // At rest a soft reset raises nothing; it re-reads the position
+                    // into the G-code interpreter so later lines start from here.
+                    machine.soft_reset(m);
+                }
+            }
+            Action::Unlock => {
+                let _ = machine.unlock();
+            }
+            Action::Beep(b) => self.outputs.beep = Some(b),
+            Action::BusyLed(on) => self.outputs.busy_led = on,
+        }
+    }
+}

@@ -1,0 +1,1274 @@
+//! The G-code interpreter: modal state, coordinate systems and the translation of one
+//! block into planner [`Command`]s in steps.
+//!
+//! Each block is checked completely before anything changes (Grbl's rule: a rejected
+//! line has no effect), then applied in the NIST order (feed, pen, dwell, units,
+//! coordinate system, distance mode, non-modal commands, motion, program stop). The
+//! position is kept in machine millimetres and converted to steps per target with
+//! round-half-away-from-zero, so rounding never accumulates. Soft limits are checked
+//! here, on every target of the block (for arcs, on their extent), before any command
+//! leaves.
+
+use super::parser::Block;
+use super::Status;
+use crate::machine::Command;
+use crate::motion::{Feed, Move, Path, StepPos, AXES};
+use crate::settings::{PenMode, Settings};
+use core::f32::consts::{FRAC_PI_2, TAU};
+use core::fmt;
+use heapless::Vec;
+
+/// Most commands one block can queue (pen, G28 intermediate, G28 target, pen at M2).
+pub const MAX_COMMANDS: usize = 4;
+const MM_PER_INCH: f32 = 25.4;
+/// Grbl's tolerance for arc end points that CAM rounding moved off the circle.
+const ARC_ABS_TOL: f32 = 0.005;
+const ARC_MAX_ERR: f32 = 0.5;
+const ARC_REL_TOL: f32 = 0.001;
+/// Largest line number Grbl accepts.
+pub const MAX_LINE_NUMBER: f32 = 9_999_999.0;
+
+/// Motion mode (modal group 1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MotionMode {
+    Rapid,
+    Linear,
+    ArcCw,
+    ArcCcw,
+    Cancel,
+}
+
+/// The modal state reported by `$G`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Modal {
+    pub motion: MotionMode,
+    pub inches: bool,
+    pub incremental: bool,
+    pub inverse_time: bool,
+    /// Active work coordinate system, 0 = G54 .. 5 = G59.
+    pub wcs: u8,
+    pub pen_down: bool,
+}
+
+impl Default for Modal {
+    fn default() -> Self {
+        Modal {
+            motion: MotionMode::Rapid,
+            inches: false,
+            incremental: false,
+            inverse_time: false,
+            wcs: 0,
+            pen_down: false,
+        }
+    }
+}
+
+/// Coordinate data that Grbl keeps across resets (and inkstep in flash).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Coords {
+    /// G54..G59 offsets, mm.
+    pub wcs: [[f32; AXES]; 6],
+    /// G28 and G30 stored positions, machine mm.
+    pub g28: [f32; AXES],
+    pub g30: [f32; AXES],
+}
+
+/// Program flow requested by a block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// M0: pause when the queue has run empty, until cycle start.
+    Pause,
+    /// M2 / M30: end of program (modal state already reset).
+    End,
+}
+
+/// A block's effect for the machine to carry out.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Outcome {
+    pub cmds: Vec<Command, MAX_COMMANDS>,
+    pub stop: Option<Stop>,
+    /// G10, G28.1 or G30.1 changed the coordinate data (worth saving).
+    pub coords_changed: bool,
+}
+
+/// Why a block was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reject {
+    /// `error:N`.
+    Error(Status),
+    /// A target lies outside the travel with soft limits on (alarm 2 for G-code).
+    SoftLimit,
+}
+
+impl From<Status> for Reject {
+    fn from(s: Status) -> Self {
+        Reject::Error(s)
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum NonModal {
+    Dwell,
+    SetCoord,
+    Home28,
+    Set28,
+    Home30,
+    Set30,
+    Absolute,
+    SetG92,
+    ResetG92,
+}
+
+/// The interpreter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Interp {
+    modal: Modal,
+    /// Programmed feed in mm/min (G94) or per-block inverse time; 0 = undefined.
+    feed: f32,
+    spindle: f32,
+    /// Position in machine mm, the end of the last queued block.
+    pos: [f32; AXES],
+    coords: Coords,
+    g92: [f32; AXES],
+}
+
+impl Default for Interp {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+fn set_once<T>(slot: &mut Option<T>, v: T) -> Result<(), Status> {
+    if slot.is_some() {
+        return Err(Status::ModalGroupViolation);
+    }
+    *slot = Some(v);
+    Ok(())
+}
+
+/// mm to steps for one axis, rounding half away from zero (saturating).
+pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
+    libm::roundf(mm * steps_per_mm) as i32
+}
+
+/// Machine mm to a step position.
+pub fn to_steps(mm: &[f32; AXES], s: &Settings) -> StepPos {
+    let mut out = [0; AXES];
+    for (axis, o) in out.iter_mut().enumerate() {
+        *o = mm_to_steps(mm.get(axis).copied().unwrap_or(0.0), s.steps_per_mm(axis));
+    }
+    out
+}
+
+/// Step position to machine mm.
+pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
+    let mut out = [0.0; AXES];
+    for (axis, o) in out.iter_mut().enumerate() {
+        *o = steps.get(axis).copied().unwrap_or(0) as f32 / s.steps_per_mm(axis);
+    }
+    out
+}
+
+/// Largest step coordinate accepted (2^30): leaves headroom for the planner's
+/// differences and sums in `i32`.
+pub const MAX_STEPS: f32 = 1_073_741_824.0;
+
+/// True if `p` (machine mm) converts to steps without leaving the safe range.
+pub fn in_step_range(p: &[f32; AXES], s: &Settings) -> bool {
+    p.iter()
+        .enumerate()
+        .all(|(axis, &v)| libm::fabsf(v * s.steps_per_mm(axis)) < MAX_STEPS)
+}
+
+/// Allowed machine range of `axis` with soft limits, or `None` if unchecked.
+/// Axes homed toward - live in [0, travel], axes homed toward + in [-travel, 0]
+/// (Grbl's convention); axes without a switch ($214) are not checked.
+pub fn travel_range(axis: usize, s: &Settings) -> Option<(f32, f32)> {
+    let bit = 1u8 << axis;
+    if s.switch_mask() & bit == 0 {
+        return None;
+    }
+    let t = s.max_travel(axis);
+    Some(if s.homing_dir_mask() & bit != 0 {
+        (0.0, t)
+    } else {
+        (-t, 0.0)
+    })
+}
+
+/// True if `p` (machine mm) lies within travel on every checked axis.
+pub fn within_travel(p: &[f32; AXES], s: &Settings) -> bool {
+    const EPS: f32 = 1e-4;
+    p.iter()
+        .enumerate()
+        .all(|(axis, &v)| match travel_range(axis, s) {
+            Some((lo, hi)) => v >= lo - EPS && v <= hi + EPS,
+            None => true,
+        })
+}
+
+struct ArcGeom {
+    /// Centre, absolute machine mm (X, Y).
+    center: [f32; 2],
+    radius: f32,
+    start_angle: f32,
+    /// Swept angle, > 0, in the arc's direction.
+    sweep: f32,
+}
+
+impl Interp {
+    pub const fn new() -> Self {
+        Interp {
+            modal: Modal {
+                motion: MotionMode::Rapid,
+                inches: false,
+                incremental: false,
+                inverse_time: false,
+                wcs: 0,
+                pen_down: false,
+            },
+            feed: 0.0,
+            spindle: 0.0,
+            pos: [0.0; AXES],
+            coords: Coords {
+                wcs: [[0.0; AXES]; 6],
+                g28: [0.0; AXES],
+                g30: [0.0; AXES],
+            },
+            g92: [0.0; AXES],
+        }
+    }
+
+    pub fn modal(&self) -> &Modal {
+        &self.modal
+    }
+    pub fn coords(&self) -> &Coords {
+        &self.coords
+    }
+    /// Replace the coordinate data (loaded from flash at boot).
+    pub fn set_coords(&mut self, c: Coords) {
+        self.coords = c;
+    }
+    pub fn g92(&self) -> &[f32; AXES] {
+        &self.g92
+    }
+    /// Position at the end of the queued program, machine mm.
+    pub fn position(&self) -> &[f32; AXES] {
+        &self.pos
+    }
+    /// Last programmed S value.
+    pub fn spindle(&self) -> f32 {
+        self.spindle
+    }
+    /// Feed in mm/min as programmed (0 if undefined).
+    pub fn feed(&self) -> f32 {
+        self.feed
+    }
+    /// The work coordinate offset (active system + G92), mm.
+    pub fn work_offset(&self) -> [f32; AXES] {
+        let wcs = self
+            .coords
+            .wcs
+            .get(usize::from(self.modal.wcs))
+            .copied()
+            .unwrap_or([0.0; AXES]);
+        let mut o = [0.0; AXES];
+        for ((o, w), g) in o.iter_mut().zip(wcs.iter()).zip(self.g92.iter()) {
+            *o = w + g;
+        }
+        o
+    }
+
+    /// Take the position from the planner after a stop that discarded the queue.
+    pub fn sync_position(&mut self, steps: &StepPos, s: &Settings) {
+        self.pos = to_mm(steps, s);
+    }
+
+    /// Soft reset: modal state back to defaults (G0 G54 G17 G21 G90 G94 M5, F0) and
+    /// the G92 offset cleared, as Grbl re-initialises its parser; the position and
+    /// the stored coordinate data stay.
+    pub fn reset_modal(&mut self) {
+        self.modal = Modal::default();
+        self.feed = 0.0;
+        self.spindle = 0.0;
+        self.g92 = [0.0; AXES];
+    }
+
+    /// `[GC:...]` body for `$G` (without brackets).
+    pub fn write_modal<W: fmt::Write>(&self, w: &mut W) -> fmt::Result {
+        let m = &self.modal;
+        let motion = match m.motion {
+            MotionMode::Rapid => "G0",
+            MotionMode::Linear => "G1",
+            MotionMode::ArcCw => "G2",
+            MotionMode::ArcCcw => "G3",
+            MotionMode::Cancel => "G80",
+        };
+        let scale = if m.inches { MM_PER_INCH } else { 1.0 };
+        write!(
+            w,
+            "GC:{} G{} G17 {} {} {} {} M9 T0 F{} S{}",
+            motion,
+            54 + m.wcs,
+            if m.inches { "G20" } else { "G21" },
+            if m.incremental { "G91" } else { "G90" },
+            if m.inverse_time { "G93" } else { "G94" },
+            if m.pen_down { "M3" } else { "M5" },
+            libm::roundf(self.feed / scale) as i32,
+            libm::roundf(self.spindle) as i32,
+        )
+    }
+
+    /// Interpret one cleaned line (no spaces, upper case, no comments).
+    /// `line_no` is used for the queued moves when the block has no N word.
+    pub fn execute(&mut self, line: &[u8], s: &Settings, line_no: u32) -> Result<Outcome, Reject> {
+        let mut b = Block::parse(line)?;
+
+        // --- Group the codes. ---
+        let mut motion: Option<MotionMode> = None;
+        let mut non_modal: Option<NonModal> = None;
+        let mut units: Option<bool> = None;
+        let mut distance: Option<bool> = None;
+        let mut feed_mode: Option<bool> = None;
+        let mut wcs: Option<u8> = None;
+        let mut plane = None;
+        let mut arc_mode = None;
+        let mut comp = None;
+        let mut tlo = None;
+        let mut path_mode = None;
+        for &code in b.g.iter() {
+            match code {
+                0 => set_once(&mut motion, MotionMode::Rapid)?,
+                10 => set_once(&mut motion, MotionMode::Linear)?,
+                20 => set_once(&mut motion, MotionMode::ArcCw)?,
+                30 => set_once(&mut motion, MotionMode::ArcCcw)?,
+                800 => set_once(&mut motion, MotionMode::Cancel)?,
+                40 => set_once(&mut non_modal, NonModal::Dwell)?,
+                100 => set_once(&mut non_modal, NonModal::SetCoord)?,
+                280 => set_once(&mut non_modal, NonModal::Home28)?,
+                281 => set_once(&mut non_modal, NonModal::Set28)?,
+                300 => set_once(&mut non_modal, NonModal::Home30)?,
+                301 => set_once(&mut non_modal, NonModal::Set30)?,
+                530 => set_once(&mut non_modal, NonModal::Absolute)?,
+                920 => set_once(&mut non_modal, NonModal::SetG92)?,
+                921 => set_once(&mut non_modal, NonModal::ResetG92)?,
+                170 => set_once(&mut plane, ())?,
+                200 => set_once(&mut units, true)?,
+                210 => set_once(&mut units, false)?,
+                900 => set_once(&mut distance, false)?,
+                910 => set_once(&mut distance, true)?,
+                911 => set_once(&mut arc_mode, ())?,
+                930 => set_once(&mut feed_mode, true)?,
+                940 => set_once(&mut feed_mode, false)?,
+                400 => set_once(&mut comp, ())?,
+                490 => set_once(&mut tlo, ())?,
+                540 | 550 | 560 | 570 | 580 | 590 => set_once(&mut wcs, (code / 10 - 54) as u8)?,
+                591..=599 => return Err(Status::UnsupportedCoordSys.into()),
+                610 => set_once(&mut path_mode, ())?,
+                _ if code % 10 != 0 && !matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61) => {
+                    return Err(Status::CommandValueNotInteger.into())
+                }
+                _ => return Err(Status::UnsupportedCommand.into()),
+            }
+        }
+        let mut stop: Option<Stop> = None;
+        let mut optional_stop = false;
+        let mut pen: Option<bool> = None;
+        let mut coolant = None;
+        for &code in b.m.iter() {
+            match code {
+                0 => set_once(&mut stop, Stop::Pause)?,
+                // M1 (optional stop) is ignored, as Grbl does without a stop switch.
+                10 => {
+                    if optional_stop {
+                        return Err(Status::ModalGroupViolation.into());
+                    }
+                    optional_stop = true;
+                }
+                20 | 300 => set_once(&mut stop, Stop::End)?,
+                30 | 40 => set_once(&mut pen, true)?,
+                50 => set_once(&mut pen, false)?,
+                70 | 80 | 90 => set_once(&mut coolant, ())?,
+                _ if code % 10 != 0 => return Err(Status::CommandValueNotInteger.into()),
+                _ => return Err(Status::UnsupportedCommand.into()),
+            }
+        }
+        if optional_stop && stop.is_some() {
+            return Err(Status::ModalGroupViolation.into());
+        }
+
+        // --- Value words. ---
+        for letter in [b'F', b'N', b'P', b'S', b'T', b'L'] {
+            if b.get(letter).is_some_and(|v| v < 0.0) {
+                return Err(Status::NegativeValue.into());
+            }
+        }
+        let n_word = b.take(b'N');
+        if n_word.is_some_and(|n| n > MAX_LINE_NUMBER) {
+            return Err(Status::InvalidLineNumber.into());
+        }
+        let line_tag = n_word.map(|n| n as u32).unwrap_or(line_no);
+        if b.take(b'T').is_some_and(|t| t > 255.0) {
+            return Err(Status::MaxValueExceeded.into());
+        }
+        let spindle = b.take(b'S');
+
+        let mut modal = self.modal;
+        if let Some(u) = units {
+            modal.inches = u;
+        }
+        if let Some(d) = distance {
+            modal.incremental = d;
+        }
+        if let Some(w) = wcs {
+            modal.wcs = w;
+        }
+        let scale = if modal.inches { MM_PER_INCH } else { 1.0 };
+
+        let mut feed = self.feed;
+        if let Some(fm) = feed_mode {
+            if fm != modal.inverse_time {
+                feed = 0.0; // switching feed modes leaves the feed undefined
+            }
+            modal.inverse_time = fm;
+        }
+        let f_word = b.take(b'F');
+        if modal.inverse_time {
+            feed = f_word.unwrap_or(0.0); // per block, never modal
+        } else if let Some(f) = f_word {
+            feed = f * scale;
+        }
+
+        let mut axis_words = [None::<f32>; AXES];
+        for (slot, letter) in axis_words.iter_mut().zip([b'X', b'Y', b'Z']) {
+            *slot = b.take(letter).map(|v| v * scale);
+        }
+        let has_axis = axis_words.iter().any(Option::is_some);
+
+        // Which command uses the axis words.
+        let nm_uses_axes = matches!(
+            non_modal,
+            Some(NonModal::SetCoord | NonModal::Home28 | NonModal::Home30 | NonModal::SetG92)
+        );
+        if nm_uses_axes && motion.is_some_and(|m| m != MotionMode::Cancel) {
+            return Err(Status::AxisCommandConflict.into());
+        }
+        if let Some(m) = motion {
+            modal.motion = m;
+        }
+        // Motion runs if it was named in the block, or implicitly for axis words.
+        let motion_cmd = !nm_uses_axes && (motion.is_some() || has_axis);
+        if motion_cmd && modal.motion == MotionMode::Cancel && has_axis {
+            return Err(Status::AxisWordsExist.into());
+        }
+        if non_modal == Some(NonModal::Absolute)
+            && !(motion_cmd && matches!(modal.motion, MotionMode::Rapid | MotionMode::Linear))
+        {
+            return Err(Status::G53InvalidMotionMode.into());
+        }
+        let feed_motion = motion_cmd
+            && matches!(
+                modal.motion,
+                MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
+            );
+        if feed_motion && feed <= 0.0 {
+            return Err(Status::UndefinedFeedRate.into());
+        }
+
+        let mut out = Outcome::default();
+        let mut coords = self.coords;
+        let mut g92 = self.g92;
+        let mut pos = self.pos;
+        let mut planned: Vec<[f32; AXES], 8> = Vec::new();
+
+        // Pen (M3/M4/M5) runs before motion.
+        let pen_change = pen.filter(|&down| down != modal.pen_down);
+        if let Some(down) = pen {
+            modal.pen_down = down;
+        }
+        if let Some(down) = pen_change {
+            match s.pen_mode() {
+                PenMode::Servo => push(&mut out, Command::Pen { down })?,
+                PenMode::ZAxis => {
+                    let mut p = pos;
+                    p[2] = if down { s.pen_z_down() } else { s.pen_z_up() };
+                    planned.push(p).map_err(|_| Status::Overflow)?;
+                    push(&mut out, rapid(&p, s, line_tag))?;
+                    pos = p;
+                }
+            }
+        }
+
+        // --- Targets, in machine mm. ---
+        let offset = {
+            let w = self
+                .coords
+                .wcs
+                .get(usize::from(modal.wcs))
+                .copied()
+                .unwrap_or([0.0; AXES]);
+            let mut o = [0.0; AXES];
+            for ((o, w), g) in o.iter_mut().zip(w.iter()).zip(self.g92.iter()) {
+                *o = w + g;
+            }
+            o
+        };
+        let absolute_override = non_modal == Some(NonModal::Absolute);
+        let mut target = pos;
+        for (axis, t) in target.iter_mut().enumerate() {
+            if let Some(v) = axis_words.get(axis).copied().flatten() {
+                let base = pos.get(axis).copied().unwrap_or(0.0);
+                let off = offset.get(axis).copied().unwrap_or(0.0);
+                *t = if absolute_override {
+                    v
+                } else if modal.incremental {
+                    base + v
+                } else {
+                    v + off
+                };
+            }
+        }
+
+        match non_modal {
+            Some(NonModal::Dwell) => {
+                let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
+                let ms = libm::roundf(p * 1000.0);
+                push(
+                    &mut out,
+                    Command::Dwell {
+                        ms: ms.min(u32::MAX as f32) as u32,
+                    },
+                )?;
+            }
+            Some(NonModal::SetCoord) => {
+                let l = b.take(b'L').ok_or(Status::ValueWordMissing)?;
+                let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
+                if p != libm::truncf(p) || l != libm::truncf(l) {
+                    return Err(Status::CommandValueNotInteger.into());
+                }
+                if p > 6.0 {
+                    return Err(Status::UnsupportedCoordSys.into());
+                }
+                if !has_axis {
+                    return Err(Status::NoAxisWords.into());
+                }
+                let idx = if p == 0.0 {
+                    usize::from(modal.wcs)
+                } else {
+                    p as usize - 1
+                };
+                let l20 = match l as u32 {
+                    2 => false,
+                    20 => true,
+                    _ => return Err(Status::UnsupportedCommand.into()),
+                };
+                if let Some(sys) = coords.wcs.get_mut(idx) {
+                    for (axis, o) in sys.iter_mut().enumerate() {
+                        if let Some(v) = axis_words.get(axis).copied().flatten() {
+                            *o = if l20 {
+                                pos.get(axis).copied().unwrap_or(0.0)
+                                    - g92.get(axis).copied().unwrap_or(0.0)
+                                    - v
+                            } else {
+                                v
+                            };
+                        }
+                    }
+                }
+                out.coords_changed = true;
+            }
+            Some(NonModal::Home28 | NonModal::Home30) => {
+                let stored = if non_modal == Some(NonModal::Home28) {
+                    coords.g28
+                } else {
+                    coords.g30
+                };
+                if has_axis {
+                    planned.push(target).map_err(|_| Status::Overflow)?;
+                    push(&mut out, rapid(&target, s, line_tag))?;
+                }
+                planned.push(stored).map_err(|_| Status::Overflow)?;
+                push(&mut out, rapid(&stored, s, line_tag))?;
+                pos = stored;
+            }
+            Some(NonModal::Set28) => {
+                coords.g28 = pos;
+                out.coords_changed = true;
+            }
+            Some(NonModal::Set30) => {
+                coords.g30 = pos;
+                out.coords_changed = true;
+            }
+            Some(NonModal::SetG92) => {
+                if !has_axis {
+                    return Err(Status::NoAxisWords.into());
+                }
+                let w = coords
+                    .wcs
+                    .get(usize::from(modal.wcs))
+                    .copied()
+                    .unwrap_or([0.0; AXES]);
+                for (axis, g) in g92.iter_mut().enumerate() {
+                    if let Some(v) = axis_words.get(axis).copied().flatten() {
+                        *g = pos.get(axis).copied().unwrap_or(0.0)
+                            - w.get(axis).copied().unwrap_or(0.0)
+                            - v;
+                    }
+                }
+            }
+            Some(NonModal::ResetG92) => g92 = [0.0; AXES],
+            Some(NonModal::Absolute) | None => {}
+        }
+
+        if motion_cmd {
+            let len_and_path = match modal.motion {
+                MotionMode::Rapid | MotionMode::Linear if has_axis => {
+                    Some((path_length(&pos, &target), Path::Line, None))
+                }
+                MotionMode::ArcCw | MotionMode::ArcCcw => {
+                    if !has_axis {
+                        return Err(Status::NoAxisWords.into());
+                    }
+                    if axis_words[0].is_none() && axis_words[1].is_none() {
+                        return Err(Status::NoAxisWordsInPlane.into());
+                    }
+                    let ccw = modal.motion == MotionMode::ArcCcw;
+                    let g = arc_geometry(&mut b, &pos, &target, ccw, scale)?;
+                    let dz = target[2] - pos[2];
+                    let arc_len = hypot(g.radius * g.sweep, dz);
+                    let path = arc_path(&g, &pos, &target, ccw, s);
+                    Some((arc_len, path, Some(g)))
+                }
+                _ => None,
+            };
+            if let Some((len, path, geom)) = len_and_path {
+                if let Some(g) = &geom {
+                    for p in arc_extremes(g, &pos, &target, modal.motion == MotionMode::ArcCcw) {
+                        planned.push(p).map_err(|_| Status::Overflow)?;
+                    }
+                } else {
+                    planned.push(target).map_err(|_| Status::Overflow)?;
+                }
+                let f = if modal.motion == MotionMode::Rapid {
+                    Feed::Rapid
+                } else if modal.inverse_time {
+                    Feed::MmPerMin(len * feed)
+                } else {
+                    Feed::MmPerMin(feed)
+                };
+                let steps = to_steps(&target, s);
+                if steps != to_steps(&pos, s) || geom.is_some() {
+                    push(
+                        &mut out,
+                        Command::Move(Move {
+                            target: steps,
+                            path,
+                            feed: f,
+                            line: line_tag,
+                        }),
+                    )?;
+                }
+                pos = target;
+            }
+        }
+
+        // Everything the block asked for must have been used.
+        let leftover_axes = has_axis && !motion_cmd && !nm_uses_axes;
+        if leftover_axes {
+            return Err(Status::AxisWordsExist.into());
+        }
+        if b.any_value() {
+            return Err(Status::UnusedWords.into());
+        }
+        if !planned.iter().all(|p| in_step_range(p, s)) {
+            return Err(Status::InvalidTarget.into());
+        }
+        if s.soft_limits() && !planned.iter().all(|p| within_travel(p, s)) {
+            return Err(Reject::SoftLimit);
+        }
+
+        if stop == Some(Stop::End) {
+            let pen_was_down = modal.pen_down;
+            modal = Modal {
+                inches: modal.inches,
+                ..Modal::default()
+            };
+            modal.motion = MotionMode::Linear;
+            if pen_was_down {
+                match s.pen_mode() {
+                    PenMode::Servo => push(&mut out, Command::Pen { down: false })?,
+                    PenMode::ZAxis => {
+                        let mut p = pos;
+                        p[2] = s.pen_z_up();
+                        push(&mut out, rapid(&p, s, line_tag))?;
+                        pos = p;
+                    }
+                }
+            }
+        }
+
+        // Commit.
+        self.modal = modal;
+        self.feed = if modal.inverse_time { 0.0 } else { feed };
+        if let Some(sp) = spindle {
+            self.spindle = sp;
+        }
+        self.pos = pos;
+        self.coords = coords;
+        self.g92 = g92;
+        out.stop = stop;
+        Ok(out)
+    }
+
+    /// Interpret the body of a `$J=` jog line (cleaned, without `$J=`): only G20/G21,
+    /// G90/G91, G53, axis words, F and N are allowed; modal state is left unchanged.
+    /// A target outside travel with soft limits on is `error:15`.
+    pub fn jog(&mut self, line: &[u8], s: &Settings) -> Result<Move, Status> {
+        let mut b = Block::parse(line)?;
+        if !b.m.is_empty() {
+            return Err(Status::InvalidJogCommand);
+        }
+        let mut inches = self.modal.inches;
+        let mut incremental = self.modal.incremental;
+        let mut absolute_override = false;
+        for &code in b.g.iter() {
+            match code {
+                200 => inches = true,
+                210 => inches = false,
+                900 => incremental = false,
+                910 => incremental = true,
+                530 => absolute_override = true,
+                _ => return Err(Status::InvalidJogCommand),
+            }
+        }
+        let _ = b.take(b'N');
+        let scale = if inches { MM_PER_INCH } else { 1.0 };
+        let f = b.take(b'F').ok_or(Status::UndefinedFeedRate)?;
+        if f <= 0.0 {
+            return Err(if f < 0.0 {
+                Status::NegativeValue
+            } else {
+                Status::UndefinedFeedRate
+            });
+        }
+        let offset = self.work_offset();
+        let mut target = self.pos;
+        let mut any = false;
+        for (axis, letter) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
+            if let Some(v) = b.take(letter) {
+                any = true;
+                let v = v * scale;
+                if let (Some(t), Some(&p), Some(&o)) =
+                    (target.get_mut(axis), self.pos.get(axis), offset.get(axis))
+                {
+                    *t = if absolute_override {
+                        v
+                    } else if incremental {
+                        p + v
+                    } else {
+                        v + o
+                    };
+                }
+            }
+        }
+        if b.any_value() {
+            return Err(Status::InvalidJogCommand);
+        }
+        if !any {
+            return Err(Status::NoAxisWords);
+        }
+        if !in_step_range(&target, s) {
+            return Err(Status::InvalidTarget);
+        }
+        if s.soft_limits() && !within_travel(&target, s) {
+            return Err(Status::TravelExceeded);
+        }
+        self.pos = target;
+        Ok(Move {
+            target: to_steps(&target, s),
+            path: Path::Line,
+            feed: Feed::MmPerMin(f * scale),
+            line: 0,
+        })
+    }
+}
+
+fn push(out: &mut Outcome, c: Command) -> Result<(), Status> {
+    out.cmds.push(c).map_err(|_| Status::Overflow)
+}
+
+fn rapid(p: &[f32; AXES], s: &Settings, line: u32) -> Command {
+    Command::Move(Move {
+        target: to_steps(p, s),
+        path: Path::Line,
+        feed: Feed::Rapid,
+        line,
+    })
+}
+
+/// sqrt(a^2 + b^2) in f32: libm's hypotf works in f64, which would pull the
+/// double-precision soft-float routines into the image for nothing here.
+fn hypot(a: f32, b: f32) -> f32 {
+    libm::sqrtf(a * a + b * b)
+}
+
+fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
+    let mut sum = 0.0;
+    for (x, y) in a.iter().zip(b.iter()) {
+        sum += (y - x) * (y - x);
+    }
+    libm::sqrtf(sum)
+}
+
+/// Normalise an angle difference into (0, 2*pi].
+fn positive_sweep(mut a: f32) -> f32 {
+    while a <= 0.0 {
+        a += TAU;
+    }
+    while a > TAU {
+        a -= TAU;
+    }
+    a
+}
+
+/// Centre and sweep of a G2/G3 block from its I/J or R words (in block units).
+fn arc_geometry(
+    b: &mut Block,
+    start: &[f32; AXES],
+    target: &[f32; AXES],
+    ccw: bool,
+    scale: f32,
+) -> Result<ArcGeom, Status> {
+    let dx = target[0] - start[0];
+    let dy = target[1] - start[1];
+    let (ci, cj) = if let Some(r) = b.take(b'R') {
+        let r = r * scale;
+        if dx == 0.0 && dy == 0.0 {
+            return Err(Status::InvalidTarget);
+        }
+        let mut disc = 4.0 * r * r - dx * dx - dy * dy;
+        if disc < 0.0 {
+            // A half circle with a rounded radius: accept within the tolerance.
+            let chord = hypot(dx, dy);
+            if chord / 2.0 - libm::fabsf(r) > ARC_ABS_TOL {
+                return Err(Status::ArcRadiusError);
+            }
+            disc = 0.0;
+        }
+        // Offset of the centre from the chord midpoint, as a multiple of the chord
+        // turned by 90 degrees; its sign picks the side (G2 with positive R: right).
+        let mut h = -libm::sqrtf(disc) / hypot(dx, dy);
+        if ccw {
+            h = -h;
+        }
+        if r < 0.0 {
+            h = -h;
+        }
+        (0.5 * (dx - dy * h), 0.5 * (dy + dx * h))
+    } else {
+        let i = b.take(b'I').map(|v| v * scale);
+        let j = b.take(b'J').map(|v| v * scale);
+        if i.is_none() && j.is_none() {
+            return Err(Status::NoOffsetsInPlane);
+        }
+        (i.unwrap_or(0.0), j.unwrap_or(0.0))
+    };
+    if b.get(b'K').is_some() {
+        return Err(Status::UnusedWords);
+    }
+    let center = [start[0] + ci, start[1] + cj];
+    let r_start = hypot(ci, cj);
+    let r_end = hypot(target[0] - center[0], target[1] - center[1]);
+    let dr = libm::fabsf(r_end - r_start);
+    if !r_start.is_finite()
+        || !r_end.is_finite()
+        || r_start <= 0.0
+        || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start))
+    {
+        return Err(Status::InvalidTarget);
+    }
+    let a0 = libm::atan2f(-cj, -ci);
+    let a1 = libm::atan2f(target[1] - center[1], target[0] - center[0]);
+    let same_point = dx == 0.0 && dy == 0.0;
+    let sweep = if same_point {
+        TAU
+    } else if ccw {
+        positive_sweep(a1 - a0)
+    } else {
+        positive_sweep(a0 - a1)
+    };
+    Ok(ArcGeom {
+        center,
+        radius: r_start,
+        start_angle: a0,
+        sweep,
+    })
+}
+
+/// The arc in step space: a circle if X and Y have the same resolution, else the
+/// ellipse the circle becomes.
+fn arc_path(
+    g: &ArcGeom,
+    start: &[f32; AXES],
+    _target: &[f32; AXES],
+    ccw: bool,
+    s: &Settings,
+) -> Path {
+    let sx = s.steps_per_mm(0);
+    let sy = s.steps_per_mm(1);
+    let start_steps = [mm_to_steps(start[0], sx), mm_to_steps(start[1], sy)];
+    let center = [
+        mm_to_steps(g.center[0], sx).saturating_sub(start_steps[0]),
+        mm_to_steps(g.center[1], sy).saturating_sub(start_steps[1]),
+    ];
+    if sx == sy {
+        Path::Arc {
+            center,
+            ccw,
+            turns: 0,
+        }
+    } else {
+        let a = libm::roundf(g.radius * sx) as i32;
+        let b = libm::roundf(g.radius * sy) as i32;
+        Path::Ellipse { center, a, b, ccw }
+    }
+}
+
+/// Points that bound the arc: its end and every axis extreme it passes.
+fn arc_extremes(
+    g: &ArcGeom,
+    start: &[f32; AXES],
+    target: &[f32; AXES],
+    ccw: bool,
+) -> Vec<[f32; AXES], 5> {
+    let mut pts: Vec<[f32; AXES], 5> = Vec::new();
+    let _ = pts.push(*target);
+    // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
+    let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
+    for (k, (cs, sn)) in axes_dirs.into_iter().enumerate() {
+        let angle = k as f32 * FRAC_PI_2;
+        let from_start = if ccw {
+            positive_sweep(angle - g.start_angle)
+        } else {
+            positive_sweep(g.start_angle - angle)
+        };
+        if from_start <= g.sweep || g.sweep >= TAU - 1e-6 {
+            let frac = if g.sweep > 0.0 {
+                (from_start / g.sweep).min(1.0)
+            } else {
+                0.0
+            };
+            let z = start[2] + (target[2] - start[2]) * frac;
+            let _ = pts.push([g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z]);
+        }
+    }
+    pts
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::parser::clean_line;
+
+    fn run(it: &mut Interp, s: &Settings, line: &str) -> Result<Outcome, Reject> {
+        let mut buf: heapless::Vec<u8, 128> = heapless::Vec::new();
+        clean_line(line.as_bytes(), &mut buf).map_err(Reject::Error)?;
+        it.execute(&buf, s, 7)
+    }
+
+    fn moves(o: &Outcome) -> std::vec::Vec<Move> {
+        o.cmds
+            .iter()
+            .filter_map(|c| match c {
+                Command::Move(m) => Some(*m),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn err(n: Status) -> Result<Outcome, Reject> {
+        Err(Reject::Error(n))
+    }
+
+    #[test]
+    fn lines_round_to_steps_and_carry_feed_and_line_numbers() {
+        let s = Settings::default(); // 80 step/mm on X and Y
+        let mut it = Interp::new();
+        let o = run(&mut it, &s, "G1 X10.0031 Y-0.00624 F600").unwrap();
+        assert_eq!(
+            moves(&o),
+            [Move {
+                target: [800, 0, 0],
+                path: Path::Line,
+                feed: Feed::MmPerMin(600.0),
+                line: 7
+            }]
+        );
+        let o = run(&mut it, &s, "N42 G91 X1 Y1").unwrap();
+        let m = moves(&o)[0];
+        assert_eq!((m.target, m.line), ([880, 80, 0], 42));
+        let o = run(&mut it, &s, "G0 X-1").unwrap();
+        assert_eq!(moves(&o)[0].feed, Feed::Rapid);
+        assert_eq!(moves(&o)[0].target, [800, 80, 0]);
+        // Inches apply to axes and feed.
+        let o = run(&mut it, &s, "G20 G90 G1 X1 F10").unwrap();
+        assert_eq!(moves(&o)[0].target, [2032, 80, 0]);
+        assert_eq!(moves(&o)[0].feed, Feed::MmPerMin(254.0));
+    }
+
+    #[test]
+    fn grbl_error_numbers_for_bad_blocks() {
+        let s = Settings::default();
+        let mut it = Interp::new();
+        assert_eq!(run(&mut it, &s, "G1 X1"), err(Status::UndefinedFeedRate));
+        assert_eq!(
+            run(&mut it, &s, "G0 G1 X1"),
+            err(Status::ModalGroupViolation)
+        );
+        assert_eq!(run(&mut it, &s, "G5 X1"), err(Status::UnsupportedCommand));
+        assert_eq!(run(&mut it, &s, "G0 X1 I2"), err(Status::UnusedWords));
+        assert_eq!(
+            run(&mut it, &s, "G0 G92 X1"),
+            err(Status::AxisCommandConflict)
+        );
+        assert_eq!(run(&mut it, &s, "G80 X1"), err(Status::AxisWordsExist));
+        assert_eq!(run(&mut it, &s, "G4"), err(Status::ValueWordMissing));
+        assert_eq!(run(&mut it, &s, "G4 P-1"), err(Status::NegativeValue));
+        assert_eq!(
+            run(&mut it, &s, "N10000000 G0 X1"),
+            err(Status::InvalidLineNumber)
+        );
+        assert_eq!(run(&mut it, &s, "G59.1"), err(Status::UnsupportedCoordSys));
+        assert_eq!(
+            run(&mut it, &s, "G53 G2 X1 I1 F10"),
+            err(Status::G53InvalidMotionMode)
+        );
+        assert_eq!(run(&mut it, &s, "G2 I1 F10"), err(Status::NoAxisWords));
+        assert_eq!(
+            run(&mut it, &s, "G2 Z1 I1 F10"),
+            err(Status::NoAxisWordsInPlane)
+        );
+        assert_eq!(run(&mut it, &s, "G2 X1 F10"), err(Status::NoOffsetsInPlane));
+        assert_eq!(
+            run(&mut it, &s, "G2 X10 R2 F10"),
+            err(Status::ArcRadiusError)
+        );
+        assert_eq!(run(&mut it, &s, "G2 X0 R2 F10"), err(Status::InvalidTarget));
+        assert_eq!(
+            run(&mut it, &s, "G10 L3 P1 X1"),
+            err(Status::UnsupportedCommand)
+        );
+        assert_eq!(
+            run(&mut it, &s, "G10 L2 P7 X1"),
+            err(Status::UnsupportedCoordSys)
+        );
+        assert_eq!(run(&mut it, &s, "M6"), err(Status::UnsupportedCommand));
+        assert_eq!(
+            run(&mut it, &s, "G1.5 X1"),
+            err(Status::CommandValueNotInteger)
+        );
+        assert_eq!(run(&mut it, &s, "T300"), err(Status::MaxValueExceeded));
+        // A rejected block changes nothing.
+        assert_eq!(it, Interp::new());
+    }
+
+    #[test]
+    fn arcs_in_ij_and_r_form_with_cam_tolerance() {
+        let s = Settings::default();
+        let mut it = Interp::new();
+        let o = run(&mut it, &s, "G2 X10 Y0 I5 J0 F300").unwrap();
+        let m = moves(&o)[0];
+        assert_eq!(m.target, [800, 0, 0]);
+        assert_eq!(
+            m.path,
+            Path::Arc {
+                center: [400, 0],
+                ccw: false,
+                turns: 0
+            }
+        );
+        // Negative R: the long way round (centre on the other side).
+        let mut it = Interp::new();
+        let short = moves(&run(&mut it, &s, "G2 X10 Y0 R7.0710678 F300").unwrap())[0];
+        let mut it = Interp::new();
+        let long = moves(&run(&mut it, &s, "G2 X10 Y0 R-7.0710678 F300").unwrap())[0];
+        assert_eq!(
+            short.path,
+            Path::Arc {
+                center: [400, -400],
+                ccw: false,
+                turns: 0
+            }
+        );
+        assert_eq!(
+            long.path,
+            Path::Arc {
+                center: [400, 400],
+                ccw: false,
+                turns: 0
+            }
+        );
+        // End point 0.004 mm off the circle (CAM rounding) is accepted, 0.1 mm is not.
+        let mut it = Interp::new();
+        assert!(run(&mut it, &s, "G3 X10.004 Y0 I5 F300").is_ok());
+        let mut it = Interp::new();
+        assert_eq!(
+            run(&mut it, &s, "G3 X10.1 Y0 I5 F300"),
+            err(Status::InvalidTarget)
+        );
+        // Full circle with I/J: target equals start.
+        let mut it = Interp::new();
+        let full = moves(&run(&mut it, &s, "G3 X0 Y0 I5 F300").unwrap())[0];
+        assert_eq!(full.target, [0, 0, 0]);
+        assert_eq!(
+            full.path,
+            Path::Arc {
+                center: [400, 0],
+                ccw: true,
+                turns: 0
+            }
+        );
+    }
+
+    #[test]
+    fn arcs_with_unequal_resolution_become_ellipses_in_step_space() {
+        let mut s = Settings::default();
+        s.set(101, 40.0).unwrap();
+        let mut it = Interp::new();
+        let m = moves(&run(&mut it, &s, "G3 X10 Y0 I5 F300").unwrap())[0];
+        assert_eq!(m.target, [800, 0, 0]);
+        assert_eq!(
+            m.path,
+            Path::Ellipse {
+                center: [400, 0],
+                a: 400,
+                b: 200,
+                ccw: true
+            }
+        );
+    }
+
+    proptest::proptest! {
+        /// R-form arcs: the centre is equidistant from both ends, on the side that
+        /// gives at most half a turn for positive R and at least half for negative R.
+        #[test]
+        fn r_form_centres_are_consistent(
+            x0 in -100.0f32..100.0, y0 in -100.0f32..100.0,
+            dx in -50.0f32..50.0, dy in -50.0f32..50.0,
+            extra in 0.0f32..50.0, neg in proptest::bool::ANY, ccw in proptest::bool::ANY,
+        ) {
+            let chord = libm::hypotf(dx, dy);
+            proptest::prop_assume!(chord > 0.5);
+            let r = chord / 2.0 + extra + 0.01;
+            let s = Settings::default();
+            let mut it = Interp::new();
+            run(&mut it, &s, &std::format!("G0 X{x0:.4} Y{y0:.4}")).unwrap();
+            let start = *it.position();
+            let line = std::format!("G{} X{:.4} Y{:.4} R{}{:.4} F100", if ccw { 3 } else { 2 }, x0 + dx, y0 + dy, if neg { "-" } else { "" }, r);
+            let o = run(&mut it, &s, &line).unwrap();
+            let m = moves(&o)[0];
+            let Path::Arc { center, ccw: dir, .. } = m.path else { panic!("not an arc") };
+            proptest::prop_assert_eq!(dir, ccw);
+            let spm = s.steps_per_mm(0);
+            let c = [start[0] + center[0] as f32 / spm, start[1] + center[1] as f32 / spm];
+            let end = it.position();
+            let r0 = libm::hypotf(start[0] - c[0], start[1] - c[1]);
+            let r1 = libm::hypotf(end[0] - c[0], end[1] - c[1]);
+            proptest::prop_assert!((r0 - r1).abs() < 2.0 / spm, "r0 {} r1 {}", r0, r1);
+            // Which side: cross product of chord and centre offset.
+            let cross = dx * (c[1] - start[1]) - dy * (c[0] - start[0]);
+            let short = (cross > 0.0) == ccw; // centre left of travel for a short CCW arc
+            if extra > 0.5 {
+                proptest::prop_assert_eq!(short, !neg, "cross {}", cross);
+            }
+        }
+    }
+
+    #[test]
+    fn targets_beyond_the_step_range_are_refused() {
+        let s = Settings::default();
+        let mut it = Interp::new();
+        assert_eq!(run(&mut it, &s, "G0 X99999999"), err(Status::InvalidTarget));
+        assert_eq!(it.jog(b"X99999999F10", &s), Err(Status::InvalidTarget));
+        assert_eq!(it, Interp::new());
+    }
+
+    #[test]
+    fn work_offsets_g92_g10_g28_g53() {
+        let s = Settings::default();
+        let mut it = Interp::new();
+        run(&mut it, &s, "G10 L2 P2 X10 Y20").unwrap();
+        run(&mut it, &s, "G55 G0 X1 Y1").unwrap();
+        assert_eq!(it.position(), &[11.0, 21.0, 0.0]);
+        run(&mut it, &s, "G92 X0 Y0").unwrap();
+        let o = run(&mut it, &s, "G0 X1").unwrap();
+        assert_eq!(moves(&o)[0].target, [12 * 80, 21 * 80, 0]);
+        run(&mut it, &s, "G92.1").unwrap();
+        let o = run(&mut it, &s, "G53 G0 X0 Y0").unwrap();
+        assert_eq!(moves(&o)[0].target, [0, 0, 0]);
+        run(&mut it, &s, "G0 X5 Y5").unwrap(); // G55: machine 15, 25
+        run(&mut it, &s, "G28.1").unwrap();
+        assert_eq!(it.coords().g28, [15.0, 25.0, 0.0]);
+        run(&mut it, &s, "G53 G0 X0 Y0").unwrap();
+        let o = run(&mut it, &s, "G28 G91 X1").unwrap();
+        let ms = moves(&o);
+        assert_eq!(ms.len(), 2, "intermediate point, then the stored position");
+        assert_eq!(ms[0].target, [80, 0, 0]);
+        assert_eq!(ms[1].target, [15 * 80, 25 * 80, 0]);
+        run(&mut it, &s, "G90 G10 L20 P0 X0").unwrap();
+        assert_eq!(it.work_offset()[0], 15.0);
+    }
+
+    #[test]
+    fn pen_dwell_and_program_end() {
+        let mut s = Settings::default();
+        let mut it = Interp::new();
+        let o = run(&mut it, &s, "M3 G1 X1 F100").unwrap();
+        assert_eq!(moves(&o)[0].target, [0, 0, -800], "Z pen drops first");
+        assert_eq!(moves(&o)[1].target, [80, 0, -800]);
+        let o = run(&mut it, &s, "G4 P0.25").unwrap();
+        assert_eq!(&o.cmds[..], &[Command::Dwell { ms: 250 }]);
+        let o = run(&mut it, &s, "M30").unwrap();
+        assert_eq!(o.stop, Some(Stop::End));
+        assert_eq!(moves(&o)[0].target, [80, 0, 0], "program end lifts the pen");
+        assert_eq!(it.modal().motion, MotionMode::Linear);
+        s.set(201, 1.0).unwrap();
+        let o = run(&mut it, &s, "M3").unwrap();
+        assert_eq!(&o.cmds[..], &[Command::Pen { down: true }]);
+        let o = run(&mut it, &s, "M3").unwrap();
+        assert!(o.cmds.is_empty(), "no change, nothing queued");
+        assert_eq!(run(&mut it, &s, "M0").unwrap().stop, Some(Stop::Pause));
+    }
+
+    #[test]
+    fn inverse_time_feed_needs_f_every_block() {
+        let s = Settings::default();
+        let mut it = Interp::new();
+        let o = run(&mut it, &s, "G93 G1 X10 F2").unwrap();
+        assert_eq!(moves(&o)[0].feed, Feed::MmPerMin(20.0));
+        assert_eq!(run(&mut it, &s, "G1 X20"), err(Status::UndefinedFeedRate));
+        run(&mut it, &s, "G94").unwrap();
+        assert_eq!(run(&mut it, &s, "G1 X20"), err(Status::UndefinedFeedRate));
+    }
+
+    #[test]
+    fn soft_limits_reject_targets_and_arc_extents() {
+        let mut s = Settings::default();
+        s.set(22, 1.0).unwrap();
+        s.set(20, 1.0).unwrap(); // X, Y in [0, 300] x [0, 200]
+        let mut it = Interp::new();
+        assert!(run(&mut it, &s, "G0 X100 Y100").is_ok());
+        assert_eq!(run(&mut it, &s, "G0 X301"), Err(Reject::SoftLimit));
+        assert_eq!(run(&mut it, &s, "G0 Y-0.1"), Err(Reject::SoftLimit));
+        // Ends inside, but the arc bulges below Y = 0.
+        assert_eq!(
+            run(&mut it, &s, "G2 X100 Y100 J-60 F100"),
+            Err(Reject::SoftLimit)
+        );
+        assert!(run(&mut it, &s, "G2 X100 Y100 J-50 F100").is_ok());
+        assert_eq!(it.jog(b"G91X-200F100", &s), Err(Status::TravelExceeded));
+        assert!(it.jog(b"G91X-100F100", &s).is_ok());
+        assert_eq!(it.jog(b"G1X1F100", &s), Err(Status::InvalidJogCommand));
+        assert_eq!(it.jog(b"X1", &s), Err(Status::UndefinedFeedRate));
+    }
+}

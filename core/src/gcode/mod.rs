@@ -1,0 +1,72 @@
+//! G-code: the line cleaner and word parser ([`parser`]) and the modal interpreter
+//! ([`interp`]) that turns blocks into queued motion in steps.
+//!
+//! Errors use Grbl 1.1's status numbers ([`Status`]) so that senders show the right
+//! message; they are shared with the `$` commands of the protocol.
+
+pub mod interp;
+pub mod parser;
+
+pub use interp::{Interp, Outcome, Reject, Stop};
+pub use parser::{Block, LineCleaner};
+
+/// Grbl 1.1 status codes, sent as `error:N`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Status {
+    ExpectedCommandLetter = 1,
+    BadNumberFormat = 2,
+    InvalidStatement = 3,
+    NegativeValue = 4,
+    HomingDisabled = 5,
+    StepPulseMin = 6,
+    SettingReadFail = 7,
+    IdleError = 8,
+    SystemLocked = 9,
+    SoftLimitError = 10,
+    Overflow = 11,
+    MaxStepRateExceeded = 12,
+    CheckDoor = 13,
+    LineLengthExceeded = 14,
+    TravelExceeded = 15,
+    InvalidJogCommand = 16,
+    UnsupportedCommand = 20,
+    ModalGroupViolation = 21,
+    UndefinedFeedRate = 22,
+    CommandValueNotInteger = 23,
+    AxisCommandConflict = 24,
+    WordRepeated = 25,
+    NoAxisWords = 26,
+    InvalidLineNumber = 27,
+    ValueWordMissing = 28,
+    UnsupportedCoordSys = 29,
+    G53InvalidMotionMode = 30,
+    AxisWordsExist = 31,
+    NoAxisWordsInPlane = 32,
+    InvalidTarget = 33,
+    ArcRadiusError = 34,
+    NoOffsetsInPlane = 35,
+    UnusedWords = 36,
+    MaxValueExceeded = 38,
+}
+
+impl Status {
+    /// The number sent after `error:`.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+}
+
+impl From<crate::settings::SettingError> for Status {
+    fn from(e: crate::settings::SettingError) -> Self {
+        use crate::settings::SettingError as E;
+        match e {
+            E::Invalid => Status::InvalidStatement,
+            E::Negative => Status::NegativeValue,
+            E::PulseTooShort => Status::StepPulseMin,
+            E::SoftLimitsNeedHoming => Status::SoftLimitError,
+            E::StepRateTooHigh => Status::MaxStepRateExceeded,
+        }
+    }
+}

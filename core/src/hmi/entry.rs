@@ -1,0 +1,433 @@
+//! Numeric entry: one editable field (digits, sign, decimal point, backspace) and the
+//! parameter forms of the drawing modes, with range checks and their messages.
+//!
+//! A field shows its current value until the first digit is typed, which starts a new
+//! text (so the last job's values are defaults you can confirm with Enter). The report's
+//! problem 5 (one key press filling every digit) cannot happen: a field changes only on
+//! Press events, and the form moves to the next field only on Enter.
+
+use heapless::{String, Vec};
+
+use super::fixed::push_fixed;
+use super::job::Job;
+use crate::keypad::Key;
+
+/// Longest text a field accepts ("-123.456").
+pub const FIELD_CHARS: usize = 8;
+
+/// One numeric parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    pub label: &'static str,
+    pub unit: &'static str,
+    pub min: f32,
+    pub max: f32,
+    /// Decimals accepted and shown.
+    pub decimals: u8,
+    /// The committed value.
+    pub value: f32,
+    text: String<FIELD_CHARS>,
+    editing: bool,
+}
+
+/// What a key did to a field.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldInput {
+    /// The field used the key.
+    Edited,
+    /// Backspace on an untouched field: leave the form.
+    Cancel,
+    /// Not a field key.
+    Ignored,
+}
+
+impl Field {
+    pub fn new(
+        label: &'static str,
+        unit: &'static str,
+        min: f32,
+        max: f32,
+        decimals: u8,
+        value: f32,
+    ) -> Self {
+        Field {
+            label,
+            unit,
+            min,
+            max,
+            decimals,
+            value: value.clamp(min, max),
+            text: String::new(),
+            editing: false,
+        }
+    }
+
+    /// Whether the user has started typing a new value.
+    pub fn editing(&self) -> bool {
+        self.editing
+    }
+
+    /// What the field shows: the text being typed, or the committed value.
+    pub fn display(&self) -> String<12> {
+        let mut s = String::new();
+        if self.editing {
+            let _ = s.push_str(&self.text);
+        } else {
+            push_fixed(&mut s, self.value, self.decimals);
+        }
+        s
+    }
+
+    /// Apply a key press (or a backspace repeat, `repeat = true`).
+    pub fn key(&mut self, key: Key, repeat: bool) -> FieldInput {
+        match key {
+            Key::Digit(d) if !repeat && d <= 9 => {
+                self.start_editing();
+                let digits_after_dot = self.text.split('.').nth(1).map_or(0, str::len);
+                let has_dot = self.text.contains('.');
+                if has_dot && digits_after_dot >= self.decimals as usize {
+                    return FieldInput::Edited;
+                }
+                let _ = self.text.push(char::from(b'0' + d));
+                FieldInput::Edited
+            }
+            Key::Dot if !repeat => {
+                self.start_editing();
+                if self.decimals > 0 && !self.text.contains('.') {
+                    if self.text.is_empty() || self.text.as_str() == "-" {
+                        let _ = self.text.push('0');
+                    }
+                    let _ = self.text.push('.');
+                }
+                FieldInput::Edited
+            }
+            Key::Sign if !repeat => {
+                if self.min >= 0.0 {
+                    return FieldInput::Edited;
+                }
+                // On an untouched field the sign starts a new negative number.
+                self.start_editing();
+                if self.text.starts_with('-') {
+                    self.text.remove(0);
+                } else {
+                    let mut t: String<FIELD_CHARS> = String::new();
+                    if t.push('-').is_ok() && t.push_str(&self.text).is_ok() {
+                        self.text = t;
+                    }
+                }
+                FieldInput::Edited
+            }
+            Key::Back => {
+                if self.editing {
+                    if self.text.pop().is_none() && !repeat {
+                        // Empty text: back to the committed value.
+                        self.editing = false;
+                    }
+                    FieldInput::Edited
+                } else if repeat {
+                    // Holding backspace never falls through into leaving the form.
+                    FieldInput::Edited
+                } else {
+                    FieldInput::Cancel
+                }
+            }
+            _ => FieldInput::Ignored,
+        }
+    }
+
+    fn start_editing(&mut self) {
+        if !self.editing {
+            self.editing = true;
+            self.text.clear();
+        }
+    }
+
+    /// Parse and range-check the text; on success it becomes the value.
+    pub fn commit(&mut self) -> Result<f32, String<28>> {
+        if !self.editing {
+            return Ok(self.value);
+        }
+        let parsed = parse_decimal(&self.text);
+        match parsed {
+            Some(v) if v >= self.min && v <= self.max => {
+                self.value = v;
+                self.editing = false;
+                self.text.clear();
+                Ok(v)
+            }
+            _ => Err(self.range_message()),
+        }
+    }
+
+    /// "R: 0.50..100.00 mm"
+    pub fn range_message(&self) -> String<28> {
+        let mut s: String<28> = String::new();
+        let _ = s.push_str(self.label);
+        let _ = s.push_str(": ");
+        push_fixed(&mut s, self.min, self.decimals);
+        let _ = s.push_str("..");
+        push_fixed(&mut s, self.max, self.decimals);
+        let _ = s.push(' ');
+        let _ = s.push_str(self.unit);
+        s
+    }
+}
+
+/// Parse what a field can hold: optional '-', digits, optional '.' and digits.
+/// Done by hand because core's float parser costs kilobytes of flash for input that is
+/// at most 8 characters; None for empty, lone "-" or "." and anything else.
+pub fn parse_decimal(text: &str) -> Option<f32> {
+    let (neg, body) = match text.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, text),
+    };
+    let mut mantissa: u32 = 0;
+    let mut scale: f32 = 1.0;
+    let mut digits = 0;
+    let mut after_dot = false;
+    for c in body.chars() {
+        match c {
+            '0'..='9' => {
+                mantissa = mantissa
+                    .checked_mul(10)?
+                    .checked_add(u32::from(c as u8 - b'0'))?;
+                digits += 1;
+                if after_dot {
+                    scale *= 10.0;
+                }
+            }
+            '.' if !after_dot => after_dot = true,
+            _ => return None,
+        }
+    }
+    if digits == 0 {
+        return None;
+    }
+    let v = mantissa as f32 / scale;
+    Some(if neg { -v } else { v })
+}
+
+/// The parameter forms, one per drawing mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FormKind {
+    Line,
+    Arc,
+    Ellipse,
+    Sine,
+    Star,
+}
+
+pub const FORM_KINDS: [FormKind; 5] = [
+    FormKind::Line,
+    FormKind::Arc,
+    FormKind::Ellipse,
+    FormKind::Sine,
+    FormKind::Star,
+];
+
+/// The remembered parameters of each form (defaults until a job is drawn).
+pub type FormMemory = [[f32; 4]; 5];
+
+pub const DEFAULT_PARAMS: FormMemory = [
+    [30.0, 20.0, 0.0, 0.0],
+    [20.0, 150.0, 0.0, 0.0],
+    [25.0, 15.0, 0.0, 0.0],
+    [10.0, 0.2, 0.0, 60.0],
+    [40.0, 0.0, 0.0, 0.0],
+];
+
+impl FormKind {
+    pub fn index(self) -> usize {
+        match self {
+            FormKind::Line => 0,
+            FormKind::Arc => 1,
+            FormKind::Ellipse => 2,
+            FormKind::Sine => 3,
+            FormKind::Star => 4,
+        }
+    }
+
+    /// A one-line reminder shown under the fields (when there is room).
+    pub fn note(self) -> &'static str {
+        match self {
+            FormKind::Line => "from the pen; *:sign #:.",
+            FormKind::Arc => "angle < 0: clockwise",
+            FormKind::Ellipse => "a along X, b along Y",
+            FormKind::Sine => "",
+            FormKind::Star => "S: diameter of the tips",
+        }
+    }
+
+    pub fn title(self) -> &'static str {
+        match self {
+            FormKind::Line => "Line to dX, dY",
+            FormKind::Arc => "Arc R, angle",
+            FormKind::Ellipse => "Ellipse a, b",
+            FormKind::Sine => "Sine A sin(wx+p)",
+            FormKind::Star => "Five-point star",
+        }
+    }
+}
+
+/// A mode's parameter form.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Form {
+    pub kind: FormKind,
+    pub fields: Vec<Field, 4>,
+    /// Index of the field being edited.
+    pub cur: usize,
+}
+
+impl Form {
+    pub fn new(kind: FormKind, p: &[f32; 4]) -> Self {
+        let mut fields: Vec<Field, 4> = Vec::new();
+        let mut add = |f: Field| {
+            let _ = fields.push(f);
+        };
+        match kind {
+            FormKind::Line => {
+                add(Field::new("dX", "mm", -200.0, 200.0, 2, p[0]));
+                add(Field::new("dY", "mm", -200.0, 200.0, 2, p[1]));
+            }
+            FormKind::Arc => {
+                add(Field::new("R", "mm", 0.5, 100.0, 2, p[0]));
+                add(Field::new("Angle", "deg", -360.0, 360.0, 1, p[1]));
+            }
+            FormKind::Ellipse => {
+                add(Field::new("a", "mm", 0.5, 100.0, 2, p[0]));
+                add(Field::new("b", "mm", 0.5, 100.0, 2, p[1]));
+            }
+            FormKind::Sine => {
+                add(Field::new("A", "mm", -50.0, 50.0, 2, p[0]));
+                add(Field::new("w", "rad/mm", 0.01, 5.0, 3, p[1]));
+                add(Field::new("phi", "deg", -360.0, 360.0, 1, p[2]));
+                add(Field::new("Len", "mm", 1.0, 200.0, 1, p[3]));
+            }
+            FormKind::Star => add(Field::new("S", "mm", 2.0, 150.0, 1, p[0])),
+        }
+        Form {
+            kind,
+            fields,
+            cur: 0,
+        }
+    }
+
+    pub fn current(&mut self) -> Option<&mut Field> {
+        self.fields.get_mut(self.cur)
+    }
+
+    pub fn is_last(&self) -> bool {
+        self.cur + 1 >= self.fields.len()
+    }
+
+    /// The committed values, in field order (unused slots 0).
+    pub fn values(&self) -> [f32; 4] {
+        let mut v = [0.0; 4];
+        for (slot, f) in v.iter_mut().zip(self.fields.iter()) {
+            *slot = f.value;
+        }
+        v
+    }
+
+    /// The job described by the committed values.
+    pub fn job(&self) -> Job {
+        let v = self.values();
+        match self.kind {
+            FormKind::Line => Job::Line { dx: v[0], dy: v[1] },
+            FormKind::Arc => Job::Arc {
+                r: v[0],
+                theta: v[1],
+            },
+            FormKind::Ellipse => Job::Ellipse { a: v[0], b: v[1] },
+            FormKind::Sine => Job::Sine {
+                amp: v[0],
+                omega: v[1],
+                phase: v[2],
+                len: v[3],
+            },
+            FormKind::Star => Job::Star { size: v[0] },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn typed(f: &mut Field, keys: &[Key]) {
+        for k in keys {
+            assert_ne!(f.key(*k, false), FieldInput::Ignored);
+        }
+    }
+
+    #[test]
+    fn decimal_parser_accepts_field_text_only() {
+        assert_eq!(parse_decimal("12.5"), Some(12.5));
+        assert_eq!(parse_decimal("-0.25"), Some(-0.25));
+        assert_eq!(parse_decimal("7."), Some(7.0));
+        assert_eq!(parse_decimal(".5"), Some(0.5));
+        for bad in ["", "-", ".", "-.", "1.2.3", "1-2", "+3", "1e5"] {
+            assert_eq!(parse_decimal(bad), None, "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn typing_replaces_the_default_and_commits_in_range() {
+        let mut f = Field::new("R", "mm", 0.5, 100.0, 2, 20.0);
+        assert_eq!(f.display().as_str(), "20.00");
+        typed(
+            &mut f,
+            &[Key::Digit(1), Key::Digit(2), Key::Dot, Key::Digit(5)],
+        );
+        assert_eq!(f.display().as_str(), "12.5");
+        assert_eq!(f.commit(), Ok(12.5));
+        assert_eq!(f.display().as_str(), "12.50");
+    }
+
+    #[test]
+    fn sign_decimals_and_backspace() {
+        let mut f = Field::new("dX", "mm", -200.0, 200.0, 2, 0.0);
+        typed(&mut f, &[Key::Digit(7), Key::Sign, Key::Dot, Key::Digit(1)]);
+        typed(&mut f, &[Key::Digit(2), Key::Digit(3)]); // third decimal dropped
+        assert_eq!(f.display().as_str(), "-7.12");
+        assert_eq!(f.key(Key::Back, true), FieldInput::Edited);
+        assert_eq!(f.display().as_str(), "-7.1");
+        assert_eq!(f.commit(), Ok(-7.1));
+    }
+
+    #[test]
+    fn out_of_range_keeps_the_old_value_and_explains() {
+        let mut f = Field::new("R", "mm", 0.5, 100.0, 2, 20.0);
+        typed(&mut f, &[Key::Digit(5), Key::Digit(0), Key::Digit(0)]);
+        assert_eq!(f.commit().unwrap_err().as_str(), "R: 0.50..100.00 mm");
+        assert_eq!(f.value, 20.0);
+        // A positive-only field ignores the sign key.
+        let mut g = Field::new("a", "mm", 0.5, 100.0, 2, 3.0);
+        typed(&mut g, &[Key::Sign]);
+        assert_eq!(g.display().as_str(), "3.00");
+    }
+
+    #[test]
+    fn backspace_empties_then_restores_then_cancels_but_repeat_never_cancels() {
+        let mut f = Field::new("A", "mm", -50.0, 50.0, 2, 10.0);
+        typed(&mut f, &[Key::Digit(4)]);
+        assert_eq!(f.key(Key::Back, true), FieldInput::Edited); // "4" -> ""
+        assert_eq!(f.key(Key::Back, true), FieldInput::Edited); // repeat on empty: stays
+        assert!(f.editing());
+        assert_eq!(f.key(Key::Back, false), FieldInput::Edited); // press: restore 10.00
+        assert!(!f.editing());
+        assert_eq!(f.display().as_str(), "10.00");
+        assert_eq!(f.key(Key::Back, true), FieldInput::Edited);
+        assert_eq!(f.key(Key::Back, false), FieldInput::Cancel);
+    }
+
+    #[test]
+    fn every_form_builds_its_job_from_the_defaults() {
+        for kind in FORM_KINDS {
+            let form = Form::new(kind, &DEFAULT_PARAMS[kind.index()]);
+            assert!(!form.fields.is_empty());
+            let job = form.job();
+            assert!(job.length_mm() > 1.0, "{kind:?}: {job:?}");
+        }
+    }
+}

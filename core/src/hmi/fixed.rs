@@ -1,0 +1,107 @@
+//! Fixed-point text formatting of f32 values ("-12.35") for the LCD and messages.
+//!
+//! core's `{:.2}` float formatting pulls several KB of flash into the firmware; the
+//! screens only ever need a few decimals of a bounded value, so it is done here with
+//! integer formatting. Values too large for the requested width print as "----".
+
+use heapless::String;
+
+/// Longest text produced: "-999999999.999".
+pub type Fixed = String<16>;
+
+/// `v` with exactly `decimals` (0..=3) digits after the point; "----" if not finite
+/// or too large. Built digit by digit in u32 (no core::fmt, no 64-bit division).
+pub fn format(v: f32, decimals: u8) -> Fixed {
+    let decimals = decimals.min(3);
+    let scale: u32 = [1, 10, 100, 1000][decimals as usize];
+    let scaled = libm::roundf(v * scale as f32);
+    let mut out = Fixed::new();
+    if !scaled.is_finite() || scaled.abs() >= 1.0e9 {
+        let _ = out.push_str("----");
+        return out;
+    }
+    let neg = scaled < 0.0;
+    let n = scaled.abs() as u32;
+    if neg && n != 0 {
+        let _ = out.push('-');
+    }
+    // Digits, least significant first, with the point after `decimals` of them.
+    let mut rev = [0u8; 14];
+    let mut len = 0;
+    let mut rest = n;
+    // At least "0" or "0.0..": one integer digit, the point and the decimals.
+    let min_len = if decimals > 0 {
+        decimals as usize + 2
+    } else {
+        1
+    };
+    while len < rev.len() && (rest > 0 || len < min_len) {
+        if decimals > 0 && len == decimals as usize {
+            rev[len] = b'.';
+            len += 1;
+            continue;
+        }
+        rev[len] = b'0' + (rest % 10) as u8;
+        rest /= 10;
+        len += 1;
+    }
+    for &c in rev[..len].iter().rev() {
+        let _ = out.push(char::from(c));
+    }
+    out
+}
+
+/// Append [`format`]`(v, decimals)`; false if `out` ran out of room.
+pub fn push_fixed<const N: usize>(out: &mut String<N>, v: f32, decimals: u8) -> bool {
+    out.push_str(&format(v, decimals)).is_ok()
+}
+
+/// `v` as a new string (see [`format`]).
+pub fn fixed<const N: usize>(v: f32, decimals: u8) -> String<N> {
+    let mut s = String::new();
+    push_fixed(&mut s, v, decimals);
+    s
+}
+
+/// Append the unsigned integer `n` right-aligned in `width` characters.
+pub fn push_uint<const N: usize>(out: &mut String<N>, n: u32, width: usize) -> bool {
+    let digits = format(n as f32, 0);
+    let mut ok = true;
+    for _ in digits.len()..width {
+        ok &= out.push(' ').is_ok();
+    }
+    ok && out.push_str(&digits).is_ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_signs_rounding_and_small_negatives() {
+        assert_eq!(fixed::<12>(12.345, 2).as_str(), "12.35");
+        assert_eq!(fixed::<12>(-0.04, 1).as_str(), "0.0");
+        assert_eq!(fixed::<12>(-0.06, 1).as_str(), "-0.1");
+        assert_eq!(fixed::<12>(-3.0, 0).as_str(), "-3");
+        assert_eq!(fixed::<12>(0.2, 3).as_str(), "0.200");
+        assert_eq!(fixed::<12>(f32::NAN, 2).as_str(), "----");
+        assert_eq!(fixed::<12>(1.0e12, 2).as_str(), "----");
+        assert_eq!(fixed::<12>(0.0, 0).as_str(), "0");
+        assert_eq!(fixed::<12>(0.05, 2).as_str(), "0.05");
+        assert_eq!(fixed::<16>(-12345.678, 3).as_str(), "-12345.678");
+    }
+
+    #[test]
+    fn right_aligned_integers() {
+        let mut s: String<12> = String::new();
+        assert!(push_uint(&mut s, 600, 5));
+        assert!(push_uint(&mut s, 12345, 2));
+        assert_eq!(s.as_str(), "  60012345");
+    }
+
+    #[test]
+    fn reports_overflow_of_the_output() {
+        let mut s: String<3> = String::new();
+        assert!(!push_fixed(&mut s, 1234.5, 1));
+    }
+}

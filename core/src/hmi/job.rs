@@ -1,0 +1,528 @@
+//! The keypad drawing jobs (the lab report's modes) and how each becomes planner moves.
+//!
+//! A [`Job`] holds the user's parameters in mm and degrees, relative to the pen position
+//! when it starts (as in the report, whose shapes all start where the pen is). It owns
+//! two things: [`Job::plan`] turns it into [`Move`]s in integer steps (pen down, the
+//! path, pen up) for the planner, and [`Job::point_at`] gives the ideal curve for the
+//! LCD preview and the progress estimate. Both come from the same parameters so the
+//! preview shows exactly what will be drawn.
+//!
+//! Pen up/down are Z moves ([`Config::pen_up_mm`], [`Config::pen_down_mm`]), so the
+//! whole job is one ordered move stream and every XY move carries the pen-down Z.
+
+use core::f32::consts::PI;
+
+use heapless::Vec;
+
+use super::Config;
+use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
+
+/// The most moves one job produces (pen down + five star lines + pen up).
+pub const MAX_MOVES: usize = 8;
+
+/// One drawing job, parameters in mm / degrees, relative to the start position.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Job {
+    /// Straight line by (dx, dy): the sign picks the quadrant.
+    Line { dx: f32, dy: f32 },
+    /// Circular arc of radius `r` starting at its 0° point (centre at -r on X), through
+    /// `theta` degrees: positive counter-clockwise, negative clockwise, ±360 a circle.
+    Arc { r: f32, theta: f32 },
+    /// Full ellipse with semi-axes `a` (X) and `b` (Y), counter-clockwise, starting at
+    /// its rightmost point.
+    Ellipse { a: f32, b: f32 },
+    /// y = amp sin(omega x + phase) - amp sin(phase) for x in [0, len] mm; `omega` in
+    /// rad/mm, `phase` in degrees.
+    Sine {
+        amp: f32,
+        omega: f32,
+        phase: f32,
+        len: f32,
+    },
+    /// Five-pointed star {5/2} drawn continuously from its top point; `size` is the
+    /// diameter of the circle through the five points.
+    Star { size: f32 },
+    /// Pen-up rapid travel by (dx, dy) (go to origin).
+    Travel { dx: f32, dy: f32 },
+}
+
+/// Why a job cannot be planned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JobError {
+    /// Nothing would move (zero length or zero angle).
+    Empty,
+    /// A coordinate does not fit the step counter.
+    TooLarge,
+}
+
+impl JobError {
+    pub fn message(self) -> &'static str {
+        match self {
+            JobError::Empty => "Nothing to draw",
+            JobError::TooLarge => "Out of range",
+        }
+    }
+}
+
+/// The moves of a job and where it ends.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    pub moves: Vec<Move, MAX_MOVES>,
+    pub end: StepPos,
+}
+
+/// Largest |steps| accepted for a coordinate (keeps sums far from i32 overflow).
+const STEP_LIMIT: f32 = 1.0e9;
+
+fn to_steps(mm: f32, steps_per_mm: f32) -> Result<i32, JobError> {
+    let s = libm::roundf(mm * steps_per_mm);
+    if s.is_finite() && s.abs() < STEP_LIMIT {
+        Ok(s as i32)
+    } else {
+        Err(JobError::TooLarge)
+    }
+}
+
+fn offset(start: StepPos, d: [f32; 2], z: i32, cfg: &Config) -> Result<StepPos, JobError> {
+    let dx = to_steps(d[0], cfg.steps_per_mm[X])?;
+    let dy = to_steps(d[1], cfg.steps_per_mm[Y])?;
+    Ok([
+        start[X].checked_add(dx).ok_or(JobError::TooLarge)?,
+        start[Y].checked_add(dy).ok_or(JobError::TooLarge)?,
+        z,
+    ])
+}
+
+/// Angle in radians of star point k (top point first, every second vertex).
+fn star_angle(k: usize) -> f32 {
+    PI / 2.0 - (k as f32) * (4.0 * PI / 5.0)
+}
+
+impl Job {
+    /// Short name for titles.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Job::Line { .. } => "Line",
+            Job::Arc { .. } => "Arc",
+            Job::Ellipse { .. } => "Ellipse",
+            Job::Sine { .. } => "Sine",
+            Job::Star { .. } => "Star",
+            Job::Travel { .. } => "Go to origin",
+        }
+    }
+
+    /// Whether the pen is down while this job moves.
+    pub fn draws(&self) -> bool {
+        !matches!(self, Job::Travel { .. })
+    }
+
+    /// The ideal path point at parameter `t` in [0, 1], in mm relative to the start.
+    pub fn point_at(&self, t: f32) -> [f32; 2] {
+        let t = t.clamp(0.0, 1.0);
+        match *self {
+            Job::Line { dx, dy } | Job::Travel { dx, dy } => [dx * t, dy * t],
+            Job::Arc { r, theta } => {
+                let a = theta.to_radians() * t;
+                [r * libm::cosf(a) - r, r * libm::sinf(a)]
+            }
+            Job::Ellipse { a, b } => {
+                let ang = 2.0 * PI * t;
+                [a * libm::cosf(ang) - a, b * libm::sinf(ang)]
+            }
+            Job::Sine {
+                amp,
+                omega,
+                phase,
+                len,
+            } => {
+                let x = len * t;
+                let ph = phase.to_radians();
+                [x, amp * libm::sinf(omega * x + ph) - amp * libm::sinf(ph)]
+            }
+            Job::Star { size } => {
+                let r = size / 2.0;
+                let s = t * 5.0;
+                let k = (libm::floorf(s) as usize).min(4);
+                let f = s - k as f32;
+                let p = |k: usize| {
+                    let a = star_angle(k);
+                    [r * libm::cosf(a), r * libm::sinf(a) - r]
+                };
+                let (p0, p1) = (p(k), p(k + 1));
+                [p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f]
+            }
+        }
+    }
+
+    /// Path length in mm (chords of 160 samples, a multiple of the star's 5 sides, so
+    /// exact for lines and the star).
+    pub fn length_mm(&self) -> f32 {
+        const N: usize = 160;
+        let mut len = 0.0;
+        let mut prev = self.point_at(0.0);
+        for i in 1..=N {
+            let p = self.point_at(i as f32 / N as f32);
+            len += libm::hypotf(p[0] - prev[0], p[1] - prev[1]);
+            prev = p;
+        }
+        len
+    }
+
+    /// Bounding box (min, max) of the path in mm relative to the start.
+    pub fn bounds(&self) -> ([f32; 2], [f32; 2]) {
+        const N: usize = 160;
+        let mut lo = [0.0f32; 2];
+        let mut hi = [0.0f32; 2];
+        for i in 0..=N {
+            let p = self.point_at(i as f32 / N as f32);
+            for ax in 0..2 {
+                lo[ax] = lo[ax].min(p[ax]);
+                hi[ax] = hi[ax].max(p[ax]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The planner moves for this job from `start` (pen down, path, pen up).
+    pub fn plan(&self, start: StepPos, cfg: &Config) -> Result<Plan, JobError> {
+        let z_down = to_steps(cfg.pen_down_mm, cfg.steps_per_mm[Z])?;
+        let z_up = to_steps(cfg.pen_up_mm, cfg.steps_per_mm[Z])?;
+        let feed = Feed::MmPerMin(cfg.draw_feed_mm_min);
+        let mut moves: Vec<Move, MAX_MOVES> = Vec::new();
+        let mut push = |target: StepPos, path: Path, feed: Feed| {
+            moves
+                .push(Move {
+                    target,
+                    path,
+                    feed,
+                    line: 0,
+                })
+                .map_err(|_| JobError::TooLarge)
+        };
+        let here = [start[X], start[Y]];
+        let z = if self.draws() { z_down } else { z_up };
+        // Pen to its working height at the start point first.
+        push([here[0], here[1], z], Path::Line, Feed::Rapid)?;
+        match *self {
+            Job::Line { dx, dy } => {
+                let end = offset(start, [dx, dy], z, cfg)?;
+                if end[X] == start[X] && end[Y] == start[Y] {
+                    return Err(JobError::Empty);
+                }
+                push(end, Path::Line, feed)?;
+            }
+            Job::Travel { dx, dy } => {
+                let end = offset(start, [dx, dy], z, cfg)?;
+                push(end, Path::Line, Feed::Rapid)?;
+            }
+            Job::Arc { r, theta } => {
+                if theta == 0.0 {
+                    return Err(JobError::Empty);
+                }
+                conic(&mut push, start, [r, r], theta, z, feed, cfg)?;
+            }
+            Job::Ellipse { a, b } => conic(&mut push, start, [a, b], 360.0, z, feed, cfg)?,
+            Job::Sine {
+                amp,
+                omega,
+                phase,
+                len,
+            } => {
+                let spx = cfg.steps_per_mm[X];
+                let amp_steps = amp * cfg.steps_per_mm[Y];
+                let omega_steps = omega / spx;
+                let ph = phase.to_radians();
+                let len_steps = to_steps(len, spx)?;
+                if len_steps == 0 {
+                    return Err(JobError::Empty);
+                }
+                let rise = amp_steps * libm::sinf(omega_steps * len_steps as f32 + ph)
+                    - amp_steps * libm::sinf(ph);
+                let end = [
+                    start[X].checked_add(len_steps).ok_or(JobError::TooLarge)?,
+                    start[Y]
+                        .checked_add(to_steps(rise, 1.0)?)
+                        .ok_or(JobError::TooLarge)?,
+                    z,
+                ];
+                push(
+                    end,
+                    Path::Sine {
+                        amp: amp_steps,
+                        omega: omega_steps,
+                        phase: ph,
+                    },
+                    feed,
+                )?;
+            }
+            Job::Star { size } => {
+                let r = size / 2.0;
+                if to_steps(r, cfg.steps_per_mm[X])? == 0 {
+                    return Err(JobError::Empty);
+                }
+                for k in 1..=5 {
+                    let a = star_angle(k);
+                    let target = if k == 5 {
+                        [start[X], start[Y], z]
+                    } else {
+                        offset(start, [r * libm::cosf(a), r * libm::sinf(a) - r], z, cfg)?
+                    };
+                    push(target, Path::Line, feed)?;
+                }
+            }
+        }
+        let last = moves.last().map(|m| m.target).unwrap_or(start);
+        let end = [last[X], last[Y], z_up];
+        if self.draws() {
+            moves
+                .push(Move {
+                    target: end,
+                    path: Path::Line,
+                    feed: Feed::Rapid,
+                    line: 0,
+                })
+                .map_err(|_| JobError::TooLarge)?;
+        }
+        Ok(Plan { moves, end })
+    }
+}
+
+/// Arc or ellipse from `start` (its 0° point) through `theta` degrees. A circle in mm is
+/// a circle in steps only when X and Y have the same steps/mm; otherwise it is sent as
+/// an ellipse. Full turns go as two half turns so that no move has target == start.
+fn conic(
+    push: &mut impl FnMut(StepPos, Path, Feed) -> Result<(), JobError>,
+    start: StepPos,
+    semi_mm: [f32; 2],
+    theta: f32,
+    z: i32,
+    feed: Feed,
+    cfg: &Config,
+) -> Result<(), JobError> {
+    let a = to_steps(semi_mm[0], cfg.steps_per_mm[X])?;
+    let b = to_steps(semi_mm[1], cfg.steps_per_mm[Y])?;
+    if a <= 0 || b <= 0 {
+        return Err(JobError::Empty);
+    }
+    let ccw = theta > 0.0;
+    let center = [start[X].checked_sub(a).ok_or(JobError::TooLarge)?, start[Y]];
+    let path_from = |from: StepPos| {
+        let rel = [center[0] - from[X], center[1] - from[Y]];
+        if a == b {
+            Path::Arc {
+                center: rel,
+                ccw,
+                turns: 0,
+            }
+        } else {
+            Path::Ellipse {
+                center: rel,
+                a,
+                b,
+                ccw,
+            }
+        }
+    };
+    let point = |deg: f32| -> Result<StepPos, JobError> {
+        let t = deg.to_radians();
+        let px = to_steps(a as f32 * libm::cosf(t), 1.0)?;
+        let py = to_steps(b as f32 * libm::sinf(t), 1.0)?;
+        Ok([
+            center[0].checked_add(px).ok_or(JobError::TooLarge)?,
+            center[1].checked_add(py).ok_or(JobError::TooLarge)?,
+            z,
+        ])
+    };
+    let full = theta.abs() >= 360.0;
+    let first_end = if full {
+        // Exactly opposite the start: (center - a, center).
+        [center[0] - a, center[1], z]
+    } else {
+        point(theta)?
+    };
+    let from = [start[X], start[Y], z];
+    push(first_end, path_from(from), feed)?;
+    if full {
+        push(from, path_from(first_end), feed)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cfg() -> Config {
+        Config {
+            steps_per_mm: [80.0, 80.0, 100.0],
+            pen_up_mm: 5.0,
+            pen_down_mm: 0.0,
+            draw_feed_mm_min: 600.0,
+        }
+    }
+
+    #[test]
+    fn line_in_each_quadrant_lands_on_the_rounded_target() {
+        for (dx, dy) in [(10.0, 5.0), (-10.0, 5.0), (-10.0, -5.0), (10.0, -5.0)] {
+            let plan = Job::Line { dx, dy }.plan([100, 200, 500], &cfg()).unwrap();
+            let m = plan.moves.as_slice();
+            assert_eq!(m.len(), 3);
+            assert_eq!(m[0].target, [100, 200, 0], "pen down at the start");
+            assert_eq!(
+                m[1].target,
+                [100 + (dx * 80.0) as i32, 200 + (dy * 80.0) as i32, 0]
+            );
+            assert_eq!(m[1].feed, Feed::MmPerMin(600.0));
+            assert_eq!(m[2].target, [m[1].target[0], m[1].target[1], 500], "pen up");
+            assert_eq!(plan.end, m[2].target);
+        }
+    }
+
+    #[test]
+    fn full_circle_is_two_half_arcs_with_centres_relative_to_each_start() {
+        let plan = Job::Arc {
+            r: 10.0,
+            theta: 360.0,
+        }
+        .plan([0, 0, 0], &cfg())
+        .unwrap();
+        let m = plan.moves.as_slice();
+        assert_eq!(m[1].target, [-1600, 0, 0]);
+        assert_eq!(
+            m[1].path,
+            Path::Arc {
+                center: [-800, 0],
+                ccw: true,
+                turns: 0
+            }
+        );
+        assert_eq!(m[2].target, [0, 0, 0]);
+        assert_eq!(
+            m[2].path,
+            Path::Arc {
+                center: [800, 0],
+                ccw: true,
+                turns: 0
+            }
+        );
+    }
+
+    #[test]
+    fn clockwise_quarter_arc_ends_below_the_centre() {
+        let plan = Job::Arc {
+            r: 10.0,
+            theta: -90.0,
+        }
+        .plan([0, 0, 0], &cfg())
+        .unwrap();
+        let m = plan.moves.as_slice();
+        assert_eq!(m[1].target, [-800, -800, 0]);
+        assert_eq!(
+            m[1].path,
+            Path::Arc {
+                center: [-800, 0],
+                ccw: false,
+                turns: 0
+            }
+        );
+    }
+
+    #[test]
+    fn arc_with_unequal_steps_per_mm_becomes_an_ellipse_in_steps() {
+        let mut c = cfg();
+        c.steps_per_mm[Y] = 40.0;
+        let plan = Job::Arc {
+            r: 10.0,
+            theta: 90.0,
+        }
+        .plan([0, 0, 0], &c)
+        .unwrap();
+        assert_eq!(
+            plan.moves[1].path,
+            Path::Ellipse {
+                center: [-800, 0],
+                a: 800,
+                b: 400,
+                ccw: true
+            }
+        );
+        assert_eq!(plan.moves[1].target, [-800, 400, 0]);
+    }
+
+    #[test]
+    fn sine_parameters_are_converted_to_steps_and_radians() {
+        let job = Job::Sine {
+            amp: 10.0,
+            omega: 0.5,
+            phase: 90.0,
+            len: 20.0,
+        };
+        let plan = job.plan([0, 0, 0], &cfg()).unwrap();
+        let m = plan.moves[1];
+        let Path::Sine { amp, omega, phase } = m.path else {
+            panic!("not a sine: {m:?}")
+        };
+        assert_eq!(amp, 800.0);
+        assert!((omega - 0.5 / 80.0).abs() < 1e-9);
+        assert!((phase - PI / 2.0).abs() < 1e-6);
+        // y(20 mm) = 10 sin(10 + pi/2) - 10 = 10 cos(10) - 10 mm.
+        let want_y = libm::roundf((10.0 * libm::cosf(10.0) - 10.0) * 80.0) as i32;
+        assert_eq!(m.target, [1600, want_y, 0]);
+    }
+
+    #[test]
+    fn star_closes_on_its_start_and_has_five_equal_sides() {
+        let plan = Job::Star { size: 40.0 }
+            .plan([1000, 1000, 0], &cfg())
+            .unwrap();
+        let m = plan.moves.as_slice();
+        assert_eq!(m.len(), 7);
+        assert_eq!(m[5].target, [1000, 1000, 0]);
+        let side = 2.0 * 20.0 * libm::sinf(2.0 * PI / 5.0) * 80.0;
+        let mut prev = [1000, 1000];
+        for mv in &m[1..6] {
+            let d = libm::hypotf(
+                (mv.target[0] - prev[0]) as f32,
+                (mv.target[1] - prev[1]) as f32,
+            );
+            assert!((d - side).abs() < 1.5, "side {d} vs {side}");
+            prev = [mv.target[0], mv.target[1]];
+        }
+        assert!((Job::Star { size: 40.0 }.length_mm() - 5.0 * side / 80.0).abs() < 0.01);
+    }
+
+    #[test]
+    fn degenerate_and_huge_jobs_are_refused() {
+        assert_eq!(
+            Job::Line { dx: 0.0, dy: 0.001 }.plan([0; 3], &cfg()),
+            Err(JobError::Empty)
+        );
+        assert_eq!(
+            Job::Arc { r: 5.0, theta: 0.0 }.plan([0; 3], &cfg()),
+            Err(JobError::Empty)
+        );
+        assert_eq!(
+            Job::Line { dx: 1.0e9, dy: 0.0 }.plan([0; 3], &cfg()),
+            Err(JobError::TooLarge)
+        );
+        assert_eq!(
+            Job::Line { dx: 1.0, dy: 0.0 }.plan([i32::MAX - 10, 0, 0], &cfg()),
+            Err(JobError::TooLarge)
+        );
+    }
+
+    #[test]
+    fn preview_points_start_at_zero_and_follow_the_shape() {
+        let e = Job::Ellipse { a: 20.0, b: 10.0 };
+        assert_eq!(e.point_at(0.0), [0.0, 0.0]);
+        let (lo, hi) = e.bounds();
+        assert!((lo[0] + 40.0).abs() < 0.01 && hi[0].abs() < 0.01);
+        assert!((lo[1] + 10.0).abs() < 0.01 && (hi[1] - 10.0).abs() < 0.01);
+        let top = Job::Arc {
+            r: 10.0,
+            theta: 90.0,
+        }
+        .point_at(1.0);
+        assert!((top[0] + 10.0).abs() < 1e-4 && (top[1] - 10.0).abs() < 1e-4);
+    }
+}

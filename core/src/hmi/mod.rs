@@ -1,0 +1,672 @@
+//! The standalone user interface: menus, manual jog, the drawing modes of the lab report,
+//! and the machine feedback (beeps, busy LED), as one pure state machine.
+//!
+//! The HMI never touches the machine. Its inputs are explicit: keypad events
+//! ([`Hmi::key`]) and a [`Status`] snapshot of the machine on every call, plus the
+//! time in ms; its outputs are [`Action`]s the integrator carries out in order (queue
+//! these moves, start/stop a jog, feed hold, abort, beep, ...). The pages the screens
+//! draw are exposed read-only ([`Hmi::page`] and friends). So it runs unchanged in the
+//! firmware's keypad task, in the simulator and in host tests.
+//!
+//! The report's two-level structure (main loop picks a mode, each mode loops until its
+//! exit key) becomes a [`Page`] enum: each page handles its keys and returns to the menu
+//! by replacing itself, never by blocking.
+
+pub mod entry;
+pub mod fixed;
+pub mod io;
+pub mod job;
+pub mod menu;
+pub mod page;
+
+pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
+pub use menu::{MachineItem, MenuItem, MACHINE_MENU, MENU};
+pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
+
+use heapless::{Deque, String};
+
+use crate::keypad::{Key, KeyEvent, KeyKind};
+use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
+use entry::{FieldInput, Form, FormMemory, DEFAULT_PARAMS};
+use job::Job;
+
+/// Jog speeds selectable with speed + / speed -.
+pub const JOG_SPEEDS: [f32; 7] = [50.0, 100.0, 200.0, 400.0, 800.0, 1500.0, 3000.0];
+const JOG_SPEED_DEFAULT: usize = 3;
+/// Draw speed range and step on the status page.
+const DRAW_FEED_MIN: f32 = 50.0;
+const DRAW_FEED_MAX: f32 = 3000.0;
+const DRAW_FEED_STEP: f32 = 50.0;
+/// How long the boot screen shows and messages stay.
+pub const BOOT_MS: u32 = 1500;
+const TOAST_MS: u32 = 2500;
+/// A job counts as stopped early if the machine sits idle this long short of its end.
+const SETTLE_MS: u32 = 1000;
+
+/// The HMI state machine.
+#[derive(Clone, Debug)]
+pub struct Hmi {
+    cfg: Config,
+    page: Page,
+    boot_ms: u32,
+    params: FormMemory,
+    last_job: Option<Job>,
+    jog_speed: usize,
+    draw_feed: f32,
+    dirs: Deque<[i8; 2], DIR_HISTORY>,
+    busy: bool,
+    alarm_latched: bool,
+    toast: Option<Toast>,
+}
+
+fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
+    let dx = (b[X].wrapping_sub(a[X])) as f32 / spmm[X];
+    let dy = (b[Y].wrapping_sub(a[Y])) as f32 / spmm[Y];
+    libm::hypotf(dx, dy)
+}
+
+fn text28(s: &str) -> String<28> {
+    let mut t = String::new();
+    for c in s.chars() {
+        if t.push(c).is_err() {
+            break;
+        }
+    }
+    t
+}
+
+fn push(out: &mut Actions, a: Action) {
+    // Capacity covers the largest single response (a job start); never silently
+    // exceeded by construction, checked here rather than panicking.
+    let _ = out.push(a);
+}
+
+impl Hmi {
+    pub fn new(cfg: Config, now_ms: u32) -> Self {
+        Hmi {
+            cfg,
+            page: Page::Boot,
+            boot_ms: now_ms,
+            params: DEFAULT_PARAMS,
+            last_job: None,
+            jog_speed: JOG_SPEED_DEFAULT,
+            draw_feed: cfg.draw_feed_mm_min,
+            dirs: Deque::new(),
+            busy: false,
+            alarm_latched: false,
+            toast: None,
+        }
+    }
+
+    pub fn page(&self) -> &Page {
+        &self.page
+    }
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+    /// New machine settings (e.g. after `$100=`); also resets the draw speed to the
+    /// configured one. Takes effect for the next job.
+    pub fn set_config(&mut self, cfg: Config) {
+        self.cfg = cfg;
+        self.draw_feed = cfg.draw_feed_mm_min;
+    }
+    pub fn toast(&self) -> Option<&str> {
+        self.toast.as_ref().map(|t| t.text.as_str())
+    }
+    pub fn jog_speed(&self) -> f32 {
+        JOG_SPEEDS.get(self.jog_speed).copied().unwrap_or(100.0)
+    }
+    pub fn draw_feed(&self) -> f32 {
+        self.draw_feed
+    }
+    pub fn last_job(&self) -> Option<Job> {
+        self.last_job
+    }
+    /// The latest distinct feed directions, oldest first.
+    pub fn feed_dirs(&self) -> impl Iterator<Item = &[i8; 2]> {
+        self.dirs.iter()
+    }
+    /// Whether the pen is down (pen axis nearer the down than the up position).
+    pub fn pen_is_down(&self, st: &Status) -> bool {
+        let z = st.pos[Z] as f32 / self.cfg.steps_per_mm[Z];
+        (z - self.cfg.pen_down_mm).abs() < (z - self.cfg.pen_up_mm).abs()
+    }
+    /// Position in mm.
+    pub fn pos_mm(&self, st: &Status) -> [f32; 3] {
+        let s = self.cfg.steps_per_mm;
+        [
+            st.pos[X] as f32 / s[X],
+            st.pos[Y] as f32 / s[Y],
+            st.pos[Z] as f32 / s[Z],
+        ]
+    }
+
+    fn say(&mut self, text: &str, now_ms: u32) {
+        self.toast = Some(Toast {
+            text: text28(text),
+            until_ms: now_ms.wrapping_add(TOAST_MS),
+        });
+    }
+
+    fn error(&mut self, title: &'static str, text: &str, out: &mut Actions) {
+        self.page = Page::Error {
+            title,
+            text: text28(text),
+        };
+        push(out, Action::Beep(Beep::Error));
+    }
+
+    /// Can a new motion command start now? Otherwise shows why.
+    fn ready(&mut self, st: &Status, out: &mut Actions) -> bool {
+        match st.state {
+            MachineState::Alarm(_) => {
+                self.error("Alarm", "Unlock or home first", out);
+                false
+            }
+            MachineState::Idle if st.queue_empty => true,
+            _ => {
+                self.error("Busy", "Machine is moving", out);
+                false
+            }
+        }
+    }
+
+    /// Handle one keypad event.
+    pub fn key(&mut self, ev: KeyEvent, st: &Status, now_ms: u32) -> Actions {
+        let mut out = Actions::new();
+        let press = ev.kind == KeyKind::Press;
+        let repeat = ev.kind == KeyKind::Repeat;
+        match &mut self.page {
+            Page::Boot => {
+                if press {
+                    self.page = Page::Menu { sel: 0 };
+                }
+            }
+            Page::Menu { sel } => {
+                let sel = *sel;
+                if press || repeat {
+                    match ev.key {
+                        Key::Up => {
+                            self.page = Page::Menu {
+                                sel: (sel + MENU.len() - 1) % MENU.len(),
+                            }
+                        }
+                        Key::Down => {
+                            self.page = Page::Menu {
+                                sel: (sel + 1) % MENU.len(),
+                            }
+                        }
+                        Key::Enter if press => self.open(sel, st, now_ms, &mut out),
+                        Key::Digit(d) if press => {
+                            if let Some(i) = MENU.iter().position(|(k, _)| *k == d) {
+                                self.page = Page::Menu { sel: i };
+                                self.open(i, st, now_ms, &mut out);
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            Page::Machine { sel } => {
+                let sel = *sel;
+                let n = MACHINE_MENU.len();
+                if press || repeat {
+                    match ev.key {
+                        Key::Up => {
+                            self.page = Page::Machine {
+                                sel: (sel + n - 1) % n,
+                            }
+                        }
+                        Key::Down => self.page = Page::Machine { sel: (sel + 1) % n },
+                        Key::Back if press => self.page = Page::Menu { sel: 8 },
+                        Key::Enter if press => self.machine(sel, st, now_ms, &mut out),
+                        Key::Digit(d) if press => {
+                            if let Some(i) = MACHINE_MENU.iter().position(|(k, _)| *k == d) {
+                                self.machine(i, st, now_ms, &mut out);
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            Page::Jog(_) => self.jog_key(ev, st, now_ms, &mut out),
+            Page::Form(_) => self.form_key(ev, now_ms, &mut out),
+            Page::Preview { job, form } => {
+                let (job, form) = (*job, *form);
+                if press {
+                    match ev.key {
+                        Key::Enter => self.start(job, st, now_ms, &mut out),
+                        Key::Back => {
+                            self.page = match form {
+                                Some(kind) => {
+                                    Page::Form(Form::new(kind, &self.params[kind.index()]))
+                                }
+                                None => Page::Menu { sel: 0 },
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            Page::Run(run) => {
+                if press {
+                    match (run.phase, ev.key) {
+                        (RunPhase::Running, Key::Enter) => {
+                            if st.state == MachineState::Hold {
+                                push(&mut out, Action::Resume);
+                            } else {
+                                push(&mut out, Action::FeedHold);
+                            }
+                        }
+                        (RunPhase::Running, Key::Back) => {
+                            push(&mut out, Action::Abort);
+                            run.phase = RunPhase::Stopping;
+                        }
+                        (RunPhase::Done { .. }, Key::Enter | Key::Back) => {
+                            self.page = Page::Menu { sel: 0 };
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            Page::Status => {
+                if press || repeat {
+                    match ev.key {
+                        Key::Up => {
+                            self.draw_feed = (self.draw_feed + DRAW_FEED_STEP).min(DRAW_FEED_MAX)
+                        }
+                        Key::Down => {
+                            self.draw_feed = (self.draw_feed - DRAW_FEED_STEP).max(DRAW_FEED_MIN)
+                        }
+                        Key::Back | Key::Enter if press => self.page = Page::Menu { sel: 9 },
+                        _ => {}
+                    }
+                }
+            }
+            Page::Alarm { .. } => {
+                if press {
+                    match ev.key {
+                        Key::Enter => push(&mut out, Action::Unlock),
+                        Key::Back => self.page = Page::Menu { sel: 0 },
+                        _ => {}
+                    }
+                }
+            }
+            Page::Error { .. } => {
+                if press {
+                    self.page = Page::Menu { sel: 0 };
+                }
+            }
+        }
+        out
+    }
+
+    /// Open main menu entry `i`.
+    fn open(&mut self, i: usize, st: &Status, now_ms: u32, out: &mut Actions) {
+        let Some((_, item)) = MENU.get(i).copied() else {
+            return;
+        };
+        match item {
+            MenuItem::Jog => {
+                if matches!(st.state, MachineState::Alarm(_)) {
+                    self.error("Alarm", "Unlock or home first", out);
+                } else if st.state.moving() && st.state != MachineState::Jog {
+                    self.error("Busy", "Machine is moving", out);
+                } else {
+                    self.page = Page::Jog(JogPage {
+                        active: None,
+                        last_dir: [0, 0],
+                    });
+                }
+            }
+            MenuItem::Draw(kind) => {
+                self.page = Page::Form(Form::new(kind, &self.params[kind.index()]));
+            }
+            MenuItem::Pen => {
+                if self.ready(st, out) {
+                    self.toggle_pen(st, now_ms, out);
+                }
+            }
+            MenuItem::Replay => match self.last_job {
+                Some(job) => self.page = Page::Preview { job, form: None },
+                None => self.say("No job drawn yet", now_ms),
+            },
+            MenuItem::Machine => self.page = Page::Machine { sel: 0 },
+            MenuItem::Status => self.page = Page::Status,
+        }
+    }
+
+    fn machine(&mut self, i: usize, st: &Status, now_ms: u32, out: &mut Actions) {
+        let Some((_, item)) = MACHINE_MENU.get(i).copied() else {
+            return;
+        };
+        self.page = Page::Machine { sel: i };
+        if !self.ready(st, out) {
+            return;
+        }
+        match item {
+            MachineItem::GoOrigin => {
+                let p = self.pos_mm(st);
+                self.start(
+                    Job::Travel {
+                        dx: -p[X],
+                        dy: -p[Y],
+                    },
+                    st,
+                    now_ms,
+                    out,
+                );
+            }
+            MachineItem::SetOrigin => {
+                push(out, Action::SetOrigin);
+                self.say("Origin set here", now_ms);
+            }
+            MachineItem::Home => {
+                push(out, Action::Home);
+                self.say("Homing...", now_ms);
+            }
+        }
+    }
+
+    fn toggle_pen(&mut self, st: &Status, now_ms: u32, out: &mut Actions) {
+        let down = !self.pen_is_down(st);
+        let z_mm = if down {
+            self.cfg.pen_down_mm
+        } else {
+            self.cfg.pen_up_mm
+        };
+        let z = libm::roundf(z_mm * self.cfg.steps_per_mm[Z]);
+        if !z.is_finite() || z.abs() >= 1.0e9 {
+            return;
+        }
+        push(
+            out,
+            Action::Queue(Move {
+                target: [st.pos[X], st.pos[Y], z as i32],
+                path: Path::Line,
+                feed: Feed::Rapid,
+                line: 0,
+            }),
+        );
+        self.say(if down { "Pen down" } else { "Pen up" }, now_ms);
+    }
+
+    fn jog_key(&mut self, ev: KeyEvent, st: &Status, now_ms: u32, out: &mut Actions) {
+        let Page::Jog(jog) = &mut self.page else {
+            return;
+        };
+        let mut jog = *jog;
+        let speed = |i: usize| JOG_SPEEDS.get(i).copied().unwrap_or(100.0);
+        match (ev.kind, ev.key) {
+            (KeyKind::Press, k) if k.jog_dir().is_some() => {
+                if let Some(dir) = k.jog_dir() {
+                    if matches!(st.state, MachineState::Alarm(_)) {
+                        self.error("Alarm", "Unlock or home first", out);
+                        return;
+                    }
+                    if jog.active.is_some() {
+                        push(out, Action::JogStop);
+                    }
+                    push(
+                        out,
+                        Action::JogStart {
+                            dir,
+                            feed_mm_min: speed(self.jog_speed),
+                        },
+                    );
+                    jog.active = Some((k, dir));
+                    jog.last_dir = dir;
+                }
+            }
+            (KeyKind::Release, k) if jog.active.map(|(held, _)| held) == Some(k) => {
+                push(out, Action::JogStop);
+                jog.active = None;
+            }
+            // Speed +/- act once per press (Repeat is ignored): the report's problem 3.
+            (KeyKind::Press, Key::Up | Key::Down) => {
+                self.jog_speed = if ev.key == Key::Up {
+                    (self.jog_speed + 1).min(JOG_SPEEDS.len() - 1)
+                } else {
+                    self.jog_speed.saturating_sub(1)
+                };
+                if let Some((_, dir)) = jog.active {
+                    push(
+                        out,
+                        Action::JogStart {
+                            dir,
+                            feed_mm_min: speed(self.jog_speed),
+                        },
+                    );
+                }
+            }
+            (KeyKind::Press, Key::Digit(5)) => {
+                if jog.active.is_none() && self.ready(st, out) {
+                    self.toggle_pen(st, now_ms, out);
+                }
+                if !matches!(self.page, Page::Jog(_)) {
+                    return;
+                }
+            }
+            (KeyKind::Press, Key::Back) => {
+                if jog.active.is_some() {
+                    push(out, Action::JogStop);
+                }
+                self.page = Page::Menu { sel: 0 };
+                return;
+            }
+            _ => {}
+        }
+        self.page = Page::Jog(jog);
+    }
+
+    fn form_key(&mut self, ev: KeyEvent, now_ms: u32, out: &mut Actions) {
+        if ev.kind == KeyKind::Release {
+            return;
+        }
+        let repeat = ev.kind == KeyKind::Repeat;
+        let Page::Form(form) = &mut self.page else {
+            return;
+        };
+        let kind = form.kind;
+        let Some(field) = form.current() else {
+            return;
+        };
+        match field.key(ev.key, repeat) {
+            FieldInput::Edited => return,
+            FieldInput::Cancel => {
+                let sel = MENU
+                    .iter()
+                    .position(|(_, m)| *m == MenuItem::Draw(kind))
+                    .unwrap_or(0);
+                self.page = Page::Menu { sel };
+                return;
+            }
+            FieldInput::Ignored => {}
+        }
+        let forward = match ev.key {
+            Key::Up => false,
+            Key::Down => true,
+            Key::Enter if !repeat => true,
+            _ => return,
+        };
+        if let Err(msg) = field.commit() {
+            self.say(&msg, now_ms);
+            push(out, Action::Beep(Beep::Error));
+            return;
+        }
+        if ev.key == Key::Enter && form.is_last() {
+            let job = form.job();
+            let values = form.values();
+            match job.plan([0; 3], &self.cfg) {
+                Ok(_) => {
+                    if let Some(slot) = self.params.get_mut(kind.index()) {
+                        *slot = values;
+                    }
+                    self.page = Page::Preview {
+                        job,
+                        form: Some(kind),
+                    };
+                }
+                Err(e) => {
+                    self.say(e.message(), now_ms);
+                    push(out, Action::Beep(Beep::Error));
+                }
+            }
+        } else if forward {
+            form.cur = (form.cur + 1).min(form.fields.len().saturating_sub(1));
+        } else {
+            form.cur = form.cur.saturating_sub(1);
+        }
+    }
+
+    /// Queue a job's moves and show it running.
+    fn start(&mut self, job: Job, st: &Status, now_ms: u32, out: &mut Actions) {
+        if !self.ready(st, out) {
+            return;
+        }
+        let cfg = Config {
+            draw_feed_mm_min: self.draw_feed,
+            ..self.cfg
+        };
+        match job.plan(st.pos, &cfg) {
+            Ok(plan) => {
+                for m in plan.moves {
+                    push(out, Action::Queue(m));
+                }
+                if job.draws() {
+                    self.last_job = Some(job);
+                }
+                self.dirs.clear();
+                self.page = Page::Run(RunPage {
+                    job,
+                    start: st.pos,
+                    end: plan.end,
+                    started_ms: now_ms,
+                    phase: RunPhase::Running,
+                    traveled_mm: 0.0,
+                    length_mm: job.length_mm(),
+                    last_pos: st.pos,
+                    idle_since: None,
+                });
+            }
+            Err(e) => self.error("Cannot draw", e.message(), out),
+        }
+    }
+
+    /// Follow the machine: call every refresh (e.g. 10-20 Hz) with a fresh snapshot.
+    pub fn tick(&mut self, st: &Status, now_ms: u32) -> Actions {
+        let mut out = Actions::new();
+        // Busy LED follows motion from any source (keypad or PC).
+        let moving = st.state.moving();
+        if moving != self.busy {
+            self.busy = moving;
+            push(&mut out, Action::BusyLed(moving));
+        }
+        // Teaching view: remember each new feed direction.
+        if st.dir != [0, 0] && self.dirs.back() != Some(&st.dir) {
+            if self.dirs.is_full() {
+                self.dirs.pop_front();
+            }
+            let _ = self.dirs.push_back(st.dir);
+        }
+        if let Some(t) = &self.toast {
+            if (now_ms.wrapping_sub(t.until_ms) as i32) >= 0 {
+                self.toast = None;
+            }
+        }
+        // Alarms take over the screen once per occurrence.
+        match st.state {
+            MachineState::Alarm(code) => {
+                if !self.alarm_latched {
+                    self.alarm_latched = true;
+                    self.page = Page::Alarm { code };
+                    push(&mut out, Action::Beep(Beep::Alarm));
+                }
+            }
+            _ => {
+                self.alarm_latched = false;
+                if matches!(self.page, Page::Alarm { .. }) {
+                    self.page = Page::Menu { sel: 0 };
+                    self.say("Alarm cleared", now_ms);
+                }
+            }
+        }
+        let spmm = self.cfg.steps_per_mm;
+        let mut stopped_at = None;
+        match &mut self.page {
+            Page::Boot if now_ms.wrapping_sub(self.boot_ms) >= BOOT_MS => {
+                self.page = Page::Menu { sel: 0 };
+            }
+            // A jog ended by something else (alarm, reset) is no longer held.
+            Page::Jog(jog)
+                if jog.active.is_some()
+                    && !matches!(st.state, MachineState::Jog | MachineState::Idle) =>
+            {
+                jog.active = None;
+            }
+            Page::Run(run) => {
+                let settled = st.state == MachineState::Idle && st.queue_empty;
+                match run.phase {
+                    RunPhase::Running => {
+                        run.traveled_mm += dist_mm(run.last_pos, st.pos, spmm);
+                        run.last_pos = st.pos;
+                        if settled {
+                            let ms = now_ms.wrapping_sub(run.started_ms);
+                            if st.pos == run.end {
+                                run.phase = RunPhase::Done { ms, complete: true };
+                                push(&mut out, Action::Beep(Beep::Done));
+                            } else {
+                                let since = *run.idle_since.get_or_insert(now_ms);
+                                if now_ms.wrapping_sub(since) >= SETTLE_MS {
+                                    run.phase = RunPhase::Done {
+                                        ms,
+                                        complete: false,
+                                    };
+                                    push(&mut out, Action::Beep(Beep::Error));
+                                }
+                            }
+                        } else {
+                            run.idle_since = None;
+                        }
+                    }
+                    RunPhase::Stopping => {
+                        if settled {
+                            stopped_at = Some(run.job.draws());
+                        }
+                    }
+                    RunPhase::Done { .. } => {}
+                }
+            }
+            _ => {}
+        }
+        if let Some(draws) = stopped_at {
+            // Stopped cleanly: lift the pen where it stands, report the position.
+            if draws {
+                let z = libm::roundf(self.cfg.pen_up_mm * spmm[Z]);
+                if z.is_finite() && z.abs() < 1.0e9 {
+                    push(
+                        &mut out,
+                        Action::Queue(Move {
+                            target: [st.pos[X], st.pos[Y], z as i32],
+                            path: Path::Line,
+                            feed: Feed::Rapid,
+                            line: 0,
+                        }),
+                    );
+                }
+            }
+            let p = self.pos_mm(st);
+            let mut msg: String<28> = String::new();
+            let _ = msg.push_str("Stopped X");
+            fixed::push_fixed(&mut msg, p[X], 1);
+            let _ = msg.push_str(" Y");
+            fixed::push_fixed(&mut msg, p[Y], 1);
+            self.page = Page::Menu { sel: 0 };
+            self.say(&msg, now_ms);
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests;

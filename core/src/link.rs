@@ -1,0 +1,308 @@
+//! The motion link: implements the machine's [`MotionControl`] over the look-ahead
+//! [`Planner`], the segment preparation ([`Prep`]) and whatever executes the prepared
+//! step commands (the step-timer interrupt on the board, a virtual timer in the
+//! simulator), so that the G-code interpreter, the protocol and the keypad modes drive
+//! the real planner the same way everywhere.
+//!
+//! It owns only what the trait asks beyond the planner: commands that are not moves
+//! (G4 dwells, servo pen lifts) wait in order behind the moves before them and run as
+//! pure-wait step commands, so their timing comes from the same timer as the steps;
+//! hold/resume/clear map onto the preparation and the planner; the position is the
+//! executor's count. Owned by the simulator's issue; the firmware's prep task uses it
+//! through the same [`StepSide`] trait.
+
+use crate::interp::Tick;
+use crate::machine::{Command, MotionControl, QueueFull};
+use crate::motion::StepPos;
+use crate::planner::{AxisConfig, PlanError, Planner, PlannerConfig, Shape, PLANNER_BLOCKS};
+use crate::settings::{AccelProfile, Interpolation, Settings};
+use crate::stepper::prep::{HoldState, Prep, PrepConfig};
+use crate::stepper::{CmdSink, StepCmd, MAX_WAIT};
+use heapless::Deque;
+
+/// The interrupt side, as the link sees it.
+pub trait StepSide {
+    type Sink: CmdSink;
+    /// Where prepared step commands go (the SPSC producer on the board).
+    fn sink(&mut self) -> &mut Self::Sink;
+    /// Position after every step emitted so far.
+    fn position(&self) -> StepPos;
+    /// Steps are still to come: the timer runs or commands wait in the queue.
+    fn is_running(&self) -> bool;
+    /// Step commands waiting for the interrupt.
+    fn queued(&self) -> usize;
+    /// Stop at once (no further step) and drop every queued command; the position
+    /// stays what was emitted.
+    fn flush(&mut self);
+    /// Redefine the position (at rest).
+    fn set_position(&mut self, p: StepPos);
+}
+
+/// Non-move commands waiting behind moves, and moves behind them.
+const PENDING: usize = 32;
+/// How far ahead of the interrupt steps are prepared, seconds. Prepared steps are
+/// committed: a block that arrives later can only raise the speed of what is not yet
+/// prepared, so preparing far ahead starves the look-ahead while a stream starts.
+const HORIZON_S: f32 = 0.010;
+/// Fewest steps kept prepared (starting from rest, and at low speed).
+const MIN_AHEAD: usize = 16;
+
+/// A sink that takes at most `left` more commands.
+struct Bounded<'a, K: CmdSink> {
+    inner: &'a mut K,
+    left: usize,
+}
+
+impl<K: CmdSink> CmdSink for Bounded<'_, K> {
+    fn has_room(&self) -> bool {
+        self.left > 0 && self.inner.has_room()
+    }
+    fn push(&mut self, c: StepCmd) -> bool {
+        self.left = self.left.saturating_sub(1);
+        self.inner.push(c)
+    }
+}
+
+/// The planner's configuration from the machine settings.
+pub fn planner_config(s: &Settings) -> PlannerConfig {
+    let axis = |i| AxisConfig {
+        steps_per_mm: s.steps_per_mm(i),
+        max_rate: s.max_rate(i),
+        accel: s.acceleration(i),
+    };
+    PlannerConfig {
+        axes: [axis(0), axis(1), axis(2)],
+        junction_deviation: s.junction_deviation(),
+        start_speed: s.start_rate() / 60.0,
+        shape: match s.accel_profile() {
+            AccelProfile::Trapezoid => Shape::Trapezoid,
+            AccelProfile::SCurve => Shape::Cosine,
+        },
+        method: match s.interpolation() {
+            Interpolation::PointByPoint => crate::interp::Method::Classic,
+            Interpolation::Dda => crate::interp::Method::Dda,
+        },
+    }
+}
+
+pub struct Link<S: StepSide> {
+    planner: Planner,
+    prep: Prep,
+    side: S,
+    timer_hz: u32,
+    /// Commands behind a dwell or pen command, in order.
+    pending: Deque<Command, PENDING>,
+    /// Timer ticks of the running dwell still to queue.
+    wait_left: u64,
+    /// The running dwell / pen command has been fully queued; it ends when the side
+    /// has run it.
+    waiting: bool,
+    pen_down: bool,
+    pen_lift_ms: u32,
+    held: bool,
+}
+
+impl<S: StepSide> Link<S> {
+    pub fn new(s: &Settings, prep: PrepConfig, side: S) -> Self {
+        let pos = side.position();
+        Link {
+            planner: Planner::new(planner_config(s), pos),
+            prep: Prep::new(prep, pos),
+            side,
+            timer_hz: prep.timer_hz,
+            pending: Deque::new(),
+            wait_left: 0,
+            waiting: false,
+            pen_down: false,
+            pen_lift_ms: s.pen_lift_ms(),
+            held: false,
+        }
+    }
+
+    pub fn side(&self) -> &S {
+        &self.side
+    }
+    pub fn side_mut(&mut self) -> &mut S {
+        &mut self.side
+    }
+    pub fn planner(&self) -> &Planner {
+        &self.planner
+    }
+    /// Take new limits from the settings (they only change at rest).
+    pub fn configure(&mut self, s: &Settings) {
+        let pos = self.side.position();
+        self.planner = Planner::new(planner_config(s), pos);
+        self.pen_lift_ms = s.pen_lift_ms();
+    }
+    /// The servo pen's commanded state.
+    pub fn pen_down(&self) -> bool {
+        self.pen_down
+    }
+    /// Source line of the block in execution.
+    pub fn line(&self) -> Option<u32> {
+        self.prep.line()
+    }
+
+    fn ms_ticks(&self, ms: u32) -> u64 {
+        u64::from(ms) * u64::from(self.timer_hz) / 1000
+    }
+
+    /// The segment-preparation task: fill the step queue, run dwells and pen commands
+    /// in order once the moves before them have been prepared.
+    pub fn fill(&mut self) {
+        if self.held && self.prep.hold_state() == HoldState::Running {
+            // Hold asked between blocks: start nothing new until resumed.
+            return;
+        }
+        loop {
+            let cfg = self.planner.config();
+            let spmm = cfg.axes.iter().fold(0.0f32, |m, a| m.max(a.steps_per_mm));
+            let ahead = ((self.prep.speed() * spmm * HORIZON_S) as usize).max(MIN_AHEAD);
+            let left = ahead.saturating_sub(self.side.queued());
+            let mut sink = Bounded {
+                inner: self.side.sink(),
+                left,
+            };
+            self.prep.fill(&mut self.planner, &mut sink);
+            if self.wait_left > 0 {
+                while self.wait_left > 0 && self.side.sink().has_room() {
+                    let w = self.wait_left.min(u64::from(MAX_WAIT)) as u32;
+                    self.side.sink().push(StepCmd::new(Tick(0), w));
+                    self.wait_left -= u64::from(w);
+                }
+                if self.wait_left > 0 {
+                    return;
+                }
+                self.waiting = true;
+            }
+            if self.waiting {
+                if self.side.is_running() {
+                    return;
+                }
+                self.waiting = false;
+            }
+            // The path before the head of `pending` is fully prepared: start it.
+            if !self.prep.is_idle(&self.planner) {
+                return;
+            }
+            let Some(cmd) = self.pending.pop_front() else {
+                return;
+            };
+            match cmd {
+                Command::Dwell { ms } => self.wait_left = self.ms_ticks(ms).max(1),
+                Command::Pen { down } => {
+                    self.pen_down = down;
+                    self.wait_left = self.ms_ticks(self.pen_lift_ms).max(1);
+                }
+                Command::Move(mv) => {
+                    if self.planner.push(&mv).is_err() {
+                        let _ = self.pending.push_front(cmd);
+                        return;
+                    }
+                    // Later moves go straight on, up to the next non-move command.
+                    while let Some(Command::Move(next)) = self.pending.front().copied() {
+                        if self.planner.push(&next).is_err() {
+                            break;
+                        }
+                        self.pending.pop_front();
+                    }
+                }
+            }
+        }
+    }
+
+    fn executing(&self) -> bool {
+        !self.prep.is_idle(&self.planner)
+            || self.side.is_running()
+            || self.wait_left > 0
+            || self.waiting
+    }
+}
+
+impl<S: StepSide> MotionControl for Link<S> {
+    fn push(&mut self, cmd: Command) -> Result<(), QueueFull> {
+        if let (Command::Move(mv), true) = (
+            cmd,
+            self.pending.is_empty() && self.wait_left == 0 && !self.waiting,
+        ) {
+            return match self.planner.push(&mv) {
+                Ok(()) => Ok(()),
+                Err(PlanError::Full) => Err(QueueFull),
+                // Invalid geometry (e.g. a zero-length move) is dropped, like Grbl.
+                Err(PlanError::Invalid) => Ok(()),
+            };
+        }
+        self.pending.push_back(cmd).map_err(|_| QueueFull)
+    }
+
+    fn queued(&self) -> usize {
+        self.planner.len() + self.pending.len() + usize::from(self.executing())
+    }
+
+    fn capacity(&self) -> usize {
+        PLANNER_BLOCKS
+    }
+
+    fn hold(&mut self) {
+        self.held = true;
+        self.prep.hold();
+    }
+
+    fn resume(&mut self) {
+        self.held = false;
+        self.prep.resume(&mut self.planner);
+    }
+
+    fn is_holding(&self) -> bool {
+        self.held || self.prep.hold_state() != HoldState::Running
+    }
+
+    fn is_moving(&self) -> bool {
+        if self.prep.hold_state() == HoldState::Held {
+            return self.side.is_running();
+        }
+        if self.held
+            && self.prep.hold_state() == HoldState::Running
+            && self.wait_left == 0
+            && !self.waiting
+        {
+            // Hold asked between blocks: nothing is in execution, the queue waits.
+            return self.side.is_running();
+        }
+        self.executing()
+    }
+
+    fn clear(&mut self) {
+        self.side.flush();
+        let pos = self.side.position();
+        self.prep.abort(pos);
+        self.planner.clear(pos);
+        self.pending.clear();
+        self.wait_left = 0;
+        self.waiting = false;
+        self.held = false;
+    }
+
+    fn set_overrides(&mut self, feed_percent: u8, rapid_percent: u8) {
+        self.planner.set_feed_override(u16::from(feed_percent));
+        self.planner.set_rapid_override(u16::from(rapid_percent));
+    }
+
+    fn position(&self) -> StepPos {
+        self.side.position()
+    }
+
+    fn set_position(&mut self, pos: StepPos) {
+        self.side.set_position(pos);
+        self.prep.abort(pos);
+        self.planner.clear(pos);
+    }
+
+    fn speed(&self) -> f32 {
+        if self.side.is_running() && !self.waiting && self.wait_left == 0 {
+            self.prep.speed() * 60.0
+        } else {
+            0.0
+        }
+    }
+}

@@ -1,0 +1,215 @@
+//! The homing cycle (`$H`) as a state machine driven by switch levels, time and the
+//! planner running empty: for each axis with a switch (Z first so the pen is clear,
+//! then X, then Y), seek the switch fast ($25), back off, locate it slowly ($24),
+//! pull off ($27); each trigger stops motion at once and waits the debounce time ($26).
+//!
+//! It only decides what to queue next and when it has failed; the machine state owns
+//! the planner, the alarms and the position it sets at the end.
+
+use super::{Command, MotionControl};
+use crate::motion::{Feed, Move, Path, StepPos, AXES};
+use crate::settings::Settings;
+
+/// How far the seek may go, as a multiple of the axis travel.
+const SEEK_TRAVEL_FACTOR: f32 = 1.5;
+/// How far the slow locate may go, as a multiple of the pull-off distance.
+const LOCATE_FACTOR: f32 = 5.0;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// Fast move toward the switch until it triggers.
+    Seek,
+    /// Switch seen: wait for the debounce time to pass.
+    Debounce { until_ms: u32, next: After },
+    /// Move off the switch by the pull-off distance; the switch must release.
+    Backoff,
+    /// Slow move toward the switch.
+    Locate,
+    /// Final move off the switch.
+    PullOff,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum After {
+    Backoff,
+    PullOff,
+}
+
+/// Why homing failed (mapped to alarms 8 and 9 by the machine).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HomingError {
+    /// The switch did not release after pulling off.
+    PullOff,
+    /// The switch was not found within the search distance.
+    NotFound,
+}
+
+/// Progress of a homing cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Progress {
+    Running,
+    /// All axes found; the position to set (steps).
+    Done(StepPos),
+    Failed(HomingError),
+}
+
+/// A running homing cycle.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Homing {
+    order: heapless::Vec<u8, AXES>,
+    current: usize,
+    phase: Phase,
+    /// A move of the current phase has been queued.
+    issued: bool,
+}
+
+impl Homing {
+    /// Start a cycle over the axes that have switches ($214). `None` if there are none.
+    pub fn start(s: &Settings) -> Option<Homing> {
+        let mut order = heapless::Vec::new();
+        for axis in [2u8, 0, 1] {
+            if s.switch_mask() & (1 << axis) != 0 {
+                let _ = order.push(axis);
+            }
+        }
+        if order.is_empty() {
+            return None;
+        }
+        Some(Homing {
+            order,
+            current: 0,
+            phase: Phase::Seek,
+            issued: false,
+        })
+    }
+
+    /// Axis being homed.
+    pub fn axis(&self) -> usize {
+        usize::from(self.order.get(self.current).copied().unwrap_or(0))
+    }
+
+    /// Advance with the current switch levels (`limits[axis]`, true = pressed).
+    pub fn step<M: MotionControl>(
+        &mut self,
+        s: &Settings,
+        limits: [bool; AXES],
+        m: &mut M,
+        now_ms: u32,
+    ) -> Progress {
+        let axis = self.axis();
+        let pressed = limits.get(axis).copied().unwrap_or(false);
+        // Toward the switch: negative when the $23 bit is set.
+        let toward: f32 = if s.homing_dir_mask() & (1 << axis) != 0 {
+            -1.0
+        } else {
+            1.0
+        };
+        match self.phase {
+            Phase::Seek | Phase::Locate => {
+                if pressed {
+                    m.clear();
+                    let next = if self.phase == Phase::Seek {
+                        After::Backoff
+                    } else {
+                        After::PullOff
+                    };
+                    self.phase = Phase::Debounce {
+                        until_ms: now_ms.wrapping_add(s.homing_debounce_ms()),
+                        next,
+                    };
+                    self.issued = false;
+                } else if !self.issued {
+                    let (dist, rate) = if self.phase == Phase::Seek {
+                        (
+                            SEEK_TRAVEL_FACTOR * s.max_travel(axis).max(s.homing_pulloff()),
+                            s.homing_seek(),
+                        )
+                    } else {
+                        (LOCATE_FACTOR * s.homing_pulloff().max(0.1), s.homing_feed())
+                    };
+                    if !self.queue(s, m, axis, toward * dist, rate) {
+                        return Progress::Running;
+                    }
+                } else if m.is_idle() {
+                    return Progress::Failed(HomingError::NotFound);
+                }
+            }
+            Phase::Debounce { until_ms, next } => {
+                if now_ms.wrapping_sub(until_ms) as i32 >= 0 {
+                    self.phase = match next {
+                        After::Backoff => Phase::Backoff,
+                        After::PullOff => Phase::PullOff,
+                    };
+                    self.issued = false;
+                }
+            }
+            Phase::Backoff | Phase::PullOff => {
+                if !self.issued {
+                    let rate = if self.phase == Phase::Backoff {
+                        s.homing_seek()
+                    } else {
+                        s.homing_feed()
+                    };
+                    self.queue(s, m, axis, -toward * s.homing_pulloff(), rate);
+                } else if m.is_idle() {
+                    if pressed {
+                        return Progress::Failed(HomingError::PullOff);
+                    }
+                    if self.phase == Phase::Backoff {
+                        self.phase = Phase::Locate;
+                        self.issued = false;
+                    } else {
+                        self.current += 1;
+                        self.phase = Phase::Seek;
+                        self.issued = false;
+                        if self.current >= self.order.len() {
+                            return Progress::Done(self.home_position(s, m.position()));
+                        }
+                    }
+                }
+            }
+        }
+        Progress::Running
+    }
+
+    /// Queue a relative move of `mm` on `axis`; false if the queue was full.
+    fn queue<M: MotionControl>(
+        &mut self,
+        s: &Settings,
+        m: &mut M,
+        axis: usize,
+        mm: f32,
+        rate: f32,
+    ) -> bool {
+        let mut target = m.position();
+        if let Some(t) = target.get_mut(axis) {
+            *t = t.saturating_add(libm::roundf(mm * s.steps_per_mm(axis)) as i32);
+        }
+        let mv = Move {
+            target,
+            path: Path::Line,
+            feed: Feed::MmPerMin(rate),
+            line: 0,
+        };
+        self.issued = m.push(Command::Move(mv)).is_ok();
+        self.issued
+    }
+
+    /// Position after homing: homed axes sit at the pull-off distance inside their
+    /// travel (+pull-off when homing toward -, -pull-off when toward +).
+    fn home_position(&self, s: &Settings, mut pos: StepPos) -> StepPos {
+        for &axis in self.order.iter() {
+            let a = usize::from(axis);
+            let off = s.homing_pulloff() * s.steps_per_mm(a);
+            let sign = if s.homing_dir_mask() & (1 << axis) != 0 {
+                1.0
+            } else {
+                -1.0
+            };
+            if let Some(p) = pos.get_mut(a) {
+                *p = libm::roundf(sign * off) as i32;
+            }
+        }
+        pos
+    }
+}

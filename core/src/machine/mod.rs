@@ -1,0 +1,81 @@
+//! Machine control: the [`MotionControl`] trait that the planner implements, the
+//! commands queued through it, and the machine state ([`state`]): alarms, hold, jog,
+//! homing, check mode and the safety inputs.
+//!
+//! The trait is deliberately small so that the G-code interpreter, the protocol and the
+//! keypad modes all drive the same planner the same way, and so that tests can use a
+//! fake planner. Everything the planner needs to know about a block travels in
+//! [`Command`].
+
+pub mod homing;
+pub mod state;
+
+use crate::motion::{Move, StepPos};
+
+pub use state::{Alarm, Inputs, Machine, RunState};
+
+/// One entry of the planner queue.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Command {
+    /// Move along a path.
+    Move(Move),
+    /// Wait `ms` milliseconds at rest (G4), after the moves before it have finished.
+    Dwell { ms: u32 },
+    /// Lift (`down == false`) or drop the pen with the RC servo, waiting the lift time
+    /// ($204) at rest. Only used when the pen is a servo ($201 = 1); with a Z-axis pen
+    /// the interpreter queues Z moves instead.
+    Pen { down: bool },
+}
+
+/// The planner queue has no room for another command.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct QueueFull;
+
+/// What the machine state needs from the planner and step engine.
+///
+/// Semantics the implementation must keep:
+/// - `push` appends to the look-ahead queue and starts motion unless held.
+/// - `hold` decelerates to rest along the path and keeps the queue; `resume` continues
+///   it from the exact position reached. `is_holding` is true from `hold` until
+///   `resume` or `clear`; `is_moving` is false once the axes are at rest.
+/// - `clear` stops at once (no further step), empties the queue and ends any hold;
+///   `position` afterwards is the exact step count reached.
+/// - `set_position` is only called at rest with an empty queue (homing, `G92` does
+///   not use it: offsets live in the interpreter).
+pub trait MotionControl {
+    /// Queue one command.
+    fn push(&mut self, cmd: Command) -> Result<(), QueueFull>;
+    /// Commands queued and not yet finished (the one executing counts).
+    fn queued(&self) -> usize;
+    /// Queue size; `capacity() - queued()` is the free room (`Bf:` reports it).
+    fn capacity(&self) -> usize;
+    /// Decelerate to a stop, keep the queue.
+    fn hold(&mut self);
+    /// Continue after a hold.
+    fn resume(&mut self);
+    /// A hold is in effect (decelerating or at rest).
+    fn is_holding(&self) -> bool;
+    /// Steps are being produced (including a dwell or pen lift in progress).
+    fn is_moving(&self) -> bool;
+    /// Stop immediately and drop everything queued.
+    fn clear(&mut self);
+    /// Feed override (10-200 %) and rapid override (25, 50 or 100 %).
+    fn set_overrides(&mut self, feed_percent: u8, rapid_percent: u8);
+    /// Current machine position in steps.
+    fn position(&self) -> StepPos;
+    /// Redefine the current position (at rest, queue empty).
+    fn set_position(&mut self, pos: StepPos);
+    /// Current path speed in mm/min (for `FS:`).
+    fn speed(&self) -> f32;
+
+    /// Nothing queued and at rest.
+    fn is_idle(&self) -> bool {
+        self.queued() == 0 && !self.is_moving()
+    }
+    /// Free queue entries.
+    fn free(&self) -> usize {
+        self.capacity().saturating_sub(self.queued())
+    }
+}

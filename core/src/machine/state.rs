@@ -1,0 +1,785 @@
+//! The machine state: what the machine is doing (idle, running, holding, jogging,
+//! homing, alarm, check mode), the safety rules around it, and the execution of
+//! G-code, jog and `$` actions against the planner.
+//!
+//! It owns the settings and the G-code interpreter so that every path into motion
+//! (protocol, keypad modes) goes through the same checks. It never formats text:
+//! it reports through a small queue of [`Event`]s that the protocol prints.
+//! Time comes in as milliseconds from the caller (`now_ms`), so tests run in virtual time.
+
+use super::homing::{Homing, HomingError, Progress};
+use super::{Command, MotionControl};
+use crate::gcode::interp::to_mm;
+use crate::gcode::{Interp, Reject, Status, Stop};
+use crate::motion::{Move, AXES};
+use crate::settings::Settings;
+use heapless::Deque;
+
+/// Alarms, with Grbl's numbers (10 is inkstep's e-stop, as grblHAL numbers it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
+pub enum Alarm {
+    HardLimit = 1,
+    SoftLimit = 2,
+    AbortCycle = 3,
+    HomingFailReset = 6,
+    HomingFailDoor = 7,
+    HomingFailPullOff = 8,
+    HomingFailApproach = 9,
+    EStop = 10,
+}
+
+impl Alarm {
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+    /// Critical alarms need a soft reset before `$X`/`$H` (position may be lost).
+    fn critical(self) -> bool {
+        matches!(self, Alarm::HardLimit | Alarm::EStop)
+    }
+}
+
+/// The state shown in status reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum RunState {
+    Idle,
+    Run,
+    /// `complete`: at rest (Hold:0); otherwise still decelerating (Hold:1).
+    Hold {
+        complete: bool,
+    },
+    Jog,
+    /// Safety door (0x84): `at_rest` false while stopping (Door:2), true once stopped
+    /// and ready to resume with cycle start (Door:0; there is no door switch to hold
+    /// it open).
+    Door {
+        at_rest: bool,
+    },
+    Alarm,
+    Home,
+    Check,
+}
+
+/// Input levels, already corrected for inversion (true = active).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Inputs {
+    pub estop: bool,
+    /// Limit/home switch per axis.
+    pub limits: [bool; AXES],
+    /// The SYNC / feed-hold input: pause while active.
+    pub feed_hold: bool,
+    pub cycle_start: bool,
+}
+
+/// Something the protocol should tell the host.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Event {
+    Alarm(Alarm),
+    /// `[MSG:...]` text.
+    Msg(&'static str),
+    /// `[MSG:Job started]`.
+    JobStarted,
+    /// `[MSG:Job finished ...]` with the job's duration.
+    JobFinished {
+        ms: u32,
+        moves: u32,
+    },
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Job {
+    running: bool,
+    start_ms: u32,
+    moves: u32,
+    /// M2/M30 seen: finish when the queue has run empty.
+    ending: bool,
+}
+
+/// The machine.
+pub struct Machine {
+    settings: Settings,
+    interp: Interp,
+    /// In the alarm state (G-code locked out until `$X`, `$H` or a cleared alarm).
+    locked: bool,
+    /// The alarm that caused the lock, if any (the power-up lock has none).
+    alarm: Option<Alarm>,
+    /// A critical alarm happened and no soft reset since.
+    needs_reset: bool,
+    check_mode: bool,
+    jogging: bool,
+    jog_cancel: bool,
+    homing: Option<Homing>,
+    homed: bool,
+    /// Hold requested by `!` or the feed-hold pin, until `~`.
+    hold: bool,
+    /// Safety door requested (0x84), until cycle start.
+    door: bool,
+    /// The hold came from the feed-hold pin and ends when it is released.
+    hold_by_pin: bool,
+    /// M0 seen: hold once the queue has run empty.
+    pause_pending: bool,
+    paused: bool,
+    /// Soft-limit alarm: bring motion to rest, then drop the queue.
+    stop_then_clear: bool,
+    feed_ovr: u8,
+    rapid_ovr: u8,
+    ovr_changed: bool,
+    inputs: Inputs,
+    job: Job,
+    events: Deque<Event, 8>,
+    settings_dirty: bool,
+    coords_dirty: bool,
+}
+
+impl Machine {
+    /// Power-up state. With homing enabled, the machine starts locked in alarm until
+    /// `$H` or `$X`, as Grbl does.
+    pub fn new(settings: Settings) -> Machine {
+        let mut m = Machine {
+            settings,
+            interp: Interp::new(),
+            locked: false,
+            alarm: None,
+            needs_reset: false,
+            check_mode: false,
+            jogging: false,
+            jog_cancel: false,
+            homing: None,
+            homed: false,
+            hold: false,
+            door: false,
+            hold_by_pin: false,
+            pause_pending: false,
+            paused: false,
+            stop_then_clear: false,
+            feed_ovr: 100,
+            rapid_ovr: 100,
+            ovr_changed: false,
+            inputs: Inputs::default(),
+            job: Job::default(),
+            events: Deque::new(),
+            settings_dirty: false,
+            coords_dirty: false,
+        };
+        m.lock_if_unhomed();
+        m
+    }
+
+    fn lock_if_unhomed(&mut self) {
+        if self.settings.homing_enabled() && !self.homed && !self.locked {
+            self.locked = true;
+            self.event(Event::Msg("'$H'|'$X' to unlock"));
+        }
+    }
+
+    fn event(&mut self, e: Event) {
+        // Oldest first; if the host is not reading, drop the oldest message.
+        if self.events.is_full() {
+            let _ = self.events.pop_front();
+        }
+        let _ = self.events.push_back(e);
+    }
+
+    /// Next message for the host.
+    pub fn next_event(&mut self) -> Option<Event> {
+        self.events.pop_front()
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+    pub fn interp(&self) -> &Interp {
+        &self.interp
+    }
+    /// Replace the coordinate data (loaded from flash at boot).
+    pub fn set_coords(&mut self, c: crate::gcode::interp::Coords) {
+        self.interp.set_coords(c);
+    }
+    /// The alarm that locked the machine, while locked.
+    pub fn alarm(&self) -> Option<Alarm> {
+        self.alarm.filter(|_| self.locked)
+    }
+    /// In the alarm state.
+    pub fn is_locked(&self) -> bool {
+        self.locked
+    }
+    pub fn overrides(&self) -> (u8, u8) {
+        (self.feed_ovr, self.rapid_ovr)
+    }
+    pub fn inputs(&self) -> Inputs {
+        self.inputs
+    }
+    /// Settings were changed and should be saved (cleared by reading).
+    pub fn take_settings_dirty(&mut self) -> bool {
+        core::mem::take(&mut self.settings_dirty)
+    }
+    /// Coordinate data changed and should be saved (cleared by reading).
+    pub fn take_coords_dirty(&mut self) -> bool {
+        core::mem::take(&mut self.coords_dirty)
+    }
+    /// Overrides changed since last asked (for the `Ov:` field).
+    pub fn take_overrides_changed(&mut self) -> bool {
+        core::mem::take(&mut self.ovr_changed)
+    }
+
+    /// The state for status reports.
+    pub fn state<M: MotionControl>(&self, m: &M) -> RunState {
+        if self.homing.is_some() {
+            RunState::Home
+        } else if self.locked {
+            RunState::Alarm
+        } else if self.door {
+            RunState::Door {
+                at_rest: !m.is_moving(),
+            }
+        } else if self.jogging {
+            // Including the deceleration of a jog cancel, as Grbl reports it.
+            RunState::Jog
+        } else if self.paused || m.is_holding() || self.hold {
+            RunState::Hold {
+                complete: !m.is_moving(),
+            }
+        } else if self.check_mode {
+            RunState::Check
+        } else if !m.is_idle() {
+            RunState::Run
+        } else {
+            RunState::Idle
+        }
+    }
+
+    /// The busy output: motion is under way or homing.
+    pub fn busy<M: MotionControl>(&self, m: &M) -> bool {
+        self.homing.is_some() || m.is_moving()
+    }
+
+    /// G-code lines are taken only when this holds: after M0 they wait for cycle
+    /// start, and during a stop that will drop the queue they wait until it is done
+    /// (otherwise they would be answered `ok` and then dropped).
+    pub fn can_accept(&self) -> bool {
+        !self.pause_pending && !self.paused && !self.stop_then_clear && !self.jog_cancel
+    }
+
+    fn idle_or_alarm<M: MotionControl>(&self, m: &M) -> bool {
+        matches!(
+            self.state(m),
+            RunState::Idle | RunState::Alarm | RunState::Check
+        )
+    }
+
+    /// `$n=v`: only at rest (Grbl's error 8 otherwise).
+    pub fn set_setting<M: MotionControl>(&mut self, n: u16, v: f32, m: &M) -> Result<(), Status> {
+        if !self.idle_or_alarm(m) {
+            return Err(Status::IdleError);
+        }
+        self.settings.set(n, v)?;
+        self.settings_dirty = true;
+        // Steps per mm may have changed: the planner's step position is the truth.
+        self.resync(m);
+        Ok(())
+    }
+
+    /// `$RST=#`: zero the work offsets and stored positions.
+    pub fn clear_coords(&mut self) {
+        self.interp
+            .set_coords(crate::gcode::interp::Coords::default());
+        self.coords_dirty = true;
+    }
+
+    /// Replace all settings (`$RST=$` or a loaded image).
+    pub fn replace_settings<M: MotionControl>(&mut self, s: Settings, m: &M) {
+        self.settings = s;
+        self.settings_dirty = true;
+        self.resync(m);
+    }
+
+    /// Execute one cleaned G-code line. `None` means "not now": the block needs more
+    /// free planner entries than there are, or an M0 pause is pending. Nothing has
+    /// changed then; the caller keeps the line and retries (back-pressure).
+    pub fn execute<M: MotionControl>(
+        &mut self,
+        line: &[u8],
+        line_no: u32,
+        m: &mut M,
+        now_ms: u32,
+    ) -> Option<Result<(), Status>> {
+        if self.locked || self.homing.is_some() {
+            return Some(Err(Status::SystemLocked));
+        }
+        if self.jogging {
+            return Some(Err(Status::IdleError));
+        }
+        if !self.can_accept() {
+            return None;
+        }
+        // Interpret on a copy; commit only if the planner has room for the result.
+        let mut trial = self.interp.clone();
+        let result = trial.execute(line, &self.settings, line_no);
+        let out = match result {
+            Ok(out) => out,
+            Err(Reject::Error(e)) => return Some(Err(e)),
+            Err(Reject::SoftLimit) => {
+                // Grbl: the line is answered ok, motion stops, alarm 2 (no reset needed).
+                self.raise(Alarm::SoftLimit, m);
+                return Some(Ok(()));
+            }
+        };
+        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
+        // motion before it has finished, so its `ok` means "program done".
+        let ends = out.stop == Some(Stop::End);
+        if ends && !self.check_mode && !m.is_idle() {
+            return None;
+        }
+        if !self.check_mode && out.cmds.len() > m.free() {
+            return None;
+        }
+        self.interp = trial;
+        if ends {
+            self.event(Event::Msg("Pgm End"));
+        }
+        if out.coords_changed {
+            self.coords_dirty = true;
+        }
+        if self.check_mode {
+            return Some(Ok(()));
+        }
+        for cmd in out.cmds.iter() {
+            if m.push(*cmd).is_err() {
+                // free() promised room; if a planner disagrees, stop rather than
+                // lose a move silently.
+                self.raise(Alarm::AbortCycle, m);
+                return Some(Ok(()));
+            }
+            if let Command::Move(_) = cmd {
+                if !self.job.running {
+                    self.job = Job {
+                        running: true,
+                        start_ms: now_ms,
+                        moves: 0,
+                        ending: false,
+                    };
+                    self.event(Event::JobStarted);
+                }
+                self.job.moves = self.job.moves.wrapping_add(1);
+            }
+        }
+        match out.stop {
+            Some(Stop::Pause) => self.pause_pending = true,
+            Some(Stop::End) => self.job.ending = self.job.running,
+            None => {}
+        }
+        Some(Ok(()))
+    }
+
+    /// Check a line (for `$N`) without running it or changing any state.
+    pub fn validate(&self, line: &[u8]) -> Result<(), Status> {
+        match self.interp.clone().execute(line, &self.settings, 0) {
+            Err(Reject::Error(e)) => Err(e),
+            _ => Ok(()),
+        }
+    }
+
+    /// `$J=...`: queue a jog (only when idle or already jogging).
+    pub fn jog<M: MotionControl>(&mut self, body: &[u8], m: &mut M) -> Result<(), Status> {
+        if self.locked || self.homing.is_some() {
+            return Err(Status::SystemLocked);
+        }
+        let st = self.state(m);
+        if !(matches!(st, RunState::Idle | RunState::Jog)) || self.check_mode {
+            return Err(Status::IdleError);
+        }
+        if m.free() == 0 {
+            return Err(Status::Overflow);
+        }
+        let mv: Move = self.interp.jog(body, &self.settings)?;
+        if m.push(Command::Move(mv)).is_ok() {
+            self.jogging = true;
+        }
+        Ok(())
+    }
+
+    /// `$X`.
+    pub fn unlock(&mut self) -> Result<(), Status> {
+        if self.inputs.estop || self.needs_reset {
+            self.event(Event::Msg("Reset to continue"));
+            return Err(Status::SystemLocked);
+        }
+        if core::mem::take(&mut self.locked) {
+            self.alarm = None;
+            self.event(Event::Msg("Caution: Unlocked"));
+        }
+        Ok(())
+    }
+
+    /// `$H`.
+    pub fn start_homing<M: MotionControl>(&mut self, m: &mut M) -> Result<(), Status> {
+        if !self.settings.homing_enabled() {
+            return Err(Status::HomingDisabled);
+        }
+        if self.inputs.estop || self.needs_reset {
+            return Err(Status::SystemLocked);
+        }
+        if !matches!(self.state(m), RunState::Idle | RunState::Alarm) || !m.is_idle() {
+            return Err(Status::IdleError);
+        }
+        match Homing::start(&self.settings) {
+            Some(h) => {
+                self.locked = false;
+                self.alarm = None;
+                self.homing = Some(h);
+                Ok(())
+            }
+            None => Err(Status::HomingDisabled),
+        }
+    }
+
+    /// `$C`: toggle check mode. Leaving it resets like Grbl does.
+    pub fn toggle_check<M: MotionControl>(&mut self, m: &mut M) -> Result<(), Status> {
+        if self.check_mode {
+            self.soft_reset(m);
+            self.event(Event::Msg("Disabled"));
+            Ok(())
+        } else if self.state(m) == RunState::Idle {
+            self.check_mode = true;
+            self.event(Event::Msg("Enabled"));
+            Ok(())
+        } else {
+            Err(Status::IdleError)
+        }
+    }
+
+    pub fn check_mode(&self) -> bool {
+        self.check_mode
+    }
+
+    fn raise<M: MotionControl>(&mut self, a: Alarm, m: &mut M) {
+        match a {
+            Alarm::SoftLimit => {
+                // Position stays exact: decelerate, then drop the rest.
+                if m.is_idle() {
+                    m.clear();
+                    self.resync(m);
+                } else {
+                    m.hold();
+                    self.stop_then_clear = true;
+                }
+            }
+            _ => {
+                m.clear();
+                self.resync(m);
+            }
+        }
+        if a.critical() {
+            self.needs_reset = true;
+        }
+        self.homing = None;
+        self.jogging = false;
+        self.jog_cancel = false;
+        self.hold = false;
+        self.door = false;
+        self.hold_by_pin = false;
+        self.job = Job::default();
+        self.pause_pending = false;
+        self.paused = false;
+        self.locked = true;
+        self.alarm = Some(a);
+        self.event(Event::Alarm(a));
+        if a.critical() {
+            self.event(Event::Msg("Reset to continue"));
+        }
+    }
+
+    fn resync<M: MotionControl>(&mut self, m: &M) {
+        self.interp.sync_position(&m.position(), &self.settings);
+    }
+
+    /// 0x18: stop everything, keep position if it is known.
+    pub fn soft_reset<M: MotionControl>(&mut self, m: &mut M) {
+        // Position is lost if steps were cut off mid-move (a hold at rest keeps it).
+        let held_at_rest = m.is_holding() && !m.is_moving();
+        let lost = self.homing.is_some() || (!m.is_idle() && !held_at_rest);
+        let was_homing = self.homing.is_some();
+        m.clear();
+        m.set_overrides(100, 100);
+        self.resync(m);
+        self.interp.reset_modal();
+        self.homing = None;
+        self.jogging = false;
+        self.jog_cancel = false;
+        self.hold = false;
+        self.door = false;
+        self.hold_by_pin = false;
+        self.pause_pending = false;
+        self.paused = false;
+        self.stop_then_clear = false;
+        self.check_mode = false;
+        self.feed_ovr = 100;
+        self.rapid_ovr = 100;
+        self.needs_reset = false;
+        self.job = Job::default();
+        let alarm = if self.inputs.estop {
+            Some(Alarm::EStop)
+        } else if was_homing {
+            Some(Alarm::HomingFailReset)
+        } else if lost {
+            Some(Alarm::AbortCycle)
+        } else {
+            None
+        };
+        if let Some(a) = alarm {
+            if a != Alarm::EStop {
+                self.homed = false;
+            }
+            self.needs_reset = a == Alarm::EStop;
+            self.locked = true;
+            self.alarm = Some(a);
+            self.event(Event::Alarm(a));
+        }
+        self.lock_if_unhomed();
+    }
+
+    /// `!` or the feed-hold pin.
+    pub fn feed_hold<M: MotionControl>(&mut self, m: &mut M) {
+        if self.locked || self.homing.is_some() || self.check_mode {
+            return;
+        }
+        if self.jogging {
+            // A hold during a jog cancels it, as Grbl does.
+            self.jog_cancel(m);
+            return;
+        }
+        if !m.is_idle() || self.pause_pending {
+            self.hold = true;
+            m.hold();
+        }
+    }
+
+    /// 0x84, the safety door: like a feed hold reported as `Door`; during homing it
+    /// aborts with alarm 7, during a jog it cancels the jog.
+    pub fn safety_door<M: MotionControl>(&mut self, m: &mut M) {
+        if self.locked || self.check_mode {
+            return;
+        }
+        if self.homing.is_some() {
+            self.raise(Alarm::HomingFailDoor, m);
+            return;
+        }
+        self.door = true;
+        if self.jogging {
+            self.jog_cancel(m);
+        } else if !m.is_idle() {
+            self.hold = true;
+            m.hold();
+        }
+    }
+
+    /// `~` or the cycle-start pin.
+    pub fn cycle_start<M: MotionControl>(&mut self, m: &mut M) {
+        // A stop that drops the queue cannot be resumed.
+        if self.locked || self.homing.is_some() || self.stop_then_clear || self.jog_cancel {
+            return;
+        }
+        if self.hold || self.paused || self.door || m.is_holding() {
+            self.hold = false;
+            self.door = false;
+            self.hold_by_pin = false;
+            self.paused = false;
+            m.resume();
+        }
+    }
+
+    /// Queue a command made outside G-code (the keypad's drawing modes). Refused in
+    /// alarm, homing, jogging or check mode; a line target outside travel with soft
+    /// limits on is refused with `error:15` semantics ([`Status::TravelExceeded`]);
+    /// shapes check their own extent with [`crate::gcode::interp::within_travel`].
+    /// The interpreter continues from the command's end point.
+    pub fn queue<M: MotionControl>(
+        &mut self,
+        cmd: Command,
+        m: &mut M,
+        now_ms: u32,
+    ) -> Result<(), Status> {
+        if self.locked || self.homing.is_some() {
+            return Err(Status::SystemLocked);
+        }
+        if self.jogging || self.check_mode {
+            return Err(Status::IdleError);
+        }
+        if let Command::Move(mv) = &cmd {
+            let end = to_mm(&mv.target, &self.settings);
+            if self.settings.soft_limits()
+                && !crate::gcode::interp::within_travel(&end, &self.settings)
+            {
+                return Err(Status::TravelExceeded);
+            }
+        }
+        m.push(cmd).map_err(|_| Status::Overflow)?;
+        if let Command::Move(mv) = cmd {
+            self.interp.sync_position(&mv.target, &self.settings);
+            if !self.job.running {
+                self.job = Job {
+                    running: true,
+                    start_ms: now_ms,
+                    moves: 0,
+                    ending: false,
+                };
+                self.event(Event::JobStarted);
+            }
+            self.job.moves = self.job.moves.wrapping_add(1);
+        }
+        Ok(())
+    }
+
+    /// Stop cleanly and forget the rest (the keypad's abort): decelerate to rest, then
+    /// drop the queue; the position stays exact.
+    pub fn stop_and_clear<M: MotionControl>(&mut self, m: &mut M) {
+        self.pause_pending = false;
+        self.paused = false;
+        self.hold = false;
+        self.door = false;
+        self.hold_by_pin = false;
+        self.job = Job::default();
+        if m.is_idle() && !m.is_holding() {
+            return;
+        }
+        if self.jogging {
+            self.jog_cancel(m);
+        } else {
+            self.stop_then_clear = true;
+            m.hold();
+        }
+    }
+
+    /// 0x85: stop a jog (decelerate, then drop the rest of the jog queue).
+    pub fn jog_cancel<M: MotionControl>(&mut self, m: &mut M) {
+        if self.jogging && !self.jog_cancel {
+            self.jog_cancel = true;
+            m.hold();
+        }
+    }
+
+    /// Feed/rapid override real-time commands 0x90-0x97.
+    pub fn override_command<M: MotionControl>(&mut self, byte: u8, m: &mut M) {
+        let f = i16::from(self.feed_ovr);
+        let feed = match byte {
+            0x90 => 100,
+            0x91 => f + 10,
+            0x92 => f - 10,
+            0x93 => f + 1,
+            0x94 => f - 1,
+            _ => f,
+        };
+        let rapid = match byte {
+            0x95 => 100,
+            0x96 => 50,
+            0x97 => 25,
+            _ => self.rapid_ovr,
+        };
+        let feed = feed.clamp(10, 200) as u8;
+        if feed != self.feed_ovr || rapid != self.rapid_ovr {
+            self.feed_ovr = feed;
+            self.rapid_ovr = rapid;
+            self.ovr_changed = true;
+            m.set_overrides(feed, rapid);
+        }
+    }
+
+    /// New input levels. Call from the input interrupt path for the fastest reaction
+    /// (the firmware stops the step engine itself on e-stop before calling this).
+    pub fn set_inputs<M: MotionControl>(&mut self, inputs: Inputs, m: &mut M, now_ms: u32) {
+        let before = self.inputs;
+        self.inputs = inputs;
+        if inputs.estop {
+            if !(self.locked && self.alarm == Some(Alarm::EStop)) {
+                self.raise(Alarm::EStop, m);
+            } else {
+                m.clear();
+            }
+            return;
+        }
+        if self.homing.is_some() {
+            self.step_homing(m, now_ms);
+            return;
+        }
+        let newly_hit = inputs
+            .limits
+            .iter()
+            .zip(before.limits.iter())
+            .any(|(&now, &was)| now && !was);
+        if newly_hit && self.settings.hard_limits() && !self.needs_reset {
+            self.raise(Alarm::HardLimit, m);
+            return;
+        }
+        if inputs.feed_hold && !before.feed_hold {
+            self.feed_hold(m);
+            self.hold_by_pin = self.hold;
+        } else if !inputs.feed_hold && before.feed_hold && self.hold_by_pin {
+            self.cycle_start(m);
+        }
+        if inputs.cycle_start && !before.cycle_start {
+            self.cycle_start(m);
+        }
+    }
+
+    fn step_homing<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
+        let Some(h) = self.homing.as_mut() else {
+            return;
+        };
+        match h.step(&self.settings, self.inputs.limits, m, now_ms) {
+            Progress::Running => {}
+            Progress::Done(pos) => {
+                self.homing = None;
+                self.homed = true;
+                m.set_position(pos);
+                self.resync(m);
+            }
+            Progress::Failed(e) => {
+                self.homing = None;
+                let a = match e {
+                    HomingError::PullOff => Alarm::HomingFailPullOff,
+                    HomingError::NotFound => Alarm::HomingFailApproach,
+                };
+                self.raise(a, m);
+            }
+        }
+    }
+
+    /// Make progress: homing, pauses, job end, jog cancel, soft-limit stop.
+    pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
+        if self.homing.is_some() {
+            self.step_homing(m, now_ms);
+        }
+        let at_rest = !m.is_moving();
+        if self.stop_then_clear && at_rest {
+            self.stop_then_clear = false;
+            m.clear();
+            self.resync(m);
+        }
+        if self.jog_cancel && at_rest {
+            self.jog_cancel = false;
+            m.clear();
+            self.resync(m);
+            self.jogging = false;
+        }
+        if self.jogging && m.is_idle() && !self.jog_cancel {
+            self.jogging = false;
+        }
+        if self.pause_pending && m.is_idle() {
+            self.pause_pending = false;
+            self.paused = true;
+        }
+        if self.job.ending && m.is_idle() {
+            let ms = now_ms.wrapping_sub(self.job.start_ms);
+            let moves = self.job.moves;
+            self.job = Job::default();
+            self.event(Event::JobFinished { ms, moves });
+        }
+    }
+
+    /// Machine position in mm from the planner's step position.
+    pub fn machine_position<M: MotionControl>(&self, m: &M) -> [f32; AXES] {
+        to_mm(&m.position(), &self.settings)
+    }
+}

@@ -1,0 +1,713 @@
+//! The Grbl 1.1 line protocol over a byte stream (USB CDC-ACM in the firmware, a pty in
+//! the simulator).
+//!
+//! Bytes go in with [`Protocol::receive`]; real-time commands (`?`, `!`, `~`, 0x18,
+//! 0x85, overrides, every byte >= 0x80) act at once, even mid-line, and never take
+//! buffer space. Other bytes wait in a 128-byte receive buffer, the one senders count
+//! characters against; when it is full `receive` stops consuming and returns how many
+//! bytes it took, so the caller leaves the rest in its endpoint (back-pressure, no
+//! byte is ever dropped). [`Protocol::poll`] frames lines, runs them through the
+//! [`Machine`] and answers `ok` / `error:N`; a line whose motion does not fit the
+//! planner queue waits, and so does everything behind it. Responses collect in an
+//! output buffer drained with [`Protocol::read_output`]; work that produces output
+//! only starts when the buffer has room for it, so responses are never truncated.
+//!
+//! Driving it (firmware protocol task, simulator loop), all from one context:
+//! ```text
+//! boot:  (settings, st) = store.load_settings().await
+//!        p = Protocol::new(settings); if let Some(t) = st.message() { p.notify(t) }
+//!        p.machine_mut().set_coords(store.load_coords().await.0)
+//!        for i in 0..STARTUP_LINES { p.set_startup_line(i, &store.load_startup(i).await.0) }
+//! loop:  n = p.receive(&usb_rx[..], &mut planner, now_ms)   // drain only n bytes
+//!        p.poll(&mut planner, now_ms)            // also every ms or so when idle:
+//!                                                  // homing and debounce run on time
+//!        usb_tx.write(&buf[..p.read_output(&mut buf)])
+//!        p.set_inputs(levels, &mut planner, now_ms)          // on any input change
+//!        busy_led.set(p.machine().busy(&planner))
+//!        when !busy: save what take_settings_dirty / take_coords_dirty /
+//!                    take_startup_dirty report (flash writes stall the CPU)
+//! ```
+//! The e-stop interrupt stops the step engine itself before the protocol task
+//! learns of it through `set_inputs`.
+
+use crate::gcode::{LineCleaner, Status};
+use crate::machine::state::Event;
+use crate::machine::{Inputs, Machine, MotionControl, RunState};
+use crate::motion::AXES;
+use crate::settings::Settings;
+use core::fmt::{self, Write};
+use heapless::{Deque, String, Vec};
+
+/// Receive buffer size advertised to character-counting senders (`Bf:` and `$I`).
+pub const RX_BUFFER_SIZE: usize = 128;
+/// Longest line after cleaning (Grbl's limit); longer lines get `error:11`.
+pub const LINE_MAX: usize = 80;
+/// Output buffer size.
+pub const OUT_CAP: usize = 640;
+/// Room kept free before starting anything that writes (the longest single output:
+/// a status report or one listing line plus a message).
+const OUT_RESERVE: usize = 256;
+/// Number of `$N` startup lines.
+pub const STARTUP_LINES: usize = 2;
+/// Status reports between repeated `WCO:` / `Ov:` fields.
+const REFRESH_EVERY: u8 = 10;
+
+/// The welcome line that senders look for.
+pub const WELCOME: &str = "Grbl 1.1h ['$' for help]";
+const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// A startup line as stored.
+pub type StartupLine = String<LINE_MAX>;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Listing {
+    Settings(usize),
+    Coords(usize),
+    Startup(usize),
+}
+
+/// The protocol handler.
+pub struct Protocol {
+    machine: Machine,
+    rx: Deque<u8, RX_BUFFER_SIZE>,
+    line: Vec<u8, LINE_MAX>,
+    cleaner: LineCleaner,
+    line_too_long: bool,
+    /// A complete line waits in `line` for room in the planner.
+    line_ready: bool,
+    /// The last line ended with CR: a following LF belongs to it.
+    after_cr: bool,
+    out: Deque<u8, OUT_CAP>,
+    status_requested: bool,
+    listing: Option<Listing>,
+    lines_received: u32,
+    reports: u8,
+    startup: [StartupLine; STARTUP_LINES],
+    startup_next: Option<usize>,
+    startup_dirty: bool,
+    wco_shown: [f32; AXES],
+    truncated: u32,
+    /// Leaving check mode resets; the welcome line follows the `ok`.
+    pending_welcome: bool,
+}
+
+struct OutWriter<'a> {
+    out: &'a mut Deque<u8, OUT_CAP>,
+    truncated: &'a mut u32,
+}
+
+impl Write for OutWriter<'_> {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        for &b in s.as_bytes() {
+            if self.out.push_back(b).is_err() {
+                *self.truncated = self.truncated.saturating_add(1);
+                return Err(fmt::Error);
+            }
+        }
+        Ok(())
+    }
+}
+
+fn axis_triplet<W: Write>(w: &mut W, v: &[f32; AXES], scale: f32) -> fmt::Result {
+    for (i, x) in v.iter().enumerate() {
+        if i > 0 {
+            w.write_char(',')?;
+        }
+        crate::settings::write_fixed3(w, x / scale)?;
+    }
+    Ok(())
+}
+
+impl Protocol {
+    /// Power-up: the welcome line is queued at once.
+    pub fn new(settings: Settings) -> Protocol {
+        let mut p = Protocol {
+            machine: Machine::new(settings),
+            rx: Deque::new(),
+            line: Vec::new(),
+            cleaner: LineCleaner::new(),
+            line_too_long: false,
+            line_ready: false,
+            after_cr: false,
+            out: Deque::new(),
+            status_requested: false,
+            listing: None,
+            lines_received: 0,
+            reports: 0,
+            startup: [String::new(), String::new()],
+            startup_next: Some(0),
+            startup_dirty: false,
+            wco_shown: [f32::NAN; AXES],
+            truncated: 0,
+            pending_welcome: false,
+        };
+        p.welcome();
+        p
+    }
+
+    pub fn machine(&self) -> &Machine {
+        &self.machine
+    }
+    /// For the keypad modes and the firmware's loading of stored data.
+    pub fn machine_mut(&mut self) -> &mut Machine {
+        &mut self.machine
+    }
+    /// Free bytes in the receive buffer (what `Bf:` reports).
+    pub fn rx_free(&self) -> usize {
+        RX_BUFFER_SIZE - self.rx.len()
+    }
+    /// Bytes waiting in the output buffer.
+    pub fn output_len(&self) -> usize {
+        self.out.len()
+    }
+    /// Bytes that did not fit the output buffer (0 unless the host never reads).
+    pub fn truncated(&self) -> u32 {
+        self.truncated
+    }
+    pub fn startup_line(&self, i: usize) -> Option<&str> {
+        self.startup.get(i).map(|s| s.as_str())
+    }
+    /// Load a stored `$N` line at boot.
+    pub fn set_startup_line(&mut self, i: usize, line: &str) {
+        if let Some(slot) = self.startup.get_mut(i) {
+            slot.clear();
+            let _ = slot.push_str(line.get(..LINE_MAX.min(line.len())).unwrap_or(""));
+        }
+    }
+    /// A `$N` line changed and should be saved (cleared by reading).
+    pub fn take_startup_dirty(&mut self) -> bool {
+        core::mem::take(&mut self.startup_dirty)
+    }
+
+    /// Take up to `buf.len()` bytes of responses.
+    pub fn read_output(&mut self, buf: &mut [u8]) -> usize {
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            match self.out.pop_front() {
+                Some(b) => {
+                    *slot = b;
+                    n += 1;
+                }
+                None => break,
+            }
+        }
+        n
+    }
+
+    fn room(&self) -> usize {
+        OUT_CAP - self.out.len()
+    }
+
+    fn w(&mut self) -> OutWriter<'_> {
+        OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
+        }
+    }
+
+    fn say(&mut self, args: fmt::Arguments) {
+        let mut w = self.w();
+        let _ = w.write_fmt(args);
+        let _ = w.write_str("\r\n");
+    }
+
+    fn welcome(&mut self) {
+        self.say(format_args!("\r\n{}", WELCOME));
+    }
+
+    fn respond(&mut self, r: Result<(), Status>) {
+        match r {
+            Ok(()) => self.say(format_args!("ok")),
+            Err(e) => self.say(format_args!("error:{}", e.code())),
+        }
+    }
+
+    /// Feed received bytes; returns how many were consumed. Bytes not consumed must be
+    /// offered again later (the receive buffer was full).
+    pub fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
+        let mut used = 0;
+        for &b in bytes {
+            if !self.realtime(b, m, now_ms) && self.rx.push_back(b).is_err() {
+                break;
+            }
+            used += 1;
+        }
+        used
+    }
+
+    /// Handle `b` if it is a real-time command.
+    fn realtime<M: MotionControl>(&mut self, b: u8, m: &mut M, now_ms: u32) -> bool {
+        match b {
+            b'?' => {
+                self.status_requested = true;
+                if self.room() >= OUT_RESERVE {
+                    self.status_report(m);
+                }
+            }
+            b'!' => self.machine.feed_hold(m),
+            b'~' => self.machine.cycle_start(m),
+            0x18 => self.soft_reset(m),
+            0x84 => self.machine.safety_door(m),
+            0x85 => self.machine.jog_cancel(m),
+            0x90..=0x97 => self.machine.override_command(b, m),
+            // Other extended real-time bytes (door, spindle and coolant overrides)
+            // have no meaning on a plotter; never let them into a line.
+            0x80..=0xFF => {}
+            _ => return false,
+        }
+        let _ = now_ms;
+        true
+    }
+
+    fn soft_reset<M: MotionControl>(&mut self, m: &mut M) {
+        self.machine.soft_reset(m);
+        self.rx.clear();
+        self.line.clear();
+        self.cleaner.reset();
+        self.line_too_long = false;
+        self.line_ready = false;
+        self.after_cr = false;
+        self.listing = None;
+        self.lines_received = 0;
+        self.startup_next = Some(0);
+        self.flush_events();
+        self.welcome();
+    }
+
+    /// Queue a `[MSG:...]` line (e.g. the settings store's load report at boot).
+    pub fn notify(&mut self, text: &str) {
+        self.say(format_args!("[MSG:{}]", text));
+    }
+
+    /// Update the input levels (e-stop, limits, feed hold, cycle start).
+    pub fn set_inputs<M: MotionControl>(&mut self, inputs: Inputs, m: &mut M, now_ms: u32) {
+        self.machine.set_inputs(inputs, m, now_ms);
+        if self.room() >= OUT_RESERVE {
+            self.flush_events();
+        }
+    }
+
+    fn flush_events(&mut self) {
+        while let Some(e) = self.machine.next_event() {
+            match e {
+                Event::Alarm(a) => self.say(format_args!("ALARM:{}", a.code())),
+                Event::Msg(t) => self.say(format_args!("[MSG:{}]", t)),
+                Event::JobStarted => self.say(format_args!("[MSG:Job started]")),
+                Event::JobFinished { ms, moves } => self.say(format_args!(
+                    "[MSG:Job finished: {}.{:03} s, {} moves]",
+                    ms / 1000,
+                    ms % 1000,
+                    moves
+                )),
+            }
+        }
+    }
+
+    /// Make progress: run buffered lines, continue listings, emit messages.
+    pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
+        self.machine.poll(m, now_ms);
+        loop {
+            if self.room() < OUT_RESERVE {
+                return;
+            }
+            self.flush_events();
+            if self.status_requested {
+                self.status_report(m);
+                continue;
+            }
+            if let Some(l) = self.listing {
+                self.continue_listing(l);
+                continue;
+            }
+            if let Some(i) = self.startup_next {
+                if !self.run_startup(i, m, now_ms) {
+                    return;
+                }
+                continue;
+            }
+            if !self.line_ready && !self.frame_line() {
+                return;
+            }
+            if !self.run_line(m, now_ms) {
+                return;
+            }
+        }
+    }
+
+    /// Move bytes from the receive buffer into the line; true when a line is complete.
+    fn frame_line(&mut self) -> bool {
+        while let Some(b) = self.rx.pop_front() {
+            let lf_after_cr = b == b'\n' && self.after_cr;
+            self.after_cr = b == b'\r';
+            if lf_after_cr {
+                continue;
+            }
+            if b == b'\n' || b == b'\r' {
+                self.cleaner.reset();
+                self.line_ready = true;
+                return true;
+            }
+            if let Some(c) = self.cleaner.push(b) {
+                if self.line.push(c).is_err() {
+                    self.line_too_long = true;
+                }
+            }
+        }
+        false
+    }
+
+    /// Execute the framed line. False if it must wait (planner full).
+    fn run_line<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) -> bool {
+        if self.line_too_long {
+            self.finish_line(Err(Status::Overflow));
+            return true;
+        }
+        let line = self.line.clone();
+        let r = match line.first() {
+            None => {
+                // Grbl answers blank lines (and lines of only a comment) with ok,
+                // but a bare CR LF pair is one line end, not two.
+                Ok(())
+            }
+            Some(b'$') => {
+                let Some(r) = self.system_command(line.get(1..).unwrap_or(&[]), m) else {
+                    return false;
+                };
+                r
+            }
+            Some(_) => {
+                let line_no = self.lines_received.wrapping_add(1);
+                let Some(r) = self.machine.execute(&line, line_no, m, now_ms) else {
+                    return false;
+                };
+                self.lines_received = line_no;
+                r
+            }
+        };
+        self.flush_events();
+        if self.listing.is_none() || r.is_err() {
+            self.listing = if r.is_err() { None } else { self.listing };
+            self.finish_line(r);
+        } else {
+            self.finish_frame();
+        }
+        true
+    }
+
+    fn finish_frame(&mut self) {
+        self.line.clear();
+        self.line_too_long = false;
+        self.line_ready = false;
+    }
+
+    fn finish_line(&mut self, r: Result<(), Status>) {
+        self.finish_frame();
+        self.respond(r);
+        if core::mem::take(&mut self.pending_welcome) {
+            self.welcome();
+        }
+    }
+
+    /// `$` commands. `None` if the command must wait for planner room.
+    fn system_command<M: MotionControl>(
+        &mut self,
+        cmd: &[u8],
+        m: &mut M,
+    ) -> Option<Result<(), Status>> {
+        let at_rest = matches!(
+            self.machine.state(m),
+            RunState::Idle | RunState::Alarm | RunState::Check
+        );
+        // Everything but help, $G, $C (checks itself) and jogging needs the machine at
+        // rest; refuse before doing anything.
+        let anytime = cmd.is_empty() || cmd == b"G" || cmd == b"C" || cmd.starts_with(b"J=");
+        if !anytime && !at_rest {
+            return Some(Err(Status::IdleError));
+        }
+        Some(match cmd {
+            b"" => {
+                self.say(format_args!("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"));
+                Ok(())
+            }
+            b"$" => {
+                self.listing = Some(Listing::Settings(0));
+                Ok(())
+            }
+            b"#" => {
+                self.listing = Some(Listing::Coords(0));
+                Ok(())
+            }
+            b"N" => {
+                self.listing = Some(Listing::Startup(0));
+                Ok(())
+            }
+            b"G" => {
+                let mut s: String<96> = String::new();
+                let _ = self.machine.interp().write_modal(&mut s);
+                self.say(format_args!("[{}]", s));
+                Ok(())
+            }
+            b"I" => {
+                self.say(format_args!(
+                    "[VER:1.1h.inkstep-{}:inkstep pen plotter]",
+                    VERSION
+                ));
+                self.say(format_args!("[OPT:NL,{},{}]", m.capacity(), RX_BUFFER_SIZE));
+                Ok(())
+            }
+            b"C" => {
+                let was = self.machine.check_mode();
+                let r = self.machine.toggle_check(m);
+                if was && r.is_ok() {
+                    self.flush_events();
+                    self.startup_next = Some(0);
+                    self.welcome_after_ok();
+                }
+                r
+            }
+            b"X" => self.machine.unlock(),
+            b"H" => self.machine.start_homing(m),
+            b"RST=$" => {
+                self.machine.replace_settings(Settings::default(), m);
+                Ok(())
+            }
+            b"RST=#" => {
+                self.machine.clear_coords();
+                Ok(())
+            }
+            b"RST=*" => {
+                self.machine.replace_settings(Settings::default(), m);
+                self.machine.clear_coords();
+                Ok(())
+            }
+            _ => {
+                if let Some(body) = cmd.strip_prefix(b"J=") {
+                    if m.free() == 0 {
+                        return None;
+                    }
+                    self.machine.jog(body, m)
+                } else if let Some(rest) = cmd.strip_prefix(b"N") {
+                    self.store_startup(rest)
+                } else {
+                    self.set_setting(cmd, m)
+                }
+            }
+        })
+    }
+
+    fn welcome_after_ok(&mut self) {
+        self.pending_welcome = true;
+    }
+
+    fn set_setting<M: MotionControl>(&mut self, cmd: &[u8], m: &M) -> Result<(), Status> {
+        let eq = cmd
+            .iter()
+            .position(|&c| c == b'=')
+            .ok_or(Status::InvalidStatement)?;
+        let (num, val) = cmd.split_at(eq);
+        let val = val.get(1..).unwrap_or(&[]);
+        if num.is_empty() || !num.iter().all(u8::is_ascii_digit) || num.len() > 4 {
+            return Err(Status::InvalidStatement);
+        }
+        let n = num
+            .iter()
+            .fold(0u16, |acc, &d| acc * 10 + u16::from(d - b'0'));
+        let (v, used) = crate::gcode::parser::read_number(val)?;
+        if used != val.len() {
+            return Err(Status::BadNumberFormat);
+        }
+        self.machine.set_setting(n, v, m)
+    }
+
+    fn store_startup(&mut self, rest: &[u8]) -> Result<(), Status> {
+        let (idx, line) = match rest {
+            [d @ b'0'..=b'9', b'=', line @ ..] => (usize::from(d - b'0'), line),
+            _ => return Err(Status::InvalidStatement),
+        };
+        let slot_exists = idx < STARTUP_LINES;
+        if !slot_exists {
+            return Err(Status::InvalidStatement);
+        }
+        self.machine.validate(line)?;
+        let text = core::str::from_utf8(line).map_err(|_| Status::InvalidStatement)?;
+        self.set_startup_line(idx, text);
+        self.startup_dirty = true;
+        Ok(())
+    }
+
+    /// Run stored startup line `i` (after reset, when not locked). False to wait.
+    fn run_startup<M: MotionControl>(&mut self, i: usize, m: &mut M, now_ms: u32) -> bool {
+        if self.machine.is_locked() {
+            self.startup_next = None;
+            return true;
+        }
+        let Some(text) = self.startup.get(i).cloned() else {
+            self.startup_next = None;
+            return true;
+        };
+        self.startup_next = Some(i + 1);
+        if text.is_empty() {
+            return true;
+        }
+        let Some(r) = self.machine.execute(text.as_bytes(), 0, m, now_ms) else {
+            self.startup_next = Some(i);
+            return false;
+        };
+        self.flush_events();
+        match r {
+            Ok(()) => self.say(format_args!(">{}:ok", text)),
+            Err(e) => self.say(format_args!(">{}:error:{}", text, e.code())),
+        }
+        true
+    }
+
+    fn continue_listing(&mut self, l: Listing) {
+        let scale = if self.machine.settings().report_inches() {
+            25.4
+        } else {
+            1.0
+        };
+        let next = match l {
+            Listing::Settings(i) => {
+                let mut s: String<48> = String::new();
+                match self.machine.settings().write_entry(i, &mut s) {
+                    Some(_) => {
+                        self.say(format_args!("{}", s));
+                        Some(Listing::Settings(i + 1))
+                    }
+                    None => None,
+                }
+            }
+            Listing::Coords(i) => {
+                let c = *self.machine.interp().coords();
+                let mut s: String<96> = String::new();
+                let done = match i {
+                    0..=5 => {
+                        let _ = write!(s, "G{}:", 54 + i);
+                        let _ = axis_triplet(&mut s, c.wcs.get(i).unwrap_or(&[0.0; AXES]), scale);
+                        false
+                    }
+                    6 | 7 => {
+                        let _ = write!(s, "G{}:", if i == 6 { 28 } else { 30 });
+                        let _ = axis_triplet(&mut s, if i == 6 { &c.g28 } else { &c.g30 }, scale);
+                        false
+                    }
+                    8 => {
+                        let _ = s.push_str("G92:");
+                        let _ = axis_triplet(&mut s, self.machine.interp().g92(), scale);
+                        false
+                    }
+                    9 => {
+                        let _ = s.push_str("TLO:0.000");
+                        false
+                    }
+                    10 => {
+                        let _ = s.push_str("PRB:0.000,0.000,0.000:0");
+                        false
+                    }
+                    _ => true,
+                };
+                if done {
+                    None
+                } else {
+                    self.say(format_args!("[{}]", s));
+                    Some(Listing::Coords(i + 1))
+                }
+            }
+            Listing::Startup(i) => match self.startup.get(i).cloned() {
+                Some(text) => {
+                    self.say(format_args!("$N{}={}", i, text));
+                    Some(Listing::Startup(i + 1))
+                }
+                None => None,
+            },
+        };
+        self.listing = next;
+        if next.is_none() {
+            self.say(format_args!("ok"));
+        }
+    }
+
+    /// `<State|MPos:...|FS:...|Bf:...|...>`.
+    fn status_report<M: MotionControl>(&mut self, m: &M) {
+        self.status_requested = false;
+        let st = self.machine.state(m);
+        let settings = self.machine.settings().clone();
+        let scale = if settings.report_inches() { 25.4 } else { 1.0 };
+        let mpos = self.machine.machine_position(m);
+        let wco = self.machine.interp().work_offset();
+        let mask = settings.status_mask();
+        self.reports = self.reports.wrapping_add(1);
+        let refresh = self.reports % REFRESH_EVERY == 1;
+        let show_wco = refresh || wco != self.wco_shown;
+        let show_ov = self.machine.take_overrides_changed() || self.reports % REFRESH_EVERY == 6;
+        let (fo, ro) = self.machine.overrides();
+        let inputs = self.machine.inputs();
+        let rx_free = self.rx_free();
+        let blocks_free = m.free();
+        let speed = m.speed() / scale;
+        // The pen is the spindle: report S while it is down.
+        let interp = self.machine.interp();
+        let spindle = if interp.modal().pen_down {
+            libm::roundf(interp.spindle()) as i32
+        } else {
+            0
+        };
+        let mut w = self.w();
+        let _ = (|| -> fmt::Result {
+            w.write_char('<')?;
+            match st {
+                RunState::Idle => w.write_str("Idle")?,
+                RunState::Run => w.write_str("Run")?,
+                RunState::Hold { complete } => write!(w, "Hold:{}", if complete { 0 } else { 1 })?,
+                RunState::Jog => w.write_str("Jog")?,
+                RunState::Door { at_rest } => write!(w, "Door:{}", if at_rest { 0 } else { 2 })?,
+                RunState::Alarm => w.write_str("Alarm")?,
+                RunState::Home => w.write_str("Home")?,
+                RunState::Check => w.write_str("Check")?,
+            }
+            if mask & 1 != 0 {
+                w.write_str("|MPos:")?;
+                axis_triplet(&mut w, &mpos, scale)?;
+            } else {
+                let mut wpos = mpos;
+                for (p, o) in wpos.iter_mut().zip(wco.iter()) {
+                    *p -= o;
+                }
+                w.write_str("|WPos:")?;
+                axis_triplet(&mut w, &wpos, scale)?;
+            }
+            if mask & 2 != 0 {
+                write!(w, "|Bf:{},{}", blocks_free, rx_free)?;
+            }
+            write!(w, "|FS:{},{}", libm::roundf(speed) as i32, spindle)?;
+            let pins = [
+                (inputs.limits[0], 'X'),
+                (inputs.limits[1], 'Y'),
+                (inputs.limits[2], 'Z'),
+                (inputs.feed_hold, 'H'),
+                (inputs.cycle_start, 'S'),
+                (inputs.estop, 'E'),
+            ];
+            if pins.iter().any(|(on, _)| *on) {
+                w.write_str("|Pn:")?;
+                for (on, c) in pins {
+                    if on {
+                        w.write_char(c)?;
+                    }
+                }
+            }
+            if show_wco {
+                w.write_str("|WCO:")?;
+                axis_triplet(&mut w, &wco, scale)?;
+            }
+            if show_ov {
+                write!(w, "|Ov:{},{},100", fo, ro)?;
+            }
+            w.write_str(">\r\n")
+        })();
+        if show_wco {
+            self.wco_shown = wco;
+        }
+    }
+}

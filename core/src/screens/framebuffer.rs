@@ -1,0 +1,185 @@
+//! The 128x64 1-bit frame buffer that the screens draw into, with dirty tracking.
+//!
+//! The ST7920 is written through a slow serial link (see [`super::st7920`]), so the
+//! firmware must send only what changed. Each pixel write compares with the stored
+//! value and marks its 16-pixel word dirty only on a real change; the screens paint in
+//! place (text with its background, fixed-width fields) instead of clearing and
+//! redrawing, so unchanged pixels cost nothing. 1 KB of pixels + 64 bytes of dirty
+//! bits: no second "shadow" buffer is needed.
+
+use core::convert::Infallible;
+
+use embedded_graphics::pixelcolor::BinaryColor;
+use embedded_graphics::prelude::*;
+use embedded_graphics::primitives::Rectangle;
+
+pub const WIDTH: usize = 128;
+pub const HEIGHT: usize = 64;
+/// Bytes per pixel row (8 pixels a byte, MSB leftmost, as the ST7920 GDRAM).
+pub const ROW_BYTES: usize = WIDTH / 8;
+/// 16-pixel words per row (the ST7920 horizontal address unit).
+pub const ROW_WORDS: usize = WIDTH / 16;
+
+/// A 128x64 monochrome frame buffer.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FrameBuffer {
+    buf: [u8; ROW_BYTES * HEIGHT],
+    /// Bit w of `dirty[y]`: word w of row y changed since the last flush.
+    dirty: [u8; HEIGHT],
+}
+
+impl Default for FrameBuffer {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl FrameBuffer {
+    /// A blank buffer, entirely dirty: what the LCD shows at power-up is unknown.
+    pub const fn new() -> Self {
+        FrameBuffer {
+            buf: [0; ROW_BYTES * HEIGHT],
+            dirty: [0xff; HEIGHT],
+        }
+    }
+
+    /// Pixel at (x, y); false outside the screen.
+    pub fn pixel(&self, x: usize, y: usize) -> bool {
+        if x >= WIDTH || y >= HEIGHT {
+            return false;
+        }
+        self.buf
+            .get(y * ROW_BYTES + x / 8)
+            .is_some_and(|b| b & (0x80 >> (x % 8)) != 0)
+    }
+
+    /// Set one pixel; off-screen coordinates are ignored.
+    pub fn set(&mut self, x: i32, y: i32, on: bool) {
+        if x < 0 || y < 0 || x >= WIDTH as i32 || y >= HEIGHT as i32 {
+            return;
+        }
+        let (x, y) = (x as usize, y as usize);
+        let mask = 0x80u8 >> (x % 8);
+        let Some(byte) = self.buf.get_mut(y * ROW_BYTES + x / 8) else {
+            return;
+        };
+        let new = if on { *byte | mask } else { *byte & !mask };
+        if new != *byte {
+            *byte = new;
+            if let Some(d) = self.dirty.get_mut(y) {
+                *d |= 1 << (x / 16);
+            }
+        }
+    }
+
+    /// The 16 bytes of pixel row `y` (empty if out of range).
+    pub fn row(&self, y: usize) -> &[u8] {
+        self.buf
+            .get(y * ROW_BYTES..(y + 1) * ROW_BYTES)
+            .unwrap_or(&[])
+    }
+
+    /// Dirty-word mask of row `y` (bit w = pixels 16w..16w+15).
+    pub fn dirty_words(&self, y: usize) -> u8 {
+        self.dirty.get(y).copied().unwrap_or(0)
+    }
+
+    /// Anything to send?
+    pub fn is_dirty(&self) -> bool {
+        self.dirty.iter().any(|d| *d != 0)
+    }
+
+    /// Number of dirty 16-pixel words.
+    pub fn dirty_word_count(&self) -> u32 {
+        self.dirty.iter().map(|d| d.count_ones()).sum()
+    }
+
+    /// Force a full resend (e.g. after the LCD was reset).
+    pub fn mark_all_dirty(&mut self) {
+        self.dirty = [0xff; HEIGHT];
+    }
+
+    /// Everything has been sent.
+    pub fn mark_clean(&mut self) {
+        self.dirty = [0; HEIGHT];
+    }
+
+    /// The raw pixels, row-major, MSB leftmost.
+    pub fn bytes(&self) -> &[u8; ROW_BYTES * HEIGHT] {
+        &self.buf
+    }
+}
+
+impl OriginDimensions for FrameBuffer {
+    fn size(&self) -> Size {
+        Size::new(WIDTH as u32, HEIGHT as u32)
+    }
+}
+
+impl DrawTarget for FrameBuffer {
+    type Color = BinaryColor;
+    type Error = Infallible;
+
+    fn draw_iter<I>(&mut self, pixels: I) -> Result<(), Self::Error>
+    where
+        I: IntoIterator<Item = Pixel<Self::Color>>,
+    {
+        for Pixel(p, c) in pixels {
+            self.set(p.x, p.y, c.is_on());
+        }
+        Ok(())
+    }
+
+    fn fill_solid(&mut self, area: &Rectangle, color: Self::Color) -> Result<(), Self::Error> {
+        let area = area.intersection(&self.bounding_box());
+        let on = color.is_on();
+        for p in area.points() {
+            self.set(p.x, p.y, on);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
+
+    #[test]
+    fn only_real_changes_mark_words_dirty() {
+        let mut fb = FrameBuffer::new();
+        assert_eq!(fb.dirty_word_count(), 512);
+        fb.mark_clean();
+        fb.set(17, 3, false); // already off
+        assert!(!fb.is_dirty());
+        fb.set(17, 3, true);
+        assert_eq!(fb.dirty_words(3), 0b10);
+        assert!(fb.pixel(17, 3));
+        assert_eq!(fb.row(3)[2], 0x40);
+        fb.mark_clean();
+        fb.set(17, 3, true); // same value again
+        fb.set(-1, 3, true);
+        fb.set(0, 64, true);
+        assert!(!fb.is_dirty());
+    }
+
+    #[test]
+    fn repainting_identical_content_leaves_it_clean() {
+        let mut fb = FrameBuffer::new();
+        let r = Rectangle::new(Point::new(10, 10), Size::new(40, 20));
+        r.into_styled(PrimitiveStyle::with_fill(BinaryColor::On))
+            .draw(&mut fb)
+            .unwrap();
+        fb.mark_clean();
+        r.into_styled(PrimitiveStyle::with_fill(BinaryColor::On))
+            .draw(&mut fb)
+            .unwrap();
+        assert!(!fb.is_dirty());
+        // A fill that runs off the screen is clipped, not a panic.
+        Rectangle::new(Point::new(120, 60), Size::new(40, 40))
+            .into_styled(PrimitiveStyle::with_fill(BinaryColor::On))
+            .draw(&mut fb)
+            .unwrap();
+        assert_eq!(fb.dirty_words(63), 0x80);
+    }
+}

@@ -1,0 +1,265 @@
+//! Small drawing pieces shared by the pages: fixed-width text cells, the title bar,
+//! the progress bar and the direction arrow.
+//!
+//! Every widget paints all pixels of its cell each time (text with its background,
+//! padded to a fixed width), so repainting an unchanged value changes no pixel and the
+//! frame buffer stays clean: that is what makes "redraw only what changed" work without
+//! a second buffer.
+
+use embedded_graphics::mono_font::{MonoFont, MonoTextStyleBuilder};
+use embedded_graphics::pixelcolor::BinaryColor;
+use embedded_graphics::prelude::*;
+use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
+use embedded_graphics::text::{Baseline, Text};
+
+use super::fonts::{BODY, SMALL};
+
+const ON: BinaryColor = BinaryColor::On;
+const OFF: BinaryColor = BinaryColor::Off;
+
+/// Paint `s` at `pos` (top-left) in a cell of exactly `chars` characters: truncated if
+/// longer, padded with background if shorter. `inverse` draws light on dark.
+pub fn cell<D>(
+    d: &mut D,
+    pos: Point,
+    font: &MonoFont<'_>,
+    s: &str,
+    chars: usize,
+    inverse: bool,
+) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    let (fg, bg) = if inverse { (OFF, ON) } else { (ON, OFF) };
+    let style = MonoTextStyleBuilder::new()
+        .font(font)
+        .text_color(fg)
+        .background_color(bg)
+        .build();
+    let end = s.char_indices().nth(chars).map_or(s.len(), |(i, _)| i);
+    let shown = s.get(..end).unwrap_or("");
+    let n = shown.chars().count();
+    Text::with_baseline(shown, pos, style, Baseline::Top).draw(d)?;
+    let cw = font.character_size.width + font.character_spacing;
+    let pad = chars.saturating_sub(n) as u32;
+    if pad > 0 {
+        let r = Rectangle::new(
+            Point::new(pos.x + (n as u32 * cw) as i32, pos.y),
+            Size::new(pad * cw, font.character_size.height),
+        );
+        d.fill_solid(&r, bg)?;
+    }
+    Ok(())
+}
+
+/// Right-align `s` in a cell of `chars` characters.
+pub fn cell_right<D>(
+    d: &mut D,
+    pos: Point,
+    font: &MonoFont<'_>,
+    s: &str,
+    chars: usize,
+    inverse: bool,
+) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    let n = s.chars().count().min(chars);
+    let cw = (font.character_size.width + font.character_spacing) as i32;
+    let pad = chars - n;
+    if pad > 0 {
+        cell(d, pos, font, "", pad, inverse)?;
+    }
+    let skip = s.chars().count() - n;
+    let start = s.char_indices().nth(skip).map_or(s.len(), |(i, _)| i);
+    cell(
+        d,
+        Point::new(pos.x + pad as i32 * cw, pos.y),
+        font,
+        s.get(start..).unwrap_or(""),
+        n,
+        inverse,
+    )
+}
+
+/// The inverted title bar (rows 0..=9): title on the left, `right` on the right.
+pub fn title_bar<D>(d: &mut D, title: &str, right: &str) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    const CHARS: usize = 21;
+    let rn = right.chars().count().min(10);
+    d.fill_solid(&Rectangle::new(Point::zero(), Size::new(1, 10)), ON)?;
+    d.fill_solid(&Rectangle::new(Point::new(127, 0), Size::new(1, 10)), ON)?;
+    cell(d, Point::new(1, 0), &BODY, title, CHARS - rn, true)?;
+    cell_right(
+        d,
+        Point::new(1 + ((CHARS - rn) * 6) as i32, 0),
+        &BODY,
+        right,
+        rn,
+        true,
+    )
+}
+
+/// The bottom line (rows 54..=63): a hint, or a message shown inverted.
+pub fn bottom_line<D>(d: &mut D, hint: &str, message: Option<&str>) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    d.fill_solid(&Rectangle::new(Point::new(0, 54), Size::new(128, 1)), OFF)?;
+    match message {
+        Some(m) => {
+            d.fill_solid(&Rectangle::new(Point::new(0, 55), Size::new(3, 9)), ON)?;
+            cell(d, Point::new(3, 55), &SMALL, m, 25, true)
+        }
+        None => {
+            d.fill_solid(&Rectangle::new(Point::new(0, 55), Size::new(3, 9)), OFF)?;
+            cell(d, Point::new(3, 55), &SMALL, hint, 25, false)
+        }
+    }?;
+    // 5x8 leaves the last row of the line free: keep it painted.
+    let bg = if message.is_some() { ON } else { OFF };
+    d.fill_solid(&Rectangle::new(Point::new(0, 63), Size::new(128, 1)), bg)
+}
+
+/// A horizontal progress bar with a frame; `frac` in 0..=1.
+pub fn progress<D>(d: &mut D, area: Rectangle, frac: f32) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    area.into_styled(PrimitiveStyle::with_stroke(ON, 1))
+        .draw(d)?;
+    let inner_w = area.size.width.saturating_sub(4);
+    let h = area.size.height.saturating_sub(4);
+    let f = if frac.is_finite() {
+        frac.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let filled = libm::roundf(inner_w as f32 * f) as u32;
+    let tl = area.top_left + Point::new(2, 2);
+    d.fill_solid(&Rectangle::new(tl, Size::new(filled, h)), ON)?;
+    d.fill_solid(
+        &Rectangle::new(
+            tl + Point::new(filled as i32, 0),
+            Size::new(inner_w - filled, h),
+        ),
+        OFF,
+    )?;
+    // The 1-pixel gap between frame and bar.
+    let gap = Rectangle::new(
+        area.top_left + Point::new(1, 1),
+        area.size - Size::new(2, 2),
+    );
+    gap.into_styled(PrimitiveStyle::with_stroke(OFF, 1)).draw(d)
+}
+
+/// A 1-pixel line from `a` to `b` (Bresenham). embedded-graphics' styled `Line` carries
+/// the thick-line machinery for any stroke width; the screens only need thin lines.
+pub fn line<D>(d: &mut D, a: Point, b: Point) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    let (dx, dy) = ((b.x - a.x).abs(), -(b.y - a.y).abs());
+    let (sx, sy) = (
+        if a.x < b.x { 1 } else { -1 },
+        if a.y < b.y { 1 } else { -1 },
+    );
+    let mut p = a;
+    let mut err = dx + dy;
+    let mut done = false;
+    let pixels = core::iter::from_fn(move || {
+        if done {
+            return None;
+        }
+        let here = p;
+        if here == b {
+            done = true;
+        } else {
+            let e2 = 2 * err;
+            if e2 >= dy {
+                err += dy;
+                p.x += sx;
+            }
+            if e2 <= dx {
+                err += dx;
+                p.y += sy;
+            }
+        }
+        Some(Pixel(here, ON))
+    });
+    d.draw_iter(pixels)
+}
+
+/// A direction arrow for (dx, dy) signs, fitted in a square `area` (Y up): a 3-pixel
+/// shaft and a head, filled when `solid` (moving) or outlined (stopped). A zero
+/// direction draws a small square (no direction yet). Built from 1-pixel lines only, so
+/// embedded-graphics' thick-line and triangle fillers stay out of the firmware.
+pub fn arrow<D>(d: &mut D, area: Rectangle, dir: [i8; 2], solid: bool) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    let c = area.center();
+    if dir == [0, 0] {
+        return Rectangle::with_center(c, Size::new(9, 9))
+            .into_styled(PrimitiveStyle::with_stroke(ON, 2))
+            .draw(d);
+    }
+    let r = (area.size.width.min(area.size.height) / 2) as f32 - 2.0;
+    let (dx, dy) = (dir[0] as f32, -(dir[1] as f32));
+    let n = libm::hypotf(dx, dy);
+    let (ux, uy) = (dx / n, dy / n);
+    let at = |along: f32, across: f32| {
+        Point::new(
+            c.x + libm::roundf(ux * along - uy * across) as i32,
+            c.y + libm::roundf(uy * along + ux * across) as i32,
+        )
+    };
+    let base = r * 0.1;
+    let half = r * 0.55;
+    // Shaft: parallel lines half a pixel apart leave no gaps on diagonals.
+    for k in -3..=3 {
+        let o = k as f32 * 0.5;
+        line(d, at(-r, o), at(base, o))?;
+    }
+    let tip = at(r, 0.0);
+    if solid {
+        // Fill the head with a fan of lines from the tip.
+        let steps = libm::ceilf(half * 4.0) as i32;
+        for k in -steps..=steps {
+            let across = half * k as f32 / steps as f32;
+            line(d, tip, at(base, across))?;
+        }
+        Ok(())
+    } else {
+        let (b1, b2) = (at(base, half), at(base, -half));
+        for (p, q) in [(tip, b1), (b1, b2), (b2, tip)] {
+            line(d, p, q)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::screens::framebuffer::FrameBuffer;
+
+    #[test]
+    fn thin_line_covers_both_ends_with_one_pixel_per_major_step() {
+        for (a, b) in [
+            (Point::new(3, 4), Point::new(40, 17)),
+            (Point::new(40, 17), Point::new(3, 4)),
+            (Point::new(10, 50), Point::new(12, 5)),
+            (Point::new(7, 7), Point::new(7, 7)),
+        ] {
+            let mut fb = FrameBuffer::new();
+            line(&mut fb, a, b).unwrap();
+            let on = fb.bytes().iter().map(|b| b.count_ones()).sum::<u32>();
+            let major = (b.x - a.x).abs().max((b.y - a.y).abs()) as u32 + 1;
+            assert_eq!(on, major, "{a:?} -> {b:?}");
+            assert!(fb.pixel(a.x as usize, a.y as usize) && fb.pixel(b.x as usize, b.y as usize));
+        }
+    }
+}

@@ -1,0 +1,794 @@
+//! Machine settings: the `$n` table (Grbl's numbers where Grbl has them, inkstep's own
+//! from `$200`), defaults, range-checked get/set, the `$$` listing and a compact
+//! versioned, checksummed byte image for the flash store.
+//!
+//! Shaped as one table of descriptors plus one `f32` per entry: get/set/list/serialise
+//! are then a single loop each, and typed accessors give the rest of the core plain
+//! values (`steps_per_mm(X)`, `homing_enabled()`, ...). Every value fits an `f32`
+//! exactly (integers stay below 2^24).
+
+use crate::motion::AXES;
+use core::fmt;
+
+/// What a setting holds; decides range checks and how `$$` prints it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Whole number (printed without decimals).
+    Int,
+    /// Bit mask over the axes (X = bit 0), or a report mask.
+    Mask,
+    /// 0 or 1 (any non-zero value is stored as 1, as Grbl does).
+    Bool,
+    /// Real number, printed with three decimals.
+    Float,
+}
+
+/// One entry of the settings table.
+#[derive(Clone, Copy, Debug)]
+pub struct Desc {
+    pub number: u16,
+    pub kind: Kind,
+    pub default: f32,
+    pub min: f32,
+    pub max: f32,
+    /// Short description with unit, for the README and help screens.
+    pub name: &'static str,
+}
+
+const fn d(number: u16, kind: Kind, default: f32, min: f32, max: f32, name: &'static str) -> Desc {
+    Desc {
+        number,
+        kind,
+        default,
+        min,
+        max,
+        name,
+    }
+}
+
+use Kind::*;
+
+/// Highest step rate one axis may be configured for ($100 x $110 / 60), in Hz.
+pub const MAX_AXIS_STEP_RATE_HZ: f32 = 100_000.0;
+
+/// The table. Order is the serialisation order: append only, and bump
+/// [`FORMAT_VERSION`] if an entry is removed or reordered.
+pub const TABLE: [Desc; 44] = [
+    d(0, Int, 10.0, 3.0, 255.0, "Step pulse time, us"),
+    d(
+        1,
+        Int,
+        25.0,
+        0.0,
+        255.0,
+        "Step idle delay, ms (255 = keep enabled)",
+    ),
+    d(2, Mask, 0.0, 0.0, 7.0, "Step pulse invert, mask"),
+    d(3, Mask, 0.0, 0.0, 7.0, "Step direction invert, mask"),
+    d(4, Bool, 0.0, 0.0, 1.0, "Invert step enable pin"),
+    d(5, Bool, 0.0, 0.0, 1.0, "Invert limit pins"),
+    d(6, Bool, 0.0, 0.0, 1.0, "Invert probe pin"),
+    d(
+        10,
+        Mask,
+        3.0,
+        0.0,
+        3.0,
+        "Status report options, mask (1 = MPos, 2 = Bf)",
+    ),
+    d(11, Float, 0.010, 0.0, 10.0, "Junction deviation, mm"),
+    d(12, Float, 0.002, 0.0001, 1.0, "Arc tolerance, mm"),
+    d(13, Bool, 0.0, 0.0, 1.0, "Report in inches"),
+    d(20, Bool, 0.0, 0.0, 1.0, "Soft limits enable"),
+    d(21, Bool, 0.0, 0.0, 1.0, "Hard limits enable"),
+    d(22, Bool, 0.0, 0.0, 1.0, "Homing cycle enable"),
+    d(
+        23,
+        Mask,
+        3.0,
+        0.0,
+        7.0,
+        "Homing direction invert, mask (set = home toward -)",
+    ),
+    d(
+        24,
+        Float,
+        25.0,
+        1.0,
+        10_000.0,
+        "Homing locate feed rate, mm/min",
+    ),
+    d(
+        25,
+        Float,
+        500.0,
+        1.0,
+        20_000.0,
+        "Homing search seek rate, mm/min",
+    ),
+    d(
+        26,
+        Int,
+        250.0,
+        0.0,
+        10_000.0,
+        "Homing switch debounce delay, ms",
+    ),
+    d(
+        27,
+        Float,
+        1.0,
+        0.0,
+        100.0,
+        "Homing switch pull-off distance, mm",
+    ),
+    d(
+        100,
+        Float,
+        80.0,
+        0.001,
+        10_000.0,
+        "X-axis travel resolution, step/mm",
+    ),
+    d(
+        101,
+        Float,
+        80.0,
+        0.001,
+        10_000.0,
+        "Y-axis travel resolution, step/mm",
+    ),
+    d(
+        102,
+        Float,
+        400.0,
+        0.001,
+        10_000.0,
+        "Z-axis travel resolution, step/mm",
+    ),
+    d(
+        110,
+        Float,
+        3000.0,
+        1.0,
+        100_000.0,
+        "X-axis maximum rate, mm/min",
+    ),
+    d(
+        111,
+        Float,
+        3000.0,
+        1.0,
+        100_000.0,
+        "Y-axis maximum rate, mm/min",
+    ),
+    d(
+        112,
+        Float,
+        600.0,
+        1.0,
+        100_000.0,
+        "Z-axis maximum rate, mm/min",
+    ),
+    d(
+        120,
+        Float,
+        200.0,
+        0.1,
+        100_000.0,
+        "X-axis acceleration, mm/s^2",
+    ),
+    d(
+        121,
+        Float,
+        200.0,
+        0.1,
+        100_000.0,
+        "Y-axis acceleration, mm/s^2",
+    ),
+    d(
+        122,
+        Float,
+        100.0,
+        0.1,
+        100_000.0,
+        "Z-axis acceleration, mm/s^2",
+    ),
+    d(
+        130,
+        Float,
+        300.0,
+        0.0,
+        10_000.0,
+        "X-axis maximum travel, mm",
+    ),
+    d(
+        131,
+        Float,
+        200.0,
+        0.0,
+        10_000.0,
+        "Y-axis maximum travel, mm",
+    ),
+    d(132, Float, 10.0, 0.0, 10_000.0, "Z-axis maximum travel, mm"),
+    d(
+        200,
+        Int,
+        0.0,
+        0.0,
+        1.0,
+        "Output mode: 0 step/dir, 1 4-phase half-step",
+    ),
+    d(201, Int, 0.0, 0.0, 1.0, "Pen mode: 0 Z axis, 1 RC servo"),
+    d(202, Float, 90.0, 0.0, 180.0, "Pen servo up angle, deg"),
+    d(203, Float, 30.0, 0.0, 180.0, "Pen servo down angle, deg"),
+    d(204, Int, 150.0, 0.0, 5000.0, "Pen lift/drop time, ms"),
+    d(
+        205,
+        Float,
+        0.0,
+        -1000.0,
+        1000.0,
+        "Pen up Z position (Z-axis pen), mm",
+    ),
+    d(
+        206,
+        Float,
+        -2.0,
+        -1000.0,
+        1000.0,
+        "Pen down Z position (Z-axis pen), mm",
+    ),
+    d(
+        210,
+        Int,
+        0.0,
+        0.0,
+        1.0,
+        "Acceleration profile: 0 trapezoid, 1 S-curve",
+    ),
+    d(
+        211,
+        Float,
+        5000.0,
+        1.0,
+        1_000_000.0,
+        "Jerk for S-curve, mm/s^3",
+    ),
+    d(
+        212,
+        Int,
+        1.0,
+        0.0,
+        1.0,
+        "Interpolation: 0 point-by-point, 1 DDA",
+    ),
+    d(
+        213,
+        Float,
+        60.0,
+        0.0,
+        10_000.0,
+        "Start rate (motors start instantly below it), mm/min",
+    ),
+    d(
+        214,
+        Mask,
+        3.0,
+        0.0,
+        7.0,
+        "Axes with home/limit switches, mask",
+    ),
+    d(
+        215,
+        Bool,
+        0.0,
+        0.0,
+        1.0,
+        "Invert e-stop, feed-hold and cycle-start inputs",
+    ),
+];
+
+/// Number of settings.
+pub const COUNT: usize = TABLE.len();
+/// Version of the byte image; bump when [`TABLE`] changes other than by appending.
+pub const FORMAT_VERSION: u8 = 1;
+const MAGIC: [u8; 2] = *b"IS";
+/// Size of the byte image: magic, version, count, values, CRC-32.
+pub const IMAGE_LEN: usize = 4 + 4 * COUNT + 4;
+
+/// Why a `$n=v` was refused; maps onto Grbl's error numbers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SettingError {
+    /// No such setting, or value outside its range (error 3).
+    Invalid,
+    /// Negative value (error 4).
+    Negative,
+    /// Step pulse shorter than 3 us (error 6).
+    PulseTooShort,
+    /// Soft limits need homing (error 10).
+    SoftLimitsNeedHoming,
+    /// Axis step rate above [`MAX_AXIS_STEP_RATE_HZ`] (error 12).
+    StepRateTooHigh,
+}
+
+/// Why a byte image could not be loaded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ImageError {
+    Length,
+    Magic,
+    Version,
+    Checksum,
+    /// A value outside its range (checksum fine, so written by a buggy build).
+    Range,
+}
+
+/// Output mode of the step generator ($200).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputMode {
+    StepDir,
+    FourPhase,
+}
+/// How the pen is lifted ($201).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PenMode {
+    ZAxis,
+    Servo,
+}
+/// Acceleration profile ($210).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AccelProfile {
+    Trapezoid,
+    SCurve,
+}
+/// Interpolation method ($212).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    PointByPoint,
+    Dda,
+}
+
+/// All settings, one value per [`TABLE`] entry.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    vals: [f32; COUNT],
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        let mut vals = [0.0; COUNT];
+        for (v, desc) in vals.iter_mut().zip(TABLE.iter()) {
+            *v = desc.default;
+        }
+        Settings { vals }
+    }
+}
+
+/// Table index of setting `number`.
+pub fn index_of(number: u16) -> Option<usize> {
+    TABLE.iter().position(|d| d.number == number)
+}
+
+/// Index lookup for the accessors below; the numbers used there are all in the table
+/// (a unit test checks it), the fallback only keeps the accessors total.
+fn ix(number: u16) -> usize {
+    index_of(number).unwrap_or(0)
+}
+
+impl Settings {
+    /// Value of setting `number`, if it exists.
+    pub fn get(&self, number: u16) -> Option<f32> {
+        index_of(number).and_then(|i| self.vals.get(i).copied())
+    }
+
+    /// Set `$number = value` with Grbl's checks. Integer kinds are truncated toward zero.
+    pub fn set(&mut self, number: u16, value: f32) -> Result<(), SettingError> {
+        let i = index_of(number).ok_or(SettingError::Invalid)?;
+        let desc = TABLE.get(i).ok_or(SettingError::Invalid)?;
+        if !value.is_finite() {
+            return Err(SettingError::Invalid);
+        }
+        if value < 0.0 && desc.min >= 0.0 {
+            return Err(SettingError::Negative);
+        }
+        let v = match desc.kind {
+            Kind::Float => value,
+            Kind::Int | Kind::Mask => libm::truncf(value),
+            Kind::Bool => {
+                if value != 0.0 {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+        };
+        if number == 0 && v < 3.0 {
+            return Err(SettingError::PulseTooShort);
+        }
+        if v < desc.min || v > desc.max {
+            return Err(SettingError::Invalid);
+        }
+        if number == 20 && v != 0.0 && !self.homing_enabled() {
+            return Err(SettingError::SoftLimitsNeedHoming);
+        }
+        let mut next = self.clone();
+        if let Some(slot) = next.vals.get_mut(i) {
+            *slot = v;
+        }
+        for axis in 0..AXES {
+            if next.steps_per_mm(axis) * next.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ {
+                return Err(SettingError::StepRateTooHigh);
+            }
+        }
+        // Turning homing off also turns soft limits off: they would refer to nothing.
+        if number == 22 && v == 0.0 {
+            if let Some(slot) = next.vals.get_mut(ix(20)) {
+                *slot = 0.0;
+            }
+        }
+        *self = next;
+        Ok(())
+    }
+
+    fn v(&self, number: u16) -> f32 {
+        self.vals.get(ix(number)).copied().unwrap_or(0.0)
+    }
+    fn flag(&self, number: u16) -> bool {
+        self.v(number) != 0.0
+    }
+    fn mask(&self, number: u16) -> u8 {
+        self.v(number) as u8
+    }
+    fn axis(&self, base: u16, axis: usize) -> f32 {
+        self.v(base + axis.min(AXES - 1) as u16)
+    }
+
+    pub fn step_pulse_us(&self) -> u8 {
+        self.v(0) as u8
+    }
+    pub fn step_idle_delay_ms(&self) -> u8 {
+        self.v(1) as u8
+    }
+    pub fn step_invert_mask(&self) -> u8 {
+        self.mask(2)
+    }
+    pub fn dir_invert_mask(&self) -> u8 {
+        self.mask(3)
+    }
+    pub fn invert_enable(&self) -> bool {
+        self.flag(4)
+    }
+    pub fn invert_limits(&self) -> bool {
+        self.flag(5)
+    }
+    pub fn status_mask(&self) -> u8 {
+        self.mask(10)
+    }
+    pub fn junction_deviation(&self) -> f32 {
+        self.v(11)
+    }
+    pub fn arc_tolerance(&self) -> f32 {
+        self.v(12)
+    }
+    pub fn report_inches(&self) -> bool {
+        self.flag(13)
+    }
+    pub fn soft_limits(&self) -> bool {
+        self.flag(20)
+    }
+    pub fn hard_limits(&self) -> bool {
+        self.flag(21)
+    }
+    pub fn homing_enabled(&self) -> bool {
+        self.flag(22)
+    }
+    pub fn homing_dir_mask(&self) -> u8 {
+        self.mask(23)
+    }
+    pub fn homing_feed(&self) -> f32 {
+        self.v(24)
+    }
+    pub fn homing_seek(&self) -> f32 {
+        self.v(25)
+    }
+    pub fn homing_debounce_ms(&self) -> u32 {
+        self.v(26) as u32
+    }
+    pub fn homing_pulloff(&self) -> f32 {
+        self.v(27)
+    }
+    /// $100-$102.
+    pub fn steps_per_mm(&self, axis: usize) -> f32 {
+        self.axis(100, axis)
+    }
+    /// $110-$112, mm/min.
+    pub fn max_rate(&self, axis: usize) -> f32 {
+        self.axis(110, axis)
+    }
+    /// $120-$122, mm/s^2.
+    pub fn acceleration(&self, axis: usize) -> f32 {
+        self.axis(120, axis)
+    }
+    /// $130-$132, mm (positive).
+    pub fn max_travel(&self, axis: usize) -> f32 {
+        self.axis(130, axis)
+    }
+    pub fn output_mode(&self) -> OutputMode {
+        if self.flag(200) {
+            OutputMode::FourPhase
+        } else {
+            OutputMode::StepDir
+        }
+    }
+    pub fn pen_mode(&self) -> PenMode {
+        if self.flag(201) {
+            PenMode::Servo
+        } else {
+            PenMode::ZAxis
+        }
+    }
+    pub fn pen_up_angle(&self) -> f32 {
+        self.v(202)
+    }
+    pub fn pen_down_angle(&self) -> f32 {
+        self.v(203)
+    }
+    /// RC-servo pulse width for the pen position, µs: 0..180 degrees maps linearly onto
+    /// 500..2500 µs, the range most hobby servos accept.
+    pub fn pen_servo_pulse_us(&self, down: bool) -> u32 {
+        let angle = if down {
+            self.pen_down_angle()
+        } else {
+            self.pen_up_angle()
+        };
+        500 + (angle.clamp(0.0, 180.0) * (2000.0 / 180.0)) as u32
+    }
+    pub fn pen_lift_ms(&self) -> u32 {
+        self.v(204) as u32
+    }
+    pub fn pen_z_up(&self) -> f32 {
+        self.v(205)
+    }
+    pub fn pen_z_down(&self) -> f32 {
+        self.v(206)
+    }
+    pub fn accel_profile(&self) -> AccelProfile {
+        if self.flag(210) {
+            AccelProfile::SCurve
+        } else {
+            AccelProfile::Trapezoid
+        }
+    }
+    pub fn jerk(&self) -> f32 {
+        self.v(211)
+    }
+    pub fn interpolation(&self) -> Interpolation {
+        if self.flag(212) {
+            Interpolation::Dda
+        } else {
+            Interpolation::PointByPoint
+        }
+    }
+    pub fn start_rate(&self) -> f32 {
+        self.v(213)
+    }
+    /// Axes that have a home/limit switch ($214).
+    pub fn switch_mask(&self) -> u8 {
+        self.mask(214)
+    }
+    pub fn invert_inputs(&self) -> bool {
+        self.flag(215)
+    }
+
+    /// Write `$n=value` for table entry `index` (no line ending). `None` past the end.
+    pub fn write_entry<W: fmt::Write>(&self, index: usize, w: &mut W) -> Option<fmt::Result> {
+        let desc = TABLE.get(index)?;
+        let v = *self.vals.get(index)?;
+        Some(match desc.kind {
+            Kind::Float => write!(w, "${}=", desc.number).and_then(|()| write_fixed3(w, v)),
+            _ => write!(w, "${}={}", desc.number, v as i32),
+        })
+    }
+
+    /// The compact byte image: `"IS"`, version, count, each value as little-endian
+    /// `f32` in table order, then a CRC-32 of everything before it.
+    pub fn to_image(&self) -> [u8; IMAGE_LEN] {
+        let mut out = [0u8; IMAGE_LEN];
+        let (head, rest) = out.split_at_mut(4);
+        head.copy_from_slice(&[MAGIC[0], MAGIC[1], FORMAT_VERSION, COUNT as u8]);
+        for (chunk, v) in rest.chunks_exact_mut(4).zip(self.vals.iter()) {
+            chunk.copy_from_slice(&v.to_le_bytes());
+        }
+        let body = IMAGE_LEN - 4;
+        let crc = crc32(out.get(..body).unwrap_or(&[]));
+        if let Some(tail) = out.get_mut(body..) {
+            tail.copy_from_slice(&crc.to_le_bytes());
+        }
+        out
+    }
+
+    /// Parse a byte image written by [`Settings::to_image`], checking everything.
+    /// An image from an older build with fewer (appended-to) settings loads too: the
+    /// settings it lacks take their defaults, so an update keeps the user's values.
+    pub fn from_image(img: &[u8]) -> Result<Settings, ImageError> {
+        let count = usize::from(*img.get(3).ok_or(ImageError::Length)?);
+        if count > COUNT || img.len() != 4 + 4 * count + 4 {
+            return Err(ImageError::Length);
+        }
+        let (body, tail) = img.split_at(img.len() - 4);
+        let stored = u32::from_le_bytes(tail.try_into().map_err(|_| ImageError::Length)?);
+        if crc32(body) != stored {
+            return Err(ImageError::Checksum);
+        }
+        if body.get(..2) != Some(&MAGIC[..]) {
+            return Err(ImageError::Magic);
+        }
+        if body.get(2) != Some(&FORMAT_VERSION) {
+            return Err(ImageError::Version);
+        }
+        let mut s = Settings::default();
+        let values = body.get(4..).unwrap_or(&[]);
+        for ((slot, chunk), desc) in s
+            .vals
+            .iter_mut()
+            .zip(values.chunks_exact(4))
+            .zip(TABLE.iter())
+        {
+            let v = f32::from_le_bytes(chunk.try_into().map_err(|_| ImageError::Length)?);
+            if !v.is_finite() || v < desc.min || v > desc.max {
+                return Err(ImageError::Range);
+            }
+            *slot = v;
+        }
+        Ok(s)
+    }
+}
+
+/// Write `v` with three decimals (Grbl's report format) through integer formatting:
+/// core's float formatting would cost about 14 KB of flash on the Cortex-M3.
+/// Values round half away from zero. Computed in f32 (no double-precision routines in
+/// the image): exact to the last digit below 16,777 (2^24 thousandths), which covers
+/// any plotter; larger values keep f32's 7 significant digits.
+pub fn write_fixed3<W: fmt::Write>(w: &mut W, v: f32) -> fmt::Result {
+    let milli = libm::roundf(v * 1000.0) as i64;
+    let sign = if milli < 0 { "-" } else { "" };
+    let a = milli.unsigned_abs();
+    write!(w, "{}{}.{:03}", sign, a / 1000, a % 1000)
+}
+
+/// CRC-32 (IEEE, reflected, polynomial 0xEDB88320), bitwise: the image is small and
+/// written rarely, so a table is not worth its 1 KB of flash.
+pub fn crc32(data: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in data {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            let lsb = crc & 1;
+            crc >>= 1;
+            if lsb != 0 {
+                crc ^= 0xEDB8_8320;
+            }
+        }
+    }
+    !crc
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_numbers_are_unique_and_defaults_in_range() {
+        for (i, a) in TABLE.iter().enumerate() {
+            assert!(a.default >= a.min && a.default <= a.max, "${}", a.number);
+            for b in TABLE.iter().skip(i + 1) {
+                assert_ne!(a.number, b.number);
+            }
+        }
+        for n in [
+            0, 1, 2, 3, 4, 5, 6, 10, 11, 12, 13, 20, 21, 22, 23, 24, 25, 26, 27,
+        ] {
+            assert!(index_of(n).is_some(), "${n} missing");
+        }
+        for base in [100, 110, 120, 130] {
+            for a in 0..3 {
+                assert!(index_of(base + a).is_some());
+            }
+        }
+    }
+
+    #[test]
+    fn fixed_point_output_matches_three_decimal_rounding() {
+        for v in [
+            0.0f32, 1.0, -1.0, 0.0005, -0.0004, 123.456, -99.9996, 0.010, 16_000.125, -2.5e-4,
+        ] {
+            let mut a: heapless::String<40> = heapless::String::new();
+            write_fixed3(&mut a, v).unwrap();
+            let want = std::format!("{:.3}", f64::from(v));
+            let want = if want == "-0.000" {
+                "0.000".into()
+            } else {
+                want
+            };
+            assert_eq!(a.as_str(), want, "{v}");
+        }
+    }
+
+    #[test]
+    fn crc_matches_the_standard_check_value() {
+        assert_eq!(crc32(b"123456789"), 0xCBF4_3926);
+    }
+
+    #[test]
+    fn set_checks_ranges_like_grbl() {
+        let mut s = Settings::default();
+        assert_eq!(s.set(999, 1.0), Err(SettingError::Invalid));
+        assert_eq!(s.set(0, 2.0), Err(SettingError::PulseTooShort));
+        assert_eq!(s.set(100, -1.0), Err(SettingError::Negative));
+        assert_eq!(s.set(20, 1.0), Err(SettingError::SoftLimitsNeedHoming));
+        assert_eq!(s.set(100, 5000.0), Err(SettingError::StepRateTooHigh));
+        assert_eq!(s.steps_per_mm(0), 80.0, "refused change must not apply");
+        s.set(22, 1.0).unwrap();
+        s.set(20, 5.0).unwrap();
+        assert!(s.soft_limits());
+        s.set(22, 0.0).unwrap();
+        assert!(!s.soft_limits(), "homing off clears soft limits");
+        s.set(3, 5.7).unwrap();
+        assert_eq!(s.dir_invert_mask(), 5);
+        s.set(101, 12.5).unwrap();
+        assert_eq!(s.steps_per_mm(1), 12.5);
+        assert_eq!(s.set(205, -3.0), Ok(()));
+        assert_eq!(s.pen_z_up(), -3.0);
+    }
+
+    #[test]
+    fn listing_prints_ints_and_floats_like_grbl() {
+        let s = Settings::default();
+        let mut line: heapless::String<48> = heapless::String::new();
+        s.write_entry(index_of(0).unwrap(), &mut line)
+            .unwrap()
+            .unwrap();
+        assert_eq!(line.as_str(), "$0=10");
+        line.clear();
+        s.write_entry(index_of(11).unwrap(), &mut line)
+            .unwrap()
+            .unwrap();
+        assert_eq!(line.as_str(), "$11=0.010");
+        assert!(s.write_entry(COUNT, &mut line).is_none());
+    }
+
+    #[test]
+    fn image_round_trips_and_rejects_any_flipped_bit() {
+        let mut s = Settings::default();
+        s.set(100, 123.25).unwrap();
+        s.set(201, 1.0).unwrap();
+        let img = s.to_image();
+        assert_eq!(Settings::from_image(&img), Ok(s.clone()));
+        for byte in 0..IMAGE_LEN {
+            for bit in 0..8 {
+                let mut bad = img;
+                bad[byte] ^= 1 << bit;
+                assert!(Settings::from_image(&bad).is_err(), "byte {byte} bit {bit}");
+            }
+        }
+        assert_eq!(Settings::from_image(&img[..10]), Err(ImageError::Length));
+    }
+
+    #[test]
+    fn an_older_shorter_image_keeps_its_values_and_defaults_the_rest() {
+        let mut s = Settings::default();
+        s.set(100, 42.0).unwrap();
+        let full = s.to_image();
+        // The image an older build with only the first 30 settings would have written.
+        let n = 30;
+        let mut old = std::vec::Vec::from(&full[..4 + 4 * n]);
+        old[3] = n as u8;
+        let crc = crc32(&old);
+        old.extend_from_slice(&crc.to_le_bytes());
+        let loaded = Settings::from_image(&old).unwrap();
+        assert_eq!(loaded.steps_per_mm(0), 42.0);
+        assert_eq!(loaded, s, "the rest are defaults, as in s");
+    }
+}

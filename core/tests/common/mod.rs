@@ -1,0 +1,162 @@
+//! A fake planner for host tests: a bounded queue executed by `step()`, which moves
+//! every axis of the head move toward its target by at most `rate` steps per call,
+//! so switches can be hit part-way and holds stop between steps.
+#![allow(dead_code)]
+
+use inkstep_core::machine::{Command, MotionControl, QueueFull};
+use inkstep_core::motion::StepPos;
+use inkstep_core::protocol::Protocol;
+use std::collections::VecDeque;
+
+pub struct FakePlanner {
+    pub queue: VecDeque<Command>,
+    pub cap: usize,
+    pub pos: StepPos,
+    pub holding: bool,
+    /// A hold was requested while moving: one more step() to come to rest.
+    pub stopping: bool,
+    pub rate: i32,
+    pub overrides: (u8, u8),
+    pub clears: u32,
+    /// Every command accepted, in order.
+    pub log: Vec<Command>,
+}
+
+impl FakePlanner {
+    pub fn new(cap: usize) -> Self {
+        FakePlanner {
+            queue: VecDeque::new(),
+            cap,
+            pos: [0; 3],
+            holding: false,
+            stopping: false,
+            rate: 1_000_000,
+            overrides: (100, 100),
+            clears: 0,
+            log: Vec::new(),
+        }
+    }
+
+    /// Advance the head command.
+    pub fn step(&mut self) {
+        if self.holding {
+            if !self.stopping {
+                return;
+            }
+            self.stopping = false;
+        }
+        let Some(head) = self.queue.front() else {
+            return;
+        };
+        let done = match head {
+            Command::Move(mv) => {
+                for (p, t) in self.pos.iter_mut().zip(mv.target.iter()) {
+                    let d = (i64::from(*t) - i64::from(*p))
+                        .clamp(-i64::from(self.rate), i64::from(self.rate));
+                    *p = (i64::from(*p) + d) as i32;
+                }
+                self.pos == mv.target
+            }
+            _ => true,
+        };
+        if done {
+            self.queue.pop_front();
+        }
+    }
+
+    pub fn run_all(&mut self) {
+        for _ in 0..1_000_000 {
+            if self.queue.is_empty() || self.holding {
+                return;
+            }
+            self.step();
+        }
+    }
+}
+
+impl MotionControl for FakePlanner {
+    fn push(&mut self, cmd: Command) -> Result<(), QueueFull> {
+        if self.queue.len() >= self.cap {
+            return Err(QueueFull);
+        }
+        self.queue.push_back(cmd);
+        self.log.push(cmd);
+        Ok(())
+    }
+    fn queued(&self) -> usize {
+        self.queue.len()
+    }
+    fn capacity(&self) -> usize {
+        self.cap
+    }
+    fn hold(&mut self) {
+        if !self.holding {
+            self.stopping = !self.queue.is_empty();
+        }
+        self.holding = true;
+    }
+    fn resume(&mut self) {
+        self.holding = false;
+        self.stopping = false;
+    }
+    fn is_holding(&self) -> bool {
+        self.holding
+    }
+    fn is_moving(&self) -> bool {
+        !self.queue.is_empty() && (!self.holding || self.stopping)
+    }
+    fn clear(&mut self) {
+        self.queue.clear();
+        self.holding = false;
+        self.stopping = false;
+        self.clears += 1;
+    }
+    fn set_overrides(&mut self, feed: u8, rapid: u8) {
+        self.overrides = (feed, rapid);
+    }
+    fn position(&self) -> StepPos {
+        self.pos
+    }
+    fn set_position(&mut self, pos: StepPos) {
+        self.pos = pos;
+    }
+    fn speed(&self) -> f32 {
+        if self.is_moving() {
+            600.0
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Read all pending output as text.
+pub fn drain(p: &mut Protocol) -> String {
+    let mut buf = [0u8; 256];
+    let mut s = String::new();
+    loop {
+        let n = p.read_output(&mut buf);
+        if n == 0 {
+            return s;
+        }
+        s.push_str(&String::from_utf8_lossy(&buf[..n]));
+    }
+}
+
+/// Send text, poll until everything is consumed, return the output.
+pub fn send(p: &mut Protocol, m: &mut FakePlanner, text: &str) -> String {
+    let mut rest = text.as_bytes();
+    let mut out = String::new();
+    for _ in 0..100_000 {
+        let n = p.receive(rest, m, 0);
+        rest = &rest[n..];
+        p.poll(m, 0);
+        out.push_str(&drain(p));
+        if rest.is_empty() {
+            break;
+        }
+        m.step();
+    }
+    p.poll(m, 0);
+    out.push_str(&drain(p));
+    out
+}

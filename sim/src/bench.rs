@@ -1,0 +1,376 @@
+//! Bench analysis: measures a step trace against the ideal path of a reference program.
+//!
+//! Owns the ideal-path JSON format of `shared/bench/*.json`, the figures we compare with
+//! Grbl (job time, max/rms deviation, steps per axis, final position) and the reading of
+//! Grbl's own figures from `shared/bench/README.md`, so that no expected number is
+//! written into the code.
+
+use crate::run::{run_gcode, RunResult};
+use crate::sender::Flow;
+use crate::trace::Trace;
+use serde::Deserialize;
+use std::path::Path;
+
+/// The ideal path a program describes, in millimetres.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Ideal {
+    Poly { pts: Vec<[f64; 2]> },
+    Circle { c: [f64; 2], r: f64 },
+}
+
+impl Ideal {
+    pub fn read_file(path: &Path) -> Result<Ideal, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Distance of the point `p` (mm) from the path, in mm.
+    pub fn distance_mm(&self, p: [f64; 2]) -> f64 {
+        match self {
+            Ideal::Circle { c, r } => ((p[0] - c[0]).hypot(p[1] - c[1]) - r).abs(),
+            Ideal::Poly { pts } => {
+                if pts.len() == 1 {
+                    return (p[0] - pts[0][0]).hypot(p[1] - pts[0][1]);
+                }
+                pts.windows(2)
+                    .map(|w| segment_distance(p, w[0], w[1]))
+                    .fold(f64::INFINITY, f64::min)
+            }
+        }
+    }
+}
+
+fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let len2 = dx * dx + dy * dy;
+    let t = if len2 == 0.0 {
+        0.0
+    } else {
+        (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0)
+    };
+    (p[0] - (a[0] + t * dx)).hypot(p[1] - (a[1] + t * dy))
+}
+
+/// What we measure of one run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Figures {
+    /// First motion to last step, seconds.
+    pub job_time_s: f64,
+    /// Distance of step positions from the ideal path, in steps.
+    pub max_dev: f64,
+    pub rms_dev: f64,
+    pub steps: [u64; 3],
+    pub final_pos: [i32; 3],
+}
+
+/// Measures `trace` against `ideal`, with `steps_per_mm` on X and Y. The start position
+/// (before the first row) is taken as the origin, as in the reference programs.
+pub fn analyse(trace: &Trace, ideal: &Ideal, steps_per_mm: f64) -> Figures {
+    let mut prev = [0i32; 3];
+    let mut steps = [0u64; 3];
+    let mut max_dev: f64 = 0.0;
+    let mut sum2 = 0.0;
+    for row in &trace.rows {
+        for a in 0..3 {
+            steps[a] += (row.pos[a] - prev[a]).unsigned_abs() as u64;
+        }
+        prev = row.pos;
+        let p = [
+            row.pos[0] as f64 / steps_per_mm,
+            row.pos[1] as f64 / steps_per_mm,
+        ];
+        let d = ideal.distance_mm(p) * steps_per_mm;
+        max_dev = max_dev.max(d);
+        sum2 += d * d;
+    }
+    let n = trace.rows.len().max(1) as f64;
+    Figures {
+        job_time_s: trace.rows.last().map_or(0.0, |r| r.t_us / 1e6),
+        max_dev,
+        rms_dev: (sum2 / n).sqrt(),
+        steps,
+        final_pos: prev,
+    }
+}
+
+/// Grbl's figures for one program, as printed in the bench README.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GrblRow {
+    /// File name, e.g. `star.nc`.
+    pub program: String,
+    /// The description after the file name.
+    pub what: String,
+    pub job_time_s: f64,
+    pub max_dev: f64,
+    pub rms_dev: f64,
+    pub steps: [u64; 2],
+    pub final_pos: [i32; 2],
+}
+
+/// Reads the markdown table of Grbl's figures from the bench README.
+pub fn read_grbl_table(readme: &str) -> Vec<GrblRow> {
+    let mut out = Vec::new();
+    for line in readme.lines() {
+        let cells: Vec<&str> = line
+            .trim()
+            .trim_matches('|')
+            .split('|')
+            .map(str::trim)
+            .collect();
+        if cells.len() != 7 || !cells[0].contains(".nc") {
+            continue;
+        }
+        let (program, what) = cells[0]
+            .split_once(char::is_whitespace)
+            .unwrap_or((cells[0], ""));
+        let num = |s: &str| s.parse::<f64>().ok();
+        let fin: Vec<i32> = cells[6]
+            .split(',')
+            .filter_map(|s| s.trim().parse().ok())
+            .collect();
+        let (Some(t), Some(mx), Some(rms), Some(sx), Some(sy)) = (
+            num(cells[1]),
+            num(cells[2]),
+            num(cells[3]),
+            num(cells[4]),
+            num(cells[5]),
+        ) else {
+            continue;
+        };
+        if fin.len() != 2 {
+            continue;
+        }
+        out.push(GrblRow {
+            program: program.to_string(),
+            what: what.trim().to_string(),
+            job_time_s: t,
+            max_dev: mx,
+            rms_dev: rms,
+            steps: [sx as u64, sy as u64],
+            final_pos: [fin[0], fin[1]],
+        });
+    }
+    out
+}
+
+/// The goals of the motion issue, checked per program.
+pub const MAX_DEV_GOAL: f64 = 0.71;
+
+/// Whether `ours` meets every goal against `grbl`: job time no longer, deviation within
+/// [`MAX_DEV_GOAL`], final position exact.
+pub fn goal_failures(ours: &Figures, grbl: &GrblRow) -> Vec<String> {
+    let mut f = Vec::new();
+    if ours.job_time_s > grbl.job_time_s {
+        f.push(format!(
+            "job time {:.4} s > Grbl's {:.4} s",
+            ours.job_time_s, grbl.job_time_s
+        ));
+    }
+    if ours.max_dev > MAX_DEV_GOAL {
+        f.push(format!(
+            "max deviation {:.3} > {MAX_DEV_GOAL}",
+            ours.max_dev
+        ));
+    }
+    if [ours.final_pos[0], ours.final_pos[1]] != grbl.final_pos {
+        f.push(format!(
+            "final position {},{} != {},{}",
+            ours.final_pos[0], ours.final_pos[1], grbl.final_pos[0], grbl.final_pos[1]
+        ));
+    }
+    f
+}
+
+/// One markdown table with our figures beside Grbl's.
+pub fn markdown_table(rows: &[(GrblRow, Figures)]) -> String {
+    let mut s = String::from(
+        "| program | job time s (Grbl) | max dev steps (Grbl) | rms dev (Grbl) | steps X | steps Y | final | goals |\n\
+         |---|---|---|---|---|---|---|---|\n",
+    );
+    for (g, o) in rows {
+        let fails = goal_failures(o, g);
+        s.push_str(&format!(
+            "| {} | {:.4} ({:.4}) | {:.3} ({:.3}) | {:.3} ({:.3}) | {} ({}) | {} ({}) | {},{} | {} |\n",
+            g.program,
+            o.job_time_s,
+            g.job_time_s,
+            o.max_dev,
+            g.max_dev,
+            o.rms_dev,
+            g.rms_dev,
+            o.steps[0],
+            g.steps[0],
+            o.steps[1],
+            g.steps[1],
+            o.final_pos[0],
+            o.final_pos[1],
+            if fails.is_empty() { "met".to_string() } else { fails.join("; ") }
+        ));
+    }
+    s
+}
+
+/// One reference program run and measured.
+pub struct BenchRun {
+    pub grbl: GrblRow,
+    pub ours: Figures,
+    pub run: RunResult,
+}
+
+/// Runs the program `grbl.program` of `bench_dir` and measures it against its ideal
+/// path. The programs set 80 steps/mm on X and Y at their head.
+pub fn run_program(bench_dir: &Path, grbl: &GrblRow) -> Result<BenchRun, String> {
+    let nc = bench_dir.join(&grbl.program);
+    let text = std::fs::read_to_string(&nc).map_err(|e| format!("{}: {e}", nc.display()))?;
+    let ideal = Ideal::read_file(&nc.with_extension("json"))?;
+    let run = run_gcode(&text, Flow::SendResponse);
+    let spmm = f64::from(run.settings.steps_per_mm(0));
+    let ours = analyse(&run.trace(), &ideal, spmm);
+    Ok(BenchRun {
+        grbl: grbl.clone(),
+        ours,
+        run,
+    })
+}
+
+/// Runs every program of the bench README.
+pub fn run_all(bench_dir: &Path) -> Result<Vec<BenchRun>, String> {
+    let readme = bench_dir.join("README.md");
+    let text =
+        std::fs::read_to_string(&readme).map_err(|e| format!("{}: {e}", readme.display()))?;
+    let rows = read_grbl_table(&text);
+    if rows.is_empty() {
+        return Err(format!("{}: no table of Grbl's figures", readme.display()));
+    }
+    rows.iter().map(|g| run_program(bench_dir, g)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::trace::Row;
+
+    fn trace(points: &[(f64, [i32; 3])]) -> Trace {
+        Trace {
+            rows: points
+                .iter()
+                .map(|&(t_us, pos)| Row { t_us, pos })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn parses_both_ideal_kinds() {
+        let p: Ideal =
+            serde_json::from_str(r#"{"type": "poly", "pts": [[0.0, 0.0], [1, 2]]}"#).unwrap();
+        assert_eq!(
+            p,
+            Ideal::Poly {
+                pts: vec![[0.0, 0.0], [1.0, 2.0]]
+            }
+        );
+        let c: Ideal =
+            serde_json::from_str(r#"{"type": "circle", "c": [20.0, 0.0], "r": 20.0}"#).unwrap();
+        assert_eq!(
+            c,
+            Ideal::Circle {
+                c: [20.0, 0.0],
+                r: 20.0
+            }
+        );
+    }
+
+    #[test]
+    fn distances() {
+        let c = Ideal::Circle {
+            c: [20.0, 0.0],
+            r: 20.0,
+        };
+        assert!((c.distance_mm([0.0, 0.0])).abs() < 1e-12);
+        assert!((c.distance_mm([20.0, 0.0]) - 20.0).abs() < 1e-12);
+        let p = Ideal::Poly {
+            pts: vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]],
+        };
+        assert!((p.distance_mm([5.0, 1.0]) - 1.0).abs() < 1e-12);
+        assert!((p.distance_mm([11.0, 5.0]) - 1.0).abs() < 1e-12);
+        // Beyond the end of a segment the end point is nearest.
+        assert!((p.distance_mm([-3.0, 4.0]) - 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn staircase_on_a_diagonal() {
+        // Line (0,0)->(2,2) mm at 1 step/mm, drawn one axis at a time: the off-diagonal
+        // corners are 1/sqrt(2) step away.
+        let ideal = Ideal::Poly {
+            pts: vec![[0.0, 0.0], [2.0, 2.0]],
+        };
+        let t = trace(&[
+            (10.0, [1, 0, 0]),
+            (20.0, [1, 1, 0]),
+            (30.0, [2, 1, 0]),
+            (1_500_000.0, [2, 2, 0]),
+        ]);
+        let f = analyse(&t, &ideal, 1.0);
+        assert!((f.max_dev - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-12);
+        assert!((f.rms_dev - (0.25f64).sqrt()).abs() < 1e-12);
+        assert_eq!(f.steps, [2, 2, 0]);
+        assert_eq!(f.final_pos, [2, 2, 0]);
+        assert!((f.job_time_s - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn steps_count_back_and_forth() {
+        let ideal = Ideal::Poly {
+            pts: vec![[0.0, 0.0], [1.0, 0.0]],
+        };
+        let t = trace(&[(1.0, [1, 0, 0]), (2.0, [0, 0, -3]), (3.0, [1, 0, 0])]);
+        let f = analyse(&t, &ideal, 1.0);
+        assert_eq!(f.steps, [3, 0, 6]);
+    }
+
+    const README: &str = "\
+| program | job time s | max deviation (steps) | rms deviation | steps X | steps Y | final position |
+|---|---|---|---|---|---|---|
+| star.nc   {5/2} star, R 40 mm, F3000 | 8.0403 | 1.029 | 0.351 | 19696 | 18734 | 0,0 |
+| sine.nc   y = 10 sin(x/5), 0.5 mm segments, F2000 | 3.2240 | 1.024 | 0.395 | 5024 | 6393 | 5024,-5 |
+";
+
+    #[test]
+    fn reads_grbl_table_and_checks_goals() {
+        let rows = read_grbl_table(README);
+        assert_eq!(rows.len(), 2);
+        assert_eq!(rows[1].program, "sine.nc");
+        assert_eq!(rows[1].final_pos, [5024, -5]);
+        assert_eq!(rows[0].steps, [19696, 18734]);
+        assert!((rows[0].job_time_s - 8.0403).abs() < 1e-12);
+        let good = Figures {
+            job_time_s: 3.0,
+            max_dev: 0.7,
+            rms_dev: 0.3,
+            steps: [5024, 6393, 0],
+            final_pos: [5024, -5, 0],
+        };
+        assert!(goal_failures(&good, &rows[1]).is_empty());
+        let slow = Figures {
+            job_time_s: 3.3,
+            max_dev: 0.8,
+            final_pos: [5024, -4, 0],
+            ..good.clone()
+        };
+        assert_eq!(goal_failures(&slow, &rows[1]).len(), 3);
+        let table = markdown_table(&[(rows[1].clone(), good)]);
+        assert!(table.contains("| sine.nc | 3.0000 (3.2240) |"));
+        assert!(table.ends_with("| met |\n"));
+    }
+
+    #[test]
+    fn reads_the_shared_bench_readme() {
+        let path = crate::paths::shared_dir().join("bench/README.md");
+        let text =
+            std::fs::read_to_string(&path).expect("shared/bench/README.md beside the repository");
+        let rows = read_grbl_table(&text);
+        let names: Vec<&str> = rows.iter().map(|r| r.program.as_str()).collect();
+        assert_eq!(names, ["star.nc", "circle.nc", "sine.nc", "spiral.nc"]);
+    }
+}

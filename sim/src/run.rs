@@ -1,0 +1,177 @@
+//! `cargo sim run`: a G-code file streamed through the real protocol handler at full
+//! speed in virtual time, as a sender on the PC would stream it to the board.
+//!
+//! Owns the host-side loop only: the [`Sender`] writes what flow control allows, the
+//! [`Board`] takes what its receive buffer can hold, responses go back to the sender,
+//! and virtual time advances while both wait. The result carries every step event.
+
+use crate::board::{Board, StepEvent, TICK_HZ};
+use crate::sender::{Flow, LineError, Sender};
+use crate::trace::{Row, Trace};
+use inkstep_core::settings::Settings;
+
+/// Virtual time after which a run is abandoned (a job that never ends).
+const TIME_LIMIT_S: u64 = 3600;
+
+pub struct RunResult {
+    pub events: Vec<StepEvent>,
+    /// Timer tick when the first motion started.
+    pub first_motion: Option<u64>,
+    pub errors: Vec<LineError>,
+    pub alarms: Vec<String>,
+    pub messages: Vec<String>,
+    pub lines: usize,
+    pub final_pos: [i32; 3],
+    /// Virtual time at the end of the stream, ticks.
+    pub end: u64,
+    pub timed_out: bool,
+    /// Settings in force at the end (steps/mm etc. for the analysis).
+    pub settings: Settings,
+}
+
+impl RunResult {
+    /// Ticks of an event since the first motion started.
+    pub fn rel(&self, t: u64) -> u64 {
+        t - self.first_motion.unwrap_or(0)
+    }
+
+    /// The trace with times in microseconds since the first motion.
+    pub fn trace(&self) -> Trace {
+        let rows = self
+            .events
+            .iter()
+            .map(|e| Row {
+                t_us: self.rel(e.t) as f64 * 1e6 / TICK_HZ as f64,
+                pos: e.pos,
+            })
+            .collect();
+        Trace { rows }
+    }
+
+    /// Job time: first motion to the last step, seconds.
+    pub fn job_time_s(&self) -> f64 {
+        self.events
+            .last()
+            .map_or(0.0, |e| self.rel(e.t) as f64 / TICK_HZ as f64)
+    }
+
+    pub fn ok(&self) -> bool {
+        self.errors.is_empty() && self.alarms.is_empty() && !self.timed_out
+    }
+}
+
+/// Streams `text` to a fresh board and runs until every line is answered and the
+/// machine is idle.
+pub fn run_gcode(text: &str, flow: Flow) -> RunResult {
+    let mut board = Board::new(Settings::default());
+    run_on(&mut board, text, flow)
+}
+
+/// Streams `text` to `board` (which may have run before).
+pub fn run_on(board: &mut Board, text: &str, flow: Flow) -> RunResult {
+    run_on_with(board, text, flow, &mut |_| {})
+}
+
+/// As [`run_on`], calling `each_ms` with the board after every millisecond of virtual
+/// time (for snapshots while a stream runs).
+pub fn run_on_with(
+    board: &mut Board,
+    text: &str,
+    flow: Flow,
+    each_ms: &mut dyn FnMut(&mut Board),
+) -> RunResult {
+    let mut sender = Sender::new(text, flow);
+    let mut events = Vec::new();
+    let mut unsent: Vec<u8> = Vec::new();
+    let limit = board.now() + TIME_LIMIT_S * TICK_HZ;
+    let step = Board::ms_to_ticks(1);
+    let mut timed_out = false;
+    loop {
+        // Bytes cross both ways until neither side has anything more to say; only then
+        // does virtual time move on (USB latency is far below a step period).
+        let out = board.usb_read();
+        let mut progressed = !out.is_empty();
+        sender.received(&out);
+        unsent.extend(sender.to_send());
+        if !unsent.is_empty() {
+            let n = board.usb_write(&unsent);
+            unsent.drain(..n);
+            progressed |= n > 0;
+        }
+        let out = board.usb_read();
+        progressed |= !out.is_empty();
+        sender.received(&out);
+        if sender.done() && unsent.is_empty() && board.is_idle() {
+            break;
+        }
+        if board.now() >= limit {
+            timed_out = true;
+            break;
+        }
+        if !progressed {
+            let until = board.now() + step;
+            board.run_until(until, &mut |e| events.push(e));
+            each_ms(board);
+        }
+    }
+    let lines = sender.total_lines();
+    RunResult {
+        events,
+        first_motion: board.first_motion,
+        errors: sender.errors,
+        alarms: sender.alarms,
+        messages: sender.messages,
+        lines,
+        final_pos: board.link.side().exec.position(),
+        end: board.now(),
+        timed_out,
+        settings: board.ctl.protocol().machine().settings().clone(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_square_runs_to_its_exact_corners() {
+        let r = run_gcode(
+            "G21 G90\nG1 X10 F3000\nG1 Y10\nG1 X0\nG1 Y0\n",
+            Flow::SendResponse,
+        );
+        assert!(r.ok(), "{:?} {:?}", r.errors, r.alarms);
+        assert_eq!(r.final_pos, [0, 0, 0]);
+        // 40 mm of path at 80 steps/mm.
+        assert_eq!(
+            r.events.iter().map(|e| e.step.count_ones()).sum::<u32>(),
+            3200
+        );
+        assert!(r.events.iter().any(|e| e.pos == [800, 800, 0]));
+        assert!(
+            r.job_time_s() > 0.8 && r.job_time_s() < 5.0,
+            "{}",
+            r.job_time_s()
+        );
+        assert_eq!(r.first_motion.map(|t| r.rel(t)), Some(0));
+    }
+
+    #[test]
+    fn errors_and_alarms_are_reported_with_their_lines() {
+        let r = run_gcode("G1 X1 F100\nG5 X2\nG1 Q3\n", Flow::SendResponse);
+        let lines: Vec<usize> = r.errors.iter().map(|e| e.line_no).collect();
+        assert_eq!(lines, [2, 3]);
+        assert!(r.errors.iter().all(|e| e.response.starts_with("error:")));
+        assert!(!r.ok());
+    }
+
+    #[test]
+    fn character_counting_gives_the_same_path() {
+        let g = "G21 G90\nG1 X5 Y3 F2000\nG2 X5 Y3 I2 J0\nG1 X0 Y0\n";
+        let a = run_gcode(g, Flow::SendResponse);
+        let b = run_gcode(g, Flow::CharCount(128));
+        assert!(a.ok() && b.ok());
+        let pa: Vec<_> = a.events.iter().map(|e| e.pos).collect();
+        let pb: Vec<_> = b.events.iter().map(|e| e.pos).collect();
+        assert_eq!(pa, pb);
+    }
+}

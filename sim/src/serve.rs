@@ -1,0 +1,58 @@
+//! `cargo sim serve`: the virtual board behind a pseudo-terminal, so that any Grbl
+//! sender can connect to it like to the board's USB serial port.
+//!
+//! Owns the real-time pacing only: virtual time follows the wall clock (times `speed`),
+//! bytes cross between the pty and the board's USB entry points every millisecond, so
+//! a `?` is answered within about a millisecond of real time.
+
+use crate::board::{Board, TICK_HZ};
+use crate::pty::Pty;
+use inkstep_core::settings::Settings;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// Runs until `stop` returns true (never, for the command line).
+pub fn serve(
+    link: Option<&Path>,
+    speed: f64,
+    mut stop: impl FnMut() -> bool,
+) -> Result<(), String> {
+    let mut pty = Pty::open().map_err(|e| format!("opening a pseudo-terminal: {e}"))?;
+    if let Some(l) = link {
+        pty.link_at(l)
+            .map_err(|e| format!("{}: {e}", l.display()))?;
+    }
+    match link {
+        Some(l) => println!(
+            "inkstep simulator on {} (linked at {})",
+            pty.path().display(),
+            l.display()
+        ),
+        None => println!("inkstep simulator on {}", pty.path().display()),
+    }
+    use std::io::Write;
+    let _ = std::io::stdout().flush();
+    let mut board = Board::new(Settings::default());
+    let start = Instant::now();
+    let mut inbox: Vec<u8> = Vec::new();
+    let mut buf = [0u8; 1024];
+    while !stop() {
+        let n = pty.read_available(&mut buf).map_err(|e| e.to_string())?;
+        inbox.extend_from_slice(&buf[..n]);
+        if !inbox.is_empty() {
+            let used = board.usb_write(&inbox);
+            inbox.drain(..used);
+        }
+        let out = board.usb_read();
+        if !out.is_empty() {
+            pty.send(&out).map_err(|e| e.to_string())?;
+        }
+        pty.flush_pending().map_err(|e| e.to_string())?;
+        let target = (start.elapsed().as_secs_f64() * speed * TICK_HZ as f64) as u64;
+        if target > board.now() {
+            board.run_until(target, &mut |_| {});
+        }
+        std::thread::sleep(Duration::from_micros(500));
+    }
+    Ok(())
+}

@@ -1,0 +1,102 @@
+//! `cargo sim serve` end to end: the binary opens a pty, a client sends `?` and G-code
+//! and reads the status report and `ok`s, as a Grbl sender would.
+
+use std::io::{Read, Write};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+struct Killed(Child);
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Reads from the non-blocking port until `done` holds or 5 s pass.
+fn read_while(port: &mut std::fs::File, got: &mut String, done: impl Fn(&str) -> bool) -> bool {
+    let end = Instant::now() + Duration::from_secs(5);
+    let mut buf = [0u8; 256];
+    while Instant::now() < end {
+        if done(got) {
+            return true;
+        }
+        match port.read(&mut buf) {
+            Ok(n) if n > 0 => got.push_str(&String::from_utf8_lossy(&buf[..n])),
+            _ => std::thread::sleep(Duration::from_millis(2)),
+        }
+    }
+    done(got)
+}
+
+fn read_until(port: &mut std::fs::File, got: &mut String, want: &str) -> bool {
+    read_while(port, got, |s| s.contains(want))
+}
+
+fn wait_for(path: &Path) {
+    let end = Instant::now() + Duration::from_secs(10);
+    while !path.exists() {
+        assert!(
+            Instant::now() < end,
+            "serve did not create {}",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn a_sender_talks_to_the_simulated_port() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("ttyINKSTEP");
+    let child = Command::new(env!("CARGO_BIN_EXE_inkstep-sim"))
+        .args(["serve", "--speed", "20", "--link"])
+        .arg(&link)
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let _guard = Killed(child);
+    wait_for(&link);
+    let mut port = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32)
+        .open(&link)
+        .unwrap();
+    let mut got = String::new();
+    assert!(
+        read_until(&mut port, &mut got, "Grbl 1.1h"),
+        "welcome: {got:?}"
+    );
+
+    port.write_all(b"?").unwrap();
+    assert!(
+        read_until(&mut port, &mut got, "<Idle|MPos:0.000,0.000,0.000"),
+        "status: {got:?}"
+    );
+
+    got.clear();
+    port.write_all(b"G21 G90\nG1 X2 Y1 F1200\n").unwrap();
+    let two_oks = |s: &str| s.matches("ok\r\n").count() >= 2;
+    assert!(read_while(&mut port, &mut got, two_oks), "oks: {got:?}");
+
+    // At 20x, 2.2 mm at 20 mm/s is over within a few tens of milliseconds.
+    let end = Instant::now() + Duration::from_secs(5);
+    loop {
+        got.clear();
+        port.write_all(b"?").unwrap();
+        assert!(read_until(&mut port, &mut got, ">"), "status: {got:?}");
+        if got.contains("<Idle|MPos:2.000,1.000,0.000") {
+            break;
+        }
+        assert!(Instant::now() < end, "never reached X2 Y1: {got:?}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+
+    got.clear();
+    port.write_all(b"G5\n").unwrap();
+    assert!(read_until(&mut port, &mut got, "error:"), "error: {got:?}");
+}
+
+use std::os::unix::fs::OpenOptionsExt;

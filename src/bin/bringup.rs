@@ -1,0 +1,275 @@
+//! The bring-up image: checks the wiring of a new machine, one peripheral at a time,
+//! with the same board module, step interrupt and core pieces as the product image.
+//!
+//! - LCD: a status page (keys, inputs, position, USB bytes) redrawn at 10 Hz through
+//!   the core's frame buffer and ST7920 flush.
+//! - Keypad: the core's debounced scanner; the eight keys around 5 jog X/Y at
+//!   1 kHz while held (step commands through the core executor and the TIM2 interrupt),
+//!   5 toggles the pen servo, every press beeps.
+//! - Inputs: e-stop (outputs off at once, latched until reset), limits, feed hold and
+//!   cycle start shown live; busy LED and busy output while stepping.
+//! - USB: a CDC-ACM serial port that greets and echoes every byte back.
+//! - The watchdog is fed by the keypad task.
+#![no_std]
+#![no_main]
+
+use defmt_rtt as _;
+use inkstep::board;
+
+#[cortex_m_rt::exception]
+unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
+    board::emergency_outputs_off();
+    loop {
+        cortex_m::asm::bkpt();
+    }
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    board::emergency_outputs_off();
+    cortex_m::interrupt::disable();
+    defmt::error!("panic: {}", defmt::Display2Format(info));
+    cortex_m::asm::udf()
+}
+
+#[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3])]
+mod app {
+    use super::board;
+    use core::fmt::Write as _;
+    use core::sync::atomic::Ordering;
+    use embedded_graphics::{
+        mono_font::{ascii::FONT_6X10, MonoTextStyle},
+        pixelcolor::BinaryColor,
+        prelude::*,
+        text::{Baseline, Text},
+    };
+    use heapless::spsc::{Consumer, Producer, Queue};
+    use inkstep::steps::{self, StepOutput, HALT};
+    use inkstep_core::interp::Tick;
+    use inkstep_core::keypad::{KeyKind, Keypad, KeypadConfig};
+    use inkstep_core::screens::{framebuffer::FrameBuffer, st7920};
+    use inkstep_core::stepper::exec::Executor;
+    use inkstep_core::stepper::{CmdSink, StepCmd};
+    use rtic_monotonics::systick::prelude::*;
+    use stm32f1xx_hal::usb::UsbBusType;
+    use usb_device::bus::UsbBusAllocator;
+
+    systick_monotonic!(Mono, 1_000);
+
+    /// Jog rate: one step per millisecond on each moving axis.
+    const JOG_WAIT_TICKS: u32 = board::STEP_TIMER_HZ / 1_000;
+
+    #[shared]
+    struct Shared {
+        usb: board::Usb,
+        serial: board::UsbSerial,
+        /// Held jog direction (signs of X, Y), or none.
+        jog: Option<[i8; 2]>,
+        last_key: &'static str,
+        usb_bytes: u32,
+    }
+
+    #[local]
+    struct Local {
+        step_out: StepOutput,
+        steps_tx: Producer<'static, StepCmd>,
+        keypad: board::KeypadMatrix,
+        inputs: board::Inputs,
+        indicators: board::Indicators,
+        servo: board::PenServo,
+        lcd_spi: board::LcdSpi,
+        watchdog: stm32f1xx_hal::watchdog::IndependentWatchdog,
+    }
+
+    #[init(local = [
+        usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
+        steps: Queue<StepCmd, 64> = Queue::new(),
+    ])]
+    fn init(cx: init::Context) -> (Shared, Local) {
+        let b = board::init(cx.device, cx.local.usb_bus);
+        Mono::start(cx.core.SYST, b.sysclk_hz);
+        let (steps_tx, steps_rx): (Producer<'static, StepCmd>, Consumer<'static, StepCmd>) =
+            cx.local.steps.split();
+        steps::install(Executor::new([0; 3], 0x1_0000), steps_rx);
+        let mut port = b.step_port;
+        let mut timer = b.step_timer;
+        timer.set_pulse_ticks(10 * (board::STEP_TIMER_HZ / 1_000_000) as u16);
+        port.set_drivers_enabled(true, true);
+        defmt::info!("inkstep bring-up, sysclk {} Hz", b.sysclk_hz);
+        jogger::spawn().ok();
+        keypad_scan::spawn().ok();
+        lcd_refresh::spawn().ok();
+        (
+            Shared {
+                usb: b.usb,
+                serial: b.serial,
+                jog: None,
+                last_key: "-",
+                usb_bytes: 0,
+            },
+            Local {
+                step_out: StepOutput::new(port, timer),
+                steps_tx,
+                keypad: b.keypad,
+                inputs: b.inputs,
+                indicators: b.indicators,
+                servo: b.servo,
+                lcd_spi: b.lcd_spi,
+                watchdog: b.watchdog,
+            },
+        )
+    }
+
+    #[idle]
+    fn idle(_: idle::Context) -> ! {
+        loop {
+            cortex_m::asm::wfi();
+        }
+    }
+
+    #[task(binds = EXTI0, priority = 7)]
+    fn estop(_: estop::Context) {
+        if board::exti_take_pending(0) {
+            board::emergency_outputs_off();
+            HALT.store(true, Ordering::SeqCst);
+            cortex_m::peripheral::NVIC::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+        }
+    }
+
+    #[task(binds = TIM2, priority = 6, local = [step_out])]
+    fn step(cx: step::Context) {
+        cx.local.step_out.on_interrupt();
+    }
+
+    /// Echo every byte; greet on the first.
+    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial, usb_bytes])]
+    fn usb_lp(cx: usb_lp::Context) {
+        (cx.shared.usb, cx.shared.serial, cx.shared.usb_bytes).lock(|usb, serial, count| {
+            if usb.poll(&mut [serial]) {
+                let mut buf = [0u8; 64];
+                if let Ok(n) = serial.read(&mut buf) {
+                    if *count == 0 {
+                        let _ = serial.write(b"inkstep bring-up: echo\r\n");
+                    }
+                    *count = count.wrapping_add(n as u32);
+                    let _ = serial.write(buf.get(..n).unwrap_or(&[]));
+                }
+            }
+        });
+    }
+
+    /// Keeps a few 1 ms jog steps queued while a jog key is held.
+    #[task(priority = 5, shared = [jog], local = [steps_tx])]
+    async fn jogger(mut cx: jogger::Context) {
+        loop {
+            if let Some([dx, dy]) = cx.shared.jog.lock(|j| *j) {
+                let tx = &mut *cx.local.steps_tx;
+                while tx.len() < 4 && tx.has_room() {
+                    let step = u8::from(dx != 0) | (u8::from(dy != 0) << 1);
+                    let neg = u8::from(dx < 0) | (u8::from(dy < 0) << 1);
+                    tx.push(StepCmd::new(Tick(step | (neg << 3)), JOG_WAIT_TICKS));
+                }
+                steps::kick();
+            }
+            Mono::delay(2.millis()).await;
+        }
+    }
+
+    #[task(priority = 3, shared = [jog, last_key], local = [keypad, watchdog, indicators, servo, inputs])]
+    async fn keypad_scan(mut cx: keypad_scan::Context) {
+        let mut scanner = Keypad::new(KeypadConfig::default());
+        let mut pen_down = false;
+        let mut beep_ms = 0u32;
+        loop {
+            cx.local.keypad.select_column(scanner.column());
+            Mono::delay(5.millis()).await;
+            let rows = cx.local.keypad.read_rows();
+            for ev in scanner.feed(rows, Mono::now().ticks()) {
+                let label = ev.key.label();
+                match ev.kind {
+                    KeyKind::Press => {
+                        beep_ms = 60;
+                        cx.shared.last_key.lock(|k| *k = label);
+                        if let Some(dir) = ev.key.jog_dir() {
+                            cx.shared.jog.lock(|j| *j = Some(dir));
+                        } else if ev.key == inkstep_core::keypad::Key::Digit(5) {
+                            pen_down = !pen_down;
+                            cx.local
+                                .servo
+                                .set_pulse_us(if pen_down { 1200 } else { 2000 });
+                        }
+                    }
+                    KeyKind::Release => {
+                        if ev.key.jog_dir().is_some() {
+                            cx.shared.jog.lock(|j| *j = None);
+                        }
+                    }
+                    KeyKind::Repeat => {}
+                }
+            }
+            let moving = cx.shared.jog.lock(|j| j.is_some());
+            cx.local.indicators.set_busy(moving);
+            cx.local.indicators.set_buzzer(beep_ms > 0);
+            beep_ms = beep_ms.saturating_sub(5);
+            if !cx.local.inputs.estop_open() && HALT.load(Ordering::Relaxed) && !moving {
+                // E-stop released and no key held: re-arm.
+                HALT.store(false, Ordering::SeqCst);
+            }
+            cx.local.watchdog.feed();
+        }
+    }
+
+    #[task(priority = 1, shared = [last_key, usb_bytes], local = [lcd_spi])]
+    async fn lcd_refresh(mut cx: lcd_refresh::Context) {
+        use embedded_hal::spi::SpiDevice;
+        let spi = cx.local.lcd_spi;
+        {
+            let mut lcd =
+                ::st7920::ST7920::new(&mut *spi, board::NoPin, None::<board::NoPin>, false);
+            if lcd.init(&mut board::SpinDelay).is_err() {
+                defmt::warn!("LCD init failed");
+            }
+        }
+        let mut fb = FrameBuffer::new();
+        fb.mark_all_dirty();
+        let style = MonoTextStyle::new(&FONT_6X10, BinaryColor::On);
+        loop {
+            let key = cx.shared.last_key.lock(|k| *k);
+            let bytes = cx.shared.usb_bytes.lock(|b| *b);
+            let inputs = board::Inputs::levels();
+            let pos = steps::position();
+            let mut lines: [heapless::String<22>; 5] = Default::default();
+            let _ = write!(lines[0], "inkstep bring-up");
+            let _ = write!(lines[1], "key {} usb {}", key, bytes);
+            let _ = write!(lines[2], "X{} Y{}", pos[0], pos[1]);
+            let _ = write!(
+                lines[3],
+                "E{} X{} Y{} H{} S{}",
+                u8::from(inputs.estop_open),
+                u8::from(inputs.limit_x_open),
+                u8::from(inputs.limit_y_open),
+                u8::from(inputs.feed_hold_low),
+                u8::from(inputs.cycle_start_low)
+            );
+            let _ = write!(
+                lines[4],
+                "{}",
+                if HALT.load(Ordering::Relaxed) {
+                    "E-STOP"
+                } else {
+                    "ready"
+                }
+            );
+            let _ = fb.clear(BinaryColor::Off);
+            for (i, l) in lines.iter().enumerate() {
+                let _ =
+                    Text::with_baseline(l, Point::new(1, 1 + 12 * i as i32), style, Baseline::Top)
+                        .draw(&mut fb);
+            }
+            if st7920::flush(&mut fb, |b| spi.write(b)).is_err() {
+                defmt::warn!("LCD write failed");
+            }
+            Mono::delay(100.millis()).await;
+        }
+    }
+}
