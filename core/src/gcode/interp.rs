@@ -622,9 +622,11 @@ impl Interp {
 
         if motion_cmd {
             let len_and_path = match modal.motion {
-                MotionMode::Rapid | MotionMode::Linear if has_axis => {
-                    Some((path_length(&pos, &target), Path::Line, None))
-                }
+                MotionMode::Rapid | MotionMode::Linear if has_axis => Some((
+                    path_length(&pos, &target),
+                    line_path(&pos, &target, s),
+                    None,
+                )),
                 MotionMode::ArcCw | MotionMode::ArcCcw => {
                     if !has_axis {
                         return Err(Status::NoAxisWords.into());
@@ -790,6 +792,29 @@ impl Interp {
             feed: Feed::MmPerMin(f * scale),
             line: 0,
         })
+    }
+}
+
+/// A straight move's path: XY lines carry their exact end points (1/256 step) so the
+/// steps follow the programmed line, not the line between rounded ends; moves that
+/// change Z (or lie outside the fine range) stay plain lines.
+fn line_path(pos: &[f32; AXES], target: &[f32; AXES], s: &Settings) -> Path {
+    let q8 = |mm: f32, axis: usize| libm::roundf(mm * s.steps_per_mm(axis) * 256.0);
+    let (p, t) = (pos.get(..2).unwrap_or(&[]), target.get(..2).unwrap_or(&[]));
+    let z_same = pos.get(2) == target.get(2);
+    match (p, t) {
+        (&[px, py], &[tx, ty]) if z_same => {
+            let v = [q8(px, 0), q8(py, 1), q8(tx, 0), q8(ty, 1)];
+            if v.iter().all(|c| c.abs() < 2.0e9) {
+                Path::LineFine {
+                    from: [v[0] as i32, v[1] as i32],
+                    to: [v[2] as i32, v[3] as i32],
+                }
+            } else {
+                Path::Line
+            }
+        }
+        _ => Path::Line,
     }
 }
 
@@ -995,11 +1020,16 @@ mod tests {
         let s = Settings::default(); // 80 step/mm on X and Y
         let mut it = Interp::new();
         let o = run(&mut it, &s, "G1 X10.0031 Y-0.00624 F600").unwrap();
+        // The target is rounded to steps; the path keeps the exact ends in 1/256 step.
+        let q8 = |mm: f32| (mm * 80.0 * 256.0).round() as i32;
         assert_eq!(
             moves(&o),
             [Move {
                 target: [800, 0, 0],
-                path: Path::Line,
+                path: Path::LineFine {
+                    from: [0, 0],
+                    to: [q8(10.0031), q8(-0.00624)]
+                },
                 feed: Feed::MmPerMin(600.0),
                 line: 7
             }]
