@@ -179,6 +179,13 @@ impl Conic {
         x1 * self.y - self.x * y1
     }
 
+    /// Dot product of the points before and after the last tick (relative to the
+    /// centre): R^2 cos(angle turned), for a circle.
+    pub fn last_dot(&self) -> i64 {
+        let (x1, y1) = self.prev;
+        x1 * self.x + y1 * self.y
+    }
+
     /// Ideal path length of the last tick in mm (`spx`, `spy`: steps per mm): the
     /// change of the parameter angle t (x = a cos t, y = b sin t) between the two points,
     /// atan(cross/dot) ~ cross/dot for one step, times |dP/dt| at their midpoint. The

@@ -61,7 +61,7 @@ const Q: f64 = (1u64 << 32) as f64;
 enum TickLen {
     /// Constant (lines), in Q units.
     Const(u64),
-    /// Circle: |cross(prev, next)| * m >> 16, with m = 2^48 / (R steps * steps/mm).
+    /// Circle: |cross(prev, next)| * m / dot(prev, next), with m = R in Q units.
     Circle(u64),
     /// Anything else: from the curve's tangent (floating point).
     Curve,
@@ -221,7 +221,10 @@ impl Prep {
             let ds = match (a.len, &a.interp) {
                 (TickLen::Const(q), _) => q,
                 (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
-                    (c.last_cross().unsigned_abs().saturating_mul(m)) >> 16
+                    // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
+                    // telescope, so a whole arc adds up to its length (to < 1e-9).
+                    let dot = c.last_dot().unsigned_abs().max(1);
+                    c.last_cross().unsigned_abs().saturating_mul(m) / dot
                 }
                 (_, Interp::Conic(c)) => to_q(c.last_tick_len(
                     f64::from(cfg.axes[X].steps_per_mm),
@@ -254,7 +257,13 @@ impl Prep {
                     self.v_last = 0.0;
                     return;
                 }
-                (self.t_last.max(a.win.t1_abs) + self.last_wait, self.v_last)
+                // Overshoot of less than half this tick (length rounding): the profile's
+                // end time.
+                if (s_new - a.win.s1) * 2 <= ds {
+                    (a.win.t1_abs, self.v_last)
+                } else {
+                    (self.t_last.max(a.win.t1_abs) + self.last_wait, self.v_last)
+                }
             };
             let mut wait = abs.saturating_sub(self.t_last).max(1);
             // Long pauses: pure waits first.
@@ -301,7 +310,7 @@ impl Prep {
                         Interp::Conic(c) => match c.circle_radius() {
                             Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
                                 let sp = f64::from(cfg.axes[X].steps_per_mm.max(1e-6));
-                                TickLen::Circle((Q * 65536.0 / (r * sp) + 0.5) as u64)
+                                TickLen::Circle((Q * r / sp + 0.5) as u64)
                             }
                             _ => TickLen::Curve,
                         },
