@@ -51,6 +51,9 @@ fn seg_distance(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> f64 {
 pub struct TraceStats {
     /// First step to last step, seconds.
     pub job_time: f64,
+    /// Time of the last step, seconds (from the trace's time origin: the simulator's
+    /// trace starts when the step timer first starts).
+    pub last_step: f64,
     /// Largest and RMS distance of a step position from the ideal path, in steps.
     pub max_dev: f64,
     pub rms_dev: f64,
@@ -118,6 +121,7 @@ impl<'a> Analyzer<'a> {
     pub fn finish(&self) -> TraceStats {
         TraceStats {
             job_time: self.last_t - self.first_t.unwrap_or(self.last_t),
+            last_step: self.last_t,
             max_dev: self.max_dev,
             rms_dev: if self.events > 0 {
                 libm::sqrt(self.sum_sq / self.events as f64)
@@ -159,6 +163,7 @@ mod tests {
         a.step(1.0, 1, [3, 1, 0]);
         let s = a.finish();
         assert!((s.job_time - 0.5).abs() < 1e-12);
+        assert!((s.last_step - 1.0).abs() < 1e-12);
         assert_eq!(s.steps, [3, 1, 0]);
         assert_eq!(s.end, [3, 1, 0]);
         // 0.1 mm off the line at 10 steps/mm: one step.

@@ -2,7 +2,13 @@
 //!
 //! `no_std` and allocation-free so that the firmware, the simulator and the host tests
 //! all run this one copy of the logic. Modules are grouped by responsibility:
-//! - geometry and the motion contract: [`motion`]
+//! - the motion contract between move producers and the planner: [`motion`]
+//! - exact interpolation in integer step space: [`interp`]
+//! - look-ahead planning, junctions and velocity profiles: [`planner`]
+//! - step generation (segment preparation, the step interrupt's work): [`stepper`]
+//! - measurement of step traces against an ideal path: [`analysis`]
+//! - the benchmark programs' G-code subset: [`refprog`]
+//! - compact sine/cosine/arctangent for planning code: [`trig`]
 //! - machine settings and their flash store: [`settings`], [`settings_store`]
 //! - G-code parsing and interpretation: [`gcode`]
 //! - machine state, safety and the planner interface: [`machine`]
@@ -32,3 +38,4 @@ pub mod screens;
 pub mod settings;
 pub mod settings_store;
 pub mod stepper;
+pub mod trig;

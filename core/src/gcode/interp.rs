@@ -810,6 +810,29 @@ impl Interp {
     }
 }
 
+/// A straight move's path: XY lines carry their exact end points (1/256 step) so the
+/// steps follow the programmed line, not the line between rounded ends; moves that
+/// change Z (or lie outside the fine range) stay plain lines.
+fn line_path(pos: &[f32; AXES], target: &[f32; AXES], s: &Settings) -> Path {
+    let q8 = |mm: f32, axis: usize| libm::roundf(mm * s.steps_per_mm(axis) * 256.0);
+    let (p, t) = (pos.get(..2).unwrap_or(&[]), target.get(..2).unwrap_or(&[]));
+    let z_same = pos.get(2) == target.get(2);
+    match (p, t) {
+        (&[px, py], &[tx, ty]) if z_same => {
+            let v = [q8(px, 0), q8(py, 1), q8(tx, 0), q8(ty, 1)];
+            if v.iter().all(|c| c.abs() < 2.0e9) {
+                Path::LineFine {
+                    from: [v[0] as i32, v[1] as i32],
+                    to: [v[2] as i32, v[3] as i32],
+                }
+            } else {
+                Path::Line
+            }
+        }
+        _ => Path::Line,
+    }
+}
+
 fn push(out: &mut Outcome, c: Command) -> Result<(), Status> {
     out.cmds.push(c).map_err(|_| Status::Overflow)
 }

@@ -133,9 +133,9 @@ impl Conic {
         if tx == 0 && ty == 0 {
             return Err(InterpError::Degenerate);
         }
-        // Budget: a generous multiple of the perimeter bound, per turn.
-        let span = (c / a.min(b)).max(1);
-        let r = isqrt(span as u64) + 2;
+        // Budget: a generous multiple of the perimeter bound, per turn (f64: no 64-bit
+        // division in the firmware).
+        let r = libm::sqrt(c as f64 / a.min(b) as f64) as u64 + 2;
         let budget = (16 * r + 64) * (u64::from(turns) + 1);
         Ok(Conic {
             a,
@@ -177,6 +177,13 @@ impl Conic {
     pub fn last_cross(&self) -> i64 {
         let (x1, y1) = self.prev;
         x1 * self.y - self.x * y1
+    }
+
+    /// Dot product of the points before and after the last tick (relative to the
+    /// centre): R^2 cos(angle turned), for a circle.
+    pub fn last_dot(&self) -> i64 {
+        let (x1, y1) = self.prev;
+        x1 * self.x + y1 * self.y
     }
 
     /// Ideal path length of the last tick in mm (`spx`, `spy`: steps per mm): the
@@ -376,21 +383,6 @@ impl Interpolate for Conic {
         self.y = ny;
         Some(t)
     }
-}
-
-/// Integer square root (floor).
-pub fn isqrt(v: u64) -> u64 {
-    if v < 2 {
-        return v;
-    }
-    let mut x = (libm::sqrt(v as f64)) as u64;
-    while x.saturating_mul(x) > v {
-        x -= 1;
-    }
-    while (x + 1).saturating_mul(x + 1) <= v {
-        x += 1;
-    }
-    x
 }
 
 #[cfg(test)]

@@ -10,8 +10,8 @@
 //! the column crossing is merged with one climbing step into a diagonal tick; in
 //! classic mode every tick moves one axis.
 //!
-//! Evaluation uses f64 arithmetic with f32 sine/cosine after exact range reduction;
-//! this runs in the segment-preparation task, never in the step interrupt.
+//! Evaluation uses f64 ([`crate::trig`]); this runs in the segment-preparation task,
+//! never in the step interrupt.
 
 use super::line::Line;
 use super::{tick_xy, InterpError, Interpolate, Method, Tick};
@@ -53,25 +53,17 @@ impl Sine {
             amp,
             omega,
             phase,
-            offset: amp * f64::from(libm::sinf(reduced(phase))),
+            offset: amp * crate::trig::sin_cos(phase).0,
         })
     }
 }
 
-/// The phase reduced to [0, 2 pi) in f64, as f32 for `sinf`/`cosf`: the f64
-/// versions' argument reduction costs 3 KB of flash, and after reduction f32 keeps the
-/// curve within 1e-7 of its amplitude.
-fn reduced(arg: f64) -> f32 {
-    let tau = core::f64::consts::TAU;
-    (arg - libm::floor(arg / tau) * tau) as f32
-}
-
 impl Curve for Sine {
     fn eval(&self, u: f64) -> f64 {
-        self.amp * f64::from(libm::sinf(reduced(self.omega * u + self.phase))) - self.offset
+        self.amp * crate::trig::sin_cos(self.omega * u + self.phase).0 - self.offset
     }
     fn slope(&self, u: f64) -> f64 {
-        self.amp * self.omega * f64::from(libm::cosf(reduced(self.omega * u + self.phase)))
+        self.amp * self.omega * crate::trig::sin_cos(self.omega * u + self.phase).1
     }
 }
 

@@ -186,8 +186,18 @@ impl FineLine {
         // n = floor((L + 128) / 256) = floor((L*den + 128 den) / (256 den)).
         let q = 256 * den;
         let num = ld + 128 * den;
-        let n = num.div_euclid(q);
-        let r = num.rem_euclid(q);
+        // Floor division without a 64-bit divide (not in the chip's instruction set):
+        // an f64 estimate, corrected exactly.
+        let mut n = libm::floor(num as f64 / q as f64) as i64;
+        let mut r = num - n * q;
+        while r < 0 {
+            r += q;
+            n -= 1;
+        }
+        while r >= q {
+            r -= q;
+            n += 1;
+        }
         // Going one step along the major direction: L*den changes by 256 * d_min * s * dir,
         // and dir = s along the major axis, so by 256 * d_min.
         let dir_maj = if i64::from(target[major]) >= p0.0 {

@@ -28,18 +28,12 @@ use crate::motion::{Move, Path, StepPos, AXES, X, Y, Z};
 pub struct Tick(pub u8);
 
 impl Tick {
-    /// Builds a tick from per-axis deltas in {-1, 0, 1}.
+    /// Builds a tick from per-axis deltas in {-1, 0, 1} (bit operations only: this
+    /// runs once per step in the segment preparation).
+    #[inline]
     pub fn from_deltas(d: [i8; AXES]) -> Self {
-        let mut bits = 0u8;
-        for (i, &v) in d.iter().enumerate() {
-            if v != 0 {
-                bits |= 1 << i;
-                if v < 0 {
-                    bits |= 1 << (i + 3);
-                }
-            }
-        }
-        Tick(bits)
+        let bit = |v: i8, i: u8| -> u8 { (u8::from(v != 0) << i) | (u8::from(v < 0) << (i + 3)) };
+        Tick(bit(d[0], 0) | bit(d[1], 1) | bit(d[2], 2))
     }
     /// Step mask (bit i = axis i steps).
     pub const fn steps(self) -> u8 {
@@ -50,20 +44,22 @@ impl Tick {
         (self.0 >> 3) & 0b111
     }
     /// Per-axis deltas in {-1, 0, 1}.
+    #[inline]
     pub fn deltas(self) -> [i8; AXES] {
-        let mut d = [0i8; AXES];
-        for (i, v) in d.iter_mut().enumerate() {
-            if self.steps() & (1 << i) != 0 {
-                *v = if self.dirs() & (1 << i) != 0 { -1 } else { 1 };
-            }
-        }
-        d
+        let d = |i: u8| -> i8 {
+            let step = (self.0 >> i) & 1;
+            let neg = (self.0 >> (i + 3)) & 1;
+            (step as i8) * (1 - 2 * neg as i8)
+        };
+        [d(0), d(1), d(2)]
     }
-    /// Applies the tick to a position (saturating, never panics).
+    /// Applies the tick to a position (wrapping at the i32 range, never panics).
+    #[inline]
     pub fn apply(self, p: &mut StepPos) {
-        for (c, d) in p.iter_mut().zip(self.deltas()) {
-            *c = c.saturating_add(i32::from(d));
-        }
+        let d = self.deltas();
+        p[0] = p[0].wrapping_add(i32::from(d[0]));
+        p[1] = p[1].wrapping_add(i32::from(d[1]));
+        p[2] = p[2].wrapping_add(i32::from(d[2]));
     }
 }
 

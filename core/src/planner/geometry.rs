@@ -91,11 +91,11 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             if r <= 0.0 {
                 return Err(GeometryError::Invalid);
             }
-            let a0 = libm::atan2f(p0.1, p0.0);
-            let a1 = libm::atan2f(p1.1, p1.0);
+            let a0 = atan2f(p0.1, p0.0);
+            let a1 = atan2f(p1.1, p1.0);
             let sweep = sweep(a0, a1, ccw, mv.target == start) + TAU * f32::from(turns);
             let sign = if ccw { 1.0 } else { -1.0 };
-            let tangent = |a: f32| [-libm::sinf(a) * sign, libm::cosf(a) * sign, 0.0];
+            let tangent = |a: f32| [-sinf(a) * sign, cosf(a) * sign, 0.0];
             let (us, ue) = (tangent(a0), tangent(a1));
             let (mut accel, mut speed) = axis_limits(cfg, us);
             let (a2, s2) = axis_limits(cfg, ue);
@@ -132,17 +132,11 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
                 p0.0 + (mv.target[X] - start[X]) as f32,
                 p0.1 + (mv.target[Y] - start[Y]) as f32,
             );
-            let t0 = libm::atan2f(p0.1 / bf, p0.0 / af);
-            let t1 = libm::atan2f(p1.1 / bf, p1.0 / af);
+            let t0 = atan2f(p0.1 / bf, p0.0 / af);
+            let t1 = atan2f(p1.1 / bf, p1.0 / af);
             let sweep = sweep(t0, t1, ccw, mv.target == start);
             let sign = if ccw { 1.0 } else { -1.0 };
-            let vel = |t: f32| {
-                [
-                    -af * libm::sinf(t) / sx * sign,
-                    bf * libm::cosf(t) / sy * sign,
-                    0.0,
-                ]
-            };
+            let vel = |t: f32| [-af * sinf(t) / sx * sign, bf * cosf(t) / sy * sign, 0.0];
             let param = |i: u32, n: u32| t0 + sign * sweep * i as f32 / n as f32;
             let (length, accel, speed) = integrate(cfg, 128, |i, n| vel(param(i, n)), sweep);
             // Smallest radius of curvature of an ellipse: min(a^2/b, b^2/a) (steps).
@@ -163,7 +157,7 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             }
             let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
             let dir = dx.signum();
-            let slope = |u: f32| amp * omega * libm::cosf(omega * u + phase);
+            let slope = |u: f32| amp * omega * cosf(omega * u + phase);
             let vel = |u: f32| [dir / sx, dir * slope(u) / sy, 0.0];
             let periods = (omega.abs() * dx.abs() / TAU) as u32;
             let n = (periods.saturating_mul(16)).clamp(64, 4096) & !1;
@@ -184,6 +178,16 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             })
         }
     }
+}
+
+fn sinf(a: f32) -> f32 {
+    crate::trig::sin_cos(f64::from(a)).0 as f32
+}
+fn cosf(a: f32) -> f32 {
+    crate::trig::sin_cos(f64::from(a)).1 as f32
+}
+fn atan2f(y: f32, x: f32) -> f32 {
+    crate::trig::atan2(f64::from(y), f64::from(x)) as f32
 }
 
 fn planar(start: StepPos, mv: &Move) -> Result<(), GeometryError> {

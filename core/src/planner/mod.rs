@@ -246,8 +246,14 @@ impl Planner {
     /// The step engine reports the fastest exit its block can still reach; the
     /// forward pass starts from it.
     pub fn set_head_cap(&mut self, cap: f32) {
-        if (cap - self.head_cap).abs() > 1e-3 {
-            self.head_cap = cap;
+        if (cap - self.head_cap).abs() <= 1e-3 {
+            return;
+        }
+        // The cap only matters if it binds the first block's entry now or did before.
+        let entry = self.blocks.front().map(|b| b.entry).unwrap_or(0.0);
+        let binds = entry >= self.head_cap - 1e-3 || entry > cap;
+        self.head_cap = cap;
+        if binds {
             self.replan();
         }
     }

@@ -81,12 +81,10 @@ impl Ramp {
                 (self.v0 * t + 0.5 * acc * t * t, self.v0 + acc * t)
             }
             Shape::Cosine => {
-                // w t lies in [0, pi]: f32 sine/cosine are exact enough and far smaller
-                // in flash than the f64 ones.
                 let w = core::f64::consts::PI / self.t;
-                let wt = (w * t) as f32;
-                let s = self.v0 * t + 0.5 * dv * (t - f64::from(libm::sinf(wt)) / w);
-                (s, self.v0 + 0.5 * dv * (1.0 - f64::from(libm::cosf(wt))))
+                let (sin, cos) = crate::trig::sin_cos(w * t);
+                let s = self.v0 * t + 0.5 * dv * (t - sin / w);
+                (s, self.v0 + 0.5 * dv * (1.0 - cos))
             }
         }
     }

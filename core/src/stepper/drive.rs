@@ -269,4 +269,103 @@ mod tests {
         assert!((rate(&ev, 2.0, 2.1) - 2000.0).abs() <= 20.0);
         assert_eq!(ev.last().unwrap().pos, [16000, 0, 0]);
     }
+
+    #[test]
+    fn s_curve_hold_mid_arc_resumes_to_the_exact_end() {
+        let cfg = PlannerConfig {
+            shape: Shape::Cosine,
+            ..PlannerConfig::default()
+        };
+        let mut vm = VirtualMachine::new(cfg, PrepConfig::default(), [0; 3]);
+        // Two full turns (one extra) around a centre 10 mm to the right, counter-clockwise.
+        let arc = Move {
+            target: [0; 3],
+            path: Path::Arc {
+                center: [800, 0],
+                ccw: true,
+                turns: 1,
+            },
+            feed: Feed::MmPerMin(2400.0),
+            line: 7,
+        };
+        vm.push(&arc).unwrap();
+        let mut ev = Vec::new();
+        vm.run_until((0.6 * HZ) as u64, &mut |e| ev.push(e));
+        vm.prep.hold();
+        vm.run_to_idle(&mut |e| ev.push(e));
+        assert_eq!(vm.prep.hold_state(), HoldState::Held);
+        let held = ev.len();
+        vm.prep.resume(&mut vm.planner);
+        vm.run_to_idle(&mut |e| ev.push(e));
+        assert!(ev.len() > held);
+        assert_eq!(ev.last().unwrap().pos, [0, 0, 0]);
+        // Two turns of a 800-step circle: both extremes of X reached, every step within
+        // half a step of the circle (DDA).
+        assert_eq!(ev.iter().map(|e| e.pos[0]).max(), Some(1600));
+        for e in &ev {
+            let r = (f64::from(e.pos[0] - 800)).hypot(f64::from(e.pos[1]));
+            assert!((r - 800.0).abs() <= 0.71, "{:?}", e.pos);
+        }
+    }
+
+    #[test]
+    fn start_speed_lets_motors_start_without_a_ramp() {
+        let cfg = PlannerConfig {
+            start_speed: 5.0,
+            ..PlannerConfig::default()
+        };
+        let mut vm = VirtualMachine::new(cfg, PrepConfig::default(), [0; 3]);
+        vm.push(&line(800, 0, 3000.0)).unwrap();
+        let ev = run(&mut vm);
+        // The first step (0.0125 mm) comes accelerating from 5 mm/s at 500 mm/s^2:
+        // (-5 + sqrt(25 + 2 * 500 * 0.0125)) / 500 = 2.25 ms, not the 7.07 ms of a ramp
+        // from rest.
+        let t1 = ev[0].t as f64 / HZ;
+        let expect = (-5.0 + (25.0f64 + 2.0 * 500.0 * 0.0125).sqrt()) / 500.0;
+        assert!((t1 - expect).abs() < 5e-5, "{t1} vs {expect}");
+        assert_eq!(ev.last().unwrap().pos, [800, 0, 0]);
+    }
+
+    #[test]
+    fn ellipse_sine_and_pen_moves_run_through_the_whole_chain() {
+        let mut vm = VirtualMachine::new(PlannerConfig::default(), PrepConfig::default(), [0; 3]);
+        let pen_down = Move {
+            target: [0, 0, -80],
+            path: Path::Line,
+            feed: Feed::Rapid,
+            line: 1,
+        };
+        let ellipse = Move {
+            target: [0, 0, -80],
+            path: Path::Ellipse {
+                center: [-1600, 0],
+                a: 1600,
+                b: 800,
+                ccw: true,
+            },
+            feed: Feed::MmPerMin(1800.0),
+            line: 2,
+        };
+        let sine = Move {
+            target: [3200, 0, -80],
+            path: Path::Sine {
+                amp: 400.0,
+                omega: core::f32::consts::TAU / 1600.0,
+                phase: 0.0,
+            },
+            feed: Feed::MmPerMin(1800.0),
+            line: 3,
+        };
+        for m in [pen_down, ellipse, sine] {
+            vm.push(&m).unwrap();
+        }
+        let ev = run(&mut vm);
+        assert_eq!(ev.last().unwrap().pos, [3200, 0, -80]);
+        assert_eq!(vm.prep.skipped(), 0);
+        // The ellipse reached its far end and the sine its crest (amplitude 400 steps).
+        assert!(ev.iter().any(|e| e.pos[0] == -3200));
+        assert!(ev.iter().any(|e| e.pos[1] == 400 && e.pos[0] > 0));
+        // Time is monotonic and no two step events share a timer tick.
+        assert!(ev.windows(2).all(|w| w[1].t > w[0].t));
+    }
 }

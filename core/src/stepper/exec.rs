@@ -94,7 +94,7 @@ impl Executor {
     }
 
     /// The step-timer interrupt.
-    #[inline]
+    #[inline(always)]
     pub fn on_interrupt(&mut self, q: &mut impl CmdSource) -> IsrOut {
         if self.halted || !self.running {
             self.running = false;

@@ -61,7 +61,7 @@ const Q: f64 = (1u64 << 32) as f64;
 enum TickLen {
     /// Constant (lines), in Q units.
     Const(u64),
-    /// Circle: |cross(prev, next)| * m >> 16, with m = 2^48 / (R steps * steps/mm).
+    /// Circle: |cross(prev, next)| * m / dot(prev, next), with m = R in Q units.
     Circle(u64),
     /// Anything else: from the curve's tangent (floating point).
     Curve,
@@ -192,7 +192,8 @@ impl Prep {
     }
 
     /// Prepares commands until `sink` is full, the path ends, or a hold comes to rest.
-    pub fn fill(&mut self, planner: &mut Planner, sink: &mut impl CmdSink) {
+    /// `dyn`: one copy compiled in the core (size-optimised), not one per caller.
+    pub fn fill(&mut self, planner: &mut Planner, sink: &mut dyn CmdSink) {
         let cfg = *planner.config();
         while sink.has_room() {
             if self.hold == HoldState::Held {
@@ -220,7 +221,10 @@ impl Prep {
             let ds = match (a.len, &a.interp) {
                 (TickLen::Const(q), _) => q,
                 (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
-                    (c.last_cross().unsigned_abs().saturating_mul(m)) >> 16
+                    // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
+                    // telescope, so a whole arc adds up to its length (to < 1e-9).
+                    let dot = c.last_dot().unsigned_abs().max(1);
+                    c.last_cross().unsigned_abs().saturating_mul(m) / dot
                 }
                 (_, Interp::Conic(c)) => to_q(c.last_tick_len(
                     f64::from(cfg.axes[X].steps_per_mm),
@@ -253,7 +257,13 @@ impl Prep {
                     self.v_last = 0.0;
                     return;
                 }
-                (self.t_last.max(a.win.t1_abs) + self.last_wait, self.v_last)
+                // Overshoot of less than half this tick (length rounding): the profile's
+                // end time.
+                if (s_new - a.win.s1) * 2 <= ds {
+                    (a.win.t1_abs, self.v_last)
+                } else {
+                    (self.t_last.max(a.win.t1_abs) + self.last_wait, self.v_last)
+                }
             };
             let mut wait = abs.saturating_sub(self.t_last).max(1);
             // Long pauses: pure waits first.
@@ -296,11 +306,11 @@ impl Prep {
                         _ => (to_q(f64::from(block.length)), None),
                     };
                     let len = match &interp {
-                        Interp::Line(l) => TickLen::Const(len_q / l.ticks().max(1)),
+                        Interp::Line(l) => TickLen::Const(to_q(line_len / l.ticks().max(1) as f64)),
                         Interp::Conic(c) => match c.circle_radius() {
                             Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
                                 let sp = f64::from(cfg.axes[X].steps_per_mm.max(1e-6));
-                                TickLen::Circle((Q * 65536.0 / (r * sp) + 0.5) as u64)
+                                TickLen::Circle((Q * r / sp + 0.5) as u64)
                             }
                             _ => TickLen::Curve,
                         },
@@ -376,7 +386,12 @@ fn advance_window(a: &mut Active, cfg: &PrepConfig) {
     let t1_abs = a.prof_t0 + (t1 * hz + 0.5) as u64;
     let (s0, t0_abs) = (a.win.s1, a.win.t1_abs);
     let ds = s1.saturating_sub(s0);
-    let k = ((t1_abs - t0_abs) << 32).checked_div(ds).unwrap_or(0);
+    // f64 rather than a u64 division: the planning maths already links it.
+    let k = if ds > 0 {
+        ((t1_abs - t0_abs) as f64 * Q / ds as f64) as u64
+    } else {
+        0
+    };
     let v = if t1 > t0 {
         (ds as f32 / Q as f32) / (t1 - t0) as f32
     } else {
