@@ -160,21 +160,6 @@ pub fn to_steps(mm: &[f32; AXES], s: &Settings) -> StepPos {
     out
 }
 
-/// The path of a straight move: in the XY plane, the exact (unrounded) end points in
-/// 1/256 step, so the steps follow the programmed line rather than the line between
-/// the rounded ends (motion's `Path::LineFine`); with Z moving, a plain line.
-fn line_path(from: &[f32; AXES], to: &[f32; AXES], s: &Settings) -> Path {
-    if from[2] != to[2] {
-        return Path::Line;
-    }
-    let q8 =
-        |p: &[f32; AXES], axis: usize| libm::roundf(p[axis] * s.steps_per_mm(axis) * 256.0) as i32;
-    Path::LineFine {
-        from: [q8(from, 0), q8(from, 1)],
-        to: [q8(to, 0), q8(to, 1)],
-    }
-}
-
 /// Step position to machine mm.
 pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
     let mut out = [0.0; AXES];
