@@ -108,7 +108,7 @@ impl Write for OutWriter<'_> {
     }
 }
 
-fn axis_triplet<W: Write>(w: &mut W, v: &[f32; AXES], scale: f32) -> fmt::Result {
+fn axis_triplet(w: &mut dyn Write, v: &[f32; AXES], scale: f32) -> fmt::Result {
     for (i, x) in v.iter().enumerate() {
         if i > 0 {
             w.write_char(',')?;

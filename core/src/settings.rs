@@ -690,12 +690,38 @@ impl Settings {
 /// core's float formatting would cost about 14 KB of flash on the Cortex-M3.
 /// Values round half away from zero. Computed in f32 (no double-precision routines in
 /// the image): exact to the last digit below 16,777 (2^24 thousandths), which covers
-/// any plotter; larger values keep f32's 7 significant digits.
-pub fn write_fixed3<W: fmt::Write>(w: &mut W, v: f32) -> fmt::Result {
-    let milli = libm::roundf(v * 1000.0) as i64;
-    let sign = if milli < 0 { "-" } else { "" };
+/// any plotter; larger values keep f32's 7 significant digits. One copy for every
+/// writer (`dyn`), 32-bit arithmetic unless the value is beyond 4,294,967 mm.
+pub fn write_fixed3(w: &mut dyn fmt::Write, v: f32) -> fmt::Result {
+    let milli = libm::roundf(v * 1000.0);
+    if libm::fabsf(milli) < 4_294_967_296.0 {
+        if milli <= -1.0 {
+            w.write_char('-')?;
+        }
+        // NaN converts to 0, as before.
+        let a = libm::fabsf(milli) as u32;
+        return write!(w, "{}.{:03}", a / 1000, a % 1000);
+    }
+    // Beyond u32 (and the saturated infinities): the same digits from an i64.
+    let milli = milli as i64;
+    if milli < 0 {
+        w.write_char('-')?;
+    }
     let a = milli.unsigned_abs();
-    write!(w, "{}{}.{:03}", sign, a / 1000, a % 1000)
+    let mut digits = [0u8; 20];
+    let mut start = digits.len();
+    let mut n = a / 1000;
+    while let Some(d) = start.checked_sub(1).and_then(|i| digits.get_mut(i)) {
+        *d = b'0' + (n % 10) as u8;
+        start -= 1;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    let int = digits.get(start..).unwrap_or(&[]);
+    w.write_str(core::str::from_utf8(int).unwrap_or(""))?;
+    write!(w, ".{:03}", (a % 1000) as u32)
 }
 
 /// CRC-32 (IEEE, reflected, polynomial 0xEDB88320), bitwise: the image is small and
@@ -753,6 +779,48 @@ mod tests {
                 want
             };
             assert_eq!(a.as_str(), want, "{v}");
+        }
+    }
+
+    #[test]
+    fn fixed_point_output_is_the_i64_rounding_everywhere() {
+        // The reference: f32 rounding to thousandths, then i64 digits.
+        fn reference(v: f32) -> std::string::String {
+            let milli = libm::roundf(v * 1000.0) as i64;
+            let sign = if milli < 0 { "-" } else { "" };
+            let a = milli.unsigned_abs();
+            std::format!("{}{}.{:03}", sign, a / 1000, a % 1000)
+        }
+        let mut vals = std::vec![
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MAX,
+            -f32::MAX,
+            4_294_967.0,
+            4_294_967.5,
+            -4_294_968.0,
+            1.0e9,
+            -3.5e12,
+            -0.0,
+            -0.0005,
+            -0.00049,
+        ];
+        let mut x = 0x2545_f491u32;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            let v = f32::from_bits(x);
+            if v.is_finite() {
+                vals.push(v);
+                vals.push(v / 1.0e30);
+            }
+        }
+        for v in vals {
+            let mut a: heapless::String<40> = heapless::String::new();
+            write_fixed3(&mut a, v).unwrap();
+            assert_eq!(a.as_str(), reference(v), "{v:e}");
         }
     }
 
