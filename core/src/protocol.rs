@@ -529,8 +529,17 @@ impl Protocol {
             return Err(Status::InvalidStatement);
         }
         self.machine.validate(line)?;
-        let text = core::str::from_utf8(line).map_err(|_| Status::InvalidStatement)?;
-        self.set_startup_line(idx, text);
+        // Cleaned lines are ASCII (the cleaner drops bytes >= 0x7F); byte-wise copy
+        // keeps UTF-8 validation out of the image.
+        if !line.is_ascii() {
+            return Err(Status::InvalidStatement);
+        }
+        if let Some(slot) = self.startup.get_mut(idx) {
+            slot.clear();
+            for &b in line.iter().take(LINE_MAX) {
+                let _ = slot.push(char::from(b));
+            }
+        }
         self.startup_dirty = true;
         Ok(())
     }

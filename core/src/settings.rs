@@ -719,8 +719,9 @@ pub fn write_fixed3(w: &mut dyn fmt::Write, v: f32) -> fmt::Result {
             break;
         }
     }
-    let int = digits.get(start..).unwrap_or(&[]);
-    w.write_str(core::str::from_utf8(int).unwrap_or(""))?;
+    for &d in digits.get(start..).unwrap_or(&[]) {
+        w.write_char(char::from(d))?;
+    }
     write!(w, ".{:03}", (a % 1000) as u32)
 }
 

@@ -369,8 +369,14 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         }
         let mut raw = [0u8; LINE_MAX + 1];
         let status = match self.fetch(KEY_STARTUP + i as u8, &mut raw) {
-            (len, LoadStatus::Loaded) => match raw.get(..len).map(core::str::from_utf8) {
-                Some(Ok(text)) if line.push_str(text).is_ok() => LoadStatus::Loaded,
+            // Startup lines are ASCII (cleaned G-code), copied byte-wise.
+            (len, LoadStatus::Loaded) => match raw.get(..len) {
+                Some(text) if len <= LINE_MAX && text.is_ascii() => {
+                    for &b in text {
+                        let _ = line.push(char::from(b));
+                    }
+                    LoadStatus::Loaded
+                }
                 _ => LoadStatus::Corrupt,
             },
             (_, status) => status,

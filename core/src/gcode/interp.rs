@@ -266,10 +266,15 @@ impl Interp {
     }
     /// The work coordinate offset (active system + G92), mm.
     pub fn work_offset(&self) -> [f32; AXES] {
+        self.offset_of(self.modal.wcs)
+    }
+
+    /// Offset of coordinate system `wcs` (0 = G54) plus G92, mm.
+    fn offset_of(&self, wcs: u8) -> [f32; AXES] {
         let wcs = self
             .coords
             .wcs
-            .get(usize::from(self.modal.wcs))
+            .get(usize::from(wcs))
             .copied()
             .unwrap_or([0.0; AXES]);
         let mut o = [0.0; AXES];
@@ -500,19 +505,7 @@ impl Interp {
         }
 
         // --- Targets, in machine mm. ---
-        let offset = {
-            let w = self
-                .coords
-                .wcs
-                .get(usize::from(modal.wcs))
-                .copied()
-                .unwrap_or([0.0; AXES]);
-            let mut o = [0.0; AXES];
-            for ((o, w), g) in o.iter_mut().zip(w.iter()).zip(self.g92.iter()) {
-                *o = w + g;
-            }
-            o
-        };
+        let offset = self.offset_of(modal.wcs);
         let absolute_override = non_modal == Some(NonModal::Absolute);
         let mut target = pos;
         for (axis, t) in target.iter_mut().enumerate() {
