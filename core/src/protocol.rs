@@ -442,9 +442,13 @@ impl Protocol {
                 Ok(())
             }
             b"G" => {
-                let mut s: String<96> = String::new();
-                let _ = self.machine.interp().write_modal(&mut s);
-                self.say(format_args!("[{}]", s));
+                let mut w = OutWriter {
+                    out: &mut self.out,
+                    truncated: &mut self.truncated,
+                };
+                let _ = w.write_char('[');
+                let _ = self.machine.interp().write_modal(&mut w);
+                let _ = w.write_str("]\r\n");
                 Ok(())
             }
             b"I" => {
@@ -588,40 +592,29 @@ impl Protocol {
                 }
             }
             Listing::Coords(i) => {
-                let c = *self.machine.interp().coords();
-                let mut s: String<96> = String::new();
-                let done = match i {
-                    0..=5 => {
-                        let _ = write!(s, "G{}:", 54 + i);
-                        let _ = axis_triplet(&mut s, c.wcs.get(i).unwrap_or(&[0.0; AXES]), scale);
-                        false
-                    }
-                    6 | 7 => {
-                        let _ = write!(s, "G{}:", if i == 6 { 28 } else { 30 });
-                        let _ = axis_triplet(&mut s, if i == 6 { &c.g28 } else { &c.g30 }, scale);
-                        false
-                    }
-                    8 => {
-                        let _ = s.push_str("G92:");
-                        let _ = axis_triplet(&mut s, self.machine.interp().g92(), scale);
-                        false
-                    }
-                    9 => {
-                        let _ = s.push_str("TLO:0.000");
-                        false
-                    }
-                    10 => {
-                        let _ = s.push_str("PRB:0.000,0.000,0.000:0");
-                        false
-                    }
-                    _ => true,
+                let interp = self.machine.interp();
+                let c = interp.coords();
+                let (code, v): (u8, &[f32; AXES]) = match i {
+                    0..=5 => (54 + i as u8, c.wcs.get(i).unwrap_or(&[0.0; AXES])),
+                    6 => (28, &c.g28),
+                    7 => (30, &c.g30),
+                    8 => (92, interp.g92()),
+                    _ => (0, &[0.0; AXES]),
                 };
-                if done {
-                    None
-                } else {
-                    self.say(format_args!("[{}]", s));
-                    Some(Listing::Coords(i + 1))
-                }
+                let v = *v;
+                let mut w = OutWriter {
+                    out: &mut self.out,
+                    truncated: &mut self.truncated,
+                };
+                let _ = match i {
+                    0..=8 => write!(w, "[G{}:", code)
+                        .and_then(|()| axis_triplet(&mut w, &v, scale))
+                        .and_then(|()| w.write_str("]\r\n")),
+                    9 => w.write_str("[TLO:0.000]\r\n"),
+                    10 => w.write_str("[PRB:0.000,0.000,0.000:0]\r\n"),
+                    _ => Ok(()),
+                };
+                (i <= 10).then_some(Listing::Coords(i + 1))
             }
             Listing::Startup(i) => match self.startup.get(i).cloned() {
                 Some(text) => {
@@ -641,11 +634,11 @@ impl Protocol {
     fn status_report<M: MotionControl>(&mut self, m: &M) {
         self.status_requested = false;
         let st = self.machine.state(m);
-        let settings = self.machine.settings().clone();
+        let settings = self.machine.settings();
         let scale = if settings.report_inches() { 25.4 } else { 1.0 };
+        let mask = settings.status_mask();
         let mpos = self.machine.machine_position(m);
         let wco = self.machine.interp().work_offset();
-        let mask = settings.status_mask();
         self.reports = self.reports.wrapping_add(1);
         let refresh = self.reports % REFRESH_EVERY == 1;
         let show_wco = refresh || wco != self.wco_shown;
