@@ -575,21 +575,29 @@ impl Protocol {
     }
 
     fn continue_listing(&mut self, l: Listing) {
+        let next = self.listing_line(l);
+        self.listing = next;
+        if next.is_none() {
+            self.say(format_args!("ok"));
+        }
+    }
+
+    /// Write one line of a listing; the next step, `None` past the end.
+    fn listing_line(&mut self, l: Listing) -> Option<Listing> {
         let scale = if self.machine.settings().report_inches() {
             25.4
         } else {
             1.0
         };
-        let next = match l {
+        match l {
             Listing::Settings(i) => {
-                let mut s: String<48> = String::new();
-                match self.machine.settings().write_entry(i, &mut s) {
-                    Some(_) => {
-                        self.say(format_args!("{}", s));
-                        Some(Listing::Settings(i + 1))
-                    }
-                    None => None,
-                }
+                let mut w = OutWriter {
+                    out: &mut self.out,
+                    truncated: &mut self.truncated,
+                };
+                let r = self.machine.settings().write_entry(i, &mut w)?;
+                let _ = r.and_then(|()| w.write_str("\r\n"));
+                Some(Listing::Settings(i + 1))
             }
             Listing::Coords(i) => {
                 let interp = self.machine.interp();
@@ -616,17 +624,15 @@ impl Protocol {
                 };
                 (i <= 10).then_some(Listing::Coords(i + 1))
             }
-            Listing::Startup(i) => match self.startup.get(i).cloned() {
-                Some(text) => {
-                    self.say(format_args!("$N{}={}", i, text));
-                    Some(Listing::Startup(i + 1))
-                }
-                None => None,
-            },
-        };
-        self.listing = next;
-        if next.is_none() {
-            self.say(format_args!("ok"));
+            Listing::Startup(i) => {
+                let text = self.startup.get(i)?;
+                let mut w = OutWriter {
+                    out: &mut self.out,
+                    truncated: &mut self.truncated,
+                };
+                let _ = write!(w, "$N{}={}\r\n", i, text);
+                Some(Listing::Startup(i + 1))
+            }
         }
     }
 
