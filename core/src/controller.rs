@@ -167,8 +167,7 @@ impl Controller {
                 // Whole numbers only: core's float formatting costs ~8 KB of flash.
                 let mut body: String<64> = String::new();
                 let _ = body.push_str("G91G21");
-                for (axis, name) in [(X, 'X'), (Y, 'Y')] {
-                    let d = dir[axis];
+                for (d, name) in [(dir[X], 'X'), (dir[Y], 'Y')] {
                     if d != 0 {
                         let _ = write!(body, "{}{}", name, i32::from(d) * JOG_REACH_MM);
                     }

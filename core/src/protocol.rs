@@ -667,9 +667,13 @@ impl Protocol {
             match st {
                 RunState::Idle => w.write_str("Idle")?,
                 RunState::Run => w.write_str("Run")?,
-                RunState::Hold { complete } => write!(w, "Hold:{}", if complete { 0 } else { 1 })?,
+                RunState::Hold { complete } => {
+                    w.write_str(if complete { "Hold:0" } else { "Hold:1" })?
+                }
                 RunState::Jog => w.write_str("Jog")?,
-                RunState::Door { at_rest } => write!(w, "Door:{}", if at_rest { 0 } else { 2 })?,
+                RunState::Door { at_rest } => {
+                    w.write_str(if at_rest { "Door:0" } else { "Door:2" })?
+                }
                 RunState::Alarm => w.write_str("Alarm")?,
                 RunState::Home => w.write_str("Home")?,
                 RunState::Check => w.write_str("Check")?,
