@@ -416,22 +416,17 @@ fn coords_to_image(c: &Coords) -> [u8; COORDS_LEN] {
 
 fn coords_from_image(img: &[u8; COORDS_LEN]) -> Option<Coords> {
     let (body, tail) = img.split_at(COORDS_LEN - 4);
-    if crc32(body) != u32::from_le_bytes(tail.try_into().ok()?)
-        || body.first() != Some(&COORDS_VERSION)
-    {
+    if crc32(body) != le32(tail, 0) || body.first() != Some(&COORDS_VERSION) {
         return None;
     }
-    let mut vals = [0.0f32; 8 * AXES];
-    for (v, chunk) in vals.iter_mut().zip(body.get(1..)?.chunks_exact(4)) {
-        *v = f32::from_le_bytes(chunk.try_into().ok()?);
+    let mut c = Coords::default();
+    let mut chunks = body.get(1..)?.chunks_exact(4);
+    let points = c.wcs.iter_mut().chain([&mut c.g28, &mut c.g30]);
+    for v in points.flat_map(|p| p.iter_mut()) {
+        *v = f32::from_le_bytes(chunks.next()?.try_into().ok()?);
         if !v.is_finite() {
             return None;
         }
-    }
-    let mut c = Coords::default();
-    let points = c.wcs.iter_mut().chain([&mut c.g28, &mut c.g30]);
-    for (p, src) in points.zip(vals.chunks_exact(AXES)) {
-        p.copy_from_slice(src);
     }
     Some(c)
 }
