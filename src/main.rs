@@ -70,7 +70,7 @@ mod app {
     use inkstep_core::machine::Inputs;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
     use inkstep_core::settings::{OutputMode, PenMode, Settings};
-    use inkstep_core::settings_store::{block_on, BlockingFlash, SettingsStore, STORE_RANGE};
+    use inkstep_core::settings_store::{BlockingFlash, SettingsStore, STORE_RANGE};
     use inkstep_core::stepper::prep::PrepConfig;
     use rtic_monotonics::systick::prelude::*;
     use stm32f1xx_hal::usb::UsbBusType;
@@ -120,8 +120,8 @@ mod app {
             // STORE_RANGE is a constant that fits the chip; this cannot happen.
             Err(_) => defmt::panic!("settings flash range"),
         };
-        let (settings, load) = block_on(store.load_settings());
-        let (coords, _) = block_on(store.load_coords());
+        let (settings, load) = store.load_settings();
+        let (coords, _) = store.load_coords();
         let mut ctl = Controller::new(settings.clone(), 0);
         if let Some(msg) = load.message() {
             defmt::warn!("settings: {}", msg);
@@ -129,7 +129,7 @@ mod app {
         }
         ctl.protocol_mut().machine_mut().set_coords(coords);
         for i in 0..2 {
-            let (line, _) = block_on(store.load_startup(i));
+            let (line, _) = store.load_startup(i);
             ctl.protocol_mut().set_startup_line(i, line.as_str());
         }
 
@@ -368,7 +368,7 @@ mod app {
             // Flash writes stall the CPU (instruction fetch waits), so only at rest.
             if *cx.local.save_pending && !busy {
                 *cx.local.save_pending = false;
-                if block_on(cx.local.store.save_settings(&settings)).is_err() {
+                if cx.local.store.save_settings(&settings).is_err() {
                     defmt::warn!("settings save failed");
                 }
             }

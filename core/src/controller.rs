@@ -22,7 +22,7 @@ use core::fmt::Write;
 use heapless::String;
 
 /// Jog moves run this far (mm) unless stopped; key release stops them.
-const JOG_REACH_MM: f32 = 1000.0;
+const JOG_REACH_MM: i32 = 1000;
 
 /// Outputs of the controller that the firmware drives (buzzer, busy LED).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -166,15 +166,15 @@ impl Controller {
                 }
             }
             Action::JogStart { dir, feed_mm_min } => {
+                // Whole numbers only: core's float formatting costs ~8 KB of flash.
                 let mut body: String<64> = String::new();
-                let _ = write!(body, "G91G21");
-                for (axis, name) in [(X, 'X'), (Y, 'Y')] {
-                    let d = dir[axis];
+                let _ = body.push_str("G91G21");
+                for (d, name) in [(dir[X], 'X'), (dir[Y], 'Y')] {
                     if d != 0 {
-                        let _ = write!(body, "{}{:.1}", name, f32::from(d) * JOG_REACH_MM);
+                        let _ = write!(body, "{}{}", name, i32::from(d) * JOG_REACH_MM);
                     }
                 }
-                let _ = write!(body, "F{:.0}", feed_mm_min);
+                let _ = write!(body, "F{}", libm::roundf(feed_mm_min) as i32);
                 if machine.jog(body.as_bytes(), m).is_err() {
                     self.outputs.beep = Some(Beep::Error);
                 }

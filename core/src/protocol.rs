@@ -108,7 +108,7 @@ impl Write for OutWriter<'_> {
     }
 }
 
-fn axis_triplet<W: Write>(w: &mut W, v: &[f32; AXES], scale: f32) -> fmt::Result {
+fn axis_triplet(w: &mut dyn Write, v: &[f32; AXES], scale: f32) -> fmt::Result {
     for (i, x) in v.iter().enumerate() {
         if i > 0 {
             w.write_char(',')?;
@@ -442,9 +442,13 @@ impl Protocol {
                 Ok(())
             }
             b"G" => {
-                let mut s: String<96> = String::new();
-                let _ = self.machine.interp().write_modal(&mut s);
-                self.say(format_args!("[{}]", s));
+                let mut w = OutWriter {
+                    out: &mut self.out,
+                    truncated: &mut self.truncated,
+                };
+                let _ = w.write_char('[');
+                let _ = self.machine.interp().write_modal(&mut w);
+                let _ = w.write_str("]\r\n");
                 Ok(())
             }
             b"I" => {
@@ -529,8 +533,17 @@ impl Protocol {
             return Err(Status::InvalidStatement);
         }
         self.machine.validate(line)?;
-        let text = core::str::from_utf8(line).map_err(|_| Status::InvalidStatement)?;
-        self.set_startup_line(idx, text);
+        // Cleaned lines are ASCII (the cleaner drops bytes >= 0x7F); byte-wise copy
+        // keeps UTF-8 validation out of the image.
+        if !line.is_ascii() {
+            return Err(Status::InvalidStatement);
+        }
+        if let Some(slot) = self.startup.get_mut(idx) {
+            slot.clear();
+            for &b in line.iter().take(LINE_MAX) {
+                let _ = slot.push(char::from(b));
+            }
+        }
         self.startup_dirty = true;
         Ok(())
     }
@@ -562,69 +575,64 @@ impl Protocol {
     }
 
     fn continue_listing(&mut self, l: Listing) {
+        let next = self.listing_line(l);
+        self.listing = next;
+        if next.is_none() {
+            self.say(format_args!("ok"));
+        }
+    }
+
+    /// Write one line of a listing; the next step, `None` past the end.
+    fn listing_line(&mut self, l: Listing) -> Option<Listing> {
         let scale = if self.machine.settings().report_inches() {
             25.4
         } else {
             1.0
         };
-        let next = match l {
+        match l {
             Listing::Settings(i) => {
-                let mut s: String<48> = String::new();
-                match self.machine.settings().write_entry(i, &mut s) {
-                    Some(_) => {
-                        self.say(format_args!("{}", s));
-                        Some(Listing::Settings(i + 1))
-                    }
-                    None => None,
-                }
+                let mut w = OutWriter {
+                    out: &mut self.out,
+                    truncated: &mut self.truncated,
+                };
+                let r = self.machine.settings().write_entry(i, &mut w)?;
+                let _ = r.and_then(|()| w.write_str("\r\n"));
+                Some(Listing::Settings(i + 1))
             }
             Listing::Coords(i) => {
-                let c = *self.machine.interp().coords();
-                let mut s: String<96> = String::new();
-                let done = match i {
-                    0..=5 => {
-                        let _ = write!(s, "G{}:", 54 + i);
-                        let _ = axis_triplet(&mut s, c.wcs.get(i).unwrap_or(&[0.0; AXES]), scale);
-                        false
-                    }
-                    6 | 7 => {
-                        let _ = write!(s, "G{}:", if i == 6 { 28 } else { 30 });
-                        let _ = axis_triplet(&mut s, if i == 6 { &c.g28 } else { &c.g30 }, scale);
-                        false
-                    }
-                    8 => {
-                        let _ = s.push_str("G92:");
-                        let _ = axis_triplet(&mut s, self.machine.interp().g92(), scale);
-                        false
-                    }
-                    9 => {
-                        let _ = s.push_str("TLO:0.000");
-                        false
-                    }
-                    10 => {
-                        let _ = s.push_str("PRB:0.000,0.000,0.000:0");
-                        false
-                    }
-                    _ => true,
+                let interp = self.machine.interp();
+                let c = interp.coords();
+                let (code, v): (u8, &[f32; AXES]) = match i {
+                    0..=5 => (54 + i as u8, c.wcs.get(i).unwrap_or(&[0.0; AXES])),
+                    6 => (28, &c.g28),
+                    7 => (30, &c.g30),
+                    8 => (92, interp.g92()),
+                    _ => (0, &[0.0; AXES]),
                 };
-                if done {
-                    None
-                } else {
-                    self.say(format_args!("[{}]", s));
-                    Some(Listing::Coords(i + 1))
-                }
+                let v = *v;
+                let mut w = OutWriter {
+                    out: &mut self.out,
+                    truncated: &mut self.truncated,
+                };
+                let _ = match i {
+                    0..=8 => write!(w, "[G{}:", code)
+                        .and_then(|()| axis_triplet(&mut w, &v, scale))
+                        .and_then(|()| w.write_str("]\r\n")),
+                    9 => w.write_str("[TLO:0.000]\r\n"),
+                    10 => w.write_str("[PRB:0.000,0.000,0.000:0]\r\n"),
+                    _ => Ok(()),
+                };
+                (i <= 10).then_some(Listing::Coords(i + 1))
             }
-            Listing::Startup(i) => match self.startup.get(i).cloned() {
-                Some(text) => {
-                    self.say(format_args!("$N{}={}", i, text));
-                    Some(Listing::Startup(i + 1))
-                }
-                None => None,
-            },
-        };
-        self.listing = next;
-        if next.is_none() {
-            self.say(format_args!("ok"));
+            Listing::Startup(i) => {
+                let text = self.startup.get(i)?;
+                let mut w = OutWriter {
+                    out: &mut self.out,
+                    truncated: &mut self.truncated,
+                };
+                let _ = write!(w, "$N{}={}\r\n", i, text);
+                Some(Listing::Startup(i + 1))
+            }
         }
     }
 
@@ -632,11 +640,11 @@ impl Protocol {
     fn status_report<M: MotionControl>(&mut self, m: &M) {
         self.status_requested = false;
         let st = self.machine.state(m);
-        let settings = self.machine.settings().clone();
+        let settings = self.machine.settings();
         let scale = if settings.report_inches() { 25.4 } else { 1.0 };
+        let mask = settings.status_mask();
         let mpos = self.machine.machine_position(m);
         let wco = self.machine.interp().work_offset();
-        let mask = settings.status_mask();
         self.reports = self.reports.wrapping_add(1);
         let refresh = self.reports % REFRESH_EVERY == 1;
         let show_wco = refresh || wco != self.wco_shown;
@@ -659,9 +667,13 @@ impl Protocol {
             match st {
                 RunState::Idle => w.write_str("Idle")?,
                 RunState::Run => w.write_str("Run")?,
-                RunState::Hold { complete } => write!(w, "Hold:{}", if complete { 0 } else { 1 })?,
+                RunState::Hold { complete } => {
+                    w.write_str(if complete { "Hold:0" } else { "Hold:1" })?
+                }
                 RunState::Jog => w.write_str("Jog")?,
-                RunState::Door { at_rest } => write!(w, "Door:{}", if at_rest { 0 } else { 2 })?,
+                RunState::Door { at_rest } => {
+                    w.write_str(if at_rest { "Door:0" } else { "Door:2" })?
+                }
                 RunState::Alarm => w.write_str("Alarm")?,
                 RunState::Home => w.write_str("Home")?,
                 RunState::Check => w.write_str("Check")?,

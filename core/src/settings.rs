@@ -6,6 +6,10 @@
 //! are then a single loop each, and typed accessors give the rest of the core plain
 //! values (`steps_per_mm(X)`, `homing_enabled()`, ...). Every value fits an `f32`
 //! exactly (integers stay below 2^24).
+//!
+//! The board carries only the columns it needs (numbers, kinds, defaults and ranges,
+//! extracted from [`TABLE`] at compile time); the descriptions stay on the host side
+//! (docs/grbl.md is generated from them), as Grbl 1.1 prints `$n=value` only.
 
 use crate::motion::AXES;
 use core::fmt;
@@ -291,6 +295,46 @@ pub const TABLE: [Desc; 44] = [
 
 /// Number of settings.
 pub const COUNT: usize = TABLE.len();
+
+/// One column of [`TABLE`], at compile time.
+macro_rules! column {
+    ($ty:ty, $zero:expr, $field:ident) => {{
+        let mut out: [$ty; COUNT] = [$zero; COUNT];
+        let mut i = 0;
+        while i < COUNT {
+            out[i] = TABLE[i].$field;
+            i += 1;
+        }
+        out
+    }};
+}
+static NUMBERS: [u16; COUNT] = column!(u16, 0, number);
+static KINDS: [Kind; COUNT] = column!(Kind, Kind::Int, kind);
+static DEFAULTS: [f32; COUNT] = column!(f32, 0.0, default);
+static MINS: [f32; COUNT] = column!(f32, 0.0, min);
+static MAXS: [f32; COUNT] = column!(f32, 0.0, max);
+
+/// Table index of setting `number`, for the accessors: evaluated at compile time, so
+/// a number missing from the table fails the build.
+const fn ix(number: u16) -> usize {
+    let mut i = 0;
+    while i < COUNT {
+        if TABLE[i].number == number {
+            return i;
+        }
+        i += 1;
+    }
+    panic!("setting not in TABLE")
+}
+// The per-axis accessors index from the X entry.
+const _: () = {
+    let mut b = 0;
+    while b < 4 {
+        let base = 100 + 10 * b as u16;
+        assert!(ix(base + 1) == ix(base) + 1 && ix(base + 2) == ix(base) + 2);
+        b += 1;
+    }
+};
 /// Version of the byte image; bump when [`TABLE`] changes other than by appending.
 pub const FORMAT_VERSION: u8 = 1;
 const MAGIC: [u8; 2] = *b"IS";
@@ -358,23 +402,13 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        let mut vals = [0.0; COUNT];
-        for (v, desc) in vals.iter_mut().zip(TABLE.iter()) {
-            *v = desc.default;
-        }
-        Settings { vals }
+        Settings { vals: DEFAULTS }
     }
 }
 
 /// Table index of setting `number`.
 pub fn index_of(number: u16) -> Option<usize> {
-    TABLE.iter().position(|d| d.number == number)
-}
-
-/// Index lookup for the accessors below; the numbers used there are all in the table
-/// (a unit test checks it), the fallback only keeps the accessors total.
-fn ix(number: u16) -> usize {
-    index_of(number).unwrap_or(0)
+    NUMBERS.iter().position(|&n| n == number)
 }
 
 impl Settings {
@@ -386,14 +420,16 @@ impl Settings {
     /// Set `$number = value` with Grbl's checks. Integer kinds are truncated toward zero.
     pub fn set(&mut self, number: u16, value: f32) -> Result<(), SettingError> {
         let i = index_of(number).ok_or(SettingError::Invalid)?;
-        let desc = TABLE.get(i).ok_or(SettingError::Invalid)?;
+        let (Some(&kind), Some(&min), Some(&max)) = (KINDS.get(i), MINS.get(i), MAXS.get(i)) else {
+            return Err(SettingError::Invalid);
+        };
         if !value.is_finite() {
             return Err(SettingError::Invalid);
         }
-        if value < 0.0 && desc.min >= 0.0 {
+        if value < 0.0 && min >= 0.0 {
             return Err(SettingError::Negative);
         }
-        let v = match desc.kind {
+        let v = match kind {
             Kind::Float => value,
             Kind::Int | Kind::Mask => libm::truncf(value),
             Kind::Bool => {
@@ -407,7 +443,7 @@ impl Settings {
         if number == 0 && v < 3.0 {
             return Err(SettingError::PulseTooShort);
         }
-        if v < desc.min || v > desc.max {
+        if v < min || v > max {
             return Err(SettingError::Invalid);
         }
         if number == 20 && v != 0.0 && !self.homing_enabled() {
@@ -424,7 +460,7 @@ impl Settings {
         }
         // Turning homing off also turns soft limits off: they would refer to nothing.
         if number == 22 && v == 0.0 {
-            if let Some(slot) = next.vals.get_mut(ix(20)) {
+            if let Some(slot) = next.vals.get_mut(const { ix(20) }) {
                 *slot = 0.0;
             }
         }
@@ -432,108 +468,111 @@ impl Settings {
         Ok(())
     }
 
-    fn v(&self, number: u16) -> f32 {
-        self.vals.get(ix(number)).copied().unwrap_or(0.0)
+    fn at(&self, index: usize) -> f32 {
+        self.vals.get(index).copied().unwrap_or(0.0)
     }
-    fn flag(&self, number: u16) -> bool {
-        self.v(number) != 0.0
+    fn v<const N: u16>(&self) -> f32 {
+        self.at(const { ix(N) })
     }
-    fn mask(&self, number: u16) -> u8 {
-        self.v(number) as u8
+    fn flag<const N: u16>(&self) -> bool {
+        self.v::<N>() != 0.0
     }
-    fn axis(&self, base: u16, axis: usize) -> f32 {
-        self.v(base + axis.min(AXES - 1) as u16)
+    fn mask<const N: u16>(&self) -> u8 {
+        self.v::<N>() as u8
+    }
+    fn axis<const BASE: u16>(&self, axis: usize) -> f32 {
+        self.at(const { ix(BASE) } + axis.min(AXES - 1))
     }
 
     pub fn step_pulse_us(&self) -> u8 {
-        self.v(0) as u8
+        self.v::<0>() as u8
     }
     pub fn step_idle_delay_ms(&self) -> u8 {
-        self.v(1) as u8
+        self.v::<1>() as u8
     }
     pub fn step_invert_mask(&self) -> u8 {
-        self.mask(2)
+        self.mask::<2>()
     }
     pub fn dir_invert_mask(&self) -> u8 {
-        self.mask(3)
+        self.mask::<3>()
     }
     pub fn invert_enable(&self) -> bool {
-        self.flag(4)
+        self.flag::<4>()
     }
     pub fn invert_limits(&self) -> bool {
-        self.flag(5)
+        self.flag::<5>()
     }
     pub fn status_mask(&self) -> u8 {
-        self.mask(10)
+        self.mask::<10>()
     }
     pub fn junction_deviation(&self) -> f32 {
-        self.v(11)
+        self.v::<11>()
     }
     pub fn arc_tolerance(&self) -> f32 {
-        self.v(12)
+        self.v::<12>()
     }
     pub fn report_inches(&self) -> bool {
-        self.flag(13)
+        self.flag::<13>()
     }
     pub fn soft_limits(&self) -> bool {
-        self.flag(20)
+        self.flag::<20>()
     }
     pub fn hard_limits(&self) -> bool {
-        self.flag(21)
+        self.flag::<21>()
     }
     pub fn homing_enabled(&self) -> bool {
-        self.flag(22)
+        self.flag::<22>()
     }
     pub fn homing_dir_mask(&self) -> u8 {
-        self.mask(23)
+        self.mask::<23>()
     }
     pub fn homing_feed(&self) -> f32 {
-        self.v(24)
+        self.v::<24>()
     }
     pub fn homing_seek(&self) -> f32 {
-        self.v(25)
+        self.v::<25>()
     }
     pub fn homing_debounce_ms(&self) -> u32 {
-        self.v(26) as u32
+        self.v::<26>() as u32
     }
     pub fn homing_pulloff(&self) -> f32 {
-        self.v(27)
+        self.v::<27>()
     }
     /// $100-$102.
     pub fn steps_per_mm(&self, axis: usize) -> f32 {
-        self.axis(100, axis)
+        self.axis::<100>(axis)
     }
     /// $110-$112, mm/min.
     pub fn max_rate(&self, axis: usize) -> f32 {
-        self.axis(110, axis)
+        self.axis::<110>(axis)
     }
     /// $120-$122, mm/s^2.
     pub fn acceleration(&self, axis: usize) -> f32 {
-        self.axis(120, axis)
+        self.axis::<120>(axis)
     }
     /// $130-$132, mm (positive).
     pub fn max_travel(&self, axis: usize) -> f32 {
-        self.axis(130, axis)
+        self.axis::<130>(axis)
     }
     pub fn output_mode(&self) -> OutputMode {
-        if self.flag(200) {
+        if self.flag::<200>() {
             OutputMode::FourPhase
         } else {
             OutputMode::StepDir
         }
     }
     pub fn pen_mode(&self) -> PenMode {
-        if self.flag(201) {
+        if self.flag::<201>() {
             PenMode::Servo
         } else {
             PenMode::ZAxis
         }
     }
     pub fn pen_up_angle(&self) -> f32 {
-        self.v(202)
+        self.v::<202>()
     }
     pub fn pen_down_angle(&self) -> f32 {
-        self.v(203)
+        self.v::<203>()
     }
     /// RC-servo pulse width for the pen position, µs: 0..180 degrees maps linearly onto
     /// 500..2500 µs, the range most hobby servos accept.
@@ -546,49 +585,49 @@ impl Settings {
         500 + (angle.clamp(0.0, 180.0) * (2000.0 / 180.0)) as u32
     }
     pub fn pen_lift_ms(&self) -> u32 {
-        self.v(204) as u32
+        self.v::<204>() as u32
     }
     pub fn pen_z_up(&self) -> f32 {
-        self.v(205)
+        self.v::<205>()
     }
     pub fn pen_z_down(&self) -> f32 {
-        self.v(206)
+        self.v::<206>()
     }
     pub fn accel_profile(&self) -> AccelProfile {
-        if self.flag(210) {
+        if self.flag::<210>() {
             AccelProfile::SCurve
         } else {
             AccelProfile::Trapezoid
         }
     }
     pub fn jerk(&self) -> f32 {
-        self.v(211)
+        self.v::<211>()
     }
     pub fn interpolation(&self) -> Interpolation {
-        if self.flag(212) {
+        if self.flag::<212>() {
             Interpolation::Dda
         } else {
             Interpolation::PointByPoint
         }
     }
     pub fn start_rate(&self) -> f32 {
-        self.v(213)
+        self.v::<213>()
     }
     /// Axes that have a home/limit switch ($214).
     pub fn switch_mask(&self) -> u8 {
-        self.mask(214)
+        self.mask::<214>()
     }
     pub fn invert_inputs(&self) -> bool {
-        self.flag(215)
+        self.flag::<215>()
     }
 
     /// Write `$n=value` for table entry `index` (no line ending). `None` past the end.
     pub fn write_entry<W: fmt::Write>(&self, index: usize, w: &mut W) -> Option<fmt::Result> {
-        let desc = TABLE.get(index)?;
+        let number = *NUMBERS.get(index)?;
         let v = *self.vals.get(index)?;
-        Some(match desc.kind {
-            Kind::Float => write!(w, "${}=", desc.number).and_then(|()| write_fixed3(w, v)),
-            _ => write!(w, "${}={}", desc.number, v as i32),
+        Some(match KINDS.get(index)? {
+            Kind::Float => write!(w, "${}=", number).and_then(|()| write_fixed3(w, v)),
+            _ => write!(w, "${}={}", number, v as i32),
         })
     }
 
@@ -630,14 +669,15 @@ impl Settings {
         }
         let mut s = Settings::default();
         let values = body.get(4..).unwrap_or(&[]);
-        for ((slot, chunk), desc) in s
+        for (((slot, chunk), &min), &max) in s
             .vals
             .iter_mut()
             .zip(values.chunks_exact(4))
-            .zip(TABLE.iter())
+            .zip(MINS.iter())
+            .zip(MAXS.iter())
         {
             let v = f32::from_le_bytes(chunk.try_into().map_err(|_| ImageError::Length)?);
-            if !v.is_finite() || v < desc.min || v > desc.max {
+            if !v.is_finite() || v < min || v > max {
                 return Err(ImageError::Range);
             }
             *slot = v;
@@ -650,12 +690,39 @@ impl Settings {
 /// core's float formatting would cost about 14 KB of flash on the Cortex-M3.
 /// Values round half away from zero. Computed in f32 (no double-precision routines in
 /// the image): exact to the last digit below 16,777 (2^24 thousandths), which covers
-/// any plotter; larger values keep f32's 7 significant digits.
-pub fn write_fixed3<W: fmt::Write>(w: &mut W, v: f32) -> fmt::Result {
-    let milli = libm::roundf(v * 1000.0) as i64;
-    let sign = if milli < 0 { "-" } else { "" };
+/// any plotter; larger values keep f32's 7 significant digits. One copy for every
+/// writer (`dyn`), 32-bit arithmetic unless the value is beyond 4,294,967 mm.
+pub fn write_fixed3(w: &mut dyn fmt::Write, v: f32) -> fmt::Result {
+    let milli = libm::roundf(v * 1000.0);
+    if libm::fabsf(milli) < 4_294_967_296.0 {
+        if milli <= -1.0 {
+            w.write_char('-')?;
+        }
+        // NaN converts to 0, as before.
+        let a = libm::fabsf(milli) as u32;
+        return write!(w, "{}.{:03}", a / 1000, a % 1000);
+    }
+    // Beyond u32 (and the saturated infinities): the same digits from an i64.
+    let milli = milli as i64;
+    if milli < 0 {
+        w.write_char('-')?;
+    }
     let a = milli.unsigned_abs();
-    write!(w, "{}{}.{:03}", sign, a / 1000, a % 1000)
+    let mut digits = [0u8; 20];
+    let mut start = digits.len();
+    let mut n = a / 1000;
+    while let Some(d) = start.checked_sub(1).and_then(|i| digits.get_mut(i)) {
+        *d = b'0' + (n % 10) as u8;
+        start -= 1;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    for &d in digits.get(start..).unwrap_or(&[]) {
+        w.write_char(char::from(d))?;
+    }
+    write!(w, ".{:03}", (a % 1000) as u32)
 }
 
 /// CRC-32 (IEEE, reflected, polynomial 0xEDB88320), bitwise: the image is small and
@@ -713,6 +780,48 @@ mod tests {
                 want
             };
             assert_eq!(a.as_str(), want, "{v}");
+        }
+    }
+
+    #[test]
+    fn fixed_point_output_is_the_i64_rounding_everywhere() {
+        // The reference: f32 rounding to thousandths, then i64 digits.
+        fn reference(v: f32) -> std::string::String {
+            let milli = libm::roundf(v * 1000.0) as i64;
+            let sign = if milli < 0 { "-" } else { "" };
+            let a = milli.unsigned_abs();
+            std::format!("{}{}.{:03}", sign, a / 1000, a % 1000)
+        }
+        let mut vals = std::vec![
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MAX,
+            -f32::MAX,
+            4_294_967.0,
+            4_294_967.5,
+            -4_294_968.0,
+            1.0e9,
+            -3.5e12,
+            -0.0,
+            -0.0005,
+            -0.00049,
+        ];
+        let mut x = 0x2545_f491u32;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            let v = f32::from_bits(x);
+            if v.is_finite() {
+                vals.push(v);
+                vals.push(v / 1.0e30);
+            }
+        }
+        for v in vals {
+            let mut a: heapless::String<40> = heapless::String::new();
+            write_fixed3(&mut a, v).unwrap();
+            assert_eq!(a.as_str(), reference(v), "{v:e}");
         }
     }
 

@@ -1,16 +1,28 @@
 //! Persistence of the settings, the coordinate data and the `$N` startup lines in the
 //! MCU's internal flash, power-loss safe.
 //!
-//! Built on `sequential-storage`'s key-value map: every save appends a new item (CRC
-//! protected by the crate) and only after it is complete does it shadow the old one,
-//! and pages are erased only after their live items were copied, so a power cut at any
-//! write or erase leaves either the old or the new value. On top, each value carries
-//! its own version and CRC-32 ([`Settings::to_image`]), so a stale layout or damaged
-//! data is never taken for settings: the store falls back to defaults and says so.
+//! A small log-structured store written for this data (a few hundred bytes in all):
 //!
-//! The crate is async; the firmware awaits it from an RTIC task and host code can use
-//! [`block_on`]. [`BlockingFlash`] adapts a blocking `embedded-storage` flash (such as
-//! the stm32f1xx-hal writer) to the async traits.
+//! - The region is a ring of flash pages. A page starts with an 8-byte header
+//!   (sequence number and a check word); the valid page with the highest sequence
+//!   number is the *current* page, and it always holds the latest value of every key.
+//! - A save appends a record to the current page: `[key, len, !key, !len]`, the data,
+//!   a CRC-32 of both, padded to 4 bytes. The newest record of a key whose CRC checks
+//!   wins; a record torn by a power cut fails its CRC and the older one stays in force.
+//! - When the current page is full, the live records (with the new value) are copied
+//!   into the next page of the ring, which is kept erased, and only then is its header
+//!   written: until that write completes the old page stays current. After it, the old
+//!   page is erased. A page is therefore never erased while it holds the only copy of
+//!   live data (a next page found not blank, after a cut, is erased before use).
+//!
+//! A power cut at any write or erase step leaves either the old or the new value. On
+//! top, each value carries its own version and CRC-32 ([`Settings::to_image`]), so a
+//! stale layout or damaged data is never taken for settings: the store falls back to
+//! defaults and says so.
+//!
+//! The store is synchronous: flash writes stall the CPU anyway, and the firmware only
+//! saves while the machine is at rest. [`BlockingFlash`] wraps the blocking
+//! `embedded-storage` flash (the stm32f1xx-hal writer, the host mocks).
 
 use crate::gcode::interp::Coords;
 use crate::motion::AXES;
@@ -20,9 +32,7 @@ use core::future::Future;
 use core::ops::Range;
 use core::pin::pin;
 use core::task::{Context, Poll, Waker};
-use embedded_storage_async::nor_flash::NorFlash;
-use sequential_storage::cache::{Cache, Uncached};
-use sequential_storage::map::{MapConfig, MapStorage};
+use embedded_storage::nor_flash::NorFlash;
 
 /// Flash range the firmware gives the store: the last four 1 KB pages of the 64 KB
 /// part (0x0800_F000..0x0801_0000), as offsets from the start of flash, which is how
@@ -32,12 +42,24 @@ pub const STORE_RANGE: Range<u32> = 0xF000..0x1_0000;
 const KEY_SETTINGS: u8 = 0;
 const KEY_COORDS: u8 = 1;
 const KEY_STARTUP: u8 = 2; // 2 .. 2 + STARTUP_LINES
+const KEYS: usize = 2 + STARTUP_LINES;
 
 /// Coordinate image: version, 8 x 3 floats, CRC-32.
 const COORDS_LEN: usize = 1 + 8 * AXES * 4 + 4;
 const COORDS_VERSION: u8 = 1;
-/// Working buffer: the largest value plus the key, rounded up to the flash word.
-const BUF_LEN: usize = 256;
+
+/// Page header: sequence number, then its CRC-32 mixed with this tag ("inkstep store
+/// v1"), so that neither erased flash nor another layout passes for a header.
+const PAGE_TAG: u32 = 0x4953_5431;
+const PAGE_HEAD: u32 = 8;
+/// Record header bytes; the CRC follows the data.
+const REC_HEAD: usize = 4;
+/// Largest record: header, 255 bytes of data, CRC, padding.
+const BUF_LEN: usize = rec_size(255) as usize;
+
+const fn rec_size(len: usize) -> u32 {
+    ((REC_HEAD + len + 4 + 3) & !3) as u32
+}
 
 /// What the load found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,113 +86,248 @@ impl LoadStatus {
 /// A save failed.
 #[derive(Debug)]
 pub enum StoreError<E> {
-    Storage(sequential_storage::Error<E>),
-    /// The flash was lost in an earlier failed scan (only after a driver error).
-    NoFlash,
+    /// The flash driver reported an error.
+    Flash(E),
+    /// The live data does not fit one page (pages smaller than the data).
+    Full,
 }
 
-impl<E> From<sequential_storage::Error<E>> for StoreError<E> {
-    fn from(e: sequential_storage::Error<E>) -> Self {
-        StoreError::Storage(e)
+impl<E> From<E> for StoreError<E> {
+    fn from(e: E) -> Self {
+        StoreError::Flash(e)
     }
 }
 
-type Map<F> = MapStorage<u8, F, Cache<Uncached, Uncached, Uncached, u8>>;
+/// The region given to [`SettingsStore::new`] is not at least two whole pages.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RangeError;
+
+/// Where the latest valid records of the current page are, and where it has room.
+struct Scan {
+    /// Page start (absolute flash offset) and sequence number.
+    page: u32,
+    seq: u32,
+    /// Offset (absolute) and data length of each key's newest valid record.
+    latest: [Option<(u32, u8)>; KEYS],
+    /// Absolute offset of the free space (the page end if full).
+    free: u32,
+}
 
 /// The store over a flash region.
-pub struct SettingsStore<F: NorFlash> {
-    map: Option<Map<F>>,
+pub struct SettingsStore<F> {
+    flash: F,
     range: Range<u32>,
+    page_size: u32,
     buf: [u8; BUF_LEN],
 }
 
-impl<F: NorFlash> SettingsStore<F> {
+impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     /// `range` must be page aligned and hold at least two pages.
-    pub fn new(
-        flash: F,
-        range: Range<u32>,
-    ) -> Result<Self, sequential_storage::map::MapConfigError> {
-        let config = MapConfig::try_new(range.clone())?;
-        let map = MapStorage::new(flash, config, Cache::new_uncached());
+    pub fn new(flash: BlockingFlash<F>, range: Range<u32>) -> Result<Self, RangeError> {
+        let page_size = F::ERASE_SIZE as u32;
+        if page_size < rec_size(255) * 2
+            || !range.start.is_multiple_of(page_size)
+            || !range.end.is_multiple_of(page_size)
+            || range.end < range.start + 2 * page_size
+        {
+            return Err(RangeError);
+        }
         Ok(SettingsStore {
-            map: Some(map),
+            flash,
             range,
+            page_size,
             buf: [0; BUF_LEN],
         })
     }
 
     /// Give the flash back (tests use it to "power-cycle").
-    pub fn into_flash(self) -> Option<F> {
-        self.map.map(|m| m.destroy().0)
+    pub fn into_flash(self) -> BlockingFlash<F> {
+        self.flash
     }
 
-    /// True if every byte of the region reads as erased. Used to tell a first boot
-    /// (blank) from storage that holds something the map cannot make sense of.
-    async fn region_blank(&mut self) -> bool {
-        let Some(map) = self.map.take() else {
-            return false;
-        };
-        let (mut flash, cache) = map.destroy();
-        let mut blank = true;
-        let mut chunk = [0u8; 64];
-        let mut addr = self.range.start;
-        while blank && addr < self.range.end {
-            let n = ((self.range.end - addr) as usize).min(chunk.len());
-            let part = chunk.get_mut(..n).unwrap_or(&mut []);
-            blank = flash.read(addr, part).await.is_ok() && part.iter().all(|&b| b == 0xFF);
-            addr += n as u32;
-        }
-        if let Ok(config) = MapConfig::try_new(self.range.clone()) {
-            self.map = Some(MapStorage::new(flash, config, cache));
-        }
-        blank
+    fn read(&mut self, addr: u32, len: usize) -> Result<&[u8], F::Error> {
+        let part = self.buf.get_mut(..len).unwrap_or(&mut []);
+        self.flash.0.read(addr, part)?;
+        Ok(part)
     }
 
-    /// Store `bytes` under `key`. If the map finds its pages inconsistent (a power cut
-    /// beyond what it can repair), the region is wiped and the value written to a
-    /// clean region: what was unreadable is lost, the new value is kept.
-    async fn store_raw(&mut self, key: u8, bytes: &[u8]) -> Result<(), StoreError<F::Error>> {
-        let map = self.map.as_mut().ok_or(StoreError::NoFlash)?;
-        match map.store_item(&mut self.buf, &key, &bytes).await {
-            Err(sequential_storage::Error::Corrupted { .. }) => {
-                map.erase_all().await?;
-                map.store_item(&mut self.buf, &key, &bytes).await?;
-                Ok(())
+    /// True if every byte of `from..to` reads as erased.
+    fn blank(&mut self, mut from: u32, to: u32) -> bool {
+        while from < to {
+            let n = ((to - from) as usize).min(BUF_LEN);
+            match self.read(from, n) {
+                Ok(b) if b.iter().all(|&x| x == 0xFF) => from += n as u32,
+                _ => return false,
             }
-            r => Ok(r?),
         }
+        true
     }
 
-    /// Fetch the raw bytes of `key` into `out`; the status says what was found.
-    async fn fetch(&mut self, key: u8, out: &mut [u8]) -> (usize, LoadStatus) {
-        let Some(map) = self.map.as_mut() else {
-            return (0, LoadStatus::Corrupt);
-        };
-        match map.fetch_item::<&[u8]>(&mut self.buf, &key).await {
-            Ok(Some(bytes)) if bytes.len() <= out.len() => {
-                if let Some(dst) = out.get_mut(..bytes.len()) {
-                    dst.copy_from_slice(bytes);
+    /// The current page: the valid header with the highest sequence number.
+    fn current(&mut self) -> Option<(u32, u32)> {
+        let mut best: Option<(u32, u32)> = None;
+        let mut page = self.range.start;
+        while page < self.range.end {
+            if let Ok(h) = self.read(page, PAGE_HEAD as usize) {
+                let seq = le32(h, 0);
+                if le32(h, 4) == crc32(&seq.to_le_bytes()) ^ PAGE_TAG
+                    && best.is_none_or(|(_, s)| seq > s)
+                {
+                    best = Some((page, seq));
                 }
-                (bytes.len(), LoadStatus::Loaded)
             }
-            Ok(Some(_)) => (0, LoadStatus::Corrupt),
-            Ok(None) => (0, LoadStatus::Empty),
-            Err(_) => {
-                // Unreadable region: wipe it so that the next save starts clean.
-                let _ = map.erase_all().await;
-                (0, LoadStatus::Corrupt)
+            page += self.page_size;
+        }
+        best
+    }
+
+    /// Walk the records of the current page.
+    fn scan(&mut self) -> Option<Scan> {
+        let (page, seq) = self.current()?;
+        let end = page + self.page_size;
+        let mut s = Scan {
+            page,
+            seq,
+            latest: [None; KEYS],
+            free: end,
+        };
+        let mut at = page + PAGE_HEAD;
+        while at < end {
+            let size = match self.read(at, REC_HEAD) {
+                Ok(&[k, n, nk, nn]) if k == !nk && n == !nn => rec_size(usize::from(n)),
+                _ => 0,
+            };
+            if size == 0 || at + size > end {
+                // Erased (the free space) or a torn header: full unless blank.
+                if self.blank(at, end) {
+                    s.free = at;
+                }
+                break;
+            }
+            if let Ok(r @ [k, n, ..]) = self.read(at, size as usize) {
+                let (k, n) = (*k, *n);
+                let body = REC_HEAD + usize::from(n);
+                let ok = r.get(..body).map(crc32) == Some(le32(r, body));
+                if let (true, Some(slot)) = (ok, s.latest.get_mut(usize::from(k))) {
+                    *slot = Some((at, n));
+                }
+            }
+            at += size;
+        }
+        Some(s)
+    }
+
+    /// Fetch the newest valid value of `key` into `out`.
+    fn fetch(&mut self, key: u8, out: &mut [u8]) -> (usize, LoadStatus) {
+        let latest = self
+            .scan()
+            .and_then(|s| s.latest.get(usize::from(key)).copied().flatten());
+        let Some((at, n)) = latest else {
+            return (0, LoadStatus::Empty);
+        };
+        let n = usize::from(n);
+        let read = match out.get_mut(..n) {
+            Some(dst) => self.flash.0.read(at + REC_HEAD as u32, dst).is_ok(),
+            None => false,
+        };
+        if read {
+            (n, LoadStatus::Loaded)
+        } else {
+            (0, LoadStatus::Corrupt)
+        }
+    }
+
+    /// Write the record for `key` (data in `buf[REC_HEAD..]`) at `at`.
+    fn write_record(&mut self, at: u32, key: u8, n: u8) -> Result<u32, F::Error> {
+        let body = REC_HEAD + usize::from(n);
+        let size = rec_size(usize::from(n)) as usize;
+        if let Some(h) = self.buf.get_mut(..REC_HEAD) {
+            h.copy_from_slice(&[key, n, !key, !n]);
+        }
+        let crc = crc32(self.buf.get(..body).unwrap_or(&[]));
+        if let Some(t) = self.buf.get_mut(body..size) {
+            t.fill(0xFF);
+            if let Some(c) = t.get_mut(..4) {
+                c.copy_from_slice(&crc.to_le_bytes());
             }
         }
+        self.flash
+            .0
+            .write(at, self.buf.get(..size).unwrap_or(&[]))?;
+        Ok(size as u32)
+    }
+
+    /// Store `bytes` under `key`: append to the current page, or move the live data
+    /// with the new value to the next page of the ring.
+    fn store_raw(&mut self, key: u8, bytes: &[u8]) -> Result<(), StoreError<F::Error>> {
+        let n = u8::try_from(bytes.len()).map_err(|_| StoreError::Full)?;
+        let size = rec_size(bytes.len());
+        let scan = self.scan();
+        let stage = |buf: &mut [u8; BUF_LEN]| {
+            if let Some(d) = buf.get_mut(REC_HEAD..REC_HEAD + bytes.len()) {
+                d.copy_from_slice(bytes);
+            }
+        };
+        if let Some(s) = &scan {
+            if s.free + size <= s.page + self.page_size {
+                stage(&mut self.buf);
+                self.write_record(s.free, key, n)?;
+                return Ok(());
+            }
+        }
+        // Next page of the ring (the first if nothing valid is stored).
+        let (target, seq) = match &scan {
+            Some(s) if s.page + self.page_size < self.range.end => (s.page + self.page_size, s.seq),
+            Some(s) => (self.range.start, s.seq),
+            None => (self.range.start, 0),
+        };
+        let end = target + self.page_size;
+        // Normally erased when it was vacated; not after a cut or on a dirty region.
+        if !self.blank(target, end) {
+            self.flash.0.erase(target, end)?;
+        }
+        let mut at = target + PAGE_HEAD;
+        for k in 0..KEYS as u8 {
+            let old = scan
+                .as_ref()
+                .and_then(|s| s.latest.get(usize::from(k)).copied().flatten());
+            let n = if k == key {
+                stage(&mut self.buf);
+                n
+            } else if let Some((from, n)) = old {
+                let data = self.buf.get_mut(REC_HEAD..REC_HEAD + usize::from(n));
+                self.flash
+                    .0
+                    .read(from + REC_HEAD as u32, data.unwrap_or(&mut []))?;
+                n
+            } else {
+                continue;
+            };
+            if at + rec_size(usize::from(n)) > end {
+                return Err(StoreError::Full);
+            }
+            at += self.write_record(at, k, n)?;
+        }
+        // The header last: only now does the new page take over.
+        let seq = seq.wrapping_add(1);
+        let mut head = [0u8; PAGE_HEAD as usize];
+        head[..4].copy_from_slice(&seq.to_le_bytes());
+        head[4..].copy_from_slice(&(crc32(&seq.to_le_bytes()) ^ PAGE_TAG).to_le_bytes());
+        self.flash.0.write(target, &head)?;
+        // Everything live is in the new page: vacate the old one.
+        if let Some(s) = scan {
+            self.flash.0.erase(s.page, s.page + self.page_size)?;
+        }
+        Ok(())
     }
 
     /// Load the settings, or defaults with the reason. Settings are the first thing
     /// the firmware saves, so a region that is not blank but holds no settings is
     /// reported as corrupt rather than taken for a first boot.
-    pub async fn load_settings(&mut self) -> (Settings, LoadStatus) {
+    pub fn load_settings(&mut self) -> (Settings, LoadStatus) {
         let mut img = [0u8; IMAGE_LEN];
-        let fetched = self.fetch(KEY_SETTINGS, &mut img).await;
-        match fetched {
-            (_, LoadStatus::Empty) if !self.region_blank().await => {
+        match self.fetch(KEY_SETTINGS, &mut img) {
+            (_, LoadStatus::Empty) if !self.blank(self.range.start, self.range.end) => {
                 (Settings::default(), LoadStatus::Corrupt)
             }
             (len, LoadStatus::Loaded) => {
@@ -183,15 +340,14 @@ impl<F: NorFlash> SettingsStore<F> {
         }
     }
 
-    pub async fn save_settings(&mut self, s: &Settings) -> Result<(), StoreError<F::Error>> {
-        let img = s.to_image();
-        self.store_raw(KEY_SETTINGS, &img).await
+    pub fn save_settings(&mut self, s: &Settings) -> Result<(), StoreError<F::Error>> {
+        self.store_raw(KEY_SETTINGS, &s.to_image())
     }
 
     /// Load G54-G59, G28 and G30 data.
-    pub async fn load_coords(&mut self) -> (Coords, LoadStatus) {
+    pub fn load_coords(&mut self) -> (Coords, LoadStatus) {
         let mut img = [0u8; COORDS_LEN];
-        match self.fetch(KEY_COORDS, &mut img).await {
+        match self.fetch(KEY_COORDS, &mut img) {
             (COORDS_LEN, LoadStatus::Loaded) => match coords_from_image(&img) {
                 Some(c) => (c, LoadStatus::Loaded),
                 None => (Coords::default(), LoadStatus::Corrupt),
@@ -201,39 +357,45 @@ impl<F: NorFlash> SettingsStore<F> {
         }
     }
 
-    pub async fn save_coords(&mut self, c: &Coords) -> Result<(), StoreError<F::Error>> {
-        let img = coords_to_image(c);
-        self.store_raw(KEY_COORDS, &img).await
+    pub fn save_coords(&mut self, c: &Coords) -> Result<(), StoreError<F::Error>> {
+        self.store_raw(KEY_COORDS, &coords_to_image(c))
     }
 
     /// Load startup line `i` (empty if none or unusable).
-    pub async fn load_startup(&mut self, i: usize) -> (StartupLine, LoadStatus) {
+    pub fn load_startup(&mut self, i: usize) -> (StartupLine, LoadStatus) {
         let mut line = StartupLine::new();
         if i >= STARTUP_LINES {
             return (line, LoadStatus::Empty);
         }
-        let key = KEY_STARTUP + i as u8;
-        let Some(map) = self.map.as_mut() else {
-            return (line, LoadStatus::Corrupt);
-        };
-        let status = match map.fetch_item::<&[u8]>(&mut self.buf, &key).await {
-            Ok(Some(bytes)) => match core::str::from_utf8(bytes) {
-                Ok(text) if text.len() <= LINE_MAX => {
-                    let _ = line.push_str(text);
+        let mut raw = [0u8; LINE_MAX + 1];
+        let status = match self.fetch(KEY_STARTUP + i as u8, &mut raw) {
+            // Startup lines are ASCII (cleaned G-code), copied byte-wise.
+            (len, LoadStatus::Loaded) => match raw.get(..len) {
+                Some(text) if len <= LINE_MAX && text.is_ascii() => {
+                    for &b in text {
+                        let _ = line.push(char::from(b));
+                    }
                     LoadStatus::Loaded
                 }
                 _ => LoadStatus::Corrupt,
             },
-            Ok(None) => LoadStatus::Empty,
-            Err(_) => LoadStatus::Corrupt,
+            (_, status) => status,
         };
         (line, status)
     }
 
-    pub async fn save_startup(&mut self, i: usize, text: &str) -> Result<(), StoreError<F::Error>> {
+    pub fn save_startup(&mut self, i: usize, text: &str) -> Result<(), StoreError<F::Error>> {
         let key = KEY_STARTUP + (i.min(STARTUP_LINES - 1)) as u8;
-        self.store_raw(key, text.as_bytes()).await
+        self.store_raw(key, text.as_bytes())
     }
+}
+
+fn le32(b: &[u8], at: usize) -> u32 {
+    let mut w = [0u8; 4];
+    if let Some(s) = b.get(at..at + 4) {
+        w.copy_from_slice(s);
+    }
+    u32::from_le_bytes(w)
 }
 
 fn coords_to_image(c: &Coords) -> [u8; COORDS_LEN] {
@@ -254,29 +416,23 @@ fn coords_to_image(c: &Coords) -> [u8; COORDS_LEN] {
 
 fn coords_from_image(img: &[u8; COORDS_LEN]) -> Option<Coords> {
     let (body, tail) = img.split_at(COORDS_LEN - 4);
-    if crc32(body) != u32::from_le_bytes(tail.try_into().ok()?)
-        || body.first() != Some(&COORDS_VERSION)
-    {
+    if crc32(body) != le32(tail, 0) || body.first() != Some(&COORDS_VERSION) {
         return None;
     }
-    let mut vals = [0.0f32; 8 * AXES];
-    for (v, chunk) in vals.iter_mut().zip(body.get(1..)?.chunks_exact(4)) {
-        *v = f32::from_le_bytes(chunk.try_into().ok()?);
+    let mut c = Coords::default();
+    let mut chunks = body.get(1..)?.chunks_exact(4);
+    let points = c.wcs.iter_mut().chain([&mut c.g28, &mut c.g30]);
+    for v in points.flat_map(|p| p.iter_mut()) {
+        *v = f32::from_le_bytes(chunks.next()?.try_into().ok()?);
         if !v.is_finite() {
             return None;
         }
     }
-    let mut c = Coords::default();
-    let points = c.wcs.iter_mut().chain([&mut c.g28, &mut c.g30]);
-    for (p, src) in points.zip(vals.chunks_exact(AXES)) {
-        p.copy_from_slice(src);
-    }
     Some(c)
 }
 
-/// Run a future to completion by polling it. Enough for flash drivers that complete
-/// synchronously (the blocking adapter below, the host mocks); never use it on a
-/// future that waits for an interrupt.
+/// Run a future to completion by polling it. Only for futures that complete without
+/// waiting for an interrupt (the store itself is synchronous and does not need it).
 pub fn block_on<T>(f: impl Future<Output = T>) -> T {
     let mut f = pin!(f);
     let mut cx = Context::from_waker(Waker::noop());
@@ -287,34 +443,6 @@ pub fn block_on<T>(f: impl Future<Output = T>) -> T {
     }
 }
 
-/// Adapter: a blocking `embedded-storage` NOR flash seen through the async traits.
+/// The blocking `embedded-storage` NOR flash the store works on (kept as a wrapper so
+/// that the firmware's and the tests' types stay as they were).
 pub struct BlockingFlash<F>(pub F);
-
-impl<F: embedded_storage::nor_flash::ErrorType> embedded_storage_async::nor_flash::ErrorType
-    for BlockingFlash<F>
-{
-    type Error = F::Error;
-}
-
-impl<F: embedded_storage::nor_flash::ReadNorFlash> embedded_storage_async::nor_flash::ReadNorFlash
-    for BlockingFlash<F>
-{
-    const READ_SIZE: usize = F::READ_SIZE;
-    async fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-        self.0.read(offset, bytes)
-    }
-    fn capacity(&self) -> usize {
-        self.0.capacity()
-    }
-}
-
-impl<F: embedded_storage::nor_flash::NorFlash> NorFlash for BlockingFlash<F> {
-    const WRITE_SIZE: usize = F::WRITE_SIZE;
-    const ERASE_SIZE: usize = F::ERASE_SIZE;
-    async fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-        self.0.erase(from, to)
-    }
-    async fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
-        self.0.write(offset, bytes)
-    }
-}

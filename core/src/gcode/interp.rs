@@ -119,6 +119,70 @@ enum NonModal {
     ResetG92,
 }
 
+const MOTION_MODES: [MotionMode; 5] = [
+    MotionMode::Rapid,
+    MotionMode::Linear,
+    MotionMode::ArcCw,
+    MotionMode::ArcCcw,
+    MotionMode::Cancel,
+];
+const NON_MODAL: [NonModal; 9] = [
+    NonModal::Dwell,
+    NonModal::SetCoord,
+    NonModal::Home28,
+    NonModal::Set28,
+    NonModal::Home30,
+    NonModal::Set30,
+    NonModal::Absolute,
+    NonModal::SetG92,
+    NonModal::ResetG92,
+];
+// Modal groups of the G codes; the plane, arc distance, cutter compensation, tool
+// length offset and path mode groups are accepted (only their default exists) and
+// checked for repeats.
+const G_MOTION: usize = 0;
+const G_NON_MODAL: usize = 1;
+const G_UNITS: usize = 2;
+const G_DISTANCE: usize = 3;
+const G_FEED_MODE: usize = 4;
+const G_WCS: usize = 5;
+const G_GROUPS: usize = 11;
+/// G code (x10), its group and its value in the group (an index into MOTION_MODES
+/// or NON_MODAL; 1 = inches / incremental / inverse time; the coordinate system).
+const G_CODES: [(u16, u8, u8); 31] = [
+    (0, 0, 0),
+    (10, 0, 1),
+    (20, 0, 2),
+    (30, 0, 3),
+    (800, 0, 4),
+    (40, 1, 0),
+    (100, 1, 1),
+    (280, 1, 2),
+    (281, 1, 3),
+    (300, 1, 4),
+    (301, 1, 5),
+    (530, 1, 6),
+    (920, 1, 7),
+    (921, 1, 8),
+    (200, 2, 1),
+    (210, 2, 0),
+    (900, 3, 0),
+    (910, 3, 1),
+    (930, 4, 1),
+    (940, 4, 0),
+    (540, 5, 0),
+    (550, 5, 1),
+    (560, 5, 2),
+    (570, 5, 3),
+    (580, 5, 4),
+    (590, 5, 5),
+    (170, 6, 0),
+    (911, 7, 0),
+    (400, 8, 0),
+    (490, 9, 0),
+    (610, 10, 0),
+];
+
 /// The interpreter.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Interp {
@@ -266,10 +330,15 @@ impl Interp {
     }
     /// The work coordinate offset (active system + G92), mm.
     pub fn work_offset(&self) -> [f32; AXES] {
+        self.offset_of(self.modal.wcs)
+    }
+
+    /// Offset of coordinate system `wcs` (0 = G54) plus G92, mm.
+    fn offset_of(&self, wcs: u8) -> [f32; AXES] {
         let wcs = self
             .coords
             .wcs
-            .get(usize::from(self.modal.wcs))
+            .get(usize::from(wcs))
             .copied()
             .unwrap_or([0.0; AXES]);
         let mut o = [0.0; AXES];
@@ -324,53 +393,30 @@ impl Interp {
     pub fn execute(&mut self, line: &[u8], s: &Settings, line_no: u32) -> Result<Outcome, Reject> {
         let mut b = Block::parse(line)?;
 
-        // --- Group the codes. ---
-        let mut motion: Option<MotionMode> = None;
-        let mut non_modal: Option<NonModal> = None;
-        let mut units: Option<bool> = None;
-        let mut distance: Option<bool> = None;
-        let mut feed_mode: Option<bool> = None;
-        let mut wcs: Option<u8> = None;
-        let mut plane = None;
-        let mut arc_mode = None;
-        let mut comp = None;
-        let mut tlo = None;
-        let mut path_mode = None;
+        // --- Group the codes (one modal group may be named once per block). ---
+        let mut groups: [Option<u8>; G_GROUPS] = [None; G_GROUPS];
         for &code in b.g.iter() {
-            match code {
-                0 => set_once(&mut motion, MotionMode::Rapid)?,
-                10 => set_once(&mut motion, MotionMode::Linear)?,
-                20 => set_once(&mut motion, MotionMode::ArcCw)?,
-                30 => set_once(&mut motion, MotionMode::ArcCcw)?,
-                800 => set_once(&mut motion, MotionMode::Cancel)?,
-                40 => set_once(&mut non_modal, NonModal::Dwell)?,
-                100 => set_once(&mut non_modal, NonModal::SetCoord)?,
-                280 => set_once(&mut non_modal, NonModal::Home28)?,
-                281 => set_once(&mut non_modal, NonModal::Set28)?,
-                300 => set_once(&mut non_modal, NonModal::Home30)?,
-                301 => set_once(&mut non_modal, NonModal::Set30)?,
-                530 => set_once(&mut non_modal, NonModal::Absolute)?,
-                920 => set_once(&mut non_modal, NonModal::SetG92)?,
-                921 => set_once(&mut non_modal, NonModal::ResetG92)?,
-                170 => set_once(&mut plane, ())?,
-                200 => set_once(&mut units, true)?,
-                210 => set_once(&mut units, false)?,
-                900 => set_once(&mut distance, false)?,
-                910 => set_once(&mut distance, true)?,
-                911 => set_once(&mut arc_mode, ())?,
-                930 => set_once(&mut feed_mode, true)?,
-                940 => set_once(&mut feed_mode, false)?,
-                400 => set_once(&mut comp, ())?,
-                490 => set_once(&mut tlo, ())?,
-                540 | 550 | 560 | 570 | 580 | 590 => set_once(&mut wcs, (code / 10 - 54) as u8)?,
-                591..=599 => return Err(Status::UnsupportedCoordSys.into()),
-                610 => set_once(&mut path_mode, ())?,
-                _ if code % 10 != 0 && !matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61) => {
-                    return Err(Status::CommandValueNotInteger.into())
+            let Some(&(_, group, value)) = G_CODES.iter().find(|e| e.0 == code) else {
+                return Err(match code {
+                    591..=599 => Status::UnsupportedCoordSys,
+                    _ if code % 10 != 0 && !matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61) => {
+                        Status::CommandValueNotInteger
+                    }
+                    _ => Status::UnsupportedCommand,
                 }
-                _ => return Err(Status::UnsupportedCommand.into()),
+                .into());
+            };
+            if let Some(slot) = groups.get_mut(usize::from(group)) {
+                set_once(slot, value)?;
             }
         }
+        let group = |g: usize| groups.get(g).copied().flatten();
+        let motion = group(G_MOTION).and_then(|v| MOTION_MODES.get(usize::from(v)).copied());
+        let non_modal = group(G_NON_MODAL).and_then(|v| NON_MODAL.get(usize::from(v)).copied());
+        let units = group(G_UNITS).map(|v| v != 0);
+        let distance = group(G_DISTANCE).map(|v| v != 0);
+        let feed_mode = group(G_FEED_MODE).map(|v| v != 0);
+        let wcs = group(G_WCS);
         let mut stop: Option<Stop> = None;
         let mut optional_stop = false;
         let mut pen: Option<bool> = None;
@@ -500,19 +546,7 @@ impl Interp {
         }
 
         // --- Targets, in machine mm. ---
-        let offset = {
-            let w = self
-                .coords
-                .wcs
-                .get(usize::from(modal.wcs))
-                .copied()
-                .unwrap_or([0.0; AXES]);
-            let mut o = [0.0; AXES];
-            for ((o, w), g) in o.iter_mut().zip(w.iter()).zip(self.g92.iter()) {
-                *o = w + g;
-            }
-            o
-        };
+        let offset = self.offset_of(modal.wcs);
         let absolute_override = non_modal == Some(NonModal::Absolute);
         let mut target = pos;
         for (axis, t) in target.iter_mut().enumerate() {
@@ -1100,6 +1134,77 @@ mod tests {
         assert_eq!(run(&mut it, &s, "T300"), err(Status::MaxValueExceeded));
         // A rejected block changes nothing.
         assert_eq!(it, Interp::new());
+    }
+
+    #[test]
+    fn every_g_code_lands_in_its_modal_group() {
+        let s = Settings::default();
+        // Each supported code with its modal group (Grbl's groups).
+        let codes: [(&str, u8); 31] = [
+            ("G0", 1),
+            ("G1", 1),
+            ("G2", 1),
+            ("G3", 1),
+            ("G80", 1),
+            ("G4", 0),
+            ("G10", 0),
+            ("G28", 0),
+            ("G28.1", 0),
+            ("G30", 0),
+            ("G30.1", 0),
+            ("G53", 0),
+            ("G92", 0),
+            ("G92.1", 0),
+            ("G17", 2),
+            ("G20", 6),
+            ("G21", 6),
+            ("G90", 3),
+            ("G91", 3),
+            ("G91.1", 4),
+            ("G93", 5),
+            ("G94", 5),
+            ("G40", 7),
+            ("G43.1", 8),
+            ("G49", 8),
+            ("G54", 12),
+            ("G55", 12),
+            ("G56", 12),
+            ("G57", 12),
+            ("G58", 12),
+            ("G59", 12),
+        ];
+        for (a, ga) in codes {
+            for (b, gb) in codes {
+                let r = run(&mut Interp::new(), &s, &std::format!("{a} {b}"));
+                let violation = r == err(Status::ModalGroupViolation);
+                if a == "G43.1" || b == "G43.1" {
+                    // Dynamic tool length offset is not supported.
+                    assert!(r.is_err(), "{a} {b}");
+                } else {
+                    assert_eq!(violation, ga == gb, "{a} {b}: {r:?}");
+                }
+            }
+        }
+        let modal = |line: &str| {
+            let mut it = Interp::new();
+            run(&mut it, &s, line).unwrap();
+            *it.modal()
+        };
+        assert_eq!(modal("G1 F100").motion, MotionMode::Linear);
+        assert_eq!(modal("G0").motion, MotionMode::Rapid);
+        assert_eq!(modal("G2 X1 I0.5 F100").motion, MotionMode::ArcCw);
+        assert_eq!(modal("G3 X1 I0.5 F100").motion, MotionMode::ArcCcw);
+        assert_eq!(modal("G80").motion, MotionMode::Cancel);
+        assert!(modal("G20").inches && !modal("G21").inches);
+        assert!(modal("G91").incremental && !modal("G90").incremental);
+        assert!(modal("G93").inverse_time && !modal("G94").inverse_time);
+        for (k, w) in ["G54", "G55", "G56", "G57", "G58", "G59"]
+            .iter()
+            .enumerate()
+        {
+            assert_eq!(usize::from(modal(w).wcs), k);
+        }
+        assert_eq!(modal("G61 G17 G91.1 G40 G49 G94").motion, MotionMode::Rapid);
     }
 
     #[test]
