@@ -1305,7 +1305,12 @@ mod tests {
             let Path::Arc { center, ccw: dir, .. } = m.path else { panic!("not an arc") };
             proptest::prop_assert_eq!(dir, ccw);
             let spm = s.steps_per_mm(0);
-            let c = [start[0] + center[0] as f32 / spm, start[1] + center[1] as f32 / spm];
+            // The centre is relative to the start's step position (the rounded start),
+            // which is where the machine is when the arc begins.
+            let c = [
+                (libm::roundf(start[0] * spm) + center[0] as f32) / spm,
+                (libm::roundf(start[1] * spm) + center[1] as f32) / spm,
+            ];
             let end = it.position();
             let r0 = libm::hypotf(start[0] - c[0], start[1] - c[1]);
             let r1 = libm::hypotf(end[0] - c[0], end[1] - c[1]);
@@ -1317,6 +1322,21 @@ mod tests {
                 proptest::prop_assert_eq!(short, !neg, "cross {}", cross);
             }
         }
+    }
+
+
+    /// A near-semicircle whose centre lies close to the chord: the centre must be the
+    /// grid point nearest the exact one, relative to the start's step position.
+    #[test]
+    fn r_form_near_semicircle_centre_is_the_nearest_grid_point() {
+        let s = Settings::default();
+        let mut it = Interp::new();
+        run(&mut it, &s, "G0 X40.4444 Y-47.9680").unwrap();
+        let o = run(&mut it, &s, "G2 X84.4295 Y-30.6952 R24.8752 F100").unwrap();
+        let Path::Arc { center, .. } = moves(&o)[0].path else { panic!("not an arc") };
+        // Exact centre (65.28043, -46.57250) mm = (5222.43, -3725.80) steps, nearest grid
+        // point (5222, -3726); the start is at step (3236, -3837).
+        assert_eq!(center, [5222 - 3236, -3726 + 3837]);
     }
 
     #[test]
