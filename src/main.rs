@@ -19,7 +19,8 @@ use defmt_rtt as _;
 use heapless::spsc::{Consumer, Producer};
 use inkstep::board;
 use inkstep::steps::{
-    self, BoardSide, StepOutput, DIR_INVERT, FOUR_PHASE, HALT, LAST_DIR, LAST_STEPPED, STEP_INVERT,
+    self, BoardSide, StepOutput, DIR_INVERT, FOUR_PHASE, HALT, LAST_DIR, LAST_STEPPED, PULSE_TICKS,
+    STEP_INVERT,
 };
 use inkstep_core::link::StepSide;
 use inkstep_core::stepper::exec::Executor;
@@ -68,6 +69,7 @@ mod app {
     use inkstep_core::controller::Controller;
     use inkstep_core::link::Link;
     use inkstep_core::machine::Inputs;
+    use inkstep_core::protocol::STARTUP_LINES;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
     use inkstep_core::settings::{OutputMode, PenMode, Settings};
     use inkstep_core::settings_store::{BlockingFlash, SettingsStore, STORE_RANGE};
@@ -180,18 +182,43 @@ mod app {
         )
     }
 
-    /// Output polarity, mode, pulse width and driver enable from the settings.
-    fn apply_output_settings(
-        s: &Settings,
-        port: &mut board::StepPort,
-        timer: &mut board::StepTimer,
-    ) {
+    /// What waits to be written to flash (at rest).
+    pub struct Saves {
+        settings: bool,
+        coords: bool,
+        startup: bool,
+    }
+
+    impl Saves {
+        const fn new() -> Self {
+            Self {
+                settings: false,
+                coords: false,
+                startup: false,
+            }
+        }
+    }
+
+    /// Output polarity, mode and pulse width for the step interrupt, and the hard-limit
+    /// arming, from the settings (at boot and whenever they change).
+    fn publish_output_settings(s: &Settings) {
         STEP_INVERT.store(s.step_invert_mask(), Ordering::Relaxed);
         DIR_INVERT.store(s.dir_invert_mask(), Ordering::Relaxed);
         FOUR_PHASE.store(s.output_mode() == OutputMode::FourPhase, Ordering::Relaxed);
         HARD_LIMITS_ARMED.store(s.hard_limits(), Ordering::Relaxed);
         let ticks = u32::from(s.step_pulse_us()) * (board::STEP_TIMER_HZ / 1_000_000);
-        timer.set_pulse_ticks(ticks.min(0xFFFF) as u16);
+        PULSE_TICKS.store(ticks.min(0xFFFF), Ordering::Relaxed);
+    }
+
+    /// Output polarity, mode, pulse width and driver enable from the settings.
+    /// The driver-enable polarity (`$4`) takes effect at boot.
+    fn apply_output_settings(
+        s: &Settings,
+        port: &mut board::StepPort,
+        timer: &mut board::StepTimer,
+    ) {
+        publish_output_settings(s);
+        timer.set_pulse_ticks(PULSE_TICKS.load(Ordering::Relaxed) as u16);
         port.set_drivers_enabled(true, !s.invert_enable());
     }
 
@@ -293,7 +320,7 @@ mod app {
     /// The protocol, the machine state and the G-code interpreter, every millisecond:
     /// inputs, received bytes (only those the protocol takes: back-pressure), the
     /// periodic work, replies, the busy LED, the pen servo and settings persistence.
-    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: heapless::Vec<u8, 64> = heapless::Vec::new(), save_pending: bool = false, pen: Option<bool> = None])]
+    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: heapless::Vec<u8, 64> = heapless::Vec::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
     async fn protocol(mut cx: protocol::Context) {
         loop {
             let now = Mono::now().ticks();
@@ -357,7 +384,8 @@ mod app {
                 HALT.store(false, Ordering::SeqCst);
             }
             if settings_changed {
-                *cx.local.save_pending = true;
+                cx.local.saves.settings = true;
+                publish_output_settings(&settings);
             }
             if *cx.local.pen != Some(pen_down) && settings.pen_mode() == PenMode::Servo {
                 cx.local
@@ -366,13 +394,33 @@ mod app {
                 *cx.local.pen = Some(pen_down);
             }
             // Flash writes stall the CPU (instruction fetch waits), so only at rest.
-            if *cx.local.save_pending && !busy {
-                *cx.local.save_pending = false;
-                if cx.local.store.save_settings(&settings).is_err() {
+            let saves = &mut *cx.local.saves;
+            let store = &mut *cx.local.store;
+            cx.shared.ctl.lock(|ctl| {
+                saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
+                saves.startup |= ctl.protocol_mut().take_startup_dirty();
+                if busy {
+                    return;
+                }
+                if core::mem::take(&mut saves.settings) && store.save_settings(&settings).is_err() {
                     defmt::warn!("settings save failed");
                 }
-            }
-            let _ = busy;
+                if core::mem::take(&mut saves.coords)
+                    && store
+                        .save_coords(ctl.protocol().machine().interp().coords())
+                        .is_err()
+                {
+                    defmt::warn!("offsets save failed");
+                }
+                if core::mem::take(&mut saves.startup) {
+                    for i in 0..STARTUP_LINES {
+                        let line = ctl.protocol().startup_line(i).unwrap_or("");
+                        if store.save_startup(i, line).is_err() {
+                            defmt::warn!("startup line save failed");
+                        }
+                    }
+                }
+            });
             Mono::delay(1.millis()).await;
         }
     }

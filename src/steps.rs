@@ -13,7 +13,7 @@
 
 use crate::board::{self, StepPort, StepTimer};
 use core::cell::RefCell;
-use core::sync::atomic::{AtomicBool, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
 use critical_section::Mutex;
 use heapless::spsc::{Consumer, Producer};
 use inkstep_core::interp::Tick;
@@ -30,6 +30,8 @@ pub static HALT: AtomicBool = AtomicBool::new(false);
 pub static STEP_INVERT: AtomicU8 = AtomicU8::new(0);
 pub static DIR_INVERT: AtomicU8 = AtomicU8::new(0);
 pub static FOUR_PHASE: AtomicBool = AtomicBool::new(false);
+/// Step pulse width in timer ticks (`$0`), taken when the timer starts.
+pub static PULSE_TICKS: AtomicU32 = AtomicU32::new(720);
 /// The last step's axes and directions (bit set = negative), for the LCD.
 pub static LAST_DIR: AtomicU8 = AtomicU8::new(0);
 pub static LAST_STEPPED: AtomicU8 = AtomicU8::new(0);
@@ -164,6 +166,8 @@ impl StepOutput {
                     let d = (out.dir ^ dir_inv) & 0b111;
                     self.port
                         .write(d << board::DIR_SHIFT, (!d & 0b111) << board::DIR_SHIFT);
+                    let pulse = PULSE_TICKS.load(Ordering::Relaxed).clamp(1, 0xFFFF);
+                    self.timer.set_pulse_ticks(pulse as u16);
                     self.timer.set_period(out.reload);
                     self.timer.start();
                 }

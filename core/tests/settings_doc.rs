@@ -37,7 +37,11 @@ fn check(file: &str) {
         std::fs::write(&path, new).expect(file);
         return;
     }
-    assert_eq!(&doc[start..end], want, "{file} is stale: rerun with INKSTEP_BLESS=1");
+    assert_eq!(
+        &doc[start..end],
+        want,
+        "{file} is stale: rerun with INKSTEP_BLESS=1"
+    );
 }
 
 #[test]

@@ -1324,7 +1324,6 @@ mod tests {
         }
     }
 
-
     /// A near-semicircle whose centre lies close to the chord: the centre must be the
     /// grid point nearest the exact one, relative to the start's step position.
     #[test]
@@ -1333,7 +1332,9 @@ mod tests {
         let mut it = Interp::new();
         run(&mut it, &s, "G0 X40.4444 Y-47.9680").unwrap();
         let o = run(&mut it, &s, "G2 X84.4295 Y-30.6952 R24.8752 F100").unwrap();
-        let Path::Arc { center, .. } = moves(&o)[0].path else { panic!("not an arc") };
+        let Path::Arc { center, .. } = moves(&o)[0].path else {
+            panic!("not an arc")
+        };
         // Exact centre (65.28043, -46.57250) mm = (5222.43, -3725.80) steps, nearest grid
         // point (5222, -3726); the start is at step (3236, -3837).
         assert_eq!(center, [5222 - 3236, -3726 + 3837]);
