@@ -360,10 +360,11 @@ mod app {
                     for &b in out.iter().take(n) {
                         let _ = tx.enqueue(b);
                     }
+                    // The planner took new settings when they changed (at rest, before
+                    // the next line); what is left is the HMI, the outputs and the save.
                     let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
                     if changed {
-                        let s = ctl.protocol().machine().settings().clone();
-                        link.configure(&s);
+                        ctl.settings_changed();
                     }
                     let busy = ctl.take_outputs().busy_led;
                     (

@@ -8,7 +8,8 @@ a chosen function and the return to its caller are charged to that call. Emulati
 deterministic, so the counts are the same on every run and every machine.
 
 Usage: measure.py ELF [--json OUT]
-The ELF exports `bench_isr` (one whole TIM2 interrupt of the firmware) and
+The ELF exports `bench_tick`, `bench_pulse_end` and `bench_kick` (the firmware's whole TIM2
+interrupt at an update event, a compare event and a start request) and
 `bench_prepare` (one call of the segment preparer), and a `BENCH_RESULT` record that
 its main fills in (steps executed per program).
 """
@@ -34,7 +35,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('elf')
     ap.add_argument('--json')
-    ap.add_argument('--names', default='bench_isr,bench_prepare')
+    ap.add_argument('--names', default='bench_tick,bench_pulse_end,bench_kick,bench_prepare')
     args = ap.parse_args()
 
     with open(args.elf, 'rb') as f:

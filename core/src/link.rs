@@ -131,7 +131,10 @@ impl<S: StepSide> Link<S> {
         &self.planner
     }
     /// Take new limits from the settings (they only change at rest).
-    pub fn configure(&mut self, s: &Settings) {
+    /// Settings change only at rest (the machine refuses `$n=v` otherwise), when the
+    /// planner is empty; rebuilding it then loses nothing. Called by the machine
+    /// through [`MotionControl::configure`] as soon as a setting changes.
+    fn reconfigure(&mut self, s: &Settings) {
         let pos = self.side.position();
         self.planner = Planner::new(planner_config(s), pos);
         self.pen_lift_ms = s.pen_lift_ms();
@@ -327,5 +330,8 @@ impl<S: StepSide> MotionControl for Link<S> {
         } else {
             0.0
         }
+    }
+    fn configure(&mut self, s: &Settings) {
+        self.reconfigure(s);
     }
 }

@@ -503,7 +503,7 @@ impl Protocol {
         self.pending_welcome = true;
     }
 
-    fn set_setting<M: MotionControl>(&mut self, cmd: &[u8], m: &M) -> Result<(), Status> {
+    fn set_setting<M: MotionControl>(&mut self, cmd: &[u8], m: &mut M) -> Result<(), Status> {
         let eq = cmd
             .iter()
             .position(|&c| c == b'=')

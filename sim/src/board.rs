@@ -183,9 +183,8 @@ impl Board {
     fn background(&mut self) {
         let now = self.now_ms();
         self.ctl.poll(&mut self.link, now);
+        // The planner took the new settings when they changed (MotionControl::configure).
         if self.ctl.protocol_mut().machine_mut().take_settings_dirty() {
-            let s = self.ctl.protocol().machine().settings().clone();
-            self.link.configure(&s);
             self.ctl.settings_changed();
         }
         self.link.fill();

@@ -6,8 +6,8 @@
 //! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
 //! interrupt body with its register accesses. The emulator has no timer, so before each
 //! call the bench sets the status flag the hardware would (update, then compare one
-//! pulse later). measure.py charges every instruction executed inside `bench_isr` and
-//! `bench_prepare` to that call.
+//! pulse later). measure.py charges every instruction executed inside `bench_tick` (update
+//! event), `bench_pulse_end` (compare event), `bench_kick` and `bench_prepare` to that call.
 #![no_std]
 #![no_main]
 
@@ -57,10 +57,30 @@ const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
 const UIF: u32 = 1;
 const CC1IF: u32 = 1 << 1;
 
-/// One TIM2 interrupt, exactly as the firmware runs it.
+/// The TIM2 interrupt at an update event (pulse start, next wait), exactly as the
+/// firmware runs it. Each wrapper first sets the status flag the hardware would (one
+/// store, counted: a conservative 2 instructions), which also keeps the three wrappers
+/// distinct so the linker cannot merge them.
 #[inline(never)]
 #[no_mangle]
-pub extern "C" fn bench_isr(out: &mut StepOutput) {
+pub extern "C" fn bench_tick(out: &mut StepOutput) {
+    raise(UIF);
+    out.on_interrupt();
+}
+
+/// The TIM2 interrupt at the compare event (pulse end, next directions).
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn bench_pulse_end(out: &mut StepOutput) {
+    raise(CC1IF);
+    out.on_interrupt();
+}
+
+/// The TIM2 interrupt pended by the preparation task to start the timer.
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn bench_kick(out: &mut StepOutput) {
+    raise(0);
     out.on_interrupt();
 }
 
@@ -131,21 +151,14 @@ fn main() -> ! {
                 log(sink.get(..n).unwrap_or(&[]));
             }
             ctl.poll(&mut link, now);
-            if ctl.protocol_mut().machine_mut().take_settings_dirty() {
-                let s = ctl.protocol().machine().settings().clone();
-                link.configure(&s);
-            }
             bench_prepare(&mut link);
             // Start the timer as the firmware's kick does (a pend with no flags).
-            raise(0);
-            bench_isr(&mut out);
+            bench_kick(&mut out);
             // Run interrupts until the prepared commands are used up.
             while out.timer.is_running() {
                 let before = steps::position();
-                raise(UIF);
-                bench_isr(&mut out);
-                raise(CC1IF);
-                bench_isr(&mut out);
+                bench_tick(&mut out);
+                bench_pulse_end(&mut out);
                 irqs += 2;
                 if steps::position() != before {
                     events += 1;
@@ -155,7 +168,13 @@ fn main() -> ! {
                     break;
                 }
             }
-            let done = sent >= prog.len() && !out.timer.is_running() && link.side().queued() == 0;
+            // Done when every byte was taken AND executed (nothing left in the protocol's
+            // receive buffer), and the machine is at rest.
+            let drained = ctl.protocol().rx_free() == inkstep_core::protocol::RX_BUFFER_SIZE;
+            let done = sent >= prog.len()
+                && drained
+                && !out.timer.is_running()
+                && link.side().queued() == 0;
             if done && inkstep_core::machine::MotionControl::is_idle(&link) {
                 break;
             }

@@ -69,6 +69,10 @@ pub trait MotionControl {
     fn set_position(&mut self, pos: StepPos);
     /// Current path speed in mm/min (for `FS:`).
     fn speed(&self) -> f32;
+    /// New settings (`$n=v`, `$RST`), given at rest, before the next line runs: the
+    /// limits must apply to every move queued after the change, and nothing queued
+    /// may be lost. Fakes that plan nothing may keep the default.
+    fn configure(&mut self, _settings: &crate::settings::Settings) {}
 
     /// Nothing queued and at rest.
     fn is_idle(&self) -> bool {

@@ -270,12 +270,19 @@ impl Machine {
     }
 
     /// `$n=v`: only at rest (Grbl's error 8 otherwise).
-    pub fn set_setting<M: MotionControl>(&mut self, n: u16, v: f32, m: &M) -> Result<(), Status> {
+    pub fn set_setting<M: MotionControl>(
+        &mut self,
+        n: u16,
+        v: f32,
+        m: &mut M,
+    ) -> Result<(), Status> {
         if !self.idle_or_alarm(m) {
             return Err(Status::IdleError);
         }
         self.settings.set(n, v)?;
         self.settings_dirty = true;
+        // The motion system takes the new limits now, before the next line is run.
+        m.configure(&self.settings);
         // Steps per mm may have changed: the planner's step position is the truth.
         self.resync(m);
         Ok(())
@@ -289,9 +296,10 @@ impl Machine {
     }
 
     /// Replace all settings (`$RST=$` or a loaded image).
-    pub fn replace_settings<M: MotionControl>(&mut self, s: Settings, m: &M) {
+    pub fn replace_settings<M: MotionControl>(&mut self, s: Settings, m: &mut M) {
         self.settings = s;
         self.settings_dirty = true;
+        m.configure(&self.settings);
         self.resync(m);
     }
 
