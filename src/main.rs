@@ -18,10 +18,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use defmt_rtt as _;
 use heapless::spsc::{Consumer, Producer};
 use inkstep::board;
-use inkstep::steps::{
-    self, BoardSide, StepOutput, DIR_INVERT, FOUR_PHASE, HALT, LAST_DIR, LAST_STEPPED, PULSE_TICKS,
-    STEP_INVERT,
-};
+use inkstep::steps::{self, BoardSide, StepOutput, HALT, PULSE_TICKS};
 use inkstep_core::link::StepSide;
 use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::StepCmd;
@@ -202,9 +199,11 @@ mod app {
     /// Output polarity, mode and pulse width for the step interrupt, and the hard-limit
     /// arming, from the settings (at boot and whenever they change).
     fn publish_output_settings(s: &Settings) {
-        STEP_INVERT.store(s.step_invert_mask(), Ordering::Relaxed);
-        DIR_INVERT.store(s.dir_invert_mask(), Ordering::Relaxed);
-        FOUR_PHASE.store(s.output_mode() == OutputMode::FourPhase, Ordering::Relaxed);
+        steps::set_output_config(
+            s.step_invert_mask(),
+            s.dir_invert_mask(),
+            s.output_mode() == OutputMode::FourPhase,
+        );
         HARD_LIMITS_ARMED.store(s.hard_limits(), Ordering::Relaxed);
         let ticks = u32::from(s.step_pulse_us()) * (board::STEP_TIMER_HZ / 1_000_000);
         PULSE_TICKS.store(ticks.min(0xFFFF), Ordering::Relaxed);
@@ -510,21 +509,18 @@ mod app {
             }
         }
         fb.mark_all_dirty();
+        let mut last_pos = [0i32; 3];
         loop {
             let now = Mono::now().ticks();
-            let dir = LAST_DIR.load(Ordering::Relaxed);
-            let stepped = LAST_STEPPED.load(Ordering::Relaxed);
-            let sign = |a: u8| {
-                if stepped & (1 << a) == 0 {
-                    0
-                } else if dir & (1 << a) != 0 {
-                    -1
-                } else {
-                    1
-                }
-            };
+            // The teaching view's feed directions: which way each axis moved since the
+            // last refresh (the step interrupt stays free of bookkeeping for it).
             let (hmi, status) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                ctl.note_direction([sign(0), sign(1)]);
+                let pos = link.side().position();
+                if pos != last_pos {
+                    let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
+                    ctl.note_direction([sign(0), sign(1)]);
+                    last_pos = pos;
+                }
                 (ctl.hmi().clone(), ctl.status(link))
             });
             let _ = screens.render(&hmi, &status, now, &mut fb);

@@ -12,9 +12,8 @@
 //! short critical sections (position reads, flush on abort, re-zeroing at rest).
 
 use crate::board::{self, StepPort, StepTimer};
-use core::cell::RefCell;
-use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
-use critical_section::Mutex;
+use core::cell::UnsafeCell;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use heapless::spsc::{Consumer, Producer};
 use inkstep_core::interp::Tick;
 use inkstep_core::link::StepSide;
@@ -26,15 +25,22 @@ use inkstep_core::stepper::StepCmd;
 /// Latched by the e-stop (and an armed hard limit): the step interrupt halts the
 /// executor and emits nothing until the machine is reset.
 pub static HALT: AtomicBool = AtomicBool::new(false);
-/// Output polarity and mode, set from the settings.
-pub static STEP_INVERT: AtomicU8 = AtomicU8::new(0);
-pub static DIR_INVERT: AtomicU8 = AtomicU8::new(0);
-pub static FOUR_PHASE: AtomicBool = AtomicBool::new(false);
+/// Output configuration for the interrupt, one word so it costs one load per
+/// interrupt: bits 0-2 step invert mask, bits 3-5 direction invert mask, bit 6
+/// 4-phase output. Written by [`set_output_config`].
+static OUTPUT_CONFIG: AtomicU32 = AtomicU32::new(0);
 /// Step pulse width in timer ticks (`$0`), taken when the timer starts.
 pub static PULSE_TICKS: AtomicU32 = AtomicU32::new(720);
-/// The last step's axes and directions (bit set = negative), for the LCD.
-pub static LAST_DIR: AtomicU8 = AtomicU8::new(0);
-pub static LAST_STEPPED: AtomicU8 = AtomicU8::new(0);
+
+const CFG_FOUR_PHASE: u32 = 1 << 6;
+
+/// Publish the output configuration (at boot and whenever the settings change).
+pub fn set_output_config(step_invert: u8, dir_invert: u8, four_phase: bool) {
+    let word = u32::from(step_invert & 0b111)
+        | (u32::from(dir_invert & 0b111) << 3)
+        | if four_phase { CFG_FOUR_PHASE } else { 0 };
+    OUTPUT_CONFIG.store(word, Ordering::Relaxed);
+}
 
 /// What the step interrupt consumes.
 pub struct Stepper {
@@ -42,15 +48,30 @@ pub struct Stepper {
     pub rx: Consumer<'static, StepCmd>,
 }
 
-static STEPPER: Mutex<RefCell<Option<Stepper>>> = Mutex::new(RefCell::new(None));
+/// The interrupt side's state. Only ever touched inside a critical section (the step
+/// interrupt's body and [`with_stepper`]), so no borrow flag is needed on top.
+struct StepperCell(UnsafeCell<Option<Stepper>>);
+// SAFETY: every access happens inside `critical_section::with`, i.e. with interrupts
+// disabled on this single-core MCU, so there is never more than one reference.
+unsafe impl Sync for StepperCell {}
+static STEPPER: StepperCell = StepperCell(UnsafeCell::new(None));
+
+/// Run `f` on the stepper state with interrupts disabled.
+#[inline(always)]
+fn locked<R>(f: impl FnOnce(&mut Option<Stepper>) -> R) -> R {
+    critical_section::with(|_| {
+        // SAFETY: interrupts are off (single core), and `f` cannot reach STEPPER again.
+        f(unsafe { &mut *STEPPER.0.get() })
+    })
+}
 
 /// Install the interrupt side (once, in `init`).
 pub fn install(exec: Executor, rx: Consumer<'static, StepCmd>) {
-    critical_section::with(|cs| STEPPER.borrow_ref_mut(cs).replace(Stepper { exec, rx }));
+    locked(|s| *s = Some(Stepper { exec, rx }));
 }
 
 fn with_stepper<R>(f: impl FnOnce(&mut Stepper) -> R) -> Option<R> {
-    critical_section::with(|cs| STEPPER.borrow_ref_mut(cs).as_mut().map(f))
+    locked(|s| s.as_mut().map(f))
 }
 
 /// The executor's position: every step emitted so far.
@@ -115,19 +136,22 @@ impl StepOutput {
     #[inline(always)]
     pub fn on_interrupt(&mut self) {
         let (update, compare) = self.timer.take_events();
-        let four_phase = FOUR_PHASE.load(Ordering::Relaxed);
-        let step_inv = STEP_INVERT.load(Ordering::Relaxed) & 0b111;
-        let dir_inv = DIR_INVERT.load(Ordering::Relaxed) & 0b111;
-        if compare && !four_phase {
-            let dir = (self.next_dir ^ dir_inv) & 0b111;
-            let set = dir << board::DIR_SHIFT;
-            let clear = (!dir & 0b111) << board::DIR_SHIFT;
-            // The idle level of a step pin is its inverted level.
-            self.port.write(step_inv | set, (!step_inv & 0b111) | clear);
+        let cfg = OUTPUT_CONFIG.load(Ordering::Relaxed);
+        let step_inv = (cfg & 0b111) as u8;
+        let four_phase = cfg & CFG_FOUR_PHASE != 0;
+        if compare && !update {
+            // Pulse end: step pins back to idle, then the next command's directions.
+            if !four_phase {
+                let dir = (self.next_dir ^ (cfg >> 3) as u8) & 0b111;
+                let set = dir << board::DIR_SHIFT;
+                let clear = (!dir & 0b111) << board::DIR_SHIFT;
+                // The idle level of a step pin is its inverted level.
+                self.port.write(step_inv | set, (!step_inv & 0b111) | clear);
+            }
+            return;
         }
-        critical_section::with(|cs| {
-            let mut guard = STEPPER.borrow_ref_mut(cs);
-            let Some(st) = guard.as_mut() else { return };
+        locked(|st| {
+            let Some(st) = st.as_mut() else { return };
             if HALT.load(Ordering::Relaxed) {
                 st.exec.halt();
                 self.timer.stop();
@@ -146,8 +170,6 @@ impl StepOutput {
                         } else {
                             self.port.write(out.step ^ step_inv, out.step & step_inv);
                         }
-                        LAST_STEPPED.store(out.step, Ordering::Relaxed);
-                        LAST_DIR.store(out.dir, Ordering::Relaxed);
                     }
                     self.next_dir = out.dir;
                     if out.reload == 0 {
@@ -163,7 +185,7 @@ impl StepOutput {
                 if let Some(out) = st.exec.start(&mut st.rx) {
                     // Direction first; the first pulse comes one wait later.
                     self.next_dir = out.dir;
-                    let d = (out.dir ^ dir_inv) & 0b111;
+                    let d = (out.dir ^ (cfg >> 3) as u8) & 0b111;
                     self.port
                         .write(d << board::DIR_SHIFT, (!d & 0b111) << board::DIR_SHIFT);
                     let pulse = PULSE_TICKS.load(Ordering::Relaxed).clamp(1, 0xFFFF);
