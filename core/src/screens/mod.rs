@@ -19,7 +19,7 @@ pub mod widgets;
 
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
+use embedded_graphics::primitives::Rectangle;
 use heapless::String;
 
 use crate::hmi::entry::FormKind;
@@ -349,9 +349,7 @@ impl Screens {
         let _ = t.push_str(job.name());
         let _ = t.push_str(": preview");
         title_bar(d, &t, "")?;
-        PREVIEW_BOX
-            .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-            .draw(d)?;
+        widgets::frame(d, PREVIEW_BOX, ON)?;
         let plot = Plot::fit(job, PREVIEW_BOX);
         plot.draw_preview(job, d)?;
         // The start point: a small filled square.
@@ -401,9 +399,7 @@ impl Screens {
             }
         };
         if fresh {
-            RUN_BOX
-                .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-                .draw(d)?;
+            widgets::frame(d, RUN_BOX, ON)?;
             plot.draw_preview(&run.job, d)?;
             self.trace.draw(d)?;
         }

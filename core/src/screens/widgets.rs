@@ -6,11 +6,11 @@
 //! frame buffer stays clean: that is what makes "redraw only what changed" work without
 //! a second buffer.
 
-use embedded_graphics::mono_font::{MonoFont, MonoTextStyleBuilder};
+use embedded_graphics::image::GetPixel;
+use embedded_graphics::mono_font::MonoFont;
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
-use embedded_graphics::text::{Baseline, Text};
+use embedded_graphics::primitives::Rectangle;
 
 use super::fonts::{BODY, SMALL};
 
@@ -19,6 +19,10 @@ const OFF: BinaryColor = BinaryColor::Off;
 
 /// Paint `s` at `pos` (top-left) in a cell of exactly `chars` characters: truncated if
 /// longer, padded with background if shorter. `inverse` draws light on dark.
+///
+/// The glyphs are copied straight out of the font bitmap, each character cell painted
+/// whole (glyph and background) like embedded-graphics' `MonoTextStyle` with a
+/// background colour does, pixel for pixel, without its text layout machinery.
 pub fn cell<D>(
     d: &mut D,
     pos: Point,
@@ -31,23 +35,59 @@ where
     D: DrawTarget<Color = BinaryColor>,
 {
     let (fg, bg) = if inverse { (OFF, ON) } else { (ON, OFF) };
-    let style = MonoTextStyleBuilder::new()
-        .font(font)
-        .text_color(fg)
-        .background_color(bg)
-        .build();
-    let end = s.char_indices().nth(chars).map_or(s.len(), |(i, _)| i);
-    let shown = s.get(..end).unwrap_or("");
-    let n = shown.chars().count();
-    Text::with_baseline(shown, pos, style, Baseline::Top).draw(d)?;
-    let cw = font.character_size.width + font.character_spacing;
+    let gw = font.character_size.width;
+    let h = font.character_size.height;
+    let cw = gw + font.character_spacing;
+    let per_row = (font.image.size().width / gw.max(1)).max(1);
+    let mut x = pos.x;
+    let mut n = 0;
+    for c in s.chars().take(chars) {
+        let g = font.glyph_mapping.index(c) as u32;
+        let origin = Point::new(((g % per_row) * gw) as i32, ((g / per_row) * h) as i32);
+        let colors = (0..h as i32).flat_map(move |y| {
+            (0..cw as i32).map(move |gx| {
+                let on = gx < gw as i32 && font.image.pixel(origin + Point::new(gx, y)) == Some(ON);
+                if on {
+                    fg
+                } else {
+                    bg
+                }
+            })
+        });
+        d.fill_contiguous(
+            &Rectangle::new(Point::new(x, pos.y), Size::new(cw, h)),
+            colors,
+        )?;
+        x += cw as i32;
+        n += 1;
+    }
     let pad = chars.saturating_sub(n) as u32;
     if pad > 0 {
-        let r = Rectangle::new(
-            Point::new(pos.x + (n as u32 * cw) as i32, pos.y),
-            Size::new(pad * cw, font.character_size.height),
-        );
-        d.fill_solid(&r, bg)?;
+        d.fill_solid(
+            &Rectangle::new(Point::new(x, pos.y), Size::new(pad * cw, h)),
+            bg,
+        )?;
+    }
+    Ok(())
+}
+
+/// A 1-pixel frame along the inside edge of `r` (what a 1-pixel stroke of the
+/// rectangle draws), as four solid fills.
+pub fn frame<D>(d: &mut D, r: Rectangle, color: BinaryColor) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    let (tl, w, h) = (r.top_left, r.size.width, r.size.height);
+    if w == 0 || h == 0 {
+        return Ok(());
+    }
+    for (p, s) in [
+        (tl, Size::new(w, 1)),
+        (tl + Point::new(0, h as i32 - 1), Size::new(w, 1)),
+        (tl, Size::new(1, h)),
+        (tl + Point::new(w as i32 - 1, 0), Size::new(1, h)),
+    ] {
+        d.fill_solid(&Rectangle::new(p, s), color)?;
     }
     Ok(())
 }
@@ -128,8 +168,7 @@ pub fn progress<D>(d: &mut D, area: Rectangle, frac: f32) -> Result<(), D::Error
 where
     D: DrawTarget<Color = BinaryColor>,
 {
-    area.into_styled(PrimitiveStyle::with_stroke(ON, 1))
-        .draw(d)?;
+    frame(d, area, ON)?;
     let inner_w = area.size.width.saturating_sub(4);
     let h = area.size.height.saturating_sub(4);
     let f = if frac.is_finite() {
@@ -152,7 +191,7 @@ where
         area.top_left + Point::new(1, 1),
         area.size - Size::new(2, 2),
     );
-    gap.into_styled(PrimitiveStyle::with_stroke(OFF, 1)).draw(d)
+    frame(d, gap, OFF)
 }
 
 /// A 1-pixel line from `a` to `b` (Bresenham). embedded-graphics' styled `Line` carries
@@ -202,9 +241,9 @@ where
 {
     let c = area.center();
     if dir == [0, 0] {
-        return Rectangle::with_center(c, Size::new(9, 9))
-            .into_styled(PrimitiveStyle::with_stroke(ON, 2))
-            .draw(d);
+        // A 2-pixel stroke centred on a 9x9 square: rings of 11x11 and 9x9.
+        frame(d, Rectangle::with_center(c, Size::new(11, 11)), ON)?;
+        return frame(d, Rectangle::with_center(c, Size::new(9, 9)), ON);
     }
     let r = (area.size.width.min(area.size.height) / 2) as f32 - 2.0;
     let (dx, dy) = (dir[0] as f32, -(dir[1] as f32));
