@@ -56,7 +56,8 @@ impl Field {
             min,
             max,
             decimals,
-            value: value.clamp(min, max),
+            // Not `clamp`: that panics (formatting both f32s) if min > max.
+            value: value.max(min).min(max),
             text: String::new(),
             editing: false,
         }
@@ -278,32 +279,35 @@ pub struct Form {
     pub cur: usize,
 }
 
+/// The fields of every form as data: (label, unit, min, max, decimals), grouped by
+/// [`FormKind`] in [`FORM_KINDS`] order; [`FORM_FIELDS`] gives each kind's slice.
+type FieldSpec = (&'static str, &'static str, f32, f32, u8);
+const FIELD_SPECS: [FieldSpec; 11] = [
+    ("dX", "mm", -200.0, 200.0, 2),
+    ("dY", "mm", -200.0, 200.0, 2),
+    ("R", "mm", 0.5, 100.0, 2),
+    ("Angle", "deg", -360.0, 360.0, 1),
+    ("a", "mm", 0.5, 100.0, 2),
+    ("b", "mm", 0.5, 100.0, 2),
+    ("A", "mm", -50.0, 50.0, 2),
+    ("w", "rad/mm", 0.01, 5.0, 3),
+    ("phi", "deg", -360.0, 360.0, 1),
+    ("Len", "mm", 1.0, 200.0, 1),
+    ("S", "mm", 2.0, 150.0, 1),
+];
+/// (first spec, number of fields) of each form kind.
+const FORM_FIELDS: [(u8, u8); 5] = [(0, 2), (2, 2), (4, 2), (6, 4), (10, 1)];
+
 impl Form {
     pub fn new(kind: FormKind, p: &[f32; 4]) -> Self {
         let mut fields: Vec<Field, 4> = Vec::new();
-        let mut add = |f: Field| {
-            let _ = fields.push(f);
-        };
-        match kind {
-            FormKind::Line => {
-                add(Field::new("dX", "mm", -200.0, 200.0, 2, p[0]));
-                add(Field::new("dY", "mm", -200.0, 200.0, 2, p[1]));
-            }
-            FormKind::Arc => {
-                add(Field::new("R", "mm", 0.5, 100.0, 2, p[0]));
-                add(Field::new("Angle", "deg", -360.0, 360.0, 1, p[1]));
-            }
-            FormKind::Ellipse => {
-                add(Field::new("a", "mm", 0.5, 100.0, 2, p[0]));
-                add(Field::new("b", "mm", 0.5, 100.0, 2, p[1]));
-            }
-            FormKind::Sine => {
-                add(Field::new("A", "mm", -50.0, 50.0, 2, p[0]));
-                add(Field::new("w", "rad/mm", 0.01, 5.0, 3, p[1]));
-                add(Field::new("phi", "deg", -360.0, 360.0, 1, p[2]));
-                add(Field::new("Len", "mm", 1.0, 200.0, 1, p[3]));
-            }
-            FormKind::Star => add(Field::new("S", "mm", 2.0, 150.0, 1, p[0])),
+        let (first, n) = FORM_FIELDS.get(kind.index()).copied().unwrap_or((0, 0));
+        let specs = FIELD_SPECS
+            .iter()
+            .skip(usize::from(first))
+            .take(usize::from(n));
+        for (&(label, unit, min, max, decimals), &v) in specs.zip(p.iter()) {
+            let _ = fields.push(Field::new(label, unit, min, max, decimals, v));
         }
         Form {
             kind,

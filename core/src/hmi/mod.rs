@@ -182,50 +182,51 @@ impl Hmi {
                     self.page = Page::Menu { sel: 0 };
                 }
             }
-            Page::Menu { sel } => {
+            // The main menu and the machine submenu share one list navigation.
+            Page::Menu { sel } | Page::Machine { sel } => {
                 let sel = *sel;
-                if press || repeat {
-                    match ev.key {
-                        Key::Up => {
-                            self.page = Page::Menu {
-                                sel: (sel + MENU.len() - 1) % MENU.len(),
-                            }
-                        }
-                        Key::Down => {
-                            self.page = Page::Menu {
-                                sel: (sel + 1) % MENU.len(),
-                            }
-                        }
-                        Key::Enter if press => self.open(sel, st, now_ms, &mut out),
-                        Key::Digit(d) if press => {
-                            if let Some(i) = MENU.iter().position(|(k, _)| *k == d) {
-                                self.page = Page::Menu { sel: i };
-                                self.open(i, st, now_ms, &mut out);
-                            }
-                        }
-                        _ => {}
+                let main = matches!(self.page, Page::Menu { .. });
+                let (n, hotkey) = if main {
+                    (
+                        MENU.len(),
+                        MENU.iter().position(|(k, _)| Key::Digit(*k) == ev.key),
+                    )
+                } else {
+                    let pos = MACHINE_MENU
+                        .iter()
+                        .position(|(k, _)| Key::Digit(*k) == ev.key);
+                    (MACHINE_MENU.len(), pos)
+                };
+                let at = |sel: usize| {
+                    if main {
+                        Page::Menu { sel }
+                    } else {
+                        Page::Machine { sel }
                     }
-                }
-            }
-            Page::Machine { sel } => {
-                let sel = *sel;
-                let n = MACHINE_MENU.len();
-                if press || repeat {
-                    match ev.key {
-                        Key::Up => {
-                            self.page = Page::Machine {
-                                sel: (sel + n - 1) % n,
-                            }
-                        }
-                        Key::Down => self.page = Page::Machine { sel: (sel + 1) % n },
-                        Key::Back if press => self.page = Page::Menu { sel: 8 },
-                        Key::Enter if press => self.machine(sel, st, now_ms, &mut out),
-                        Key::Digit(d) if press => {
-                            if let Some(i) = MACHINE_MENU.iter().position(|(k, _)| *k == d) {
-                                self.machine(i, st, now_ms, &mut out);
-                            }
-                        }
-                        _ => {}
+                };
+                let chosen = match ev.key {
+                    Key::Up if press || repeat => {
+                        self.page = at((sel + n - 1) % n);
+                        None
+                    }
+                    Key::Down if press || repeat => {
+                        self.page = at((sel + 1) % n);
+                        None
+                    }
+                    Key::Back if press && !main => {
+                        self.page = Page::Menu { sel: 8 };
+                        None
+                    }
+                    Key::Enter if press => Some(sel),
+                    Key::Digit(_) if press => hotkey,
+                    _ => None,
+                };
+                if let Some(i) = chosen {
+                    if main {
+                        self.page = Page::Menu { sel: i };
+                        self.open(i, st, now_ms, &mut out);
+                    } else {
+                        self.machine(i, st, now_ms, &mut out);
                     }
                 }
             }

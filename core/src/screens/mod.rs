@@ -572,6 +572,14 @@ where
     Ok(())
 }
 
+/// The boot screen's sine period: row of x = 16 + 2i, i.e. round(32 - 7 sin(2 pi i / 48))
+/// (checked against the formula in the tests; a table costs 49 bytes, sinf far more).
+const BOOT_WAVE: [u8; 49] = [
+    32, 31, 30, 29, 29, 28, 27, 26, 26, 26, 25, 25, 25, 25, 25, 26, 26, 26, 27, 28, 29, 29, 30, 31,
+    32, 33, 34, 35, 36, 36, 37, 38, 38, 38, 39, 39, 39, 39, 39, 38, 38, 38, 37, 36, 36, 35, 34, 33,
+    32,
+];
+
 fn boot<D>(d: &mut D) -> Result<(), D::Error>
 where
     D: DrawTarget<Color = BinaryColor>,
@@ -580,10 +588,8 @@ where
     d.fill_solid(&Rectangle::new(Point::new(34, 4), Size::new(60, 16)), ON)?;
     cell(d, Point::new(43, 7), &BODY, "inkstep", 7, true)?;
     let mut prev: Option<Point> = None;
-    for i in 0..=48 {
-        let x = 16 + i * 2;
-        let y = 32.0 - 7.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
-        let p = Point::new(x, libm::roundf(y) as i32);
+    for (x, &y) in (16..).step_by(2).zip(BOOT_WAVE.iter()) {
+        let p = Point::new(x, i32::from(y));
         widgets::line(d, prev.unwrap_or(p), p)?;
         prev = Some(p);
     }
@@ -622,6 +628,14 @@ mod tests {
             st,
             now,
         );
+    }
+
+    #[test]
+    fn boot_wave_is_one_sine_period() {
+        for (i, &y) in BOOT_WAVE.iter().enumerate() {
+            let want = 32.0 - 7.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
+            assert_eq!(f32::from(y), libm::roundf(want), "i = {i}");
+        }
     }
 
     #[test]
