@@ -27,9 +27,8 @@ use crate::hmi::fixed::{push_fixed, push_uint};
 use crate::hmi::job::Job;
 use crate::hmi::{alarm_text, Hmi, Page, RunPhase, Status, MACHINE_MENU, MENU};
 use crate::motion::{X, Y};
-use fonts::{BODY, SMALL};
 use plot::{Plot, Trace};
-use widgets::{arrow, bottom_line, cell, cell_right, progress, title_bar};
+use widgets::{arrow, bottom_line, progress, put, put_right, title_bar, Cell};
 
 const ON: BinaryColor = BinaryColor::On;
 const OFF: BinaryColor = BinaryColor::Off;
@@ -212,15 +211,15 @@ impl Screens {
                 title_bar(d, form.kind.title(), &right)?;
                 for (i, (f, y)) in form.fields.iter().zip(ROW_Y).enumerate() {
                     let current = i == form.cur;
-                    cell(d, Point::new(0, y), &BODY, f.label, 6, false)?;
+                    put(d, Cell::at(0, y, 6), f.label)?;
                     let mut v: String<14> = String::new();
                     let _ = v.push_str(&f.display());
                     let _ = v.push(if current && f.editing() { '_' } else { ' ' });
-                    cell_right(d, Point::new(36, y), &BODY, &v, 9, current)?;
-                    cell(d, Point::new(93, y + 1), &SMALL, f.unit, 7, false)?;
+                    put_right(d, Cell::at(36, y, 9).inverse(current), &v)?;
+                    put(d, Cell::at(93, y + 1, 7).small(), f.unit)?;
                 }
                 if fresh && form.fields.len() < ROW_Y.len() {
-                    cell(d, Point::new(0, 44), &SMALL, form.kind.note(), 25, false)?;
+                    put(d, Cell::at(0, 44, 25).small(), form.kind.note())?;
                 }
                 bottom_line(d, "D:ok C:del/esc A/B:field", hmi.toast())
             }
@@ -243,33 +242,19 @@ impl Screens {
                     self.arrow = Some(shown);
                 }
                 let p = hmi.pos_mm(st);
-                cell(
-                    d,
-                    Point::new(52, 12),
-                    &BODY,
-                    &axis_text('X', p[X]),
-                    12,
-                    false,
-                )?;
-                cell(
-                    d,
-                    Point::new(52, 22),
-                    &BODY,
-                    &axis_text('Y', p[Y]),
-                    12,
-                    false,
-                )?;
+                put(d, Cell::at(52, 12, 12), &axis_text('X', p[X]))?;
+                put(d, Cell::at(52, 22, 12), &axis_text('Y', p[Y]))?;
                 let mut f: Line = String::new();
                 let _ = f.push_str("F ");
                 push_uint(&mut f, hmi.jog_speed() as u32, 4);
                 let _ = f.push_str(" mm/m");
-                cell(d, Point::new(52, 32), &BODY, &f, 12, false)?;
+                put(d, Cell::at(52, 32, 12), &f)?;
                 let pen = if hmi.pen_is_down(st) {
                     "Pen down"
                 } else {
                     "Pen up"
                 };
-                cell(d, Point::new(52, 42), &BODY, pen, 12, false)?;
+                put(d, Cell::at(52, 42, 12), pen)?;
                 bottom_line(d, "hold 1-9:move A/B:F 5:pen", hmi.toast())
             }
             Page::Status => {
@@ -281,7 +266,7 @@ impl Screens {
                 push_fixed(&mut l, p[X], 2);
                 let _ = l.push_str("  Y ");
                 push_fixed(&mut l, p[Y], 2);
-                cell(d, Point::new(0, ROW_Y[0]), &BODY, &l, 21, false)?;
+                put(d, Cell::at(0, ROW_Y[0], 21), &l)?;
                 l.clear();
                 let _ = l.push_str("Z ");
                 push_fixed(&mut l, p[2], 2);
@@ -290,19 +275,19 @@ impl Screens {
                 } else {
                     "  pen up"
                 });
-                cell(d, Point::new(0, ROW_Y[1]), &BODY, &l, 21, false)?;
+                put(d, Cell::at(0, ROW_Y[1], 21), &l)?;
                 l.clear();
                 let _ = l.push_str("step/mm");
                 for s in cfg.steps_per_mm {
                     let _ = l.push(' ');
                     push_fixed(&mut l, s, 0);
                 }
-                cell(d, Point::new(0, ROW_Y[2]), &BODY, &l, 21, false)?;
+                put(d, Cell::at(0, ROW_Y[2], 21), &l)?;
                 l.clear();
                 let _ = l.push_str("Draw F ");
                 push_uint(&mut l, hmi.draw_feed() as u32, 4);
                 let _ = l.push_str(" mm/min");
-                cell(d, Point::new(0, ROW_Y[3]), &BODY, &l, 21, true)?;
+                put(d, Cell::at(0, ROW_Y[3], 21).inverse(true), &l)?;
                 let mut h: Line = String::new();
                 let _ = h.push_str("A/B:draw F  jog F ");
                 push_uint(&mut h, hmi.jog_speed() as u32, 0);
@@ -320,7 +305,7 @@ impl Screens {
                     let banner =
                         Rectangle::new(Point::new(x, 17), Size::new(6 * n as u32 + 12, 16));
                     d.fill_solid(&banner, ON)?;
-                    cell(d, Point::new(x + 6, 20), &BODY, text, n, true)?;
+                    put(d, Cell::at(x + 6, 20, n).inverse(true), text)?;
                 }
                 let p = hmi.pos_mm(st);
                 let mut l: Line = String::new();
@@ -328,13 +313,13 @@ impl Screens {
                 push_fixed(&mut l, p[X], 2);
                 let _ = l.push_str(" Y");
                 push_fixed(&mut l, p[Y], 2);
-                cell(d, Point::new(0, 41), &BODY, &l, 21, false)?;
+                put(d, Cell::at(0, 41, 21), &l)?;
                 bottom_line(d, "D:unlock      C:menu", hmi.toast())
             }
             Page::Error { title, text } => {
                 title_bar(d, title, "!")?;
                 if fresh {
-                    cell(d, Point::new(0, 21), &BODY, text, 21, false)?;
+                    put(d, Cell::at(0, 21, 21), text)?;
                 }
                 bottom_line(d, "any key: back to menu", None)
             }
@@ -372,7 +357,7 @@ impl Screens {
             if *name == "t" {
                 let _ = l.push('s');
             }
-            cell(d, Point::new(83, y), &BODY, &l, 7, false)?;
+            put(d, Cell::at(83, y, 7), &l)?;
         }
         Ok(())
     }
@@ -439,32 +424,18 @@ impl Screens {
         }
         // Live values.
         let p = hmi.pos_mm(st);
-        cell(
-            d,
-            Point::new(76, 11),
-            &BODY,
-            &axis_text('X', p[X]),
-            8,
-            false,
-        )?;
-        cell(
-            d,
-            Point::new(76, 21),
-            &BODY,
-            &axis_text('Y', p[Y]),
-            8,
-            false,
-        )?;
+        put(d, Cell::at(76, 11, 8), &axis_text('X', p[X]))?;
+        put(d, Cell::at(76, 21, 8), &axis_text('Y', p[Y]))?;
         let mut l: Line = String::new();
         let _ = l.push_str("F ");
         push_uint(&mut l, st.feed_mm_min.max(0.0) as u32, 4);
         let _ = l.push_str("mm/m");
-        cell(d, Point::new(76, 31), &SMALL, &l, 10, false)?;
+        put(d, Cell::at(76, 31, 10).small(), &l)?;
         // Teaching view: the feed direction now and the ones before it.
         l.clear();
         let _ = l.push_str("feed ");
         let _ = l.push_str(&dir_text(st.dir));
-        cell(d, Point::new(76, 39), &SMALL, &l, 10, false)?;
+        put(d, Cell::at(76, 39, 10).small(), &l)?;
         l.clear();
         let dirs: heapless::Vec<[i8; 2], { crate::hmi::DIR_HISTORY }> =
             hmi.feed_dirs().copied().collect();
@@ -478,7 +449,7 @@ impl Screens {
             let _ = l.push(' ');
             let _ = l.push_str(&t);
         }
-        cell(d, Point::new(76, 47), &SMALL, &l, 10, false)?;
+        put(d, Cell::at(76, 47, 10).small(), &l)?;
         // Progress and state.
         progress(
             d,
@@ -496,7 +467,7 @@ impl Screens {
         push_uint(&mut l, libm::roundf(run.progress() * 100.0) as u32, 3);
         let _ = l.push_str("% ");
         let _ = l.push_str(state);
-        cell(d, Point::new(65, 56), &SMALL, &l, 12, false)
+        put(d, Cell::at(65, 56, 12).small(), &l)
     }
 }
 
@@ -540,7 +511,7 @@ where
             let _ = l.push(' ');
             let _ = l.push_str(label);
         }
-        cell(d, Point::new(0, *y), &BODY, &l, 20, i == sel)?;
+        put(d, Cell::at(0, *y, 20).inverse(i == sel), &l)?;
     }
     // Scroll bar in x 123..=125, rows 11..=50, painted pixel-exact.
     if count > rows {
@@ -586,22 +557,15 @@ where
 {
     // The name in an inverted banner, one period of the report's signature curve under it.
     d.fill_solid(&Rectangle::new(Point::new(34, 4), Size::new(60, 16)), ON)?;
-    cell(d, Point::new(43, 7), &BODY, "inkstep", 7, true)?;
+    put(d, Cell::at(43, 7, 7).inverse(true), "inkstep")?;
     let mut prev: Option<Point> = None;
     for (x, &y) in (16..).step_by(2).zip(BOOT_WAVE.iter()) {
         let p = Point::new(x, i32::from(y));
         widgets::line(d, prev.unwrap_or(p), p)?;
         prev = Some(p);
     }
-    cell(d, Point::new(31, 42), &BODY, "pen plotter", 11, false)?;
-    cell(
-        d,
-        Point::new(9, 55),
-        &SMALL,
-        "STM32F103 + ST7920 LCD",
-        22,
-        false,
-    )
+    put(d, Cell::at(31, 42, 11), "pen plotter")?;
+    put(d, Cell::at(9, 55, 22).small(), "STM32F103 + ST7920 LCD")
 }
 
 #[cfg(test)]

@@ -92,6 +92,61 @@ where
     Ok(())
 }
 
+/// Where and how a text cell is painted, packed in one word so that a call passes it
+/// in a single register: top-left x and y, width in characters, font, inverse.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cell(u32);
+
+impl Cell {
+    const SMALL: u32 = 1 << 24;
+    const INVERSE: u32 = 1 << 25;
+
+    /// `chars` characters of the body font, top-left at (x, y) (on screen: 0..=255).
+    pub const fn at(x: i32, y: i32, chars: usize) -> Cell {
+        Cell((x as u32 & 0xFF) | (y as u32 & 0xFF) << 8 | (chars as u32 & 0xFF) << 16)
+    }
+    /// In the small font instead.
+    pub const fn small(self) -> Cell {
+        Cell(self.0 | Self::SMALL)
+    }
+    /// Light on dark if `on`.
+    pub const fn inverse(self, on: bool) -> Cell {
+        Cell(if on { self.0 | Self::INVERSE } else { self.0 })
+    }
+    fn pos(self) -> Point {
+        Point::new((self.0 & 0xFF) as i32, (self.0 >> 8 & 0xFF) as i32)
+    }
+    fn chars(self) -> usize {
+        (self.0 >> 16 & 0xFF) as usize
+    }
+    fn font(self) -> &'static MonoFont<'static> {
+        if self.0 & Self::SMALL != 0 {
+            &SMALL
+        } else {
+            &BODY
+        }
+    }
+    fn inverted(self) -> bool {
+        self.0 & Self::INVERSE != 0
+    }
+}
+
+/// [`cell`] for a packed [`Cell`].
+pub fn put<D>(d: &mut D, c: Cell, s: &str) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    cell(d, c.pos(), c.font(), s, c.chars(), c.inverted())
+}
+
+/// [`cell_right`] for a packed [`Cell`].
+pub fn put_right<D>(d: &mut D, c: Cell, s: &str) -> Result<(), D::Error>
+where
+    D: DrawTarget<Color = BinaryColor>,
+{
+    cell_right(d, c.pos(), c.font(), s, c.chars(), c.inverted())
+}
+
 /// Right-align `s` in a cell of `chars` characters.
 pub fn cell_right<D>(
     d: &mut D,
@@ -131,14 +186,11 @@ where
     let rn = right.chars().count().min(10);
     d.fill_solid(&Rectangle::new(Point::zero(), Size::new(1, 10)), ON)?;
     d.fill_solid(&Rectangle::new(Point::new(127, 0), Size::new(1, 10)), ON)?;
-    cell(d, Point::new(1, 0), &BODY, title, CHARS - rn, true)?;
-    cell_right(
+    put(d, Cell::at(1, 0, CHARS - rn).inverse(true), title)?;
+    put_right(
         d,
-        Point::new(1 + ((CHARS - rn) * 6) as i32, 0),
-        &BODY,
+        Cell::at(1 + ((CHARS - rn) * 6) as i32, 0, rn).inverse(true),
         right,
-        rn,
-        true,
     )
 }
 
@@ -147,19 +199,16 @@ pub fn bottom_line<D>(d: &mut D, hint: &str, message: Option<&str>) -> Result<()
 where
     D: DrawTarget<Color = BinaryColor>,
 {
+    let inverse = message.is_some();
+    let bg = if inverse { ON } else { OFF };
     d.fill_solid(&Rectangle::new(Point::new(0, 54), Size::new(128, 1)), OFF)?;
-    match message {
-        Some(m) => {
-            d.fill_solid(&Rectangle::new(Point::new(0, 55), Size::new(3, 9)), ON)?;
-            cell(d, Point::new(3, 55), &SMALL, m, 25, true)
-        }
-        None => {
-            d.fill_solid(&Rectangle::new(Point::new(0, 55), Size::new(3, 9)), OFF)?;
-            cell(d, Point::new(3, 55), &SMALL, hint, 25, false)
-        }
-    }?;
+    d.fill_solid(&Rectangle::new(Point::new(0, 55), Size::new(3, 9)), bg)?;
+    put(
+        d,
+        Cell::at(3, 55, 25).small().inverse(inverse),
+        message.unwrap_or(hint),
+    )?;
     // 5x8 leaves the last row of the line free: keep it painted.
-    let bg = if message.is_some() { ON } else { OFF };
     d.fill_solid(&Rectangle::new(Point::new(0, 63), Size::new(128, 1)), bg)
 }
 
