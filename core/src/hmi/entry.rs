@@ -84,18 +84,22 @@ impl Field {
         match key {
             Key::Digit(d) if !repeat && d <= 9 => {
                 self.start_editing();
-                let digits_after_dot = self.text.split('.').nth(1).map_or(0, str::len);
-                let has_dot = self.text.contains('.');
-                if has_dot && digits_after_dot >= self.decimals as usize {
-                    return FieldInput::Edited;
+                // Byte-wise (the text is ASCII): str's pattern search costs far more.
+                let t = self.text.as_bytes();
+                let full = t
+                    .iter()
+                    .position(|&c| c == b'.')
+                    .is_some_and(|dot| t.len() - dot - 1 >= usize::from(self.decimals));
+                if !full {
+                    let _ = self.text.push(char::from(b'0' + d));
                 }
-                let _ = self.text.push(char::from(b'0' + d));
                 FieldInput::Edited
             }
             Key::Dot if !repeat => {
                 self.start_editing();
-                if self.decimals > 0 && !self.text.contains('.') {
-                    if self.text.is_empty() || self.text.as_str() == "-" {
+                let t = self.text.as_bytes();
+                if self.decimals > 0 && !t.contains(&b'.') {
+                    if t.is_empty() || t == b"-" {
                         let _ = self.text.push('0');
                     }
                     let _ = self.text.push('.');
@@ -108,13 +112,14 @@ impl Field {
                 }
                 // On an untouched field the sign starts a new negative number.
                 self.start_editing();
-                if self.text.starts_with('-') {
-                    self.text.remove(0);
-                } else {
-                    let mut t: String<FIELD_CHARS> = String::new();
-                    if t.push('-').is_ok() && t.push_str(&self.text).is_ok() {
-                        self.text = t;
-                    }
+                let neg = self.text.as_bytes().first() == Some(&b'-');
+                let mut t: String<FIELD_CHARS> = String::new();
+                if !neg {
+                    let _ = t.push('-');
+                }
+                let body = self.text.get(usize::from(neg)..).unwrap_or("");
+                if t.push_str(body).is_ok() {
+                    self.text = t;
                 }
                 FieldInput::Edited
             }

@@ -123,7 +123,7 @@ impl Hmi {
         self.last_job
     }
     /// The latest distinct feed directions, oldest first.
-    pub fn feed_dirs(&self) -> impl Iterator<Item = &[i8; 2]> {
+    pub fn feed_dirs(&self) -> impl DoubleEndedIterator<Item = &[i8; 2]> {
         self.dirs.iter()
     }
     /// Whether the pen is down (pen axis nearer the down than the up position).

@@ -437,11 +437,9 @@ impl Screens {
         let _ = l.push_str(&dir_text(st.dir));
         put(d, Cell::at(76, 39, 10).small(), &l)?;
         l.clear();
-        let dirs: heapless::Vec<[i8; 2], { crate::hmi::DIR_HISTORY }> =
-            hmi.feed_dirs().copied().collect();
-        let mut previous = dirs.iter().rev().skip(usize::from(st.dir != [0, 0]));
+        let previous = hmi.feed_dirs().rev().skip(usize::from(st.dir != [0, 0]));
         let _ = l.push_str("was");
-        for dir in previous.by_ref() {
+        for dir in previous {
             let t = dir_text(*dir);
             if l.len() + 1 + t.len() > 10 {
                 break;
