@@ -66,13 +66,28 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
 }
 
 fn text28(s: &str) -> String<28> {
-    let mut t = String::new();
-    for c in s.chars() {
-        if t.push(c).is_err() {
-            break;
-        }
+    // The longest prefix that fits, cut at a character boundary.
+    let mut end = s.len().min(28);
+    while !s.is_char_boundary(end) {
+        end -= 1;
     }
+    let mut t = String::new();
+    let _ = t.push_str(s.get(..end).unwrap_or(""));
     t
+}
+
+/// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
+fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
+    let z = libm::roundf(z_mm * steps_per_mm);
+    if !z.is_finite() || z.abs() >= 1.0e9 {
+        return None;
+    }
+    Some(Action::Queue(Move {
+        target: [st.pos[X], st.pos[Y], z as i32],
+        path: Path::Line,
+        feed: Feed::Rapid,
+        line: 0,
+    }))
 }
 
 fn push(out: &mut Actions, a: Action) {
@@ -376,19 +391,10 @@ impl Hmi {
         } else {
             self.cfg.pen_up_mm
         };
-        let z = libm::roundf(z_mm * self.cfg.steps_per_mm[Z]);
-        if !z.is_finite() || z.abs() >= 1.0e9 {
+        let Some(lift) = pen_move(st, z_mm, self.cfg.steps_per_mm[Z]) else {
             return;
-        }
-        push(
-            out,
-            Action::Queue(Move {
-                target: [st.pos[X], st.pos[Y], z as i32],
-                path: Path::Line,
-                feed: Feed::Rapid,
-                line: 0,
-            }),
-        );
+        };
+        push(out, lift);
         self.say(if down { "Pen down" } else { "Pen up" }, now_ms);
     }
 
@@ -643,17 +649,8 @@ impl Hmi {
         if let Some(draws) = stopped_at {
             // Stopped cleanly: lift the pen where it stands, report the position.
             if draws {
-                let z = libm::roundf(self.cfg.pen_up_mm * spmm[Z]);
-                if z.is_finite() && z.abs() < 1.0e9 {
-                    push(
-                        &mut out,
-                        Action::Queue(Move {
-                            target: [st.pos[X], st.pos[Y], z as i32],
-                            path: Path::Line,
-                            feed: Feed::Rapid,
-                            line: 0,
-                        }),
-                    );
+                if let Some(lift) = pen_move(st, self.cfg.pen_up_mm, spmm[Z]) {
+                    push(&mut out, lift);
                 }
             }
             let p = self.pos_mm(st);

@@ -28,7 +28,7 @@ use crate::hmi::job::Job;
 use crate::hmi::{alarm_text, Hmi, Page, RunPhase, Status, MACHINE_MENU, MENU};
 use crate::motion::{X, Y};
 use plot::{Plot, Trace};
-use widgets::{arrow, bottom_line, progress, put, put_right, title_bar, Cell};
+use widgets::{arrow, bottom_line, progress, put, title_bar, Cell};
 
 const ON: BinaryColor = BinaryColor::On;
 const OFF: BinaryColor = BinaryColor::Off;
@@ -215,7 +215,7 @@ impl Screens {
                     let mut v: String<14> = String::new();
                     let _ = v.push_str(&f.display());
                     let _ = v.push(if current && f.editing() { '_' } else { ' ' });
-                    put_right(d, Cell::at(36, y, 9).inverse(current), &v)?;
+                    put(d, Cell::at(36, y, 9).inverse(current).right(), &v)?;
                     put(d, Cell::at(93, y + 1, 7).small(), f.unit)?;
                 }
                 if fresh && form.fields.len() < ROW_Y.len() {

@@ -17,60 +17,6 @@ use super::fonts::{BODY, SMALL};
 const ON: BinaryColor = BinaryColor::On;
 const OFF: BinaryColor = BinaryColor::Off;
 
-/// Paint `s` at `pos` (top-left) in a cell of exactly `chars` characters: truncated if
-/// longer, padded with background if shorter. `inverse` draws light on dark.
-///
-/// The glyphs are copied straight out of the font bitmap, each character cell painted
-/// whole (glyph and background) like embedded-graphics' `MonoTextStyle` with a
-/// background colour does, pixel for pixel, without its text layout machinery.
-pub fn cell<D>(
-    d: &mut D,
-    pos: Point,
-    font: &MonoFont<'_>,
-    s: &str,
-    chars: usize,
-    inverse: bool,
-) -> Result<(), D::Error>
-where
-    D: DrawTarget<Color = BinaryColor>,
-{
-    let (fg, bg) = if inverse { (OFF, ON) } else { (ON, OFF) };
-    let gw = font.character_size.width;
-    let h = font.character_size.height;
-    let cw = gw + font.character_spacing;
-    let per_row = (font.image.size().width / gw.max(1)).max(1);
-    let mut x = pos.x;
-    let mut n = 0;
-    for c in s.chars().take(chars) {
-        let g = font.glyph_mapping.index(c) as u32;
-        let origin = Point::new(((g % per_row) * gw) as i32, ((g / per_row) * h) as i32);
-        let colors = (0..h as i32).flat_map(move |y| {
-            (0..cw as i32).map(move |gx| {
-                let on = gx < gw as i32 && font.image.pixel(origin + Point::new(gx, y)) == Some(ON);
-                if on {
-                    fg
-                } else {
-                    bg
-                }
-            })
-        });
-        d.fill_contiguous(
-            &Rectangle::new(Point::new(x, pos.y), Size::new(cw, h)),
-            colors,
-        )?;
-        x += cw as i32;
-        n += 1;
-    }
-    let pad = chars.saturating_sub(n) as u32;
-    if pad > 0 {
-        d.fill_solid(
-            &Rectangle::new(Point::new(x, pos.y), Size::new(pad * cw, h)),
-            bg,
-        )?;
-    }
-    Ok(())
-}
-
 /// A 1-pixel frame along the inside edge of `r` (what a 1-pixel stroke of the
 /// rectangle draws), as four solid fills.
 pub fn frame<D>(d: &mut D, r: Rectangle, color: BinaryColor) -> Result<(), D::Error>
@@ -93,13 +39,14 @@ where
 }
 
 /// Where and how a text cell is painted, packed in one word so that a call passes it
-/// in a single register: top-left x and y, width in characters, font, inverse.
+/// in a single register: top-left x and y, width in characters, font, inverse, alignment.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Cell(u32);
 
 impl Cell {
     const SMALL: u32 = 1 << 24;
     const INVERSE: u32 = 1 << 25;
+    const RIGHT: u32 = 1 << 26;
 
     /// `chars` characters of the body font, top-left at (x, y) (on screen: 0..=255).
     pub const fn at(x: i32, y: i32, chars: usize) -> Cell {
@@ -112,6 +59,13 @@ impl Cell {
     /// Light on dark if `on`.
     pub const fn inverse(self, on: bool) -> Cell {
         Cell(if on { self.0 | Self::INVERSE } else { self.0 })
+    }
+    /// Right-aligned in the cell.
+    pub const fn right(self) -> Cell {
+        Cell(self.0 | Self::RIGHT)
+    }
+    fn right_aligned(self) -> bool {
+        self.0 & Self::RIGHT != 0
     }
     fn pos(self) -> Point {
         Point::new((self.0 & 0xFF) as i32, (self.0 >> 8 & 0xFF) as i32)
@@ -131,50 +85,53 @@ impl Cell {
     }
 }
 
-/// [`cell`] for a packed [`Cell`].
+/// Paint `s` in the text cell `c`: exactly `c`'s width in characters, truncated if
+/// longer (keeping the end if right-aligned), padded with background if shorter.
+///
+/// The glyphs are copied straight out of the font bitmap, each character cell painted
+/// whole (glyph and background) like embedded-graphics' `MonoTextStyle` with a
+/// background colour does, pixel for pixel, without its text layout machinery.
 pub fn put<D>(d: &mut D, c: Cell, s: &str) -> Result<(), D::Error>
 where
     D: DrawTarget<Color = BinaryColor>,
 {
-    cell(d, c.pos(), c.font(), s, c.chars(), c.inverted())
-}
-
-/// [`cell_right`] for a packed [`Cell`].
-pub fn put_right<D>(d: &mut D, c: Cell, s: &str) -> Result<(), D::Error>
-where
-    D: DrawTarget<Color = BinaryColor>,
-{
-    cell_right(d, c.pos(), c.font(), s, c.chars(), c.inverted())
-}
-
-/// Right-align `s` in a cell of `chars` characters.
-pub fn cell_right<D>(
-    d: &mut D,
-    pos: Point,
-    font: &MonoFont<'_>,
-    s: &str,
-    chars: usize,
-    inverse: bool,
-) -> Result<(), D::Error>
-where
-    D: DrawTarget<Color = BinaryColor>,
-{
-    let n = s.chars().count().min(chars);
-    let cw = (font.character_size.width + font.character_spacing) as i32;
-    let pad = chars - n;
-    if pad > 0 {
-        cell(d, pos, font, "", pad, inverse)?;
+    let font = c.font();
+    let (fg, bg) = if c.inverted() { (OFF, ON) } else { (ON, OFF) };
+    let gw = font.character_size.width;
+    let h = font.character_size.height;
+    let cw = gw + font.character_spacing;
+    let per_row = (font.image.size().width / gw.max(1)).max(1);
+    let count = s.chars().count();
+    let n = count.min(c.chars());
+    let pad = (c.chars() - n) as u32;
+    let right = c.right_aligned();
+    let Point { mut x, y } = c.pos();
+    let blank = Size::new(pad * cw, h);
+    if right && pad > 0 {
+        d.fill_solid(&Rectangle::new(Point::new(x, y), blank), bg)?;
+        x += blank.width as i32;
     }
-    let skip = s.chars().count() - n;
-    let start = s.char_indices().nth(skip).map_or(s.len(), |(i, _)| i);
-    cell(
-        d,
-        Point::new(pos.x + pad as i32 * cw, pos.y),
-        font,
-        s.get(start..).unwrap_or(""),
-        n,
-        inverse,
-    )
+    for ch in s.chars().skip(if right { count - n } else { 0 }).take(n) {
+        let g = font.glyph_mapping.index(ch) as u32;
+        let origin = Point::new(((g % per_row) * gw) as i32, ((g / per_row) * h) as i32);
+        let colors = (0..h as i32).flat_map(move |gy| {
+            (0..cw as i32).map(move |gx| {
+                let on =
+                    gx < gw as i32 && font.image.pixel(origin + Point::new(gx, gy)) == Some(ON);
+                if on {
+                    fg
+                } else {
+                    bg
+                }
+            })
+        });
+        d.fill_contiguous(&Rectangle::new(Point::new(x, y), Size::new(cw, h)), colors)?;
+        x += cw as i32;
+    }
+    if !right && pad > 0 {
+        d.fill_solid(&Rectangle::new(Point::new(x, y), blank), bg)?;
+    }
+    Ok(())
 }
 
 /// The inverted title bar (rows 0..=9): title on the left, `right` on the right.
@@ -187,9 +144,11 @@ where
     d.fill_solid(&Rectangle::new(Point::zero(), Size::new(1, 10)), ON)?;
     d.fill_solid(&Rectangle::new(Point::new(127, 0), Size::new(1, 10)), ON)?;
     put(d, Cell::at(1, 0, CHARS - rn).inverse(true), title)?;
-    put_right(
+    put(
         d,
-        Cell::at(1 + ((CHARS - rn) * 6) as i32, 0, rn).inverse(true),
+        Cell::at(1 + ((CHARS - rn) * 6) as i32, 0, rn)
+            .inverse(true)
+            .right(),
         right,
     )
 }
