@@ -6,17 +6,18 @@
 //! problem 5 (one key press filling every digit) cannot happen: a field changes only on
 //! Press events, and the form moves to the next field only on Enter.
 
-use heapless::{String, Vec};
+use heapless::String;
 
 use super::fixed::push_fixed;
 use super::job::Job;
+use super::text::Text;
 use crate::keypad::Key;
 
 /// Longest text a field accepts ("-123.456").
 pub const FIELD_CHARS: usize = 8;
 
 /// One numeric parameter.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Field {
     pub label: &'static str,
     pub unit: &'static str,
@@ -26,7 +27,7 @@ pub struct Field {
     pub decimals: u8,
     /// The committed value.
     pub value: f32,
-    text: String<FIELD_CHARS>,
+    text: Text<FIELD_CHARS>,
     editing: bool,
 }
 
@@ -58,7 +59,7 @@ impl Field {
             decimals,
             // Not `clamp`: that panics (formatting both f32s) if min > max.
             value: value.max(min).min(max),
-            text: String::new(),
+            text: Text::new(),
             editing: false,
         }
     }
@@ -113,7 +114,7 @@ impl Field {
                 // On an untouched field the sign starts a new negative number.
                 self.start_editing();
                 let neg = self.text.as_bytes().first() == Some(&b'-');
-                let mut t: String<FIELD_CHARS> = String::new();
+                let mut t: Text<FIELD_CHARS> = Text::new();
                 if !neg {
                     let _ = t.push('-');
                 }
@@ -276,13 +277,27 @@ impl FormKind {
 }
 
 /// A mode's parameter form.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Form {
     pub kind: FormKind,
-    pub fields: Vec<Field, 4>,
     /// Index of the field being edited.
     pub cur: usize,
+    /// The first `count` slots are the fields.
+    slots: [Field; 4],
+    count: u8,
 }
+
+/// An unused field slot.
+const NO_FIELD: Field = Field {
+    label: "",
+    unit: "",
+    min: 0.0,
+    max: 0.0,
+    decimals: 0,
+    value: 0.0,
+    text: Text::new(),
+    editing: false,
+};
 
 /// The fields of every form as data: (label, unit, min, max, decimals), grouped by
 /// [`FormKind`] in [`FORM_KINDS`] order; [`FORM_FIELDS`] gives each kind's slice.
@@ -305,34 +320,46 @@ const FORM_FIELDS: [(u8, u8); 5] = [(0, 2), (2, 2), (4, 2), (6, 4), (10, 1)];
 
 impl Form {
     pub fn new(kind: FormKind, p: &[f32; 4]) -> Self {
-        let mut fields: Vec<Field, 4> = Vec::new();
+        let mut slots = [NO_FIELD; 4];
         let (first, n) = FORM_FIELDS.get(kind.index()).copied().unwrap_or((0, 0));
         let specs = FIELD_SPECS
             .iter()
             .skip(usize::from(first))
             .take(usize::from(n));
-        for (&(label, unit, min, max, decimals), &v) in specs.zip(p.iter()) {
-            let _ = fields.push(Field::new(label, unit, min, max, decimals, v));
+        let mut count = 0;
+        for ((&(label, unit, min, max, decimals), &v), slot) in
+            specs.zip(p.iter()).zip(slots.iter_mut())
+        {
+            *slot = Field::new(label, unit, min, max, decimals, v);
+            count += 1;
         }
         Form {
             kind,
-            fields,
             cur: 0,
+            slots,
+            count,
         }
     }
 
+    /// The fields, in order.
+    pub fn fields(&self) -> &[Field] {
+        self.slots.get(..usize::from(self.count)).unwrap_or(&[])
+    }
+
     pub fn current(&mut self) -> Option<&mut Field> {
-        self.fields.get_mut(self.cur)
+        self.slots
+            .get_mut(..usize::from(self.count))
+            .and_then(|f| f.get_mut(self.cur))
     }
 
     pub fn is_last(&self) -> bool {
-        self.cur + 1 >= self.fields.len()
+        self.cur + 1 >= self.fields().len()
     }
 
     /// The committed values, in field order (unused slots 0).
     pub fn values(&self) -> [f32; 4] {
         let mut v = [0.0; 4];
-        for (slot, f) in v.iter_mut().zip(self.fields.iter()) {
+        for (slot, f) in v.iter_mut().zip(self.fields()) {
             *slot = f.value;
         }
         v
@@ -434,7 +461,7 @@ mod tests {
     fn every_form_builds_its_job_from_the_defaults() {
         for kind in FORM_KINDS {
             let form = Form::new(kind, &DEFAULT_PARAMS[kind.index()]);
-            assert!(!form.fields.is_empty());
+            assert!(!form.fields().is_empty());
             let job = form.job();
             assert!(job.length_mm() > 1.0, "{kind:?}: {job:?}");
         }

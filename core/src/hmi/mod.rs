@@ -18,17 +18,19 @@ pub mod io;
 pub mod job;
 pub mod menu;
 pub mod page;
+pub mod text;
 
 pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
 pub use menu::{MachineItem, MenuItem, MACHINE_MENU, MENU};
 pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
 
-use heapless::{Deque, String};
+use heapless::String;
 
 use crate::keypad::{Key, KeyEvent, KeyKind};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
 use entry::{FieldInput, Form, FormMemory, DEFAULT_PARAMS};
 use job::Job;
+use text::Text;
 
 /// Jog speeds selectable with speed + / speed -.
 pub const JOG_SPEEDS: [f32; 7] = [50.0, 100.0, 200.0, 400.0, 800.0, 1500.0, 3000.0];
@@ -43,8 +45,8 @@ const TOAST_MS: u32 = 2500;
 /// A job counts as stopped early if the machine sits idle this long short of its end.
 const SETTLE_MS: u32 = 1000;
 
-/// The HMI state machine.
-#[derive(Clone, Debug)]
+/// The HMI state machine (plain data: copying it is a `memcpy`).
+#[derive(Clone, Copy, Debug)]
 pub struct Hmi {
     cfg: Config,
     page: Page,
@@ -53,7 +55,9 @@ pub struct Hmi {
     last_job: Option<Job>,
     jog_speed: usize,
     draw_feed: f32,
-    dirs: Deque<[i8; 2], DIR_HISTORY>,
+    /// The latest distinct feed directions, oldest first: the first `ndirs`.
+    dirs: [[i8; 2]; DIR_HISTORY],
+    ndirs: u8,
     busy: bool,
     alarm_latched: bool,
     toast: Option<Toast>,
@@ -63,17 +67,6 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
     let dx = (b[X].wrapping_sub(a[X])) as f32 / spmm[X];
     let dy = (b[Y].wrapping_sub(a[Y])) as f32 / spmm[Y];
     libm::hypotf(dx, dy)
-}
-
-fn text28(s: &str) -> String<28> {
-    // The longest prefix that fits, cut at a character boundary.
-    let mut end = s.len().min(28);
-    while !s.is_char_boundary(end) {
-        end -= 1;
-    }
-    let mut t = String::new();
-    let _ = t.push_str(s.get(..end).unwrap_or(""));
-    t
 }
 
 /// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
@@ -106,7 +99,8 @@ impl Hmi {
             last_job: None,
             jog_speed: JOG_SPEED_DEFAULT,
             draw_feed: cfg.draw_feed_mm_min,
-            dirs: Deque::new(),
+            dirs: [[0; 2]; DIR_HISTORY],
+            ndirs: 0,
             busy: false,
             alarm_latched: false,
             toast: None,
@@ -139,7 +133,10 @@ impl Hmi {
     }
     /// The latest distinct feed directions, oldest first.
     pub fn feed_dirs(&self) -> impl DoubleEndedIterator<Item = &[i8; 2]> {
-        self.dirs.iter()
+        self.dirs
+            .get(..usize::from(self.ndirs))
+            .unwrap_or(&[])
+            .iter()
     }
     /// Whether the pen is down (pen axis nearer the down than the up position).
     pub fn pen_is_down(&self, st: &Status) -> bool {
@@ -158,7 +155,7 @@ impl Hmi {
 
     fn say(&mut self, text: &str, now_ms: u32) {
         self.toast = Some(Toast {
-            text: text28(text),
+            text: Text::truncated(text),
             until_ms: now_ms.wrapping_add(TOAST_MS),
         });
     }
@@ -166,7 +163,7 @@ impl Hmi {
     fn error(&mut self, title: &'static str, text: &str, out: &mut Actions) {
         self.page = Page::Error {
             title,
-            text: text28(text),
+            text: Text::truncated(text),
         };
         push(out, Action::Beep(Beep::Error));
     }
@@ -520,7 +517,7 @@ impl Hmi {
                 }
             }
         } else if forward {
-            form.cur = (form.cur + 1).min(form.fields.len().saturating_sub(1));
+            form.cur = (form.cur + 1).min(form.fields().len().saturating_sub(1));
         } else {
             form.cur = form.cur.saturating_sub(1);
         }
@@ -543,7 +540,7 @@ impl Hmi {
                 if job.draws() {
                     self.last_job = Some(job);
                 }
-                self.dirs.clear();
+                self.ndirs = 0;
                 self.page = Page::Run(RunPage {
                     job,
                     start: st.pos,
@@ -570,11 +567,16 @@ impl Hmi {
             push(&mut out, Action::BusyLed(moving));
         }
         // Teaching view: remember each new feed direction.
-        if st.dir != [0, 0] && self.dirs.back() != Some(&st.dir) {
-            if self.dirs.is_full() {
-                self.dirs.pop_front();
+        if st.dir != [0, 0] && self.feed_dirs().next_back() != Some(&st.dir) {
+            let n = usize::from(self.ndirs);
+            if n < DIR_HISTORY {
+                self.ndirs += 1;
+            } else {
+                self.dirs.copy_within(1.., 0);
             }
-            let _ = self.dirs.push_back(st.dir);
+            if let Some(last) = self.dirs.get_mut(n.min(DIR_HISTORY - 1)) {
+                *last = st.dir;
+            }
         }
         if let Some(t) = &self.toast {
             if (now_ms.wrapping_sub(t.until_ms) as i32) >= 0 {

@@ -207,9 +207,9 @@ impl Screens {
                 let mut right: String<6> = String::new();
                 push_uint(&mut right, form.cur as u32 + 1, 0);
                 let _ = right.push('/');
-                push_uint(&mut right, form.fields.len() as u32, 0);
+                push_uint(&mut right, form.fields().len() as u32, 0);
                 title_bar(d, form.kind.title(), &right)?;
-                for (i, (f, y)) in form.fields.iter().zip(ROW_Y).enumerate() {
+                for (i, (f, y)) in form.fields().iter().zip(ROW_Y).enumerate() {
                     let current = i == form.cur;
                     put(d, Cell::at(0, y, 6), f.label)?;
                     let mut v: String<14> = String::new();
@@ -218,7 +218,7 @@ impl Screens {
                     put(d, Cell::at(36, y, 9).inverse(current).right(), &v)?;
                     put(d, Cell::at(93, y + 1, 7).small(), f.unit)?;
                 }
-                if fresh && form.fields.len() < ROW_Y.len() {
+                if fresh && form.fields().len() < ROW_Y.len() {
                     put(d, Cell::at(0, 44, 25).small(), form.kind.note())?;
                 }
                 bottom_line(d, "D:ok C:del/esc A/B:field", hmi.toast())
