@@ -126,7 +126,7 @@ impl Field {
             }
             Key::Back => {
                 if self.editing {
-                    if self.text.pop().is_none() && !repeat {
+                    if !self.text.pop() && !repeat {
                         // Empty text: back to the committed value.
                         self.editing = false;
                     }

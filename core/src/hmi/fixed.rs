@@ -4,6 +4,7 @@
 //! screens only ever need a few decimals of a bounded value, so it is done here with
 //! integer formatting. Values too large for the requested width print as "----".
 
+use heapless::string::StringView;
 use heapless::String;
 
 /// Longest text produced: "-999999999.999".
@@ -57,6 +58,12 @@ fn digits(neg: bool, n: u32, decimals: u8) -> Fixed {
 
 /// Append [`format`]`(v, decimals)`; false if `out` ran out of room.
 pub fn push_fixed<const N: usize>(out: &mut String<N>, v: f32, decimals: u8) -> bool {
+    push_fixed_view(out.as_mut_view(), v, decimals)
+}
+
+// The work of the generic helpers, compiled once for every capacity.
+#[inline(never)]
+fn push_fixed_view(out: &mut StringView, v: f32, decimals: u8) -> bool {
     out.push_str(&format(v, decimals)).is_ok()
 }
 
@@ -69,6 +76,11 @@ pub fn fixed<const N: usize>(v: f32, decimals: u8) -> String<N> {
 
 /// Append the unsigned integer `n` right-aligned in `width` characters.
 pub fn push_uint<const N: usize>(out: &mut String<N>, n: u32, width: usize) -> bool {
+    push_uint_view(out.as_mut_view(), n, width)
+}
+
+#[inline(never)]
+fn push_uint_view(out: &mut StringView, n: u32, width: usize) -> bool {
     let text = digits(false, n, 0);
     let mut ok = true;
     for _ in text.len()..width {

@@ -144,13 +144,13 @@ impl Hmi {
         (z - self.cfg.pen_down_mm).abs() < (z - self.cfg.pen_up_mm).abs()
     }
     /// Position in mm.
+    #[inline(never)]
     pub fn pos_mm(&self, st: &Status) -> [f32; 3] {
-        let s = self.cfg.steps_per_mm;
-        [
-            st.pos[X] as f32 / s[X],
-            st.pos[Y] as f32 / s[Y],
-            st.pos[Z] as f32 / s[Z],
-        ]
+        let mut p = [0.0; 3];
+        for ((mm, &steps), &spmm) in p.iter_mut().zip(&st.pos).zip(&self.cfg.steps_per_mm) {
+            *mm = steps as f32 / spmm;
+        }
+        p
     }
 
     fn say(&mut self, text: &str, now_ms: u32) {

@@ -65,11 +65,18 @@ impl<const N: usize> Text<N> {
         self.push_str(c.encode_utf8(&mut [0; 4]))
     }
 
-    /// Remove and return the last character.
-    pub fn pop(&mut self) -> Option<char> {
-        let c = self.as_str().chars().next_back()?;
-        self.len -= c.len_utf8() as u8;
-        Some(c)
+    /// Remove the last character; false if the text was empty.
+    pub fn pop(&mut self) -> bool {
+        let s = self.as_str();
+        if s.is_empty() {
+            return false;
+        }
+        let mut end = s.len() - 1;
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        self.len = end as u8;
+        true
     }
 
     pub fn clear(&mut self) {
@@ -107,11 +114,12 @@ mod tests {
         assert!(t.push('é').is_ok());
         assert_eq!(t.as_str(), "abé");
         assert!(t.push('c').is_err(), "full");
-        assert_eq!(t.pop(), Some('é'));
-        assert_eq!(t.pop(), Some('b'));
+        assert!(t.pop());
+        assert_eq!(t, "ab");
+        assert!(t.pop());
         assert_eq!(t, "a");
         t.clear();
-        assert_eq!(t.pop(), None);
+        assert!(!t.pop());
         assert_eq!(Text::<4>::truncated("xyzé").as_str(), "xyz");
         assert_eq!(Text::<5>::truncated("xyzé").as_str(), "xyzé");
     }
