@@ -114,18 +114,13 @@ where
     for ch in s.chars().skip(if right { count - n } else { 0 }).take(n) {
         let g = font.glyph_mapping.index(ch) as u32;
         let origin = Point::new(((g % per_row) * gw) as i32, ((g / per_row) * h) as i32);
-        let colors = (0..h as i32).flat_map(move |gy| {
-            (0..cw as i32).map(move |gx| {
-                let on =
-                    gx < gw as i32 && font.image.pixel(origin + Point::new(gx, gy)) == Some(ON);
-                if on {
-                    fg
-                } else {
-                    bg
-                }
-            })
+        let at = Point::new(x, y);
+        let pixels = (0..cw * h).map(move |i| {
+            let g = Point::new((i % cw) as i32, (i / cw) as i32);
+            let on = g.x < gw as i32 && font.image.pixel(origin + g) == Some(ON);
+            Pixel(at + g, if on { fg } else { bg })
         });
-        d.fill_contiguous(&Rectangle::new(Point::new(x, y), Size::new(cw, h)), colors)?;
+        d.draw_iter(pixels)?;
         x += cw as i32;
     }
     if !right && pad > 0 {
