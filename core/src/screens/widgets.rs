@@ -7,6 +7,7 @@
 //! a second buffer.
 
 use embedded_graphics::image::GetPixel;
+use embedded_graphics::image::ImageRaw;
 use embedded_graphics::mono_font::MonoFont;
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
@@ -16,6 +17,37 @@ use super::fonts::{BODY, SMALL};
 
 const ON: BinaryColor = BinaryColor::On;
 const OFF: BinaryColor = BinaryColor::Off;
+
+/// What the text painter needs of a font: its bitmap and cell size. Taken out of the
+/// `MonoFont` constants at compile time, so the fonts' dynamic glyph-mapping objects
+/// never reach the firmware.
+pub struct Glyphs {
+    image: ImageRaw<'static, BinaryColor>,
+    size: Size,
+    spacing: u32,
+}
+
+const fn glyphs(font: &MonoFont<'static>) -> Glyphs {
+    Glyphs {
+        image: font.image,
+        size: font.character_size,
+        spacing: font.character_spacing,
+    }
+}
+
+static BODY_GLYPHS: Glyphs = glyphs(&BODY);
+static SMALL_GLYPHS: Glyphs = glyphs(&SMALL);
+
+/// Glyph index of `c` in the screens' fonts, which are both embedded-graphics' ASCII
+/// fonts: ' '..='\u{7f}' in order, anything else shown as '?'. The same as the fonts'
+/// `glyph_mapping` (checked in the tests) without its dynamic, string-walking lookup.
+fn ascii_glyph(c: char) -> u32 {
+    if (' '..='\u{7f}').contains(&c) {
+        c as u32 - 32
+    } else {
+        '?' as u32 - 32
+    }
+}
 
 /// A 1-pixel frame along the inside edge of `r` (what a 1-pixel stroke of the
 /// rectangle draws), as four solid fills.
@@ -73,11 +105,11 @@ impl Cell {
     fn chars(self) -> usize {
         (self.0 >> 16 & 0xFF) as usize
     }
-    fn font(self) -> &'static MonoFont<'static> {
+    fn font(self) -> &'static Glyphs {
         if self.0 & Self::SMALL != 0 {
-            &SMALL
+            &SMALL_GLYPHS
         } else {
-            &BODY
+            &BODY_GLYPHS
         }
     }
     fn inverted(self) -> bool {
@@ -97,9 +129,9 @@ where
 {
     let font = c.font();
     let (fg, bg) = if c.inverted() { (OFF, ON) } else { (ON, OFF) };
-    let gw = font.character_size.width;
-    let h = font.character_size.height;
-    let cw = gw + font.character_spacing;
+    let gw = font.size.width;
+    let h = font.size.height;
+    let cw = gw + font.spacing;
     let per_row = (font.image.size().width / gw.max(1)).max(1);
     let count = s.chars().count();
     let n = count.min(c.chars());
@@ -112,7 +144,7 @@ where
         x += blank.width as i32;
     }
     for ch in s.chars().skip(if right { count - n } else { 0 }).take(n) {
-        let g = font.glyph_mapping.index(ch) as u32;
+        let g = ascii_glyph(ch);
         let origin = Point::new(((g % per_row) * gw) as i32, ((g / per_row) * h) as i32);
         let at = Point::new(x, y);
         let pixels = (0..cw * h).map(move |i| {
@@ -287,6 +319,19 @@ where
 mod tests {
     use super::*;
     use crate::screens::framebuffer::FrameBuffer;
+
+    #[test]
+    fn ascii_glyph_matches_the_fonts_mapping() {
+        for font in [&BODY, &SMALL] {
+            for c in (0..0x300).filter_map(char::from_u32).chain(['€', '中']) {
+                assert_eq!(
+                    ascii_glyph(c) as usize,
+                    font.glyph_mapping.index(c),
+                    "{c:?}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn thin_line_covers_both_ends_with_one_pixel_per_major_step() {
