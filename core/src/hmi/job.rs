@@ -202,39 +202,28 @@ impl Job {
         let z_up = to_steps(cfg.pen_up_mm, cfg.steps_per_mm[Z])?;
         let feed = Feed::MmPerMin(cfg.draw_feed_mm_min);
         let mut moves: Vec<Move, MAX_MOVES> = Vec::new();
-        let mut push = |target: StepPos, path: Path, feed: Feed| {
-            moves
-                .push(Move {
-                    target,
-                    path,
-                    feed,
-                    line: 0,
-                })
-                .map_err(|_| JobError::TooLarge)
-        };
-        let here = [start[X], start[Y]];
+        let push =
+            &mut |target: StepPos, path: Path, feed: Feed| add(&mut moves, target, path, feed);
         let z = if self.draws() { z_down } else { z_up };
         // Pen to its working height at the start point first.
-        push([here[0], here[1], z], Path::Line, Feed::Rapid)?;
+        push([start[X], start[Y], z], Path::Line, Feed::Rapid)?;
         match *self {
-            Job::Line { dx, dy } => {
+            Job::Line { dx, dy } | Job::Travel { dx, dy } => {
                 let end = offset(start, [dx, dy], z, cfg)?;
-                if end[X] == start[X] && end[Y] == start[Y] {
+                let draws = self.draws();
+                // A drawn line must move; going to the origin from there is fine.
+                if draws && end[X] == start[X] && end[Y] == start[Y] {
                     return Err(JobError::Empty);
                 }
-                push(end, Path::Line, feed)?;
-            }
-            Job::Travel { dx, dy } => {
-                let end = offset(start, [dx, dy], z, cfg)?;
-                push(end, Path::Line, Feed::Rapid)?;
+                push(end, Path::Line, if draws { feed } else { Feed::Rapid })?;
             }
             Job::Arc { r, theta } => {
                 if theta == 0.0 {
                     return Err(JobError::Empty);
                 }
-                conic(&mut push, start, [r, r], theta, z, feed, cfg)?;
+                conic(push, start, [r, r], theta, z, feed, cfg)?;
             }
-            Job::Ellipse { a, b } => conic(&mut push, start, [a, b], 360.0, z, feed, cfg)?,
+            Job::Ellipse { a, b } => conic(push, start, [a, b], 360.0, z, feed, cfg)?,
             Job::Sine {
                 amp,
                 omega,
@@ -286,17 +275,27 @@ impl Job {
         let last = moves.last().map(|m| m.target).unwrap_or(start);
         let end = [last[X], last[Y], z_up];
         if self.draws() {
-            moves
-                .push(Move {
-                    target: end,
-                    path: Path::Line,
-                    feed: Feed::Rapid,
-                    line: 0,
-                })
-                .map_err(|_| JobError::TooLarge)?;
+            add(&mut moves, end, Path::Line, Feed::Rapid)?;
         }
         Ok(Plan { moves, end })
     }
+}
+
+/// Append a move (no room: the job is too complex, which the fixed jobs never are).
+fn add(
+    moves: &mut Vec<Move, MAX_MOVES>,
+    target: StepPos,
+    path: Path,
+    feed: Feed,
+) -> Result<(), JobError> {
+    moves
+        .push(Move {
+            target,
+            path,
+            feed,
+            line: 0,
+        })
+        .map_err(|_| JobError::TooLarge)
 }
 
 /// Arc or ellipse from `start` (its 0° point) through `theta` degrees. A circle in mm is
