@@ -90,7 +90,7 @@ impl Field {
                 let full = t
                     .iter()
                     .position(|&c| c == b'.')
-                    .is_some_and(|dot| t.len() - dot - 1 >= usize::from(self.decimals));
+                    .is_some_and(|dot| t.len() - dot > usize::from(self.decimals));
                 if !full {
                     let _ = self.text.push(char::from(b'0' + d));
                 }
@@ -119,7 +119,7 @@ impl Field {
                     let _ = t.push('-');
                 }
                 let body = self.text.get(usize::from(neg)..).unwrap_or("");
-                if t.push_str(body).is_ok() {
+                if t.push_str(body) {
                     self.text = t;
                 }
                 FieldInput::Edited

@@ -45,8 +45,9 @@ const TOAST_MS: u32 = 2500;
 /// A job counts as stopped early if the machine sits idle this long short of its end.
 const SETTLE_MS: u32 = 1000;
 
-/// The HMI state machine (plain data: copying it is a `memcpy`).
-#[derive(Clone, Copy, Debug)]
+/// The HMI state machine. Every field is `Copy`, so a clone (the firmware takes one on
+/// every LCD refresh) is a plain copy; not `Copy` itself, as a clone is deliberate.
+#[derive(Debug)]
 pub struct Hmi {
     cfg: Config,
     page: Page,
@@ -61,6 +62,40 @@ pub struct Hmi {
     busy: bool,
     alarm_latched: bool,
     toast: Option<Toast>,
+}
+
+impl Clone for Hmi {
+    fn clone(&self) -> Self {
+        // Copy every field as plain data (a derived clone would match on each Option).
+        let Hmi {
+            cfg,
+            page,
+            boot_ms,
+            params,
+            last_job,
+            jog_speed,
+            draw_feed,
+            dirs,
+            ndirs,
+            busy,
+            alarm_latched,
+            toast,
+        } = *self;
+        Hmi {
+            cfg,
+            page,
+            boot_ms,
+            params,
+            last_job,
+            jog_speed,
+            draw_feed,
+            dirs,
+            ndirs,
+            busy,
+            alarm_latched,
+            toast,
+        }
+    }
 }
 
 fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {

@@ -1,6 +1,6 @@
 //! [`Text`]: a short string in a fixed array, `Copy` so that the pages and the whole
-//! [`super::Hmi`] are plain data: the firmware copies the HMI out of its lock on every
-//! LCD refresh, and a copy of plain data is a `memcpy` instead of a clone per field.
+//! [`super::Hmi`] are plain data: the firmware clones the HMI out of its lock on every
+//! LCD refresh, and a clone of plain data is a copy instead of a clone per field.
 
 use core::fmt;
 use core::ops::Deref;
@@ -47,21 +47,22 @@ impl<const N: usize> Text<N> {
         self.as_str().as_bytes()
     }
 
-    /// Append `s` whole, or change nothing and return Err if it does not fit.
-    pub fn push_str(&mut self, s: &str) -> Result<(), ()> {
+    /// Append `s` whole, or change nothing and return false if it does not fit.
+    pub fn push_str(&mut self, s: &str) -> bool {
         let at = usize::from(self.len);
         let end = at + s.len();
         match self.buf.get_mut(at..end) {
             Some(dst) if end <= usize::from(u8::MAX) => {
                 dst.copy_from_slice(s.as_bytes());
                 self.len = end as u8;
-                Ok(())
+                true
             }
-            _ => Err(()),
+            _ => false,
         }
     }
 
-    pub fn push(&mut self, c: char) -> Result<(), ()> {
+    /// Append `c`; false (and unchanged) if it does not fit.
+    pub fn push(&mut self, c: char) -> bool {
         self.push_str(c.encode_utf8(&mut [0; 4]))
     }
 
@@ -110,10 +111,10 @@ mod tests {
     #[test]
     fn push_pop_and_truncation_keep_whole_characters() {
         let mut t: Text<4> = Text::new();
-        assert!(t.push_str("ab").is_ok());
-        assert!(t.push('é').is_ok());
+        assert!(t.push_str("ab"));
+        assert!(t.push('é'));
         assert_eq!(t.as_str(), "abé");
-        assert!(t.push('c').is_err(), "full");
+        assert!(!t.push('c'), "full");
         assert!(t.pop());
         assert_eq!(t, "ab");
         assert!(t.pop());

@@ -692,7 +692,7 @@ mod tests {
         let mut screens = Screens::new();
         st.state = MachineState::Run;
         st.queue_empty = false;
-        let Page::Run(run) = hmi.page().clone() else {
+        let Page::Run(run) = *hmi.page() else {
             panic!("not drawing")
         };
         for i in 0..=40u32 {
