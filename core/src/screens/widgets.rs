@@ -38,15 +38,21 @@ const fn glyphs(font: &MonoFont<'static>) -> Glyphs {
 static BODY_GLYPHS: Glyphs = glyphs(&BODY);
 static SMALL_GLYPHS: Glyphs = glyphs(&SMALL);
 
-/// Glyph index of `c` in the screens' fonts, which are both embedded-graphics' ASCII
-/// fonts: ' '..='\u{7f}' in order, anything else shown as '?'. The same as the fonts'
-/// `glyph_mapping` (checked in the tests) without its dynamic, string-walking lookup.
-fn ascii_glyph(c: char) -> u32 {
-    if (' '..='\u{7f}').contains(&c) {
-        c as u32 - 32
+/// Glyph index, in the screens' fonts, of the character whose UTF-8 encoding starts
+/// with byte `lead`. Both fonts are embedded-graphics' ASCII fonts: ' '..='\u{7f}' in
+/// order, anything else shown as '?'. The same as the fonts' `glyph_mapping` (checked in
+/// the tests) without its dynamic, string-walking lookup or UTF-8 decoding.
+fn ascii_glyph(lead: u8) -> u32 {
+    if (b' '..=0x7f).contains(&lead) {
+        u32::from(lead) - 32
     } else {
-        '?' as u32 - 32
+        u32::from(b'?') - 32
     }
+}
+
+/// Whether `b` starts a character in UTF-8 (is not a continuation byte).
+fn starts_char(b: &u8) -> bool {
+    (*b as i8) >= -0x40
 }
 
 /// A 1-pixel frame along the inside edge of `r` (what a 1-pixel stroke of the
@@ -133,7 +139,8 @@ where
     let h = font.size.height;
     let cw = gw + font.spacing;
     let per_row = (font.image.size().width / gw.max(1)).max(1);
-    let count = s.chars().count();
+    // Characters are counted and looked up by their first byte: exact for any &str.
+    let count = s.bytes().filter(starts_char).count();
     let n = count.min(c.chars());
     let pad = (c.chars() - n) as u32;
     let right = c.right_aligned();
@@ -143,8 +150,9 @@ where
         d.fill_solid(&Rectangle::new(Point::new(x, y), blank), bg)?;
         x += blank.width as i32;
     }
-    for ch in s.chars().skip(if right { count - n } else { 0 }).take(n) {
-        let g = ascii_glyph(ch);
+    let shown = s.bytes().filter(starts_char);
+    for lead in shown.skip(if right { count - n } else { 0 }).take(n) {
+        let g = ascii_glyph(lead);
         let origin = Point::new(((g % per_row) * gw) as i32, ((g / per_row) * h) as i32);
         let at = Point::new(x, y);
         let pixels = (0..cw * h).map(move |i| {
@@ -320,15 +328,78 @@ mod tests {
     use super::*;
     use crate::screens::framebuffer::FrameBuffer;
 
+    /// The text painter gives exactly what embedded-graphics' MonoTextStyle with a
+    /// background draws for the shown characters, plus the background padding.
+    #[test]
+    fn put_paints_like_embedded_graphics_text() {
+        use embedded_graphics::mono_font::MonoTextStyleBuilder;
+        use embedded_graphics::text::{Baseline, Text};
+        let cases = [
+            ("Hello, -12.5 mm", 20, false, false, false),
+            ("\u{e9}\u{20ac}x?\u{4e2d}~", 6, true, true, false),
+            ("truncated text here", 5, false, true, true),
+            ("ab", 7, true, false, true),
+            ("", 3, false, true, false),
+        ];
+        for (s, chars, small, inverse, right) in cases {
+            let mut c = Cell::at(3, 7, chars).inverse(inverse);
+            if small {
+                c = c.small();
+            }
+            if right {
+                c = c.right();
+            }
+            let mut ours = FrameBuffer::new();
+            put(&mut ours, c, s).unwrap();
+            let font = if small { &SMALL } else { &BODY };
+            let (fg, bg) = if inverse { (OFF, ON) } else { (ON, OFF) };
+            let style = MonoTextStyleBuilder::new()
+                .font(font)
+                .text_color(fg)
+                .background_color(bg)
+                .build();
+            let all: std::vec::Vec<char> = s.chars().collect();
+            let n = all.len().min(chars);
+            let shown: std::string::String = if right {
+                all[all.len() - n..].iter().collect()
+            } else {
+                all[..n].iter().collect()
+            };
+            let cw = font.character_size.width as i32;
+            let pad = (chars - n) as i32;
+            let (text_x, pad_x) = if right {
+                (3 + pad * cw, 3)
+            } else {
+                (3, 3 + n as i32 * cw)
+            };
+            let mut reference = FrameBuffer::new();
+            Text::with_baseline(&shown, Point::new(text_x, 7), style, Baseline::Top)
+                .draw(&mut reference)
+                .unwrap();
+            let blank = Size::new((pad * cw) as u32, font.character_size.height);
+            reference
+                .fill_solid(&Rectangle::new(Point::new(pad_x, 7), blank), bg)
+                .unwrap();
+            assert!(ours.bytes() == reference.bytes(), "{s:?}");
+        }
+    }
+
     #[test]
     fn ascii_glyph_matches_the_fonts_mapping() {
         for font in [&BODY, &SMALL] {
-            for c in (0..0x300).filter_map(char::from_u32).chain(['€', '中']) {
+            for c in (0..0x300)
+                .filter_map(char::from_u32)
+                .chain(['€', '中', '😀'])
+            {
+                let mut buf = [0; 4];
+                let utf8 = c.encode_utf8(&mut buf).as_bytes();
+                let lead = utf8[0];
                 assert_eq!(
-                    ascii_glyph(c) as usize,
+                    ascii_glyph(lead) as usize,
                     font.glyph_mapping.index(c),
                     "{c:?}"
                 );
+                assert_eq!(utf8.iter().filter(|b| starts_char(b)).count(), 1, "{c:?}");
             }
         }
     }
