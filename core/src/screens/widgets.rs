@@ -292,10 +292,15 @@ where
     let (dx, dy) = (dir[0] as f32, -(dir[1] as f32));
     let n = libm::hypotf(dx, dy);
     let (ux, uy) = (dx / n, dy / n);
+    // One rounding helper for both coordinates: u*along - v*across, rounded. For y,
+    // (v = -ux) gives uy*along + ux*across bit for bit (negation is exact).
+    fn rot(u: f32, v: f32, along: f32, across: f32) -> i32 {
+        libm::roundf(u * along - v * across) as i32
+    }
     let at = |along: f32, across: f32| {
         Point::new(
-            c.x + libm::roundf(ux * along - uy * across) as i32,
-            c.y + libm::roundf(uy * along + ux * across) as i32,
+            c.x + rot(ux, uy, along, across),
+            c.y + rot(uy, -ux, along, across),
         )
     };
     let base = r * 0.1;
@@ -381,6 +386,68 @@ mod tests {
                 .fill_solid(&Rectangle::new(Point::new(pad_x, 7), blank), bg)
                 .unwrap();
             assert!(ours.bytes() == reference.bytes(), "{s:?}");
+        }
+    }
+
+    /// The arrow as first written (two rounding expressions per point), kept to check
+    /// that the shared rounding helper draws the same pixels.
+    fn old_arrow<D>(d: &mut D, area: Rectangle, dir: [i8; 2], solid: bool) -> Result<(), D::Error>
+    where
+        D: DrawTarget<Color = BinaryColor>,
+    {
+        let c = area.center();
+        if dir == [0, 0] {
+            // A 2-pixel stroke centred on a 9x9 square: rings of 11x11 and 9x9.
+            frame(d, Rectangle::with_center(c, Size::new(11, 11)), ON)?;
+            return frame(d, Rectangle::with_center(c, Size::new(9, 9)), ON);
+        }
+        let r = (area.size.width.min(area.size.height) / 2) as f32 - 2.0;
+        let (dx, dy) = (dir[0] as f32, -(dir[1] as f32));
+        let n = libm::hypotf(dx, dy);
+        let (ux, uy) = (dx / n, dy / n);
+        let at = |along: f32, across: f32| {
+            Point::new(
+                c.x + libm::roundf(ux * along - uy * across) as i32,
+                c.y + libm::roundf(uy * along + ux * across) as i32,
+            )
+        };
+        let base = r * 0.1;
+        let half = r * 0.55;
+        // Shaft: parallel lines half a pixel apart leave no gaps on diagonals.
+        for k in -3..=3 {
+            let o = k as f32 * 0.5;
+            line(d, at(-r, o), at(base, o))?;
+        }
+        let tip = at(r, 0.0);
+        if solid {
+            // Fill the head with a fan of lines from the tip.
+            let steps = libm::ceilf(half * 4.0) as i32;
+            for k in -steps..=steps {
+                let across = half * k as f32 / steps as f32;
+                line(d, tip, at(base, across))?;
+            }
+            Ok(())
+        } else {
+            let (b1, b2) = (at(base, half), at(base, -half));
+            for (p, q) in [(tip, b1), (b1, b2), (b2, tip)] {
+                line(d, p, q)?;
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn arrow_is_unchanged_in_every_direction_and_style() {
+        let area = Rectangle::new(Point::new(4, 12), Size::new(40, 40));
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for solid in [false, true] {
+                    let (mut ours, mut first) = (FrameBuffer::new(), FrameBuffer::new());
+                    arrow(&mut ours, area, [dx, dy], solid).unwrap();
+                    old_arrow(&mut first, area, [dx, dy], solid).unwrap();
+                    assert!(ours.bytes() == first.bytes(), "{dx} {dy} {solid}");
+                }
+            }
         }
     }
 
