@@ -184,26 +184,25 @@ impl Field {
 /// Done by hand because core's float parser costs kilobytes of flash for input that is
 /// at most 8 characters; None for empty, lone "-" or "." and anything else.
 pub fn parse_decimal(text: &str) -> Option<f32> {
-    let (neg, body) = match text.strip_prefix('-') {
-        Some(rest) => (true, rest),
-        None => (false, text),
+    // Byte-wise: anything but ASCII digits and one '.' is refused anyway.
+    let (neg, body) = match text.as_bytes() {
+        [b'-', rest @ ..] => (true, rest),
+        all => (false, all),
     };
     let mut mantissa: u32 = 0;
     let mut scale: f32 = 1.0;
     let mut digits = 0;
     let mut after_dot = false;
-    for c in body.chars() {
+    for &c in body {
         match c {
-            '0'..='9' => {
-                mantissa = mantissa
-                    .checked_mul(10)?
-                    .checked_add(u32::from(c as u8 - b'0'))?;
+            b'0'..=b'9' => {
+                mantissa = mantissa.checked_mul(10)?.checked_add(u32::from(c - b'0'))?;
                 digits += 1;
                 if after_dot {
                     scale *= 10.0;
                 }
             }
-            '.' if !after_dot => after_dot = true,
+            b'.' if !after_dot => after_dot = true,
             _ => return None,
         }
     }
