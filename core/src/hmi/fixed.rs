@@ -50,7 +50,7 @@ fn digits(neg: bool, n: u32, decimals: u8) -> Fixed {
         rest /= 10;
         len += 1;
     }
-    for &c in rev[..len].iter().rev() {
+    for &c in rev.get(..len).unwrap_or(&[]).iter().rev() {
         let _ = out.push(char::from(c));
     }
     out

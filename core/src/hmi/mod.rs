@@ -569,8 +569,8 @@ impl Hmi {
         };
         match job.plan(st.pos, &cfg) {
             Ok(plan) => {
-                for m in plan.moves {
-                    push(out, Action::Queue(m));
+                for m in &plan.moves {
+                    push(out, Action::Queue(*m));
                 }
                 if job.draws() {
                     self.last_job = Some(job);
