@@ -175,8 +175,8 @@ impl Job {
         (lo, hi)
     }
 
-    /// Bounds and length from one pass over 160 samples of the path.
-    fn sweep(&self) -> ([f32; 2], [f32; 2], f32) {
+    /// Bounds (min, max) and length from one pass over 160 samples of the path.
+    pub fn sweep(&self) -> ([f32; 2], [f32; 2], f32) {
         const N: usize = 160;
         let mut lo = [0.0f32; 2];
         let mut hi = [0.0f32; 2];

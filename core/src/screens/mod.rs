@@ -340,23 +340,19 @@ impl Screens {
         // The start point: a small filled square.
         let s = plot.to_px([0.0, 0.0]);
         d.fill_solid(&Rectangle::new(s - Point::new(1, 1), Size::new(3, 3)), ON)?;
-        let (lo, hi) = job.bounds();
-        let len = job.length_mm();
+        let (lo, hi, len) = job.sweep();
         let feed = hmi.draw_feed().max(1.0);
-        let rows: [(&str, f32, u8); 4] = [
-            ("W", hi[0] - lo[0], 1),
-            ("H", hi[1] - lo[1], 1),
-            ("L", len, 1),
-            ("t", len / feed * 60.0, 0),
+        let rows: [(&str, f32, u8, &str); 4] = [
+            ("W ", hi[0] - lo[0], 1, ""),
+            ("H ", hi[1] - lo[1], 1, ""),
+            ("L ", len, 1, ""),
+            ("t ", len / feed * 60.0, 0, "s"),
         ];
-        for ((name, v, dec), y) in rows.iter().zip(ROW_Y) {
+        for ((name, v, dec, unit), y) in rows.iter().zip(ROW_Y) {
             let mut l: String<12> = String::new();
             let _ = l.push_str(name);
-            let _ = l.push(' ');
             push_fixed(&mut l, *v, *dec);
-            if *name == "t" {
-                let _ = l.push('s');
-            }
+            let _ = l.push_str(unit);
             put(d, Cell::at(83, y, 7), &l)?;
         }
         Ok(())
