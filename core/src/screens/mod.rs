@@ -186,21 +186,21 @@ impl Screens {
                 }
                 Ok(())
             }
-            Page::Menu { sel } => {
-                let item = |i: usize| MENU.get(i).map(|(k, m)| (*k, m.label()));
-                list(d, "inkstep", st.state.name(), &item, MENU.len(), *sel)?;
-                bottom_line(d, &position_hint(hmi, st), hmi.toast())
-            }
-            Page::Machine { sel } => {
-                let item = |i: usize| MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()));
-                list(
-                    d,
-                    "Machine",
-                    st.state.name(),
-                    &item,
-                    MACHINE_MENU.len(),
-                    *sel,
-                )?;
+            Page::Menu { sel } | Page::Machine { sel } => {
+                let main = matches!(page, Page::Menu { .. });
+                let item = |i: usize| {
+                    if main {
+                        MENU.get(i).map(|(k, m)| (*k, m.label()))
+                    } else {
+                        MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()))
+                    }
+                };
+                let (title, count) = if main {
+                    ("inkstep", MENU.len())
+                } else {
+                    ("Machine", MACHINE_MENU.len())
+                };
+                list(d, title, st.state.name(), &item, count, *sel)?;
                 bottom_line(d, &position_hint(hmi, st), hmi.toast())
             }
             Page::Form(form) => {
