@@ -35,6 +35,11 @@ const OFF: BinaryColor = BinaryColor::Off;
 
 /// Rows of a list or form page (below the title, above the bottom line).
 const ROW_Y: [i32; 4] = [11, 21, 31, 41];
+
+/// `ROW_Y[i]` by arithmetic (cheaper than iterating the array by value).
+const fn row_y(i: usize) -> i32 {
+    11 + 10 * i as i32
+}
 /// The preview / trace box of the drawing page.
 const RUN_BOX: Rectangle = Rectangle::new(Point::new(2, 11), Size::new(72, 42));
 /// The preview box of the "ready to draw" page.
@@ -209,8 +214,8 @@ impl Screens {
                 let _ = right.push('/');
                 push_uint(&mut right, form.fields().len() as u32, 0);
                 title_bar(d, form.kind.title(), &right)?;
-                for (i, (f, y)) in form.fields().iter().zip(ROW_Y).enumerate() {
-                    let current = i == form.cur;
+                for (i, f) in form.fields().iter().take(ROW_Y.len()).enumerate() {
+                    let (y, current) = (row_y(i), i == form.cur);
                     put(d, Cell::at(0, y, 6), f.label)?;
                     let mut v: String<14> = String::new();
                     let _ = v.push_str(&f.display());
@@ -348,7 +353,8 @@ impl Screens {
             ("L ", len, 1, ""),
             ("t ", len / feed * 60.0, 0, "s"),
         ];
-        for ((name, v, dec, unit), y) in rows.iter().zip(ROW_Y) {
+        for (i, (name, v, dec, unit)) in rows.iter().enumerate() {
+            let y = row_y(i);
             let mut l: String<12> = String::new();
             let _ = l.push_str(name);
             push_fixed(&mut l, *v, *dec);
@@ -496,7 +502,8 @@ where
     title_bar(d, title, right)?;
     let rows = ROW_Y.len();
     let top = sel.saturating_sub(rows - 1).min(count.saturating_sub(rows));
-    for (row, y) in ROW_Y.iter().enumerate() {
+    for row in 0..rows {
+        let y = row_y(row);
         let i = top + row;
         let mut l: Line = String::new();
         if let Some((hotkey, label)) = item(i) {
@@ -505,7 +512,7 @@ where
             let _ = l.push(' ');
             let _ = l.push_str(label);
         }
-        put(d, Cell::at(0, *y, 20).inverse(i == sel), &l)?;
+        put(d, Cell::at(0, y, 20).inverse(i == sel), &l)?;
     }
     // Scroll bar in x 123..=125, rows 11..=50, painted pixel-exact.
     if count > rows {
@@ -593,6 +600,13 @@ mod tests {
         for (i, &y) in BOOT_WAVE.iter().enumerate() {
             let want = 32.0 - 7.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
             assert_eq!(f32::from(y), libm::roundf(want), "i = {i}");
+        }
+    }
+
+    #[test]
+    fn row_y_is_the_row_table() {
+        for (i, y) in ROW_Y.iter().enumerate() {
+            assert_eq!(row_y(i), *y);
         }
     }
 
