@@ -182,7 +182,7 @@ impl Job {
         let mut hi = [0.0f32; 2];
         let mut len = 0.0;
         let mut prev = self.point_at(0.0);
-        for i in 0..=N {
+        for i in 0..N + 1 {
             let p = self.point_at(i as f32 / N as f32);
             if i > 0 {
                 len += libm::hypotf(p[0] - prev[0], p[1] - prev[1]);
@@ -262,7 +262,7 @@ impl Job {
                 if to_steps(r, cfg.steps_per_mm[X])? == 0 {
                     return Err(JobError::Empty);
                 }
-                for k in 1..=5 {
+                for k in 1..6 {
                     let target = if k == 5 {
                         [start[X], start[Y], z]
                     } else {

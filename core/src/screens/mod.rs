@@ -82,7 +82,7 @@ type Line = String<32>;
 /// "+X-Y" for a direction; "--" for none.
 fn dir_text(dir: [i8; 2]) -> String<6> {
     let mut s = String::new();
-    for (v, axis) in [(dir[0], 'X'), (dir[1], 'Y')] {
+    for &(v, axis) in [(dir[0], 'X'), (dir[1], 'Y')].iter() {
         if v != 0 {
             let _ = s.push(if v > 0 { '+' } else { '-' });
             let _ = s.push(axis);
@@ -522,7 +522,7 @@ where
         let x = 123;
         let rest = (track - pos - len).max(0);
         // Outside the thumb: a 1-pixel track line in the middle column.
-        for (y0, h) in [(11, pos), (11 + pos + len, rest)] {
+        for &(y0, h) in [(11, pos), (11 + pos + len, rest)].iter() {
             d.fill_solid(
                 &Rectangle::new(Point::new(x, y0), Size::new(1, h as u32)),
                 OFF,
@@ -560,7 +560,8 @@ where
     d.fill_solid(&Rectangle::new(Point::new(34, 4), Size::new(60, 16)), ON)?;
     put(d, Cell::at(43, 7, 7).inverse(true), "inkstep")?;
     let mut prev: Option<Point> = None;
-    for (x, &y) in (16..).step_by(2).zip(BOOT_WAVE.iter()) {
+    for (i, &y) in BOOT_WAVE.iter().enumerate() {
+        let x = 16 + 2 * i as i32;
         let p = Point::new(x, i32::from(y));
         widgets::line(d, prev.unwrap_or(p), p)?;
         prev = Some(p);

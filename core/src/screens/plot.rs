@@ -78,7 +78,7 @@ impl Plot {
     {
         let len_px = job.length_mm() * self.scale;
         let n = libm::roundf(len_px / 2.5).clamp(8.0, 400.0) as u32;
-        for i in 0..=n {
+        for i in 0..n + 1 {
             let p = self.to_px(job.point_at(i as f32 / n as f32));
             Pixel(p, BinaryColor::On).draw(d)?;
         }

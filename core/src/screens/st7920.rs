@@ -102,7 +102,7 @@ fn next_span(mask: u16, r: usize, w: &mut usize) -> Option<Span> {
 }
 
 fn frame(out: &mut [u8], at: &mut usize, start: u8, byte: u8) {
-    for b in [start, byte & 0xF0, byte << 4] {
+    for &b in [start, byte & 0xF0, byte << 4].iter() {
         if let Some(slot) = out.get_mut(*at) {
             *slot = b;
             *at += 1;
@@ -116,7 +116,7 @@ pub fn encode(fb: &FrameBuffer, span: Span, out: &mut [u8]) -> usize {
     let mut n = 0;
     frame(out, &mut n, 0xF8, 0x80 | (span.row & 0x1F));
     frame(out, &mut n, 0xF8, 0x80 | (span.first & 0x0F));
-    for w in span.first as usize..=span.last as usize {
+    for w in span.first as usize..span.last as usize + 1 {
         let (y, word) = if w < ROW_WORDS {
             (span.row as usize, w)
         } else {

@@ -65,12 +65,14 @@ where
     if w == 0 || h == 0 {
         return Ok(());
     }
-    for (p, s) in [
+    for &(p, s) in [
         (tl, Size::new(w, 1)),
         (tl + Point::new(0, h as i32 - 1), Size::new(w, 1)),
         (tl, Size::new(1, h)),
         (tl + Point::new(w as i32 - 1, 0), Size::new(1, h)),
-    ] {
+    ]
+    .iter()
+    {
         d.fill_solid(&Rectangle::new(p, s), color)?;
     }
     Ok(())
@@ -306,7 +308,7 @@ where
     let base = r * 0.1;
     let half = r * 0.55;
     // Shaft: parallel lines half a pixel apart leave no gaps on diagonals.
-    for k in -3..=3 {
+    for k in -3..4 {
         let o = k as f32 * 0.5;
         line(d, at(-r, o), at(base, o))?;
     }
@@ -314,14 +316,14 @@ where
     if solid {
         // Fill the head with a fan of lines from the tip.
         let steps = libm::ceilf(half * 4.0) as i32;
-        for k in -steps..=steps {
+        for k in -steps..steps + 1 {
             let across = half * k as f32 / steps as f32;
             line(d, tip, at(base, across))?;
         }
         Ok(())
     } else {
         let (b1, b2) = (at(base, half), at(base, -half));
-        for (p, q) in [(tip, b1), (b1, b2), (b2, tip)] {
+        for &(p, q) in [(tip, b1), (b1, b2), (b2, tip)].iter() {
             line(d, p, q)?;
         }
         Ok(())
