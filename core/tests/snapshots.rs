@@ -255,7 +255,7 @@ fn preview() {
 /// Follow a job's ideal path to fraction `upto`, ticking and rendering as the firmware
 /// would at 10 Hz.
 fn draw_along(b: &mut Bench, upto: f32, steps: u32) {
-    let inkstep_core::hmi::Page::Run(run) = b.hmi.page().clone() else {
+    let inkstep_core::hmi::Page::Run(run) = *b.hmi.page() else {
         panic!("not drawing: {:?}", b.hmi.page());
     };
     b.st.state = MachineState::Run;
@@ -294,7 +294,7 @@ fn drawing_star_done() {
     let mut b = Bench::new();
     b.keys(&[Key::Digit(6), Key::Enter, Key::Enter]);
     b.render();
-    let inkstep_core::hmi::Page::Run(run) = b.hmi.page().clone() else {
+    let inkstep_core::hmi::Page::Run(run) = *b.hmi.page() else {
         panic!()
     };
     draw_along(&mut b, 1.0, 100);

@@ -6,17 +6,18 @@
 //! problem 5 (one key press filling every digit) cannot happen: a field changes only on
 //! Press events, and the form moves to the next field only on Enter.
 
-use heapless::{String, Vec};
+use heapless::String;
 
 use super::fixed::push_fixed;
 use super::job::Job;
+use super::text::Text;
 use crate::keypad::Key;
 
 /// Longest text a field accepts ("-123.456").
 pub const FIELD_CHARS: usize = 8;
 
 /// One numeric parameter.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Field {
     pub label: &'static str,
     pub unit: &'static str,
@@ -26,7 +27,7 @@ pub struct Field {
     pub decimals: u8,
     /// The committed value.
     pub value: f32,
-    text: String<FIELD_CHARS>,
+    text: Text<FIELD_CHARS>,
     editing: bool,
 }
 
@@ -56,8 +57,9 @@ impl Field {
             min,
             max,
             decimals,
-            value: value.clamp(min, max),
-            text: String::new(),
+            // Not `clamp`: that panics (formatting both f32s) if min > max.
+            value: value.max(min).min(max),
+            text: Text::new(),
             editing: false,
         }
     }
@@ -83,18 +85,22 @@ impl Field {
         match key {
             Key::Digit(d) if !repeat && d <= 9 => {
                 self.start_editing();
-                let digits_after_dot = self.text.split('.').nth(1).map_or(0, str::len);
-                let has_dot = self.text.contains('.');
-                if has_dot && digits_after_dot >= self.decimals as usize {
-                    return FieldInput::Edited;
+                // Byte-wise (the text is ASCII): str's pattern search costs far more.
+                let t = self.text.as_bytes();
+                let full = t
+                    .iter()
+                    .position(|&c| c == b'.')
+                    .is_some_and(|dot| t.len() - dot > usize::from(self.decimals));
+                if !full {
+                    let _ = self.text.push(char::from(b'0' + d));
                 }
-                let _ = self.text.push(char::from(b'0' + d));
                 FieldInput::Edited
             }
             Key::Dot if !repeat => {
                 self.start_editing();
-                if self.decimals > 0 && !self.text.contains('.') {
-                    if self.text.is_empty() || self.text.as_str() == "-" {
+                let t = self.text.as_bytes();
+                if self.decimals > 0 && !t.contains(&b'.') {
+                    if t.is_empty() || t == b"-" {
                         let _ = self.text.push('0');
                     }
                     let _ = self.text.push('.');
@@ -107,19 +113,20 @@ impl Field {
                 }
                 // On an untouched field the sign starts a new negative number.
                 self.start_editing();
-                if self.text.starts_with('-') {
-                    self.text.remove(0);
-                } else {
-                    let mut t: String<FIELD_CHARS> = String::new();
-                    if t.push('-').is_ok() && t.push_str(&self.text).is_ok() {
-                        self.text = t;
-                    }
+                let neg = self.text.as_bytes().first() == Some(&b'-');
+                let mut t: Text<FIELD_CHARS> = Text::new();
+                if !neg {
+                    let _ = t.push('-');
+                }
+                let body = self.text.get(usize::from(neg)..).unwrap_or("");
+                if t.push_str(body) {
+                    self.text = t;
                 }
                 FieldInput::Edited
             }
             Key::Back => {
                 if self.editing {
-                    if self.text.pop().is_none() && !repeat {
+                    if !self.text.pop() && !repeat {
                         // Empty text: back to the committed value.
                         self.editing = false;
                     }
@@ -177,26 +184,25 @@ impl Field {
 /// Done by hand because core's float parser costs kilobytes of flash for input that is
 /// at most 8 characters; None for empty, lone "-" or "." and anything else.
 pub fn parse_decimal(text: &str) -> Option<f32> {
-    let (neg, body) = match text.strip_prefix('-') {
-        Some(rest) => (true, rest),
-        None => (false, text),
+    // Byte-wise: anything but ASCII digits and one '.' is refused anyway.
+    let (neg, body) = match text.as_bytes() {
+        [b'-', rest @ ..] => (true, rest),
+        all => (false, all),
     };
     let mut mantissa: u32 = 0;
     let mut scale: f32 = 1.0;
     let mut digits = 0;
     let mut after_dot = false;
-    for c in body.chars() {
+    for &c in body {
         match c {
-            '0'..='9' => {
-                mantissa = mantissa
-                    .checked_mul(10)?
-                    .checked_add(u32::from(c as u8 - b'0'))?;
+            b'0'..=b'9' => {
+                mantissa = mantissa.checked_mul(10)?.checked_add(u32::from(c - b'0'))?;
                 digits += 1;
                 if after_dot {
                     scale *= 10.0;
                 }
             }
-            '.' if !after_dot => after_dot = true,
+            b'.' if !after_dot => after_dot = true,
             _ => return None,
         }
     }
@@ -270,60 +276,89 @@ impl FormKind {
 }
 
 /// A mode's parameter form.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Form {
     pub kind: FormKind,
-    pub fields: Vec<Field, 4>,
     /// Index of the field being edited.
     pub cur: usize,
+    /// The first `count` slots are the fields.
+    slots: [Field; 4],
+    count: u8,
 }
+
+/// An unused field slot.
+const NO_FIELD: Field = Field {
+    label: "",
+    unit: "",
+    min: 0.0,
+    max: 0.0,
+    decimals: 0,
+    value: 0.0,
+    text: Text::new(),
+    editing: false,
+};
+
+/// The fields of every form as data: (label, unit, min, max, decimals), grouped by
+/// [`FormKind`] in [`FORM_KINDS`] order; [`FORM_FIELDS`] gives each kind's slice.
+type FieldSpec = (&'static str, &'static str, f32, f32, u8);
+const FIELD_SPECS: [FieldSpec; 11] = [
+    ("dX", "mm", -200.0, 200.0, 2),
+    ("dY", "mm", -200.0, 200.0, 2),
+    ("R", "mm", 0.5, 100.0, 2),
+    ("Angle", "deg", -360.0, 360.0, 1),
+    ("a", "mm", 0.5, 100.0, 2),
+    ("b", "mm", 0.5, 100.0, 2),
+    ("A", "mm", -50.0, 50.0, 2),
+    ("w", "rad/mm", 0.01, 5.0, 3),
+    ("phi", "deg", -360.0, 360.0, 1),
+    ("Len", "mm", 1.0, 200.0, 1),
+    ("S", "mm", 2.0, 150.0, 1),
+];
+/// (first spec, number of fields) of each form kind.
+const FORM_FIELDS: [(u8, u8); 5] = [(0, 2), (2, 2), (4, 2), (6, 4), (10, 1)];
 
 impl Form {
     pub fn new(kind: FormKind, p: &[f32; 4]) -> Self {
-        let mut fields: Vec<Field, 4> = Vec::new();
-        let mut add = |f: Field| {
-            let _ = fields.push(f);
-        };
-        match kind {
-            FormKind::Line => {
-                add(Field::new("dX", "mm", -200.0, 200.0, 2, p[0]));
-                add(Field::new("dY", "mm", -200.0, 200.0, 2, p[1]));
-            }
-            FormKind::Arc => {
-                add(Field::new("R", "mm", 0.5, 100.0, 2, p[0]));
-                add(Field::new("Angle", "deg", -360.0, 360.0, 1, p[1]));
-            }
-            FormKind::Ellipse => {
-                add(Field::new("a", "mm", 0.5, 100.0, 2, p[0]));
-                add(Field::new("b", "mm", 0.5, 100.0, 2, p[1]));
-            }
-            FormKind::Sine => {
-                add(Field::new("A", "mm", -50.0, 50.0, 2, p[0]));
-                add(Field::new("w", "rad/mm", 0.01, 5.0, 3, p[1]));
-                add(Field::new("phi", "deg", -360.0, 360.0, 1, p[2]));
-                add(Field::new("Len", "mm", 1.0, 200.0, 1, p[3]));
-            }
-            FormKind::Star => add(Field::new("S", "mm", 2.0, 150.0, 1, p[0])),
+        let mut slots = [NO_FIELD; 4];
+        let (first, n) = FORM_FIELDS.get(kind.index()).copied().unwrap_or((0, 0));
+        let specs = FIELD_SPECS
+            .iter()
+            .skip(usize::from(first))
+            .take(usize::from(n));
+        let mut count = 0;
+        for ((&(label, unit, min, max, decimals), &v), slot) in
+            specs.zip(p.iter()).zip(slots.iter_mut())
+        {
+            *slot = Field::new(label, unit, min, max, decimals, v);
+            count += 1;
         }
         Form {
             kind,
-            fields,
             cur: 0,
+            slots,
+            count,
         }
     }
 
+    /// The fields, in order.
+    pub fn fields(&self) -> &[Field] {
+        self.slots.get(..usize::from(self.count)).unwrap_or(&[])
+    }
+
     pub fn current(&mut self) -> Option<&mut Field> {
-        self.fields.get_mut(self.cur)
+        self.slots
+            .get_mut(..usize::from(self.count))
+            .and_then(|f| f.get_mut(self.cur))
     }
 
     pub fn is_last(&self) -> bool {
-        self.cur + 1 >= self.fields.len()
+        self.cur + 1 >= self.fields().len()
     }
 
     /// The committed values, in field order (unused slots 0).
     pub fn values(&self) -> [f32; 4] {
         let mut v = [0.0; 4];
-        for (slot, f) in v.iter_mut().zip(self.fields.iter()) {
+        for (slot, f) in v.iter_mut().zip(self.fields()) {
             *slot = f.value;
         }
         v
@@ -425,7 +460,7 @@ mod tests {
     fn every_form_builds_its_job_from_the_defaults() {
         for kind in FORM_KINDS {
             let form = Form::new(kind, &DEFAULT_PARAMS[kind.index()]);
-            assert!(!form.fields.is_empty());
+            assert!(!form.fields().is_empty());
             let job = form.job();
             assert!(job.length_mm() > 1.0, "{kind:?}: {job:?}");
         }

@@ -4,6 +4,7 @@
 //! screens only ever need a few decimals of a bounded value, so it is done here with
 //! integer formatting. Values too large for the requested width print as "----".
 
+use heapless::string::StringView;
 use heapless::String;
 
 /// Longest text produced: "-999999999.999".
@@ -15,13 +16,17 @@ pub fn format(v: f32, decimals: u8) -> Fixed {
     let decimals = decimals.min(3);
     let scale: u32 = [1, 10, 100, 1000][decimals as usize];
     let scaled = libm::roundf(v * scale as f32);
-    let mut out = Fixed::new();
     if !scaled.is_finite() || scaled.abs() >= 1.0e9 {
+        let mut out = Fixed::new();
         let _ = out.push_str("----");
         return out;
     }
-    let neg = scaled < 0.0;
-    let n = scaled.abs() as u32;
+    digits(scaled < 0.0, scaled.abs() as u32, decimals)
+}
+
+/// `n` (already scaled by 10^decimals) as text, "-" first if `neg` and n != 0.
+fn digits(neg: bool, n: u32, decimals: u8) -> Fixed {
+    let mut out = Fixed::new();
     if neg && n != 0 {
         let _ = out.push('-');
     }
@@ -45,7 +50,7 @@ pub fn format(v: f32, decimals: u8) -> Fixed {
         rest /= 10;
         len += 1;
     }
-    for &c in rev[..len].iter().rev() {
+    for &c in rev.get(..len).unwrap_or(&[]).iter().rev() {
         let _ = out.push(char::from(c));
     }
     out
@@ -53,6 +58,12 @@ pub fn format(v: f32, decimals: u8) -> Fixed {
 
 /// Append [`format`]`(v, decimals)`; false if `out` ran out of room.
 pub fn push_fixed<const N: usize>(out: &mut String<N>, v: f32, decimals: u8) -> bool {
+    push_fixed_view(out.as_mut_view(), v, decimals)
+}
+
+// The work of the generic helpers, compiled once for every capacity.
+#[inline(never)]
+fn push_fixed_view(out: &mut StringView, v: f32, decimals: u8) -> bool {
     out.push_str(&format(v, decimals)).is_ok()
 }
 
@@ -65,12 +76,17 @@ pub fn fixed<const N: usize>(v: f32, decimals: u8) -> String<N> {
 
 /// Append the unsigned integer `n` right-aligned in `width` characters.
 pub fn push_uint<const N: usize>(out: &mut String<N>, n: u32, width: usize) -> bool {
-    let digits = format(n as f32, 0);
+    push_uint_view(out.as_mut_view(), n, width)
+}
+
+#[inline(never)]
+fn push_uint_view(out: &mut StringView, n: u32, width: usize) -> bool {
+    let text = digits(false, n, 0);
     let mut ok = true;
-    for _ in digits.len()..width {
+    for _ in text.len()..width {
         ok &= out.push(' ').is_ok();
     }
-    ok && out.push_str(&digits).is_ok()
+    ok && out.push_str(&text).is_ok()
 }
 
 #[cfg(test)]
@@ -97,6 +113,9 @@ mod tests {
         assert!(push_uint(&mut s, 600, 5));
         assert!(push_uint(&mut s, 12345, 2));
         assert_eq!(s.as_str(), "  60012345");
+        let mut big: String<12> = String::new();
+        assert!(push_uint(&mut big, u32::MAX, 0));
+        assert_eq!(big.as_str(), "4294967295");
     }
 
     #[test]

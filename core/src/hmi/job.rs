@@ -93,9 +93,28 @@ fn offset(start: StepPos, d: [f32; 2], z: i32, cfg: &Config) -> Result<StepPos, 
     ])
 }
 
-/// Angle in radians of star point k (top point first, every second vertex).
-fn star_angle(k: usize) -> f32 {
-    PI / 2.0 - (k as f32) * (4.0 * PI / 5.0)
+/// (cos, sin) of star point k's angle, pi/2 - k 4pi/5 (top point first, every second
+/// vertex), k = 0..=5: the exact f32 values of libm's cosf/sinf (checked in the tests),
+/// so the star needs no trigonometry at run time.
+const STAR: [[f32; 2]; 6] = [
+    [f32::from_bits(0xb33b_bd2e), f32::from_bits(0x3f80_0000)],
+    [f32::from_bits(0x3f16_7918), f32::from_bits(0xbf4f_1bbd)],
+    [f32::from_bits(0xbf73_7871), f32::from_bits(0x3e9e_3779)],
+    [f32::from_bits(0x3f73_7871), f32::from_bits(0x3e9e_3778)],
+    [f32::from_bits(0xbf16_7920), f32::from_bits(0xbf4f_1bb7)],
+    [f32::from_bits(0x3532_22c4), f32::from_bits(0x3f80_0000)],
+];
+
+/// Star point k of a star of circumradius `r`, relative to its top point.
+fn star_point(r: f32, k: usize) -> [f32; 2] {
+    let [c, s] = STAR.get(k).copied().unwrap_or([0.0, 1.0]);
+    [r * c, r * s - r]
+}
+
+/// A point of the ellipse with semi-axes (a, b) at `angle` (radians) from its 0° point,
+/// relative to that point.
+fn conic_point(a: f32, b: f32, angle: f32) -> [f32; 2] {
+    [a * libm::cosf(angle) - a, b * libm::sinf(angle)]
 }
 
 impl Job {
@@ -121,14 +140,8 @@ impl Job {
         let t = t.clamp(0.0, 1.0);
         match *self {
             Job::Line { dx, dy } | Job::Travel { dx, dy } => [dx * t, dy * t],
-            Job::Arc { r, theta } => {
-                let a = theta.to_radians() * t;
-                [r * libm::cosf(a) - r, r * libm::sinf(a)]
-            }
-            Job::Ellipse { a, b } => {
-                let ang = 2.0 * PI * t;
-                [a * libm::cosf(ang) - a, b * libm::sinf(ang)]
-            }
+            Job::Arc { r, theta } => conic_point(r, r, theta.to_radians() * t),
+            Job::Ellipse { a, b } => conic_point(a, b, 2.0 * PI * t),
             Job::Sine {
                 amp,
                 omega,
@@ -144,11 +157,7 @@ impl Job {
                 let s = t * 5.0;
                 let k = (libm::floorf(s) as usize).min(4);
                 let f = s - k as f32;
-                let p = |k: usize| {
-                    let a = star_angle(k);
-                    [r * libm::cosf(a), r * libm::sinf(a) - r]
-                };
-                let (p0, p1) = (p(k), p(k + 1));
+                let (p0, p1) = (star_point(r, k), star_point(r, k + 1));
                 [p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f]
             }
         }
@@ -157,30 +166,34 @@ impl Job {
     /// Path length in mm (chords of 160 samples, a multiple of the star's 5 sides, so
     /// exact for lines and the star).
     pub fn length_mm(&self) -> f32 {
-        const N: usize = 160;
-        let mut len = 0.0;
-        let mut prev = self.point_at(0.0);
-        for i in 1..=N {
-            let p = self.point_at(i as f32 / N as f32);
-            len += libm::hypotf(p[0] - prev[0], p[1] - prev[1]);
-            prev = p;
-        }
-        len
+        self.sweep().2
     }
 
     /// Bounding box (min, max) of the path in mm relative to the start.
     pub fn bounds(&self) -> ([f32; 2], [f32; 2]) {
+        let (lo, hi, _) = self.sweep();
+        (lo, hi)
+    }
+
+    /// Bounds (min, max) and length from one pass over 160 samples of the path.
+    pub fn sweep(&self) -> ([f32; 2], [f32; 2], f32) {
         const N: usize = 160;
         let mut lo = [0.0f32; 2];
         let mut hi = [0.0f32; 2];
-        for i in 0..=N {
+        let mut len = 0.0;
+        let mut prev = self.point_at(0.0);
+        for i in 0..N + 1 {
             let p = self.point_at(i as f32 / N as f32);
+            if i > 0 {
+                len += libm::hypotf(p[0] - prev[0], p[1] - prev[1]);
+            }
+            prev = p;
             for ax in 0..2 {
                 lo[ax] = lo[ax].min(p[ax]);
                 hi[ax] = hi[ax].max(p[ax]);
             }
         }
-        (lo, hi)
+        (lo, hi, len)
     }
 
     /// The planner moves for this job from `start` (pen down, path, pen up).
@@ -189,39 +202,28 @@ impl Job {
         let z_up = to_steps(cfg.pen_up_mm, cfg.steps_per_mm[Z])?;
         let feed = Feed::MmPerMin(cfg.draw_feed_mm_min);
         let mut moves: Vec<Move, MAX_MOVES> = Vec::new();
-        let mut push = |target: StepPos, path: Path, feed: Feed| {
-            moves
-                .push(Move {
-                    target,
-                    path,
-                    feed,
-                    line: 0,
-                })
-                .map_err(|_| JobError::TooLarge)
-        };
-        let here = [start[X], start[Y]];
+        let push =
+            &mut |target: StepPos, path: Path, feed: Feed| add(&mut moves, target, path, feed);
         let z = if self.draws() { z_down } else { z_up };
         // Pen to its working height at the start point first.
-        push([here[0], here[1], z], Path::Line, Feed::Rapid)?;
+        push([start[X], start[Y], z], Path::Line, Feed::Rapid)?;
         match *self {
-            Job::Line { dx, dy } => {
+            Job::Line { dx, dy } | Job::Travel { dx, dy } => {
                 let end = offset(start, [dx, dy], z, cfg)?;
-                if end[X] == start[X] && end[Y] == start[Y] {
+                let draws = self.draws();
+                // A drawn line must move; going to the origin from there is fine.
+                if draws && end[X] == start[X] && end[Y] == start[Y] {
                     return Err(JobError::Empty);
                 }
-                push(end, Path::Line, feed)?;
-            }
-            Job::Travel { dx, dy } => {
-                let end = offset(start, [dx, dy], z, cfg)?;
-                push(end, Path::Line, Feed::Rapid)?;
+                push(end, Path::Line, if draws { feed } else { Feed::Rapid })?;
             }
             Job::Arc { r, theta } => {
                 if theta == 0.0 {
                     return Err(JobError::Empty);
                 }
-                conic(&mut push, start, [r, r], theta, z, feed, cfg)?;
+                conic(push, start, [r, r], theta, z, feed, cfg)?;
             }
-            Job::Ellipse { a, b } => conic(&mut push, start, [a, b], 360.0, z, feed, cfg)?,
+            Job::Ellipse { a, b } => conic(push, start, [a, b], 360.0, z, feed, cfg)?,
             Job::Sine {
                 amp,
                 omega,
@@ -260,12 +262,11 @@ impl Job {
                 if to_steps(r, cfg.steps_per_mm[X])? == 0 {
                     return Err(JobError::Empty);
                 }
-                for k in 1..=5 {
-                    let a = star_angle(k);
+                for k in 1..6 {
                     let target = if k == 5 {
                         [start[X], start[Y], z]
                     } else {
-                        offset(start, [r * libm::cosf(a), r * libm::sinf(a) - r], z, cfg)?
+                        offset(start, star_point(r, k), z, cfg)?
                     };
                     push(target, Path::Line, feed)?;
                 }
@@ -274,17 +275,27 @@ impl Job {
         let last = moves.last().map(|m| m.target).unwrap_or(start);
         let end = [last[X], last[Y], z_up];
         if self.draws() {
-            moves
-                .push(Move {
-                    target: end,
-                    path: Path::Line,
-                    feed: Feed::Rapid,
-                    line: 0,
-                })
-                .map_err(|_| JobError::TooLarge)?;
+            add(&mut moves, end, Path::Line, Feed::Rapid)?;
         }
         Ok(Plan { moves, end })
     }
+}
+
+/// Append a move (no room: the job is too complex, which the fixed jobs never are).
+fn add(
+    moves: &mut Vec<Move, MAX_MOVES>,
+    target: StepPos,
+    path: Path,
+    feed: Feed,
+) -> Result<(), JobError> {
+    moves
+        .push(Move {
+            target,
+            path,
+            feed,
+            line: 0,
+        })
+        .map_err(|_| JobError::TooLarge)
 }
 
 /// Arc or ellipse from `start` (its 0° point) through `theta` degrees. A circle in mm is
@@ -509,6 +520,15 @@ mod tests {
             Job::Line { dx: 1.0, dy: 0.0 }.plan([i32::MAX - 10, 0, 0], &cfg()),
             Err(JobError::TooLarge)
         );
+    }
+
+    #[test]
+    fn star_table_is_libms_cos_and_sin_of_the_star_angles() {
+        for (k, [c, s]) in STAR.iter().enumerate() {
+            let a = PI / 2.0 - (k as f32) * (4.0 * PI / 5.0);
+            assert_eq!(c.to_bits(), libm::cosf(a).to_bits(), "cos {k}");
+            assert_eq!(s.to_bits(), libm::sinf(a).to_bits(), "sin {k}");
+        }
     }
 
     #[test]

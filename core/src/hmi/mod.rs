@@ -18,17 +18,19 @@ pub mod io;
 pub mod job;
 pub mod menu;
 pub mod page;
+pub mod text;
 
 pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
 pub use menu::{MachineItem, MenuItem, MACHINE_MENU, MENU};
 pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
 
-use heapless::{Deque, String};
+use heapless::String;
 
 use crate::keypad::{Key, KeyEvent, KeyKind};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
 use entry::{FieldInput, Form, FormMemory, DEFAULT_PARAMS};
 use job::Job;
+use text::Text;
 
 /// Jog speeds selectable with speed + / speed -.
 pub const JOG_SPEEDS: [f32; 7] = [50.0, 100.0, 200.0, 400.0, 800.0, 1500.0, 3000.0];
@@ -43,8 +45,9 @@ const TOAST_MS: u32 = 2500;
 /// A job counts as stopped early if the machine sits idle this long short of its end.
 const SETTLE_MS: u32 = 1000;
 
-/// The HMI state machine.
-#[derive(Clone, Debug)]
+/// The HMI state machine. Every field is `Copy`, so a clone (the firmware takes one on
+/// every LCD refresh) is a plain copy; not `Copy` itself, as a clone is deliberate.
+#[derive(Debug)]
 pub struct Hmi {
     cfg: Config,
     page: Page,
@@ -53,10 +56,46 @@ pub struct Hmi {
     last_job: Option<Job>,
     jog_speed: usize,
     draw_feed: f32,
-    dirs: Deque<[i8; 2], DIR_HISTORY>,
+    /// The latest distinct feed directions, oldest first: the first `ndirs`.
+    dirs: [[i8; 2]; DIR_HISTORY],
+    ndirs: u8,
     busy: bool,
     alarm_latched: bool,
     toast: Option<Toast>,
+}
+
+impl Clone for Hmi {
+    fn clone(&self) -> Self {
+        // Copy every field as plain data (a derived clone would match on each Option).
+        let Hmi {
+            cfg,
+            page,
+            boot_ms,
+            params,
+            last_job,
+            jog_speed,
+            draw_feed,
+            dirs,
+            ndirs,
+            busy,
+            alarm_latched,
+            toast,
+        } = *self;
+        Hmi {
+            cfg,
+            page,
+            boot_ms,
+            params,
+            last_job,
+            jog_speed,
+            draw_feed,
+            dirs,
+            ndirs,
+            busy,
+            alarm_latched,
+            toast,
+        }
+    }
 }
 
 fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
@@ -65,14 +104,18 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
     libm::hypotf(dx, dy)
 }
 
-fn text28(s: &str) -> String<28> {
-    let mut t = String::new();
-    for c in s.chars() {
-        if t.push(c).is_err() {
-            break;
-        }
+/// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
+fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
+    let z = libm::roundf(z_mm * steps_per_mm);
+    if !z.is_finite() || z.abs() >= 1.0e9 {
+        return None;
     }
-    t
+    Some(Action::Queue(Move {
+        target: [st.pos[X], st.pos[Y], z as i32],
+        path: Path::Line,
+        feed: Feed::Rapid,
+        line: 0,
+    }))
 }
 
 fn push(out: &mut Actions, a: Action) {
@@ -91,7 +134,8 @@ impl Hmi {
             last_job: None,
             jog_speed: JOG_SPEED_DEFAULT,
             draw_feed: cfg.draw_feed_mm_min,
-            dirs: Deque::new(),
+            dirs: [[0; 2]; DIR_HISTORY],
+            ndirs: 0,
             busy: false,
             alarm_latched: false,
             toast: None,
@@ -123,8 +167,11 @@ impl Hmi {
         self.last_job
     }
     /// The latest distinct feed directions, oldest first.
-    pub fn feed_dirs(&self) -> impl Iterator<Item = &[i8; 2]> {
-        self.dirs.iter()
+    pub fn feed_dirs(&self) -> impl DoubleEndedIterator<Item = &[i8; 2]> {
+        self.dirs
+            .get(..usize::from(self.ndirs))
+            .unwrap_or(&[])
+            .iter()
     }
     /// Whether the pen is down (pen axis nearer the down than the up position).
     pub fn pen_is_down(&self, st: &Status) -> bool {
@@ -132,18 +179,18 @@ impl Hmi {
         (z - self.cfg.pen_down_mm).abs() < (z - self.cfg.pen_up_mm).abs()
     }
     /// Position in mm.
+    #[inline(never)]
     pub fn pos_mm(&self, st: &Status) -> [f32; 3] {
-        let s = self.cfg.steps_per_mm;
-        [
-            st.pos[X] as f32 / s[X],
-            st.pos[Y] as f32 / s[Y],
-            st.pos[Z] as f32 / s[Z],
-        ]
+        let mut p = [0.0; 3];
+        for ((mm, &steps), &spmm) in p.iter_mut().zip(&st.pos).zip(&self.cfg.steps_per_mm) {
+            *mm = steps as f32 / spmm;
+        }
+        p
     }
 
     fn say(&mut self, text: &str, now_ms: u32) {
         self.toast = Some(Toast {
-            text: text28(text),
+            text: Text::truncated(text),
             until_ms: now_ms.wrapping_add(TOAST_MS),
         });
     }
@@ -151,7 +198,7 @@ impl Hmi {
     fn error(&mut self, title: &'static str, text: &str, out: &mut Actions) {
         self.page = Page::Error {
             title,
-            text: text28(text),
+            text: Text::truncated(text),
         };
         push(out, Action::Beep(Beep::Error));
     }
@@ -182,50 +229,51 @@ impl Hmi {
                     self.page = Page::Menu { sel: 0 };
                 }
             }
-            Page::Menu { sel } => {
+            // The main menu and the machine submenu share one list navigation.
+            Page::Menu { sel } | Page::Machine { sel } => {
                 let sel = *sel;
-                if press || repeat {
-                    match ev.key {
-                        Key::Up => {
-                            self.page = Page::Menu {
-                                sel: (sel + MENU.len() - 1) % MENU.len(),
-                            }
-                        }
-                        Key::Down => {
-                            self.page = Page::Menu {
-                                sel: (sel + 1) % MENU.len(),
-                            }
-                        }
-                        Key::Enter if press => self.open(sel, st, now_ms, &mut out),
-                        Key::Digit(d) if press => {
-                            if let Some(i) = MENU.iter().position(|(k, _)| *k == d) {
-                                self.page = Page::Menu { sel: i };
-                                self.open(i, st, now_ms, &mut out);
-                            }
-                        }
-                        _ => {}
+                let main = matches!(self.page, Page::Menu { .. });
+                let (n, hotkey) = if main {
+                    (
+                        MENU.len(),
+                        MENU.iter().position(|(k, _)| Key::Digit(*k) == ev.key),
+                    )
+                } else {
+                    let pos = MACHINE_MENU
+                        .iter()
+                        .position(|(k, _)| Key::Digit(*k) == ev.key);
+                    (MACHINE_MENU.len(), pos)
+                };
+                let at = |sel: usize| {
+                    if main {
+                        Page::Menu { sel }
+                    } else {
+                        Page::Machine { sel }
                     }
-                }
-            }
-            Page::Machine { sel } => {
-                let sel = *sel;
-                let n = MACHINE_MENU.len();
-                if press || repeat {
-                    match ev.key {
-                        Key::Up => {
-                            self.page = Page::Machine {
-                                sel: (sel + n - 1) % n,
-                            }
-                        }
-                        Key::Down => self.page = Page::Machine { sel: (sel + 1) % n },
-                        Key::Back if press => self.page = Page::Menu { sel: 8 },
-                        Key::Enter if press => self.machine(sel, st, now_ms, &mut out),
-                        Key::Digit(d) if press => {
-                            if let Some(i) = MACHINE_MENU.iter().position(|(k, _)| *k == d) {
-                                self.machine(i, st, now_ms, &mut out);
-                            }
-                        }
-                        _ => {}
+                };
+                let chosen = match ev.key {
+                    Key::Up if press || repeat => {
+                        self.page = at((sel + n - 1) % n);
+                        None
+                    }
+                    Key::Down if press || repeat => {
+                        self.page = at((sel + 1) % n);
+                        None
+                    }
+                    Key::Back if press && !main => {
+                        self.page = Page::Menu { sel: 8 };
+                        None
+                    }
+                    Key::Enter if press => Some(sel),
+                    Key::Digit(_) if press => hotkey,
+                    _ => None,
+                };
+                if let Some(i) = chosen {
+                    if main {
+                        self.page = Page::Menu { sel: i };
+                        self.open(i, st, now_ms, &mut out);
+                    } else {
+                        self.machine(i, st, now_ms, &mut out);
                     }
                 }
             }
@@ -375,19 +423,10 @@ impl Hmi {
         } else {
             self.cfg.pen_up_mm
         };
-        let z = libm::roundf(z_mm * self.cfg.steps_per_mm[Z]);
-        if !z.is_finite() || z.abs() >= 1.0e9 {
+        let Some(lift) = pen_move(st, z_mm, self.cfg.steps_per_mm[Z]) else {
             return;
-        }
-        push(
-            out,
-            Action::Queue(Move {
-                target: [st.pos[X], st.pos[Y], z as i32],
-                path: Path::Line,
-                feed: Feed::Rapid,
-                line: 0,
-            }),
-        );
+        };
+        push(out, lift);
         self.say(if down { "Pen down" } else { "Pen up" }, now_ms);
     }
 
@@ -513,7 +552,7 @@ impl Hmi {
                 }
             }
         } else if forward {
-            form.cur = (form.cur + 1).min(form.fields.len().saturating_sub(1));
+            form.cur = (form.cur + 1).min(form.fields().len().saturating_sub(1));
         } else {
             form.cur = form.cur.saturating_sub(1);
         }
@@ -530,13 +569,13 @@ impl Hmi {
         };
         match job.plan(st.pos, &cfg) {
             Ok(plan) => {
-                for m in plan.moves {
-                    push(out, Action::Queue(m));
+                for m in &plan.moves {
+                    push(out, Action::Queue(*m));
                 }
                 if job.draws() {
                     self.last_job = Some(job);
                 }
-                self.dirs.clear();
+                self.ndirs = 0;
                 self.page = Page::Run(RunPage {
                     job,
                     start: st.pos,
@@ -563,11 +602,16 @@ impl Hmi {
             push(&mut out, Action::BusyLed(moving));
         }
         // Teaching view: remember each new feed direction.
-        if st.dir != [0, 0] && self.dirs.back() != Some(&st.dir) {
-            if self.dirs.is_full() {
-                self.dirs.pop_front();
+        if st.dir != [0, 0] && self.feed_dirs().next_back() != Some(&st.dir) {
+            let n = usize::from(self.ndirs);
+            if n < DIR_HISTORY {
+                self.ndirs += 1;
+            } else {
+                self.dirs.copy_within(1.., 0);
             }
-            let _ = self.dirs.push_back(st.dir);
+            if let Some(last) = self.dirs.get_mut(n.min(DIR_HISTORY - 1)) {
+                *last = st.dir;
+            }
         }
         if let Some(t) = &self.toast {
             if (now_ms.wrapping_sub(t.until_ms) as i32) >= 0 {
@@ -642,17 +686,8 @@ impl Hmi {
         if let Some(draws) = stopped_at {
             // Stopped cleanly: lift the pen where it stands, report the position.
             if draws {
-                let z = libm::roundf(self.cfg.pen_up_mm * spmm[Z]);
-                if z.is_finite() && z.abs() < 1.0e9 {
-                    push(
-                        &mut out,
-                        Action::Queue(Move {
-                            target: [st.pos[X], st.pos[Y], z as i32],
-                            path: Path::Line,
-                            feed: Feed::Rapid,
-                            line: 0,
-                        }),
-                    );
+                if let Some(lift) = pen_move(st, self.cfg.pen_up_mm, spmm[Z]) {
+                    push(&mut out, lift);
                 }
             }
             let p = self.pos_mm(st);

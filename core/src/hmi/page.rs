@@ -1,9 +1,8 @@
 //! What the HMI is showing ([`Page`]) and the per-page state the screens draw from.
 
-use heapless::String;
-
 use super::entry::{Form, FormKind};
 use super::job::Job;
+use super::text::Text;
 use crate::keypad::Key;
 use crate::motion::StepPos;
 
@@ -61,7 +60,7 @@ impl RunPage {
 }
 
 /// What is on the screen.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Page {
     Boot,
     Menu {
@@ -84,14 +83,14 @@ pub enum Page {
     },
     Error {
         title: &'static str,
-        text: String<28>,
+        text: Text<28>,
     },
 }
 
 /// A short message on the bottom line.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Toast {
-    pub text: String<28>,
+    pub text: Text<28>,
     pub(super) until_ms: u32,
 }
 

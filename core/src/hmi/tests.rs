@@ -220,7 +220,7 @@ fn out_of_range_value_is_refused_with_a_message_and_a_beep() {
     let Page::Form(f) = b.hmi.page() else {
         panic!()
     };
-    assert_eq!((f.cur, f.fields[0].value), (1, 25.0));
+    assert_eq!((f.cur, f.fields()[0].value), (1, 25.0));
 }
 
 #[test]
@@ -249,7 +249,7 @@ fn a_held_digit_through_the_real_keypad_enters_one_digit() {
     let Page::Form(f) = b.hmi.page() else {
         panic!()
     };
-    assert_eq!(f.fields[0].display().as_str(), "3");
+    assert_eq!(f.fields()[0].display().as_str(), "3");
 }
 
 #[test]

@@ -131,10 +131,20 @@ impl DrawTarget for FrameBuffer {
     }
 
     fn fill_solid(&mut self, area: &Rectangle, color: Self::Color) -> Result<(), Self::Error> {
-        let area = area.intersection(&self.bounding_box());
+        // Clipped to the screen with plain integer bounds (no Rectangle intersection).
+        let end = |start: i32, len: u32, max: usize| {
+            start
+                .saturating_add(len.min(1 << 16) as i32)
+                .min(max as i32)
+        };
+        let (x0, y0) = (area.top_left.x.max(0), area.top_left.y.max(0));
+        let x1 = end(area.top_left.x, area.size.width, WIDTH);
+        let y1 = end(area.top_left.y, area.size.height, HEIGHT);
         let on = color.is_on();
-        for p in area.points() {
-            self.set(p.x, p.y, on);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                self.set(x, y, on);
+            }
         }
         Ok(())
     }

@@ -19,7 +19,7 @@ pub mod widgets;
 
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::{PrimitiveStyle, Rectangle};
+use embedded_graphics::primitives::Rectangle;
 use heapless::String;
 
 use crate::hmi::entry::FormKind;
@@ -27,15 +27,19 @@ use crate::hmi::fixed::{push_fixed, push_uint};
 use crate::hmi::job::Job;
 use crate::hmi::{alarm_text, Hmi, Page, RunPhase, Status, MACHINE_MENU, MENU};
 use crate::motion::{X, Y};
-use fonts::{BODY, SMALL};
 use plot::{Plot, Trace};
-use widgets::{arrow, bottom_line, cell, cell_right, progress, title_bar};
+use widgets::{arrow, bottom_line, progress, put, title_bar, Cell};
 
 const ON: BinaryColor = BinaryColor::On;
 const OFF: BinaryColor = BinaryColor::Off;
 
 /// Rows of a list or form page (below the title, above the bottom line).
 const ROW_Y: [i32; 4] = [11, 21, 31, 41];
+
+/// `ROW_Y[i]` by arithmetic (cheaper than iterating the array by value).
+const fn row_y(i: usize) -> i32 {
+    11 + 10 * i as i32
+}
 /// The preview / trace box of the drawing page.
 const RUN_BOX: Rectangle = Rectangle::new(Point::new(2, 11), Size::new(72, 42));
 /// The preview box of the "ready to draw" page.
@@ -78,7 +82,7 @@ type Line = String<32>;
 /// "+X-Y" for a direction; "--" for none.
 fn dir_text(dir: [i8; 2]) -> String<6> {
     let mut s = String::new();
-    for (v, axis) in [(dir[0], 'X'), (dir[1], 'Y')] {
+    for &(v, axis) in [(dir[0], 'X'), (dir[1], 'Y')].iter() {
         if v != 0 {
             let _ = s.push(if v > 0 { '+' } else { '-' });
             let _ = s.push(axis);
@@ -187,40 +191,40 @@ impl Screens {
                 }
                 Ok(())
             }
-            Page::Menu { sel } => {
-                let item = |i: usize| MENU.get(i).map(|(k, m)| (*k, m.label()));
-                list(d, "inkstep", st.state.name(), &item, MENU.len(), *sel)?;
-                bottom_line(d, &position_hint(hmi, st), hmi.toast())
-            }
-            Page::Machine { sel } => {
-                let item = |i: usize| MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()));
-                list(
-                    d,
-                    "Machine",
-                    st.state.name(),
-                    &item,
-                    MACHINE_MENU.len(),
-                    *sel,
-                )?;
+            Page::Menu { sel } | Page::Machine { sel } => {
+                let main = matches!(page, Page::Menu { .. });
+                let item = |i: usize| {
+                    if main {
+                        MENU.get(i).map(|(k, m)| (*k, m.label()))
+                    } else {
+                        MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()))
+                    }
+                };
+                let (title, count) = if main {
+                    ("inkstep", MENU.len())
+                } else {
+                    ("Machine", MACHINE_MENU.len())
+                };
+                list(d, title, st.state.name(), &item, count, *sel)?;
                 bottom_line(d, &position_hint(hmi, st), hmi.toast())
             }
             Page::Form(form) => {
                 let mut right: String<6> = String::new();
                 push_uint(&mut right, form.cur as u32 + 1, 0);
                 let _ = right.push('/');
-                push_uint(&mut right, form.fields.len() as u32, 0);
+                push_uint(&mut right, form.fields().len() as u32, 0);
                 title_bar(d, form.kind.title(), &right)?;
-                for (i, (f, y)) in form.fields.iter().zip(ROW_Y).enumerate() {
-                    let current = i == form.cur;
-                    cell(d, Point::new(0, y), &BODY, f.label, 6, false)?;
+                for (i, f) in form.fields().iter().take(ROW_Y.len()).enumerate() {
+                    let (y, current) = (row_y(i), i == form.cur);
+                    put(d, Cell::at(0, y, 6), f.label)?;
                     let mut v: String<14> = String::new();
                     let _ = v.push_str(&f.display());
                     let _ = v.push(if current && f.editing() { '_' } else { ' ' });
-                    cell_right(d, Point::new(36, y), &BODY, &v, 9, current)?;
-                    cell(d, Point::new(93, y + 1), &SMALL, f.unit, 7, false)?;
+                    put(d, Cell::at(36, y, 9).inverse(current).right(), &v)?;
+                    put(d, Cell::at(93, y + 1, 7).small(), f.unit)?;
                 }
-                if fresh && form.fields.len() < ROW_Y.len() {
-                    cell(d, Point::new(0, 44), &SMALL, form.kind.note(), 25, false)?;
+                if fresh && form.fields().len() < ROW_Y.len() {
+                    put(d, Cell::at(0, 44, 25).small(), form.kind.note())?;
                 }
                 bottom_line(d, "D:ok C:del/esc A/B:field", hmi.toast())
             }
@@ -243,33 +247,19 @@ impl Screens {
                     self.arrow = Some(shown);
                 }
                 let p = hmi.pos_mm(st);
-                cell(
-                    d,
-                    Point::new(52, 12),
-                    &BODY,
-                    &axis_text('X', p[X]),
-                    12,
-                    false,
-                )?;
-                cell(
-                    d,
-                    Point::new(52, 22),
-                    &BODY,
-                    &axis_text('Y', p[Y]),
-                    12,
-                    false,
-                )?;
+                put(d, Cell::at(52, 12, 12), &axis_text('X', p[X]))?;
+                put(d, Cell::at(52, 22, 12), &axis_text('Y', p[Y]))?;
                 let mut f: Line = String::new();
                 let _ = f.push_str("F ");
                 push_uint(&mut f, hmi.jog_speed() as u32, 4);
                 let _ = f.push_str(" mm/m");
-                cell(d, Point::new(52, 32), &BODY, &f, 12, false)?;
+                put(d, Cell::at(52, 32, 12), &f)?;
                 let pen = if hmi.pen_is_down(st) {
                     "Pen down"
                 } else {
                     "Pen up"
                 };
-                cell(d, Point::new(52, 42), &BODY, pen, 12, false)?;
+                put(d, Cell::at(52, 42, 12), pen)?;
                 bottom_line(d, "hold 1-9:move A/B:F 5:pen", hmi.toast())
             }
             Page::Status => {
@@ -281,7 +271,7 @@ impl Screens {
                 push_fixed(&mut l, p[X], 2);
                 let _ = l.push_str("  Y ");
                 push_fixed(&mut l, p[Y], 2);
-                cell(d, Point::new(0, ROW_Y[0]), &BODY, &l, 21, false)?;
+                put(d, Cell::at(0, ROW_Y[0], 21), &l)?;
                 l.clear();
                 let _ = l.push_str("Z ");
                 push_fixed(&mut l, p[2], 2);
@@ -290,19 +280,19 @@ impl Screens {
                 } else {
                     "  pen up"
                 });
-                cell(d, Point::new(0, ROW_Y[1]), &BODY, &l, 21, false)?;
+                put(d, Cell::at(0, ROW_Y[1], 21), &l)?;
                 l.clear();
                 let _ = l.push_str("step/mm");
                 for s in cfg.steps_per_mm {
                     let _ = l.push(' ');
                     push_fixed(&mut l, s, 0);
                 }
-                cell(d, Point::new(0, ROW_Y[2]), &BODY, &l, 21, false)?;
+                put(d, Cell::at(0, ROW_Y[2], 21), &l)?;
                 l.clear();
                 let _ = l.push_str("Draw F ");
                 push_uint(&mut l, hmi.draw_feed() as u32, 4);
                 let _ = l.push_str(" mm/min");
-                cell(d, Point::new(0, ROW_Y[3]), &BODY, &l, 21, true)?;
+                put(d, Cell::at(0, ROW_Y[3], 21).inverse(true), &l)?;
                 let mut h: Line = String::new();
                 let _ = h.push_str("A/B:draw F  jog F ");
                 push_uint(&mut h, hmi.jog_speed() as u32, 0);
@@ -320,7 +310,7 @@ impl Screens {
                     let banner =
                         Rectangle::new(Point::new(x, 17), Size::new(6 * n as u32 + 12, 16));
                     d.fill_solid(&banner, ON)?;
-                    cell(d, Point::new(x + 6, 20), &BODY, text, n, true)?;
+                    put(d, Cell::at(x + 6, 20, n).inverse(true), text)?;
                 }
                 let p = hmi.pos_mm(st);
                 let mut l: Line = String::new();
@@ -328,13 +318,13 @@ impl Screens {
                 push_fixed(&mut l, p[X], 2);
                 let _ = l.push_str(" Y");
                 push_fixed(&mut l, p[Y], 2);
-                cell(d, Point::new(0, 41), &BODY, &l, 21, false)?;
+                put(d, Cell::at(0, 41, 21), &l)?;
                 bottom_line(d, "D:unlock      C:menu", hmi.toast())
             }
             Page::Error { title, text } => {
                 title_bar(d, title, "!")?;
                 if fresh {
-                    cell(d, Point::new(0, 21), &BODY, text, 21, false)?;
+                    put(d, Cell::at(0, 21, 21), text)?;
                 }
                 bottom_line(d, "any key: back to menu", None)
             }
@@ -349,32 +339,27 @@ impl Screens {
         let _ = t.push_str(job.name());
         let _ = t.push_str(": preview");
         title_bar(d, &t, "")?;
-        PREVIEW_BOX
-            .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-            .draw(d)?;
+        widgets::frame(d, PREVIEW_BOX, ON)?;
         let plot = Plot::fit(job, PREVIEW_BOX);
         plot.draw_preview(job, d)?;
         // The start point: a small filled square.
         let s = plot.to_px([0.0, 0.0]);
         d.fill_solid(&Rectangle::new(s - Point::new(1, 1), Size::new(3, 3)), ON)?;
-        let (lo, hi) = job.bounds();
-        let len = job.length_mm();
+        let (lo, hi, len) = job.sweep();
         let feed = hmi.draw_feed().max(1.0);
-        let rows: [(&str, f32, u8); 4] = [
-            ("W", hi[0] - lo[0], 1),
-            ("H", hi[1] - lo[1], 1),
-            ("L", len, 1),
-            ("t", len / feed * 60.0, 0),
+        let rows: [(&str, f32, u8, &str); 4] = [
+            ("W ", hi[0] - lo[0], 1, ""),
+            ("H ", hi[1] - lo[1], 1, ""),
+            ("L ", len, 1, ""),
+            ("t ", len / feed * 60.0, 0, "s"),
         ];
-        for ((name, v, dec), y) in rows.iter().zip(ROW_Y) {
+        for (i, (name, v, dec, unit)) in rows.iter().enumerate() {
+            let y = row_y(i);
             let mut l: String<12> = String::new();
             let _ = l.push_str(name);
-            let _ = l.push(' ');
             push_fixed(&mut l, *v, *dec);
-            if *name == "t" {
-                let _ = l.push('s');
-            }
-            cell(d, Point::new(83, y), &BODY, &l, 7, false)?;
+            let _ = l.push_str(unit);
+            put(d, Cell::at(83, y, 7), &l)?;
         }
         Ok(())
     }
@@ -401,9 +386,7 @@ impl Screens {
             }
         };
         if fresh {
-            RUN_BOX
-                .into_styled(PrimitiveStyle::with_stroke(ON, 1))
-                .draw(d)?;
+            widgets::frame(d, RUN_BOX, ON)?;
             plot.draw_preview(&run.job, d)?;
             self.trace.draw(d)?;
         }
@@ -443,38 +426,22 @@ impl Screens {
         }
         // Live values.
         let p = hmi.pos_mm(st);
-        cell(
-            d,
-            Point::new(76, 11),
-            &BODY,
-            &axis_text('X', p[X]),
-            8,
-            false,
-        )?;
-        cell(
-            d,
-            Point::new(76, 21),
-            &BODY,
-            &axis_text('Y', p[Y]),
-            8,
-            false,
-        )?;
+        put(d, Cell::at(76, 11, 8), &axis_text('X', p[X]))?;
+        put(d, Cell::at(76, 21, 8), &axis_text('Y', p[Y]))?;
         let mut l: Line = String::new();
         let _ = l.push_str("F ");
         push_uint(&mut l, st.feed_mm_min.max(0.0) as u32, 4);
         let _ = l.push_str("mm/m");
-        cell(d, Point::new(76, 31), &SMALL, &l, 10, false)?;
+        put(d, Cell::at(76, 31, 10).small(), &l)?;
         // Teaching view: the feed direction now and the ones before it.
         l.clear();
         let _ = l.push_str("feed ");
         let _ = l.push_str(&dir_text(st.dir));
-        cell(d, Point::new(76, 39), &SMALL, &l, 10, false)?;
+        put(d, Cell::at(76, 39, 10).small(), &l)?;
         l.clear();
-        let dirs: heapless::Vec<[i8; 2], { crate::hmi::DIR_HISTORY }> =
-            hmi.feed_dirs().copied().collect();
-        let mut previous = dirs.iter().rev().skip(usize::from(st.dir != [0, 0]));
+        let previous = hmi.feed_dirs().rev().skip(usize::from(st.dir != [0, 0]));
         let _ = l.push_str("was");
-        for dir in previous.by_ref() {
+        for dir in previous {
             let t = dir_text(*dir);
             if l.len() + 1 + t.len() > 10 {
                 break;
@@ -482,7 +449,7 @@ impl Screens {
             let _ = l.push(' ');
             let _ = l.push_str(&t);
         }
-        cell(d, Point::new(76, 47), &SMALL, &l, 10, false)?;
+        put(d, Cell::at(76, 47, 10).small(), &l)?;
         // Progress and state.
         progress(
             d,
@@ -500,7 +467,7 @@ impl Screens {
         push_uint(&mut l, libm::roundf(run.progress() * 100.0) as u32, 3);
         let _ = l.push_str("% ");
         let _ = l.push_str(state);
-        cell(d, Point::new(65, 56), &SMALL, &l, 12, false)
+        put(d, Cell::at(65, 56, 12).small(), &l)
     }
 }
 
@@ -535,7 +502,8 @@ where
     title_bar(d, title, right)?;
     let rows = ROW_Y.len();
     let top = sel.saturating_sub(rows - 1).min(count.saturating_sub(rows));
-    for (row, y) in ROW_Y.iter().enumerate() {
+    for row in 0..rows {
+        let y = row_y(row);
         let i = top + row;
         let mut l: Line = String::new();
         if let Some((hotkey, label)) = item(i) {
@@ -544,7 +512,7 @@ where
             let _ = l.push(' ');
             let _ = l.push_str(label);
         }
-        cell(d, Point::new(0, *y), &BODY, &l, 20, i == sel)?;
+        put(d, Cell::at(0, y, 20).inverse(i == sel), &l)?;
     }
     // Scroll bar in x 123..=125, rows 11..=50, painted pixel-exact.
     if count > rows {
@@ -554,7 +522,7 @@ where
         let x = 123;
         let rest = (track - pos - len).max(0);
         // Outside the thumb: a 1-pixel track line in the middle column.
-        for (y0, h) in [(11, pos), (11 + pos + len, rest)] {
+        for &(y0, h) in [(11, pos), (11 + pos + len, rest)].iter() {
             d.fill_solid(
                 &Rectangle::new(Point::new(x, y0), Size::new(1, h as u32)),
                 OFF,
@@ -576,30 +544,30 @@ where
     Ok(())
 }
 
+/// The boot screen's sine period: row of x = 16 + 2i, i.e. round(32 - 7 sin(2 pi i / 48))
+/// (checked against the formula in the tests; a table costs 49 bytes, sinf far more).
+const BOOT_WAVE: [u8; 49] = [
+    32, 31, 30, 29, 29, 28, 27, 26, 26, 26, 25, 25, 25, 25, 25, 26, 26, 26, 27, 28, 29, 29, 30, 31,
+    32, 33, 34, 35, 36, 36, 37, 38, 38, 38, 39, 39, 39, 39, 39, 38, 38, 38, 37, 36, 36, 35, 34, 33,
+    32,
+];
+
 fn boot<D>(d: &mut D) -> Result<(), D::Error>
 where
     D: DrawTarget<Color = BinaryColor>,
 {
     // The name in an inverted banner, one period of the report's signature curve under it.
     d.fill_solid(&Rectangle::new(Point::new(34, 4), Size::new(60, 16)), ON)?;
-    cell(d, Point::new(43, 7), &BODY, "inkstep", 7, true)?;
+    put(d, Cell::at(43, 7, 7).inverse(true), "inkstep")?;
     let mut prev: Option<Point> = None;
-    for i in 0..=48 {
-        let x = 16 + i * 2;
-        let y = 32.0 - 7.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
-        let p = Point::new(x, libm::roundf(y) as i32);
+    for (i, &y) in BOOT_WAVE.iter().enumerate() {
+        let x = 16 + 2 * i as i32;
+        let p = Point::new(x, i32::from(y));
         widgets::line(d, prev.unwrap_or(p), p)?;
         prev = Some(p);
     }
-    cell(d, Point::new(31, 42), &BODY, "pen plotter", 11, false)?;
-    cell(
-        d,
-        Point::new(9, 55),
-        &SMALL,
-        "STM32F103 + ST7920 LCD",
-        22,
-        false,
-    )
+    put(d, Cell::at(31, 42, 11), "pen plotter")?;
+    put(d, Cell::at(9, 55, 22).small(), "STM32F103 + ST7920 LCD")
 }
 
 #[cfg(test)]
@@ -626,6 +594,21 @@ mod tests {
             st,
             now,
         );
+    }
+
+    #[test]
+    fn boot_wave_is_one_sine_period() {
+        for (i, &y) in BOOT_WAVE.iter().enumerate() {
+            let want = 32.0 - 7.0 * libm::sinf(i as f32 / 48.0 * 2.0 * core::f32::consts::PI);
+            assert_eq!(f32::from(y), libm::roundf(want), "i = {i}");
+        }
+    }
+
+    #[test]
+    fn row_y_is_the_row_table() {
+        for (i, y) in ROW_Y.iter().enumerate() {
+            assert_eq!(row_y(i), *y);
+        }
     }
 
     #[test]
@@ -720,7 +703,7 @@ mod tests {
         let mut screens = Screens::new();
         st.state = MachineState::Run;
         st.queue_empty = false;
-        let Page::Run(run) = hmi.page().clone() else {
+        let Page::Run(run) = *hmi.page() else {
             panic!("not drawing")
         };
         for i in 0..=40u32 {

@@ -60,9 +60,10 @@ impl Plot {
         let y = libm::roundf(self.origin[1] - mm[1] * self.scale);
         let br = self.area.top_left + self.area.size - Point::new(2, 2);
         let tl = self.area.top_left + Point::new(1, 1);
+        // max/min rather than clamp: no "min > max" assertion to carry.
         let clamp = |v: f32, lo: i32, hi: i32| {
             if v.is_finite() {
-                (v as i32).clamp(lo, hi)
+                (v as i32).max(lo).min(hi)
             } else {
                 lo
             }
@@ -77,7 +78,7 @@ impl Plot {
     {
         let len_px = job.length_mm() * self.scale;
         let n = libm::roundf(len_px / 2.5).clamp(8.0, 400.0) as u32;
-        for i in 0..=n {
+        for i in 0..n + 1 {
             let p = self.to_px(job.point_at(i as f32 / n as f32));
             Pixel(p, BinaryColor::On).draw(d)?;
         }

@@ -68,38 +68,41 @@ pub fn spans(fb: &FrameBuffer) -> impl Iterator<Item = Span> + '_ {
     (0..GDRAM_ROWS).flat_map(move |r| {
         let mask = gdram_mask(fb, r);
         let mut w = 0usize;
-        core::iter::from_fn(move || {
-            while w < GDRAM_WORDS && mask & (1 << w) == 0 {
-                w += 1;
-            }
-            if w >= GDRAM_WORDS {
-                return None;
-            }
-            let first = w;
-            let mut last = w;
-            w += 1;
-            while w < GDRAM_WORDS {
-                if mask & (1 << w) != 0 {
-                    last = w;
-                    w += 1;
-                } else if w + 1 < GDRAM_WORDS && mask & (1 << (w + 1)) != 0 {
-                    last = w + 1;
-                    w += 2;
-                } else {
-                    break;
-                }
-            }
-            Some(Span {
-                row: r as u8,
-                first: first as u8,
-                last: last as u8,
-            })
-        })
+        core::iter::from_fn(move || next_span(mask, r, &mut w))
+    })
+}
+
+/// The next span of GDRAM row `r` (dirty mask `mask`) from word `*w` on.
+fn next_span(mask: u16, r: usize, w: &mut usize) -> Option<Span> {
+    while *w < GDRAM_WORDS && mask & (1 << *w) == 0 {
+        *w += 1;
+    }
+    if *w >= GDRAM_WORDS {
+        return None;
+    }
+    let first = *w;
+    let mut last = *w;
+    *w += 1;
+    while *w < GDRAM_WORDS {
+        if mask & (1 << *w) != 0 {
+            last = *w;
+            *w += 1;
+        } else if *w + 1 < GDRAM_WORDS && mask & (1 << (*w + 1)) != 0 {
+            last = *w + 1;
+            *w += 2;
+        } else {
+            break;
+        }
+    }
+    Some(Span {
+        row: r as u8,
+        first: first as u8,
+        last: last as u8,
     })
 }
 
 fn frame(out: &mut [u8], at: &mut usize, start: u8, byte: u8) {
-    for b in [start, byte & 0xF0, byte << 4] {
+    for &b in [start, byte & 0xF0, byte << 4].iter() {
         if let Some(slot) = out.get_mut(*at) {
             *slot = b;
             *at += 1;
@@ -113,7 +116,7 @@ pub fn encode(fb: &FrameBuffer, span: Span, out: &mut [u8]) -> usize {
     let mut n = 0;
     frame(out, &mut n, 0xF8, 0x80 | (span.row & 0x1F));
     frame(out, &mut n, 0xF8, 0x80 | (span.first & 0x0F));
-    for w in span.first as usize..=span.last as usize {
+    for w in span.first as usize..span.last as usize + 1 {
         let (y, word) = if w < ROW_WORDS {
             (span.row as usize, w)
         } else {
@@ -143,10 +146,15 @@ pub fn flush<E>(
 ) -> Result<usize, E> {
     let mut buf = [0u8; MAX_SPAN_BYTES];
     let mut total = 0;
-    for span in spans(fb) {
-        let n = encode(fb, span, &mut buf);
-        send(buf.get(..n).unwrap_or(&[]))?;
-        total += n;
+    // The same spans as [`spans`], walked with plain loops (no iterator adapters).
+    for r in 0..GDRAM_ROWS {
+        let mask = gdram_mask(fb, r);
+        let mut w = 0;
+        while let Some(span) = next_span(mask, r, &mut w) {
+            let n = encode(fb, span, &mut buf);
+            send(buf.get(..n).unwrap_or(&[]))?;
+            total += n;
+        }
     }
     fb.mark_clean();
     Ok(total)

@@ -1,0 +1,127 @@
+//! [`Text`]: a short string in a fixed array, `Copy` so that the pages and the whole
+//! [`super::Hmi`] are plain data: the firmware clones the HMI out of its lock on every
+//! LCD refresh, and a clone of plain data is a copy instead of a clone per field.
+
+use core::fmt;
+use core::ops::Deref;
+
+/// Up to `N` bytes of UTF-8 text.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct Text<const N: usize> {
+    len: u8,
+    buf: [u8; N],
+}
+
+impl<const N: usize> Default for Text<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> Text<N> {
+    /// The empty text (`N` must be at most 255).
+    pub const fn new() -> Self {
+        Text {
+            len: 0,
+            buf: [0; N],
+        }
+    }
+
+    /// The longest prefix of `s` that fits, cut at a character boundary.
+    pub fn truncated(s: &str) -> Self {
+        let mut end = s.len().min(N);
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut t = Self::new();
+        let _ = t.push_str(s.get(..end).unwrap_or(""));
+        t
+    }
+
+    pub fn as_str(&self) -> &str {
+        let bytes = self.buf.get(..usize::from(self.len)).unwrap_or(&[]);
+        core::str::from_utf8(bytes).unwrap_or("")
+    }
+
+    pub fn as_bytes(&self) -> &[u8] {
+        self.as_str().as_bytes()
+    }
+
+    /// Append `s` whole, or change nothing and return false if it does not fit.
+    pub fn push_str(&mut self, s: &str) -> bool {
+        let at = usize::from(self.len);
+        let end = at + s.len();
+        match self.buf.get_mut(at..end) {
+            Some(dst) if end <= usize::from(u8::MAX) => {
+                dst.copy_from_slice(s.as_bytes());
+                self.len = end as u8;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Append `c`; false (and unchanged) if it does not fit.
+    pub fn push(&mut self, c: char) -> bool {
+        self.push_str(c.encode_utf8(&mut [0; 4]))
+    }
+
+    /// Remove the last character; false if the text was empty.
+    pub fn pop(&mut self) -> bool {
+        let s = self.as_str();
+        if s.is_empty() {
+            return false;
+        }
+        let mut end = s.len() - 1;
+        while !s.is_char_boundary(end) {
+            end -= 1;
+        }
+        self.len = end as u8;
+        true
+    }
+
+    pub fn clear(&mut self) {
+        self.len = 0;
+    }
+}
+
+impl<const N: usize> Deref for Text<N> {
+    type Target = str;
+    fn deref(&self) -> &str {
+        self.as_str()
+    }
+}
+
+impl<const N: usize> fmt::Debug for Text<N> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Debug::fmt(self.as_str(), f)
+    }
+}
+
+impl<const N: usize> PartialEq<&str> for Text<N> {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_pop_and_truncation_keep_whole_characters() {
+        let mut t: Text<4> = Text::new();
+        assert!(t.push_str("ab"));
+        assert!(t.push('é'));
+        assert_eq!(t.as_str(), "abé");
+        assert!(!t.push('c'), "full");
+        assert!(t.pop());
+        assert_eq!(t, "ab");
+        assert!(t.pop());
+        assert_eq!(t, "a");
+        t.clear();
+        assert!(!t.pop());
+        assert_eq!(Text::<4>::truncated("xyzé").as_str(), "xyz");
+        assert_eq!(Text::<5>::truncated("xyzé").as_str(), "xyzé");
+    }
+}
