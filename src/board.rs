@@ -411,6 +411,9 @@ pub type UsbSerial = usbd_serial::SerialPort<'static, UsbBusType>;
 pub const SETTINGS_FLASH_START: u32 = 0x0800_F000;
 pub const SETTINGS_FLASH_SIZE: u32 = 4 * 1024;
 pub const FLASH_PAGE_SIZE: u32 = 1024;
+/// The chip's flash size and the settings pages as chip flash offsets.
+pub const FLASH_SIZE: u32 = 64 * 1024;
+pub const SETTINGS_OFFSET: u32 = SETTINGS_FLASH_START - 0x0800_0000;
 
 /// Everything `init` hands to the RTIC app.
 pub struct Board {
@@ -616,11 +619,14 @@ pub fn exti_take_pending(line: u8) -> bool {
     }
 }
 
-/// The settings pages of the internal flash as a NOR flash (embedded-storage traits),
-/// for the power-loss-safe store in the core.
+/// The internal flash as a NOR flash (embedded-storage traits) for the power-loss-safe
+/// settings store in the core. Offsets are chip flash offsets (0 = 0x0800_0000), the
+/// store's range (`settings_store::STORE_RANGE`) is the settings pages; reads may look
+/// anywhere in the 64 KB, writes and erases only inside the settings pages, so a store
+/// bug can never overwrite the program.
 ///
 /// Programming stalls instruction fetch from flash for the duration of a write (~50 µs
-/// per half-word) or erase (~20 ms per page), so the core only writes settings while idle.
+/// per half-word) or erase (~20 ms per page), so the firmware only saves at rest.
 pub struct SettingsFlash {
     flash: stm32f1xx_hal::flash::Parts,
 }
@@ -651,21 +657,27 @@ impl embedded_storage::nor_flash::ErrorType for SettingsFlash {
     type Error = FlashError;
 }
 
+/// `offset..offset + len` lies inside `lo..hi`.
+fn within(offset: u32, len: usize, lo: u32, hi: u32) -> bool {
+    let Ok(len) = u32::try_from(len) else {
+        return false;
+    };
+    offset >= lo && offset.checked_add(len).is_some_and(|end| end <= hi)
+}
+
 impl embedded_storage::nor_flash::ReadNorFlash for SettingsFlash {
     const READ_SIZE: usize = 1;
     fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
-        let end = offset.checked_add(bytes.len() as u32).ok_or(FlashError)?;
-        if end > SETTINGS_FLASH_SIZE {
+        if !within(offset, bytes.len(), 0, FLASH_SIZE) {
             return Err(FlashError);
         }
-        let base = SETTINGS_FLASH_START - 0x0800_0000 + offset;
         let writer = self.writer();
-        let data = writer.read(base, bytes.len()).map_err(|_| FlashError)?;
+        let data = writer.read(offset, bytes.len()).map_err(|_| FlashError)?;
         bytes.copy_from_slice(data);
         Ok(())
     }
     fn capacity(&self) -> usize {
-        SETTINGS_FLASH_SIZE as usize
+        FLASH_SIZE as usize
     }
 }
 
@@ -673,22 +685,19 @@ impl embedded_storage::nor_flash::NorFlash for SettingsFlash {
     const WRITE_SIZE: usize = 2;
     const ERASE_SIZE: usize = FLASH_PAGE_SIZE as usize;
     fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-        if from > to || to > SETTINGS_FLASH_SIZE {
+        let end = SETTINGS_OFFSET + SETTINGS_FLASH_SIZE;
+        if from > to || !within(from, (to - from) as usize, SETTINGS_OFFSET, end) {
             return Err(FlashError);
         }
-        let base = SETTINGS_FLASH_START - 0x0800_0000;
         self.writer()
-            .erase(base + from, (to - from) as usize)
+            .erase(from, (to - from) as usize)
             .map_err(|_| FlashError)
     }
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
-        let end = offset.checked_add(bytes.len() as u32).ok_or(FlashError)?;
-        if end > SETTINGS_FLASH_SIZE {
+        let end = SETTINGS_OFFSET + SETTINGS_FLASH_SIZE;
+        if !within(offset, bytes.len(), SETTINGS_OFFSET, end) {
             return Err(FlashError);
         }
-        let base = SETTINGS_FLASH_START - 0x0800_0000;
-        self.writer()
-            .write(base + offset, bytes)
-            .map_err(|_| FlashError)
+        self.writer().write(offset, bytes).map_err(|_| FlashError)
     }
 }
