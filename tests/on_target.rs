@@ -118,13 +118,14 @@ mod tests {
     fn settings_store_round_trip(b: &mut Board) {
         use inkstep_core::settings::Settings;
         use inkstep_core::settings_store::{BlockingFlash, LoadStatus, SettingsStore, STORE_RANGE};
-        let mut store =
-            defmt::unwrap!(SettingsStore::new(BlockingFlash(&mut b.flash), STORE_RANGE).ok());
-        let mut s = Settings::default();
-        defmt::unwrap!(s.set(110, 4321.0).ok());
-        defmt::unwrap!(store.save_settings(&s).ok());
+        {
+            let mut store =
+                defmt::unwrap!(SettingsStore::new(BlockingFlash(&mut b.flash), STORE_RANGE).ok());
+            let mut s = Settings::default();
+            defmt::unwrap!(s.set(110, 4321.0).ok());
+            defmt::unwrap!(store.save_settings(&s).ok());
+        }
         // A fresh store over the same pages (as after a reset) loads what was saved.
-        drop(store);
         let mut store =
             defmt::unwrap!(SettingsStore::new(BlockingFlash(&mut b.flash), STORE_RANGE).ok());
         let (loaded, status) = store.load_settings();
