@@ -3,4 +3,5 @@
 #![no_std]
 
 pub mod board;
+pub mod fault;
 pub mod steps;

@@ -32,31 +32,15 @@ const USB_TX: usize = 512;
 /// Hard limits stop stepping at once only when `$21` is on.
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
 
-/// A fault must leave every motor driver disabled, whatever caused it.
+/// A fault or panic must leave every motor driver disabled (see `inkstep::fault`).
 #[cortex_m_rt::exception]
 unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    board::emergency_outputs_off();
-    loop {
-        cortex_m::asm::bkpt();
-    }
+    inkstep::fault::on_hard_fault()
 }
 
-/// The panic handler: drivers off before anything else, then what panic-probe does
-/// (print over defmt, then fault so that probe-rs stops and shows the backtrace).
-/// panic-probe itself offers no hook to run first, hence this copy of its behaviour.
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    board::emergency_outputs_off();
-    cortex_m::interrupt::disable();
-    defmt::error!("panic: {}", defmt::Display2Format(info));
-    // Escalate the undefined instruction to HardFault (it disables the outputs again).
-    // SAFETY: SHCSR is the System Handler Control and State Register; clearing
-    // USGFAULTENA only changes which fault handler runs.
-    unsafe {
-        const SHCSR: *mut u32 = 0xE000_ED24_usize as *mut u32;
-        core::ptr::write_volatile(SHCSR, core::ptr::read_volatile(SHCSR) & !(1 << 18));
-    }
-    cortex_m::asm::udf()
+    inkstep::fault::on_panic(info)
 }
 
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3, SPI1, I2C1_EV])]

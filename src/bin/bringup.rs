@@ -16,20 +16,15 @@
 use defmt_rtt as _;
 use inkstep::board;
 
+/// A fault or panic must leave every motor driver disabled (see `inkstep::fault`).
 #[cortex_m_rt::exception]
 unsafe fn HardFault(_frame: &cortex_m_rt::ExceptionFrame) -> ! {
-    board::emergency_outputs_off();
-    loop {
-        cortex_m::asm::bkpt();
-    }
+    inkstep::fault::on_hard_fault()
 }
 
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo) -> ! {
-    board::emergency_outputs_off();
-    cortex_m::interrupt::disable();
-    defmt::error!("panic: {}", defmt::Display2Format(info));
-    cortex_m::asm::udf()
+    inkstep::fault::on_panic(info)
 }
 
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3])]
