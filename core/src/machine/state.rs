@@ -361,16 +361,7 @@ impl Machine {
                 return Some(Ok(()));
             }
             if let Command::Move(_) = cmd {
-                if !self.job.running {
-                    self.job = Job {
-                        running: true,
-                        start_ms: now_ms,
-                        moves: 0,
-                        ending: false,
-                    };
-                    self.event(Event::JobStarted);
-                }
-                self.job.moves = self.job.moves.wrapping_add(1);
+                self.count_move(now_ms);
             }
         }
         match out.stop {
@@ -626,18 +617,23 @@ impl Machine {
         m.push(cmd).map_err(|_| Status::Overflow)?;
         if let Command::Move(mv) = cmd {
             self.interp.sync_position(&mv.target, &self.settings);
-            if !self.job.running {
-                self.job = Job {
-                    running: true,
-                    start_ms: now_ms,
-                    moves: 0,
-                    ending: false,
-                };
-                self.event(Event::JobStarted);
-            }
-            self.job.moves = self.job.moves.wrapping_add(1);
+            self.count_move(now_ms);
         }
         Ok(())
+    }
+
+    /// A move was queued: the first one of a job starts it (and says so).
+    fn count_move(&mut self, now_ms: u32) {
+        if !self.job.running {
+            self.job = Job {
+                running: true,
+                start_ms: now_ms,
+                moves: 0,
+                ending: false,
+            };
+            self.event(Event::JobStarted);
+        }
+        self.job.moves = self.job.moves.wrapping_add(1);
     }
 
     /// Stop cleanly and forget the rest (the keypad's abort): decelerate to rest, then
