@@ -48,6 +48,7 @@ mod app {
     use super::*;
     use heapless::spsc::Queue;
     use inkstep_core::controller::Controller;
+    use inkstep_core::hmi::buzzer::Buzzer;
     use inkstep_core::link::Link;
     use inkstep_core::machine::Inputs;
     use inkstep_core::protocol::STARTUP_LINES;
@@ -439,12 +440,13 @@ mod app {
     /// Also plays the buzzer patterns and feeds the watchdog.
     #[task(priority = 3, shared = [ctl, link], local = [keypad, watchdog, indicators])]
     async fn keypad_scan(mut cx: keypad_scan::Context) {
-        let mut beep: &'static [u16] = &[];
-        let mut beep_left_ms: u32 = 0;
+        /// One keypad column per tick; the buzzer pattern advances by the same tick.
+        const SCAN_MS: u32 = 5;
+        let mut buzzer = Buzzer::new();
         loop {
             let col = cx.shared.ctl.lock(|c| c.keypad().column());
             cx.local.keypad.select_column(col);
-            Mono::delay(5.millis()).await;
+            Mono::delay(SCAN_MS.millis()).await;
             let rows = cx.local.keypad.read_rows();
             let now = Mono::now().ticks();
             let out = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
@@ -453,22 +455,9 @@ mod app {
             });
             cx.local.indicators.set_busy(out.busy_led);
             if let Some(b) = out.beep {
-                beep = b.pattern();
-                beep_left_ms = 0;
+                buzzer.play(b);
             }
-            // Buzzer: step through the on/off pattern in 5 ms ticks.
-            if beep_left_ms == 0 {
-                match beep.split_first() {
-                    Some((&ms, rest)) => {
-                        // Even number of entries left = this one is an "on" time.
-                        cx.local.indicators.set_buzzer(beep.len() % 2 == 1);
-                        beep_left_ms = u32::from(ms);
-                        beep = rest;
-                    }
-                    None => cx.local.indicators.set_buzzer(false),
-                }
-            }
-            beep_left_ms = beep_left_ms.saturating_sub(5);
+            cx.local.indicators.set_buzzer(buzzer.tick(SCAN_MS));
             cx.local.watchdog.feed();
         }
     }

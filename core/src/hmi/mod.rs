@@ -12,6 +12,7 @@
 //! exit key) becomes a [`Page`] enum: each page handles its keys and returns to the menu
 //! by replacing itself, never by blocking.
 
+pub mod buzzer;
 pub mod entry;
 pub mod fixed;
 pub mod io;
