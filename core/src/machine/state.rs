@@ -473,6 +473,18 @@ impl Machine {
         if a.critical() {
             self.needs_reset = true;
         }
+        self.drop_activity();
+        self.locked = true;
+        self.alarm = Some(a);
+        self.event(Event::Alarm(a));
+        if a.critical() {
+            self.event(Event::Msg("Reset to continue"));
+        }
+    }
+
+    /// Forget what the machine was doing (homing, jogging, holds, pauses, the job):
+    /// both an alarm and a soft reset end all of it.
+    fn drop_activity(&mut self) {
         self.homing = None;
         self.jogging = false;
         self.jog_cancel = false;
@@ -482,12 +494,6 @@ impl Machine {
         self.job = Job::default();
         self.pause_pending = false;
         self.paused = false;
-        self.locked = true;
-        self.alarm = Some(a);
-        self.event(Event::Alarm(a));
-        if a.critical() {
-            self.event(Event::Msg("Reset to continue"));
-        }
     }
 
     fn resync<M: MotionControl>(&mut self, m: &M) {
@@ -504,20 +510,12 @@ impl Machine {
         m.set_overrides(100, 100);
         self.resync(m);
         self.interp.reset_modal();
-        self.homing = None;
-        self.jogging = false;
-        self.jog_cancel = false;
-        self.hold = false;
-        self.door = false;
-        self.hold_by_pin = false;
-        self.pause_pending = false;
-        self.paused = false;
+        self.drop_activity();
         self.stop_then_clear = false;
         self.check_mode = false;
         self.feed_ovr = 100;
         self.rapid_ovr = 100;
         self.needs_reset = false;
-        self.job = Job::default();
         let alarm = if self.inputs.estop {
             Some(Alarm::EStop)
         } else if was_homing {
