@@ -169,17 +169,23 @@ fn pair_greedy_undirected(
     edges: &mut Vec<(usize, usize, Option<usize>)>,
 ) {
     while let Some(u) = odd.pop() {
-        let (k, _) = odd
-            .iter()
-            .enumerate()
-            .map(|(k, &v)| (k, pts[u].dist(pts[v])))
-            .fold(
-                (usize::MAX, f64::INFINITY),
-                |b, c| if c.1 < b.1 { c } else { b },
-            );
+        let k = nearest(pts, u, odd);
         let v = odd.swap_remove(k);
         edges.push((u, v, None));
     }
+}
+
+/// Index in `cands` of the point nearest `pts[u]` (`usize::MAX` if `cands` is empty).
+fn nearest(pts: &[Pt], u: usize, cands: &[usize]) -> usize {
+    cands
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| (k, pts[u].dist(pts[v])))
+        .fold(
+            (usize::MAX, f64::INFINITY),
+            |b, c| if c.1 < b.1 { c } else { b },
+        )
+        .0
 }
 
 fn pair_greedy_directed(
@@ -189,14 +195,7 @@ fn pair_greedy_directed(
     edges: &mut Vec<(usize, usize, Option<usize>)>,
 ) {
     for &u in from {
-        let (k, _) = to
-            .iter()
-            .enumerate()
-            .map(|(k, &v)| (k, pts[u].dist(pts[v])))
-            .fold(
-                (usize::MAX, f64::INFINITY),
-                |b, c| if c.1 < b.1 { c } else { b },
-            );
+        let k = nearest(pts, u, to);
         let v = to.swap_remove(k);
         edges.push((u, v, None));
     }
