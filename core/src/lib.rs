@@ -8,7 +8,7 @@
 //! - step generation (segment preparation, the step interrupt's work): [`stepper`]
 //! - measurement of step traces against an ideal path: [`analysis`]
 //! - the benchmark programs' G-code subset: [`refprog`]
-//! - compact sine/cosine/arctangent for planning code: [`trig`]
+//! - compact sine/cosine/arctangent for planning code: [`trig`]; libm-free f32 math: [`fmath`]
 //! - machine settings and their flash store: [`settings`], [`settings_store`]
 //! - G-code parsing and interpretation: [`gcode`]
 //! - machine state, safety and the planner interface: [`machine`]
@@ -24,6 +24,7 @@
 
 pub mod analysis;
 pub mod controller;
+pub mod fmath;
 pub mod gcode;
 pub mod hmi;
 pub mod interp;
