@@ -135,6 +135,11 @@ pub fn emergency_outputs_off() {
     }
 }
 
+/// [`StepTimer::take_events`]: the update event (UIF), a period has ended.
+pub const EVENT_UPDATE: u32 = 1;
+/// [`StepTimer::take_events`]: the compare event (CC1IF), the pulse width has passed.
+pub const EVENT_COMPARE: u32 = 1 << 1;
+
 /// TIM2 as the step timer: counts at [`STEP_TIMER_HZ`]; the update interrupt starts a
 /// step pulse, compare channel 1 ends it after the configured pulse width.
 pub struct StepTimer {
@@ -172,10 +177,11 @@ impl StepTimer {
             .write(|w| unsafe { w.bits(u32::from(ticks.max(1))) });
     }
 
-    /// Program the period of the next step interval, in ticks (2..=65536).
+    /// Program the period of the next step interval, in ticks (2..=65536; the executor
+    /// never asks for more, so only the low end is clamped here).
     #[inline(always)]
     pub fn set_period(&mut self, ticks: u32) {
-        let arr = ticks.clamp(2, 0x1_0000) - 1;
+        let arr = ticks.max(2) - 1;
         self.tim.arr().write(|w| unsafe { w.bits(arr) });
         // Interrupt latency already counted past the new end: end the period now
         // rather than wrapping through 65536 ticks.
@@ -202,22 +208,14 @@ impl StepTimer {
         self.tim.cr1().read().cen().bit_is_set()
     }
 
-    /// Which event raised the interrupt; clears the flags it reports.
+    /// Which events raised the interrupt ([`EVENT_UPDATE`], [`EVENT_COMPARE`] bits);
+    /// clears exactly the flags it reports.
     #[inline(always)]
-    pub fn take_events(&mut self) -> (bool, bool) {
-        let sr = self.tim.sr().read();
-        let update = sr.uif().bit_is_set();
-        let compare = sr.cc1if().bit_is_set();
-        // rc_w0 bits: write 0 to clear exactly the ones we saw.
-        let mut clear = 0xFFFF_u32;
-        if update {
-            clear &= !1;
-        }
-        if compare {
-            clear &= !(1 << 1);
-        }
-        self.tim.sr().write(|w| unsafe { w.bits(clear) });
-        (update, compare)
+    pub fn take_events(&mut self) -> u32 {
+        let seen = self.tim.sr().read().bits() & (EVENT_UPDATE | EVENT_COMPARE);
+        // rc_w0 bits: writing 0 clears, writing 1 leaves a flag alone.
+        self.tim.sr().write(|w| unsafe { w.bits(!seen & 0xFFFF) });
+        seen
     }
 }
 

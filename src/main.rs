@@ -18,13 +18,10 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use defmt_rtt as _;
 use heapless::spsc::{Consumer, Producer};
 use inkstep::board;
-use inkstep::steps::{self, BoardSide, StepOutput, HALT, PULSE_TICKS};
+use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, HALT, PULSE_TICKS};
 use inkstep_core::link::StepSide;
 use inkstep_core::stepper::exec::Executor;
-use inkstep_core::stepper::StepCmd;
 
-/// Step commands between segment preparation and the step interrupt (4 bytes each).
-const STEP_QUEUE: usize = 256;
 /// USB byte queues. RX holds more than Grbl's 128-byte character-counting window.
 const USB_RX: usize = 256;
 const USB_TX: usize = 512;
@@ -90,7 +87,7 @@ mod app {
 
     #[init(local = [
         usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
-        steps: Queue<StepCmd, STEP_QUEUE> = Queue::new(),
+        steps: StepCmdQueue = StepCmdQueue::new(),
         usb_rxq: Queue<u8, USB_RX> = Queue::new(),
         usb_txq: Queue<u8, USB_TX> = Queue::new(),
     ])]

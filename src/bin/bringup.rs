@@ -38,8 +38,7 @@ mod app {
         prelude::*,
         text::{Baseline, Text},
     };
-    use heapless::spsc::{Consumer, Producer, Queue};
-    use inkstep::steps::{self, StepOutput, HALT};
+    use inkstep::steps::{self, StepCmdQueue, StepOutput, StepTx, HALT};
     use inkstep_core::interp::Tick;
     use inkstep_core::keypad::{KeyKind, Keypad, KeypadConfig};
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920};
@@ -67,7 +66,7 @@ mod app {
     #[local]
     struct Local {
         step_out: StepOutput,
-        steps_tx: Producer<'static, StepCmd>,
+        steps_tx: StepTx,
         keypad: board::KeypadMatrix,
         inputs: board::Inputs,
         indicators: board::Indicators,
@@ -78,13 +77,12 @@ mod app {
 
     #[init(local = [
         usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
-        steps: Queue<StepCmd, 64> = Queue::new(),
+        steps: StepCmdQueue = StepCmdQueue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let b = board::init(cx.device, cx.local.usb_bus);
         Mono::start(cx.core.SYST, b.sysclk_hz);
-        let (steps_tx, steps_rx): (Producer<'static, StepCmd>, Consumer<'static, StepCmd>) =
-            cx.local.steps.split();
+        let (steps_tx, steps_rx) = cx.local.steps.split();
         steps::install(Executor::new([0; 3], 0x1_0000), steps_rx);
         let mut port = b.step_port;
         let mut timer = b.step_timer;

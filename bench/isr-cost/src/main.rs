@@ -12,15 +12,13 @@
 #![no_main]
 
 use defmt_rtt as _;
-use heapless::spsc::Queue;
 use inkstep::board::{self, StepPins};
-use inkstep::steps::{self, BoardSide, StepOutput};
+use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput};
 use inkstep_core::controller::Controller;
 use inkstep_core::link::{Link, StepSide};
 use inkstep_core::settings::Settings;
 use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::prep::PrepConfig;
-use inkstep_core::stepper::StepCmd;
 use stm32f1xx_hal::{gpio::PinState, pac, prelude::*};
 
 const PROGRAMS: [&[u8]; 4] = [
@@ -121,7 +119,7 @@ fn main() -> ! {
     timer.set_pulse_ticks(10 * 72);
     let mut out = StepOutput::new(port, timer);
 
-    static mut QUEUES: [Queue<StepCmd, 256>; 4] = [const { Queue::new() }; 4];
+    static mut QUEUES: [StepCmdQueue; 4] = [const { StepCmdQueue::new() }; 4];
     let settings = Settings::default();
     let prep = PrepConfig {
         timer_hz: board::STEP_TIMER_HZ,

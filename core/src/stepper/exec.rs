@@ -22,6 +22,24 @@ pub struct IsrOut {
     pub reload: u32,
 }
 
+/// Per-axis position change of each 6-bit tick (steps in bits 0-2, negative directions
+/// in bits 3-5): three loads and adds instead of three branches in the interrupt.
+static STEP_DELTA: [[i8; 3]; 64] = {
+    let mut t = [[0i8; 3]; 64];
+    let mut bits = 0;
+    while bits < 64 {
+        let mut axis = 0;
+        while axis < 3 {
+            if bits >> axis & 1 != 0 {
+                t[bits][axis] = if bits >> (axis + 3) & 1 != 0 { -1 } else { 1 };
+            }
+            axis += 1;
+        }
+        bits += 1;
+    }
+    t
+};
+
 /// Interrupt-side state.
 #[derive(Clone, Debug)]
 pub struct Executor {
@@ -32,7 +50,6 @@ pub struct Executor {
     remaining: u32,
     running: bool,
     halted: bool,
-    dir: u8,
     max_reload: u32,
 }
 
@@ -45,7 +62,6 @@ impl Executor {
             remaining: 0,
             running: false,
             halted: false,
-            dir: 0,
             max_reload: if max_reload == 0 { 1 } else { max_reload },
         }
     }
@@ -76,9 +92,9 @@ impl Executor {
     fn load(&mut self, c: StepCmd, step: u8) -> IsrOut {
         let bits = c.tick().0;
         self.pending = bits;
-        // Keep the pins of axes that do not step in the next command.
-        let mask = bits & 0b111;
-        self.dir = (self.dir & !mask) | ((bits >> 3) & mask);
+        // The pins follow the next command's direction bits. An axis that does not step
+        // in it may flip meanwhile: drivers read the pin only at a step edge, and every
+        // later step's direction is again set a whole period ahead of it.
         let wait = c.wait();
         let reload = if wait > self.max_reload {
             self.max_reload
@@ -88,7 +104,7 @@ impl Executor {
         self.remaining = wait - reload;
         IsrOut {
             step,
-            dir: self.dir,
+            dir: bits >> 3,
             reload,
         }
     }
@@ -96,11 +112,11 @@ impl Executor {
     /// The step-timer interrupt.
     #[inline(always)]
     pub fn on_interrupt(&mut self, q: &mut impl CmdSource) -> IsrOut {
-        if self.halted || !self.running {
-            self.running = false;
+        // A halt clears `running`, so one test covers both.
+        if !self.running {
             return IsrOut {
                 step: 0,
-                dir: self.dir,
+                dir: self.pending >> 3,
                 reload: 0,
             };
         }
@@ -113,23 +129,17 @@ impl Executor {
             self.remaining -= reload;
             return IsrOut {
                 step: 0,
-                dir: self.dir,
+                dir: self.pending >> 3,
                 reload,
             };
         }
         // The pending command's wait is over: its steps happen now.
         let bits = self.pending;
+        let delta = &STEP_DELTA[usize::from(bits & 0x3f)];
+        self.pos[0] = self.pos[0].wrapping_add(i32::from(delta[0]));
+        self.pos[1] = self.pos[1].wrapping_add(i32::from(delta[1]));
+        self.pos[2] = self.pos[2].wrapping_add(i32::from(delta[2]));
         let step = bits & 0b111;
-        let neg = bits >> 3;
-        if step & 1 != 0 {
-            self.pos[0] = self.pos[0].wrapping_add(if neg & 1 != 0 { -1 } else { 1 });
-        }
-        if step & 2 != 0 {
-            self.pos[1] = self.pos[1].wrapping_add(if neg & 2 != 0 { -1 } else { 1 });
-        }
-        if step & 4 != 0 {
-            self.pos[2] = self.pos[2].wrapping_add(if neg & 4 != 0 { -1 } else { 1 });
-        }
         match q.pop() {
             Some(c) => self.load(c, step),
             None => {
@@ -137,7 +147,7 @@ impl Executor {
                 self.pending = 0;
                 IsrOut {
                     step,
-                    dir: self.dir,
+                    dir: bits >> 3,
                     reload: 0,
                 }
             }

@@ -1,0 +1,203 @@
+//! The step-command queue between the segment-preparation task (producer) and the
+//! step-timer interrupt (consumer): a single-producer single-consumer ring of packed
+//! [`StepCmd`] words.
+//!
+//! Why not `heapless::spsc`: its dequeue is an out-of-line generic with two `dmb`
+//! barriers, a large share of a step interrupt that must stay under 100 instructions.
+//! This ring is specialised for the job: a power-of-two capacity (the index mask is
+//! one `and`, and the compiler drops the bounds check), free-running `u32` indices, and
+//! atomics everywhere (no `unsafe`). On the microcontroller (one core, producer and
+//! consumer are a task and an interrupt on the same CPU) program order is all the
+//! ordering needed, so index publication uses compiler fences and plain loads and
+//! stores; on other targets (the simulator and tests) it uses real acquire/release.
+
+use super::{CmdSink, CmdSource, StepCmd};
+use core::sync::atomic::{AtomicU32, Ordering};
+
+/// Producer and consumer run on one CPU core (thread + interrupt).
+const SINGLE_CORE: bool = cfg!(all(target_arch = "arm", target_os = "none"));
+
+#[inline(always)]
+fn load_acquire(a: &AtomicU32) -> u32 {
+    if SINGLE_CORE {
+        let v = a.load(Ordering::Relaxed);
+        core::sync::atomic::compiler_fence(Ordering::Acquire);
+        v
+    } else {
+        a.load(Ordering::Acquire)
+    }
+}
+
+#[inline(always)]
+fn store_release(a: &AtomicU32, v: u32) {
+    if SINGLE_CORE {
+        core::sync::atomic::compiler_fence(Ordering::Release);
+        a.store(v, Ordering::Relaxed);
+    } else {
+        a.store(v, Ordering::Release);
+    }
+}
+
+/// The ring. `N` must be a power of two (checked at compile time).
+pub struct StepQueue<const N: usize> {
+    slots: [AtomicU32; N],
+    /// Next slot the consumer reads (written by the consumer only).
+    head: AtomicU32,
+    /// Next slot the producer writes (written by the producer only).
+    tail: AtomicU32,
+}
+
+impl<const N: usize> Default for StepQueue<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize> StepQueue<N> {
+    const MASK: u32 = {
+        assert!(
+            N.is_power_of_two() && N <= 1 << 16,
+            "StepQueue capacity must be a power of two"
+        );
+        N as u32 - 1
+    };
+
+    pub const fn new() -> Self {
+        let _ = Self::MASK;
+        StepQueue {
+            slots: [const { AtomicU32::new(0) }; N],
+            head: AtomicU32::new(0),
+            tail: AtomicU32::new(0),
+        }
+    }
+
+    /// The two ends. Taking `&mut` once guarantees one producer and one consumer.
+    pub fn split(&mut self) -> (QueueTx<'_, N>, QueueRx<'_, N>) {
+        (QueueTx { q: self }, QueueRx { q: self })
+    }
+
+    #[inline(always)]
+    fn len(&self) -> u32 {
+        self.tail
+            .load(Ordering::Relaxed)
+            .wrapping_sub(self.head.load(Ordering::Relaxed))
+    }
+}
+
+/// The producer end (the preparation task).
+pub struct QueueTx<'a, const N: usize> {
+    q: &'a StepQueue<N>,
+}
+
+impl<const N: usize> QueueTx<'_, N> {
+    /// Commands waiting (the consumer may take some meanwhile).
+    pub fn len(&self) -> usize {
+        self.q.len() as usize
+    }
+    pub fn is_empty(&self) -> bool {
+        self.q.len() == 0
+    }
+    pub fn is_full(&self) -> bool {
+        self.q.len() > StepQueue::<N>::MASK
+    }
+    /// Appends `c`; false (and nothing written) if the ring is full.
+    pub fn push(&mut self, c: StepCmd) -> bool {
+        let tail = self.q.tail.load(Ordering::Relaxed);
+        if tail.wrapping_sub(load_acquire(&self.q.head)) > StepQueue::<N>::MASK {
+            return false;
+        }
+        self.q.slots[(tail & StepQueue::<N>::MASK) as usize].store(c.0, Ordering::Relaxed);
+        store_release(&self.q.tail, tail.wrapping_add(1));
+        true
+    }
+}
+
+/// The consumer end (the step interrupt).
+pub struct QueueRx<'a, const N: usize> {
+    q: &'a StepQueue<N>,
+}
+
+impl<const N: usize> QueueRx<'_, N> {
+    /// Takes the oldest command.
+    #[inline(always)]
+    pub fn pop(&mut self) -> Option<StepCmd> {
+        let head = self.q.head.load(Ordering::Relaxed);
+        if head == load_acquire(&self.q.tail) {
+            return None;
+        }
+        let c = self.q.slots[(head & StepQueue::<N>::MASK) as usize].load(Ordering::Relaxed);
+        store_release(&self.q.head, head.wrapping_add(1));
+        Some(StepCmd(c))
+    }
+    /// Drops everything queued (abort); the producer may keep pushing afterwards.
+    pub fn clear(&mut self) {
+        store_release(&self.q.head, load_acquire(&self.q.tail));
+    }
+}
+
+impl<const N: usize> CmdSink for QueueTx<'_, N> {
+    fn has_room(&self) -> bool {
+        !self.is_full()
+    }
+    fn push(&mut self, c: StepCmd) -> bool {
+        QueueTx::push(self, c)
+    }
+}
+
+impl<const N: usize> CmdSource for QueueRx<'_, N> {
+    #[inline(always)]
+    fn pop(&mut self) -> Option<StepCmd> {
+        QueueRx::pop(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interp::Tick;
+
+    #[test]
+    fn fifo_order_wraparound_full_and_clear() {
+        let mut q: StepQueue<4> = StepQueue::new();
+        let (mut tx, mut rx) = q.split();
+        let cmd = |w| StepCmd::new(Tick(1), w);
+        for round in 0..10u32 {
+            for i in 0..4 {
+                assert!(tx.push(cmd(round * 10 + i + 1)));
+            }
+            assert!(tx.is_full());
+            assert!(
+                !tx.push(cmd(999)),
+                "a full ring refuses, it never overwrites"
+            );
+            assert_eq!(tx.len(), 4);
+            for i in 0..4 {
+                assert_eq!(rx.pop().map(StepCmd::wait), Some(round * 10 + i + 1));
+            }
+            assert_eq!(rx.pop(), None);
+            assert!(tx.is_empty());
+        }
+        tx.push(cmd(5));
+        tx.push(cmd(6));
+        rx.clear();
+        assert!(tx.is_empty());
+        assert_eq!(rx.pop(), None);
+        tx.push(cmd(7));
+        assert_eq!(rx.pop().map(StepCmd::wait), Some(7));
+    }
+
+    #[test]
+    fn indices_survive_u32_wrap() {
+        let mut q: StepQueue<2> = StepQueue::new();
+        q.head.store(u32::MAX - 1, Ordering::Relaxed);
+        q.tail.store(u32::MAX - 1, Ordering::Relaxed);
+        let (mut tx, mut rx) = q.split();
+        for w in 1..20 {
+            assert!(tx.push(StepCmd::new(Tick(0), w)));
+            assert!(tx.push(StepCmd::new(Tick(0), w + 100)));
+            assert!(!tx.has_room());
+            assert_eq!(rx.pop().map(StepCmd::wait), Some(w));
+            assert_eq!(rx.pop().map(StepCmd::wait), Some(w + 100));
+        }
+    }
+}
