@@ -6,9 +6,9 @@
 //!
 //! | pin      | signal                          | notes                                          |
 //! |----------|---------------------------------|------------------------------------------------|
-//! | PA0      | X STEP  (4-phase: X coil A)     | push-pull; all motion outputs share GPIOA so   |
-//! | PA1      | Y STEP  (4-phase: X coil B)     | one BSRR store sets every step/dir/coil bit    |
-//! | PA2      | Z STEP  (4-phase: X coil C)     |                                                |
+//! | PA0      | X STEP  (4-phase: X coil A)     | TIM2 CH1-CH3 in step/dir mode: the timer draws |
+//! | PA1      | Y STEP  (4-phase: X coil B)     | the pulses; GPIO in 4-phase mode. All motion   |
+//! | PA2      | Z STEP  (4-phase: X coil C)     | outputs on GPIOA: one BSRR store sets the rest |
 //! | PA3      | X DIR   (4-phase: X coil D)     |                                                |
 //! | PA4      | Y DIR   (4-phase: Y coil A)     |                                                |
 //! | PA5      | Z DIR   (4-phase: Y coil B)     |                                                |
@@ -70,6 +70,12 @@ pub const STEP_MASK_Z: u32 = 1 << 2;
 pub const DIR_SHIFT: u32 = 3;
 pub const MOTION_PINS: u32 = 0xFF;
 
+/// The GPIOA BSRR word that sets the pins in `high` and clears those in `low` (PA0-PA7).
+#[inline(always)]
+pub const fn bsrr_word(high: u8, low: u8) -> u32 {
+    (high as u32) | ((low as u32) << 16)
+}
+
 /// The step, direction and coil outputs on PA0-PA7 plus the driver enable on PA9.
 ///
 /// Owns the HAL pins (so nothing else can take them) but writes GPIOA's BSRR directly:
@@ -83,11 +89,16 @@ impl StepPort {
     /// Set the pins in `high` and clear the pins in `low` among PA0-PA7, in one store.
     #[inline(always)]
     pub fn write(&mut self, high: u8, low: u8) {
-        // SAFETY: BSRR is write-only and atomic per bit; this struct owns PA0-PA7.
+        self.write_word(bsrr_word(high, low));
+    }
+
+    /// Store a BSRR word made by [`bsrr_word`] (precomputed by the step interrupt).
+    #[inline(always)]
+    pub fn write_word(&mut self, word: u32) {
+        // SAFETY: BSRR is write-only and atomic per bit; this struct owns PA0-PA7 and
+        // `bsrr_word` only makes words for those pins.
         unsafe {
-            (*pac::GPIOA::ptr())
-                .bsrr()
-                .write(|w| w.bits(u32::from(high) | (u32::from(low) << 16)));
+            (*pac::GPIOA::ptr()).bsrr().write(|w| w.bits(word));
         }
     }
 
@@ -127,23 +138,57 @@ pub fn step_outputs(pins: StepPins, tim2: pac::TIM2) -> (StepPort, StepTimer) {
 /// invert setting may be unknown in a panic, it also releases every coil (4-phase
 /// motors are then unpowered whatever the setting).
 pub fn emergency_outputs_off() {
-    // SAFETY: single atomic store to a write-only register.
+    // SAFETY: a single store to GPIOA's write-only BSRR.
     unsafe {
         (*pac::GPIOA::ptr())
             .bsrr()
             .write(|w| w.bits((1 << 9) | (MOTION_PINS << 16)));
     }
+    // The step timer draws the step pulses in step/dir mode.
+    stop_step_timer();
 }
 
-/// [`StepTimer::take_events`]: the update event (UIF), a period has ended.
-pub const EVENT_UPDATE: u32 = 1;
-/// [`StepTimer::take_events`]: the compare event (CC1IF), the pulse width has passed.
-pub const EVENT_COMPARE: u32 = 1 << 1;
+/// The update event flag (UIF): a period has ended.
+const EVENT_UPDATE: u32 = 1;
 
-/// TIM2 as the step timer: counts at [`STEP_TIMER_HZ`]; the update interrupt starts a
-/// step pulse, compare channel 1 ends it after the configured pulse width.
+// TIM2 register values (RM0008 section 15.4). PWM mode 1 with CCR preload on channels
+// 1-3 (the step pins PA0-PA2): a channel is active from the update event until the count
+// reaches its CCR, so a CCR of `pulse` gives one pulse of exactly that width at the
+// start of the period and a CCR of 0 gives none.
+const CCMR1_STEP_XY: u32 = (0b110 << 4) | (1 << 3) | (0b110 << 12) | (1 << 11);
+const CCMR2_STEP_Z: u32 = (0b110 << 4) | (1 << 3);
+const CCER_STEP_ENABLE: u32 = (1 << 0) | (1 << 4) | (1 << 8);
+const DIER_UPDATE: u32 = 1;
+
+/// Point PA0-PA2 at the step timer (alternate function: the timer shapes the pulses) or
+/// back at GPIO (4-phase coils written by the interrupt). Only at rest.
+fn set_step_pins_to_timer(timer: bool) {
+    let nibble = if timer { 0xB } else { 0x3 }; // AF / GPIO push-pull, 50 MHz
+    critical_section::with(|_| {
+        // SAFETY: PA0-PA2's configuration nibbles belong to the step port; the
+        // read-modify-write of CRL happens with interrupts off.
+        unsafe {
+            (*pac::GPIOA::ptr()).crl().modify(|r, w| {
+                w.bits((r.bits() & !0xFFF) | nibble | (nibble << 4) | (nibble << 8))
+            });
+        }
+    });
+}
+
+/// TIM2 as the step timer, counting at [`STEP_TIMER_HZ`].
+///
+/// In step/dir mode the timer itself draws every step pulse: the interrupt at the start
+/// of a period arms, through the CCR preload registers, the channels that pulse at the
+/// start of the next period, so pulse timing and width are exact to the tick and need
+/// no interrupt of their own. In 4-phase mode the pins are GPIO and the interrupt writes
+/// the coils. One interrupt per step event either way.
 pub struct StepTimer {
     tim: pac::TIM2,
+    /// Pulse width in ticks, the CCR value of an armed channel.
+    pulse: u32,
+    /// CCR1-CCR3 for each step mask (bit i = axis i): `pulse` or 0 (a fourth word
+    /// pads each row to 16 bytes, so the interrupt indexes it with one shift).
+    arm_table: [[u32; 4]; 8],
 }
 
 impl StepTimer {
@@ -157,42 +202,90 @@ impl StepTimer {
             rcc.apb1rstr().modify(|_, w| w.tim2rst().clear_bit());
         }
         let psc = SYSCLK_HZ / STEP_TIMER_HZ - 1;
-        tim.psc().write(|w| unsafe { w.bits(psc) });
-        tim.arr().write(|w| unsafe { w.bits(0xFFFF) });
-        // Apply the prescaler now, without taking an interrupt for it.
-        tim.egr().write(|w| w.ug().set_bit());
-        tim.sr().write(|w| unsafe { w.bits(0) });
-        // No ARR preload: the reload written in the update interrupt is the length of
-        // the period that has just begun (the executor's contract). `set_period`
-        // guards against a count that has already passed the new value.
-        tim.cr1().write(|w| w.arpe().clear_bit().urs().set_bit());
-        tim.dier().write(|w| w.uie().set_bit().cc1ie().set_bit());
-        Self { tim }
+        // SAFETY (all raw writes below): documented TIM2 register values.
+        unsafe {
+            tim.psc().write(|w| w.bits(psc));
+            tim.arr().write(|w| w.bits(0xFFFF));
+            tim.ccmr1_output().write(|w| w.bits(CCMR1_STEP_XY));
+            tim.ccmr2_output().write(|w| w.bits(CCMR2_STEP_Z));
+            for n in 0..4 {
+                tim.ccr(n).write(|w| w.bits(0));
+            }
+            // Apply the prescaler and the zero CCRs now, without an interrupt for it.
+            tim.egr().write(|w| w.ug().set_bit());
+            tim.sr().write(|w| w.bits(0));
+            // No ARR preload: the reload written in the update interrupt is the length
+            // of the period that has just begun (the executor's contract), and
+            // `set_period` guards against a count already past the new value. URS: only
+            // counter overflows raise the update interrupt, not UG.
+            tim.cr1().write(|w| w.arpe().clear_bit().urs().set_bit());
+            tim.dier().write(|w| w.bits(DIER_UPDATE));
+        }
+        let mut t = Self {
+            tim,
+            pulse: 0,
+            arm_table: [[0; 4]; 8],
+        };
+        t.set_pulse_ticks(720);
+        t
     }
 
-    /// Set the pulse width in timer ticks (end-of-pulse compare value).
+    /// Output mode: in step/dir mode the timer drives PA0-PA2 (with `step_invert`
+    /// inverting a channel's polarity, bit i = axis i); in 4-phase mode it lets go of
+    /// them. Only at rest.
+    pub fn configure_outputs(&mut self, step_dir: bool, step_invert: u8) {
+        let inv = u32::from(step_invert);
+        let polarity = ((inv & 1) << 1) | ((inv & 2) << 4) | ((inv & 4) << 7);
+        let ccer = if step_dir {
+            CCER_STEP_ENABLE | polarity
+        } else {
+            0
+        };
+        // SAFETY: documented CCER bits of the channels this timer owns.
+        self.tim.ccer().write(|w| unsafe { w.bits(ccer) });
+        set_step_pins_to_timer(step_dir);
+    }
+
+    /// Set the pulse width in timer ticks (at rest; taken by the next armed pulse).
     pub fn set_pulse_ticks(&mut self, ticks: u16) {
-        self.tim
-            .ccr1()
-            .write(|w| unsafe { w.bits(u32::from(ticks.max(1))) });
+        self.pulse = u32::from(ticks.max(1));
+        for (mask, row) in (0u8..).zip(self.arm_table.iter_mut()) {
+            for (axis, ccr) in row.iter_mut().take(3).enumerate() {
+                *ccr = if mask >> axis & 1 != 0 { self.pulse } else { 0 };
+            }
+        }
     }
 
-    /// Program the period of the next step interval, in ticks (2..=65536; the executor
-    /// never asks for more, so only the low end is clamped here).
+    /// The pulse width in ticks.
+    pub fn pulse_ticks(&self) -> u32 {
+        self.pulse
+    }
+
+    /// Arm the channels of `steps` (bit i = axis i) to pulse at the start of the next
+    /// period, and disarm the others (CCR preloads, taken at the next update).
+    #[inline(always)]
+    pub fn arm_pulses(&mut self, steps: u8) {
+        let [x, y, z, _] = self.arm_table[usize::from(steps & 0b111)];
+        // SAFETY: CCR values for the step channels.
+        unsafe {
+            self.tim.ccr1().write(|w| w.bits(x));
+            self.tim.ccr2().write(|w| w.bits(y));
+            self.tim.ccr3().write(|w| w.bits(z));
+        }
+    }
+
+    /// Program the period of the next step interval, in ticks: 2..=65536, which the
+    /// core's executor guarantees (so no clamp costs the interrupt time here).
     #[inline(always)]
     pub fn set_period(&mut self, ticks: u32) {
-        let arr = ticks.max(2) - 1;
+        debug_assert!((2..=0x1_0000).contains(&ticks));
+        let arr = ticks.wrapping_sub(1);
         self.tim.arr().write(|w| unsafe { w.bits(arr) });
         // Interrupt latency already counted past the new end: end the period now
         // rather than wrapping through 65536 ticks.
         if self.tim.cnt().read().bits() >= arr {
             self.tim.cnt().write(|w| unsafe { w.bits(arr) });
         }
-    }
-
-    /// The compare value that ends each pulse, in ticks.
-    pub fn pulse_ticks(&self) -> u32 {
-        self.tim.ccr1().read().bits()
     }
 
     pub fn start(&mut self) {
@@ -204,18 +297,49 @@ impl StepTimer {
         self.tim.cr1().modify(|_, w| w.cen().clear_bit());
     }
 
+    /// Stop at once with every step output back at its idle level (e-stop, abort): the
+    /// armed channels are cleared and loaded immediately, cutting a pulse in flight.
+    pub fn stop_now(&mut self) {
+        self.arm_pulses(0);
+        self.tim.egr().write(|w| w.ug().set_bit());
+        self.stop();
+    }
+
     pub fn is_running(&self) -> bool {
         self.tim.cr1().read().cen().bit_is_set()
     }
 
-    /// Which events raised the interrupt ([`EVENT_UPDATE`], [`EVENT_COMPARE`] bits);
-    /// clears exactly the flags it reports.
+    /// Whether an update event raised the interrupt (false for a software pend);
+    /// clears the status flags (only the update interrupt is enabled).
     #[inline(always)]
-    pub fn take_events(&mut self) -> u32 {
-        let seen = self.tim.sr().read().bits() & (EVENT_UPDATE | EVENT_COMPARE);
-        // rc_w0 bits: writing 0 clears, writing 1 leaves a flag alone.
-        self.tim.sr().write(|w| unsafe { w.bits(!seen & 0xFFFF) });
-        seen
+    pub fn take_update(&mut self) -> bool {
+        let sr = self.tim.sr().read().bits();
+        // rc_w0 flags: writing 0 clears them all.
+        self.tim.sr().write(|w| unsafe { w.bits(0) });
+        sr & EVENT_UPDATE != 0
+    }
+}
+
+/// Stop the step timer from any context (the e-stop and hard-limit interrupts): one
+/// store, CEN cleared and URS kept (StepTimer's configuration).
+pub fn stop_step_timer() {
+    // SAFETY: a single store to TIM2's CR1.
+    unsafe {
+        (*pac::TIM2::ptr()).cr1().write(|w| w.bits(1 << 2));
+    }
+}
+
+/// Disarm every step channel of the step timer from a task, inside the critical section
+/// that flushes the step queue: a pulse armed for a command that was just dropped must
+/// not fire.
+pub fn disarm_step_pulses() {
+    // SAFETY: CCR preload writes of TIM2's step channels; called with interrupts off, so
+    // the step interrupt (their only other writer) cannot be halfway through arming.
+    unsafe {
+        let tim = &*pac::TIM2::ptr();
+        tim.ccr1().write(|w| w.bits(0));
+        tim.ccr2().write(|w| w.bits(0));
+        tim.ccr3().write(|w| w.bits(0));
     }
 }
 

@@ -18,7 +18,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use defmt_rtt as _;
 use heapless::spsc::{Consumer, Producer};
 use inkstep::board;
-use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, HALT, PULSE_TICKS};
+use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
 use inkstep_core::link::StepSide;
 use inkstep_core::stepper::exec::Executor;
 
@@ -115,7 +115,6 @@ mod app {
         }
 
         let (steps_tx, steps_rx) = cx.local.steps.split();
-        steps::install(Executor::new([0; 3], 0x1_0000), steps_rx);
         let prep = PrepConfig {
             timer_hz: board::STEP_TIMER_HZ,
             ..PrepConfig::default()
@@ -127,6 +126,12 @@ mod app {
         let mut step_port = b.step_port;
         let mut step_timer = b.step_timer;
         apply_output_settings(&settings, &mut step_port, &mut step_timer);
+        let step_out = steps::install(
+            Executor::new([0; 3], 0x1_0000),
+            steps_rx,
+            step_port,
+            step_timer,
+        );
 
         defmt::info!(
             "inkstep {} up, sysclk {} Hz",
@@ -145,7 +150,7 @@ mod app {
                 serial: b.serial,
             },
             Local {
-                step_out: StepOutput::new(step_port, step_timer),
+                step_out,
                 servo: b.servo,
                 keypad: b.keypad,
                 inputs: b.inputs,
@@ -216,8 +221,7 @@ mod app {
     fn estop(_: estop::Context) {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
-            HALT.store(true, Ordering::SeqCst);
-            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+            steps::halt();
         }
     }
 
@@ -226,16 +230,14 @@ mod app {
     #[task(binds = EXTI1, priority = 7)]
     fn limit_x(_: limit_x::Context) {
         if board::exti_take_pending(1) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
-            HALT.store(true, Ordering::SeqCst);
-            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+            steps::halt();
         }
     }
 
     #[task(binds = EXTI3, priority = 7)]
     fn limit_y(_: limit_y::Context) {
         if board::exti_take_pending(3) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
-            HALT.store(true, Ordering::SeqCst);
-            rtic::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+            steps::halt();
         }
     }
 
@@ -357,13 +359,13 @@ mod app {
                 });
             rtic::pend(stm32f1xx_hal::pac::Interrupt::USB_LP_CAN_RX0);
             // A reset from the alarm (soft reset / $X) clears the latched halt.
-            if HALT.load(Ordering::Relaxed)
+            if steps::is_halted()
                 && !cx
                     .shared
                     .ctl
                     .lock(|c| c.protocol().machine().alarm().is_some())
             {
-                HALT.store(false, Ordering::SeqCst);
+                steps::clear_halt();
             }
             if settings_changed {
                 cx.local.saves.settings = true;

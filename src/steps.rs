@@ -1,12 +1,16 @@
 //! The step interrupt's glue between the core's [`Executor`] and the step timer and
 //! port: shared by the product image and the bring-up image so both run the same path.
 //!
-//! Timing per step command: the update event emits the step pulses of the command
-//! whose wait just ended and programs the next wait; the compare event (one pulse
-//! width later) ends the pulses and only then sets the direction pins for the next
-//! command, so a direction change never falls inside a pulse and always has the whole
-//! wait as set-up time. After the last command the timer runs one more short period so
-//! that the last pulse still ends. A software pend while the timer is stopped starts it.
+//! Timing per step command, one interrupt per step event: in step/dir mode the timer
+//! draws the step pulses itself (PWM on TIM2 CH1-CH3, armed one period ahead through
+//! the CCR preloads), so a pulse starts exactly when its wait ends and lasts exactly
+//! the set width whatever the interrupt latency. The interrupt at each update event
+//! takes the next command, arms the channels for the end of the new period, writes the
+//! period and the next directions. A direction pin never changes inside a pulse of its
+//! axis: such a change (a reversal) first runs the executor's short turn guard period
+//! (pulse width + hold time), at whose end the pin turns. In 4-phase mode the pins are GPIO and the interrupt writes the coil pattern. After the
+//! last command the timer runs one more short period so that the last pulse ends. A
+//! software pend while the timer is stopped starts it.
 //!
 //! The executor and the queue's consumer are shared with the preparation side: the
 //! interrupt uses them without a lock (it is their highest-priority user), the tasks
@@ -15,7 +19,7 @@
 
 use crate::board::{self, StepPort, StepTimer};
 use core::cell::UnsafeCell;
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use core::sync::atomic::{AtomicU32, Ordering};
 use inkstep_core::interp::Tick;
 use inkstep_core::link::StepSide;
 use inkstep_core::motion::StepPos;
@@ -23,17 +27,34 @@ use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::phase4::Phase4;
 use inkstep_core::stepper::queue::{QueueRx, QueueTx, StepQueue};
 
-/// Latched by the e-stop (and an armed hard limit): the step interrupt halts the
-/// executor and emits nothing until the machine is reset.
-pub static HALT: AtomicBool = AtomicBool::new(false);
-/// Output configuration for the interrupt, one word so it costs one load per
-/// interrupt: bits 0-2 step invert mask, bits 3-5 direction invert mask, bit 6
-/// 4-phase output. Written by [`set_output_config`].
-static OUTPUT_CONFIG: AtomicU32 = AtomicU32::new(0);
+/// The interrupt's whole configuration in one word, so that it costs one load per
+/// interrupt: bits 0-2 step invert mask, bits 3-5 direction invert mask, bit 6 4-phase
+/// output (written by [`set_output_config`]), bit 31 the halt latch ([`halt`]).
+static STEP_STATE: AtomicU32 = AtomicU32::new(0);
 /// Step pulse width in timer ticks (`$0`), taken when the timer starts.
 pub static PULSE_TICKS: AtomicU32 = AtomicU32::new(720);
 
 const CFG_FOUR_PHASE: u32 = 1 << 6;
+const HALT_BIT: u32 = 1 << 31;
+
+/// The e-stop (and an armed hard limit): stop the step timer at once (no update event,
+/// so no further pulse), latch the halt and pend the step interrupt, which halts the
+/// executor and emits nothing until [`clear_halt`]. Any context.
+pub fn halt() {
+    board::stop_step_timer();
+    STEP_STATE.fetch_or(HALT_BIT, Ordering::SeqCst);
+    cortex_m::peripheral::NVIC::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+}
+
+/// Whether the halt latch is set.
+pub fn is_halted() -> bool {
+    STEP_STATE.load(Ordering::Relaxed) & HALT_BIT != 0
+}
+
+/// Release the halt latch (after a reset, with the queue flushed).
+pub fn clear_halt() {
+    STEP_STATE.fetch_and(!HALT_BIT, Ordering::SeqCst);
+}
 
 /// Step commands the queue holds (4 bytes each): 256 is several milliseconds of
 /// stepping at the highest rates, enough to ride out the lower-priority tasks.
@@ -45,12 +66,18 @@ pub type StepTx = QueueTx<'static, STEP_QUEUE_LEN>;
 /// The interrupt's end of the queue.
 pub type StepRx = QueueRx<'static, STEP_QUEUE_LEN>;
 
-/// Publish the output configuration (at boot and whenever the settings change).
+/// Publish the output configuration (at boot and whenever the settings change). The
+/// step interrupt applies it to the timer and pins at rest; the pend makes that happen
+/// now if the machine is idle.
 pub fn set_output_config(step_invert: u8, dir_invert: u8, four_phase: bool) {
     let word = u32::from(step_invert & 0b111)
         | (u32::from(dir_invert & 0b111) << 3)
         | if four_phase { CFG_FOUR_PHASE } else { 0 };
-    OUTPUT_CONFIG.store(word, Ordering::Relaxed);
+    // Keep the halt bit as it is (an e-stop may set it meanwhile).
+    let _ = STEP_STATE.fetch_update(Ordering::SeqCst, Ordering::Relaxed, |s| {
+        Some((s & HALT_BIT) | word)
+    });
+    cortex_m::peripheral::NVIC::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
 }
 
 /// What the step interrupt consumes.
@@ -71,10 +98,23 @@ struct StepperCell(UnsafeCell<Option<Stepper>>);
 unsafe impl Sync for StepperCell {}
 static STEPPER: StepperCell = StepperCell(UnsafeCell::new(None));
 
-/// Install the interrupt side (once, in `init`).
-pub fn install(exec: Executor, rx: StepRx) {
-    // SAFETY: interrupts are off inside the critical section (access rule).
-    critical_section::with(|_| unsafe { *STEPPER.0.get() = Some(Stepper { exec, rx }) });
+/// Install the interrupt side (in `init`, before the step interrupt can run) and hand
+/// out the step interrupt's output state, which points at it.
+pub fn install(exec: Executor, rx: StepRx, port: StepPort, timer: StepTimer) -> StepOutput {
+    // SAFETY: interrupts are off inside the critical section (access rule). The pointer
+    // stays valid: STEPPER is a static and a later install overwrites it in place.
+    let stepper = critical_section::with(|_| unsafe {
+        let cell = &mut *STEPPER.0.get();
+        core::ptr::from_mut(cell.insert(Stepper { exec, rx }))
+    });
+    StepOutput {
+        port,
+        timer,
+        stepper,
+        phase4: Phase4::default(),
+        dir_words: [0; 8],
+        applied_cfg: u32::MAX,
+    }
 }
 
 /// Run `f` on the stepper state with interrupts disabled (tasks only, never the step
@@ -114,6 +154,7 @@ impl StepSide for BoardSide {
         with_stepper(|s| {
             s.exec.halt();
             s.rx.clear();
+            board::disarm_step_pulses();
             s.exec.reset();
         });
     }
@@ -122,126 +163,155 @@ impl StepSide for BoardSide {
     }
 }
 
-/// The interrupt-owned output state.
+/// Direction hold time after a step pulse ends, before a reversal turns the pin: 1 µs,
+/// above every common driver's requirement (A4988 200 ns, DRV8825 650 ns, TB6600-style
+/// opto inputs ~1 µs with their set-up time counted in the rest of the wait).
+const DIR_HOLD_TICKS: u32 = board::STEP_TIMER_HZ / 1_000_000;
+
+/// The interrupt-owned output state (from [`install`]).
 pub struct StepOutput {
     pub port: StepPort,
     pub timer: StepTimer,
+    /// The installed stepper state (in STEPPER), reached without a `None` check.
+    stepper: *mut Stepper,
     phase4: Phase4,
-    /// Direction pins to output when the running pulse ends.
-    next_dir: u8,
-    /// The last command has run; this period only lets its pulse end.
-    finishing: bool,
+    /// GPIOA BSRR word that outputs each direction state (inversion applied).
+    dir_words: [u32; 8],
+    /// The output configuration the timer and pins are set up for.
+    applied_cfg: u32,
 }
 
-impl StepOutput {
-    pub fn new(port: StepPort, timer: StepTimer) -> Self {
-        Self {
-            port,
-            timer,
-            phase4: Phase4::default(),
-            next_dir: 0,
-            finishing: false,
-        }
-    }
+// SAFETY: `stepper` points into the STEPPER static, whose access rule does not depend
+// on the thread: moving StepOutput from `init` into the step interrupt is fine.
+unsafe impl Send for StepOutput {}
 
+impl StepOutput {
     /// The whole TIM2 interrupt. Call it only from the step interrupt (see
     /// [`StepperCell`]'s access rule): it reads the stepper state without a lock.
+    ///
+    /// Update event (a period ends): in step/dir mode the timer has just started the
+    /// pulses armed for this moment by the previous interrupt; the executor counts
+    /// them and takes the next command (a reversal of an axis whose pulse is in flight
+    /// first runs the executor's turn guard period), and this arms the channels that
+    /// pulse when the new period ends, writes the new period and the directions. In
+    /// 4-phase mode the coils are written here.
     #[inline(always)]
     pub fn on_interrupt(&mut self) {
-        let events = self.timer.take_events();
-        let cfg = OUTPUT_CONFIG.load(Ordering::Relaxed);
-        let step_inv = (cfg & 0b111) as u8;
-        if events & board::EVENT_UPDATE == 0 {
-            if events & board::EVENT_COMPARE != 0 {
-                self.pulse_end(cfg, step_inv);
-            } else {
-                // A software pend: the preparation task's kick or the e-stop.
-                self.start(cfg);
-            }
+        if !self.timer.take_update() {
+            self.pend(STEP_STATE.load(Ordering::Relaxed));
             return;
         }
-        // SAFETY: the step interrupt is the lock-free accessor of the access rule.
-        let Some(st) = (unsafe { &mut *STEPPER.0.get() }).as_mut() else {
-            return;
-        };
-        if HALT.load(Ordering::Relaxed) || core::mem::take(&mut self.finishing) {
-            self.stop(st);
-            return;
-        }
+        // No halt test here: `halt` stops the timer before it sets the latch, so no
+        // update follows a halt; an update already pending counts the pulse that did
+        // start, and the pend that `halt` raises halts the executor next.
+        // SAFETY: the step interrupt is the lock-free accessor of the access rule, and
+        // `stepper` points at the installed state.
+        let st = unsafe { &mut *self.stepper };
         let out = st.exec.on_interrupt(&mut st.rx);
-        if out.step != 0 {
-            if cfg & CFG_FOUR_PHASE != 0 {
-                let coils = self.phase4.step(Tick(out.step | (out.dir << 3)));
+        // The output configuration only changes at rest (see `pend`). Read here, not
+        // earlier: held across the executor it would cost a register spill.
+        // SAFETY: a plain read of an initialised field of `self`.
+        let cfg = unsafe { core::ptr::read_volatile(&self.applied_cfg) };
+        if cfg & CFG_FOUR_PHASE != 0 {
+            if out.step != 0 {
+                let coils = self.phase4.step(Tick(out.tick));
                 let bits = (coils[0] & 0x0F) | ((coils[1] & 0x0F) << 4);
                 self.port.write(bits, !bits);
-            } else {
-                self.port.write(out.step ^ step_inv, out.step & step_inv);
             }
+        } else {
+            self.timer.arm_pulses(out.arm);
         }
-        self.next_dir = out.dir;
-        if out.reload == 0 {
+        if out.dir_changed != 0 {
+            self.write_dirs(out.dir);
+        }
+        if out.reload != 0 {
+            self.timer.set_period(out.reload);
+        } else if out.step != 0 {
             // Queue empty: one more short period so that the last pulse still ends.
-            self.finishing = true;
             self.timer
                 .set_period((2 * self.timer.pulse_ticks() + 16).min(0x1_0000));
         } else {
-            self.timer.set_period(out.reload);
+            // That period is over (or the queue ran dry after a pure wait): no pulse
+            // is in flight.
+            self.stop(st, false);
         }
     }
 
-    /// Compare event, one pulse width after the update: step pins back to idle, then
-    /// the next command's directions.
+    /// Output direction pins `dir` (bit i set = axis i negative, before inversion).
     #[inline(always)]
-    fn pulse_end(&mut self, cfg: u32, step_inv: u8) {
-        if cfg & CFG_FOUR_PHASE == 0 {
-            let dir = (self.next_dir ^ (cfg >> 3) as u8) & 0b111;
-            let set = dir << board::DIR_SHIFT;
-            let clear = (!dir & 0b111) << board::DIR_SHIFT;
-            // The idle level of a step pin is its inverted level.
-            self.port.write(step_inv | set, (!step_inv & 0b111) | clear);
-        }
+    fn write_dirs(&mut self, dir: u8) {
+        self.port
+            .write_word(self.dir_words[usize::from(dir & 0b111)]);
     }
 
-    /// Halted, or the last pulse has ended: stop the timer.
-    #[inline(always)]
-    fn stop(&mut self, st: &mut Stepper) {
-        if HALT.load(Ordering::Relaxed) {
-            st.exec.halt();
-        }
-        self.timer.stop();
-    }
-
-    /// A pend while the timer may be stopped: start it if commands wait.
+    /// A software pend (the preparation task's kick, the e-stop, a new output
+    /// configuration): halt, or start the timer if it is idle and commands wait.
     #[inline(never)]
-    fn start(&mut self, cfg: u32) {
-        // SAFETY: the step interrupt is the lock-free accessor of the access rule.
-        let Some(st) = (unsafe { &mut *STEPPER.0.get() }).as_mut() else {
-            return;
-        };
-        if HALT.load(Ordering::Relaxed) {
-            self.stop(st);
+    fn pend(&mut self, cfg: u32) {
+        // SAFETY: as in `on_interrupt`.
+        let st = unsafe { &mut *self.stepper };
+        if cfg & HALT_BIT != 0 {
+            self.stop(st, true);
             return;
         }
         if self.timer.is_running() {
             return;
         }
-        if let Some(out) = st.exec.start(&mut st.rx) {
-            // Direction first; the first pulse comes one wait later.
-            self.next_dir = out.dir;
-            let d = (out.dir ^ (cfg >> 3) as u8) & 0b111;
-            self.port
-                .write(d << board::DIR_SHIFT, (!d & 0b111) << board::DIR_SHIFT);
-            let pulse = PULSE_TICKS.load(Ordering::Relaxed).clamp(1, 0xFFFF);
+        let four_phase = cfg & CFG_FOUR_PHASE != 0;
+        if cfg != self.applied_cfg {
+            // At rest: the output mode or polarity changed (or first run).
+            self.applied_cfg = cfg;
+            self.timer
+                .configure_outputs(!four_phase, (cfg & 0b111) as u8);
+            // In 4-phase mode PA3-PA5 are coils: the direction words do nothing (a
+            // BSRR word of 0 changes no pin).
+            for (dir, word) in (0u8..).zip(self.dir_words.iter_mut()) {
+                let d = (dir ^ (cfg >> 3) as u8) & 0b111;
+                *word = if four_phase {
+                    0
+                } else {
+                    board::bsrr_word(d << board::DIR_SHIFT, (!d & 0b111) << board::DIR_SHIFT)
+                };
+            }
+        }
+        let pulse = PULSE_TICKS.load(Ordering::Relaxed).clamp(1, 0xFFFF);
+        if pulse != self.timer.pulse_ticks() {
             self.timer.set_pulse_ticks(pulse as u16);
+        }
+        // 4-phase outputs are levels: nothing to guard.
+        st.exec.set_turn_guard(if four_phase {
+            0
+        } else {
+            pulse + DIR_HOLD_TICKS
+        });
+        if let Some(out) = st.exec.start(&mut st.rx) {
+            // Directions first (no pulse is in flight); the first pulse comes when
+            // the first wait ends.
+            self.write_dirs(out.dir);
+            if !four_phase {
+                self.timer.arm_pulses(out.arm);
+            }
             self.timer.set_period(out.reload);
             self.timer.start();
+        }
+    }
+
+    /// Halted, or the last pulse has ended: stop the timer (at once, outputs idle,
+    /// when halted).
+    #[inline(never)]
+    fn stop(&mut self, st: &mut Stepper, halted: bool) {
+        if halted {
+            st.exec.halt();
+            self.timer.stop_now();
+        } else {
+            self.timer.stop();
         }
     }
 }
 
 /// Ask the step interrupt to start if commands wait (it ignores the pend if running).
 pub fn kick() {
-    if !HALT.load(Ordering::Relaxed) {
+    if !is_halted() {
         cortex_m::peripheral::NVIC::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
     }
 }

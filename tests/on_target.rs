@@ -45,44 +45,65 @@ mod tests {
     }
 
     #[test]
-    fn step_timer_emits_n_pulses_of_the_set_width(b: &mut Board) {
+    fn step_timer_draws_n_pulses_of_the_set_width(b: &mut Board) {
         const N: u32 = 200;
-        const PERIOD: u32 = 100; // ticks: 20 kHz at 2 MHz
-        const WIDTH: u16 = 20; // ticks: 10 µs
+        const PERIOD: u32 = 7_200; // ticks at 72 MHz: 10 kHz
+        const WIDTH: u16 = 720; // ticks: 10 µs
+        let x = board::STEP_MASK_X as u8;
+        // Step/dir mode: the timer drives PA0-PA2 and draws the pulses itself.
+        b.step_timer.configure_outputs(true, 0);
         b.step_timer.set_pulse_ticks(WIDTH);
+        b.step_timer.arm_pulses(x); // the first pulse, when the first period ends
         b.step_timer.set_period(PERIOD);
-        // Interrupts stay masked in the NVIC: the test polls the flags the ISR would see.
+        // Interrupts stay masked in the NVIC: the test polls the update flag the step
+        // interrupt would see, arms X for the next N - 1 periods and then nothing,
+        // and samples the pin to time every pulse with the cycle counter.
         let gpioa = unsafe { &*pac::GPIOA::ptr() };
-        let tim = unsafe { &*pac::TIM2::ptr() };
-        let (mut rises, mut falls) = (0u32, 0u32);
-        let mut widths_ok = true;
+        let pin_high = || gpioa.idr().read().bits() & board::STEP_MASK_X != 0;
+        let (mut armed, mut rises, mut widths_ok) = (1u32, 0u32, true);
+        let (mut high_since, mut first_rise, mut last_rise) = (None, 0u32, 0u32);
         let start = cortex_m::peripheral::DWT::cycle_count();
         b.step_timer.start();
-        while falls < N {
-            let (update, compare) = b.step_timer.take_events();
-            if compare && rises > falls {
-                let width = tim.cnt().read().bits();
-                b.step_port.write(0, board::STEP_MASK_X as u8);
-                widths_ok &= gpioa.odr().read().bits() & board::STEP_MASK_X == 0;
-                widths_ok &= width >= u32::from(WIDTH) && width < u32::from(WIDTH) + 10;
-                falls += 1;
+        // N + 3 periods: room to see that no pulse follows the N-th.
+        let span = (N + 3) * PERIOD * (board::SYSCLK_HZ / board::STEP_TIMER_HZ);
+        loop {
+            let now = cortex_m::peripheral::DWT::cycle_count();
+            if now.wrapping_sub(start) > span {
+                break;
             }
-            if update && rises < N {
-                b.step_port.write(board::STEP_MASK_X as u8, 0);
-                widths_ok &= gpioa.odr().read().bits() & board::STEP_MASK_X != 0;
-                rises += 1;
+            if b.step_timer.take_update() {
+                b.step_timer.arm_pulses(if armed < N { x } else { 0 });
+                armed += 1;
+            }
+            match (pin_high(), high_since) {
+                (true, None) => {
+                    high_since = Some(now);
+                    if rises == 0 {
+                        first_rise = now;
+                    }
+                    last_rise = now;
+                    rises += 1;
+                }
+                (false, Some(t0)) => {
+                    let width = now.wrapping_sub(t0);
+                    // Sampling granularity: one loop pass, well under 60 cycles.
+                    widths_ok &= (u32::from(WIDTH) - 60..u32::from(WIDTH) + 60).contains(&width);
+                    high_since = None;
+                }
+                _ => {}
             }
         }
         b.step_timer.stop();
-        let cycles = cortex_m::peripheral::DWT::cycle_count().wrapping_sub(start);
-        defmt::assert_eq!(rises, N);
-        defmt::assert!(widths_ok, "a pulse had the wrong width or pin level");
-        // N periods of PERIOD ticks at 2 MHz = N * PERIOD * 36 cycles at 72 MHz.
-        let expected = N * PERIOD * (board::SYSCLK_HZ / board::STEP_TIMER_HZ);
+        b.step_timer.arm_pulses(0);
+        defmt::assert_eq!(rises, N, "pulses drawn");
+        defmt::assert!(widths_ok, "a pulse had the wrong width");
+        // N - 1 periods between the first and the last rise.
+        let spent = last_rise.wrapping_sub(first_rise);
+        let expected = (N - 1) * PERIOD * (board::SYSCLK_HZ / board::STEP_TIMER_HZ);
         defmt::assert!(
-            cycles >= expected - expected / 50 && cycles <= expected + expected / 20,
-            "{} cycles for {} pulses, expected {}",
-            cycles,
+            spent + 120 >= expected && spent <= expected + 120,
+            "{} cycles between the first and the last of {} pulses, expected {}",
+            spent,
             N,
             expected
         );

@@ -8,8 +8,8 @@ a chosen function and the return to its caller are charged to that call. Emulati
 deterministic, so the counts are the same on every run and every machine.
 
 Usage: measure.py ELF [--json OUT]
-The ELF exports `bench_tick`, `bench_pulse_end` and `bench_kick` (the firmware's whole TIM2
-interrupt at an update event, a compare event and a start request) and
+The ELF exports `bench_isr` (the firmware's whole TIM2 interrupt handler; each call is
+classified by the timer's update flag at entry, see --split) and
 `bench_prepare` (one call of the segment preparer), and a `BENCH_RESULT` record that
 its main fills in (steps executed per program).
 """
@@ -35,7 +35,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument('elf')
     ap.add_argument('--json')
-    ap.add_argument('--names', default='bench_tick,bench_pulse_end,bench_kick,bench_prepare')
+    ap.add_argument('--names', default='bench_isr,bench_prepare')
+    ap.add_argument('--split', action='append', default=['bench_isr=0x40000010:1:update:pend'],
+                    help='NAME=REG:MASK:YES:NO charges NAME to NAME_YES if (*REG & MASK) at entry, else NAME_NO')
     args = ap.parse_args()
 
     with open(args.elf, 'rb') as f:
@@ -59,7 +61,14 @@ def main():
         entries[syms[n][0] & ~1] = n
     cs = Cs(CS_ARCH_ARM, CS_MODE_THUMB | CS_MODE_MCLASS)
     block_len = {}
-    stats = {n: {'calls': 0, 'total': 0, 'worst': 0, 'hist': {}} for n in names}
+    split = {}
+    for spec in args.split:
+        name, rest = spec.split('=')
+        reg, mask, yes, no = rest.split(':')
+        if name in names:
+            split[name] = (int(reg, 0), int(mask, 0), f'{name}_{yes}', f'{name}_{no}')
+    counted = [n for n in names if n not in split] + [x for v in split.values() for x in v[2:]]
+    stats = {n: {'calls': 0, 'total': 0, 'worst': 0, 'hist': {}} for n in counted}
     state = {'fn': None, 'ret': None, 'count': 0, 'all': 0}
 
     def on_block(uc, addr, size, _):
@@ -79,6 +88,11 @@ def main():
             state['fn'] = None
         if state['fn'] is None and addr in entries:
             state['fn'] = entries[addr]
+            if state['fn'] in split:
+                # Classify the call by a status register at entry (e.g. the timer's UIF).
+                reg, bit, yes, no = split[state['fn']]
+                flags = struct.unpack('<I', bytes(uc.mem_read(reg, 4)))[0]
+                state['fn'] = yes if flags & bit else no
             state['ret'] = uc.reg_read(UC_ARM_REG_LR) & ~1
             state['count'] = 0
         if state['fn'] is not None:
@@ -95,7 +109,8 @@ def main():
     result = {'instructions_total': state['all'], 'functions': {}}
     for n, s in stats.items():
         mean = s['total'] / s['calls'] if s['calls'] else 0.0
-        result['functions'][n] = {'calls': s['calls'], 'worst': s['worst'], 'mean': round(mean, 2), 'total': s['total']}
+        result['functions'][n] = {'calls': s['calls'], 'worst': s['worst'], 'mean': round(mean, 2), 'total': s['total'],
+                                  'histogram': {str(k): v for k, v in sorted(s['hist'].items())}}
     if 'BENCH_RESULT' in syms:
         addr, size = syms['BENCH_RESULT']
         words = struct.unpack(f'<{size // 4}I', bytes(uc.mem_read(addr, size)))

@@ -31,14 +31,13 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 mod app {
     use super::board;
     use core::fmt::Write as _;
-    use core::sync::atomic::Ordering;
     use embedded_graphics::{
         mono_font::{ascii::FONT_6X10, MonoTextStyle},
         pixelcolor::BinaryColor,
         prelude::*,
         text::{Baseline, Text},
     };
-    use inkstep::steps::{self, StepCmdQueue, StepOutput, StepTx, HALT};
+    use inkstep::steps::{self, StepCmdQueue, StepOutput, StepTx};
     use inkstep_core::interp::Tick;
     use inkstep_core::keypad::{KeyKind, Keypad, KeypadConfig};
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920};
@@ -83,11 +82,11 @@ mod app {
         let b = board::init(cx.device, cx.local.usb_bus);
         Mono::start(cx.core.SYST, b.sysclk_hz);
         let (steps_tx, steps_rx) = cx.local.steps.split();
-        steps::install(Executor::new([0; 3], 0x1_0000), steps_rx);
         let mut port = b.step_port;
         let mut timer = b.step_timer;
         timer.set_pulse_ticks(10 * (board::STEP_TIMER_HZ / 1_000_000) as u16);
         port.set_drivers_enabled(true, true);
+        let step_out = steps::install(Executor::new([0; 3], 0x1_0000), steps_rx, port, timer);
         defmt::info!("inkstep bring-up, sysclk {} Hz", b.sysclk_hz);
         jogger::spawn().ok();
         keypad_scan::spawn().ok();
@@ -101,7 +100,7 @@ mod app {
                 usb_bytes: 0,
             },
             Local {
-                step_out: StepOutput::new(port, timer),
+                step_out,
                 steps_tx,
                 keypad: b.keypad,
                 inputs: b.inputs,
@@ -124,8 +123,7 @@ mod app {
     fn estop(_: estop::Context) {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
-            HALT.store(true, Ordering::SeqCst);
-            cortex_m::peripheral::NVIC::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
+            steps::halt();
         }
     }
 
@@ -204,9 +202,9 @@ mod app {
             cx.local.indicators.set_busy(moving);
             cx.local.indicators.set_buzzer(beep_ms > 0);
             beep_ms = beep_ms.saturating_sub(5);
-            if !cx.local.inputs.estop_open() && HALT.load(Ordering::Relaxed) && !moving {
+            if !cx.local.inputs.estop_open() && steps::is_halted() && !moving {
                 // E-stop released and no key held: re-arm.
-                HALT.store(false, Ordering::SeqCst);
+                steps::clear_halt();
             }
             cx.local.watchdog.feed();
         }
@@ -247,7 +245,7 @@ mod app {
             let _ = write!(
                 lines[4],
                 "{}",
-                if HALT.load(Ordering::Relaxed) {
+                if steps::is_halted() {
                     "E-STOP"
                 } else {
                     "ready"

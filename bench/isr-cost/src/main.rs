@@ -5,9 +5,10 @@
 //! (planner + segment preparation), whose step commands cross the same SPSC queue to
 //! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
 //! interrupt body with its register accesses. The emulator has no timer, so before each
-//! call the bench sets the status flag the hardware would (update, then compare one
-//! pulse later). measure.py charges every instruction executed inside `bench_tick` (update
-//! event), `bench_pulse_end` (compare event), `bench_kick` and `bench_prepare` to that call.
+//! call the bench sets the status flag the hardware would (the update event; the timer
+//! draws the pulses itself, so there is no other event). measure.py charges every
+//! instruction executed inside `bench_tick` (update event), `bench_kick` (software pend)
+//! and `bench_prepare` to that call.
 #![no_std]
 #![no_main]
 
@@ -28,9 +29,10 @@ const PROGRAMS: [&[u8]; 4] = [
     include_bytes!("../../spiral.nc"),
 ];
 
-/// Per program: step events, interrupts, final X, final Y (read by measure.py).
+/// Per program: step events, interrupts, final X, final Y; then per program the steps
+/// summed over the axes (read by measure.py).
 #[no_mangle]
-pub static mut BENCH_RESULT: [u32; 16] = [0; 16];
+pub static mut BENCH_RESULT: [u32; 20] = [0; 20];
 
 /// The protocol's replies (last 1 KB), for measure.py to show when a program fails.
 #[no_mangle]
@@ -53,25 +55,25 @@ fn log(bytes: &[u8]) {
 
 const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
 const UIF: u32 = 1;
-const CC1IF: u32 = 1 << 1;
 
-/// The TIM2 interrupt at an update event (pulse start, next wait), exactly as the
-/// firmware runs it. Each wrapper first sets the status flag the hardware would (one
-/// store, counted: a conservative 2 instructions), which also keeps the three wrappers
-/// distinct so the linker cannot merge them.
+/// The TIM2 interrupt handler exactly as RTIC generates it for the firmware's priority-6
+/// `step` task (`rtic::export::run` saves and restores BASEPRI around the body), compiled
+/// once as in the firmware. measure.py charges each call of this function, classified by
+/// the status flag at entry: `update` (a period ended) or `pend` (software pend).
+#[inline(never)]
+#[no_mangle]
+pub extern "C" fn bench_isr(out: &mut StepOutput) {
+    rtic::export::run(6, || out.on_interrupt());
+}
+
+/// The TIM2 interrupt at an update event (period end: next command, pulses armed, next
+/// wait), as the firmware runs it. Each wrapper first sets the status flag the hardware
+/// would (one store, counted), which also keeps the wrappers distinct.
 #[inline(never)]
 #[no_mangle]
 pub extern "C" fn bench_tick(out: &mut StepOutput) {
     raise(UIF);
-    out.on_interrupt();
-}
-
-/// The TIM2 interrupt at the compare event (pulse end, next directions).
-#[inline(never)]
-#[no_mangle]
-pub extern "C" fn bench_pulse_end(out: &mut StepOutput) {
-    raise(CC1IF);
-    out.on_interrupt();
+    bench_isr(out);
 }
 
 /// The TIM2 interrupt pended by the preparation task to start the timer.
@@ -79,7 +81,7 @@ pub extern "C" fn bench_pulse_end(out: &mut StepOutput) {
 #[no_mangle]
 pub extern "C" fn bench_kick(out: &mut StepOutput) {
     raise(0);
-    out.on_interrupt();
+    bench_isr(out);
 }
 
 /// One run of segment preparation, as the firmware's prepare task does it.
@@ -117,7 +119,10 @@ fn main() -> ! {
     };
     let (port, mut timer) = board::step_outputs(pins, dp.TIM2);
     timer.set_pulse_ticks(10 * 72);
-    let mut out = StepOutput::new(port, timer);
+    let (mut port, mut timer) = (Some(port), Some(timer));
+    // The interrupt's configuration word is written at boot, as in the firmware (so
+    // the bench pays its load like the firmware does).
+    steps::set_output_config(0, 0, false);
 
     static mut QUEUES: [StepCmdQueue; 4] = [const { StepCmdQueue::new() }; 4];
     let settings = Settings::default();
@@ -131,10 +136,14 @@ fn main() -> ! {
         // SAFETY: each queue is split once, before anything else uses it.
         let queue = unsafe { &mut (*core::ptr::addr_of_mut!(QUEUES))[p] };
         let (tx, rx) = queue.split();
-        steps::install(Executor::new([0; 3], 0x1_0000), rx);
+        let (Some(pins), Some(tim)) = (port.take(), timer.take()) else {
+            break;
+        };
+        let mut out = steps::install(Executor::new([0; 3], 0x1_0000), rx, pins, tim);
         let mut link = Link::new(&settings, prep, BoardSide { tx });
         let mut ctl = Controller::new(settings.clone(), 0);
         let (mut sent, mut ticks, mut events, mut irqs) = (0usize, 0u64, 0u32, 0u32);
+        let mut axis_steps = 0u32;
         let mut sink = [0u8; 128];
         loop {
             let now = (ticks / 72_000) as u32;
@@ -156,10 +165,11 @@ fn main() -> ! {
             while out.timer.is_running() {
                 let before = steps::position();
                 bench_tick(&mut out);
-                bench_pulse_end(&mut out);
-                irqs += 2;
-                if steps::position() != before {
+                irqs += 1;
+                let after = steps::position();
+                if after != before {
                     events += 1;
+                    axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
                 }
                 ticks += 2000;
                 if link.side().queued() < 32 {
@@ -178,6 +188,8 @@ fn main() -> ! {
             }
         }
         let pos = steps::position();
+        port = Some(out.port);
+        timer = Some(out.timer);
         // SAFETY: single-threaded bench; measure.py reads this after the run.
         unsafe {
             let r = &mut *core::ptr::addr_of_mut!(BENCH_RESULT);
@@ -185,6 +197,7 @@ fn main() -> ! {
             r[4 * p + 1] = irqs;
             r[4 * p + 2] = pos[0] as u32;
             r[4 * p + 3] = pos[1] as u32;
+            r[16 + p] = axis_steps;
         }
     }
     loop {

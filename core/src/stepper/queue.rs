@@ -73,7 +73,7 @@ impl<const N: usize> StepQueue<N> {
 
     /// The two ends. Taking `&mut` once guarantees one producer and one consumer.
     pub fn split(&mut self) -> (QueueTx<'_, N>, QueueRx<'_, N>) {
-        (QueueTx { q: self }, QueueRx { q: self })
+        (QueueTx { q: self, dirs: 0 }, QueueRx { q: self })
     }
 
     #[inline(always)]
@@ -87,6 +87,8 @@ impl<const N: usize> StepQueue<N> {
 /// The producer end (the preparation task).
 pub struct QueueTx<'a, const N: usize> {
     q: &'a StepQueue<N>,
+    /// Direction bits as of the last command pushed (bit i = axis i negative).
+    dirs: u8,
 }
 
 impl<const N: usize> QueueTx<'_, N> {
@@ -101,12 +103,22 @@ impl<const N: usize> QueueTx<'_, N> {
         self.q.len() > StepQueue::<N>::MASK
     }
     /// Appends `c`; false (and nothing written) if the ring is full.
+    ///
+    /// Direction bits become sticky on the way in: an axis that does not step in `c`
+    /// gets the direction it had in the previous command (a tick's direction bit of a
+    /// non-stepping axis means nothing), so the interrupt can output the three bits as
+    /// they are and a pin still only changes where a step needs it.
     pub fn push(&mut self, c: StepCmd) -> bool {
         let tail = self.q.tail.load(Ordering::Relaxed);
         if tail.wrapping_sub(load_acquire(&self.q.head)) > StepQueue::<N>::MASK {
             return false;
         }
-        self.q.slots[(tail & StepQueue::<N>::MASK) as usize].store(c.0, Ordering::Relaxed);
+        let bits = c.tick().0;
+        let mask = bits & 0b111;
+        let dirs = (self.dirs & !mask) | ((bits >> 3) & mask);
+        self.dirs = dirs;
+        let word = (c.0 & !(0b111 << 27)) | (u32::from(dirs) << 27);
+        self.q.slots[(tail & StepQueue::<N>::MASK) as usize].store(word, Ordering::Relaxed);
         store_release(&self.q.tail, tail.wrapping_add(1));
         true
     }
@@ -163,7 +175,7 @@ mod tests {
         let cmd = |w| StepCmd::new(Tick(1), w);
         for round in 0..10u32 {
             for i in 0..4 {
-                assert!(tx.push(cmd(round * 10 + i + 1)));
+                assert!(tx.push(cmd(round * 10 + i + 2)));
             }
             assert!(tx.is_full());
             assert!(
@@ -172,7 +184,7 @@ mod tests {
             );
             assert_eq!(tx.len(), 4);
             for i in 0..4 {
-                assert_eq!(rx.pop().map(StepCmd::wait), Some(round * 10 + i + 1));
+                assert_eq!(rx.pop().map(StepCmd::wait), Some(round * 10 + i + 2));
             }
             assert_eq!(rx.pop(), None);
             assert!(tx.is_empty());
@@ -187,12 +199,27 @@ mod tests {
     }
 
     #[test]
+    fn direction_bits_of_idle_axes_are_sticky() {
+        let mut q: StepQueue<8> = StepQueue::new();
+        let (mut tx, mut rx) = q.split();
+        for d in [[-1, 1, 0], [0, 1, 0], [0, -1, -1], [1, 0, 0], [0, 0, 0]] {
+            tx.push(StepCmd::new(Tick::from_deltas(d), 10));
+        }
+        let dirs: std::vec::Vec<u8> = core::iter::from_fn(|| rx.pop())
+            .map(|c| c.tick().dirs())
+            .collect();
+        // X keeps -X while it does not step, Y and Z keep theirs.
+        assert_eq!(dirs, [0b001, 0b001, 0b111, 0b110, 0b110]);
+        // The steps (and so the position deltas) are unchanged.
+    }
+
+    #[test]
     fn indices_survive_u32_wrap() {
         let mut q: StepQueue<2> = StepQueue::new();
         q.head.store(u32::MAX - 1, Ordering::Relaxed);
         q.tail.store(u32::MAX - 1, Ordering::Relaxed);
         let (mut tx, mut rx) = q.split();
-        for w in 1..20 {
+        for w in 2..20 {
             assert!(tx.push(StepCmd::new(Tick(0), w)));
             assert!(tx.push(StepCmd::new(Tick(0), w + 100)));
             assert!(!tx.has_room());
