@@ -310,13 +310,14 @@ impl StepTimer {
     }
 
     /// Whether an update event raised the interrupt (false for a software pend);
-    /// clears the status flags (only the update interrupt is enabled).
+    /// clears the update flag only if it was seen, so an update that arrives between
+    /// the read and the write (during a pend) is not lost.
     #[inline(always)]
     pub fn take_update(&mut self) -> bool {
-        let sr = self.tim.sr().read().bits();
-        // rc_w0 flags: writing 0 clears them all.
-        self.tim.sr().write(|w| unsafe { w.bits(0) });
-        sr & EVENT_UPDATE != 0
+        let seen = self.tim.sr().read().bits() & EVENT_UPDATE;
+        // rc_w0 flags: a 0 clears, a 1 leaves a flag alone (bits 15:0 only).
+        self.tim.sr().write(|w| unsafe { w.bits(!seen & 0xFFFF) });
+        seen != 0
     }
 }
 

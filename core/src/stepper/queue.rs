@@ -133,12 +133,15 @@ impl<const N: usize> QueueRx<'_, N> {
     /// Takes the oldest command.
     #[inline(always)]
     pub fn pop(&mut self) -> Option<StepCmd> {
-        let head = self.q.head.load(Ordering::Relaxed);
-        if head == load_acquire(&self.q.tail) {
+        // A local copy of the reference: the fences below would make the compiler load
+        // `self.q` again after each of them.
+        let q = self.q;
+        let head = q.head.load(Ordering::Relaxed);
+        if head == load_acquire(&q.tail) {
             return None;
         }
-        let c = self.q.slots[(head & StepQueue::<N>::MASK) as usize].load(Ordering::Relaxed);
-        store_release(&self.q.head, head.wrapping_add(1));
+        let c = q.slots[(head & StepQueue::<N>::MASK) as usize].load(Ordering::Relaxed);
+        store_release(&q.head, head.wrapping_add(1));
         Some(StepCmd(c))
     }
     /// Drops everything queued (abort); the producer may keep pushing afterwards.
