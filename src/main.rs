@@ -80,7 +80,7 @@ mod app {
         inputs: board::Inputs,
         indicators: board::Indicators,
         lcd_spi: board::LcdSpi,
-        watchdog: stm32f1xx_hal::watchdog::IndependentWatchdog,
+        watchdog: board::Watchdog,
         store: Store,
         usb_rx_in: Producer<'static, u8>,
         usb_rx_out: Consumer<'static, u8>,

@@ -73,7 +73,7 @@ mod app {
         indicators: board::Indicators,
         servo: board::PenServo,
         lcd_spi: board::LcdSpi,
-        watchdog: stm32f1xx_hal::watchdog::IndependentWatchdog,
+        watchdog: board::Watchdog,
     }
 
     #[init(local = [
