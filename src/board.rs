@@ -35,8 +35,6 @@
 //! | PC14     | keypad column 4                 | open-drain (low-speed pin, fine for a keypad)  |
 //! | PC15     | busy output                     | high while moving, for syncing controllers     |
 
-use embedded_hal::digital::{ErrorType, OutputPin};
-use embedded_hal_bus::spi::ExclusiveDevice;
 use stm32f1xx_hal::{
     flash::FlashExt,
     gpio::{self, Edge, ErasedPin, ExtiPin, Input, OpenDrain, Output, PullUp, PushPull},
@@ -409,50 +407,46 @@ impl Watchdog {
 // The HAL's search gives prescaler /8, reload 2500 for 500 ms.
 const _: () = assert!(matches!(Watchdog::timing(500), (1, 2500)));
 
-/// The ST7920 chip select is active high; embedded-hal-bus's ExclusiveDevice drives CS
-/// active low, so it gets an inverted view of PB12.
-pub struct ActiveHighCs(pub gpio::PB12<Output<PushPull>>);
-
-impl ErrorType for ActiveHighCs {
-    type Error = core::convert::Infallible;
+/// The LCD link: SPI2, transmit only (the ST7920's serial mode has no read-back),
+/// and the controller's chip select on PB12, which is active high.
+pub struct LcdSpi {
+    spi: Spi<pac::SPI2, u8>,
+    cs: gpio::PB12<Output<PushPull>>,
 }
 
-impl OutputPin for ActiveHighCs {
-    fn set_low(&mut self) -> Result<(), Self::Error> {
-        self.0.set_high();
-        Ok(())
-    }
-    fn set_high(&mut self) -> Result<(), Self::Error> {
-        self.0.set_low();
-        Ok(())
+impl LcdSpi {
+    /// Send `bytes` as one transaction: chip select raised around them.
+    pub fn write(&mut self, bytes: &[u8]) -> Result<(), stm32f1xx_hal::spi::Error> {
+        self.cs.set_high();
+        let sent = self.spi.write(bytes);
+        self.cs.set_low();
+        sent
     }
 }
 
-/// A pin that does nothing: the ST7920 module's reset is tied to VCC on most boards.
-pub struct NoPin;
-impl ErrorType for NoPin {
-    type Error = core::convert::Infallible;
-}
-impl OutputPin for NoPin {
-    fn set_low(&mut self) -> Result<(), Self::Error> {
-        Ok(())
+/// Bring the ST7920 up in graphics mode: the st7920 crate's sequence (its reset wait
+/// on a tied reset pin, then basic function set, display on, clear, entry mode,
+/// extended function set, graphics on, each followed by its execution time), without
+/// building that crate's 1 KB frame buffer. Blocking: only for the lowest-priority task.
+pub fn lcd_init(spi: &mut LcdSpi) -> Result<(), stm32f1xx_hal::spi::Error> {
+    /// (instruction, wait after it in µs)
+    const STEPS: [(u8, u32); 6] = [
+        (0x30, 200),
+        (0x0C, 100),
+        (0x01, 10_000),
+        (0x06, 100),
+        (0x34, 10_000),
+        (0x36, 100_000),
+    ];
+    const CYCLES_PER_US: u32 = SYSCLK_HZ / 1_000_000;
+    cortex_m::asm::delay(80_000 * CYCLES_PER_US);
+    for (cmd, wait_us) in STEPS {
+        // One serial frame: command start byte, high nibble, low nibble.
+        spi.write(&[0xF8, cmd & 0xF0, cmd << 4])?;
+        cortex_m::asm::delay(wait_us * CYCLES_PER_US);
     }
-    fn set_high(&mut self) -> Result<(), Self::Error> {
-        Ok(())
-    }
+    Ok(())
 }
-
-/// A busy-wait delay for the LCD driver. Only the lowest-priority task uses it, so
-/// every other task preempts it.
-pub struct SpinDelay;
-impl embedded_hal::delay::DelayNs for SpinDelay {
-    fn delay_ns(&mut self, ns: u32) {
-        // 72 cycles per µs; asm::delay waits at least the given cycle count.
-        cortex_m::asm::delay((ns / 1000 + 1) * (SYSCLK_HZ / 1_000_000));
-    }
-}
-
-pub type LcdSpi = ExclusiveDevice<Spi<pac::SPI2, u8>, ActiveHighCs, SpinDelay>;
 
 pub type Usb = UsbDevice<'static, UsbBusType>;
 pub type UsbSerial = usbd_serial::SerialPort<'static, UsbBusType>;
@@ -595,7 +589,7 @@ pub fn init(
     // LCD on SPI2. The ST7920 samples on the rising edge with the clock idle low.
     let sck = gpiob.pb13.into_alternate_push_pull(&mut gpiob.crh);
     let mosi = gpiob.pb15.into_alternate_push_pull(&mut gpiob.crh);
-    let cs = ActiveHighCs(gpiob.pb12.into_push_pull_output(&mut gpiob.crh));
+    let cs = gpiob.pb12.into_push_pull_output(&mut gpiob.crh);
     let spi = Spi::new(
         dp.SPI2,
         (
@@ -610,8 +604,7 @@ pub fn init(
         LCD_SPI_HZ.Hz(),
         &mut rcc,
     );
-    // ExclusiveDevice::new fails only if setting CS fails, which is infallible here.
-    let Ok(lcd_spi) = ExclusiveDevice::new(spi, cs, SpinDelay);
+    let lcd_spi = LcdSpi { spi, cs };
 
     // USB: force a re-enumeration by pulling D+ low briefly (the Blue Pill has a fixed
     // pull-up on D+), then hand the pins to the USB peripheral.

@@ -472,14 +472,10 @@ mod app {
         // Retained state of the screens and the 1 KB frame buffer live in this task.
         let mut screens = Screens::new();
         let mut fb = FrameBuffer::new();
-        {
-            // The st7920 crate brings the controller up in graphics mode; after that
-            // only the changed bytes are sent (core::screens::st7920).
-            let mut lcd =
-                ::st7920::ST7920::new(&mut *spi, board::NoPin, None::<board::NoPin>, false);
-            if lcd.init(&mut board::SpinDelay).is_err() {
-                defmt::warn!("LCD init failed");
-            }
+        // The controller comes up in graphics mode; after that only the changed bytes
+        // are sent (core::screens::st7920).
+        if board::lcd_init(spi).is_err() {
+            defmt::warn!("LCD init failed");
         }
         fb.mark_all_dirty();
         let mut last_pos = [0i32; 3];
@@ -497,7 +493,6 @@ mod app {
                 (ctl.hmi().clone(), ctl.status(link))
             });
             let _ = screens.render(&hmi, &status, now, &mut fb);
-            use embedded_hal::spi::SpiDevice;
             if st7920::flush(&mut fb, |bytes| spi.write(bytes)).is_err() {
                 defmt::warn!("LCD write failed");
             }
