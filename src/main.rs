@@ -181,6 +181,45 @@ mod app {
         }
     }
 
+    /// Received bytes the protocol has not taken yet (it takes only what it can use:
+    /// back-pressure toward the USB queue and the host).
+    pub struct Carry {
+        buf: [u8; 64],
+        len: usize,
+    }
+
+    impl Carry {
+        const fn new() -> Self {
+            Self {
+                buf: [0; 64],
+                len: 0,
+            }
+        }
+
+        /// Top up from the USB receive queue.
+        fn fill(&mut self, rx: &mut Consumer<'static, u8>) {
+            for slot in self.buf.iter_mut().skip(self.len) {
+                match rx.dequeue() {
+                    Some(b) => *slot = b,
+                    None => break,
+                }
+                self.len += 1;
+            }
+        }
+
+        fn bytes(&self) -> &[u8] {
+            self.buf.get(..self.len).unwrap_or(&[])
+        }
+
+        /// Drop the first `n` bytes (the ones the protocol took).
+        fn consume(&mut self, n: usize) {
+            let len = self.len.min(self.buf.len());
+            let n = n.min(len);
+            self.buf.copy_within(n..len, 0);
+            self.len = len - n;
+        }
+    }
+
     /// Output polarity, mode and pulse width for the step interrupt, and the hard-limit
     /// arming, from the settings (at boot and whenever they change).
     fn publish_output_settings(s: &Settings) {
@@ -304,22 +343,15 @@ mod app {
     /// The protocol, the machine state and the G-code interpreter, every millisecond:
     /// inputs, received bytes (only those the protocol takes: back-pressure), the
     /// periodic work, replies, the busy LED, the pen servo and settings persistence.
-    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: heapless::Vec<u8, 64> = heapless::Vec::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
+    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: Carry = Carry::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
     async fn protocol(mut cx: protocol::Context) {
         loop {
             let now = Mono::now().ticks();
             let pins = &mut *cx.local.inputs;
             let carry = &mut *cx.local.carry;
-            while !carry.is_full() {
-                match cx.local.usb_rx_out.dequeue() {
-                    Some(b) => {
-                        let _ = carry.push(b);
-                    }
-                    None => break,
-                }
-            }
+            carry.fill(cx.local.usb_rx_out);
             let tx = &mut *cx.local.usb_tx_in;
-            let (busy, settings_changed, pen_down, settings) =
+            let (busy, settings_changed, pen_down, pen_pulse) =
                 (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
                     let s = ctl.protocol().machine().settings();
                     let inputs = Inputs {
@@ -333,10 +365,8 @@ mod app {
                         cycle_start: pins.cycle_start_low(),
                     };
                     ctl.protocol_mut().set_inputs(inputs, link, now);
-                    let taken = ctl.usb_rx(carry, link, now);
-                    let taken = taken.min(carry.len());
-                    carry.copy_within(taken.., 0);
-                    carry.truncate(carry.len() - taken);
+                    let taken = ctl.usb_rx(carry.bytes(), link, now);
+                    carry.consume(taken);
                     ctl.poll(link, now);
                     let mut out = [0u8; 64];
                     let room = (tx.capacity() - tx.len()).min(out.len());
@@ -351,12 +381,15 @@ mod app {
                         ctl.settings_changed();
                     }
                     let busy = ctl.take_outputs().busy_led;
-                    (
-                        busy,
-                        changed,
-                        link.pen_down(),
-                        ctl.protocol().machine().settings().clone(),
-                    )
+                    let pen_down = link.pen_down();
+                    // Only what the outputs need is read here; the settings stay in place.
+                    let s = ctl.protocol().machine().settings();
+                    if changed {
+                        publish_output_settings(s);
+                    }
+                    let pen_pulse =
+                        (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
+                    (busy, changed, pen_down, pen_pulse)
                 });
             rtic::pend(stm32f1xx_hal::pac::Interrupt::USB_LP_CAN_RX0);
             // A reset from the alarm (soft reset / $X) clears the latched halt.
@@ -370,12 +403,9 @@ mod app {
             }
             if settings_changed {
                 cx.local.saves.settings = true;
-                publish_output_settings(&settings);
             }
-            if *cx.local.pen != Some(pen_down) && settings.pen_mode() == PenMode::Servo {
-                cx.local
-                    .servo
-                    .set_pulse_us(settings.pen_servo_pulse_us(pen_down));
+            if let Some(us) = pen_pulse.filter(|_| *cx.local.pen != Some(pen_down)) {
+                cx.local.servo.set_pulse_us(us);
                 *cx.local.pen = Some(pen_down);
             }
             // Flash writes stall the CPU (instruction fetch waits), so only at rest.
@@ -387,7 +417,11 @@ mod app {
                 if busy {
                     return;
                 }
-                if core::mem::take(&mut saves.settings) && store.save_settings(&settings).is_err() {
+                if core::mem::take(&mut saves.settings)
+                    && store
+                        .save_settings(ctl.protocol().machine().settings())
+                        .is_err()
+                {
                     defmt::warn!("settings save failed");
                 }
                 if core::mem::take(&mut saves.coords)
