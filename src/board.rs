@@ -37,7 +37,7 @@
 
 use stm32f1xx_hal::{
     flash::FlashExt,
-    gpio::{self, Edge, ErasedPin, ExtiPin, Input, OpenDrain, Output, PullUp, PushPull},
+    gpio::{self, ErasedPin, Input, OpenDrain, Output, PullUp, PushPull},
     pac,
     prelude::*,
     rcc,
@@ -498,7 +498,7 @@ pub fn init(
     let mut gpioa = dp.GPIOA.split(&mut rcc);
     let mut gpiob = dp.GPIOB.split(&mut rcc);
     let mut gpioc = dp.GPIOC.split(&mut rcc);
-    let mut exti = dp.EXTI;
+    let exti = dp.EXTI;
 
     // JTAG off, SWD on: frees PA15, PB3, PB4.
     let (pa15, pb3, pb4) = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
@@ -549,28 +549,34 @@ pub fn init(
             .into_open_drain_output_with_state(&mut gpioc.crh, gpio::PinState::High),
     };
 
-    let mut estop = gpiob.pb0.into_pull_up_input(&mut gpiob.crl);
-    let mut limit_x = gpiob.pb1.into_pull_up_input(&mut gpiob.crl);
-    let mut limit_y = pb3.into_pull_up_input(&mut gpiob.crl);
-    let mut feed_hold = pb4.into_pull_up_input(&mut gpiob.crl);
-    let mut cycle_start = gpiob.pb5.into_pull_up_input(&mut gpiob.crl);
-    // E-stop and limits: NC switches to GND, so opening (rising edge) is the event.
-    // Both edges are taken so that releasing is seen too.
-    estop.make_interrupt_source(&mut afio);
-    estop.trigger_on_edge(&mut exti, Edge::RisingFalling);
-    estop.enable_interrupt(&mut exti);
-    limit_x.make_interrupt_source(&mut afio);
-    limit_x.trigger_on_edge(&mut exti, Edge::RisingFalling);
-    limit_x.enable_interrupt(&mut exti);
-    limit_y.make_interrupt_source(&mut afio);
-    limit_y.trigger_on_edge(&mut exti, Edge::RisingFalling);
-    limit_y.enable_interrupt(&mut exti);
-    feed_hold.make_interrupt_source(&mut afio);
-    feed_hold.trigger_on_edge(&mut exti, Edge::RisingFalling);
-    feed_hold.enable_interrupt(&mut exti);
-    cycle_start.make_interrupt_source(&mut afio);
-    cycle_start.trigger_on_edge(&mut exti, Edge::Falling);
-    cycle_start.enable_interrupt(&mut exti);
+    let estop = gpiob.pb0.into_pull_up_input(&mut gpiob.crl);
+    let limit_x = gpiob.pb1.into_pull_up_input(&mut gpiob.crl);
+    let limit_y = pb3.into_pull_up_input(&mut gpiob.crl);
+    let feed_hold = pb4.into_pull_up_input(&mut gpiob.crl);
+    let cycle_start = gpiob.pb5.into_pull_up_input(&mut gpiob.crl);
+    // EXTI lines 0, 1, 3, 4, 5 from port B. E-stop and limits: NC switches to GND, so
+    // opening (rising edge) is the event; both edges are taken so that releasing is
+    // seen too, and feed hold likewise. Cycle start acts on pressing (falling edge).
+    // The same register values as the HAL's per-pin ExtiPin calls, in one write each.
+    const LINES: u32 = (1 << 0) | (1 << 1) | (1 << 3) | (1 << 4) | (1 << 5);
+    const PORT_B: u32 = 1;
+    // SAFETY: AFIO's clock is on (`constrain`); these EXTICR fields, trigger and mask
+    // bits belong to the lines above, which nothing else configures.
+    unsafe {
+        let afio_regs = &*pac::AFIO::ptr();
+        afio_regs
+            .exticr1()
+            .modify(|r, w| w.bits((r.bits() & !0xF0FF) | PORT_B | (PORT_B << 4) | (PORT_B << 12)));
+        afio_regs
+            .exticr2()
+            .modify(|r, w| w.bits((r.bits() & !0x00FF) | PORT_B | (PORT_B << 4)));
+    }
+    exti.rtsr()
+        .modify(|r, w| unsafe { w.bits((r.bits() | LINES) & !(1 << 5)) });
+    exti.ftsr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
+    exti.imr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
     let inputs = Inputs {
         estop,
         limit_x,
