@@ -46,6 +46,7 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3, SPI1, I2C1_EV])]
 mod app {
     use super::*;
+    use core::mem::MaybeUninit;
     use heapless::spsc::Queue;
     use inkstep_core::controller::Controller;
     use inkstep_core::hmi::buzzer::Buzzer;
@@ -64,10 +65,14 @@ mod app {
 
     type Store = SettingsStore<BlockingFlash<board::SettingsFlash>>;
 
+    // The controller (2 KB) and the link (4 KB, the planner's buffer) are built in
+    // place in init's static cells and shared by reference: returned by value they
+    // would be built on init's stack (more than the stack left beside the statics)
+    // and copied.
     #[shared]
     struct Shared {
-        ctl: Controller,
-        link: Link<BoardSide>,
+        ctl: &'static mut Controller,
+        link: &'static mut Link<BoardSide>,
         usb: board::Usb,
         serial: board::UsbSerial,
     }
@@ -93,6 +98,8 @@ mod app {
         steps: Queue<StepCmd, STEP_QUEUE> = Queue::new(),
         usb_rxq: Queue<u8, USB_RX> = Queue::new(),
         usb_txq: Queue<u8, USB_TX> = Queue::new(),
+        ctl_cell: MaybeUninit<Controller> = MaybeUninit::uninit(),
+        link_cell: MaybeUninit<Link<BoardSide>> = MaybeUninit::uninit(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let b = board::init(cx.device, cx.local.usb_bus);
@@ -106,7 +113,7 @@ mod app {
         };
         let (settings, load) = store.load_settings();
         let (coords, _) = store.load_coords();
-        let mut ctl = Controller::new(settings.clone(), 0);
+        let ctl = cx.local.ctl_cell.write(Controller::new(settings, 0));
         if let Some(msg) = load.message() {
             defmt::warn!("settings: {}", msg);
             ctl.protocol_mut().notify(msg);
@@ -123,13 +130,17 @@ mod app {
             timer_hz: board::STEP_TIMER_HZ,
             ..PrepConfig::default()
         };
-        let link = Link::new(&settings, prep, BoardSide { tx: steps_tx });
+        let settings = ctl.protocol().machine().settings();
+        let link = cx
+            .local
+            .link_cell
+            .write(Link::new(settings, prep, BoardSide { tx: steps_tx }));
         let (usb_rx_in, usb_rx_out) = cx.local.usb_rxq.split();
         let (usb_tx_in, usb_tx_out) = cx.local.usb_txq.split();
 
         let mut step_port = b.step_port;
         let mut step_timer = b.step_timer;
-        apply_output_settings(&settings, &mut step_port, &mut step_timer);
+        apply_output_settings(settings, &mut step_port, &mut step_timer);
 
         defmt::info!(
             "inkstep {} up, sysclk {} Hz",
@@ -353,6 +364,7 @@ mod app {
             let tx = &mut *cx.local.usb_tx_in;
             let (busy, settings_changed, pen_down, pen_pulse) =
                 (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                    let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                     let s = ctl.protocol().machine().settings();
                     let inputs = Inputs {
                         estop: pins.estop_open() != s.invert_inputs(),
@@ -450,6 +462,7 @@ mod app {
         if board::exti_take_pending(4) {
             let now = Mono::now().ticks();
             (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                 let mut i = ctl.protocol().machine().inputs();
                 i.feed_hold = board::Inputs::read_feed_hold_low();
                 ctl.protocol_mut().set_inputs(i, link, now);
@@ -462,6 +475,7 @@ mod app {
         if board::exti_take_pending(5) {
             let now = Mono::now().ticks();
             (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                 let mut i = ctl.protocol().machine().inputs();
                 i.cycle_start = board::Inputs::read_cycle_start_low();
                 ctl.protocol_mut().set_inputs(i, link, now);
@@ -484,6 +498,7 @@ mod app {
             let rows = cx.local.keypad.read_rows();
             let now = Mono::now().ticks();
             let out = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                 ctl.key_scan(rows, link, now);
                 ctl.take_outputs()
             });
@@ -518,6 +533,7 @@ mod app {
             // The teaching view's feed directions: which way each axis moved since the
             // last refresh (the step interrupt stays free of bookkeeping for it).
             let (hmi, status) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                 let pos = link.side().position();
                 if pos != last_pos {
                     let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
