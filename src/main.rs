@@ -317,15 +317,12 @@ mod app {
             }
             let mut out = [0u8; 64];
             let mut n = 0;
-            while n < out.len() {
-                match tx.peek() {
-                    Some(&b) => {
-                        out[n] = b;
-                        n += 1;
-                        tx.dequeue();
-                    }
+            for slot in out.iter_mut() {
+                match tx.dequeue() {
+                    Some(b) => *slot = b,
                     None => break,
                 }
+                n += 1;
             }
             if n > 0 {
                 // The CDC class buffers what the endpoint cannot take yet; bytes it
