@@ -676,20 +676,117 @@ pub fn exti_take_pending(line: u8) -> bool {
 ///
 /// Programming stalls instruction fetch from flash for the duration of a write (~50 µs
 /// per half-word) or erase (~20 ms per page), so the firmware only saves at rest.
+///
+/// The controller is driven by register writes, step for step as the HAL's
+/// `FlashWriter` with verification on (RM0008 "Flash program and erase"): unlock with
+/// the two keys, program half-words with PG or erase pages with PER/AR/STRT, wait for
+/// BSY, check PGERR/WRPRTERR, read back, lock again. The HAL's generic version of
+/// the same cost twice the flash.
 pub struct SettingsFlash {
-    flash: stm32f1xx_hal::flash::Parts,
+    /// Owned so that nothing else reaches the flash controller.
+    _flash: stm32f1xx_hal::flash::Parts,
 }
 
+/// Where the flash is mapped.
+const FLASH_BASE: u32 = 0x0800_0000;
+
 impl SettingsFlash {
+    const KEY1: u32 = 0x4567_0123;
+    const KEY2: u32 = 0xCDEF_89AB;
+
     fn new(flash: stm32f1xx_hal::flash::Parts) -> Self {
-        Self { flash }
+        Self { _flash: flash }
     }
 
-    fn writer(&mut self) -> stm32f1xx_hal::flash::FlashWriter<'_> {
-        self.flash.writer(
-            stm32f1xx_hal::flash::SectorSize::Sz1K,
-            stm32f1xx_hal::flash::FlashSize::Sz64K,
-        )
+    fn regs(&mut self) -> &pac::flash::RegisterBlock {
+        // SAFETY: this struct owns the flash parts, so it alone uses these registers
+        // (the HAL's ACR wait-state setting was done at clock setup).
+        unsafe { &*pac::FLASH::ptr() }
+    }
+
+    fn wait_idle(&mut self) {
+        while self.regs().sr().read().bsy().bit_is_set() {}
+    }
+
+    fn unlock(&mut self) -> Result<(), FlashError> {
+        self.wait_idle();
+        let f = self.regs();
+        // SAFETY: the key sequence only unlocks FLASH_CR (in this order, or it stays
+        // locked until reset).
+        unsafe {
+            f.keyr().write(|w| w.bits(Self::KEY1));
+            f.keyr().write(|w| w.bits(Self::KEY2));
+        }
+        if f.cr().read().lock().bit_is_set() {
+            return Err(FlashError);
+        }
+        Ok(())
+    }
+
+    fn lock(&mut self) -> Result<(), FlashError> {
+        self.wait_idle();
+        let f = self.regs();
+        f.cr().modify(|_, w| w.lock().set_bit());
+        if f.cr().read().lock().bit_is_clear() {
+            return Err(FlashError);
+        }
+        Ok(())
+    }
+
+    /// Erase the page holding `offset` and check that it reads back blank.
+    fn erase_page(&mut self, offset: u32) -> Result<(), FlashError> {
+        self.unlock()?;
+        let f = self.regs();
+        f.cr().modify(|_, w| w.per().set_bit());
+        // SAFETY: AR takes any address; the caller checked it is a settings page.
+        f.ar().write(|w| unsafe { w.bits(FLASH_BASE + offset) });
+        f.cr().modify(|_, w| w.strt().set_bit());
+        // BSY rises one cycle after STRT (STM32F10x errata 2.2.8).
+        cortex_m::asm::nop();
+        self.wait_idle();
+        let f = self.regs();
+        let sr = f.sr().read();
+        f.cr().modify(|_, w| w.per().clear_bit());
+        self.lock()?;
+        if sr.wrprterr().bit_is_set() {
+            self.regs().sr().modify(|_, w| w.wrprterr().set_bit());
+            return Err(FlashError);
+        }
+        let page = (FLASH_BASE + (offset & !(FLASH_PAGE_SIZE - 1))) as *const u16;
+        for i in 0..(FLASH_PAGE_SIZE / 2) as usize {
+            // SAFETY: a half-word of the page just erased, inside the flash.
+            if unsafe { core::ptr::read_volatile(page.add(i)) } != 0xFFFF {
+                return Err(FlashError);
+            }
+        }
+        Ok(())
+    }
+
+    /// Program one half-word and check it reads back; on failure the flash is locked.
+    fn program(&mut self, addr: u32, half: u16) -> Result<(), FlashError> {
+        let f = self.regs();
+        f.cr().modify(|_, w| w.pg().set_bit());
+        self.wait_idle();
+        // SAFETY: a half-word of a settings page, with PG set and the flash unlocked.
+        unsafe { core::ptr::write_volatile(addr as *mut u16, half) };
+        self.wait_idle();
+        let f = self.regs();
+        f.cr().modify(|_, w| w.pg().clear_bit());
+        let ok = if f.sr().read().pgerr().bit_is_set() {
+            f.sr().modify(|_, w| w.pgerr().set_bit());
+            false
+        } else if f.sr().read().wrprterr().bit_is_set() {
+            f.sr().modify(|_, w| w.wrprterr().set_bit());
+            false
+        } else {
+            // SAFETY: the half-word just programmed.
+            unsafe { core::ptr::read_volatile(addr as *const u16) == half }
+        };
+        if !ok {
+            self.lock()?;
+            return Err(FlashError);
+        }
+        Ok(())
     }
 }
 
@@ -720,8 +817,14 @@ impl embedded_storage::nor_flash::ReadNorFlash for SettingsFlash {
         if !within(offset, bytes.len(), 0, FLASH_SIZE) {
             return Err(FlashError);
         }
-        let writer = self.writer();
-        let data = writer.read(offset, bytes.len()).map_err(|_| FlashError)?;
+        // Half-word aligned, as the HAL's reader required.
+        if !offset.is_multiple_of(2) {
+            return Err(FlashError);
+        }
+        // SAFETY: inside the 64 KB of flash (checked above), which is always mapped
+        // and only changes through `&mut self`.
+        let data =
+            unsafe { core::slice::from_raw_parts((FLASH_BASE + offset) as *const u8, bytes.len()) };
         bytes.copy_from_slice(data);
         Ok(())
     }
@@ -738,15 +841,31 @@ impl embedded_storage::nor_flash::NorFlash for SettingsFlash {
         if from > to || !within(from, (to - from) as usize, SETTINGS_OFFSET, end) {
             return Err(FlashError);
         }
-        self.writer()
-            .erase(from, (to - from) as usize)
-            .map_err(|_| FlashError)
+        // Half-word aligned, every page from `from` up to `to` (as the HAL did).
+        if !from.is_multiple_of(2) || !(to - from).is_multiple_of(2) {
+            return Err(FlashError);
+        }
+        let mut page = from;
+        while page < to {
+            self.erase_page(page)?;
+            page += FLASH_PAGE_SIZE;
+        }
+        Ok(())
     }
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
         let end = SETTINGS_OFFSET + SETTINGS_FLASH_SIZE;
         if !within(offset, bytes.len(), SETTINGS_OFFSET, end) {
             return Err(FlashError);
         }
-        self.writer().write(offset, bytes).map_err(|_| FlashError)
+        if !offset.is_multiple_of(2) || !bytes.len().is_multiple_of(2) {
+            return Err(FlashError);
+        }
+        self.unlock()?;
+        let mut addr = FLASH_BASE + offset;
+        for pair in bytes.chunks_exact(2) {
+            self.program(addr, u16::from_le_bytes([pair[0], pair[1]]))?;
+            addr += 2;
+        }
+        self.lock()
     }
 }
