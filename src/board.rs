@@ -35,19 +35,15 @@
 //! | PC14     | keypad column 4                 | open-drain (low-speed pin, fine for a keypad)  |
 //! | PC15     | busy output                     | high while moving, for syncing controllers     |
 
-use embedded_hal::digital::{ErrorType, OutputPin};
-use embedded_hal_bus::spi::ExclusiveDevice;
-use fugit::ExtU32;
 use stm32f1xx_hal::{
     flash::FlashExt,
-    gpio::{self, Edge, ErasedPin, ExtiPin, Input, OpenDrain, Output, PullUp, PushPull},
+    gpio::{self, ErasedPin, Input, OpenDrain, Output, PullUp, PushPull},
     pac,
     prelude::*,
     rcc,
     spi::{Mode, Phase, Polarity, Spi},
     timer::{Channel, PwmChannel, Tim1NoRemap},
     usb::{Peripheral, UsbBus, UsbBusType},
-    watchdog::IndependentWatchdog,
 };
 use usb_device::{bus::UsbBusAllocator, prelude::*};
 
@@ -481,50 +477,99 @@ impl Indicators {
     }
 }
 
-/// The ST7920 chip select is active high; embedded-hal-bus's ExclusiveDevice drives CS
-/// active low, so it gets an inverted view of PB12.
-pub struct ActiveHighCs(pub gpio::PB12<Output<PushPull>>);
-
-impl ErrorType for ActiveHighCs {
-    type Error = core::convert::Infallible;
+/// The independent watchdog (IWDG, 40 kHz LSI), started by [`init`] with a
+/// [`WATCHDOG_MS`] timeout; the keypad task feeds it.
+///
+/// Register writes instead of the HAL's `IndependentWatchdog`, whose prescaler search
+/// runs (with its panics) at boot: here it is done at compile time, with the same
+/// result (prescaler /8, reload 2500 for 500 ms).
+pub struct Watchdog {
+    iwdg: pac::IWDG,
 }
 
-impl OutputPin for ActiveHighCs {
-    fn set_low(&mut self) -> Result<(), Self::Error> {
-        self.0.set_high();
-        Ok(())
+impl Watchdog {
+    const KR_ACCESS: u16 = 0x5555;
+    const KR_RELOAD: u16 = 0xAAAA;
+    const KR_START: u16 = 0xCCCC;
+    /// Prescaler code and reload for `ms`: the smallest divider (4 << pr) whose longest
+    /// period (4096 ticks) reaches `ms`, the reload scaled to it.
+    const fn period_ms(pr: u32) -> u32 {
+        4096 * (4 << pr) / 40
     }
-    fn set_high(&mut self) -> Result<(), Self::Error> {
-        self.0.set_low();
-        Ok(())
+    const fn timing(ms: u32) -> (u16, u16) {
+        let mut pr = 0;
+        while pr < 6 && Self::period_ms(pr) < ms {
+            pr += 1;
+        }
+        let rl = ms * 0xFFF / Self::period_ms(pr);
+        // Both fit 16 bits: pr <= 6, rl <= 0xFFF.
+        (pr as u16, if rl > 0xFFF { 0xFFF } else { rl as u16 })
+    }
+    const TIMING: (u16, u16) = Self::timing(WATCHDOG_MS);
+
+    fn start(iwdg: pac::IWDG) -> Self {
+        let (pr, rl) = Self::TIMING;
+        // SAFETY: IWDG key, prescaler and reload registers take any of these values.
+        unsafe {
+            iwdg.kr().write(|w| w.bits(Self::KR_ACCESS));
+            iwdg.pr().write(|w| w.bits(pr));
+            iwdg.rlr().write(|w| w.bits(rl));
+            iwdg.kr().write(|w| w.bits(Self::KR_RELOAD));
+            iwdg.kr().write(|w| w.bits(Self::KR_START));
+        }
+        Self { iwdg }
+    }
+
+    /// Reload the counter.
+    pub fn feed(&mut self) {
+        // SAFETY: writing the reload key only restarts the countdown.
+        unsafe { self.iwdg.kr().write(|w| w.bits(Self::KR_RELOAD)) };
     }
 }
 
-/// A pin that does nothing: the ST7920 module's reset is tied to VCC on most boards.
-pub struct NoPin;
-impl ErrorType for NoPin {
-    type Error = core::convert::Infallible;
+// The HAL's search gives prescaler /8, reload 2500 for 500 ms.
+const _: () = assert!(matches!(Watchdog::timing(500), (1, 2500)));
+
+/// The LCD link: SPI2, transmit only (the ST7920's serial mode has no read-back),
+/// and the controller's chip select on PB12, which is active high.
+pub struct LcdSpi {
+    spi: Spi<pac::SPI2, u8>,
+    cs: gpio::PB12<Output<PushPull>>,
 }
-impl OutputPin for NoPin {
-    fn set_low(&mut self) -> Result<(), Self::Error> {
-        Ok(())
-    }
-    fn set_high(&mut self) -> Result<(), Self::Error> {
-        Ok(())
+
+impl LcdSpi {
+    /// Send `bytes` as one transaction: chip select raised around them.
+    pub fn write(&mut self, bytes: &[u8]) -> Result<(), stm32f1xx_hal::spi::Error> {
+        self.cs.set_high();
+        let sent = self.spi.write(bytes);
+        self.cs.set_low();
+        sent
     }
 }
 
-/// A busy-wait delay for the LCD driver. Only the lowest-priority task uses it, so
-/// every other task preempts it.
-pub struct SpinDelay;
-impl embedded_hal::delay::DelayNs for SpinDelay {
-    fn delay_ns(&mut self, ns: u32) {
-        // 72 cycles per µs; asm::delay waits at least the given cycle count.
-        cortex_m::asm::delay((ns / 1000 + 1) * (SYSCLK_HZ / 1_000_000));
+/// Bring the ST7920 up in graphics mode: the st7920 crate's sequence (its reset wait
+/// on a tied reset pin, then basic function set, display on, clear, entry mode,
+/// extended function set, graphics on, each followed by its execution time), without
+/// building that crate's 1 KB frame buffer. Blocking: only for the lowest-priority task.
+pub fn lcd_init(spi: &mut LcdSpi) -> Result<(), stm32f1xx_hal::spi::Error> {
+    /// (instruction, wait after it in µs)
+    const STEPS: [(u8, u32); 6] = [
+        (0x30, 200),
+        (0x0C, 100),
+        (0x01, 10_000),
+        (0x06, 100),
+        (0x34, 10_000),
+        (0x36, 100_000),
+    ];
+    const CYCLES_PER_US: u32 = SYSCLK_HZ / 1_000_000;
+    cortex_m::asm::delay(80_000 * CYCLES_PER_US);
+    for (cmd, wait_us) in STEPS {
+        // One serial frame: command start byte, high nibble, low nibble.
+        spi.write(&[0xF8, cmd & 0xF0, cmd << 4])?;
+        cortex_m::asm::delay(wait_us * CYCLES_PER_US);
     }
+    Ok(())
 }
-
-pub type LcdSpi = ExclusiveDevice<Spi<pac::SPI2, u8>, ActiveHighCs, SpinDelay>;
 
 pub type Usb = UsbDevice<'static, UsbBusType>;
 pub type UsbSerial = usbd_serial::SerialPort<'static, UsbBusType>;
@@ -549,7 +594,7 @@ pub struct Board {
     pub lcd_spi: LcdSpi,
     pub usb: Usb,
     pub serial: UsbSerial,
-    pub watchdog: IndependentWatchdog,
+    pub watchdog: Watchdog,
     pub flash: SettingsFlash,
     pub sysclk_hz: u32,
 }
@@ -576,7 +621,7 @@ pub fn init(
     let mut gpioa = dp.GPIOA.split(&mut rcc);
     let mut gpiob = dp.GPIOB.split(&mut rcc);
     let mut gpioc = dp.GPIOC.split(&mut rcc);
-    let mut exti = dp.EXTI;
+    let exti = dp.EXTI;
 
     // JTAG off, SWD on: frees PA15, PB3, PB4.
     let (pa15, pb3, pb4) = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
@@ -627,28 +672,34 @@ pub fn init(
             .into_open_drain_output_with_state(&mut gpioc.crh, gpio::PinState::High),
     };
 
-    let mut estop = gpiob.pb0.into_pull_up_input(&mut gpiob.crl);
-    let mut limit_x = gpiob.pb1.into_pull_up_input(&mut gpiob.crl);
-    let mut limit_y = pb3.into_pull_up_input(&mut gpiob.crl);
-    let mut feed_hold = pb4.into_pull_up_input(&mut gpiob.crl);
-    let mut cycle_start = gpiob.pb5.into_pull_up_input(&mut gpiob.crl);
-    // E-stop and limits: NC switches to GND, so opening (rising edge) is the event.
-    // Both edges are taken so that releasing is seen too.
-    estop.make_interrupt_source(&mut afio);
-    estop.trigger_on_edge(&mut exti, Edge::RisingFalling);
-    estop.enable_interrupt(&mut exti);
-    limit_x.make_interrupt_source(&mut afio);
-    limit_x.trigger_on_edge(&mut exti, Edge::RisingFalling);
-    limit_x.enable_interrupt(&mut exti);
-    limit_y.make_interrupt_source(&mut afio);
-    limit_y.trigger_on_edge(&mut exti, Edge::RisingFalling);
-    limit_y.enable_interrupt(&mut exti);
-    feed_hold.make_interrupt_source(&mut afio);
-    feed_hold.trigger_on_edge(&mut exti, Edge::RisingFalling);
-    feed_hold.enable_interrupt(&mut exti);
-    cycle_start.make_interrupt_source(&mut afio);
-    cycle_start.trigger_on_edge(&mut exti, Edge::Falling);
-    cycle_start.enable_interrupt(&mut exti);
+    let estop = gpiob.pb0.into_pull_up_input(&mut gpiob.crl);
+    let limit_x = gpiob.pb1.into_pull_up_input(&mut gpiob.crl);
+    let limit_y = pb3.into_pull_up_input(&mut gpiob.crl);
+    let feed_hold = pb4.into_pull_up_input(&mut gpiob.crl);
+    let cycle_start = gpiob.pb5.into_pull_up_input(&mut gpiob.crl);
+    // EXTI lines 0, 1, 3, 4, 5 from port B. E-stop and limits: NC switches to GND, so
+    // opening (rising edge) is the event; both edges are taken so that releasing is
+    // seen too, and feed hold likewise. Cycle start acts on pressing (falling edge).
+    // The same register values as the HAL's per-pin ExtiPin calls, in one write each.
+    const LINES: u32 = (1 << 0) | (1 << 1) | (1 << 3) | (1 << 4) | (1 << 5);
+    const PORT_B: u32 = 1;
+    // SAFETY: AFIO's clock is on (`constrain`); these EXTICR fields, trigger and mask
+    // bits belong to the lines above, which nothing else configures.
+    unsafe {
+        let afio_regs = &*pac::AFIO::ptr();
+        afio_regs
+            .exticr1()
+            .modify(|r, w| w.bits((r.bits() & !0xF0FF) | PORT_B | (PORT_B << 4) | (PORT_B << 12)));
+        afio_regs
+            .exticr2()
+            .modify(|r, w| w.bits((r.bits() & !0x00FF) | PORT_B | (PORT_B << 4)));
+    }
+    exti.rtsr()
+        .modify(|r, w| unsafe { w.bits((r.bits() | LINES) & !(1 << 5)) });
+    exti.ftsr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
+    exti.imr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
     let inputs = Inputs {
         estop,
         limit_x,
@@ -667,7 +718,7 @@ pub fn init(
     // LCD on SPI2. The ST7920 samples on the rising edge with the clock idle low.
     let sck = gpiob.pb13.into_alternate_push_pull(&mut gpiob.crh);
     let mosi = gpiob.pb15.into_alternate_push_pull(&mut gpiob.crh);
-    let cs = ActiveHighCs(gpiob.pb12.into_push_pull_output(&mut gpiob.crh));
+    let cs = gpiob.pb12.into_push_pull_output(&mut gpiob.crh);
     let spi = Spi::new(
         dp.SPI2,
         (
@@ -682,8 +733,7 @@ pub fn init(
         LCD_SPI_HZ.Hz(),
         &mut rcc,
     );
-    // ExclusiveDevice::new fails only if setting CS fails, which is infallible here.
-    let Ok(lcd_spi) = ExclusiveDevice::new(spi, cs, SpinDelay);
+    let lcd_spi = LcdSpi { spi, cs };
 
     // USB: force a re-enumeration by pulling D+ low briefly (the Blue Pill has a fixed
     // pull-up on D+), then hand the pins to the USB peripheral.
@@ -708,8 +758,7 @@ pub fn init(
         .unwrap_or_else(|_| defmt::panic!("usb strings"))
         .build();
 
-    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
-    watchdog.start(WATCHDOG_MS.millis());
+    let watchdog = Watchdog::start(dp.IWDG);
 
     let flash = SettingsFlash::new(flash);
 
@@ -750,20 +799,117 @@ pub fn exti_take_pending(line: u8) -> bool {
 ///
 /// Programming stalls instruction fetch from flash for the duration of a write (~50 µs
 /// per half-word) or erase (~20 ms per page), so the firmware only saves at rest.
+///
+/// The controller is driven by register writes, step for step as the HAL's
+/// `FlashWriter` with verification on (RM0008 "Flash program and erase"): unlock with
+/// the two keys, program half-words with PG or erase pages with PER/AR/STRT, wait for
+/// BSY, check PGERR/WRPRTERR, read back, lock again. The HAL's generic version of
+/// the same cost twice the flash.
 pub struct SettingsFlash {
-    flash: stm32f1xx_hal::flash::Parts,
+    /// Owned so that nothing else reaches the flash controller.
+    _flash: stm32f1xx_hal::flash::Parts,
 }
 
+/// Where the flash is mapped.
+const FLASH_BASE: u32 = 0x0800_0000;
+
 impl SettingsFlash {
+    const KEY1: u32 = 0x4567_0123;
+    const KEY2: u32 = 0xCDEF_89AB;
+
     fn new(flash: stm32f1xx_hal::flash::Parts) -> Self {
-        Self { flash }
+        Self { _flash: flash }
     }
 
-    fn writer(&mut self) -> stm32f1xx_hal::flash::FlashWriter<'_> {
-        self.flash.writer(
-            stm32f1xx_hal::flash::SectorSize::Sz1K,
-            stm32f1xx_hal::flash::FlashSize::Sz64K,
-        )
+    fn regs(&mut self) -> &pac::flash::RegisterBlock {
+        // SAFETY: this struct owns the flash parts, so it alone uses these registers
+        // (the HAL's ACR wait-state setting was done at clock setup).
+        unsafe { &*pac::FLASH::ptr() }
+    }
+
+    fn wait_idle(&mut self) {
+        while self.regs().sr().read().bsy().bit_is_set() {}
+    }
+
+    fn unlock(&mut self) -> Result<(), FlashError> {
+        self.wait_idle();
+        let f = self.regs();
+        // SAFETY: the key sequence only unlocks FLASH_CR (in this order, or it stays
+        // locked until reset).
+        unsafe {
+            f.keyr().write(|w| w.bits(Self::KEY1));
+            f.keyr().write(|w| w.bits(Self::KEY2));
+        }
+        if f.cr().read().lock().bit_is_set() {
+            return Err(FlashError);
+        }
+        Ok(())
+    }
+
+    fn lock(&mut self) -> Result<(), FlashError> {
+        self.wait_idle();
+        let f = self.regs();
+        f.cr().modify(|_, w| w.lock().set_bit());
+        if f.cr().read().lock().bit_is_clear() {
+            return Err(FlashError);
+        }
+        Ok(())
+    }
+
+    /// Erase the page holding `offset` and check that it reads back blank.
+    fn erase_page(&mut self, offset: u32) -> Result<(), FlashError> {
+        self.unlock()?;
+        let f = self.regs();
+        f.cr().modify(|_, w| w.per().set_bit());
+        // SAFETY: AR takes any address; the caller checked it is a settings page.
+        f.ar().write(|w| unsafe { w.bits(FLASH_BASE + offset) });
+        f.cr().modify(|_, w| w.strt().set_bit());
+        // BSY rises one cycle after STRT (STM32F10x errata 2.2.8).
+        cortex_m::asm::nop();
+        self.wait_idle();
+        let f = self.regs();
+        let sr = f.sr().read();
+        f.cr().modify(|_, w| w.per().clear_bit());
+        self.lock()?;
+        if sr.wrprterr().bit_is_set() {
+            self.regs().sr().modify(|_, w| w.wrprterr().set_bit());
+            return Err(FlashError);
+        }
+        let page = (FLASH_BASE + (offset & !(FLASH_PAGE_SIZE - 1))) as *const u16;
+        for i in 0..(FLASH_PAGE_SIZE / 2) as usize {
+            // SAFETY: a half-word of the page just erased, inside the flash.
+            if unsafe { core::ptr::read_volatile(page.add(i)) } != 0xFFFF {
+                return Err(FlashError);
+            }
+        }
+        Ok(())
+    }
+
+    /// Program one half-word and check it reads back; on failure the flash is locked.
+    fn program(&mut self, addr: u32, half: u16) -> Result<(), FlashError> {
+        let f = self.regs();
+        f.cr().modify(|_, w| w.pg().set_bit());
+        self.wait_idle();
+        // SAFETY: a half-word of a settings page, with PG set and the flash unlocked.
+        unsafe { core::ptr::write_volatile(addr as *mut u16, half) };
+        self.wait_idle();
+        let f = self.regs();
+        f.cr().modify(|_, w| w.pg().clear_bit());
+        let ok = if f.sr().read().pgerr().bit_is_set() {
+            f.sr().modify(|_, w| w.pgerr().set_bit());
+            false
+        } else if f.sr().read().wrprterr().bit_is_set() {
+            f.sr().modify(|_, w| w.wrprterr().set_bit());
+            false
+        } else {
+            // SAFETY: the half-word just programmed.
+            unsafe { core::ptr::read_volatile(addr as *const u16) == half }
+        };
+        if !ok {
+            self.lock()?;
+            return Err(FlashError);
+        }
+        Ok(())
     }
 }
 
@@ -794,8 +940,14 @@ impl embedded_storage::nor_flash::ReadNorFlash for SettingsFlash {
         if !within(offset, bytes.len(), 0, FLASH_SIZE) {
             return Err(FlashError);
         }
-        let writer = self.writer();
-        let data = writer.read(offset, bytes.len()).map_err(|_| FlashError)?;
+        // Half-word aligned, as the HAL's reader required.
+        if !offset.is_multiple_of(2) {
+            return Err(FlashError);
+        }
+        // SAFETY: inside the 64 KB of flash (checked above), which is always mapped
+        // and only changes through `&mut self`.
+        let data =
+            unsafe { core::slice::from_raw_parts((FLASH_BASE + offset) as *const u8, bytes.len()) };
         bytes.copy_from_slice(data);
         Ok(())
     }
@@ -812,15 +964,31 @@ impl embedded_storage::nor_flash::NorFlash for SettingsFlash {
         if from > to || !within(from, (to - from) as usize, SETTINGS_OFFSET, end) {
             return Err(FlashError);
         }
-        self.writer()
-            .erase(from, (to - from) as usize)
-            .map_err(|_| FlashError)
+        // Half-word aligned, every page from `from` up to `to` (as the HAL did).
+        if !from.is_multiple_of(2) || !(to - from).is_multiple_of(2) {
+            return Err(FlashError);
+        }
+        let mut page = from;
+        while page < to {
+            self.erase_page(page)?;
+            page += FLASH_PAGE_SIZE;
+        }
+        Ok(())
     }
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
         let end = SETTINGS_OFFSET + SETTINGS_FLASH_SIZE;
         if !within(offset, bytes.len(), SETTINGS_OFFSET, end) {
             return Err(FlashError);
         }
-        self.writer().write(offset, bytes).map_err(|_| FlashError)
+        if !offset.is_multiple_of(2) || !bytes.len().is_multiple_of(2) {
+            return Err(FlashError);
+        }
+        self.unlock()?;
+        let mut addr = FLASH_BASE + offset;
+        for pair in bytes.chunks_exact(2) {
+            self.program(addr, u16::from_le_bytes([pair[0], pair[1]]))?;
+            addr += 2;
+        }
+        self.lock()
     }
 }

@@ -11,7 +11,12 @@ use crate::board;
 pub fn on_panic(info: &core::panic::PanicInfo) -> ! {
     board::emergency_outputs_off();
     cortex_m::interrupt::disable();
-    defmt::error!("panic: {}", defmt::Display2Format(info));
+    // The location only: formatting the message would link core::fmt's machinery
+    // (and every panic site's argument formatting) into the image.
+    match info.location() {
+        Some(l) => defmt::error!("panic at {}:{}", l.file(), l.line()),
+        None => defmt::error!("panic"),
+    }
     // SAFETY: SHCSR is the System Handler Control and State Register; clearing
     // USGFAULTENA only makes the undefined instruction below a HardFault.
     unsafe {

@@ -4,4 +4,5 @@
 
 pub mod board;
 pub mod fault;
+pub mod mem;
 pub mod steps;

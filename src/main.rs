@@ -43,6 +43,7 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3, SPI1, I2C1_EV])]
 mod app {
     use super::*;
+    use core::mem::MaybeUninit;
     use heapless::spsc::Queue;
     use inkstep_core::controller::Controller;
     use inkstep_core::hmi::buzzer::Buzzer;
@@ -61,10 +62,14 @@ mod app {
 
     type Store = SettingsStore<BlockingFlash<board::SettingsFlash>>;
 
+    // The controller (2 KB) and the link (4 KB, the planner's buffer) are built in
+    // place in init's static cells and shared by reference: returned by value they
+    // would be built on init's stack (more than the stack left beside the statics)
+    // and copied.
     #[shared]
     struct Shared {
-        ctl: Controller,
-        link: Link<BoardSide>,
+        ctl: &'static mut Controller,
+        link: &'static mut Link<BoardSide>,
         usb: board::Usb,
         serial: board::UsbSerial,
     }
@@ -77,7 +82,7 @@ mod app {
         inputs: board::Inputs,
         indicators: board::Indicators,
         lcd_spi: board::LcdSpi,
-        watchdog: stm32f1xx_hal::watchdog::IndependentWatchdog,
+        watchdog: board::Watchdog,
         store: Store,
         usb_rx_in: Producer<'static, u8>,
         usb_rx_out: Consumer<'static, u8>,
@@ -90,6 +95,8 @@ mod app {
         steps: StepCmdQueue = StepCmdQueue::new(),
         usb_rxq: Queue<u8, USB_RX> = Queue::new(),
         usb_txq: Queue<u8, USB_TX> = Queue::new(),
+        ctl_cell: MaybeUninit<Controller> = MaybeUninit::uninit(),
+        link_cell: MaybeUninit<Link<BoardSide>> = MaybeUninit::uninit(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let b = board::init(cx.device, cx.local.usb_bus);
@@ -103,7 +110,7 @@ mod app {
         };
         let (settings, load) = store.load_settings();
         let (coords, _) = store.load_coords();
-        let mut ctl = Controller::new(settings.clone(), 0);
+        let ctl = cx.local.ctl_cell.write(Controller::new(settings, 0));
         if let Some(msg) = load.message() {
             defmt::warn!("settings: {}", msg);
             ctl.protocol_mut().notify(msg);
@@ -119,13 +126,17 @@ mod app {
             timer_hz: board::STEP_TIMER_HZ,
             ..PrepConfig::default()
         };
-        let link = Link::new(&settings, prep, BoardSide { tx: steps_tx });
+        let settings = ctl.protocol().machine().settings();
+        let link = cx
+            .local
+            .link_cell
+            .write(Link::new(settings, prep, BoardSide { tx: steps_tx }));
         let (usb_rx_in, usb_rx_out) = cx.local.usb_rxq.split();
         let (usb_tx_in, usb_tx_out) = cx.local.usb_txq.split();
 
         let mut step_port = b.step_port;
         let mut step_timer = b.step_timer;
-        apply_output_settings(&settings, &mut step_port, &mut step_timer);
+        apply_output_settings(settings, &mut step_port, &mut step_timer);
         let step_out = steps::install(
             Executor::new([0; 3], 0x1_0000),
             steps_rx,
@@ -180,6 +191,45 @@ mod app {
                 coords: false,
                 startup: false,
             }
+        }
+    }
+
+    /// Received bytes the protocol has not taken yet (it takes only what it can use:
+    /// back-pressure toward the USB queue and the host).
+    pub struct Carry {
+        buf: [u8; 64],
+        len: usize,
+    }
+
+    impl Carry {
+        const fn new() -> Self {
+            Self {
+                buf: [0; 64],
+                len: 0,
+            }
+        }
+
+        /// Top up from the USB receive queue.
+        fn fill(&mut self, rx: &mut Consumer<'static, u8>) {
+            for slot in self.buf.iter_mut().skip(self.len) {
+                match rx.dequeue() {
+                    Some(b) => *slot = b,
+                    None => break,
+                }
+                self.len += 1;
+            }
+        }
+
+        fn bytes(&self) -> &[u8] {
+            self.buf.get(..self.len).unwrap_or(&[])
+        }
+
+        /// Drop the first `n` bytes (the ones the protocol took).
+        fn consume(&mut self, n: usize) {
+            let len = self.len.min(self.buf.len());
+            let n = n.min(len);
+            self.buf.copy_within(n..len, 0);
+            self.len = len - n;
         }
     }
 
@@ -266,15 +316,12 @@ mod app {
             }
             let mut out = [0u8; 64];
             let mut n = 0;
-            while n < out.len() {
-                match tx.peek() {
-                    Some(&b) => {
-                        out[n] = b;
-                        n += 1;
-                        tx.dequeue();
-                    }
+            for slot in out.iter_mut() {
+                match tx.dequeue() {
+                    Some(b) => *slot = b,
                     None => break,
                 }
+                n += 1;
             }
             if n > 0 {
                 // The CDC class buffers what the endpoint cannot take yet; bytes it
@@ -303,23 +350,17 @@ mod app {
     /// The protocol, the machine state and the G-code interpreter, every millisecond:
     /// inputs, received bytes (only those the protocol takes: back-pressure), the
     /// periodic work, replies, the busy LED, the pen servo and settings persistence.
-    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: heapless::Vec<u8, 64> = heapless::Vec::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
+    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: Carry = Carry::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
     async fn protocol(mut cx: protocol::Context) {
         loop {
             let now = Mono::now().ticks();
             let pins = &mut *cx.local.inputs;
             let carry = &mut *cx.local.carry;
-            while !carry.is_full() {
-                match cx.local.usb_rx_out.dequeue() {
-                    Some(b) => {
-                        let _ = carry.push(b);
-                    }
-                    None => break,
-                }
-            }
+            carry.fill(cx.local.usb_rx_out);
             let tx = &mut *cx.local.usb_tx_in;
-            let (busy, settings_changed, pen_down, settings) =
+            let (busy, settings_changed, pen_down, pen_pulse) =
                 (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                    let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                     let s = ctl.protocol().machine().settings();
                     let inputs = Inputs {
                         estop: pins.estop_open() != s.invert_inputs(),
@@ -332,10 +373,8 @@ mod app {
                         cycle_start: pins.cycle_start_low(),
                     };
                     ctl.protocol_mut().set_inputs(inputs, link, now);
-                    let taken = ctl.usb_rx(carry, link, now);
-                    let taken = taken.min(carry.len());
-                    carry.copy_within(taken.., 0);
-                    carry.truncate(carry.len() - taken);
+                    let taken = ctl.usb_rx(carry.bytes(), link, now);
+                    carry.consume(taken);
                     ctl.poll(link, now);
                     let mut out = [0u8; 64];
                     let room = (tx.capacity() - tx.len()).min(out.len());
@@ -350,12 +389,15 @@ mod app {
                         ctl.settings_changed();
                     }
                     let busy = ctl.take_outputs().busy_led;
-                    (
-                        busy,
-                        changed,
-                        link.pen_down(),
-                        ctl.protocol().machine().settings().clone(),
-                    )
+                    let pen_down = link.pen_down();
+                    // Only what the outputs need is read here; the settings stay in place.
+                    let s = ctl.protocol().machine().settings();
+                    if changed {
+                        publish_output_settings(s);
+                    }
+                    let pen_pulse =
+                        (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
+                    (busy, changed, pen_down, pen_pulse)
                 });
             rtic::pend(stm32f1xx_hal::pac::Interrupt::USB_LP_CAN_RX0);
             // A reset from the alarm (soft reset / $X) clears the latched halt.
@@ -369,12 +411,9 @@ mod app {
             }
             if settings_changed {
                 cx.local.saves.settings = true;
-                publish_output_settings(&settings);
             }
-            if *cx.local.pen != Some(pen_down) && settings.pen_mode() == PenMode::Servo {
-                cx.local
-                    .servo
-                    .set_pulse_us(settings.pen_servo_pulse_us(pen_down));
+            if let Some(us) = pen_pulse.filter(|_| *cx.local.pen != Some(pen_down)) {
+                cx.local.servo.set_pulse_us(us);
                 *cx.local.pen = Some(pen_down);
             }
             // Flash writes stall the CPU (instruction fetch waits), so only at rest.
@@ -386,7 +425,11 @@ mod app {
                 if busy {
                     return;
                 }
-                if core::mem::take(&mut saves.settings) && store.save_settings(&settings).is_err() {
+                if core::mem::take(&mut saves.settings)
+                    && store
+                        .save_settings(ctl.protocol().machine().settings())
+                        .is_err()
+                {
                     defmt::warn!("settings save failed");
                 }
                 if core::mem::take(&mut saves.coords)
@@ -415,6 +458,7 @@ mod app {
         if board::exti_take_pending(4) {
             let now = Mono::now().ticks();
             (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                 let mut i = ctl.protocol().machine().inputs();
                 i.feed_hold = board::Inputs::read_feed_hold_low();
                 ctl.protocol_mut().set_inputs(i, link, now);
@@ -427,6 +471,7 @@ mod app {
         if board::exti_take_pending(5) {
             let now = Mono::now().ticks();
             (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                 let mut i = ctl.protocol().machine().inputs();
                 i.cycle_start = board::Inputs::read_cycle_start_low();
                 ctl.protocol_mut().set_inputs(i, link, now);
@@ -449,6 +494,7 @@ mod app {
             let rows = cx.local.keypad.read_rows();
             let now = Mono::now().ticks();
             let out = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                 ctl.key_scan(rows, link, now);
                 ctl.take_outputs()
             });
@@ -471,14 +517,10 @@ mod app {
         // Retained state of the screens and the 1 KB frame buffer live in this task.
         let mut screens = Screens::new();
         let mut fb = FrameBuffer::new();
-        {
-            // The st7920 crate brings the controller up in graphics mode; after that
-            // only the changed bytes are sent (core::screens::st7920).
-            let mut lcd =
-                ::st7920::ST7920::new(&mut *spi, board::NoPin, None::<board::NoPin>, false);
-            if lcd.init(&mut board::SpinDelay).is_err() {
-                defmt::warn!("LCD init failed");
-            }
+        // The controller comes up in graphics mode; after that only the changed bytes
+        // are sent (core::screens::st7920).
+        if board::lcd_init(spi).is_err() {
+            defmt::warn!("LCD init failed");
         }
         fb.mark_all_dirty();
         let mut last_pos = [0i32; 3];
@@ -487,6 +529,7 @@ mod app {
             // The teaching view's feed directions: which way each axis moved since the
             // last refresh (the step interrupt stays free of bookkeeping for it).
             let (hmi, status) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
+                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
                 let pos = link.side().position();
                 if pos != last_pos {
                     let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
@@ -496,7 +539,6 @@ mod app {
                 (ctl.hmi().clone(), ctl.status(link))
             });
             let _ = screens.render(&hmi, &status, now, &mut fb);
-            use embedded_hal::spi::SpiDevice;
             if st7920::flush(&mut fb, |bytes| spi.write(bytes)).is_err() {
                 defmt::warn!("LCD write failed");
             }

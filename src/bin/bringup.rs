@@ -71,7 +71,7 @@ mod app {
         indicators: board::Indicators,
         servo: board::PenServo,
         lcd_spi: board::LcdSpi,
-        watchdog: stm32f1xx_hal::watchdog::IndependentWatchdog,
+        watchdog: board::Watchdog,
     }
 
     #[init(local = [
@@ -212,14 +212,9 @@ mod app {
 
     #[task(priority = 1, shared = [last_key, usb_bytes], local = [lcd_spi])]
     async fn lcd_refresh(mut cx: lcd_refresh::Context) {
-        use embedded_hal::spi::SpiDevice;
         let spi = cx.local.lcd_spi;
-        {
-            let mut lcd =
-                ::st7920::ST7920::new(&mut *spi, board::NoPin, None::<board::NoPin>, false);
-            if lcd.init(&mut board::SpinDelay).is_err() {
-                defmt::warn!("LCD init failed");
-            }
+        if board::lcd_init(spi).is_err() {
+            defmt::warn!("LCD init failed");
         }
         let mut fb = FrameBuffer::new();
         fb.mark_all_dirty();
