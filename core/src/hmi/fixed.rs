@@ -4,6 +4,7 @@
 //! screens only ever need a few decimals of a bounded value, so it is done here with
 //! integer formatting. Values too large for the requested width print as "----".
 
+use crate::fmath;
 use heapless::string::StringView;
 use heapless::String;
 
@@ -15,7 +16,7 @@ pub type Fixed = String<16>;
 pub fn format(v: f32, decimals: u8) -> Fixed {
     let decimals = decimals.min(3);
     let scale: u32 = [1, 10, 100, 1000][decimals as usize];
-    let scaled = libm::roundf(v * scale as f32);
+    let scaled = fmath::round(v * scale as f32);
     if !scaled.is_finite() || scaled.abs() >= 1.0e9 {
         let mut out = Fixed::new();
         let _ = out.push_str("----");

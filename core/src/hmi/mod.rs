@@ -25,6 +25,7 @@ pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
 pub use menu::{MachineItem, MenuItem, MACHINE_MENU, MENU};
 pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
 
+use crate::fmath;
 use heapless::String;
 
 use crate::keypad::{Key, KeyEvent, KeyKind};
@@ -102,12 +103,12 @@ impl Clone for Hmi {
 fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
     let dx = (b[X].wrapping_sub(a[X])) as f32 / spmm[X];
     let dy = (b[Y].wrapping_sub(a[Y])) as f32 / spmm[Y];
-    libm::hypotf(dx, dy)
+    fmath::hypot(dx, dy)
 }
 
 /// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
 fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
-    let z = libm::roundf(z_mm * steps_per_mm);
+    let z = fmath::round(z_mm * steps_per_mm);
     if !z.is_finite() || z.abs() >= 1.0e9 {
         return None;
     }

@@ -17,6 +17,7 @@ pub mod plot;
 pub mod st7920;
 pub mod widgets;
 
+use crate::fmath;
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
 use embedded_graphics::primitives::Rectangle;
@@ -464,7 +465,7 @@ impl Screens {
             RunPhase::Done { complete: true, .. } => "DONE",
             RunPhase::Done { .. } => "SHORT",
         };
-        push_uint(&mut l, libm::roundf(run.progress() * 100.0) as u32, 3);
+        push_uint(&mut l, fmath::round(run.progress() * 100.0) as u32, 3);
         let _ = l.push_str("% ");
         let _ = l.push_str(state);
         put(d, Cell::at(65, 56, 12).small(), &l)

@@ -7,6 +7,7 @@
 //! The trace lives in a fixed array (no allocation); when it fills up every other point
 //! is dropped, which keeps the shape at the preview's resolution.
 
+use crate::fmath;
 use embedded_graphics::pixelcolor::BinaryColor;
 use embedded_graphics::prelude::*;
 use embedded_graphics::primitives::Rectangle;
@@ -56,8 +57,8 @@ impl Plot {
 
     /// Screen pixel of a point in mm (relative to the job start), clamped to the area.
     pub fn to_px(&self, mm: [f32; 2]) -> Point {
-        let x = libm::roundf(self.origin[0] + mm[0] * self.scale);
-        let y = libm::roundf(self.origin[1] - mm[1] * self.scale);
+        let x = fmath::round(self.origin[0] + mm[0] * self.scale);
+        let y = fmath::round(self.origin[1] - mm[1] * self.scale);
         let br = self.area.top_left + self.area.size - Point::new(2, 2);
         let tl = self.area.top_left + Point::new(1, 1);
         // max/min rather than clamp: no "min > max" assertion to carry.
@@ -77,7 +78,7 @@ impl Plot {
         D: DrawTarget<Color = BinaryColor>,
     {
         let len_px = job.length_mm() * self.scale;
-        let n = libm::roundf(len_px / 2.5).clamp(8.0, 400.0) as u32;
+        let n = fmath::round(len_px / 2.5).clamp(8.0, 400.0) as u32;
         for i in 0..n + 1 {
             let p = self.to_px(job.point_at(i as f32 / n as f32));
             Pixel(p, BinaryColor::On).draw(d)?;

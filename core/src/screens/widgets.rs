@@ -6,6 +6,7 @@
 //! frame buffer stays clean: that is what makes "redraw only what changed" work without
 //! a second buffer.
 
+use crate::fmath;
 use embedded_graphics::image::GetPixel;
 use embedded_graphics::image::ImageRaw;
 use embedded_graphics::mono_font::MonoFont;
@@ -221,7 +222,7 @@ where
     } else {
         0.0
     };
-    let filled = libm::roundf(inner_w as f32 * f) as u32;
+    let filled = fmath::round(inner_w as f32 * f) as u32;
     let tl = area.top_left + Point::new(2, 2);
     d.fill_solid(&Rectangle::new(tl, Size::new(filled, h)), ON)?;
     d.fill_solid(
@@ -292,12 +293,12 @@ where
     }
     let r = (area.size.width.min(area.size.height) / 2) as f32 - 2.0;
     let (dx, dy) = (dir[0] as f32, -(dir[1] as f32));
-    let n = libm::hypotf(dx, dy);
+    let n = fmath::hypot(dx, dy);
     let (ux, uy) = (dx / n, dy / n);
     // One rounding helper for both coordinates: u*along - v*across, rounded. For y,
     // (v = -ux) gives uy*along + ux*across bit for bit (negation is exact).
     fn rot(u: f32, v: f32, along: f32, across: f32) -> i32 {
-        libm::roundf(u * along - v * across) as i32
+        fmath::round(u * along - v * across) as i32
     }
     let at = |along: f32, across: f32| {
         Point::new(
@@ -315,7 +316,7 @@ where
     let tip = at(r, 0.0);
     if solid {
         // Fill the head with a fan of lines from the tip.
-        let steps = libm::ceilf(half * 4.0) as i32;
+        let steps = fmath::ceil(half * 4.0) as i32;
         for k in -steps..steps + 1 {
             let across = half * k as f32 / steps as f32;
             line(d, tip, at(base, across))?;
