@@ -6,9 +6,6 @@
 //! problem 5 (one key press filling every digit) cannot happen: a field changes only on
 //! Press events, and the form moves to the next field only on Enter.
 
-use heapless::String;
-
-use super::fixed::push_fixed;
 use super::job::Job;
 use super::text::Text;
 use crate::keypad::Key;
@@ -70,12 +67,12 @@ impl Field {
     }
 
     /// What the field shows: the text being typed, or the committed value.
-    pub fn display(&self) -> String<12> {
-        let mut s = String::new();
+    pub fn display(&self) -> Text<12> {
+        let mut s = Text::new();
         if self.editing {
-            let _ = s.push_str(&self.text);
+            s.push_str(&self.text);
         } else {
-            push_fixed(&mut s, self.value, self.decimals);
+            s.push_fixed(self.value, self.decimals);
         }
         s
     }
@@ -150,7 +147,7 @@ impl Field {
     }
 
     /// Parse and range-check the text; on success it becomes the value.
-    pub fn commit(&mut self) -> Result<f32, String<28>> {
+    pub fn commit(&mut self) -> Result<f32, Text<28>> {
         if !self.editing {
             return Ok(self.value);
         }
@@ -167,15 +164,15 @@ impl Field {
     }
 
     /// "R: 0.50..100.00 mm"
-    pub fn range_message(&self) -> String<28> {
-        let mut s: String<28> = String::new();
-        let _ = s.push_str(self.label);
-        let _ = s.push_str(": ");
-        push_fixed(&mut s, self.min, self.decimals);
-        let _ = s.push_str("..");
-        push_fixed(&mut s, self.max, self.decimals);
-        let _ = s.push(' ');
-        let _ = s.push_str(self.unit);
+    pub fn range_message(&self) -> Text<28> {
+        let mut s: Text<28> = Text::new();
+        s.push_str(self.label);
+        s.push_str(": ");
+        s.push_fixed(self.min, self.decimals);
+        s.push_str("..");
+        s.push_fixed(self.max, self.decimals);
+        s.push_str(" ");
+        s.push_str(self.unit);
         s
     }
 }

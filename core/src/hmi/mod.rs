@@ -26,8 +26,6 @@ pub use menu::{MachineItem, MenuItem, MACHINE_MENU, MENU};
 pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
 
 use crate::fmath;
-use heapless::String;
-
 use crate::keypad::{Key, KeyEvent, KeyKind};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
 use entry::{FieldInput, Form, FormMemory, DEFAULT_PARAMS};
@@ -693,11 +691,11 @@ impl Hmi {
                 }
             }
             let p = self.pos_mm(st);
-            let mut msg: String<28> = String::new();
-            let _ = msg.push_str("Stopped X");
-            fixed::push_fixed(&mut msg, p[X], 1);
-            let _ = msg.push_str(" Y");
-            fixed::push_fixed(&mut msg, p[Y], 1);
+            let mut msg: Text<28> = Text::new();
+            msg.push_str("Stopped X");
+            msg.push_fixed(p[X], 1);
+            msg.push_str(" Y");
+            msg.push_fixed(p[Y], 1);
             self.page = Page::Menu { sel: 0 };
             self.say(&msg, now_ms);
         }
