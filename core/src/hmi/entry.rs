@@ -70,7 +70,7 @@ impl Field {
     pub fn display(&self) -> Text<12> {
         let mut s = Text::new();
         if self.editing {
-            s.push_str(&self.text);
+            s.push_text(&self.text);
         } else {
             s.push_fixed(self.value, self.decimals);
         }
@@ -89,7 +89,7 @@ impl Field {
                     .position(|&c| c == b'.')
                     .is_some_and(|dot| t.len() - dot > usize::from(self.decimals));
                 if !full {
-                    let _ = self.text.push(char::from(b'0' + d));
+                    self.text.push_ascii(b'0' + d);
                 }
                 FieldInput::Edited
             }
@@ -98,9 +98,9 @@ impl Field {
                 let t = self.text.as_bytes();
                 if self.decimals > 0 && !t.contains(&b'.') {
                     if t.is_empty() || t == b"-" {
-                        let _ = self.text.push('0');
+                        self.text.push_ascii(b'0');
                     }
-                    let _ = self.text.push('.');
+                    self.text.push_ascii(b'.');
                 }
                 FieldInput::Edited
             }
@@ -112,11 +112,12 @@ impl Field {
                 self.start_editing();
                 let neg = self.text.as_bytes().first() == Some(&b'-');
                 let mut t: Text<FIELD_CHARS> = Text::new();
-                if !neg {
-                    let _ = t.push('-');
+                let mut ok = neg || t.push_ascii(b'-');
+                // The field text is ASCII: copied byte by byte, kept only if it all fits.
+                for &b in self.text.bytes().iter().skip(usize::from(neg)) {
+                    ok &= t.push_ascii(b);
                 }
-                let body = self.text.get(usize::from(neg)..).unwrap_or("");
-                if t.push_str(body) {
+                if ok {
                     self.text = t;
                 }
                 FieldInput::Edited

@@ -44,7 +44,7 @@ impl<const N: usize> Text<N> {
     }
 
     pub fn as_bytes(&self) -> &[u8] {
-        self.as_str().as_bytes()
+        self.bytes()
     }
 
     /// Length in bytes.
@@ -80,6 +80,11 @@ impl<const N: usize> Text<N> {
         self.push_str(c.encode_utf8(&mut [0; 4]))
     }
 
+    /// Append the whole of `t`, or change nothing and return false if it does not fit.
+    pub fn push_text<const M: usize>(&mut self, t: &Text<M>) -> bool {
+        append(&mut self.buf, &mut self.len, t.bytes())
+    }
+
     /// Append the ASCII byte `b` (anything else is refused, keeping the text UTF-8).
     pub fn push_ascii(&mut self, b: u8) -> bool {
         b.is_ascii() && append(&mut self.buf, &mut self.len, &[b])
@@ -87,7 +92,7 @@ impl<const N: usize> Text<N> {
 
     /// Append [`super::fixed::format`]`(v, decimals)`; false if it does not fit.
     pub fn push_fixed(&mut self, v: f32, decimals: u8) -> bool {
-        self.push_str(&super::fixed::format(v, decimals))
+        self.push_text(&super::fixed::format(v, decimals))
     }
 
     /// Append the unsigned integer `n` right-aligned in `width` characters.
@@ -97,21 +102,19 @@ impl<const N: usize> Text<N> {
         for _ in text.len()..width {
             ok &= self.push_str(" ");
         }
-        ok && self.push_str(&text)
+        ok && self.push_text(&text)
     }
 
     /// Remove the last character; false if the text was empty.
     pub fn pop(&mut self) -> bool {
-        let s = self.as_str();
-        if s.is_empty() {
-            return false;
+        // Back to the last byte that starts a character (not a UTF-8 continuation).
+        match self.bytes().iter().rposition(|&b| (b as i8) >= -0x40) {
+            Some(end) => {
+                self.len = end as u8;
+                true
+            }
+            None => false,
         }
-        let mut end = s.len() - 1;
-        while !s.is_char_boundary(end) {
-            end -= 1;
-        }
-        self.len = end as u8;
-        true
     }
 
     pub fn clear(&mut self) {

@@ -115,7 +115,7 @@ fn axis_text(axis: &str, mm: f32) -> Line {
     for _ in v.len()..7 {
         s.push_str(" ");
     }
-    s.push_str(&v);
+    s.push_text(&v);
     s
 }
 
@@ -245,7 +245,7 @@ impl Screens {
                     let (y, current) = (row_y(i), i == form.cur);
                     put(fb, Cell::at(0, y, 6), f.label.as_bytes());
                     l.clear();
-                    l.push_str(&f.display());
+                    l.push_text(&f.display());
                     l.push_str(if current && f.editing() { "_" } else { " " });
                     put(fb, Cell::at(36, y, 9).inverse(current).right(), l.bytes());
                     put(fb, Cell::at(93, y + 1, 7).small(), f.unit.as_bytes());
