@@ -131,6 +131,25 @@ impl Job {
         }
     }
 
+    /// The variant (0..=5) and the parameters' bit patterns (unused ones 0): an exact
+    /// identity for the job without float comparisons.
+    pub fn words(&self) -> (u32, [u32; 4]) {
+        let (kind, v) = match *self {
+            Job::Line { dx, dy } => (0, [dx, dy, 0.0, 0.0]),
+            Job::Arc { r, theta } => (1, [r, theta, 0.0, 0.0]),
+            Job::Ellipse { a, b } => (2, [a, b, 0.0, 0.0]),
+            Job::Sine {
+                amp,
+                omega,
+                phase,
+                len,
+            } => (3, [amp, omega, phase, len]),
+            Job::Star { size } => (4, [size, 0.0, 0.0, 0.0]),
+            Job::Travel { dx, dy } => (5, [dx, dy, 0.0, 0.0]),
+        };
+        (kind, v.map(f32::to_bits))
+    }
+
     /// Whether the pen is down while this job moves.
     pub fn draws(&self) -> bool {
         !matches!(self, Job::Travel { .. })

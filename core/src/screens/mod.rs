@@ -21,7 +21,6 @@ pub mod widgets;
 use core::convert::Infallible;
 
 use crate::fmath;
-use crate::hmi::entry::FormKind;
 use crate::hmi::job::Job;
 use crate::hmi::text::Text;
 use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Status, MACHINE_MENU, MENU};
@@ -42,33 +41,26 @@ const RUN_BOX: Area = [2, 11, 72, 42];
 /// The preview box of the "ready to draw" page.
 const PREVIEW_BOX: Area = [0, 11, 80, 43];
 
-/// Which page (and which instance of it) is on the screen.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum PageKey {
-    Boot,
-    Menu,
-    Machine,
-    Jog,
-    Form(FormKind),
-    Preview(Job),
-    Run(u32),
-    Status,
-    Alarm(u8),
-    Error,
-}
+/// Which page (and which instance of it) is on the screen: a page number and what
+/// tells its instances apart (form kind, the previewed job's parameters as bits, run
+/// start time, alarm code). Compared as plain words, no float comparisons.
+type PageKey = [u32; 6];
 
 fn page_key(page: &Page) -> PageKey {
     match page {
-        Page::Boot => PageKey::Boot,
-        Page::Menu { .. } => PageKey::Menu,
-        Page::Machine { .. } => PageKey::Machine,
-        Page::Jog(_) => PageKey::Jog,
-        Page::Form(f) => PageKey::Form(f.kind),
-        Page::Preview { job, .. } => PageKey::Preview(*job),
-        Page::Run(r) => PageKey::Run(r.started_ms),
-        Page::Status => PageKey::Status,
-        Page::Alarm { code } => PageKey::Alarm(*code),
-        Page::Error { .. } => PageKey::Error,
+        Page::Boot => [0; 6],
+        Page::Menu { .. } => [1, 0, 0, 0, 0, 0],
+        Page::Machine { .. } => [2, 0, 0, 0, 0, 0],
+        Page::Jog(_) => [3, 0, 0, 0, 0, 0],
+        Page::Form(f) => [4, f.kind.index() as u32, 0, 0, 0, 0],
+        Page::Preview { job, .. } => {
+            let (kind, v) = job.words();
+            [5, kind, v[0], v[1], v[2], v[3]]
+        }
+        Page::Run(r) => [6, r.started_ms, 0, 0, 0, 0],
+        Page::Status => [7, 0, 0, 0, 0, 0],
+        Page::Alarm { code } => [8, u32::from(*code), 0, 0, 0, 0],
+        Page::Error { .. } => [9, 0, 0, 0, 0, 0],
     }
 }
 
@@ -172,8 +164,8 @@ impl Screens {
             self.arrow = None;
             self.ticks = None;
             // A new run starts a new trace; a rebuilt page of the same run keeps it.
-            let run = match key {
-                PageKey::Run(t) => Some(t),
+            let run = match page {
+                Page::Run(r) => Some(r.started_ms),
                 _ => None,
             };
             if run.is_none() || run != self.trace_run {
