@@ -6,9 +6,6 @@
 //! problem 5 (one key press filling every digit) cannot happen: a field changes only on
 //! Press events, and the form moves to the next field only on Enter.
 
-use heapless::String;
-
-use super::fixed::push_fixed;
 use super::job::Job;
 use super::text::Text;
 use crate::keypad::Key;
@@ -70,12 +67,12 @@ impl Field {
     }
 
     /// What the field shows: the text being typed, or the committed value.
-    pub fn display(&self) -> String<12> {
-        let mut s = String::new();
+    pub fn display(&self) -> Text<12> {
+        let mut s = Text::new();
         if self.editing {
-            let _ = s.push_str(&self.text);
+            s.push_text(&self.text);
         } else {
-            push_fixed(&mut s, self.value, self.decimals);
+            s.push_fixed(self.value, self.decimals);
         }
         s
     }
@@ -92,7 +89,7 @@ impl Field {
                     .position(|&c| c == b'.')
                     .is_some_and(|dot| t.len() - dot > usize::from(self.decimals));
                 if !full {
-                    let _ = self.text.push(char::from(b'0' + d));
+                    self.text.push_ascii(b'0' + d);
                 }
                 FieldInput::Edited
             }
@@ -101,9 +98,9 @@ impl Field {
                 let t = self.text.as_bytes();
                 if self.decimals > 0 && !t.contains(&b'.') {
                     if t.is_empty() || t == b"-" {
-                        let _ = self.text.push('0');
+                        self.text.push_ascii(b'0');
                     }
-                    let _ = self.text.push('.');
+                    self.text.push_ascii(b'.');
                 }
                 FieldInput::Edited
             }
@@ -115,11 +112,12 @@ impl Field {
                 self.start_editing();
                 let neg = self.text.as_bytes().first() == Some(&b'-');
                 let mut t: Text<FIELD_CHARS> = Text::new();
-                if !neg {
-                    let _ = t.push('-');
+                let mut ok = neg || t.push_ascii(b'-');
+                // The field text is ASCII: copied byte by byte, kept only if it all fits.
+                for &b in self.text.bytes().iter().skip(usize::from(neg)) {
+                    ok &= t.push_ascii(b);
                 }
-                let body = self.text.get(usize::from(neg)..).unwrap_or("");
-                if t.push_str(body) {
+                if ok {
                     self.text = t;
                 }
                 FieldInput::Edited
@@ -150,7 +148,7 @@ impl Field {
     }
 
     /// Parse and range-check the text; on success it becomes the value.
-    pub fn commit(&mut self) -> Result<f32, String<28>> {
+    pub fn commit(&mut self) -> Result<f32, Text<28>> {
         if !self.editing {
             return Ok(self.value);
         }
@@ -167,15 +165,15 @@ impl Field {
     }
 
     /// "R: 0.50..100.00 mm"
-    pub fn range_message(&self) -> String<28> {
-        let mut s: String<28> = String::new();
-        let _ = s.push_str(self.label);
-        let _ = s.push_str(": ");
-        push_fixed(&mut s, self.min, self.decimals);
-        let _ = s.push_str("..");
-        push_fixed(&mut s, self.max, self.decimals);
-        let _ = s.push(' ');
-        let _ = s.push_str(self.unit);
+    pub fn range_message(&self) -> Text<28> {
+        let mut s: Text<28> = Text::new();
+        s.push_str(self.label);
+        s.push_str(": ");
+        s.push_fixed(self.min, self.decimals);
+        s.push_str("..");
+        s.push_fixed(self.max, self.decimals);
+        s.push_str(" ");
+        s.push_str(self.unit);
         s
     }
 }

@@ -4,34 +4,33 @@
 //! screens only ever need a few decimals of a bounded value, so it is done here with
 //! integer formatting. Values too large for the requested width print as "----".
 
-use heapless::string::StringView;
-use heapless::String;
+use super::text::Text;
+use crate::fmath;
 
 /// Longest text produced: "-999999999.999".
-pub type Fixed = String<16>;
+pub type Fixed = Text<16>;
 
 /// `v` with exactly `decimals` (0..=3) digits after the point; "----" if not finite
 /// or too large. Built digit by digit in u32 (no core::fmt, no 64-bit division).
 pub fn format(v: f32, decimals: u8) -> Fixed {
     let decimals = decimals.min(3);
     let scale: u32 = [1, 10, 100, 1000][decimals as usize];
-    let scaled = libm::roundf(v * scale as f32);
+    let scaled = fmath::round(v * scale as f32);
     if !scaled.is_finite() || scaled.abs() >= 1.0e9 {
-        let mut out = Fixed::new();
-        let _ = out.push_str("----");
-        return out;
+        return Text::truncated("----");
     }
     digits(scaled < 0.0, scaled.abs() as u32, decimals)
 }
 
+/// `n` in decimal.
+pub fn uint(n: u32) -> Fixed {
+    digits(false, n, 0)
+}
+
 /// `n` (already scaled by 10^decimals) as text, "-" first if `neg` and n != 0.
 fn digits(neg: bool, n: u32, decimals: u8) -> Fixed {
-    let mut out = Fixed::new();
-    if neg && n != 0 {
-        let _ = out.push('-');
-    }
     // Digits, least significant first, with the point after `decimals` of them.
-    let mut rev = [0u8; 14];
+    let mut rev = [0u8; 16];
     let mut len = 0;
     let mut rest = n;
     // At least "0" or "0.0..": one integer digit, the point and the decimals.
@@ -40,53 +39,46 @@ fn digits(neg: bool, n: u32, decimals: u8) -> Fixed {
     } else {
         1
     };
-    while len < rev.len() && (rest > 0 || len < min_len) {
-        if decimals > 0 && len == decimals as usize {
-            rev[len] = b'.';
-            len += 1;
-            continue;
+    while let Some(slot) = rev.get_mut(len) {
+        if rest == 0 && len >= min_len {
+            break;
         }
-        rev[len] = b'0' + (rest % 10) as u8;
-        rest /= 10;
+        if decimals > 0 && len == decimals as usize {
+            *slot = b'.';
+        } else {
+            *slot = b'0' + (rest % 10) as u8;
+            rest /= 10;
+        }
         len += 1;
     }
+    if neg && n != 0 {
+        if let Some(slot) = rev.get_mut(len) {
+            *slot = b'-';
+            len += 1;
+        }
+    }
+    let mut out = Fixed::new();
     for &c in rev.get(..len).unwrap_or(&[]).iter().rev() {
-        let _ = out.push(char::from(c));
+        out.push_ascii(c);
     }
     out
 }
 
 /// Append [`format`]`(v, decimals)`; false if `out` ran out of room.
-pub fn push_fixed<const N: usize>(out: &mut String<N>, v: f32, decimals: u8) -> bool {
-    push_fixed_view(out.as_mut_view(), v, decimals)
+pub fn push_fixed<const N: usize>(out: &mut Text<N>, v: f32, decimals: u8) -> bool {
+    out.push_fixed(v, decimals)
 }
 
-// The work of the generic helpers, compiled once for every capacity.
-#[inline(never)]
-fn push_fixed_view(out: &mut StringView, v: f32, decimals: u8) -> bool {
-    out.push_str(&format(v, decimals)).is_ok()
-}
-
-/// `v` as a new string (see [`format`]).
-pub fn fixed<const N: usize>(v: f32, decimals: u8) -> String<N> {
-    let mut s = String::new();
-    push_fixed(&mut s, v, decimals);
+/// `v` as a new text (see [`format`]).
+pub fn fixed<const N: usize>(v: f32, decimals: u8) -> Text<N> {
+    let mut s = Text::new();
+    s.push_fixed(v, decimals);
     s
 }
 
 /// Append the unsigned integer `n` right-aligned in `width` characters.
-pub fn push_uint<const N: usize>(out: &mut String<N>, n: u32, width: usize) -> bool {
-    push_uint_view(out.as_mut_view(), n, width)
-}
-
-#[inline(never)]
-fn push_uint_view(out: &mut StringView, n: u32, width: usize) -> bool {
-    let text = digits(false, n, 0);
-    let mut ok = true;
-    for _ in text.len()..width {
-        ok &= out.push(' ').is_ok();
-    }
-    ok && out.push_str(&text).is_ok()
+pub fn push_uint<const N: usize>(out: &mut Text<N>, n: u32, width: usize) -> bool {
+    out.push_uint(n, width)
 }
 
 #[cfg(test)]
@@ -109,18 +101,18 @@ mod tests {
 
     #[test]
     fn right_aligned_integers() {
-        let mut s: String<12> = String::new();
+        let mut s: Text<12> = Text::new();
         assert!(push_uint(&mut s, 600, 5));
         assert!(push_uint(&mut s, 12345, 2));
         assert_eq!(s.as_str(), "  60012345");
-        let mut big: String<12> = String::new();
+        let mut big: Text<12> = Text::new();
         assert!(push_uint(&mut big, u32::MAX, 0));
         assert_eq!(big.as_str(), "4294967295");
     }
 
     #[test]
     fn reports_overflow_of_the_output() {
-        let mut s: String<3> = String::new();
+        let mut s: Text<3> = Text::new();
         assert!(!push_fixed(&mut s, 1234.5, 1));
     }
 }

@@ -10,6 +10,7 @@
 //! Pen up/down are Z moves ([`Config::pen_up_mm`], [`Config::pen_down_mm`]), so the
 //! whole job is one ordered move stream and every XY move carries the pen-down Z.
 
+use crate::fmath;
 use core::f32::consts::PI;
 
 use heapless::Vec;
@@ -75,7 +76,7 @@ pub struct Plan {
 const STEP_LIMIT: f32 = 1.0e9;
 
 fn to_steps(mm: f32, steps_per_mm: f32) -> Result<i32, JobError> {
-    let s = libm::roundf(mm * steps_per_mm);
+    let s = fmath::round(mm * steps_per_mm);
     if s.is_finite() && s.abs() < STEP_LIMIT {
         Ok(s as i32)
     } else {
@@ -114,7 +115,7 @@ fn star_point(r: f32, k: usize) -> [f32; 2] {
 /// A point of the ellipse with semi-axes (a, b) at `angle` (radians) from its 0° point,
 /// relative to that point.
 fn conic_point(a: f32, b: f32, angle: f32) -> [f32; 2] {
-    [a * libm::cosf(angle) - a, b * libm::sinf(angle)]
+    [a * fmath::cos(angle) - a, b * fmath::sin(angle)]
 }
 
 impl Job {
@@ -128,6 +129,25 @@ impl Job {
             Job::Star { .. } => "Star",
             Job::Travel { .. } => "Go to origin",
         }
+    }
+
+    /// The variant (0..=5) and the parameters' bit patterns (unused ones 0): an exact
+    /// identity for the job without float comparisons.
+    pub fn words(&self) -> (u32, [u32; 4]) {
+        let (kind, v) = match *self {
+            Job::Line { dx, dy } => (0, [dx, dy, 0.0, 0.0]),
+            Job::Arc { r, theta } => (1, [r, theta, 0.0, 0.0]),
+            Job::Ellipse { a, b } => (2, [a, b, 0.0, 0.0]),
+            Job::Sine {
+                amp,
+                omega,
+                phase,
+                len,
+            } => (3, [amp, omega, phase, len]),
+            Job::Star { size } => (4, [size, 0.0, 0.0, 0.0]),
+            Job::Travel { dx, dy } => (5, [dx, dy, 0.0, 0.0]),
+        };
+        (kind, v.map(f32::to_bits))
     }
 
     /// Whether the pen is down while this job moves.
@@ -150,12 +170,12 @@ impl Job {
             } => {
                 let x = len * t;
                 let ph = phase.to_radians();
-                [x, amp * libm::sinf(omega * x + ph) - amp * libm::sinf(ph)]
+                [x, amp * fmath::sin(omega * x + ph) - amp * fmath::sin(ph)]
             }
             Job::Star { size } => {
                 let r = size / 2.0;
                 let s = t * 5.0;
-                let k = (libm::floorf(s) as usize).min(4);
+                let k = (fmath::floor(s) as usize).min(4);
                 let f = s - k as f32;
                 let (p0, p1) = (star_point(r, k), star_point(r, k + 1));
                 [p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f]
@@ -185,7 +205,7 @@ impl Job {
         for i in 0..N + 1 {
             let p = self.point_at(i as f32 / N as f32);
             if i > 0 {
-                len += libm::hypotf(p[0] - prev[0], p[1] - prev[1]);
+                len += fmath::hypot(p[0] - prev[0], p[1] - prev[1]);
             }
             prev = p;
             for ax in 0..2 {
@@ -238,8 +258,8 @@ impl Job {
                 if len_steps == 0 {
                     return Err(JobError::Empty);
                 }
-                let rise = amp_steps * libm::sinf(omega_steps * len_steps as f32 + ph)
-                    - amp_steps * libm::sinf(ph);
+                let rise = amp_steps * fmath::sin(omega_steps * len_steps as f32 + ph)
+                    - amp_steps * fmath::sin(ph);
                 let end = [
                     start[X].checked_add(len_steps).ok_or(JobError::TooLarge)?,
                     start[Y]
@@ -336,8 +356,8 @@ fn conic(
     };
     let point = |deg: f32| -> Result<StepPos, JobError> {
         let t = deg.to_radians();
-        let px = to_steps(a as f32 * libm::cosf(t), 1.0)?;
-        let py = to_steps(b as f32 * libm::sinf(t), 1.0)?;
+        let px = to_steps(a as f32 * fmath::cos(t), 1.0)?;
+        let py = to_steps(b as f32 * fmath::sin(t), 1.0)?;
         Ok([
             center[0].checked_add(px).ok_or(JobError::TooLarge)?,
             center[1].checked_add(py).ok_or(JobError::TooLarge)?,

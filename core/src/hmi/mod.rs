@@ -25,8 +25,7 @@ pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
 pub use menu::{MachineItem, MenuItem, MACHINE_MENU, MENU};
 pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
 
-use heapless::String;
-
+use crate::fmath;
 use crate::keypad::{Key, KeyEvent, KeyKind};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
 use entry::{FieldInput, Form, FormMemory, DEFAULT_PARAMS};
@@ -102,12 +101,12 @@ impl Clone for Hmi {
 fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
     let dx = (b[X].wrapping_sub(a[X])) as f32 / spmm[X];
     let dy = (b[Y].wrapping_sub(a[Y])) as f32 / spmm[Y];
-    libm::hypotf(dx, dy)
+    fmath::hypot(dx, dy)
 }
 
 /// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
 fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
-    let z = libm::roundf(z_mm * steps_per_mm);
+    let z = fmath::round(z_mm * steps_per_mm);
     if !z.is_finite() || z.abs() >= 1.0e9 {
         return None;
     }
@@ -692,11 +691,11 @@ impl Hmi {
                 }
             }
             let p = self.pos_mm(st);
-            let mut msg: String<28> = String::new();
-            let _ = msg.push_str("Stopped X");
-            fixed::push_fixed(&mut msg, p[X], 1);
-            let _ = msg.push_str(" Y");
-            fixed::push_fixed(&mut msg, p[Y], 1);
+            let mut msg: Text<28> = Text::new();
+            msg.push_str("Stopped X");
+            msg.push_fixed(p[X], 1);
+            msg.push_str(" Y");
+            msg.push_fixed(p[Y], 1);
             self.page = Page::Menu { sel: 0 };
             self.say(&msg, now_ms);
         }

@@ -44,21 +44,35 @@ impl<const N: usize> Text<N> {
     }
 
     pub fn as_bytes(&self) -> &[u8] {
-        self.as_str().as_bytes()
+        self.bytes()
+    }
+
+    /// Length in bytes.
+    pub fn len(&self) -> usize {
+        usize::from(self.len)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Keep the first `len` bytes (callers cut only at character boundaries).
+    pub fn truncate(&mut self, len: usize) {
+        // A boundary: not a UTF-8 continuation byte.
+        let boundary = self.buf.get(len).is_some_and(|&b| (b as i8) >= -0x40);
+        if len < usize::from(self.len) && boundary {
+            self.len = len as u8;
+        }
+    }
+
+    /// The text's bytes (UTF-8), without re-checking them.
+    pub fn bytes(&self) -> &[u8] {
+        self.buf.get(..usize::from(self.len)).unwrap_or(&[])
     }
 
     /// Append `s` whole, or change nothing and return false if it does not fit.
     pub fn push_str(&mut self, s: &str) -> bool {
-        let at = usize::from(self.len);
-        let end = at + s.len();
-        match self.buf.get_mut(at..end) {
-            Some(dst) if end <= usize::from(u8::MAX) => {
-                dst.copy_from_slice(s.as_bytes());
-                self.len = end as u8;
-                true
-            }
-            _ => false,
-        }
+        append(&mut self.buf, &mut self.len, s.as_bytes())
     }
 
     /// Append `c`; false (and unchanged) if it does not fit.
@@ -66,22 +80,61 @@ impl<const N: usize> Text<N> {
         self.push_str(c.encode_utf8(&mut [0; 4]))
     }
 
+    /// Append the whole of `t`, or change nothing and return false if it does not fit.
+    pub fn push_text<const M: usize>(&mut self, t: &Text<M>) -> bool {
+        append(&mut self.buf, &mut self.len, t.bytes())
+    }
+
+    /// Append the ASCII byte `b` (anything else is refused, keeping the text UTF-8).
+    pub fn push_ascii(&mut self, b: u8) -> bool {
+        b.is_ascii() && append(&mut self.buf, &mut self.len, &[b])
+    }
+
+    /// Append [`super::fixed::format`]`(v, decimals)`; false if it does not fit.
+    pub fn push_fixed(&mut self, v: f32, decimals: u8) -> bool {
+        self.push_text(&super::fixed::format(v, decimals))
+    }
+
+    /// Append the unsigned integer `n` right-aligned in `width` characters.
+    pub fn push_uint(&mut self, n: u32, width: usize) -> bool {
+        let text = super::fixed::uint(n);
+        let mut ok = true;
+        for _ in text.len()..width {
+            ok &= self.push_str(" ");
+        }
+        ok && self.push_text(&text)
+    }
+
     /// Remove the last character; false if the text was empty.
     pub fn pop(&mut self) -> bool {
-        let s = self.as_str();
-        if s.is_empty() {
-            return false;
+        // Back to the last byte that starts a character (not a UTF-8 continuation).
+        match self.bytes().iter().rposition(|&b| (b as i8) >= -0x40) {
+            Some(end) => {
+                self.len = end as u8;
+                true
+            }
+            None => false,
         }
-        let mut end = s.len() - 1;
-        while !s.is_char_boundary(end) {
-            end -= 1;
-        }
-        self.len = end as u8;
-        true
     }
 
     pub fn clear(&mut self) {
         self.len = 0;
+    }
+}
+
+/// The work of [`Text::push_str`] for every capacity: append `s` whole to the first
+/// `len` bytes of `buf`, or change nothing.
+#[inline(never)]
+fn append(buf: &mut [u8], len: &mut u8, s: &[u8]) -> bool {
+    let at = usize::from(*len);
+    let end = at + s.len();
+    match buf.get_mut(at..end) {
+        Some(dst) if end <= usize::from(u8::MAX) => {
+            dst.copy_from_slice(s);
+            *len = end as u8;
+            true
+        }
+        _ => false,
     }
 }
 

@@ -72,6 +72,17 @@ impl FrameBuffer {
         }
     }
 
+    /// Fill the `w` x `h` rectangle at (x, y), clipped to the screen.
+    pub fn fill(&mut self, x: i32, y: i32, w: i32, h: i32, on: bool) {
+        let x1 = x.saturating_add(w).min(WIDTH as i32);
+        let y1 = y.saturating_add(h).min(HEIGHT as i32);
+        for yy in y.max(0)..y1 {
+            for xx in x.max(0)..x1 {
+                self.set(xx, yy, on);
+            }
+        }
+    }
+
     /// The 16 bytes of pixel row `y` (empty if out of range).
     pub fn row(&self, y: usize) -> &[u8] {
         self.buf
@@ -131,21 +142,9 @@ impl DrawTarget for FrameBuffer {
     }
 
     fn fill_solid(&mut self, area: &Rectangle, color: Self::Color) -> Result<(), Self::Error> {
-        // Clipped to the screen with plain integer bounds (no Rectangle intersection).
-        let end = |start: i32, len: u32, max: usize| {
-            start
-                .saturating_add(len.min(1 << 16) as i32)
-                .min(max as i32)
-        };
-        let (x0, y0) = (area.top_left.x.max(0), area.top_left.y.max(0));
-        let x1 = end(area.top_left.x, area.size.width, WIDTH);
-        let y1 = end(area.top_left.y, area.size.height, HEIGHT);
-        let on = color.is_on();
-        for y in y0..y1 {
-            for x in x0..x1 {
-                self.set(x, y, on);
-            }
-        }
+        let len = |l: u32| l.min(1 << 16) as i32;
+        let (p, s) = (area.top_left, area.size);
+        self.fill(p.x, p.y, len(s.width), len(s.height), color.is_on());
         Ok(())
     }
 }

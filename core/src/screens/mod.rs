@@ -1,5 +1,5 @@
-//! The LCD pages: what each [`Page`] of the HMI looks like on the 128x64 ST7920, drawn
-//! with embedded-graphics onto any `DrawTarget<Color = BinaryColor>`.
+//! The LCD pages: what each [`Page`] of the HMI looks like on the 128x64 ST7920, painted
+//! straight into the [`FrameBuffer`].
 //!
 //! [`Screens`] is retained-mode on purpose: when the page changes it clears and draws
 //! the static parts (frames, labels, the curve preview) once; on every later refresh it
@@ -9,7 +9,8 @@
 //! [`st7920`] for the SPI budget). The small state it keeps (page identity, the preview
 //! fit, the pen trace, the last arrow and ticks) is what the retained drawing needs.
 //!
-//! Fonts are chosen in [`fonts`]; shared pieces are in [`widgets`].
+//! Fonts are in [`fonts`]; shared pieces are in [`widgets`]. The frame buffer is the
+//! only drawing target (no generic `DrawTarget` code in the firmware).
 
 pub mod fonts;
 pub mod framebuffer;
@@ -17,116 +18,102 @@ pub mod plot;
 pub mod st7920;
 pub mod widgets;
 
-use embedded_graphics::pixelcolor::BinaryColor;
-use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::Rectangle;
-use heapless::String;
+use core::convert::Infallible;
 
-use crate::hmi::entry::FormKind;
-use crate::hmi::fixed::{push_fixed, push_uint};
+use crate::fmath;
 use crate::hmi::job::Job;
-use crate::hmi::{alarm_text, Hmi, Page, RunPhase, Status, MACHINE_MENU, MENU};
+use crate::hmi::text::Text;
+use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Status, MACHINE_MENU, MENU};
 use crate::motion::{X, Y};
-use plot::{Plot, Trace};
-use widgets::{arrow, bottom_line, progress, put, title_bar, Cell};
-
-const ON: BinaryColor = BinaryColor::On;
-const OFF: BinaryColor = BinaryColor::Off;
+use framebuffer::FrameBuffer;
+use plot::{Area, Plot, Trace};
+use widgets::{arrow, bottom_line, progress, put, title_bar, Cell, Px};
 
 /// Rows of a list or form page (below the title, above the bottom line).
-const ROW_Y: [i32; 4] = [11, 21, 31, 41];
+const ROWS: usize = 4;
 
-/// `ROW_Y[i]` by arithmetic (cheaper than iterating the array by value).
+/// The y of list / form row `i` (11, 21, 31, 41).
 const fn row_y(i: usize) -> i32 {
     11 + 10 * i as i32
 }
 /// The preview / trace box of the drawing page.
-const RUN_BOX: Rectangle = Rectangle::new(Point::new(2, 11), Size::new(72, 42));
+const RUN_BOX: Area = [2, 11, 72, 42];
 /// The preview box of the "ready to draw" page.
-const PREVIEW_BOX: Rectangle = Rectangle::new(Point::new(0, 11), Size::new(80, 43));
-/// The jog direction arrow.
-const ARROW_BOX: Rectangle = Rectangle::new(Point::new(4, 12), Size::new(40, 40));
+const PREVIEW_BOX: Area = [0, 11, 80, 43];
 
-/// Which page (and which instance of it) is on the screen.
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum PageKey {
-    Boot,
-    Menu,
-    Machine,
-    Jog,
-    Form(FormKind),
-    Preview(Job),
-    Run(u32),
-    Status,
-    Alarm(u8),
-    Error,
-}
+/// Which page (and which instance of it) is on the screen: a page number and what
+/// tells its instances apart (form kind, the previewed job's parameters as bits, run
+/// start time, alarm code). Compared as plain words, no float comparisons.
+type PageKey = [u32; 6];
 
 fn page_key(page: &Page) -> PageKey {
     match page {
-        Page::Boot => PageKey::Boot,
-        Page::Menu { .. } => PageKey::Menu,
-        Page::Machine { .. } => PageKey::Machine,
-        Page::Jog(_) => PageKey::Jog,
-        Page::Form(f) => PageKey::Form(f.kind),
-        Page::Preview { job, .. } => PageKey::Preview(*job),
-        Page::Run(r) => PageKey::Run(r.started_ms),
-        Page::Status => PageKey::Status,
-        Page::Alarm { code } => PageKey::Alarm(*code),
-        Page::Error { .. } => PageKey::Error,
+        Page::Boot => [0; 6],
+        Page::Menu { .. } => [1, 0, 0, 0, 0, 0],
+        Page::Machine { .. } => [2, 0, 0, 0, 0, 0],
+        Page::Jog(_) => [3, 0, 0, 0, 0, 0],
+        Page::Form(f) => [4, f.kind.index() as u32, 0, 0, 0, 0],
+        Page::Preview { job, .. } => {
+            let (kind, v) = job.words();
+            [5, kind, v[0], v[1], v[2], v[3]]
+        }
+        Page::Run(r) => [6, r.started_ms, 0, 0, 0, 0],
+        Page::Status => [7, 0, 0, 0, 0, 0],
+        Page::Alarm { code } => [8, u32::from(*code), 0, 0, 0, 0],
+        Page::Error { .. } => [9, 0, 0, 0, 0, 0],
     }
 }
 
-type Line = String<32>;
+/// One line of text being built.
+type Line = Text<32>;
 
-/// "+X-Y" for a direction; "--" for none.
-fn dir_text(dir: [i8; 2]) -> String<6> {
-    let mut s = String::new();
-    for &(v, axis) in [(dir[0], 'X'), (dir[1], 'Y')].iter() {
+/// Append "+X-Y" for a direction; "--" for none.
+fn push_dir(l: &mut Line, dir: [i8; 2]) {
+    let at = l.len();
+    for (v, axis) in [(dir[0], "X"), (dir[1], "Y")] {
         if v != 0 {
-            let _ = s.push(if v > 0 { '+' } else { '-' });
-            let _ = s.push(axis);
+            l.push_str(if v > 0 { "+" } else { "-" });
+            l.push_str(axis);
         }
     }
-    if s.is_empty() {
-        let _ = s.push_str("--");
+    if l.len() == at {
+        l.push_str("--");
     }
-    s
 }
 
 /// "12.3s" or "2m05s".
-fn time_text(ms: u32) -> String<10> {
-    let mut s = String::new();
+fn time_text(ms: u32) -> Line {
+    let mut s = Line::new();
     let tenths = ms / 100;
     if tenths < 600 {
-        push_uint(&mut s, tenths / 10, 0);
-        let _ = s.push('.');
-        push_uint(&mut s, tenths % 10, 0);
-        let _ = s.push('s');
+        s.push_uint(tenths / 10, 0);
+        s.push_str(".");
+        s.push_uint(tenths % 10, 0);
     } else {
         let secs = ms / 1000;
-        push_uint(&mut s, secs / 60, 0);
-        let _ = s.push('m');
-        if secs % 60 < 10 {
-            let _ = s.push('0');
-        }
-        push_uint(&mut s, secs % 60, 0);
-        let _ = s.push('s');
+        s.push_uint(secs / 60, 0);
+        s.push_str(if secs % 60 < 10 { "m0" } else { "m" });
+        s.push_uint(secs % 60, 0);
     }
+    s.push_str("s");
     s
 }
 
 /// "X" + value right-aligned, e.g. "X  -12.34".
-fn axis_text(axis: char, mm: f32) -> Line {
-    let mut v: Line = String::new();
-    push_fixed(&mut v, mm, 2);
-    let mut s: Line = String::new();
-    let _ = s.push(axis);
+fn axis_text(axis: &str, mm: f32) -> Line {
+    let v = crate::hmi::fixed::format(mm, 2);
+    let mut s = Line::new();
+    s.push_str(axis);
     for _ in v.len()..7 {
-        let _ = s.push(' ');
+        s.push_str(" ");
     }
-    let _ = s.push_str(&v);
+    s.push_text(&v);
     s
+}
+
+/// Put [`axis_text`] in cell `c`.
+fn put_axis(fb: &mut FrameBuffer, c: Cell, axis: &str, mm: f32) {
+    put(fb, c, axis_text(axis, mm).bytes());
 }
 
 /// The screens' retained state.
@@ -136,7 +123,7 @@ pub struct Screens {
     plot: Option<Plot>,
     trace: Trace,
     trace_run: Option<u32>,
-    ticks: Option<Point>,
+    ticks: Option<Px>,
     arrow: Option<([i8; 2], bool)>,
 }
 
@@ -155,27 +142,30 @@ impl Screens {
         &self.trace
     }
 
-    /// Draw the current page of `hmi` for machine status `st`.
-    pub fn render<D>(
+    /// Draw the current page of `hmi` for machine status `st` (never fails: the result
+    /// is kept for the callers written against a fallible drawing target).
+    pub fn render(
         &mut self,
         hmi: &Hmi,
         st: &Status,
         now_ms: u32,
-        d: &mut D,
-    ) -> Result<(), D::Error>
-    where
-        D: DrawTarget<Color = BinaryColor>,
-    {
+        fb: &mut FrameBuffer,
+    ) -> Result<(), Infallible> {
+        self.draw(hmi, st, now_ms, fb);
+        Ok(())
+    }
+
+    fn draw(&mut self, hmi: &Hmi, st: &Status, now_ms: u32, fb: &mut FrameBuffer) {
         let page = hmi.page();
         let key = page_key(page);
         let fresh = self.key != Some(key);
         if fresh {
-            d.clear(OFF)?;
+            fb.fill(0, 0, 128, 64, false);
             self.arrow = None;
             self.ticks = None;
             // A new run starts a new trace; a rebuilt page of the same run keeps it.
-            let run = match key {
-                PageKey::Run(t) => Some(t),
+            let run = match page {
+                Page::Run(r) => Some(r.started_ms),
                 _ => None,
             };
             if run.is_none() || run != self.trace_run {
@@ -184,199 +174,184 @@ impl Screens {
             }
             self.key = Some(key);
         }
-        match page {
+        let toast = hmi.toast();
+        let p = hmi.pos_mm(st);
+        let pen_down = hmi.pen_is_down(st);
+        let state = st.state.name().as_bytes();
+        let mut l = Line::new();
+        let hint: &[u8] = match page {
             Page::Boot => {
                 if fresh {
-                    boot(d)?;
+                    boot(fb);
                 }
-                Ok(())
+                return;
             }
             Page::Menu { sel } | Page::Machine { sel } => {
                 let main = matches!(page, Page::Menu { .. });
-                let item = |i: usize| {
-                    if main {
+                let (title, count): (&[u8], usize) = if main {
+                    (b"inkstep", MENU.len())
+                } else {
+                    (b"Machine", MACHINE_MENU.len())
+                };
+                title_bar(fb, title, state);
+                let top = sel.saturating_sub(ROWS - 1).min(count.saturating_sub(ROWS));
+                for row in 0..ROWS {
+                    let i = top + row;
+                    let item = if main {
                         MENU.get(i).map(|(k, m)| (*k, m.label()))
                     } else {
                         MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()))
+                    };
+                    l.clear();
+                    if let Some((hotkey, label)) = item {
+                        l.push_str(" ");
+                        l.push_uint(u32::from(hotkey), 0);
+                        l.push_str(" ");
+                        l.push_str(label);
                     }
-                };
-                let (title, count) = if main {
-                    ("inkstep", MENU.len())
-                } else {
-                    ("Machine", MACHINE_MENU.len())
-                };
-                list(d, title, st.state.name(), &item, count, *sel)?;
-                bottom_line(d, &position_hint(hmi, st), hmi.toast())
+                    put(
+                        fb,
+                        Cell::at(0, row_y(row), 20).inverse(i == *sel),
+                        l.bytes(),
+                    );
+                }
+                if count > ROWS {
+                    scroll_bar(fb, top, count);
+                }
+                // "X12.3 Y-4.5 pen up" for the menus' bottom line.
+                l.clear();
+                l.push_str("X");
+                l.push_fixed(p[X], 1);
+                l.push_str(" Y");
+                l.push_fixed(p[Y], 1);
+                l.push_str(if pen_down { " pen dn" } else { " pen up" });
+                l.bytes()
             }
             Page::Form(form) => {
-                let mut right: String<6> = String::new();
-                push_uint(&mut right, form.cur as u32 + 1, 0);
-                let _ = right.push('/');
-                push_uint(&mut right, form.fields().len() as u32, 0);
-                title_bar(d, form.kind.title(), &right)?;
-                for (i, f) in form.fields().iter().take(ROW_Y.len()).enumerate() {
+                let fields = form.fields();
+                l.push_uint(form.cur as u32 + 1, 0);
+                l.push_str("/");
+                l.push_uint(fields.len() as u32, 0);
+                title_bar(fb, form.kind.title().as_bytes(), l.bytes());
+                for (i, f) in fields.iter().take(ROWS).enumerate() {
                     let (y, current) = (row_y(i), i == form.cur);
-                    put(d, Cell::at(0, y, 6), f.label)?;
-                    let mut v: String<14> = String::new();
-                    let _ = v.push_str(&f.display());
-                    let _ = v.push(if current && f.editing() { '_' } else { ' ' });
-                    put(d, Cell::at(36, y, 9).inverse(current).right(), &v)?;
-                    put(d, Cell::at(93, y + 1, 7).small(), f.unit)?;
+                    put(fb, Cell::at(0, y, 6), f.label.as_bytes());
+                    l.clear();
+                    l.push_text(&f.display());
+                    l.push_str(if current && f.editing() { "_" } else { " " });
+                    put(fb, Cell::at(36, y, 9).inverse(current).right(), l.bytes());
+                    put(fb, Cell::at(93, y + 1, 7).small(), f.unit.as_bytes());
                 }
-                if fresh && form.fields().len() < ROW_Y.len() {
-                    put(d, Cell::at(0, 44, 25).small(), form.kind.note())?;
+                if fresh && fields.len() < ROWS {
+                    put(fb, Cell::at(0, 44, 25).small(), form.kind.note().as_bytes());
                 }
-                bottom_line(d, "D:ok C:del/esc A/B:field", hmi.toast())
+                b"D:ok C:del/esc A/B:field"
             }
             Page::Preview { job, .. } => {
                 if fresh {
-                    self.preview_page(hmi, job, d)?;
+                    preview_page(hmi, job, fb);
                 }
-                bottom_line(d, "D:draw      C:back", hmi.toast())
+                b"D:draw      C:back"
             }
-            Page::Run(run) => self.run_page(hmi, st, now_ms, run, fresh, d),
+            Page::Run(run) => {
+                self.run_page(hmi, st, now_ms, run, fresh, fb);
+                return;
+            }
             Page::Jog(jog) => {
-                title_bar(d, "Jog", st.state.name())?;
+                title_bar(fb, b"Jog", state);
                 let shown = (
                     jog.active.map_or(jog.last_dir, |(_, dir)| dir),
                     jog.active.is_some(),
                 );
                 if self.arrow != Some(shown) {
-                    d.fill_solid(&ARROW_BOX, OFF)?;
-                    arrow(d, ARROW_BOX, shown.0, shown.1)?;
+                    fb.fill(4, 12, 40, 40, false);
+                    arrow(fb, 4, 12, 40, shown.0, shown.1);
                     self.arrow = Some(shown);
                 }
-                let p = hmi.pos_mm(st);
-                put(d, Cell::at(52, 12, 12), &axis_text('X', p[X]))?;
-                put(d, Cell::at(52, 22, 12), &axis_text('Y', p[Y]))?;
-                let mut f: Line = String::new();
-                let _ = f.push_str("F ");
-                push_uint(&mut f, hmi.jog_speed() as u32, 4);
-                let _ = f.push_str(" mm/m");
-                put(d, Cell::at(52, 32, 12), &f)?;
-                let pen = if hmi.pen_is_down(st) {
-                    "Pen down"
-                } else {
-                    "Pen up"
-                };
-                put(d, Cell::at(52, 42, 12), pen)?;
-                bottom_line(d, "hold 1-9:move A/B:F 5:pen", hmi.toast())
+                put_axis(fb, Cell::at(52, 12, 12), "X", p[X]);
+                put_axis(fb, Cell::at(52, 22, 12), "Y", p[Y]);
+                l.push_str("F ");
+                l.push_uint(hmi.jog_speed() as u32, 4);
+                l.push_str(" mm/m");
+                put(fb, Cell::at(52, 32, 12), l.bytes());
+                let pen: &[u8] = if pen_down { b"Pen down" } else { b"Pen up" };
+                put(fb, Cell::at(52, 42, 12), pen);
+                b"hold 1-9:move A/B:F 5:pen"
             }
             Page::Status => {
-                title_bar(d, "Status / setup", st.state.name())?;
-                let p = hmi.pos_mm(st);
-                let cfg = hmi.config();
-                let mut l: Line = String::new();
-                let _ = l.push_str("X ");
-                push_fixed(&mut l, p[X], 2);
-                let _ = l.push_str("  Y ");
-                push_fixed(&mut l, p[Y], 2);
-                put(d, Cell::at(0, ROW_Y[0], 21), &l)?;
+                title_bar(fb, b"Status / setup", state);
+                l.push_str("X ");
+                l.push_fixed(p[X], 2);
+                l.push_str("  Y ");
+                l.push_fixed(p[Y], 2);
+                put(fb, Cell::at(0, row_y(0), 21), l.bytes());
                 l.clear();
-                let _ = l.push_str("Z ");
-                push_fixed(&mut l, p[2], 2);
-                let _ = l.push_str(if hmi.pen_is_down(st) {
-                    "  pen down"
-                } else {
-                    "  pen up"
-                });
-                put(d, Cell::at(0, ROW_Y[1], 21), &l)?;
+                l.push_str("Z ");
+                l.push_fixed(p[2], 2);
+                l.push_str(if pen_down { "  pen down" } else { "  pen up" });
+                put(fb, Cell::at(0, row_y(1), 21), l.bytes());
                 l.clear();
-                let _ = l.push_str("step/mm");
-                for s in cfg.steps_per_mm {
-                    let _ = l.push(' ');
-                    push_fixed(&mut l, s, 0);
+                l.push_str("step/mm");
+                for s in hmi.config().steps_per_mm {
+                    l.push_str(" ");
+                    l.push_fixed(s, 0);
                 }
-                put(d, Cell::at(0, ROW_Y[2], 21), &l)?;
+                put(fb, Cell::at(0, row_y(2), 21), l.bytes());
                 l.clear();
-                let _ = l.push_str("Draw F ");
-                push_uint(&mut l, hmi.draw_feed() as u32, 4);
-                let _ = l.push_str(" mm/min");
-                put(d, Cell::at(0, ROW_Y[3], 21).inverse(true), &l)?;
-                let mut h: Line = String::new();
-                let _ = h.push_str("A/B:draw F  jog F ");
-                push_uint(&mut h, hmi.jog_speed() as u32, 0);
-                bottom_line(d, &h, hmi.toast())
+                l.push_str("Draw F ");
+                l.push_uint(hmi.draw_feed() as u32, 4);
+                l.push_str(" mm/min");
+                put(fb, Cell::at(0, row_y(3), 21).inverse(true), l.bytes());
+                l.clear();
+                l.push_str("A/B:draw F  jog F ");
+                l.push_uint(hmi.jog_speed() as u32, 0);
+                l.bytes()
             }
             Page::Alarm { code } => {
-                let mut right: String<6> = String::new();
-                let _ = right.push('#');
-                push_uint(&mut right, u32::from(*code), 0);
-                title_bar(d, "!! ALARM", &right)?;
+                l.push_str("#");
+                l.push_uint(u32::from(*code), 0);
+                title_bar(fb, b"!! ALARM", l.bytes());
                 if fresh {
                     let text = alarm_text(*code);
                     let n = text.len().min(19);
                     let x = (128 - 6 * n as i32 - 12) / 2;
-                    let banner =
-                        Rectangle::new(Point::new(x, 17), Size::new(6 * n as u32 + 12, 16));
-                    d.fill_solid(&banner, ON)?;
-                    put(d, Cell::at(x + 6, 20, n).inverse(true), text)?;
+                    fb.fill(x, 17, 6 * n as i32 + 12, 16, true);
+                    put(fb, Cell::at(x + 6, 20, n).inverse(true), text.as_bytes());
                 }
-                let p = hmi.pos_mm(st);
-                let mut l: Line = String::new();
-                let _ = l.push_str("at X");
-                push_fixed(&mut l, p[X], 2);
-                let _ = l.push_str(" Y");
-                push_fixed(&mut l, p[Y], 2);
-                put(d, Cell::at(0, 41, 21), &l)?;
-                bottom_line(d, "D:unlock      C:menu", hmi.toast())
+                l.clear();
+                l.push_str("at X");
+                l.push_fixed(p[X], 2);
+                l.push_str(" Y");
+                l.push_fixed(p[Y], 2);
+                put(fb, Cell::at(0, 41, 21), l.bytes());
+                b"D:unlock      C:menu"
             }
             Page::Error { title, text } => {
-                title_bar(d, title, "!")?;
+                title_bar(fb, title.as_bytes(), b"!");
                 if fresh {
-                    put(d, Cell::at(0, 21, 21), text)?;
+                    put(fb, Cell::at(0, 21, 21), text.bytes());
                 }
-                bottom_line(d, "any key: back to menu", None)
+                bottom_line(fb, b"any key: back to menu", None);
+                return;
             }
-        }
+        };
+        bottom_line(fb, hint, toast);
     }
 
-    fn preview_page<D>(&mut self, hmi: &Hmi, job: &Job, d: &mut D) -> Result<(), D::Error>
-    where
-        D: DrawTarget<Color = BinaryColor>,
-    {
-        let mut t: Line = String::new();
-        let _ = t.push_str(job.name());
-        let _ = t.push_str(": preview");
-        title_bar(d, &t, "")?;
-        widgets::frame(d, PREVIEW_BOX, ON)?;
-        let plot = Plot::fit(job, PREVIEW_BOX);
-        plot.draw_preview(job, d)?;
-        // The start point: a small filled square.
-        let s = plot.to_px([0.0, 0.0]);
-        d.fill_solid(&Rectangle::new(s - Point::new(1, 1), Size::new(3, 3)), ON)?;
-        let (lo, hi, len) = job.sweep();
-        let feed = hmi.draw_feed().max(1.0);
-        let rows: [(&str, f32, u8, &str); 4] = [
-            ("W ", hi[0] - lo[0], 1, ""),
-            ("H ", hi[1] - lo[1], 1, ""),
-            ("L ", len, 1, ""),
-            ("t ", len / feed * 60.0, 0, "s"),
-        ];
-        for (i, (name, v, dec, unit)) in rows.iter().enumerate() {
-            let y = row_y(i);
-            let mut l: String<12> = String::new();
-            let _ = l.push_str(name);
-            push_fixed(&mut l, *v, *dec);
-            let _ = l.push_str(unit);
-            put(d, Cell::at(83, y, 7), &l)?;
-        }
-        Ok(())
-    }
-
-    fn run_page<D>(
+    fn run_page(
         &mut self,
         hmi: &Hmi,
         st: &Status,
         now_ms: u32,
         run: &crate::hmi::RunPage,
         fresh: bool,
-        d: &mut D,
-    ) -> Result<(), D::Error>
-    where
-        D: DrawTarget<Color = BinaryColor>,
-    {
-        title_bar(d, run.job.name(), &time_text(run.elapsed_ms(now_ms)))?;
+        fb: &mut FrameBuffer,
+    ) {
+        title_bar(
+            fb,
+            run.job.name().as_bytes(),
+            time_text(run.elapsed_ms(now_ms)).bytes(),
+        );
         let plot = match (fresh, self.plot) {
             (false, Some(p)) => p,
             _ => {
@@ -386,9 +361,10 @@ impl Screens {
             }
         };
         if fresh {
-            widgets::frame(d, RUN_BOX, ON)?;
-            plot.draw_preview(&run.job, d)?;
-            self.trace.draw(d)?;
+            let [x, y, w, h] = RUN_BOX;
+            widgets::frame(fb, x, y, w, h, true);
+            plot.draw_preview(&run.job, fb);
+            self.trace.draw(fb);
         }
         // The pen: extend the trace while the pen is down, move the edge ticks.
         let spmm = hmi.config().steps_per_mm;
@@ -399,149 +375,109 @@ impl Screens {
         let px = plot.to_px(rel);
         if run.job.draws() && hmi.pen_is_down(st) {
             if let Some((a, b)) = self.trace.push(px) {
-                widgets::line(d, a, b)?;
+                widgets::line(fb, a, b);
             }
         }
         if self.ticks != Some(px) {
-            let bottom = RUN_BOX.top_left.y + RUN_BOX.size.height as i32;
+            let bottom = RUN_BOX[1] + RUN_BOX[3];
             if let Some(old) = self.ticks {
-                d.fill_solid(
-                    &Rectangle::new(Point::new(old.x - 1, bottom), Size::new(3, 2)),
-                    OFF,
-                )?;
-                d.fill_solid(
-                    &Rectangle::new(Point::new(0, old.y - 1), Size::new(2, 3)),
-                    OFF,
-                )?;
+                fb.fill(old.0 - 1, bottom, 3, 2, false);
+                fb.fill(0, old.1 - 1, 2, 3, false);
             }
-            d.fill_solid(
-                &Rectangle::new(Point::new(px.x - 1, bottom), Size::new(3, 2)),
-                ON,
-            )?;
-            d.fill_solid(
-                &Rectangle::new(Point::new(0, px.y - 1), Size::new(2, 3)),
-                ON,
-            )?;
+            fb.fill(px.0 - 1, bottom, 3, 2, true);
+            fb.fill(0, px.1 - 1, 2, 3, true);
             self.ticks = Some(px);
         }
         // Live values.
         let p = hmi.pos_mm(st);
-        put(d, Cell::at(76, 11, 8), &axis_text('X', p[X]))?;
-        put(d, Cell::at(76, 21, 8), &axis_text('Y', p[Y]))?;
-        let mut l: Line = String::new();
-        let _ = l.push_str("F ");
-        push_uint(&mut l, st.feed_mm_min.max(0.0) as u32, 4);
-        let _ = l.push_str("mm/m");
-        put(d, Cell::at(76, 31, 10).small(), &l)?;
+        put_axis(fb, Cell::at(76, 11, 8), "X", p[X]);
+        put_axis(fb, Cell::at(76, 21, 8), "Y", p[Y]);
+        let mut l = Line::new();
+        l.push_str("F ");
+        l.push_uint(st.feed_mm_min.max(0.0) as u32, 4);
+        l.push_str("mm/m");
+        put(fb, Cell::at(76, 31, 10).small(), l.bytes());
         // Teaching view: the feed direction now and the ones before it.
         l.clear();
-        let _ = l.push_str("feed ");
-        let _ = l.push_str(&dir_text(st.dir));
-        put(d, Cell::at(76, 39, 10).small(), &l)?;
+        l.push_str("feed ");
+        push_dir(&mut l, st.dir);
+        put(fb, Cell::at(76, 39, 10).small(), l.bytes());
         l.clear();
         let previous = hmi.feed_dirs().rev().skip(usize::from(st.dir != [0, 0]));
-        let _ = l.push_str("was");
+        l.push_str("was");
         for dir in previous {
-            let t = dir_text(*dir);
-            if l.len() + 1 + t.len() > 10 {
+            let at = l.len();
+            l.push_str(" ");
+            push_dir(&mut l, *dir);
+            if l.len() > 10 {
+                l.truncate(at);
                 break;
             }
-            let _ = l.push(' ');
-            let _ = l.push_str(&t);
         }
-        put(d, Cell::at(76, 47, 10).small(), &l)?;
+        put(fb, Cell::at(76, 47, 10).small(), l.bytes());
         // Progress and state.
-        progress(
-            d,
-            Rectangle::new(Point::new(0, 56), Size::new(62, 8)),
-            run.progress(),
-        )?;
+        let frac = run.progress();
+        progress(fb, 0, 56, 62, 8, frac);
         l.clear();
         let state = match run.phase {
-            RunPhase::Running if st.state == crate::hmi::MachineState::Hold => "HOLD",
+            RunPhase::Running if st.state == MachineState::Hold => "HOLD",
             RunPhase::Running => "RUN",
             RunPhase::Stopping => "STOP",
             RunPhase::Done { complete: true, .. } => "DONE",
             RunPhase::Done { .. } => "SHORT",
         };
-        push_uint(&mut l, libm::roundf(run.progress() * 100.0) as u32, 3);
-        let _ = l.push_str("% ");
-        let _ = l.push_str(state);
-        put(d, Cell::at(65, 56, 12).small(), &l)
+        l.push_uint(fmath::round(frac * 100.0) as u32, 3);
+        l.push_str("% ");
+        l.push_str(state);
+        put(fb, Cell::at(65, 56, 12).small(), l.bytes());
     }
 }
 
-/// "X12.3 Y-4.5 pen up" for the menus' bottom line.
-fn position_hint(hmi: &Hmi, st: &Status) -> Line {
-    let p = hmi.pos_mm(st);
-    let mut l: Line = String::new();
-    let _ = l.push('X');
-    push_fixed(&mut l, p[X], 1);
-    let _ = l.push_str(" Y");
-    push_fixed(&mut l, p[Y], 1);
-    let _ = l.push_str(if hmi.pen_is_down(st) {
-        " pen dn"
-    } else {
-        " pen up"
-    });
-    l
+fn preview_page(hmi: &Hmi, job: &Job, fb: &mut FrameBuffer) {
+    let mut t = Line::new();
+    t.push_str(job.name());
+    t.push_str(": preview");
+    title_bar(fb, t.bytes(), b"");
+    let [x, y, w, h] = PREVIEW_BOX;
+    widgets::frame(fb, x, y, w, h, true);
+    let plot = Plot::fit(job, PREVIEW_BOX);
+    plot.draw_preview(job, fb);
+    // The start point: a small filled square.
+    let s = plot.to_px([0.0, 0.0]);
+    fb.fill(s.0 - 1, s.1 - 1, 3, 3, true);
+    let (lo, hi, len) = job.sweep();
+    let feed = hmi.draw_feed().max(1.0);
+    let rows: [(&str, f32, u8); 4] = [
+        ("W ", hi[0] - lo[0], 1),
+        ("H ", hi[1] - lo[1], 1),
+        ("L ", len, 1),
+        ("t ", len / feed * 60.0, 0),
+    ];
+    for (i, &(name, v, dec)) in rows.iter().enumerate() {
+        let mut l = Line::new();
+        l.push_str(name);
+        l.push_fixed(v, dec);
+        if dec == 0 {
+            l.push_str("s");
+        }
+        put(fb, Cell::at(83, row_y(i), 7), l.bytes());
+    }
 }
 
-/// A scrolling list of (hotkey, label) with the selected row inverted.
-fn list<D>(
-    d: &mut D,
-    title: &str,
-    right: &str,
-    item: &dyn Fn(usize) -> Option<(u8, &'static str)>,
-    count: usize,
-    sel: usize,
-) -> Result<(), D::Error>
-where
-    D: DrawTarget<Color = BinaryColor>,
-{
-    title_bar(d, title, right)?;
-    let rows = ROW_Y.len();
-    let top = sel.saturating_sub(rows - 1).min(count.saturating_sub(rows));
-    for row in 0..rows {
-        let y = row_y(row);
-        let i = top + row;
-        let mut l: Line = String::new();
-        if let Some((hotkey, label)) = item(i) {
-            let _ = l.push(' ');
-            push_uint(&mut l, u32::from(hotkey), 0);
-            let _ = l.push(' ');
-            let _ = l.push_str(label);
-        }
-        put(d, Cell::at(0, y, 20).inverse(i == sel), &l)?;
+/// The list's scroll bar in x 123..=125, rows 11..=50, painted pixel-exact.
+fn scroll_bar(fb: &mut FrameBuffer, top: usize, count: usize) {
+    let track = 40i32;
+    let len = (track * ROWS as i32 / count as i32).max(4);
+    let pos = (track - len) * top as i32 / (count - ROWS) as i32;
+    let x = 123;
+    let rest = (track - pos - len).max(0);
+    // Outside the thumb: a 1-pixel track line in the middle column.
+    for (y0, h) in [(11, pos), (11 + pos + len, rest)] {
+        fb.fill(x, y0, 1, h, false);
+        fb.fill(x + 1, y0, 1, h, true);
+        fb.fill(x + 2, y0, 1, h, false);
     }
-    // Scroll bar in x 123..=125, rows 11..=50, painted pixel-exact.
-    if count > rows {
-        let track = 40i32;
-        let len = (track * rows as i32 / count as i32).max(4);
-        let pos = (track - len) * top as i32 / (count - rows) as i32;
-        let x = 123;
-        let rest = (track - pos - len).max(0);
-        // Outside the thumb: a 1-pixel track line in the middle column.
-        for &(y0, h) in [(11, pos), (11 + pos + len, rest)].iter() {
-            d.fill_solid(
-                &Rectangle::new(Point::new(x, y0), Size::new(1, h as u32)),
-                OFF,
-            )?;
-            d.fill_solid(
-                &Rectangle::new(Point::new(x + 1, y0), Size::new(1, h as u32)),
-                ON,
-            )?;
-            d.fill_solid(
-                &Rectangle::new(Point::new(x + 2, y0), Size::new(1, h as u32)),
-                OFF,
-            )?;
-        }
-        d.fill_solid(
-            &Rectangle::new(Point::new(x, 11 + pos), Size::new(3, len as u32)),
-            ON,
-        )?;
-    }
-    Ok(())
+    fb.fill(x, 11 + pos, 3, len, true);
 }
 
 /// The boot screen's sine period: row of x = 16 + 2i, i.e. round(32 - 7 sin(2 pi i / 48))
@@ -552,22 +488,18 @@ const BOOT_WAVE: [u8; 49] = [
     32,
 ];
 
-fn boot<D>(d: &mut D) -> Result<(), D::Error>
-where
-    D: DrawTarget<Color = BinaryColor>,
-{
+fn boot(fb: &mut FrameBuffer) {
     // The name in an inverted banner, one period of the report's signature curve under it.
-    d.fill_solid(&Rectangle::new(Point::new(34, 4), Size::new(60, 16)), ON)?;
-    put(d, Cell::at(43, 7, 7).inverse(true), "inkstep")?;
-    let mut prev: Option<Point> = None;
+    fb.fill(34, 4, 60, 16, true);
+    put(fb, Cell::at(43, 7, 7).inverse(true), b"inkstep");
+    let mut prev: Option<Px> = None;
     for (i, &y) in BOOT_WAVE.iter().enumerate() {
-        let x = 16 + 2 * i as i32;
-        let p = Point::new(x, i32::from(y));
-        widgets::line(d, prev.unwrap_or(p), p)?;
+        let p = (16 + 2 * i as i32, i32::from(y));
+        widgets::line(fb, prev.unwrap_or(p), p);
         prev = Some(p);
     }
-    put(d, Cell::at(31, 42, 11), "pen plotter")?;
-    put(d, Cell::at(9, 55, 22).small(), "STM32F103 + ST7920 LCD")
+    put(fb, Cell::at(31, 42, 11), b"pen plotter");
+    put(fb, Cell::at(9, 55, 22).small(), b"STM32F103 + ST7920 LCD");
 }
 
 #[cfg(test)]
@@ -606,19 +538,24 @@ mod tests {
 
     #[test]
     fn row_y_is_the_row_table() {
-        for (i, y) in ROW_Y.iter().enumerate() {
+        for (i, y) in [11, 21, 31, 41].iter().enumerate() {
             assert_eq!(row_y(i), *y);
         }
     }
 
     #[test]
     fn text_helpers() {
+        let dir_text = |d| {
+            let mut l = Line::new();
+            push_dir(&mut l, d);
+            l
+        };
         assert_eq!(dir_text([1, -1]).as_str(), "+X-Y");
         assert_eq!(dir_text([0, 1]).as_str(), "+Y");
         assert_eq!(dir_text([0, 0]).as_str(), "--");
         assert_eq!(time_text(12_345).as_str(), "12.3s");
         assert_eq!(time_text(125_000).as_str(), "2m05s");
-        assert_eq!(axis_text('X', -12.345).as_str(), "X -12.35");
+        assert_eq!(axis_text("X", -12.345).as_str(), "X -12.35");
     }
 
     /// While drawing, a refresh sends only the changed cells and the new trace: far

@@ -7,18 +7,18 @@
 //! The trace lives in a fixed array (no allocation); when it fills up every other point
 //! is dropped, which keeps the shape at the preview's resolution.
 
-use embedded_graphics::pixelcolor::BinaryColor;
-use embedded_graphics::prelude::*;
-use embedded_graphics::primitives::Rectangle;
-use heapless::Vec;
-
-use super::widgets::line;
+use super::framebuffer::FrameBuffer;
+use super::widgets::{line, Px};
+use crate::fmath;
 use crate::hmi::job::Job;
+
+/// A screen box: x, y, width, height in pixels.
+pub type Area = [i32; 4];
 
 /// Maps job millimetres (relative to the job start) to screen pixels.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plot {
-    area: Rectangle,
+    area: Area,
     scale: f32,
     /// Pixel position of the job start (fractional).
     origin: [f32; 2],
@@ -26,21 +26,30 @@ pub struct Plot {
 
 impl Plot {
     /// Fit `job` inside `area` with a 2-pixel margin.
-    pub fn fit(job: &Job, area: Rectangle) -> Self {
+    pub fn fit(job: &Job, area: Area) -> Self {
+        let [x, y, w, h] = area;
         let (lo, hi) = job.bounds();
-        let inner_w = area.size.width.saturating_sub(5) as f32;
-        let inner_h = area.size.height.saturating_sub(5) as f32;
-        let w = hi[0] - lo[0];
-        let h = hi[1] - lo[1];
-        let sx = if w > 1e-3 { inner_w / w } else { f32::INFINITY };
-        let sy = if h > 1e-3 { inner_h / h } else { f32::INFINITY };
+        let inner_w = (w - 5) as f32;
+        let inner_h = (h - 5) as f32;
+        let bw = hi[0] - lo[0];
+        let bh = hi[1] - lo[1];
+        let sx = if bw > 1e-3 {
+            inner_w / bw
+        } else {
+            f32::INFINITY
+        };
+        let sy = if bh > 1e-3 {
+            inner_h / bh
+        } else {
+            f32::INFINITY
+        };
         let mut scale = sx.min(sy);
         if !scale.is_finite() {
             scale = 1.0;
         }
         // Centre the drawing in the area.
-        let cx = area.top_left.x as f32 + area.size.width as f32 / 2.0;
-        let cy = area.top_left.y as f32 + area.size.height as f32 / 2.0;
+        let cx = x as f32 + w as f32 / 2.0;
+        let cy = y as f32 + h as f32 / 2.0;
         let mid = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         Plot {
             area,
@@ -55,11 +64,10 @@ impl Plot {
     }
 
     /// Screen pixel of a point in mm (relative to the job start), clamped to the area.
-    pub fn to_px(&self, mm: [f32; 2]) -> Point {
-        let x = libm::roundf(self.origin[0] + mm[0] * self.scale);
-        let y = libm::roundf(self.origin[1] - mm[1] * self.scale);
-        let br = self.area.top_left + self.area.size - Point::new(2, 2);
-        let tl = self.area.top_left + Point::new(1, 1);
+    pub fn to_px(&self, mm: [f32; 2]) -> Px {
+        let [x, y, w, h] = self.area;
+        let px = fmath::round(self.origin[0] + mm[0] * self.scale);
+        let py = fmath::round(self.origin[1] - mm[1] * self.scale);
         // max/min rather than clamp: no "min > max" assertion to carry.
         let clamp = |v: f32, lo: i32, hi: i32| {
             if v.is_finite() {
@@ -68,92 +76,104 @@ impl Plot {
                 lo
             }
         };
-        Point::new(clamp(x, tl.x, br.x), clamp(y, tl.y, br.y))
+        (clamp(px, x + 1, x + w - 2), clamp(py, y + 1, y + h - 2))
     }
 
     /// Draw the ideal path dotted (a pixel every ~2.5 px of path).
-    pub fn draw_preview<D>(&self, job: &Job, d: &mut D) -> Result<(), D::Error>
-    where
-        D: DrawTarget<Color = BinaryColor>,
-    {
+    pub fn draw_preview(&self, job: &Job, fb: &mut FrameBuffer) {
         let len_px = job.length_mm() * self.scale;
-        let n = libm::roundf(len_px / 2.5).clamp(8.0, 400.0) as u32;
+        let n = fmath::round(len_px / 2.5).clamp(8.0, 400.0) as u32;
         for i in 0..n + 1 {
             let p = self.to_px(job.point_at(i as f32 / n as f32));
-            Pixel(p, BinaryColor::On).draw(d)?;
+            fb.set(p.0, p.1, true);
         }
-        Ok(())
     }
 }
 
 /// Trace points kept for a full redraw.
 pub const TRACE_POINTS: usize = 128;
 
-/// The pen trace in screen pixels.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// The pen trace in screen pixels: the first `len` of `pts`.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Trace {
-    pts: Vec<(u8, u8), TRACE_POINTS>,
+    pts: [(u8, u8); TRACE_POINTS],
+    len: usize,
+}
+
+impl Default for Trace {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl Trace {
-    pub fn new() -> Self {
-        Trace { pts: Vec::new() }
+    pub const fn new() -> Self {
+        Trace {
+            pts: [(0, 0); TRACE_POINTS],
+            len: 0,
+        }
     }
 
     pub fn clear(&mut self) {
-        self.pts.clear();
+        self.len = 0;
     }
 
     pub fn len(&self) -> usize {
-        self.pts.len()
+        self.len
     }
 
     pub fn is_empty(&self) -> bool {
-        self.pts.is_empty()
+        self.len == 0
     }
 
-    fn last(&self) -> Option<Point> {
-        self.pts
-            .last()
-            .map(|&(x, y)| Point::new(x as i32, y as i32))
+    fn points(&self) -> &[(u8, u8)] {
+        self.pts.get(..self.len).unwrap_or(&[])
+    }
+
+    fn last(&self) -> Option<Px> {
+        self.points().last().map(|&(x, y)| (x as i32, y as i32))
     }
 
     /// Add the pen's pixel; returns the segment to draw (from the previous point), or
     /// None if the pixel did not change.
-    pub fn push(&mut self, p: Point) -> Option<(Point, Point)> {
-        let (x, y) = (p.x.clamp(0, 255) as u8, p.y.clamp(0, 255) as u8);
+    pub fn push(&mut self, p: Px) -> Option<(Px, Px)> {
+        let (x, y) = (p.0.clamp(0, 255) as u8, p.1.clamp(0, 255) as u8);
+        let here = (x as i32, y as i32);
         let prev = self.last();
-        if prev == Some(Point::new(x as i32, y as i32)) {
+        if prev == Some(here) {
             return None;
         }
-        if self.pts.is_full() {
-            // Keep every other point, and always the newest.
-            let mut kept: Vec<(u8, u8), TRACE_POINTS> = Vec::new();
-            let n = self.pts.len();
-            for (i, q) in self.pts.iter().enumerate() {
+        if self.len >= TRACE_POINTS {
+            // Keep every other point, and always the newest (in place).
+            let n = self.len;
+            let mut kept = 0;
+            for i in 0..n {
                 if i % 2 == 0 || i + 1 == n {
-                    let _ = kept.push(*q);
+                    if let Some(&q) = self.pts.get(i) {
+                        if let Some(slot) = self.pts.get_mut(kept) {
+                            *slot = q;
+                        }
+                    }
+                    kept += 1;
                 }
             }
-            self.pts = kept;
+            self.len = kept;
         }
-        let _ = self.pts.push((x, y));
-        let here = Point::new(x as i32, y as i32);
+        if let Some(slot) = self.pts.get_mut(self.len) {
+            *slot = (x, y);
+            self.len += 1;
+        }
         Some((prev.unwrap_or(here), here))
     }
 
     /// Draw the whole trace as connected lines.
-    pub fn draw<D>(&self, d: &mut D) -> Result<(), D::Error>
-    where
-        D: DrawTarget<Color = BinaryColor>,
-    {
-        let mut prev: Option<Point> = None;
-        for &(x, y) in &self.pts {
-            let p = Point::new(x as i32, y as i32);
-            line(d, prev.unwrap_or(p), p)?;
+    pub fn draw(&self, fb: &mut FrameBuffer) {
+        let mut prev: Option<Px> = None;
+        for &(x, y) in self.points() {
+            let p = (x as i32, y as i32);
+            line(fb, prev.unwrap_or(p), p);
             prev = Some(p);
         }
-        Ok(())
     }
 }
 
@@ -161,9 +181,13 @@ impl Trace {
 mod tests {
     use super::*;
 
+    fn pt(x: i32, y: i32) -> Px {
+        (x, y)
+    }
+
     #[test]
     fn plot_fits_the_job_inside_the_area_with_y_up() {
-        let area = Rectangle::new(Point::new(2, 11), Size::new(72, 42));
+        let area = [2, 11, 72, 42];
         let job = Job::Sine {
             amp: 10.0,
             omega: 0.2,
@@ -173,27 +197,24 @@ mod tests {
         let plot = Plot::fit(&job, area);
         let start = plot.to_px([0.0, 0.0]);
         let end = plot.to_px(job.point_at(1.0));
-        assert!(end.x > start.x + 50, "{start:?} {end:?}");
+        assert!(end.0 > start.0 + 50, "{start:?} {end:?}");
         let peak = plot.to_px(job.point_at(0.13)); // near the first maximum
-        assert!(peak.y < start.y, "Y up means smaller pixel rows");
+        assert!(peak.1 < start.1, "Y up means smaller pixel rows");
         for i in 0..=50 {
             let p = plot.to_px(job.point_at(i as f32 / 50.0));
-            assert!(area.contains(p));
+            assert!((2..74).contains(&p.0) && (11..53).contains(&p.1));
         }
     }
 
     #[test]
     fn trace_decimates_instead_of_overflowing() {
         let mut t = Trace::new();
-        assert_eq!(
-            t.push(Point::new(5, 5)),
-            Some((Point::new(5, 5), Point::new(5, 5)))
-        );
-        assert_eq!(t.push(Point::new(5, 5)), None);
+        assert_eq!(t.push(pt(5, 5)), Some((pt(5, 5), pt(5, 5))));
+        assert_eq!(t.push(pt(5, 5)), None);
         for i in 0..400 {
-            t.push(Point::new(6 + i % 60, 5 + i / 60));
+            t.push(pt(6 + i % 60, 5 + i / 60));
         }
         assert!(t.len() <= TRACE_POINTS);
-        assert_eq!(t.last(), Some(Point::new(6 + 399 % 60, 5 + 399 / 60)));
+        assert_eq!(t.last(), Some(pt(6 + 399 % 60, 5 + 399 / 60)));
     }
 }
