@@ -11,8 +11,8 @@
 //! extracted from [`TABLE`] at compile time); the descriptions stay on the host side
 //! (docs/grbl.md is generated from them), as Grbl 1.1 prints `$n=value` only.
 
+use crate::fmath;
 use crate::motion::AXES;
-use core::fmt;
 
 /// What a setting holds; decides range checks and how `$$` prints it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -431,7 +431,7 @@ impl Settings {
         }
         let v = match kind {
             Kind::Float => value,
-            Kind::Int | Kind::Mask => libm::truncf(value),
+            Kind::Int | Kind::Mask => fmath::trunc(value),
             Kind::Bool => {
                 if value != 0.0 {
                     1.0
@@ -622,13 +622,19 @@ impl Settings {
     }
 
     /// Write `$n=value` for table entry `index` (no line ending). `None` past the end.
-    pub fn write_entry<W: fmt::Write>(&self, index: usize, w: &mut W) -> Option<fmt::Result> {
+    pub fn write_entry(&self, index: usize, w: &mut dyn Sink) -> Option<()> {
         let number = *NUMBERS.get(index)?;
         let v = *self.vals.get(index)?;
-        Some(match KINDS.get(index)? {
-            Kind::Float => write!(w, "${}=", number).and_then(|()| write_fixed3(w, v)),
-            _ => write!(w, "${}={}", number, v as i32),
-        })
+        let kind = *KINDS.get(index)?;
+        w.put(b"$");
+        put_int(w, i32::from(number));
+        w.put(b"=");
+        if kind == Kind::Float {
+            write_fixed3(w, v);
+        } else {
+            put_int(w, v as i32);
+        }
+        Some(())
     }
 
     /// The compact byte image: `"IS"`, version, count, each value as little-endian
@@ -686,43 +692,84 @@ impl Settings {
     }
 }
 
-/// Write `v` with three decimals (Grbl's report format) through integer formatting:
-/// core's float formatting would cost about 14 KB of flash on the Cortex-M3.
-/// Values round half away from zero. Computed in f32 (no double-precision routines in
-/// the image): exact to the last digit below 16,777 (2^24 thousandths), which covers
-/// any plotter; larger values keep f32's 7 significant digits. One copy for every
-/// writer (`dyn`), 32-bit arithmetic unless the value is beyond 4,294,967 mm.
-pub fn write_fixed3(w: &mut dyn fmt::Write, v: f32) -> fmt::Result {
-    let milli = libm::roundf(v * 1000.0);
-    if libm::fabsf(milli) < 4_294_967_296.0 {
-        if milli <= -1.0 {
-            w.write_char('-')?;
+/// A byte sink for the protocol's responses: replies are built from byte strings and
+/// the number writers below, never through `core::fmt` (its machinery costs several KB
+/// of flash on the Cortex-M3).
+pub trait Sink {
+    fn put(&mut self, bytes: &[u8]);
+}
+
+impl<const N: usize> Sink for heapless::Vec<u8, N> {
+    fn put(&mut self, bytes: &[u8]) {
+        let _ = self.extend_from_slice(bytes);
+    }
+}
+
+impl<const N: usize> Sink for heapless::String<N> {
+    fn put(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            let _ = self.push(char::from(b));
         }
-        // NaN converts to 0, as before.
-        let a = libm::fabsf(milli) as u32;
-        return write!(w, "{}.{:03}", a / 1000, a % 1000);
     }
-    // Beyond u32 (and the saturated infinities): the same digits from an i64.
-    let milli = milli as i64;
-    if milli < 0 {
-        w.write_char('-')?;
-    }
-    let a = milli.unsigned_abs();
-    let mut digits = [0u8; 20];
-    let mut start = digits.len();
-    let mut n = a / 1000;
-    while let Some(d) = start.checked_sub(1).and_then(|i| digits.get_mut(i)) {
-        *d = b'0' + (n % 10) as u8;
+}
+
+/// `a` in decimal with `decimals` digits after a point (at least one before it),
+/// behind a `-` if `neg`. Digits by shifts and adds: no 64-bit division routine.
+pub fn put_decimal(w: &mut dyn Sink, mut a: u64, neg: bool, decimals: usize) {
+    let mut buf = [0u8; 24];
+    let mut start = buf.len();
+    let mut k = 0;
+    loop {
+        // q = a / 10 (Hacker's Delight), r = a % 10.
+        let mut q = (a >> 1) + (a >> 2);
+        q += q >> 4;
+        q += q >> 8;
+        q += q >> 16;
+        q += q >> 32;
+        q >>= 3;
+        let mut r = a - q * 10;
+        if r > 9 {
+            q += 1;
+            r -= 10;
+        }
         start -= 1;
-        n /= 10;
-        if n == 0 {
+        if let Some(d) = buf.get_mut(start) {
+            *d = b'0' + r as u8;
+        }
+        a = q;
+        k += 1;
+        if k == decimals {
+            start -= 1;
+            if let Some(d) = buf.get_mut(start) {
+                *d = b'.';
+            }
+        }
+        if a == 0 && k > decimals {
             break;
         }
     }
-    for &d in digits.get(start..).unwrap_or(&[]) {
-        w.write_char(char::from(d))?;
+    if neg {
+        start -= 1;
+        if let Some(d) = buf.get_mut(start) {
+            *d = b'-';
+        }
     }
-    write!(w, ".{:03}", (a % 1000) as u32)
+    w.put(buf.get(start..).unwrap_or(&[]));
+}
+
+/// A whole number in decimal.
+pub fn put_int(w: &mut dyn Sink, v: i32) {
+    put_decimal(w, u64::from(v.unsigned_abs()), v < 0, 0);
+}
+
+/// Write `v` with three decimals (Grbl's report format) through integer formatting.
+/// Values round half away from zero, in f32 (no double-precision routines in the
+/// image): exact to the last digit below 16,777 (2^24 thousandths), which covers any
+/// plotter; larger values keep f32's 7 significant digits, and values beyond i64
+/// thousandths saturate. NaN prints as 0.000.
+pub fn write_fixed3(w: &mut dyn Sink, v: f32) {
+    let milli = fmath::round(v * 1000.0) as i64;
+    put_decimal(w, milli.unsigned_abs(), milli < 0, 3);
 }
 
 /// CRC-32 (IEEE, reflected, polynomial 0xEDB88320), bitwise: the image is small and
@@ -772,7 +819,7 @@ mod tests {
             0.0f32, 1.0, -1.0, 0.0005, -0.0004, 123.456, -99.9996, 0.010, 16_000.125, -2.5e-4,
         ] {
             let mut a: heapless::String<40> = heapless::String::new();
-            write_fixed3(&mut a, v).unwrap();
+            write_fixed3(&mut a, v);
             let want = std::format!("{:.3}", f64::from(v));
             let want = if want == "-0.000" {
                 "0.000".into()
@@ -820,7 +867,7 @@ mod tests {
         }
         for v in vals {
             let mut a: heapless::String<40> = heapless::String::new();
-            write_fixed3(&mut a, v).unwrap();
+            write_fixed3(&mut a, v);
             assert_eq!(a.as_str(), reference(v), "{v:e}");
         }
     }
@@ -856,14 +903,10 @@ mod tests {
     fn listing_prints_ints_and_floats_like_grbl() {
         let s = Settings::default();
         let mut line: heapless::String<48> = heapless::String::new();
-        s.write_entry(index_of(0).unwrap(), &mut line)
-            .unwrap()
-            .unwrap();
+        s.write_entry(index_of(0).unwrap(), &mut line).unwrap();
         assert_eq!(line.as_str(), "$0=10");
         line.clear();
-        s.write_entry(index_of(11).unwrap(), &mut line)
-            .unwrap()
-            .unwrap();
+        s.write_entry(index_of(11).unwrap(), &mut line).unwrap();
         assert_eq!(line.as_str(), "$11=0.010");
         assert!(s.write_entry(COUNT, &mut line).is_none());
     }

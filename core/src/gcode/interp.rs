@@ -11,11 +11,11 @@
 
 use super::parser::Block;
 use super::Status;
+use crate::fmath;
 use crate::machine::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
-use crate::settings::{PenMode, Settings};
+use crate::settings::{put_int, PenMode, Settings, Sink};
 use core::f32::consts::{FRAC_PI_2, TAU};
-use core::fmt;
 use heapless::Vec;
 
 /// Most commands one block can queue (pen, G28 intermediate, G28 target, pen at M2).
@@ -212,7 +212,7 @@ fn set_once<T>(slot: &mut Option<T>, v: T) -> Result<(), Status> {
 
 /// mm to steps for one axis, rounding half away from zero (saturating).
 pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
-    libm::roundf(mm * steps_per_mm) as i32
+    fmath::round(mm * steps_per_mm) as i32
 }
 
 /// Machine mm to a step position.
@@ -241,7 +241,7 @@ pub const MAX_STEPS: f32 = 1_073_741_824.0;
 pub fn in_step_range(p: &[f32; AXES], s: &Settings) -> bool {
     p.iter()
         .enumerate()
-        .all(|(axis, &v)| libm::fabsf(v * s.steps_per_mm(axis)) < MAX_STEPS)
+        .all(|(axis, &v)| fmath::abs(v * s.steps_per_mm(axis)) < MAX_STEPS)
 }
 
 /// Allowed machine range of `axis` with soft limits, or `None` if unchecked.
@@ -364,28 +364,25 @@ impl Interp {
     }
 
     /// `[GC:...]` body for `$G` (without brackets).
-    pub fn write_modal<W: fmt::Write>(&self, w: &mut W) -> fmt::Result {
+    pub fn write_modal(&self, w: &mut dyn Sink) {
         let m = &self.modal;
-        let motion = match m.motion {
-            MotionMode::Rapid => "G0",
-            MotionMode::Linear => "G1",
-            MotionMode::ArcCw => "G2",
-            MotionMode::ArcCcw => "G3",
-            MotionMode::Cancel => "G80",
-        };
+        w.put(match m.motion {
+            MotionMode::Rapid => b"GC:G0 G",
+            MotionMode::Linear => b"GC:G1 G",
+            MotionMode::ArcCw => b"GC:G2 G",
+            MotionMode::ArcCcw => b"GC:G3 G",
+            MotionMode::Cancel => b"GC:G80 G",
+        });
+        put_int(w, i32::from(54 + m.wcs));
+        w.put(if m.inches { b" G17 G20" } else { b" G17 G21" });
+        w.put(if m.incremental { b" G91" } else { b" G90" });
+        w.put(if m.inverse_time { b" G93" } else { b" G94" });
+        w.put(if m.pen_down { b" M3" } else { b" M5" });
+        w.put(b" M9 T0 F");
         let scale = if m.inches { MM_PER_INCH } else { 1.0 };
-        write!(
-            w,
-            "GC:{} G{} G17 {} {} {} {} M9 T0 F{} S{}",
-            motion,
-            54 + m.wcs,
-            if m.inches { "G20" } else { "G21" },
-            if m.incremental { "G91" } else { "G90" },
-            if m.inverse_time { "G93" } else { "G94" },
-            if m.pen_down { "M3" } else { "M5" },
-            libm::roundf(self.feed / scale) as i32,
-            libm::roundf(self.spindle) as i32,
-        )
+        put_int(w, fmath::round(self.feed / scale) as i32);
+        w.put(b" S");
+        put_int(w, fmath::round(self.spindle) as i32);
     }
 
     /// Interpret one cleaned line (no spaces, upper case, no comments).
@@ -566,7 +563,7 @@ impl Interp {
         match non_modal {
             Some(NonModal::Dwell) => {
                 let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
-                let ms = libm::roundf(p * 1000.0);
+                let ms = fmath::round(p * 1000.0);
                 push(
                     &mut out,
                     Command::Dwell {
@@ -577,7 +574,7 @@ impl Interp {
             Some(NonModal::SetCoord) => {
                 let l = b.take(b'L').ok_or(Status::ValueWordMissing)?;
                 let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
-                if p != libm::truncf(p) || l != libm::truncf(l) {
+                if p != fmath::trunc(p) || l != fmath::trunc(l) {
                     return Err(Status::CommandValueNotInteger.into());
                 }
                 if p > 6.0 {
@@ -833,7 +830,7 @@ impl Interp {
 /// steps follow the programmed line, not the line between rounded ends; moves that
 /// change Z (or lie outside the fine range) stay plain lines.
 fn line_path(pos: &[f32; AXES], target: &[f32; AXES], s: &Settings) -> Path {
-    let q8 = |mm: f32, axis: usize| libm::roundf(mm * s.steps_per_mm(axis) * 256.0);
+    let q8 = |mm: f32, axis: usize| fmath::round(mm * s.steps_per_mm(axis) * 256.0);
     let (p, t) = (pos.get(..2).unwrap_or(&[]), target.get(..2).unwrap_or(&[]));
     let z_same = pos.get(2) == target.get(2);
     match (p, t) {
@@ -868,7 +865,7 @@ fn rapid(p: &[f32; AXES], s: &Settings, line: u32) -> Command {
 /// sqrt(a^2 + b^2) in f32: libm's hypotf works in f64, which would pull the
 /// double-precision soft-float routines into the image for nothing here.
 fn hypot(a: f32, b: f32) -> f32 {
-    libm::sqrtf(a * a + b * b)
+    fmath::sqrt(a * a + b * b)
 }
 
 fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
@@ -876,7 +873,7 @@ fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
     for (x, y) in a.iter().zip(b.iter()) {
         sum += (y - x) * (y - x);
     }
-    libm::sqrtf(sum)
+    fmath::sqrt(sum)
 }
 
 /// Normalise an angle difference into (0, 2*pi].
@@ -909,14 +906,14 @@ fn arc_geometry(
         if disc < 0.0 {
             // A half circle with a rounded radius: accept within the tolerance.
             let chord = hypot(dx, dy);
-            if chord / 2.0 - libm::fabsf(r) > ARC_ABS_TOL {
+            if chord / 2.0 - fmath::abs(r) > ARC_ABS_TOL {
                 return Err(Status::ArcRadiusError);
             }
             disc = 0.0;
         }
         // Offset of the centre from the chord midpoint, as a multiple of the chord
         // turned by 90 degrees; its sign picks the side (G2 with positive R: right).
-        let mut h = -libm::sqrtf(disc) / hypot(dx, dy);
+        let mut h = -fmath::sqrt(disc) / hypot(dx, dy);
         if ccw {
             h = -h;
         }
@@ -938,7 +935,7 @@ fn arc_geometry(
     let center = [start[0] + ci, start[1] + cj];
     let r_start = hypot(ci, cj);
     let r_end = hypot(target[0] - center[0], target[1] - center[1]);
-    let dr = libm::fabsf(r_end - r_start);
+    let dr = fmath::abs(r_end - r_start);
     if !r_start.is_finite()
         || !r_end.is_finite()
         || r_start <= 0.0
@@ -946,8 +943,8 @@ fn arc_geometry(
     {
         return Err(Status::InvalidTarget);
     }
-    let a0 = libm::atan2f(-cj, -ci);
-    let a1 = libm::atan2f(target[1] - center[1], target[0] - center[0]);
+    let a0 = fmath::atan2(-cj, -ci);
+    let a1 = fmath::atan2(target[1] - center[1], target[0] - center[0]);
     let same_point = dx == 0.0 && dy == 0.0;
     let sweep = if same_point {
         TAU
@@ -987,8 +984,8 @@ fn arc_path(
             turns: 0,
         }
     } else {
-        let a = libm::roundf(g.radius * sx) as i32;
-        let b = libm::roundf(g.radius * sy) as i32;
+        let a = fmath::round(g.radius * sx) as i32;
+        let b = fmath::round(g.radius * sy) as i32;
         Path::Ellipse { center, a, b, ccw }
     }
 }
