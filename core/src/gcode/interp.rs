@@ -522,7 +522,10 @@ impl Interp {
         let mut coords = self.coords;
         let mut g92 = self.g92;
         let mut pos = self.pos;
-        let mut planned: Vec<[f32; AXES], 8> = Vec::new();
+        let mut planned = Reach {
+            in_range: true,
+            in_travel: true,
+        };
 
         // Pen (M3/M4/M5) runs before motion.
         let pen_change = pen.filter(|&down| down != modal.pen_down);
@@ -535,7 +538,7 @@ impl Interp {
                 PenMode::ZAxis => {
                     let mut p = pos;
                     p[2] = if down { s.pen_z_down() } else { s.pen_z_up() };
-                    planned.push(p).map_err(|_| Status::Overflow)?;
+                    planned.add(&p, s);
                     push(&mut out, rapid(&p, s, line_tag))?;
                     pos = p;
                 }
@@ -615,10 +618,10 @@ impl Interp {
                     coords.g30
                 };
                 if has_axis {
-                    planned.push(target).map_err(|_| Status::Overflow)?;
+                    planned.add(&target, s);
                     push(&mut out, rapid(&target, s, line_tag))?;
                 }
-                planned.push(stored).map_err(|_| Status::Overflow)?;
+                planned.add(&stored, s);
                 push(&mut out, rapid(&stored, s, line_tag))?;
                 pos = stored;
             }
@@ -676,11 +679,16 @@ impl Interp {
             };
             if let Some((len, path, geom)) = len_and_path {
                 if let Some(g) = &geom {
-                    for p in arc_extremes(g, &pos, &target, modal.motion == MotionMode::ArcCcw) {
-                        planned.push(p).map_err(|_| Status::Overflow)?;
-                    }
+                    arc_extremes(
+                        g,
+                        &pos,
+                        &target,
+                        modal.motion == MotionMode::ArcCcw,
+                        &mut planned,
+                        s,
+                    );
                 } else {
-                    planned.push(target).map_err(|_| Status::Overflow)?;
+                    planned.add(&target, s);
                 }
                 let f = if modal.motion == MotionMode::Rapid {
                     Feed::Rapid
@@ -713,10 +721,10 @@ impl Interp {
         if b.any_value() {
             return Err(Status::UnusedWords.into());
         }
-        if !planned.iter().all(|p| in_step_range(p, s)) {
+        if !planned.in_range {
             return Err(Status::InvalidTarget.into());
         }
-        if s.soft_limits() && !planned.iter().all(|p| within_travel(p, s)) {
+        if s.soft_limits() && !planned.in_travel {
             return Err(Reject::SoftLimit);
         }
 
@@ -990,15 +998,32 @@ fn arc_path(
     }
 }
 
-/// Points that bound the arc: its end and every axis extreme it passes.
+/// Every point a block moves to, checked as it is planned; the verdicts are reported
+/// after the block's word checks, in Grbl's order.
+struct Reach {
+    /// All points convert to steps ([`in_step_range`]).
+    in_range: bool,
+    /// All points lie within travel ([`within_travel`]).
+    in_travel: bool,
+}
+
+impl Reach {
+    fn add(&mut self, p: &[f32; AXES], s: &Settings) {
+        self.in_range &= in_step_range(p, s);
+        self.in_travel &= within_travel(p, s);
+    }
+}
+
+/// Check the points that bound the arc: its end and every axis extreme it passes.
 fn arc_extremes(
     g: &ArcGeom,
     start: &[f32; AXES],
     target: &[f32; AXES],
     ccw: bool,
-) -> Vec<[f32; AXES], 5> {
-    let mut pts: Vec<[f32; AXES], 5> = Vec::new();
-    let _ = pts.push(*target);
+    pts: &mut Reach,
+    s: &Settings,
+) {
+    pts.add(target, s);
     // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
     let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
     for (k, (cs, sn)) in axes_dirs.into_iter().enumerate() {
@@ -1015,10 +1040,12 @@ fn arc_extremes(
                 0.0
             };
             let z = start[2] + (target[2] - start[2]) * frac;
-            let _ = pts.push([g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z]);
+            pts.add(
+                &[g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z],
+                s,
+            );
         }
     }
-    pts
 }
 
 #[cfg(test)]
