@@ -211,6 +211,7 @@ fn set_once<T>(slot: &mut Option<T>, v: T) -> Result<(), Status> {
 }
 
 /// mm to steps for one axis, rounding half away from zero (saturating).
+#[inline(never)]
 pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
     fmath::round(mm * steps_per_mm) as i32
 }
@@ -838,22 +839,22 @@ impl Interp {
 /// steps follow the programmed line, not the line between rounded ends; moves that
 /// change Z (or lie outside the fine range) stay plain lines.
 fn line_path(pos: &[f32; AXES], target: &[f32; AXES], s: &Settings) -> Path {
-    let q8 = |mm: f32, axis: usize| fmath::round(mm * s.steps_per_mm(axis) * 256.0);
-    let (p, t) = (pos.get(..2).unwrap_or(&[]), target.get(..2).unwrap_or(&[]));
-    let z_same = pos.get(2) == target.get(2);
-    match (p, t) {
-        (&[px, py], &[tx, ty]) if z_same => {
-            let v = [q8(px, 0), q8(py, 1), q8(tx, 0), q8(ty, 1)];
-            if v.iter().all(|c| c.abs() < 2.0e9) {
-                Path::LineFine {
-                    from: [v[0] as i32, v[1] as i32],
-                    to: [v[2] as i32, v[3] as i32],
-                }
-            } else {
-                Path::Line
-            }
+    // Exact: scaling by 256 commutes with the rounding multiply.
+    let (sx, sy) = (s.steps_per_mm(0) * 256.0, s.steps_per_mm(1) * 256.0);
+    let v = [
+        mm_to_steps(pos[0], sx),
+        mm_to_steps(pos[1], sy),
+        mm_to_steps(target[0], sx),
+        mm_to_steps(target[1], sy),
+    ];
+    // Saturation starts at 2^31, beyond the fine range's bound.
+    if pos[2] == target[2] && v.iter().all(|c| c.unsigned_abs() < 2_000_000_000) {
+        Path::LineFine {
+            from: [v[0], v[1]],
+            to: [v[2], v[3]],
         }
-        _ => Path::Line,
+    } else {
+        Path::Line
     }
 }
 
