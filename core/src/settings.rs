@@ -311,8 +311,65 @@ macro_rules! column {
 static NUMBERS: [u16; COUNT] = column!(u16, 0, number);
 static KINDS: [Kind; COUNT] = column!(Kind, Kind::Int, kind);
 static DEFAULTS: [f32; COUNT] = column!(f32, 0.0, default);
-static MINS: [f32; COUNT] = column!(f32, 0.0, min);
-static MAXS: [f32; COUNT] = column!(f32, 0.0, max);
+
+/// Distinct range bounds (min or max) of [`TABLE`], at compile time: the entries keep
+/// one-byte indices into it instead of two floats each.
+const fn bounds<const N: usize>() -> ([f32; N], usize) {
+    let mut out = [0.0f32; N];
+    let mut n = 0;
+    let mut i = 0;
+    while i < 2 * COUNT {
+        let v = if i < COUNT {
+            TABLE[i].min
+        } else {
+            TABLE[i - COUNT].max
+        };
+        let mut k = 0;
+        while k < n && out[k].to_bits() != v.to_bits() {
+            k += 1;
+        }
+        if k == n {
+            out[n] = v;
+            n += 1;
+        }
+        i += 1;
+    }
+    (out, n)
+}
+const BOUNDS_LEN: usize = bounds::<{ 2 * COUNT }>().1;
+static BOUNDS: [f32; BOUNDS_LEN] = {
+    let all = bounds::<{ 2 * COUNT }>().0;
+    let mut out = [0.0f32; BOUNDS_LEN];
+    let mut i = 0;
+    while i < BOUNDS_LEN {
+        out[i] = all[i];
+        i += 1;
+    }
+    out
+};
+/// Per entry: the indices of its min and max in [`BOUNDS`].
+static RANGES: [[u8; 2]; COUNT] = {
+    const fn find(v: f32) -> u8 {
+        let mut k = 0;
+        while BOUNDS[k].to_bits() != v.to_bits() {
+            k += 1;
+        }
+        k as u8
+    }
+    let mut out = [[0u8; 2]; COUNT];
+    let mut i = 0;
+    while i < COUNT {
+        out[i] = [find(TABLE[i].min), find(TABLE[i].max)];
+        i += 1;
+    }
+    out
+};
+
+/// Allowed range of table entry `i`.
+fn range(i: usize) -> Option<(f32, f32)> {
+    let &[lo, hi] = RANGES.get(i)?;
+    Some((*BOUNDS.get(usize::from(lo))?, *BOUNDS.get(usize::from(hi))?))
+}
 
 /// Table index of setting `number`, for the accessors: evaluated at compile time, so
 /// a number missing from the table fails the build.
@@ -420,7 +477,7 @@ impl Settings {
     /// Set `$number = value` with Grbl's checks. Integer kinds are truncated toward zero.
     pub fn set(&mut self, number: u16, value: f32) -> Result<(), SettingError> {
         let i = index_of(number).ok_or(SettingError::Invalid)?;
-        let (Some(&kind), Some(&min), Some(&max)) = (KINDS.get(i), MINS.get(i), MAXS.get(i)) else {
+        let (Some(&kind), Some((min, max))) = (KINDS.get(i), range(i)) else {
             return Err(SettingError::Invalid);
         };
         if !value.is_finite() {
@@ -675,13 +732,8 @@ impl Settings {
         }
         let mut s = Settings::default();
         let values = body.get(4..).unwrap_or(&[]);
-        for (((slot, chunk), &min), &max) in s
-            .vals
-            .iter_mut()
-            .zip(values.chunks_exact(4))
-            .zip(MINS.iter())
-            .zip(MAXS.iter())
-        {
+        for (i, (slot, chunk)) in s.vals.iter_mut().zip(values.chunks_exact(4)).enumerate() {
+            let (min, max) = range(i).ok_or(ImageError::Range)?;
             let v = f32::from_le_bytes(chunk.try_into().map_err(|_| ImageError::Length)?);
             if !v.is_finite() || v < min || v > max {
                 return Err(ImageError::Range);

@@ -264,12 +264,13 @@ pub fn travel_range(axis: usize, s: &Settings) -> Option<(f32, f32)> {
 /// True if `p` (machine mm) lies within travel on every checked axis.
 pub fn within_travel(p: &[f32; AXES], s: &Settings) -> bool {
     const EPS: f32 = 1e-4;
-    p.iter()
-        .enumerate()
-        .all(|(axis, &v)| match travel_range(axis, s) {
-            Some((lo, hi)) => v >= lo - EPS && v <= hi + EPS,
-            None => true,
-        })
+    let (switches, toward_minus) = (s.switch_mask(), s.homing_dir_mask());
+    p.iter().enumerate().all(|(axis, &v)| {
+        let bit = 1u8 << axis;
+        // Mirrored onto [0, travel] (negation is exact, so the bounds are the same).
+        let v = if toward_minus & bit != 0 { v } else { -v };
+        switches & bit == 0 || (v >= -EPS && v <= s.max_travel(axis) + EPS)
+    })
 }
 
 struct ArcGeom {
