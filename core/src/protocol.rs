@@ -375,27 +375,27 @@ impl Protocol {
             self.finish_line(Err(Status::Overflow));
             return true;
         }
-        let line = self.line.clone();
+        // Moved out while it runs (the `$` commands need `self`), back if it waits.
+        let line = core::mem::take(&mut self.line);
         let r = match line.first() {
             None => {
                 // Grbl answers blank lines (and lines of only a comment) with ok,
                 // but a bare CR LF pair is one line end, not two.
-                Ok(())
+                Some(Ok(()))
             }
-            Some(b'$') => {
-                let Some(r) = self.system_command(line.get(1..).unwrap_or(&[]), m) else {
-                    return false;
-                };
-                r
-            }
+            Some(b'$') => self.system_command(line.get(1..).unwrap_or(&[]), m),
             Some(_) => {
                 let line_no = self.lines_received.wrapping_add(1);
-                let Some(r) = self.machine.execute(&line, line_no, m, now_ms) else {
-                    return false;
-                };
-                self.lines_received = line_no;
+                let r = self.machine.execute(&line, line_no, m, now_ms);
+                if r.is_some() {
+                    self.lines_received = line_no;
+                }
                 r
             }
+        };
+        let Some(r) = r else {
+            self.line = line;
+            return false;
         };
         self.flush_events();
         if self.listing.is_none() || r.is_err() {
@@ -574,10 +574,25 @@ impl Protocol {
             self.startup_next = None;
             return true;
         }
-        let Some(text) = self.startup.get(i).cloned() else {
+        // Moved out while it runs (no copy), put back before returning.
+        let Some(text) = self.startup.get_mut(i).map(core::mem::take) else {
             self.startup_next = None;
             return true;
         };
+        let done = self.startup_line_ran(i, &text, m, now_ms);
+        if let Some(slot) = self.startup.get_mut(i) {
+            *slot = text;
+        }
+        done
+    }
+
+    fn startup_line_ran<M: MotionControl>(
+        &mut self,
+        i: usize,
+        text: &str,
+        m: &mut M,
+        now_ms: u32,
+    ) -> bool {
         self.startup_next = Some(i + 1);
         if text.is_empty() {
             return true;
@@ -587,17 +602,17 @@ impl Protocol {
             return false;
         };
         self.flush_events();
+        let mut w = self.w();
+        w.put(b">");
+        w.put(text.as_bytes());
         match r {
-            Ok(()) => self.say(&[b">", text.as_bytes(), b":ok"]),
+            Ok(()) => w.put(b":ok"),
             Err(e) => {
-                let mut w = self.w();
-                w.put(b">");
-                w.put(text.as_bytes());
                 w.put(b":error:");
                 put_int(&mut w, i32::from(e.code()));
-                w.put(b"\r\n");
             }
         }
+        w.put(b"\r\n");
         true
     }
 
