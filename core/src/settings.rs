@@ -766,29 +766,31 @@ impl<const N: usize> Sink for heapless::String<N> {
 }
 
 /// `a` in decimal with `decimals` digits after a point (at least one before it),
-/// behind a `-` if `neg`. Digits by shifts and adds: no 64-bit division routine.
-pub fn put_decimal(w: &mut dyn Sink, mut a: u64, neg: bool, decimals: usize) {
+/// behind a `-` if `neg`. Long division by 10 over 16-bit limbs with the core's 32-bit
+/// divide: no 64-bit division routine.
+pub fn put_decimal(w: &mut dyn Sink, a: u64, neg: bool, decimals: usize) {
     let mut buf = [0u8; 24];
     let mut start = buf.len();
+    let mut limbs = [
+        (a >> 48) as u32,
+        (a >> 32) as u32 & 0xFFFF,
+        (a >> 16) as u32 & 0xFFFF,
+        a as u32 & 0xFFFF,
+    ];
     let mut k = 0;
     loop {
-        // q = a / 10 (Hacker's Delight), r = a % 10.
-        let mut q = (a >> 1) + (a >> 2);
-        q += q >> 4;
-        q += q >> 8;
-        q += q >> 16;
-        q += q >> 32;
-        q >>= 3;
-        let mut r = a - q * 10;
-        if r > 9 {
-            q += 1;
-            r -= 10;
+        let mut r = 0u32;
+        let mut more = false;
+        for l in limbs.iter_mut() {
+            let cur = (r << 16) | *l;
+            *l = cur / 10;
+            r = cur % 10;
+            more |= *l != 0;
         }
         start -= 1;
         if let Some(d) = buf.get_mut(start) {
             *d = b'0' + r as u8;
         }
-        a = q;
         k += 1;
         if k == decimals {
             start -= 1;
@@ -796,7 +798,7 @@ pub fn put_decimal(w: &mut dyn Sink, mut a: u64, neg: bool, decimals: usize) {
                 *d = b'.';
             }
         }
-        if a == 0 && k > decimals {
+        if !more && k > decimals {
             break;
         }
     }
