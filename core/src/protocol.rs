@@ -120,18 +120,19 @@ impl Protocol {
     pub fn new(settings: Settings) -> Protocol {
         let mut p = Protocol {
             machine: Machine::new(settings),
-            rx: Deque::new(),
-            line: Vec::new(),
+            // Const templates: zeroed or copied, not built field by field.
+            rx: const { Deque::new() },
+            line: const { Vec::new() },
             cleaner: LineCleaner::new(),
             line_too_long: false,
             line_ready: false,
             after_cr: false,
-            out: Deque::new(),
+            out: const { Deque::new() },
             status_requested: false,
             listing: None,
             lines_received: 0,
             reports: 0,
-            startup: [String::new(), String::new()],
+            startup: const { [String::new(), String::new()] },
             startup_next: Some(0),
             startup_dirty: false,
             wco_shown: [f32::NAN; AXES],
