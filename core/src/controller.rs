@@ -17,9 +17,8 @@ use crate::keypad::{Keypad, KeypadConfig};
 use crate::machine::{Command, MotionControl, RunState};
 use crate::motion::{X, Y, Z};
 use crate::protocol::Protocol;
-use crate::settings::Settings;
-use core::fmt::Write;
-use heapless::String;
+use crate::settings::{put_int, Settings, Sink};
+use heapless::Vec;
 
 /// Jog moves run this far (mm) unless stopped; key release stops them.
 const JOG_REACH_MM: i32 = 1000;
@@ -166,16 +165,18 @@ impl Controller {
                 }
             }
             Action::JogStart { dir, feed_mm_min } => {
-                // Whole numbers only: core's float formatting costs ~8 KB of flash.
-                let mut body: String<64> = String::new();
-                let _ = body.push_str("G91G21");
-                for (d, name) in [(dir[X], 'X'), (dir[Y], 'Y')] {
+                // Whole numbers only, through the protocol's number writer.
+                let mut body: Vec<u8, 64> = Vec::new();
+                body.put(b"G91G21");
+                for (d, name) in [(dir[X], b"X"), (dir[Y], b"Y")] {
                     if d != 0 {
-                        let _ = write!(body, "{}{}", name, i32::from(d) * JOG_REACH_MM);
+                        body.put(name);
+                        put_int(&mut body, i32::from(d) * JOG_REACH_MM);
                     }
                 }
-                let _ = write!(body, "F{}", libm::roundf(feed_mm_min) as i32);
-                if machine.jog(body.as_bytes(), m).is_err() {
+                body.put(b"F");
+                put_int(&mut body, crate::fmath::round(feed_mm_min) as i32);
+                if machine.jog(&body, m).is_err() {
                     self.outputs.beep = Some(Beep::Error);
                 }
             }

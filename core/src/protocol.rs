@@ -30,12 +30,12 @@
 //! The e-stop interrupt stops the step engine itself before the protocol task
 //! learns of it through `set_inputs`.
 
+use crate::fmath;
 use crate::gcode::{LineCleaner, Status};
 use crate::machine::state::Event;
 use crate::machine::{Inputs, Machine, MotionControl, RunState};
 use crate::motion::AXES;
-use crate::settings::Settings;
-use core::fmt::{self, Write};
+use crate::settings::{put_decimal, put_int, write_fixed3, Settings, Sink};
 use heapless::{Deque, String, Vec};
 
 /// Receive buffer size advertised to character-counting senders (`Bf:` and `$I`).
@@ -96,26 +96,23 @@ struct OutWriter<'a> {
     truncated: &'a mut u32,
 }
 
-impl Write for OutWriter<'_> {
-    fn write_str(&mut self, s: &str) -> fmt::Result {
-        for &b in s.as_bytes() {
+impl Sink for OutWriter<'_> {
+    fn put(&mut self, bytes: &[u8]) {
+        for &b in bytes {
             if self.out.push_back(b).is_err() {
                 *self.truncated = self.truncated.saturating_add(1);
-                return Err(fmt::Error);
             }
         }
-        Ok(())
     }
 }
 
-fn axis_triplet(w: &mut dyn Write, v: &[f32; AXES], scale: f32) -> fmt::Result {
+fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
     for (i, x) in v.iter().enumerate() {
         if i > 0 {
-            w.write_char(',')?;
+            w.put(b",");
         }
-        crate::settings::write_fixed3(w, x / scale)?;
+        write_fixed3(w, x / scale);
     }
-    Ok(())
 }
 
 impl Protocol {
@@ -123,18 +120,19 @@ impl Protocol {
     pub fn new(settings: Settings) -> Protocol {
         let mut p = Protocol {
             machine: Machine::new(settings),
-            rx: Deque::new(),
-            line: Vec::new(),
+            // Const templates: zeroed or copied, not built field by field.
+            rx: const { Deque::new() },
+            line: const { Vec::new() },
             cleaner: LineCleaner::new(),
             line_too_long: false,
             line_ready: false,
             after_cr: false,
-            out: Deque::new(),
+            out: const { Deque::new() },
             status_requested: false,
             listing: None,
             lines_received: 0,
             reports: 0,
-            startup: [String::new(), String::new()],
+            startup: const { [String::new(), String::new()] },
             startup_next: Some(0),
             startup_dirty: false,
             wco_shown: [f32::NAN; AXES],
@@ -205,20 +203,32 @@ impl Protocol {
         }
     }
 
-    fn say(&mut self, args: fmt::Arguments) {
+    /// One response line: `parts` in order, then CR LF.
+    fn say(&mut self, parts: &[&[u8]]) {
         let mut w = self.w();
-        let _ = w.write_fmt(args);
-        let _ = w.write_str("\r\n");
+        for p in parts {
+            w.put(p);
+        }
+        w.put(b"\r\n");
+    }
+
+    /// A line of `head`, a number and `tail`.
+    fn say_n(&mut self, head: &[u8], n: u8, tail: &[u8]) {
+        let mut w = self.w();
+        w.put(head);
+        put_int(&mut w, i32::from(n));
+        w.put(tail);
+        w.put(b"\r\n");
     }
 
     fn welcome(&mut self) {
-        self.say(format_args!("\r\n{}", WELCOME));
+        self.say(&[b"\r\n", WELCOME.as_bytes()]);
     }
 
     fn respond(&mut self, r: Result<(), Status>) {
         match r {
-            Ok(()) => self.say(format_args!("ok")),
-            Err(e) => self.say(format_args!("error:{}", e.code())),
+            Ok(()) => self.say(&[b"ok"]),
+            Err(e) => self.say_n(b"error:", e.code(), b""),
         }
     }
 
@@ -276,7 +286,7 @@ impl Protocol {
 
     /// Queue a `[MSG:...]` line (e.g. the settings store's load report at boot).
     pub fn notify(&mut self, text: &str) {
-        self.say(format_args!("[MSG:{}]", text));
+        self.say(&[b"[MSG:", text.as_bytes(), b"]"]);
     }
 
     /// Update the input levels (e-stop, limits, feed hold, cycle start).
@@ -290,15 +300,19 @@ impl Protocol {
     fn flush_events(&mut self) {
         while let Some(e) = self.machine.next_event() {
             match e {
-                Event::Alarm(a) => self.say(format_args!("ALARM:{}", a.code())),
-                Event::Msg(t) => self.say(format_args!("[MSG:{}]", t)),
-                Event::JobStarted => self.say(format_args!("[MSG:Job started]")),
-                Event::JobFinished { ms, moves } => self.say(format_args!(
-                    "[MSG:Job finished: {}.{:03} s, {} moves]",
-                    ms / 1000,
-                    ms % 1000,
-                    moves
-                )),
+                Event::Alarm(a) => self.say_n(b"ALARM:", a.code(), b""),
+                Event::Msg(t) => self.say(&[b"[MSG:", t.as_bytes(), b"]"]),
+                Event::JobStarted => self.say(&[b"[MSG:Job started]"]),
+                Event::JobFinished { ms, moves } => {
+                    let mut w = self.w();
+                    w.put(b"[MSG:Job finished: ");
+                    // Seconds with three decimals: exact, as f32 holds any u32 / 1000
+                    // only approximately, so the digits come from the integer.
+                    put_decimal(&mut w, u64::from(ms), false, 3);
+                    w.put(b" s, ");
+                    put_decimal(&mut w, u64::from(moves), false, 0);
+                    w.put(b" moves]\r\n");
+                }
             }
         }
     }
@@ -362,27 +376,27 @@ impl Protocol {
             self.finish_line(Err(Status::Overflow));
             return true;
         }
-        let line = self.line.clone();
+        // Moved out while it runs (the `$` commands need `self`), back if it waits.
+        let line = core::mem::take(&mut self.line);
         let r = match line.first() {
             None => {
                 // Grbl answers blank lines (and lines of only a comment) with ok,
                 // but a bare CR LF pair is one line end, not two.
-                Ok(())
+                Some(Ok(()))
             }
-            Some(b'$') => {
-                let Some(r) = self.system_command(line.get(1..).unwrap_or(&[]), m) else {
-                    return false;
-                };
-                r
-            }
+            Some(b'$') => self.system_command(line.get(1..).unwrap_or(&[]), m),
             Some(_) => {
                 let line_no = self.lines_received.wrapping_add(1);
-                let Some(r) = self.machine.execute(&line, line_no, m, now_ms) else {
-                    return false;
-                };
-                self.lines_received = line_no;
+                let r = self.machine.execute(&line, line_no, m, now_ms);
+                if r.is_some() {
+                    self.lines_received = line_no;
+                }
                 r
             }
+        };
+        let Some(r) = r else {
+            self.line = line;
+            return false;
         };
         self.flush_events();
         if self.listing.is_none() || r.is_err() {
@@ -426,7 +440,7 @@ impl Protocol {
         }
         Some(match cmd {
             b"" => {
-                self.say(format_args!("[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"));
+                self.say(&[b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"]);
                 Ok(())
             }
             b"$" => {
@@ -446,17 +460,24 @@ impl Protocol {
                     out: &mut self.out,
                     truncated: &mut self.truncated,
                 };
-                let _ = w.write_char('[');
-                let _ = self.machine.interp().write_modal(&mut w);
-                let _ = w.write_str("]\r\n");
+                w.put(b"[");
+                self.machine.interp().write_modal(&mut w);
+                w.put(b"]\r\n");
                 Ok(())
             }
             b"I" => {
-                self.say(format_args!(
-                    "[VER:1.1h.inkstep-{}:inkstep pen plotter]",
-                    VERSION
-                ));
-                self.say(format_args!("[OPT:NL,{},{}]", m.capacity(), RX_BUFFER_SIZE));
+                self.say(&[
+                    b"[VER:1.1h.inkstep-",
+                    VERSION.as_bytes(),
+                    b":inkstep pen plotter]",
+                ]);
+                let cap = m.capacity();
+                let mut w = self.w();
+                w.put(b"[OPT:NL,");
+                put_int(&mut w, cap as i32);
+                w.put(b",");
+                put_int(&mut w, RX_BUFFER_SIZE as i32);
+                w.put(b"]\r\n");
                 Ok(())
             }
             b"C" => {
@@ -554,10 +575,25 @@ impl Protocol {
             self.startup_next = None;
             return true;
         }
-        let Some(text) = self.startup.get(i).cloned() else {
+        // Moved out while it runs (no copy), put back before returning.
+        let Some(text) = self.startup.get_mut(i).map(core::mem::take) else {
             self.startup_next = None;
             return true;
         };
+        let done = self.startup_line_ran(i, &text, m, now_ms);
+        if let Some(slot) = self.startup.get_mut(i) {
+            *slot = text;
+        }
+        done
+    }
+
+    fn startup_line_ran<M: MotionControl>(
+        &mut self,
+        i: usize,
+        text: &str,
+        m: &mut M,
+        now_ms: u32,
+    ) -> bool {
         self.startup_next = Some(i + 1);
         if text.is_empty() {
             return true;
@@ -567,10 +603,17 @@ impl Protocol {
             return false;
         };
         self.flush_events();
+        let mut w = self.w();
+        w.put(b">");
+        w.put(text.as_bytes());
         match r {
-            Ok(()) => self.say(format_args!(">{}:ok", text)),
-            Err(e) => self.say(format_args!(">{}:error:{}", text, e.code())),
+            Ok(()) => w.put(b":ok"),
+            Err(e) => {
+                w.put(b":error:");
+                put_int(&mut w, i32::from(e.code()));
+            }
         }
+        w.put(b"\r\n");
         true
     }
 
@@ -578,7 +621,7 @@ impl Protocol {
         let next = self.listing_line(l);
         self.listing = next;
         if next.is_none() {
-            self.say(format_args!("ok"));
+            self.say(&[b"ok"]);
         }
     }
 
@@ -595,8 +638,8 @@ impl Protocol {
                     out: &mut self.out,
                     truncated: &mut self.truncated,
                 };
-                let r = self.machine.settings().write_entry(i, &mut w)?;
-                let _ = r.and_then(|()| w.write_str("\r\n"));
+                self.machine.settings().write_entry(i, &mut w)?;
+                w.put(b"\r\n");
                 Some(Listing::Settings(i + 1))
             }
             Listing::Coords(i) => {
@@ -614,14 +657,18 @@ impl Protocol {
                     out: &mut self.out,
                     truncated: &mut self.truncated,
                 };
-                let _ = match i {
-                    0..=8 => write!(w, "[G{}:", code)
-                        .and_then(|()| axis_triplet(&mut w, &v, scale))
-                        .and_then(|()| w.write_str("]\r\n")),
-                    9 => w.write_str("[TLO:0.000]\r\n"),
-                    10 => w.write_str("[PRB:0.000,0.000,0.000:0]\r\n"),
-                    _ => Ok(()),
-                };
+                match i {
+                    0..=8 => {
+                        w.put(b"[G");
+                        put_int(&mut w, i32::from(code));
+                        w.put(b":");
+                        axis_triplet(&mut w, &v, scale);
+                        w.put(b"]\r\n");
+                    }
+                    9 => w.put(b"[TLO:0.000]\r\n"),
+                    10 => w.put(b"[PRB:0.000,0.000,0.000:0]\r\n"),
+                    _ => {}
+                }
                 (i <= 10).then_some(Listing::Coords(i + 1))
             }
             Listing::Startup(i) => {
@@ -630,7 +677,11 @@ impl Protocol {
                     out: &mut self.out,
                     truncated: &mut self.truncated,
                 };
-                let _ = write!(w, "$N{}={}\r\n", i, text);
+                w.put(b"$N");
+                put_int(&mut w, i as i32);
+                w.put(b"=");
+                w.put(text.as_bytes());
+                w.put(b"\r\n");
                 Some(Listing::Startup(i + 1))
             }
         }
@@ -657,67 +708,72 @@ impl Protocol {
         // The pen is the spindle: report S while it is down.
         let interp = self.machine.interp();
         let spindle = if interp.modal().pen_down {
-            libm::roundf(interp.spindle()) as i32
+            fmath::round(interp.spindle()) as i32
         } else {
             0
         };
         let mut w = self.w();
-        let _ = (|| -> fmt::Result {
-            w.write_char('<')?;
-            match st {
-                RunState::Idle => w.write_str("Idle")?,
-                RunState::Run => w.write_str("Run")?,
-                RunState::Hold { complete } => {
-                    w.write_str(if complete { "Hold:0" } else { "Hold:1" })?
+        w.put(match st {
+            RunState::Idle => b"<Idle",
+            RunState::Run => b"<Run",
+            RunState::Hold { complete: true } => b"<Hold:0",
+            RunState::Hold { complete: false } => b"<Hold:1",
+            RunState::Jog => b"<Jog",
+            RunState::Door { at_rest: true } => b"<Door:0",
+            RunState::Door { at_rest: false } => b"<Door:2",
+            RunState::Alarm => b"<Alarm",
+            RunState::Home => b"<Home",
+            RunState::Check => b"<Check",
+        });
+        if mask & 1 != 0 {
+            w.put(b"|MPos:");
+            axis_triplet(&mut w, &mpos, scale);
+        } else {
+            let mut wpos = mpos;
+            for (p, o) in wpos.iter_mut().zip(wco.iter()) {
+                *p -= o;
+            }
+            w.put(b"|WPos:");
+            axis_triplet(&mut w, &wpos, scale);
+        }
+        if mask & 2 != 0 {
+            w.put(b"|Bf:");
+            put_int(&mut w, blocks_free as i32);
+            w.put(b",");
+            put_int(&mut w, rx_free as i32);
+        }
+        w.put(b"|FS:");
+        put_int(&mut w, fmath::round(speed) as i32);
+        w.put(b",");
+        put_int(&mut w, spindle);
+        let pins = [
+            inputs.limits[0],
+            inputs.limits[1],
+            inputs.limits[2],
+            inputs.feed_hold,
+            inputs.cycle_start,
+            inputs.estop,
+        ];
+        if pins.contains(&true) {
+            w.put(b"|Pn:");
+            for (on, c) in pins.iter().zip(b"XYZHSE".chunks(1)) {
+                if *on {
+                    w.put(c);
                 }
-                RunState::Jog => w.write_str("Jog")?,
-                RunState::Door { at_rest } => {
-                    w.write_str(if at_rest { "Door:0" } else { "Door:2" })?
-                }
-                RunState::Alarm => w.write_str("Alarm")?,
-                RunState::Home => w.write_str("Home")?,
-                RunState::Check => w.write_str("Check")?,
             }
-            if mask & 1 != 0 {
-                w.write_str("|MPos:")?;
-                axis_triplet(&mut w, &mpos, scale)?;
-            } else {
-                let mut wpos = mpos;
-                for (p, o) in wpos.iter_mut().zip(wco.iter()) {
-                    *p -= o;
-                }
-                w.write_str("|WPos:")?;
-                axis_triplet(&mut w, &wpos, scale)?;
-            }
-            if mask & 2 != 0 {
-                write!(w, "|Bf:{},{}", blocks_free, rx_free)?;
-            }
-            write!(w, "|FS:{},{}", libm::roundf(speed) as i32, spindle)?;
-            let pins = [
-                (inputs.limits[0], 'X'),
-                (inputs.limits[1], 'Y'),
-                (inputs.limits[2], 'Z'),
-                (inputs.feed_hold, 'H'),
-                (inputs.cycle_start, 'S'),
-                (inputs.estop, 'E'),
-            ];
-            if pins.iter().any(|(on, _)| *on) {
-                w.write_str("|Pn:")?;
-                for (on, c) in pins {
-                    if on {
-                        w.write_char(c)?;
-                    }
-                }
-            }
-            if show_wco {
-                w.write_str("|WCO:")?;
-                axis_triplet(&mut w, &wco, scale)?;
-            }
-            if show_ov {
-                write!(w, "|Ov:{},{},100", fo, ro)?;
-            }
-            w.write_str(">\r\n")
-        })();
+        }
+        if show_wco {
+            w.put(b"|WCO:");
+            axis_triplet(&mut w, &wco, scale);
+        }
+        if show_ov {
+            w.put(b"|Ov:");
+            put_int(&mut w, i32::from(fo));
+            w.put(b",");
+            put_int(&mut w, i32::from(ro));
+            w.put(b",100");
+        }
+        w.put(b">\r\n");
         if show_wco {
             self.wco_shown = wco;
         }

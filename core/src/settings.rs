@@ -11,8 +11,8 @@
 //! extracted from [`TABLE`] at compile time); the descriptions stay on the host side
 //! (docs/grbl.md is generated from them), as Grbl 1.1 prints `$n=value` only.
 
+use crate::fmath;
 use crate::motion::AXES;
-use core::fmt;
 
 /// What a setting holds; decides range checks and how `$$` prints it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -311,8 +311,65 @@ macro_rules! column {
 static NUMBERS: [u16; COUNT] = column!(u16, 0, number);
 static KINDS: [Kind; COUNT] = column!(Kind, Kind::Int, kind);
 static DEFAULTS: [f32; COUNT] = column!(f32, 0.0, default);
-static MINS: [f32; COUNT] = column!(f32, 0.0, min);
-static MAXS: [f32; COUNT] = column!(f32, 0.0, max);
+
+/// Distinct range bounds (min or max) of [`TABLE`], at compile time: the entries keep
+/// one-byte indices into it instead of two floats each.
+const fn bounds<const N: usize>() -> ([f32; N], usize) {
+    let mut out = [0.0f32; N];
+    let mut n = 0;
+    let mut i = 0;
+    while i < 2 * COUNT {
+        let v = if i < COUNT {
+            TABLE[i].min
+        } else {
+            TABLE[i - COUNT].max
+        };
+        let mut k = 0;
+        while k < n && out[k].to_bits() != v.to_bits() {
+            k += 1;
+        }
+        if k == n {
+            out[n] = v;
+            n += 1;
+        }
+        i += 1;
+    }
+    (out, n)
+}
+const BOUNDS_LEN: usize = bounds::<{ 2 * COUNT }>().1;
+static BOUNDS: [f32; BOUNDS_LEN] = {
+    let all = bounds::<{ 2 * COUNT }>().0;
+    let mut out = [0.0f32; BOUNDS_LEN];
+    let mut i = 0;
+    while i < BOUNDS_LEN {
+        out[i] = all[i];
+        i += 1;
+    }
+    out
+};
+/// Per entry: the indices of its min and max in [`BOUNDS`].
+static RANGES: [[u8; 2]; COUNT] = {
+    const fn find(v: f32) -> u8 {
+        let mut k = 0;
+        while BOUNDS[k].to_bits() != v.to_bits() {
+            k += 1;
+        }
+        k as u8
+    }
+    let mut out = [[0u8; 2]; COUNT];
+    let mut i = 0;
+    while i < COUNT {
+        out[i] = [find(TABLE[i].min), find(TABLE[i].max)];
+        i += 1;
+    }
+    out
+};
+
+/// Allowed range of table entry `i`.
+fn range(i: usize) -> Option<(f32, f32)> {
+    let &[lo, hi] = RANGES.get(i)?;
+    Some((*BOUNDS.get(usize::from(lo))?, *BOUNDS.get(usize::from(hi))?))
+}
 
 /// Table index of setting `number`, for the accessors: evaluated at compile time, so
 /// a number missing from the table fails the build.
@@ -420,7 +477,7 @@ impl Settings {
     /// Set `$number = value` with Grbl's checks. Integer kinds are truncated toward zero.
     pub fn set(&mut self, number: u16, value: f32) -> Result<(), SettingError> {
         let i = index_of(number).ok_or(SettingError::Invalid)?;
-        let (Some(&kind), Some(&min), Some(&max)) = (KINDS.get(i), MINS.get(i), MAXS.get(i)) else {
+        let (Some(&kind), Some((min, max))) = (KINDS.get(i), range(i)) else {
             return Err(SettingError::Invalid);
         };
         if !value.is_finite() {
@@ -431,7 +488,7 @@ impl Settings {
         }
         let v = match kind {
             Kind::Float => value,
-            Kind::Int | Kind::Mask => libm::truncf(value),
+            Kind::Int | Kind::Mask => fmath::trunc(value),
             Kind::Bool => {
                 if value != 0.0 {
                     1.0
@@ -622,13 +679,19 @@ impl Settings {
     }
 
     /// Write `$n=value` for table entry `index` (no line ending). `None` past the end.
-    pub fn write_entry<W: fmt::Write>(&self, index: usize, w: &mut W) -> Option<fmt::Result> {
+    pub fn write_entry(&self, index: usize, w: &mut dyn Sink) -> Option<()> {
         let number = *NUMBERS.get(index)?;
         let v = *self.vals.get(index)?;
-        Some(match KINDS.get(index)? {
-            Kind::Float => write!(w, "${}=", number).and_then(|()| write_fixed3(w, v)),
-            _ => write!(w, "${}={}", number, v as i32),
-        })
+        let kind = *KINDS.get(index)?;
+        w.put(b"$");
+        put_int(w, i32::from(number));
+        w.put(b"=");
+        if kind == Kind::Float {
+            write_fixed3(w, v);
+        } else {
+            put_int(w, v as i32);
+        }
+        Some(())
     }
 
     /// The compact byte image: `"IS"`, version, count, each value as little-endian
@@ -669,13 +732,8 @@ impl Settings {
         }
         let mut s = Settings::default();
         let values = body.get(4..).unwrap_or(&[]);
-        for (((slot, chunk), &min), &max) in s
-            .vals
-            .iter_mut()
-            .zip(values.chunks_exact(4))
-            .zip(MINS.iter())
-            .zip(MAXS.iter())
-        {
+        for (i, (slot, chunk)) in s.vals.iter_mut().zip(values.chunks_exact(4)).enumerate() {
+            let (min, max) = range(i).ok_or(ImageError::Range)?;
             let v = f32::from_le_bytes(chunk.try_into().map_err(|_| ImageError::Length)?);
             if !v.is_finite() || v < min || v > max {
                 return Err(ImageError::Range);
@@ -686,43 +744,86 @@ impl Settings {
     }
 }
 
-/// Write `v` with three decimals (Grbl's report format) through integer formatting:
-/// core's float formatting would cost about 14 KB of flash on the Cortex-M3.
-/// Values round half away from zero. Computed in f32 (no double-precision routines in
-/// the image): exact to the last digit below 16,777 (2^24 thousandths), which covers
-/// any plotter; larger values keep f32's 7 significant digits. One copy for every
-/// writer (`dyn`), 32-bit arithmetic unless the value is beyond 4,294,967 mm.
-pub fn write_fixed3(w: &mut dyn fmt::Write, v: f32) -> fmt::Result {
-    let milli = libm::roundf(v * 1000.0);
-    if libm::fabsf(milli) < 4_294_967_296.0 {
-        if milli <= -1.0 {
-            w.write_char('-')?;
+/// A byte sink for the protocol's responses: replies are built from byte strings and
+/// the number writers below, never through `core::fmt` (its machinery costs several KB
+/// of flash on the Cortex-M3).
+pub trait Sink {
+    fn put(&mut self, bytes: &[u8]);
+}
+
+impl<const N: usize> Sink for heapless::Vec<u8, N> {
+    fn put(&mut self, bytes: &[u8]) {
+        let _ = self.extend_from_slice(bytes);
+    }
+}
+
+impl<const N: usize> Sink for heapless::String<N> {
+    fn put(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            let _ = self.push(char::from(b));
         }
-        // NaN converts to 0, as before.
-        let a = libm::fabsf(milli) as u32;
-        return write!(w, "{}.{:03}", a / 1000, a % 1000);
     }
-    // Beyond u32 (and the saturated infinities): the same digits from an i64.
-    let milli = milli as i64;
-    if milli < 0 {
-        w.write_char('-')?;
-    }
-    let a = milli.unsigned_abs();
-    let mut digits = [0u8; 20];
-    let mut start = digits.len();
-    let mut n = a / 1000;
-    while let Some(d) = start.checked_sub(1).and_then(|i| digits.get_mut(i)) {
-        *d = b'0' + (n % 10) as u8;
+}
+
+/// `a` in decimal with `decimals` digits after a point (at least one before it),
+/// behind a `-` if `neg`. Long division by 10 over 16-bit limbs with the core's 32-bit
+/// divide: no 64-bit division routine.
+pub fn put_decimal(w: &mut dyn Sink, a: u64, neg: bool, decimals: usize) {
+    let mut buf = [0u8; 24];
+    let mut start = buf.len();
+    let mut limbs = [
+        (a >> 48) as u32,
+        (a >> 32) as u32 & 0xFFFF,
+        (a >> 16) as u32 & 0xFFFF,
+        a as u32 & 0xFFFF,
+    ];
+    let mut k = 0;
+    loop {
+        let mut r = 0u32;
+        let mut more = false;
+        for l in limbs.iter_mut() {
+            let cur = (r << 16) | *l;
+            *l = cur / 10;
+            r = cur % 10;
+            more |= *l != 0;
+        }
         start -= 1;
-        n /= 10;
-        if n == 0 {
+        if let Some(d) = buf.get_mut(start) {
+            *d = b'0' + r as u8;
+        }
+        k += 1;
+        if k == decimals {
+            start -= 1;
+            if let Some(d) = buf.get_mut(start) {
+                *d = b'.';
+            }
+        }
+        if !more && k > decimals {
             break;
         }
     }
-    for &d in digits.get(start..).unwrap_or(&[]) {
-        w.write_char(char::from(d))?;
+    if neg {
+        start -= 1;
+        if let Some(d) = buf.get_mut(start) {
+            *d = b'-';
+        }
     }
-    write!(w, ".{:03}", (a % 1000) as u32)
+    w.put(buf.get(start..).unwrap_or(&[]));
+}
+
+/// A whole number in decimal.
+pub fn put_int(w: &mut dyn Sink, v: i32) {
+    put_decimal(w, u64::from(v.unsigned_abs()), v < 0, 0);
+}
+
+/// Write `v` with three decimals (Grbl's report format) through integer formatting.
+/// Values round half away from zero, in f32 (no double-precision routines in the
+/// image): exact to the last digit below 16,777 (2^24 thousandths), which covers any
+/// plotter; larger values keep f32's 7 significant digits, and values beyond i64
+/// thousandths saturate. NaN prints as 0.000.
+pub fn write_fixed3(w: &mut dyn Sink, v: f32) {
+    let milli = fmath::round(v * 1000.0) as i64;
+    put_decimal(w, milli.unsigned_abs(), milli < 0, 3);
 }
 
 /// CRC-32 (IEEE, reflected, polynomial 0xEDB88320), bitwise: the image is small and
@@ -772,7 +873,7 @@ mod tests {
             0.0f32, 1.0, -1.0, 0.0005, -0.0004, 123.456, -99.9996, 0.010, 16_000.125, -2.5e-4,
         ] {
             let mut a: heapless::String<40> = heapless::String::new();
-            write_fixed3(&mut a, v).unwrap();
+            write_fixed3(&mut a, v);
             let want = std::format!("{:.3}", f64::from(v));
             let want = if want == "-0.000" {
                 "0.000".into()
@@ -820,7 +921,7 @@ mod tests {
         }
         for v in vals {
             let mut a: heapless::String<40> = heapless::String::new();
-            write_fixed3(&mut a, v).unwrap();
+            write_fixed3(&mut a, v);
             assert_eq!(a.as_str(), reference(v), "{v:e}");
         }
     }
@@ -856,14 +957,10 @@ mod tests {
     fn listing_prints_ints_and_floats_like_grbl() {
         let s = Settings::default();
         let mut line: heapless::String<48> = heapless::String::new();
-        s.write_entry(index_of(0).unwrap(), &mut line)
-            .unwrap()
-            .unwrap();
+        s.write_entry(index_of(0).unwrap(), &mut line).unwrap();
         assert_eq!(line.as_str(), "$0=10");
         line.clear();
-        s.write_entry(index_of(11).unwrap(), &mut line)
-            .unwrap()
-            .unwrap();
+        s.write_entry(index_of(11).unwrap(), &mut line).unwrap();
         assert_eq!(line.as_str(), "$11=0.010");
         assert!(s.write_entry(COUNT, &mut line).is_none());
     }

@@ -11,11 +11,11 @@
 
 use super::parser::Block;
 use super::Status;
+use crate::fmath;
 use crate::machine::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
-use crate::settings::{PenMode, Settings};
+use crate::settings::{put_int, PenMode, Settings, Sink};
 use core::f32::consts::{FRAC_PI_2, TAU};
-use core::fmt;
 use heapless::Vec;
 
 /// Most commands one block can queue (pen, G28 intermediate, G28 target, pen at M2).
@@ -211,8 +211,9 @@ fn set_once<T>(slot: &mut Option<T>, v: T) -> Result<(), Status> {
 }
 
 /// mm to steps for one axis, rounding half away from zero (saturating).
+#[inline(never)]
 pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
-    libm::roundf(mm * steps_per_mm) as i32
+    fmath::round(mm * steps_per_mm) as i32
 }
 
 /// Machine mm to a step position.
@@ -241,7 +242,7 @@ pub const MAX_STEPS: f32 = 1_073_741_824.0;
 pub fn in_step_range(p: &[f32; AXES], s: &Settings) -> bool {
     p.iter()
         .enumerate()
-        .all(|(axis, &v)| libm::fabsf(v * s.steps_per_mm(axis)) < MAX_STEPS)
+        .all(|(axis, &v)| fmath::abs(v * s.steps_per_mm(axis)) < MAX_STEPS)
 }
 
 /// Allowed machine range of `axis` with soft limits, or `None` if unchecked.
@@ -263,12 +264,13 @@ pub fn travel_range(axis: usize, s: &Settings) -> Option<(f32, f32)> {
 /// True if `p` (machine mm) lies within travel on every checked axis.
 pub fn within_travel(p: &[f32; AXES], s: &Settings) -> bool {
     const EPS: f32 = 1e-4;
-    p.iter()
-        .enumerate()
-        .all(|(axis, &v)| match travel_range(axis, s) {
-            Some((lo, hi)) => v >= lo - EPS && v <= hi + EPS,
-            None => true,
-        })
+    let (switches, toward_minus) = (s.switch_mask(), s.homing_dir_mask());
+    p.iter().enumerate().all(|(axis, &v)| {
+        let bit = 1u8 << axis;
+        // Mirrored onto [0, travel] (negation is exact, so the bounds are the same).
+        let v = if toward_minus & bit != 0 { v } else { -v };
+        switches & bit == 0 || (v >= -EPS && v <= s.max_travel(axis) + EPS)
+    })
 }
 
 struct ArcGeom {
@@ -364,28 +366,25 @@ impl Interp {
     }
 
     /// `[GC:...]` body for `$G` (without brackets).
-    pub fn write_modal<W: fmt::Write>(&self, w: &mut W) -> fmt::Result {
+    pub fn write_modal(&self, w: &mut dyn Sink) {
         let m = &self.modal;
-        let motion = match m.motion {
-            MotionMode::Rapid => "G0",
-            MotionMode::Linear => "G1",
-            MotionMode::ArcCw => "G2",
-            MotionMode::ArcCcw => "G3",
-            MotionMode::Cancel => "G80",
-        };
+        w.put(match m.motion {
+            MotionMode::Rapid => b"GC:G0 G",
+            MotionMode::Linear => b"GC:G1 G",
+            MotionMode::ArcCw => b"GC:G2 G",
+            MotionMode::ArcCcw => b"GC:G3 G",
+            MotionMode::Cancel => b"GC:G80 G",
+        });
+        put_int(w, i32::from(54 + m.wcs));
+        w.put(if m.inches { b" G17 G20" } else { b" G17 G21" });
+        w.put(if m.incremental { b" G91" } else { b" G90" });
+        w.put(if m.inverse_time { b" G93" } else { b" G94" });
+        w.put(if m.pen_down { b" M3" } else { b" M5" });
+        w.put(b" M9 T0 F");
         let scale = if m.inches { MM_PER_INCH } else { 1.0 };
-        write!(
-            w,
-            "GC:{} G{} G17 {} {} {} {} M9 T0 F{} S{}",
-            motion,
-            54 + m.wcs,
-            if m.inches { "G20" } else { "G21" },
-            if m.incremental { "G91" } else { "G90" },
-            if m.inverse_time { "G93" } else { "G94" },
-            if m.pen_down { "M3" } else { "M5" },
-            libm::roundf(self.feed / scale) as i32,
-            libm::roundf(self.spindle) as i32,
-        )
+        put_int(w, fmath::round(self.feed / scale) as i32);
+        w.put(b" S");
+        put_int(w, fmath::round(self.spindle) as i32);
     }
 
     /// Interpret one cleaned line (no spaces, upper case, no comments).
@@ -525,7 +524,10 @@ impl Interp {
         let mut coords = self.coords;
         let mut g92 = self.g92;
         let mut pos = self.pos;
-        let mut planned: Vec<[f32; AXES], 8> = Vec::new();
+        let mut planned = Reach {
+            in_range: true,
+            in_travel: true,
+        };
 
         // Pen (M3/M4/M5) runs before motion.
         let pen_change = pen.filter(|&down| down != modal.pen_down);
@@ -538,7 +540,7 @@ impl Interp {
                 PenMode::ZAxis => {
                     let mut p = pos;
                     p[2] = if down { s.pen_z_down() } else { s.pen_z_up() };
-                    planned.push(p).map_err(|_| Status::Overflow)?;
+                    planned.add(&p, s);
                     push(&mut out, rapid(&p, s, line_tag))?;
                     pos = p;
                 }
@@ -566,7 +568,7 @@ impl Interp {
         match non_modal {
             Some(NonModal::Dwell) => {
                 let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
-                let ms = libm::roundf(p * 1000.0);
+                let ms = fmath::round(p * 1000.0);
                 push(
                     &mut out,
                     Command::Dwell {
@@ -577,7 +579,7 @@ impl Interp {
             Some(NonModal::SetCoord) => {
                 let l = b.take(b'L').ok_or(Status::ValueWordMissing)?;
                 let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
-                if p != libm::truncf(p) || l != libm::truncf(l) {
+                if p != fmath::trunc(p) || l != fmath::trunc(l) {
                     return Err(Status::CommandValueNotInteger.into());
                 }
                 if p > 6.0 {
@@ -618,10 +620,10 @@ impl Interp {
                     coords.g30
                 };
                 if has_axis {
-                    planned.push(target).map_err(|_| Status::Overflow)?;
+                    planned.add(&target, s);
                     push(&mut out, rapid(&target, s, line_tag))?;
                 }
-                planned.push(stored).map_err(|_| Status::Overflow)?;
+                planned.add(&stored, s);
                 push(&mut out, rapid(&stored, s, line_tag))?;
                 pos = stored;
             }
@@ -679,11 +681,16 @@ impl Interp {
             };
             if let Some((len, path, geom)) = len_and_path {
                 if let Some(g) = &geom {
-                    for p in arc_extremes(g, &pos, &target, modal.motion == MotionMode::ArcCcw) {
-                        planned.push(p).map_err(|_| Status::Overflow)?;
-                    }
+                    arc_extremes(
+                        g,
+                        &pos,
+                        &target,
+                        modal.motion == MotionMode::ArcCcw,
+                        &mut planned,
+                        s,
+                    );
                 } else {
-                    planned.push(target).map_err(|_| Status::Overflow)?;
+                    planned.add(&target, s);
                 }
                 let f = if modal.motion == MotionMode::Rapid {
                     Feed::Rapid
@@ -716,10 +723,10 @@ impl Interp {
         if b.any_value() {
             return Err(Status::UnusedWords.into());
         }
-        if !planned.iter().all(|p| in_step_range(p, s)) {
+        if !planned.in_range {
             return Err(Status::InvalidTarget.into());
         }
-        if s.soft_limits() && !planned.iter().all(|p| within_travel(p, s)) {
+        if s.soft_limits() && !planned.in_travel {
             return Err(Reject::SoftLimit);
         }
 
@@ -833,22 +840,22 @@ impl Interp {
 /// steps follow the programmed line, not the line between rounded ends; moves that
 /// change Z (or lie outside the fine range) stay plain lines.
 fn line_path(pos: &[f32; AXES], target: &[f32; AXES], s: &Settings) -> Path {
-    let q8 = |mm: f32, axis: usize| libm::roundf(mm * s.steps_per_mm(axis) * 256.0);
-    let (p, t) = (pos.get(..2).unwrap_or(&[]), target.get(..2).unwrap_or(&[]));
-    let z_same = pos.get(2) == target.get(2);
-    match (p, t) {
-        (&[px, py], &[tx, ty]) if z_same => {
-            let v = [q8(px, 0), q8(py, 1), q8(tx, 0), q8(ty, 1)];
-            if v.iter().all(|c| c.abs() < 2.0e9) {
-                Path::LineFine {
-                    from: [v[0] as i32, v[1] as i32],
-                    to: [v[2] as i32, v[3] as i32],
-                }
-            } else {
-                Path::Line
-            }
+    // Exact: scaling by 256 commutes with the rounding multiply.
+    let (sx, sy) = (s.steps_per_mm(0) * 256.0, s.steps_per_mm(1) * 256.0);
+    let v = [
+        mm_to_steps(pos[0], sx),
+        mm_to_steps(pos[1], sy),
+        mm_to_steps(target[0], sx),
+        mm_to_steps(target[1], sy),
+    ];
+    // Saturation starts at 2^31, beyond the fine range's bound.
+    if pos[2] == target[2] && v.iter().all(|c| c.unsigned_abs() < 2_000_000_000) {
+        Path::LineFine {
+            from: [v[0], v[1]],
+            to: [v[2], v[3]],
         }
-        _ => Path::Line,
+    } else {
+        Path::Line
     }
 }
 
@@ -868,7 +875,7 @@ fn rapid(p: &[f32; AXES], s: &Settings, line: u32) -> Command {
 /// sqrt(a^2 + b^2) in f32: libm's hypotf works in f64, which would pull the
 /// double-precision soft-float routines into the image for nothing here.
 fn hypot(a: f32, b: f32) -> f32 {
-    libm::sqrtf(a * a + b * b)
+    fmath::sqrt(a * a + b * b)
 }
 
 fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
@@ -876,7 +883,7 @@ fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
     for (x, y) in a.iter().zip(b.iter()) {
         sum += (y - x) * (y - x);
     }
-    libm::sqrtf(sum)
+    fmath::sqrt(sum)
 }
 
 /// Normalise an angle difference into (0, 2*pi].
@@ -909,14 +916,14 @@ fn arc_geometry(
         if disc < 0.0 {
             // A half circle with a rounded radius: accept within the tolerance.
             let chord = hypot(dx, dy);
-            if chord / 2.0 - libm::fabsf(r) > ARC_ABS_TOL {
+            if chord / 2.0 - fmath::abs(r) > ARC_ABS_TOL {
                 return Err(Status::ArcRadiusError);
             }
             disc = 0.0;
         }
         // Offset of the centre from the chord midpoint, as a multiple of the chord
         // turned by 90 degrees; its sign picks the side (G2 with positive R: right).
-        let mut h = -libm::sqrtf(disc) / hypot(dx, dy);
+        let mut h = -fmath::sqrt(disc) / hypot(dx, dy);
         if ccw {
             h = -h;
         }
@@ -938,7 +945,7 @@ fn arc_geometry(
     let center = [start[0] + ci, start[1] + cj];
     let r_start = hypot(ci, cj);
     let r_end = hypot(target[0] - center[0], target[1] - center[1]);
-    let dr = libm::fabsf(r_end - r_start);
+    let dr = fmath::abs(r_end - r_start);
     if !r_start.is_finite()
         || !r_end.is_finite()
         || r_start <= 0.0
@@ -946,8 +953,8 @@ fn arc_geometry(
     {
         return Err(Status::InvalidTarget);
     }
-    let a0 = libm::atan2f(-cj, -ci);
-    let a1 = libm::atan2f(target[1] - center[1], target[0] - center[0]);
+    let a0 = fmath::atan2(-cj, -ci);
+    let a1 = fmath::atan2(target[1] - center[1], target[0] - center[0]);
     let same_point = dx == 0.0 && dy == 0.0;
     let sweep = if same_point {
         TAU
@@ -987,21 +994,38 @@ fn arc_path(
             turns: 0,
         }
     } else {
-        let a = libm::roundf(g.radius * sx) as i32;
-        let b = libm::roundf(g.radius * sy) as i32;
+        let a = fmath::round(g.radius * sx) as i32;
+        let b = fmath::round(g.radius * sy) as i32;
         Path::Ellipse { center, a, b, ccw }
     }
 }
 
-/// Points that bound the arc: its end and every axis extreme it passes.
+/// Every point a block moves to, checked as it is planned; the verdicts are reported
+/// after the block's word checks, in Grbl's order.
+struct Reach {
+    /// All points convert to steps ([`in_step_range`]).
+    in_range: bool,
+    /// All points lie within travel ([`within_travel`]).
+    in_travel: bool,
+}
+
+impl Reach {
+    fn add(&mut self, p: &[f32; AXES], s: &Settings) {
+        self.in_range &= in_step_range(p, s);
+        self.in_travel &= within_travel(p, s);
+    }
+}
+
+/// Check the points that bound the arc: its end and every axis extreme it passes.
 fn arc_extremes(
     g: &ArcGeom,
     start: &[f32; AXES],
     target: &[f32; AXES],
     ccw: bool,
-) -> Vec<[f32; AXES], 5> {
-    let mut pts: Vec<[f32; AXES], 5> = Vec::new();
-    let _ = pts.push(*target);
+    pts: &mut Reach,
+    s: &Settings,
+) {
+    pts.add(target, s);
     // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
     let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
     for (k, (cs, sn)) in axes_dirs.into_iter().enumerate() {
@@ -1018,10 +1042,12 @@ fn arc_extremes(
                 0.0
             };
             let z = start[2] + (target[2] - start[2]) * frac;
-            let _ = pts.push([g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z]);
+            pts.add(
+                &[g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z],
+                s,
+            );
         }
     }
-    pts
 }
 
 #[cfg(test)]

@@ -141,7 +141,7 @@ fn code_of(value: f32) -> Result<Code, Status> {
     if value > 999.0 {
         return Err(Status::UnsupportedCommand);
     }
-    let hundredths = libm::roundf(value * 100.0) as u32;
+    let hundredths = crate::fmath::round(value * 100.0) as u32;
     if !hundredths.is_multiple_of(10) {
         return Err(Status::CommandValueNotInteger);
     }

@@ -183,7 +183,7 @@ impl Homing {
     ) -> bool {
         let mut target = m.position();
         if let Some(t) = target.get_mut(axis) {
-            *t = t.saturating_add(libm::roundf(mm * s.steps_per_mm(axis)) as i32);
+            *t = t.saturating_add(crate::fmath::round(mm * s.steps_per_mm(axis)) as i32);
         }
         let mv = Move {
             target,
@@ -207,7 +207,7 @@ impl Homing {
                 -1.0
             };
             if let Some(p) = pos.get_mut(a) {
-                *p = libm::roundf(sign * off) as i32;
+                *p = crate::fmath::round(sign * off) as i32;
             }
         }
         pos

@@ -139,7 +139,8 @@ impl Machine {
     pub fn new(settings: Settings) -> Machine {
         let mut m = Machine {
             settings,
-            interp: Interp::new(),
+            // A const template (copied from flash) instead of field-by-field stores.
+            interp: const { Interp::new() },
             locked: false,
             alarm: None,
             needs_reset: false,
