@@ -187,8 +187,8 @@ impl FineLine {
         let q = 256 * den;
         let num = ld + 128 * den;
         // Floor division without a 64-bit divide (not in the chip's instruction set):
-        // an f64 estimate, corrected exactly.
-        let mut n = libm::floor(num as f64 / q as f64) as i64;
+        // an f32 estimate (within a few units: |n| < 2^22), corrected exactly below.
+        let mut n = (num as f32 / q as f32) as i64;
         let mut r = num - n * q;
         while r < 0 {
             r += q;

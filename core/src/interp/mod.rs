@@ -127,7 +127,7 @@ impl Interp {
             }
             Path::Sine { amp, omega, phase } => {
                 planar(start, mv.target)?;
-                let c = curve::Sine::new(f64::from(amp), f64::from(omega), f64::from(phase))?;
+                let c = curve::Sine::new(amp, omega, phase)?;
                 Ok(Interp::Sine(curve::CurveTrace::new(
                     start, mv.target, c, method,
                 )))
