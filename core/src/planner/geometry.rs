@@ -201,12 +201,13 @@ fn planar(start: StepPos, mv: &Move) -> Result<(), GeometryError> {
 }
 
 /// Angle wrapped into [0, 2 pi).
+/// `floor`, not `%`: f32 remainder links fmodf and a u64 division (~1 KB).
 fn wrap(a: f32) -> f32 {
-    let w = a % TAU;
-    if w < 0.0 {
-        w + TAU
+    let w = a - crate::fmath::floor(a / TAU) * TAU;
+    if w >= TAU {
+        0.0
     } else {
-        w
+        w.max(0.0)
     }
 }
 
