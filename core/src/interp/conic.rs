@@ -227,9 +227,11 @@ impl Conic {
     }
 
     /// Signed position of `(x, y)` relative to the target ray: the cross product
-    /// target x p, oriented so that it grows in the feed direction.
-    fn side(&self, x: i64, y: i64) -> i128 {
-        let cr = i128::from(self.tx) * i128::from(y) - i128::from(self.ty) * i128::from(x);
+    /// target x p, oriented so that it grows in the feed direction. i64 is enough:
+    /// every coordinate is within 2^30.5 of the centre (the limits checked in
+    /// [`Conic::build`]), so each product is below 2^61.
+    fn side(&self, x: i64, y: i64) -> i64 {
+        let cr = self.tx * y - self.ty * x;
         if self.ccw {
             cr
         } else {
@@ -238,7 +240,7 @@ impl Conic {
     }
 
     fn ahead(&self, x: i64, y: i64) -> bool {
-        i128::from(self.tx) * i128::from(x) + i128::from(self.ty) * i128::from(y) > 0
+        self.tx * x + self.ty * y > 0
     }
 
     /// Nearest integer to the curve along the minor axis at major coordinate `m`,
