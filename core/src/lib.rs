@@ -8,7 +8,7 @@
 //! - step generation (segment preparation, the step interrupt's work): [`stepper`]
 //! - measurement of step traces against an ideal path: [`analysis`]
 //! - the benchmark programs' G-code subset: [`refprog`]
-//! - compact sine/cosine/arctangent for planning code: [`trig`]; libm-free f32 math: [`fmath`]
+//! - libm-free f32 math (sine, cosine, arctangent, square root): [`fmath`]
 //! - machine settings and their flash store: [`settings`], [`settings_store`]
 //! - G-code parsing and interpretation: [`gcode`]
 //! - machine state, safety and the planner interface: [`machine`]
@@ -39,4 +39,3 @@ pub mod screens;
 pub mod settings;
 pub mod settings_store;
 pub mod stepper;
-pub mod trig;

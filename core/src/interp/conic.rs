@@ -133,9 +133,9 @@ impl Conic {
         if tx == 0 && ty == 0 {
             return Err(InterpError::Degenerate);
         }
-        // Budget: a generous multiple of the perimeter bound, per turn (f64: no 64-bit
+        // Budget: a generous multiple of the perimeter bound, per turn (f32: no 64-bit
         // division in the firmware).
-        let r = libm::sqrt(c as f64 / a.min(b) as f64) as u64 + 2;
+        let r = crate::fmath::sqrt(c as f32 / a.min(b) as f32) as u64 + 2;
         let budget = (16 * r + 64) * (u64::from(turns) + 1);
         Ok(Conic {
             a,
@@ -163,8 +163,8 @@ impl Conic {
     }
 
     /// Radius in steps if this is a circle.
-    pub fn circle_radius(&self) -> Option<f64> {
-        (self.a == self.b).then(|| libm::sqrt(self.c as f64))
+    pub fn circle_radius(&self) -> Option<f32> {
+        (self.a == self.b).then(|| crate::fmath::sqrt(self.c as f32))
     }
 
     /// The last tick is part of the straight tail to the target.
@@ -190,26 +190,26 @@ impl Conic {
     /// change of the parameter angle t (x = a cos t, y = b sin t) between the two points,
     /// atan(cross/dot) ~ cross/dot for one step, times |dP/dt| at their midpoint. The
     /// angles telescope, so the lengths of a whole arc add up to its true length.
-    pub fn last_tick_len(&self, spx: f64, spy: f64) -> f64 {
+    pub fn last_tick_len(&self, spx: f32, spy: f32) -> f32 {
         let (x1, y1) = self.prev;
         let (x2, y2) = (self.x, self.y);
         if self.tail.is_some() {
-            let (dx, dy) = ((x2 - x1) as f64 / spx, (y2 - y1) as f64 / spy);
-            return libm::sqrt(dx * dx + dy * dy);
+            let (dx, dy) = ((x2 - x1) as f32 / spx, (y2 - y1) as f32 / spy);
+            return crate::fmath::sqrt(dx * dx + dy * dy);
         }
-        let (a, b) = (self.a as f64, self.b as f64);
-        let cross = (x1 * y2 - x2 * y1) as f64;
-        let dot = a * (x1 * x2) as f64 + b * (y1 * y2) as f64;
+        let (a, b) = (self.a as f32, self.b as f32);
+        let cross = (x1 * y2 - x2 * y1) as f32;
+        let dot = a * (x1 * x2) as f32 + b * (y1 * y2) as f32;
         if dot <= 0.0 {
             return 0.0;
         }
         // One step turns the radius by about 1/R: atan(x) = x - x^3/3 differs by
         // < 1e-9 relative for any radius of more than a few steps.
-        let dt = cross.abs() * libm::sqrt(a * b) / dot;
-        let (mx, my) = ((x1 + x2) as f64 * 0.5, (y1 + y2) as f64 * 0.5);
-        let vx = libm::sqrt(b / a) * my / spx;
-        let vy = libm::sqrt(a / b) * mx / spy;
-        dt * libm::sqrt(vx * vx + vy * vy)
+        let dt = cross.abs() * crate::fmath::sqrt(a * b) / dot;
+        let (mx, my) = ((x1 + x2) as f32 * 0.5, (y1 + y2) as f32 * 0.5);
+        let vx = crate::fmath::sqrt(b / a) * my / spx;
+        let vy = crate::fmath::sqrt(a / b) * mx / spy;
+        dt * crate::fmath::sqrt(vx * vx + vy * vy)
     }
 
     fn f(&self, x: i64, y: i64) -> i64 {
@@ -227,9 +227,11 @@ impl Conic {
     }
 
     /// Signed position of `(x, y)` relative to the target ray: the cross product
-    /// target x p, oriented so that it grows in the feed direction.
-    fn side(&self, x: i64, y: i64) -> i128 {
-        let cr = i128::from(self.tx) * i128::from(y) - i128::from(self.ty) * i128::from(x);
+    /// target x p, oriented so that it grows in the feed direction. i64 is enough:
+    /// every coordinate is within 2^30.5 of the centre (the limits checked in
+    /// [`Conic::build`]), so each product is below 2^61.
+    fn side(&self, x: i64, y: i64) -> i64 {
+        let cr = self.tx * y - self.ty * x;
         if self.ccw {
             cr
         } else {
@@ -238,7 +240,7 @@ impl Conic {
     }
 
     fn ahead(&self, x: i64, y: i64) -> bool {
-        i128::from(self.tx) * i128::from(x) + i128::from(self.ty) * i128::from(y) > 0
+        self.tx * x + self.ty * y > 0
     }
 
     /// Nearest integer to the curve along the minor axis at major coordinate `m`,

@@ -10,7 +10,7 @@
 //! the column crossing is merged with one climbing step into a diagonal tick; in
 //! classic mode every tick moves one axis.
 //!
-//! Evaluation uses f64 ([`crate::trig`]); this runs in the segment-preparation task,
+//! Evaluation uses f32 ([`crate::fmath`]); this runs in the segment-preparation task,
 //! never in the step interrupt.
 
 use super::line::Line;
@@ -19,15 +19,15 @@ use crate::motion::{StepPos, X, Y};
 
 /// A function y = f(u), u = x - x_start in steps, y relative to the start in steps.
 pub trait Curve {
-    fn eval(&self, u: f64) -> f64;
+    fn eval(&self, u: f32) -> f32;
     /// dy/du; a central difference unless the curve knows better.
-    fn slope(&self, u: f64) -> f64 {
+    fn slope(&self, u: f32) -> f32 {
         self.eval(u + 0.25) * 2.0 - self.eval(u - 0.25) * 2.0
     }
 }
 
-impl<F: Fn(f64) -> f64> Curve for F {
-    fn eval(&self, u: f64) -> f64 {
+impl<F: Fn(f32) -> f32> Curve for F {
+    fn eval(&self, u: f32) -> f32 {
         self(u)
     }
 }
@@ -35,14 +35,14 @@ impl<F: Fn(f64) -> f64> Curve for F {
 /// y = amp sin(omega u + phase) - amp sin(phase): passes through the start point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sine {
-    amp: f64,
-    omega: f64,
-    phase: f64,
-    offset: f64,
+    amp: f32,
+    omega: f32,
+    phase: f32,
+    offset: f32,
 }
 
 impl Sine {
-    pub fn new(amp: f64, omega: f64, phase: f64) -> Result<Self, InterpError> {
+    pub fn new(amp: f32, omega: f32, phase: f32) -> Result<Self, InterpError> {
         if !(amp.is_finite() && omega.is_finite() && phase.is_finite()) {
             return Err(InterpError::Degenerate);
         }
@@ -53,17 +53,17 @@ impl Sine {
             amp,
             omega,
             phase,
-            offset: amp * crate::trig::sin_cos(phase).0,
+            offset: amp * crate::fmath::sin_cos(phase).0,
         })
     }
 }
 
 impl Curve for Sine {
-    fn eval(&self, u: f64) -> f64 {
-        self.amp * crate::trig::sin_cos(self.omega * u + self.phase).0 - self.offset
+    fn eval(&self, u: f32) -> f32 {
+        self.amp * crate::fmath::sin_cos(self.omega * u + self.phase).0 - self.offset
     }
-    fn slope(&self, u: f64) -> f64 {
-        self.amp * self.omega * crate::trig::sin_cos(self.omega * u + self.phase).1
+    fn slope(&self, u: f32) -> f32 {
+        self.amp * self.omega * crate::fmath::sin_cos(self.omega * u + self.phase).1
     }
 }
 
@@ -91,9 +91,9 @@ pub struct CurveTrace<C> {
     tail: Option<Line>,
 }
 
-fn nearest(v: f64) -> i64 {
+fn nearest(v: f32) -> i64 {
     // Saturating conversion; NaN becomes 0.
-    libm::round(v) as i64
+    crate::fmath::round(v) as i64
 }
 
 impl<C: Curve> CurveTrace<C> {
@@ -119,16 +119,13 @@ impl<C: Curve> CurveTrace<C> {
 
     /// Feed direction at the present column (step space, not normalised).
     pub fn direction(&self) -> [f32; 2] {
-        let u = (self.dir * self.k) as f64 + 0.5 * self.dir as f64;
-        [
-            self.dir as f32,
-            (self.dir as f64 * self.curve.slope(u)) as f32,
-        ]
+        let u = (self.dir * self.k) as f32 + 0.5 * self.dir as f32;
+        [self.dir as f32, self.dir as f32 * self.curve.slope(u)]
     }
 
     fn at(&self, k2: i64) -> i64 {
         // f at u = dir * k2 / 2.
-        nearest(self.curve.eval((self.dir * k2) as f64 * 0.5))
+        nearest(self.curve.eval((self.dir * k2) as f32 * 0.5))
     }
 
     /// Sets up the climbs of column k -> k+1 (or the tail after the last column).
@@ -219,11 +216,11 @@ mod tests {
 
     /// Does the curve pass through the square [p +- half]? Dense sampling over the
     /// square's x range (the curve is smooth at this scale).
-    fn near_curve(f: &dyn Fn(f64) -> f64, u: f64, y: f64, half: f64) -> bool {
+    fn near_curve(f: &dyn Fn(f32) -> f32, u: f32, y: f32, half: f32) -> bool {
         let n = 16;
-        let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+        let (mut lo, mut hi) = (f32::MAX, f32::MIN);
         for i in 0..=n {
-            let v = f(u - half + 2.0 * half * f64::from(i) / f64::from(n));
+            let v = f(u - half + 2.0 * half * i as f32 / n as f32);
             lo = lo.min(v);
             hi = hi.max(v);
         }
@@ -232,23 +229,23 @@ mod tests {
 
     proptest! {
         #[test]
-        fn sine_trace_is_exact(amp in -2000.0f64..2000.0, omega in -0.3f64..0.3, phase in -7.0f64..7.0,
+        fn sine_trace_is_exact(amp in -2000.0f32..2000.0, omega in -0.3f32..0.3, phase in -7.0f32..7.0,
                                dx in -1500i32..1500, classic in any::<bool>()) {
             let s = Sine::new(amp, omega, phase).unwrap();
             let start = [17, -40, 3];
-            let ideal_end = nearest(s.eval(f64::from(dx))) as i32;
+            let ideal_end = nearest(s.eval(dx as f32)) as i32;
             let target = [17 + dx, -40 + ideal_end, 3];
             let method = if classic { Method::Classic } else { Method::Dda };
             let mut it = CurveTrace::new(start, target, s, method);
             let mut p = start;
-            let f = |u: f64| s.eval(u);
+            let f = |u: f32| s.eval(u);
             while let Some(t) = it.next_tick() {
                 if classic {
                     prop_assert_eq!(t.steps().count_ones(), 1);
                 }
                 t.apply(&mut p);
-                let u = f64::from(p[0] - 17);
-                prop_assert!(near_curve(&f, u, f64::from(p[1] + 40), 0.5), "{:?}", p);
+                let u = (p[0] - 17) as f32;
+                prop_assert!(near_curve(&f, u, (p[1] + 40) as f32, 0.5), "{:?}", p);
             }
             prop_assert_eq!(p, target);
         }
@@ -256,7 +253,7 @@ mod tests {
 
     #[test]
     fn arbitrary_function_reaches_an_off_curve_target_exactly() {
-        let f = |u: f64| 0.001 * u * u;
+        let f = |u: f32| 0.001 * u * u;
         let start = [0, 0, 0];
         let pts = run(CurveTrace::new(start, [-100, 12, 0], f, Method::Dda), start);
         assert_eq!(*pts.last().unwrap(), [-100, 12, 0]);
@@ -266,7 +263,7 @@ mod tests {
 
     #[test]
     fn shallow_parts_step_diagonally_like_bresenham() {
-        let f = |u: f64| 0.5 * u;
+        let f = |u: f32| 0.5 * u;
         let pts = run(CurveTrace::new([0; 3], [10, 5, 0], f, Method::Dda), [0; 3]);
         assert_eq!(pts.len() - 1, 10);
         let classic = run(

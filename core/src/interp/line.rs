@@ -105,7 +105,8 @@ impl ClassicLine {
 impl Interpolate for ClassicLine {
     fn next_tick(&mut self) -> Option<Tick> {
         // Pick the unfinished axis with the smallest progress taken/len; compare
-        // fractions by cross-multiplication (i128: products of two i64 travels).
+        // fractions by cross-multiplication (u64: both factors are travels of two i32
+        // positions, below 2^32, so the product fits).
         let mut best: Option<usize> = None;
         for i in 0..AXES {
             if self.taken[i] >= self.len[i] {
@@ -114,8 +115,8 @@ impl Interpolate for ClassicLine {
             best = match best {
                 None => Some(i),
                 Some(b) => {
-                    let lhs = i128::from(self.taken[i]) * i128::from(self.len[b]);
-                    let rhs = i128::from(self.taken[b]) * i128::from(self.len[i]);
+                    let lhs = self.taken[i].unsigned_abs() * self.len[b].unsigned_abs();
+                    let rhs = self.taken[b].unsigned_abs() * self.len[i].unsigned_abs();
                     if lhs < rhs {
                         Some(i)
                     } else {
@@ -187,8 +188,8 @@ impl FineLine {
         let q = 256 * den;
         let num = ld + 128 * den;
         // Floor division without a 64-bit divide (not in the chip's instruction set):
-        // an f64 estimate, corrected exactly.
-        let mut n = libm::floor(num as f64 / q as f64) as i64;
+        // an f32 estimate (within a few units: |n| < 2^22), corrected exactly below.
+        let mut n = (num as f32 / q as f32) as i64;
         let mut r = num - n * q;
         while r < 0 {
             r += q;

@@ -127,7 +127,7 @@ impl Interp {
             }
             Path::Sine { amp, omega, phase } => {
                 planar(start, mv.target)?;
-                let c = curve::Sine::new(f64::from(amp), f64::from(omega), f64::from(phase))?;
+                let c = curve::Sine::new(amp, omega, phase)?;
                 Ok(Interp::Sine(curve::CurveTrace::new(
                     start, mv.target, c, method,
                 )))
@@ -168,11 +168,7 @@ fn planar(start: StepPos, target: StepPos) -> Result<(), InterpError> {
 
 /// Sign of an i64 as -1, 0 or 1.
 pub(crate) fn sgn(v: i64) -> i8 {
-    match v.cmp(&0) {
-        core::cmp::Ordering::Less => -1,
-        core::cmp::Ordering::Equal => 0,
-        core::cmp::Ordering::Greater => 1,
-    }
+    i8::from(v > 0) - i8::from(v < 0)
 }
 
 /// XY deltas to a tick with no Z motion.

@@ -13,11 +13,15 @@ pub fn star(center: [i32; 2], r: i32, z: i32) -> [StepPos; 6] {
     let mut v = [[0i32; 3]; 6];
     for (i, p) in v.iter_mut().enumerate() {
         let k = (2 * i) % 5;
-        let ang = core::f64::consts::FRAC_PI_2 + core::f64::consts::TAU * k as f64 / 5.0;
-        let (sin, cos) = crate::trig::sin_cos(ang);
-        let x = f64::from(center[0]) + f64::from(r) * cos;
-        let y = f64::from(center[1]) + f64::from(r) * sin;
-        *p = [libm::round(x) as i32, libm::round(y) as i32, z];
+        let ang = core::f32::consts::FRAC_PI_2 + core::f32::consts::TAU * k as f32 / 5.0;
+        let (sin, cos) = crate::fmath::sin_cos(ang);
+        let x = center[0] as f32 + r as f32 * cos;
+        let y = center[1] as f32 + r as f32 * sin;
+        *p = [
+            crate::fmath::round(x) as i32,
+            crate::fmath::round(y) as i32,
+            z,
+        ];
     }
     v
 }

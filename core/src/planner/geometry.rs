@@ -49,7 +49,7 @@ fn axis_limits(cfg: &PlannerConfig, u: [f32; AXES]) -> (f32, f32) {
 }
 
 fn normalize(v: [f32; AXES]) -> [f32; AXES] {
-    let n = libm::sqrtf(v.iter().map(|c| c * c).sum());
+    let n = crate::fmath::sqrt(v.iter().map(|c| c * c).sum());
     if n > 0.0 {
         [v[0] / n, v[1] / n, v[2] / n]
     } else {
@@ -68,7 +68,7 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
     });
     match mv.path {
         Path::Line | Path::LineFine { .. } => {
-            let length = libm::sqrtf(d.iter().map(|c| c * c).sum());
+            let length = crate::fmath::sqrt(d.iter().map(|c| c * c).sum());
             if length <= 0.0 {
                 return Err(GeometryError::Empty);
             }
@@ -87,15 +87,21 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
             let p0 = (-center[0] as f32 / sx, -center[1] as f32 / sy);
             let p1 = (d[X] + p0.0, d[Y] + p0.1);
-            let r = libm::hypotf(p0.0, p0.1);
+            let r = crate::fmath::hypot(p0.0, p0.1);
             if r <= 0.0 {
                 return Err(GeometryError::Invalid);
             }
-            let a0 = atan2f(p0.1, p0.0);
-            let a1 = atan2f(p1.1, p1.0);
+            let a0 = crate::fmath::atan2(p0.1, p0.0);
+            let a1 = crate::fmath::atan2(p1.1, p1.0);
             let sweep = sweep(a0, a1, ccw, mv.target == start) + TAU * f32::from(turns);
             let sign = if ccw { 1.0 } else { -1.0 };
-            let tangent = |a: f32| [-sinf(a) * sign, cosf(a) * sign, 0.0];
+            let tangent = |a: f32| {
+                [
+                    -crate::fmath::sin(a) * sign,
+                    crate::fmath::cos(a) * sign,
+                    0.0,
+                ]
+            };
             let (us, ue) = (tangent(a0), tangent(a1));
             let (mut accel, mut speed) = axis_limits(cfg, us);
             let (a2, s2) = axis_limits(cfg, ue);
@@ -111,7 +117,7 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
                     speed = speed.min(s3);
                 }
             }
-            let centripetal = libm::sqrtf(accel * r);
+            let centripetal = crate::fmath::sqrt(accel * r);
             Ok(Geometry {
                 length: r * sweep,
                 unit_start: us,
@@ -132,11 +138,17 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
                 p0.0 + (mv.target[X] - start[X]) as f32,
                 p0.1 + (mv.target[Y] - start[Y]) as f32,
             );
-            let t0 = atan2f(p0.1 / bf, p0.0 / af);
-            let t1 = atan2f(p1.1 / bf, p1.0 / af);
+            let t0 = crate::fmath::atan2(p0.1 / bf, p0.0 / af);
+            let t1 = crate::fmath::atan2(p1.1 / bf, p1.0 / af);
             let sweep = sweep(t0, t1, ccw, mv.target == start);
             let sign = if ccw { 1.0 } else { -1.0 };
-            let vel = |t: f32| [-af * sinf(t) / sx * sign, bf * cosf(t) / sy * sign, 0.0];
+            let vel = |t: f32| {
+                [
+                    -af * crate::fmath::sin(t) / sx * sign,
+                    bf * crate::fmath::cos(t) / sy * sign,
+                    0.0,
+                ]
+            };
             let param = |i: u32, n: u32| t0 + sign * sweep * i as f32 / n as f32;
             let (length, accel, speed) = integrate(cfg, 128, |i, n| vel(param(i, n)), sweep);
             // Smallest radius of curvature of an ellipse: min(a^2/b, b^2/a) (steps).
@@ -146,7 +158,7 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
                 unit_start: normalize(vel(t0)),
                 unit_end: normalize(vel(t0 + sign * sweep)),
                 accel,
-                speed_limit: speed.min(libm::sqrtf(accel * r_min)),
+                speed_limit: speed.min(crate::fmath::sqrt(accel * r_min)),
             })
         }
         Path::Sine { amp, omega, phase } => {
@@ -157,7 +169,7 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             }
             let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
             let dir = dx.signum();
-            let slope = |u: f32| amp * omega * cosf(omega * u + phase);
+            let slope = |u: f32| amp * omega * crate::fmath::cos(omega * u + phase);
             let vel = |u: f32| [dir / sx, dir * slope(u) / sy, 0.0];
             let periods = (omega.abs() * dx.abs() / TAU) as u32;
             let n = (periods.saturating_mul(16)).clamp(64, 4096) & !1;
@@ -174,20 +186,10 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
                 unit_start: normalize(vel(0.0)),
                 unit_end: normalize(vel(dx)),
                 accel,
-                speed_limit: speed.min(libm::sqrtf(accel * r_min)),
+                speed_limit: speed.min(crate::fmath::sqrt(accel * r_min)),
             })
         }
     }
-}
-
-fn sinf(a: f32) -> f32 {
-    crate::trig::sin_cos(f64::from(a)).0 as f32
-}
-fn cosf(a: f32) -> f32 {
-    crate::trig::sin_cos(f64::from(a)).1 as f32
-}
-fn atan2f(y: f32, x: f32) -> f32 {
-    crate::trig::atan2(f64::from(y), f64::from(x)) as f32
 }
 
 fn planar(start: StepPos, mv: &Move) -> Result<(), GeometryError> {
@@ -199,12 +201,13 @@ fn planar(start: StepPos, mv: &Move) -> Result<(), GeometryError> {
 }
 
 /// Angle wrapped into [0, 2 pi).
+/// `floor`, not `%`: f32 remainder links fmodf and a u64 division (~1 KB).
 fn wrap(a: f32) -> f32 {
-    let w = a % TAU;
-    if w < 0.0 {
-        w + TAU
+    let w = a - crate::fmath::floor(a / TAU) * TAU;
+    if w >= TAU {
+        0.0
     } else {
-        w
+        w.max(0.0)
     }
 }
 
@@ -235,7 +238,7 @@ fn integrate(
     let mut speed = f32::INFINITY;
     for i in 0..=n {
         let v = vel(i, n);
-        let m = libm::sqrtf(v.iter().map(|c| c * c).sum());
+        let m = crate::fmath::sqrt(v.iter().map(|c| c * c).sum());
         let w = if i == 0 || i == n {
             1.0
         } else if i % 2 == 1 {

@@ -308,7 +308,7 @@ impl Planner {
                 None => continue,
             };
             if let Some(b) = self.blocks.get_mut(i) {
-                let reach = libm::sqrtf(next_entry * next_entry + 2.0 * ae * b.length);
+                let reach = crate::fmath::sqrt(next_entry * next_entry + 2.0 * ae * b.length);
                 b.entry = b.max_entry.min(ovr_max).min(reach);
                 next_entry = b.entry;
             }
@@ -323,7 +323,7 @@ impl Planner {
                 if b.entry > cap {
                     b.entry = cap;
                 }
-                cap = libm::sqrtf(b.entry * b.entry + 2.0 * ae * b.length);
+                cap = crate::fmath::sqrt(b.entry * b.entry + 2.0 * ae * b.length);
             }
         }
         self.generation = self.generation.wrapping_add(1);
@@ -341,12 +341,12 @@ pub fn junction_speed(cfg: &PlannerConfig, u1: [f32; AXES], u2: [f32; AXES], sha
         return cfg.start_speed; // full reversal
     }
     // theta: angle between the reversed incoming and the outgoing direction.
-    let sin_half = libm::sqrtf(0.5 * (1.0 + dot));
+    let sin_half = crate::fmath::sqrt(0.5 * (1.0 + dot));
     let mut j = [0.0f32; AXES];
     for (k, v) in j.iter_mut().enumerate() {
         *v = u2[k] - u1[k];
     }
-    let n = libm::sqrtf(j.iter().map(|c| c * c).sum());
+    let n = crate::fmath::sqrt(j.iter().map(|c| c * c).sum());
     let mut a = f32::INFINITY;
     for (ax, c) in cfg.axes.iter().zip(j.iter()) {
         let c = (c / n).abs();
@@ -355,7 +355,7 @@ pub fn junction_speed(cfg: &PlannerConfig, u1: [f32; AXES], u2: [f32; AXES], sha
         }
     }
     let a = shape.effective_accel(a);
-    libm::sqrtf(a * cfg.junction_deviation * sin_half / (1.0 - sin_half))
+    crate::fmath::sqrt(a * cfg.junction_deviation * sin_half / (1.0 - sin_half))
 }
 
 #[cfg(test)]

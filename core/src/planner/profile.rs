@@ -38,26 +38,26 @@ impl Shape {
 /// One ramp from `v0` to `v1` lasting `t` seconds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Ramp {
-    v0: f64,
-    v1: f64,
-    t: f64,
+    v0: f32,
+    v1: f32,
+    t: f32,
 }
 
 impl Ramp {
-    fn new(shape: Shape, v0: f64, v1: f64, a: f64) -> Self {
+    fn new(shape: Shape, v0: f32, v1: f32, a: f32) -> Self {
         let t = match shape {
             Shape::Trapezoid => (v1 - v0).abs() / a,
-            Shape::Cosine => core::f64::consts::PI * (v1 - v0).abs() / (2.0 * a),
+            Shape::Cosine => PI * (v1 - v0).abs() / (2.0 * a),
         };
         Ramp { v0, v1, t }
     }
-    fn dist(&self) -> f64 {
+    fn dist(&self) -> f32 {
         0.5 * (self.v0 + self.v1) * self.t
     }
     /// Distance and speed `t` seconds into the ramp. The second half is evaluated
     /// backwards from the end (a ramp run backwards is the reverse ramp), so the
     /// distance left near the end keeps full precision with f32 sine/cosine.
-    fn at(&self, shape: Shape, t: f64) -> (f64, f64) {
+    fn at(&self, shape: Shape, t: f32) -> (f32, f32) {
         if self.t <= 0.0 {
             return (0.0, self.v0);
         }
@@ -73,7 +73,7 @@ impl Ramp {
         self.forward(shape, t)
     }
 
-    fn forward(&self, shape: Shape, t: f64) -> (f64, f64) {
+    fn forward(&self, shape: Shape, t: f32) -> (f32, f32) {
         let dv = self.v1 - self.v0;
         match shape {
             Shape::Trapezoid => {
@@ -81,8 +81,8 @@ impl Ramp {
                 (self.v0 * t + 0.5 * acc * t * t, self.v0 + acc * t)
             }
             Shape::Cosine => {
-                let w = core::f64::consts::PI / self.t;
-                let (sin, cos) = crate::trig::sin_cos(w * t);
+                let w = PI / self.t;
+                let (sin, cos) = crate::fmath::sin_cos(w * t);
                 let s = self.v0 * t + 0.5 * dv * (t - sin / w);
                 (s, self.v0 + 0.5 * dv * (1.0 - cos))
             }
@@ -95,8 +95,8 @@ impl Ramp {
 pub struct Profile {
     shape: Shape,
     up: Ramp,
-    cruise_v: f64,
-    cruise_t: f64,
+    cruise_v: f32,
+    cruise_t: f32,
     down: Ramp,
 }
 
@@ -104,22 +104,18 @@ impl Profile {
     /// Fastest profile from speed `v0` over `dist` that ends at `v_exit`, never above
     /// `v_max`, with peak acceleration `a`. If `v_exit` cannot be reached (too short to
     /// slow down, or to speed up), the profile ends at the closest reachable speed.
-    pub fn new(shape: Shape, v0: f32, v_max: f32, v_exit: f32, a: f32, dist: f64) -> Self {
-        let a = if a > 0.0 {
-            f64::from(a)
-        } else {
-            f64::from(f32::MIN_POSITIVE)
-        };
-        let ae = f64::from(shape.effective_accel(1.0)) * a;
+    pub fn new(shape: Shape, v0: f32, v_max: f32, v_exit: f32, a: f32, dist: f32) -> Self {
+        let a = if a > 0.0 { a } else { f32::MIN_POSITIVE };
+        let ae = shape.effective_accel(a);
         let dist = dist.max(0.0);
-        let v0 = f64::from(v0.max(0.0));
-        let v_max = f64::from(v_max.max(0.0));
+        let v0 = v0.max(0.0);
+        let v_max = v_max.max(0.0);
         // Exit speeds reachable over `dist` from v0 lie in [lo, hi].
-        let hi = libm::sqrt(v0 * v0 + 2.0 * ae * dist);
-        let lo = libm::sqrt((v0 * v0 - 2.0 * ae * dist).max(0.0));
-        let ve = f64::from(v_exit.max(0.0)).min(hi).max(lo);
+        let hi = crate::fmath::sqrt(v0 * v0 + 2.0 * ae * dist);
+        let lo = crate::fmath::sqrt((v0 * v0 - 2.0 * ae * dist).max(0.0));
+        let ve = v_exit.max(0.0).min(hi).max(lo);
         // Where an acceleration from v0 meets a deceleration to ve (>= both of them).
-        let meet = libm::sqrt(ae * dist + 0.5 * (v0 * v0 + ve * ve));
+        let meet = crate::fmath::sqrt(ae * dist + 0.5 * (v0 * v0 + ve * ve));
         let peak = if meet <= v_max { meet } else { v_max.max(ve) };
         let up = Ramp::new(shape, v0, peak, a);
         let down = Ramp::new(shape, peak, ve, a);
@@ -135,20 +131,36 @@ impl Profile {
     }
 
     /// Total duration in seconds.
-    pub fn duration(&self) -> f64 {
+    pub fn duration(&self) -> f32 {
         self.up.t + self.cruise_t + self.down.t
     }
     /// Total distance.
-    pub fn distance(&self) -> f64 {
+    pub fn distance(&self) -> f32 {
         self.up.dist() + self.cruise_v * self.cruise_t + self.down.dist()
     }
     /// Speed at the end.
-    pub fn exit_speed(&self) -> f64 {
+    pub fn exit_speed(&self) -> f32 {
         self.down.v1
     }
+    /// Distance left to the end `t` seconds after the start. Near the end it comes from
+    /// the last ramp run backwards, so it keeps full f32 precision where the speed is
+    /// low and a tiny distance error would be a large time error (`distance() - at(t)`
+    /// would lose it to cancellation).
+    pub fn left(&self, t: f32) -> f32 {
+        let r = self.duration() - t;
+        if r < self.down.t {
+            let rev = Ramp {
+                v0: self.down.v1,
+                v1: self.down.v0,
+                t: self.down.t,
+            };
+            rev.at(self.shape, r.max(0.0)).0
+        } else {
+            (self.distance() - self.at(t).0).max(0.0)
+        }
+    }
     /// Distance covered and speed `t` seconds after the start (clamped to the end).
-    /// Evaluated in f64: near the end of a long move f32 cannot resolve one step.
-    pub fn at(&self, t: f64) -> (f64, f64) {
+    pub fn at(&self, t: f32) -> (f32, f32) {
         let t = t.max(0.0);
         if t < self.up.t {
             return self.up.at(self.shape, t);
@@ -194,7 +206,7 @@ mod tests {
         // 1 mm is too short to reach 50 mm/s: triangle peaking at sqrt(a d).
         let t = Profile::new(Shape::Trapezoid, 0.0, 50.0, 0.0, 500.0, 1.0);
         let (_, vp) = t.at(t.duration() / 2.0);
-        assert!((vp - 500f64.sqrt()).abs() < 1e-3);
+        assert!((vp - 500f32.sqrt()).abs() < 1e-3);
         assert!((t.distance() - 1.0).abs() < 1e-5);
     }
 
@@ -202,10 +214,11 @@ mod tests {
     fn from_any_state_brakes_when_too_fast() {
         // Feed hold: from 40 mm/s stop as soon as possible, with plenty of room.
         let p = Profile::new(Shape::Trapezoid, 40.0, 0.0, 0.0, 500.0, 1000.0);
-        assert!((p.distance() - 1.6).abs() < 1e-9 && p.exit_speed() == 0.0);
+        // f32 profile: 1.6 to within a few ulp (was 1e-9 while the profile was f64).
+        assert!((p.distance() - 1.6).abs() < 1e-6 && p.exit_speed() == 0.0);
         // Too short to stop: ends at the lowest reachable speed.
         let q = Profile::new(Shape::Trapezoid, 40.0, 40.0, 0.0, 500.0, 1.0);
-        assert!((q.exit_speed() - (1600.0f64 - 1000.0).sqrt()).abs() < 1e-3);
+        assert!((q.exit_speed() - (1600.0f32 - 1000.0).sqrt()).abs() < 1e-3);
         assert!((q.distance() - 1.0).abs() < 1e-4);
         // Override lowered the maximum below the present speed.
         let r = Profile::new(Shape::Cosine, 40.0, 20.0, 20.0, 500.0, 100.0);
@@ -217,9 +230,9 @@ mod tests {
     fn speed_is_monotone_on_ramps_and_distance_never_decreases() {
         for shape in [Shape::Trapezoid, Shape::Cosine] {
             let p = Profile::new(shape, 5.0, 80.0, 10.0, 300.0, 40.0);
-            let mut last = -1.0f64;
+            let mut last = -1.0f32;
             for i in 0..=1000 {
-                let (s, _) = p.at(p.duration() * f64::from(i) / 1000.0);
+                let (s, _) = p.at(p.duration() * i as f32 / 1000.0);
                 assert!(s >= last - 1e-5);
                 last = s;
             }

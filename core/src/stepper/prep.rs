@@ -19,7 +19,7 @@
 
 use super::{CmdSink, StepCmd, MAX_WAIT};
 use crate::interp::{Interp, Interpolate, Tick};
-use crate::motion::{StepPos, AXES, X, Y};
+use crate::motion::{StepPos, X, Y};
 use crate::planner::{Block, Planner, PlannerConfig, Profile};
 
 /// Feed-hold state of the preparation.
@@ -54,7 +54,7 @@ impl Default for PrepConfig {
 
 /// Distance unit of the per-tick path: 2^-32 mm, fine enough that rounding each
 /// tick's length adds up to far less than a step over any block.
-const Q: f64 = (1u64 << 32) as f64;
+const Q: f32 = 4_294_967_296.0;
 
 /// How each tick's length is found.
 #[derive(Clone, Copy, Debug)]
@@ -62,7 +62,7 @@ enum TickLen {
     /// Constant (lines), in Q units.
     Const(u64),
     /// Circle: |cross(prev, next)| * m / dot(prev, next), with m = R in Q units.
-    Circle(u64),
+    Circle(f32),
     /// Anything else: from the curve's tangent (floating point).
     Curve,
 }
@@ -71,8 +71,8 @@ enum TickLen {
 /// from the block start) happens at t0 + (s - s0) * k >> 32 timer ticks.
 #[derive(Clone, Copy, Debug, Default)]
 struct Window {
-    /// Window end time, seconds from the profile start.
-    t1: f64,
+    /// Window end time, timer ticks from the profile start.
+    t1: u64,
     s0: u64,
     s1: u64,
     t0_abs: u64,
@@ -175,8 +175,10 @@ impl Prep {
             self.hold = HoldState::Running;
             if let Some(a) = self.active.as_ref() {
                 let ae = planner.plan_accel(&a.block);
-                let rest = (a.len_q.saturating_sub(a.s) as f64 / Q) as f32;
-                planner.set_head_cap(libm::sqrtf(self.v_last * self.v_last + 2.0 * ae * rest));
+                let rest = a.len_q.saturating_sub(a.s) as f32 / Q;
+                planner.set_head_cap(crate::fmath::sqrt(
+                    self.v_last * self.v_last + 2.0 * ae * rest,
+                ));
             }
             self.generation = planner.generation().wrapping_sub(1);
         }
@@ -211,7 +213,7 @@ impl Prep {
             let Some(tick) = a.pending.take().or_else(|| a.interp.next_tick()) else {
                 // Block done: carry the speed into the next one.
                 self.v_last = if a.prof_done {
-                    a.prof.exit_speed() as f32
+                    a.prof.exit_speed()
                 } else {
                     a.win.v
                 };
@@ -223,13 +225,13 @@ impl Prep {
                 (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
                     // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
                     // telescope, so a whole arc adds up to its length (to < 1e-9).
-                    let dot = c.last_dot().unsigned_abs().max(1);
-                    c.last_cross().unsigned_abs().saturating_mul(m) / dot
+                    // f32, not a u64 division (not in the chip's instruction set).
+                    let dot = c.last_dot().unsigned_abs().max(1) as f32;
+                    (c.last_cross().unsigned_abs() as f32 * m / dot) as u64
                 }
-                (_, Interp::Conic(c)) => to_q(c.last_tick_len(
-                    f64::from(cfg.axes[X].steps_per_mm),
-                    f64::from(cfg.axes[Y].steps_per_mm),
-                )),
+                (_, Interp::Conic(c)) => {
+                    to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
+                }
                 (_, interp) => to_q(curve_ds(&cfg, interp.direction().unwrap_or([1.0, 0.0]))),
             };
             let mut s_new = a.s + ds;
@@ -250,7 +252,7 @@ impl Prep {
             } else {
                 // Past the profile's end: a hold stops here; otherwise (a catch-up step
                 // of a fine line, curve length rounding) go on at the last step's rate.
-                let v_end = a.prof.exit_speed() as f32;
+                let v_end = a.prof.exit_speed();
                 if self.hold != HoldState::Running && v_end < 1e-3 {
                     a.pending = Some(tick);
                     self.hold = HoldState::Held;
@@ -303,14 +305,14 @@ impl Prep {
                     let line_len = line_length(cfg, self.pos, block.mv.target);
                     let (len_q, ticks_left) = match &interp {
                         Interp::Line(l) => (to_q(line_len), Some(l.ticks())),
-                        _ => (to_q(f64::from(block.length)), None),
+                        _ => (to_q(block.length), None),
                     };
                     let len = match &interp {
-                        Interp::Line(l) => TickLen::Const(to_q(line_len / l.ticks().max(1) as f64)),
+                        Interp::Line(l) => TickLen::Const(to_q(line_len / l.ticks().max(1) as f32)),
                         Interp::Conic(c) => match c.circle_radius() {
                             Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
-                                let sp = f64::from(cfg.axes[X].steps_per_mm.max(1e-6));
-                                TickLen::Circle((Q * r / sp + 0.5) as u64)
+                                let sp = cfg.axes[X].steps_per_mm.max(1e-6);
+                                TickLen::Circle(Q * r / sp)
                             }
                             _ => TickLen::Curve,
                         },
@@ -332,7 +334,7 @@ impl Prep {
                         pending: None,
                     });
                     let v = self.v_last;
-                    planner.set_head_cap(libm::sqrtf(v * v + 2.0 * ae * block.length));
+                    planner.set_head_cap(crate::fmath::sqrt(v * v + 2.0 * ae * block.length));
                     self.generation = planner.generation().wrapping_sub(1);
                     return true;
                 }
@@ -352,7 +354,7 @@ impl Prep {
         } else {
             (0.0, 0.0)
         };
-        let rest = a.len_q.saturating_sub(a.s) as f64 / Q;
+        let rest = a.len_q.saturating_sub(a.s) as f32 / Q;
         let v0 = if self.hold == HoldState::Running {
             self.v_last.max(cfg.start_speed)
         } else {
@@ -372,28 +374,37 @@ impl Prep {
     }
 }
 
-fn to_q(mm: f64) -> u64 {
+fn to_q(mm: f32) -> u64 {
     (mm * Q + 0.5) as u64
 }
 
 /// Moves the window on by the configured length (floating point, once per window).
 fn advance_window(a: &mut Active, cfg: &PrepConfig) {
-    let dur = a.prof.duration();
+    // Time is kept in whole timer ticks (exact, no drift); only the profile is
+    // evaluated in f32 seconds, whose rounding moves a window edge by far less than a step.
+    let hz = cfg.timer_hz as f32;
+    let dur = (a.prof.duration() * hz + 0.5) as u64;
     let t0 = a.win.t1;
-    let t1 = (t0 + f64::from(cfg.window_s)).min(dur);
-    let hz = f64::from(cfg.timer_hz);
-    let s1 = a.prof_s0 + to_q(a.prof.at(t1).0);
-    let t1_abs = a.prof_t0 + (t1 * hz + 0.5) as u64;
+    let t1 = (t0 + (cfg.window_s * hz + 0.5) as u64).min(dur);
+    let t = t1 as f32 / hz;
+    // The first half from the start, the second half back from the end: either way
+    // the small distance near a slow end of the profile stays exact in f32.
+    let s1 = if 2 * t1 <= dur {
+        a.prof_s0 + to_q(a.prof.at(t).0)
+    } else {
+        (a.prof_s0 + to_q(a.prof.distance())).saturating_sub(to_q(a.prof.left(t)))
+    };
+    let t1_abs = a.prof_t0 + t1;
     let (s0, t0_abs) = (a.win.s1, a.win.t1_abs);
     let ds = s1.saturating_sub(s0);
-    // f64 rather than a u64 division: the planning maths already links it.
+    // f32 rather than a u64 division (not in the chip's instruction set).
     let k = if ds > 0 {
-        ((t1_abs - t0_abs) as f64 * Q / ds as f64) as u64
+        ((t1_abs - t0_abs) as f32 * Q / ds as f32) as u64
     } else {
         0
     };
     let v = if t1 > t0 {
-        (ds as f32 / Q as f32) / (t1 - t0) as f32
+        (ds as f32 / Q) / ((t1 - t0) as f32 / hz)
     } else {
         a.win.v
     };
@@ -412,28 +423,27 @@ fn advance_window(a: &mut Active, cfg: &PrepConfig) {
 }
 
 /// Length of a line, mm.
-fn line_length(cfg: &PlannerConfig, from: StepPos, to: StepPos) -> f64 {
-    let mut len2 = 0.0f64;
-    for i in 0..AXES {
-        let d = i64::from(to[i]) - i64::from(from[i]);
-        let mm = d as f64 / f64::from(cfg.axes[i].steps_per_mm.max(1e-6));
+fn line_length(cfg: &PlannerConfig, from: StepPos, to: StepPos) -> f32 {
+    let mut len2 = 0.0f32;
+    for ((&t, &f), ax) in to.iter().zip(from.iter()).zip(cfg.axes.iter()) {
+        let mm = (i64::from(t) - i64::from(f)) as f32 / ax.steps_per_mm.max(1e-6);
         len2 += mm * mm;
     }
-    libm::sqrt(len2)
+    crate::fmath::sqrt(len2)
 }
 
 /// Ideal path length per tick along a curve with feed direction `t` (steps), mm.
-fn curve_ds(cfg: &PlannerConfig, t: [f32; 2]) -> f64 {
+fn curve_ds(cfg: &PlannerConfig, t: [f32; 2]) -> f32 {
     let (tx, ty) = (t[0].abs(), t[1].abs());
     let mx = tx / cfg.axes[X].steps_per_mm.max(1e-6);
     let my = ty / cfg.axes[Y].steps_per_mm.max(1e-6);
-    let mm = libm::sqrtf(mx * mx + my * my);
+    let mm = crate::fmath::sqrt(mx * mx + my * my);
     let per = match cfg.method {
         crate::interp::Method::Dda => tx.max(ty),
         crate::interp::Method::Classic => tx + ty,
     };
     if per > 0.0 {
-        f64::from(mm / per)
+        mm / per
     } else {
         0.0
     }
