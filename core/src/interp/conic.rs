@@ -281,19 +281,24 @@ impl Conic {
     fn dda_candidate(&self) -> (i64, i64) {
         let (tx, ty) = self.tangent(self.x, self.y);
         let x_first = tx.abs() >= ty.abs();
+        // A candidate must keep its major coordinate within the conic's extent (there
+        // is then a curve point at that coordinate, and the nearest minor integer is
+        // within 0.5 of it). Near a sharp vertex of a thin ellipse the tangent is
+        // steep while the curve ends within a step: stepping the "major" axis past the
+        // vertex would leave no such point, so the other axis goes first there.
         for x_major in [x_first, !x_first] {
             if x_major {
                 let s = if tx != 0 { sgn(tx) } else { -sgn(self.x) };
                 let nx = self.x + i64::from(s);
                 let ny = self.nearest_minor(true, nx, self.y, ty);
-                if (ny - self.y).abs() <= 1 {
+                if (ny - self.y).abs() <= 1 && self.a * nx * nx <= self.c {
                     return (nx, ny);
                 }
             } else {
                 let s = if ty != 0 { sgn(ty) } else { -sgn(self.y) };
                 let ny = self.y + i64::from(s);
                 let nx = self.nearest_minor(false, ny, self.x, tx);
-                if (nx - self.x).abs() <= 1 {
+                if (nx - self.x).abs() <= 1 && self.b * ny * ny <= self.c {
                     return (nx, ny);
                 }
             }
@@ -508,6 +513,36 @@ mod tests {
             0.0f64..std::f64::consts::TAU,
             any::<bool>(),
         )
+    }
+
+    #[test]
+    fn dda_thin_ellipse_does_not_step_past_its_vertex() {
+        // Found by the property test below: a = 41, b = 1682, from the rounded point
+        // at 1.5585 rad counter-clockwise to angle 0. The start (1, 1682) lies half a
+        // step outside, where the tangent is at 45 degrees; stepping Y first went to
+        // (0, 1683), a whole step off the curve.
+        let (a, b) = (41i32, 1682i32);
+        let start = [1, 1682, 0];
+        let target = [41, 0, 0];
+        let pts = run(
+            Conic::ellipse(start, [-1, -1682], a, b, target, true, Method::Dda).unwrap(),
+            start,
+        );
+        assert_eq!(*pts.last().unwrap(), target);
+        let (af, bf) = (f64::from(a), f64::from(b));
+        for p in &pts {
+            assert!(
+                cell_meets(
+                    bf * bf,
+                    af * af,
+                    af * af * bf * bf,
+                    f64::from(p[0]),
+                    f64::from(p[1]),
+                    0.5 + 1e-9
+                ),
+                "{p:?}"
+            );
+        }
     }
 
     proptest! {
