@@ -121,6 +121,27 @@ impl FrameBuffer {
     }
 }
 
+impl FrameBuffer {
+    /// Draw this frame onto any embedded-graphics target (the simulator's display,
+    /// another panel's driver): the screens paint into a `FrameBuffer` (which keeps the
+    /// firmware free of generic drawing code and tracks what changed), and this hands
+    /// the result to whatever `DrawTarget` shows it, every pixel on or off.
+    pub fn draw_onto<D: DrawTarget<Color = BinaryColor>>(
+        &self,
+        target: &mut D,
+    ) -> Result<(), D::Error> {
+        let pixels = (0..HEIGHT)
+            .flat_map(|y| (0..WIDTH).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                Pixel(
+                    Point::new(x as i32, y as i32),
+                    BinaryColor::from(self.pixel(x, y)),
+                )
+            });
+        target.draw_iter(pixels)
+    }
+}
+
 impl OriginDimensions for FrameBuffer {
     fn size(&self) -> Size {
         Size::new(WIDTH as u32, HEIGHT as u32)
@@ -170,6 +191,18 @@ mod tests {
         fb.set(-1, 3, true);
         fb.set(0, 64, true);
         assert!(!fb.is_dirty());
+    }
+
+    #[test]
+    fn a_frame_draws_onto_any_draw_target() {
+        let mut fb = FrameBuffer::new();
+        fb.fill(3, 5, 20, 7, true);
+        fb.set(127, 63, true);
+        // Another DrawTarget, here a second frame buffer with different content.
+        let mut other = FrameBuffer::new();
+        other.fill(0, 0, 128, 64, true);
+        fb.draw_onto(&mut other).unwrap();
+        assert_eq!(other.bytes(), fb.bytes());
     }
 
     #[test]
