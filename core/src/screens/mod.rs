@@ -235,12 +235,12 @@ impl Screens {
                 title_bar(fb, form.kind.title().as_bytes(), l.bytes());
                 for (i, f) in fields.iter().take(ROWS).enumerate() {
                     let (y, current) = (row_y(i), i == form.cur);
-                    put(fb, Cell::at(0, y, 6), f.label.as_bytes());
+                    put(fb, Cell::at(0, y, 6), f.label().as_bytes());
                     l.clear();
                     l.push_text(&f.display());
                     l.push_str(if current && f.editing() { "_" } else { " " });
                     put(fb, Cell::at(36, y, 9).inverse(current).right(), l.bytes());
-                    put(fb, Cell::at(93, y + 1, 7).small(), f.unit.as_bytes());
+                    put(fb, Cell::at(93, y + 1, 7).small(), f.unit().as_bytes());
                 }
                 if fresh && fields.len() < ROWS {
                     put(fb, Cell::at(0, 44, 25).small(), form.kind.note().as_bytes());
