@@ -67,6 +67,34 @@ fn page_key(page: &Page) -> PageKey {
 /// One line of text being built.
 type Line = Text<32>;
 
+/// Line templates: ASCII text with value slots. `FIX + d` is the next value with d
+/// (0..=3) decimals, `UINT + w` the next value as an unsigned integer right-aligned in
+/// w (0..=7) characters. One routine builds every line from its template instead of a
+/// call per piece at each place.
+const FIX: u8 = 1;
+const UINT: u8 = 8;
+
+/// Build `tpl` with `vals` into `l` (cleared first); its bytes.
+fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
+    l.clear();
+    let mut v = vals.iter().copied();
+    for &b in tpl {
+        if b >= UINT && b < UINT + 8 {
+            l.push_uint(v.next().unwrap_or(0.0) as u32, usize::from(b - UINT));
+        } else if b >= FIX && b < FIX + 4 {
+            l.push_fixed(v.next().unwrap_or(0.0), b - FIX);
+        } else {
+            l.push_ascii(b);
+        }
+    }
+    l.bytes()
+}
+
+/// Put the line of template `tpl` with `vals` in cell `c`.
+fn put_line(fb: &mut FrameBuffer, c: Cell, l: &mut Line, tpl: &[u8], vals: &[f32]) {
+    put(fb, c, fill(l, tpl, vals));
+}
+
 /// Append "+X-Y" for a direction; "--" for none.
 fn push_dir(l: &mut Line, dir: [i8; 2]) {
     let at = l.len();
@@ -204,9 +232,7 @@ impl Screens {
                     };
                     l.clear();
                     if let Some((hotkey, label)) = item {
-                        l.push_str(" ");
-                        l.push_uint(u32::from(hotkey), 0);
-                        l.push_str(" ");
+                        fill(&mut l, b" \x08 ", &[f32::from(hotkey)]);
                         l.push_str(label);
                     }
                     put(
@@ -219,20 +245,21 @@ impl Screens {
                     scroll_bar(fb, top, count);
                 }
                 // "X12.3 Y-4.5 pen up" for the menus' bottom line.
-                l.clear();
-                l.push_str("X");
-                l.push_fixed(p[X], 1);
-                l.push_str(" Y");
-                l.push_fixed(p[Y], 1);
-                l.push_str(if pen_down { " pen dn" } else { " pen up" });
-                l.bytes()
+                let tpl: &[u8] = if pen_down {
+                    b"X\x02 Y\x02 pen dn"
+                } else {
+                    b"X\x02 Y\x02 pen up"
+                };
+                fill(&mut l, tpl, &[p[X], p[Y]])
             }
             Page::Form(form) => {
                 let fields = form.fields();
-                l.push_uint(form.cur as u32 + 1, 0);
-                l.push_str("/");
-                l.push_uint(fields.len() as u32, 0);
-                title_bar(fb, form.kind.title().as_bytes(), l.bytes());
+                let count = [form.cur as f32 + 1.0, fields.len() as f32];
+                title_bar(
+                    fb,
+                    form.kind.title().as_bytes(),
+                    fill(&mut l, b"\x08/\x08", &count),
+                );
                 for (i, f) in fields.iter().take(ROWS).enumerate() {
                     let (y, current) = (row_y(i), i == form.cur);
                     put(fb, Cell::at(0, y, 6), f.label().as_bytes());
@@ -270,47 +297,30 @@ impl Screens {
                 }
                 put_axis(fb, Cell::at(52, 12, 12), "X", p[X]);
                 put_axis(fb, Cell::at(52, 22, 12), "Y", p[Y]);
-                l.push_str("F ");
-                l.push_uint(hmi.jog_speed() as u32, 4);
-                l.push_str(" mm/m");
-                put(fb, Cell::at(52, 32, 12), l.bytes());
+                let c = Cell::at(52, 32, 12);
+                put_line(fb, c, &mut l, b"F \x0c mm/m", &[hmi.jog_speed()]);
                 let pen: &[u8] = if pen_down { b"Pen down" } else { b"Pen up" };
                 put(fb, Cell::at(52, 42, 12), pen);
                 b"hold 1-9:move A/B:F 5:pen"
             }
             Page::Status => {
                 title_bar(fb, b"Status / setup", state);
-                l.push_str("X ");
-                l.push_fixed(p[X], 2);
-                l.push_str("  Y ");
-                l.push_fixed(p[Y], 2);
-                put(fb, Cell::at(0, row_y(0), 21), l.bytes());
-                l.clear();
-                l.push_str("Z ");
-                l.push_fixed(p[2], 2);
-                l.push_str(if pen_down { "  pen down" } else { "  pen up" });
-                put(fb, Cell::at(0, row_y(1), 21), l.bytes());
-                l.clear();
-                l.push_str("step/mm");
-                for s in hmi.config().steps_per_mm {
-                    l.push_str(" ");
-                    l.push_fixed(s, 0);
-                }
-                put(fb, Cell::at(0, row_y(2), 21), l.bytes());
-                l.clear();
-                l.push_str("Draw F ");
-                l.push_uint(hmi.draw_feed() as u32, 4);
-                l.push_str(" mm/min");
-                put(fb, Cell::at(0, row_y(3), 21).inverse(true), l.bytes());
-                l.clear();
-                l.push_str("A/B:draw F  jog F ");
-                l.push_uint(hmi.jog_speed() as u32, 0);
-                l.bytes()
+                let row = |i| Cell::at(0, row_y(i), 21);
+                put_line(fb, row(0), &mut l, b"X \x03  Y \x03", &[p[X], p[Y]]);
+                let tpl: &[u8] = if pen_down {
+                    b"Z \x03  pen down"
+                } else {
+                    b"Z \x03  pen up"
+                };
+                put_line(fb, row(1), &mut l, tpl, &[p[2]]);
+                let spmm = &hmi.config().steps_per_mm;
+                put_line(fb, row(2), &mut l, b"step/mm \x01 \x01 \x01", spmm);
+                let c = row(3).inverse(true);
+                put_line(fb, c, &mut l, b"Draw F \x0c mm/min", &[hmi.draw_feed()]);
+                fill(&mut l, b"A/B:draw F  jog F \x08", &[hmi.jog_speed()])
             }
             Page::Alarm { code } => {
-                l.push_str("#");
-                l.push_uint(u32::from(*code), 0);
-                title_bar(fb, b"!! ALARM", l.bytes());
+                title_bar(fb, b"!! ALARM", fill(&mut l, b"#\x08", &[f32::from(*code)]));
                 if fresh {
                     let text = alarm_text(*code);
                     let n = text.len().min(19);
@@ -318,12 +328,13 @@ impl Screens {
                     fb.fill(x, 17, 6 * n as i32 + 12, 16, true);
                     put(fb, Cell::at(x + 6, 20, n).inverse(true), text.as_bytes());
                 }
-                l.clear();
-                l.push_str("at X");
-                l.push_fixed(p[X], 2);
-                l.push_str(" Y");
-                l.push_fixed(p[Y], 2);
-                put(fb, Cell::at(0, 41, 21), l.bytes());
+                put_line(
+                    fb,
+                    Cell::at(0, 41, 21),
+                    &mut l,
+                    b"at X\x03 Y\x03",
+                    &[p[X], p[Y]],
+                );
                 b"D:unlock      C:menu"
             }
             Page::Error { title, text } => {
@@ -393,10 +404,15 @@ impl Screens {
         put_axis(fb, Cell::at(76, 11, 8), "X", p[X]);
         put_axis(fb, Cell::at(76, 21, 8), "Y", p[Y]);
         let mut l = Line::new();
-        l.push_str("F ");
-        l.push_uint(st.feed_mm_min.max(0.0) as u32, 4);
-        l.push_str("mm/m");
-        put(fb, Cell::at(76, 31, 10).small(), l.bytes());
+        // (`as u32` saturates: a negative or NaN feed shows 0.)
+        let feed = [st.feed_mm_min];
+        put_line(
+            fb,
+            Cell::at(76, 31, 10).small(),
+            &mut l,
+            b"F \x0cmm/m",
+            &feed,
+        );
         // Teaching view: the feed direction now and the ones before it.
         l.clear();
         l.push_str("feed ");
@@ -418,7 +434,6 @@ impl Screens {
         // Progress and state.
         let frac = run.progress();
         progress(fb, 0, 56, 62, 8, frac);
-        l.clear();
         let state = match run.phase {
             RunPhase::Running if st.state == MachineState::Hold => "HOLD",
             RunPhase::Running => "RUN",
@@ -426,8 +441,7 @@ impl Screens {
             RunPhase::Done { complete: true, .. } => "DONE",
             RunPhase::Done { .. } => "SHORT",
         };
-        l.push_uint(fmath::round(frac * 100.0) as u32, 3);
-        l.push_str("% ");
+        fill(&mut l, b"\x0b% ", &[fmath::round(frac * 100.0)]);
         l.push_str(state);
         put(fb, Cell::at(65, 56, 12).small(), l.bytes());
     }
