@@ -98,10 +98,10 @@ fn put_line(fb: &mut FrameBuffer, c: Cell, l: &mut Line, tpl: &[u8], vals: &[f32
 /// Append "+X-Y" for a direction; "--" for none.
 fn push_dir(l: &mut Line, dir: [i8; 2]) {
     let at = l.len();
-    for (v, axis) in [(dir[0], "X"), (dir[1], "Y")] {
+    for (v, axis) in [(dir[0], b'X'), (dir[1], b'Y')] {
         if v != 0 {
-            l.push_str(if v > 0 { "+" } else { "-" });
-            l.push_str(axis);
+            l.push_ascii(if v > 0 { b'+' } else { b'-' });
+            l.push_ascii(axis);
         }
     }
     if l.len() == at {
@@ -113,17 +113,18 @@ fn push_dir(l: &mut Line, dir: [i8; 2]) {
 fn time_text(ms: u32) -> Line {
     let mut s = Line::new();
     let tenths = ms / 100;
-    if tenths < 600 {
-        s.push_uint(tenths / 10, 0);
-        s.push_str(".");
-        s.push_uint(tenths % 10, 0);
+    let (tpl, v): (&[u8], [u32; 2]) = if tenths < 600 {
+        (b"\x08.\x08s", [tenths / 10, tenths % 10])
     } else {
         let secs = ms / 1000;
-        s.push_uint(secs / 60, 0);
-        s.push_str(if secs % 60 < 10 { "m0" } else { "m" });
-        s.push_uint(secs % 60, 0);
-    }
-    s.push_str("s");
+        let tpl: &[u8] = if secs % 60 < 10 {
+            b"\x08m0\x08s"
+        } else {
+            b"\x08m\x08s"
+        };
+        (tpl, [secs / 60, secs % 60])
+    };
+    fill(&mut s, tpl, &v.map(|n| n as f32));
     s
 }
 
@@ -461,20 +462,14 @@ fn preview_page(hmi: &Hmi, job: &Job, fb: &mut FrameBuffer) {
     fb.fill(s.0 - 1, s.1 - 1, 3, 3, true);
     let (lo, hi, len) = job.sweep();
     let feed = hmi.draw_feed().max(1.0);
-    let rows: [(&str, f32, u8); 4] = [
-        ("W ", hi[0] - lo[0], 1),
-        ("H ", hi[1] - lo[1], 1),
-        ("L ", len, 1),
-        ("t ", len / feed * 60.0, 0),
+    let rows: [(&[u8], f32); 4] = [
+        (b"W \x02", hi[0] - lo[0]),
+        (b"H \x02", hi[1] - lo[1]),
+        (b"L \x02", len),
+        (b"t \x01s", len / feed * 60.0),
     ];
-    for (i, &(name, v, dec)) in rows.iter().enumerate() {
-        let mut l = Line::new();
-        l.push_str(name);
-        l.push_fixed(v, dec);
-        if dec == 0 {
-            l.push_str("s");
-        }
-        put(fb, Cell::at(83, row_y(i), 7), l.bytes());
+    for (i, &(tpl, v)) in rows.iter().enumerate() {
+        put_line(fb, Cell::at(83, row_y(i), 7), &mut t, tpl, &[v]);
     }
 }
 
