@@ -21,6 +21,7 @@ pub mod widgets;
 use core::convert::Infallible;
 
 use crate::fmath;
+use crate::hmi::fixed;
 use crate::hmi::job::Job;
 use crate::hmi::text::Text;
 use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Status, MACHINE_MENU, MENU};
@@ -69,23 +70,32 @@ type Line = Text<32>;
 
 /// Line templates: ASCII text with value slots. `FIX + d` is the next value with d
 /// (0..=3) decimals, `UINT + w` the next value as an unsigned integer right-aligned in
-/// w (0..=7) characters. One routine builds every line from its template instead of a
-/// call per piece at each place.
+/// w (0..=7) characters, `AXIS + w` the next value with 2 decimals right-aligned in w
+/// characters. One routine builds every line from its template instead of a call per
+/// piece at each place.
 const FIX: u8 = 1;
 const UINT: u8 = 8;
+const AXIS: u8 = 16;
 
 /// Build `tpl` with `vals` into `l` (cleared first); its bytes.
 fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
     l.clear();
     let mut v = vals.iter().copied();
     for &b in tpl {
-        if b >= UINT && b < UINT + 8 {
-            l.push_uint(v.next().unwrap_or(0.0) as u32, usize::from(b - UINT));
-        } else if b >= FIX && b < FIX + 4 {
-            l.push_fixed(v.next().unwrap_or(0.0), b - FIX);
-        } else {
-            l.push_ascii(b);
+        let mut x = || v.next().unwrap_or(0.0);
+        let (text, width) = match b {
+            FIX..UINT => (fixed::format(x(), b - FIX), 0),
+            UINT..AXIS => (fixed::uint(x() as u32), b - UINT),
+            AXIS..24 => (fixed::format(x(), 2), b - AXIS),
+            _ => {
+                l.push_ascii(b);
+                continue;
+            }
+        };
+        for _ in text.len()..usize::from(width) {
+            l.push_ascii(b' ');
         }
+        l.push_text(&text);
     }
     l.bytes()
 }
@@ -126,23 +136,6 @@ fn time_text(ms: u32) -> Line {
     };
     fill(&mut s, tpl, &v.map(|n| n as f32));
     s
-}
-
-/// "X" + value right-aligned, e.g. "X  -12.34".
-fn axis_text(axis: &str, mm: f32) -> Line {
-    let v = crate::hmi::fixed::format(mm, 2);
-    let mut s = Line::new();
-    s.push_str(axis);
-    for _ in v.len()..7 {
-        s.push_str(" ");
-    }
-    s.push_text(&v);
-    s
-}
-
-/// Put [`axis_text`] in cell `c`.
-fn put_axis(fb: &mut FrameBuffer, c: Cell, axis: &str, mm: f32) {
-    put(fb, c, axis_text(axis, mm).bytes());
 }
 
 /// The screens' retained state.
@@ -296,8 +289,9 @@ impl Screens {
                     arrow(fb, 4, 12, 40, shown.0, shown.1);
                     self.arrow = Some(shown);
                 }
-                put_axis(fb, Cell::at(52, 12, 12), "X", p[X]);
-                put_axis(fb, Cell::at(52, 22, 12), "Y", p[Y]);
+                // "X" + value right-aligned, e.g. "X  -12.34".
+                put_line(fb, Cell::at(52, 12, 12), &mut l, b"X\x17", &[p[X]]);
+                put_line(fb, Cell::at(52, 22, 12), &mut l, b"Y\x17", &[p[Y]]);
                 let c = Cell::at(52, 32, 12);
                 put_line(fb, c, &mut l, b"F \x0c mm/m", &[hmi.jog_speed()]);
                 let pen: &[u8] = if pen_down { b"Pen down" } else { b"Pen up" };
@@ -402,9 +396,9 @@ impl Screens {
         }
         // Live values.
         let p = hmi.pos_mm(st);
-        put_axis(fb, Cell::at(76, 11, 8), "X", p[X]);
-        put_axis(fb, Cell::at(76, 21, 8), "Y", p[Y]);
         let mut l = Line::new();
+        put_line(fb, Cell::at(76, 11, 8), &mut l, b"X\x17", &[p[X]]);
+        put_line(fb, Cell::at(76, 21, 8), &mut l, b"Y\x17", &[p[Y]]);
         // (`as u32` saturates: a negative or NaN feed shows 0.)
         let feed = [st.feed_mm_min];
         put_line(
@@ -564,7 +558,10 @@ mod tests {
         assert_eq!(dir_text([0, 0]).as_str(), "--");
         assert_eq!(time_text(12_345).as_str(), "12.3s");
         assert_eq!(time_text(125_000).as_str(), "2m05s");
-        assert_eq!(axis_text("X", -12.345).as_str(), "X -12.35");
+        let mut l = Line::new();
+        assert_eq!(fill(&mut l, b"X\x17", &[-12.345]), b"X -12.35");
+        assert_eq!(fill(&mut l, b"F \x0c mm/m", &[600.9]), b"F  600 mm/m");
+        assert_eq!(fill(&mut l, b"X\x02 Y\x01s", &[1.0, -2.5]), b"X1.0 Y-3s");
     }
 
     /// While drawing, a refresh sends only the changed cells and the new trace: far
