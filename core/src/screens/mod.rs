@@ -24,7 +24,8 @@ use crate::fmath;
 use crate::hmi::fixed;
 use crate::hmi::job::Job;
 use crate::hmi::text::Text;
-use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Status, MACHINE_MENU, MENU};
+use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Status};
+use crate::hmi::{MACHINE_LINES, MENU_LINES};
 use crate::motion::{X, Y};
 use framebuffer::FrameBuffer;
 use plot::{Area, Plot, Trace};
@@ -210,30 +211,18 @@ impl Screens {
             }
             Page::Menu { sel } | Page::Machine { sel } => {
                 let main = matches!(page, Page::Menu { .. });
-                let (title, count): (&[u8], usize) = if main {
-                    (b"inkstep", MENU.len())
+                let (title, lines): (&[u8], &[&str]) = if main {
+                    (b"inkstep", &MENU_LINES)
                 } else {
-                    (b"Machine", MACHINE_MENU.len())
+                    (b"Machine", &MACHINE_LINES)
                 };
+                let count = lines.len();
                 title_bar(fb, title, state);
                 let top = sel.saturating_sub(ROWS - 1).min(count.saturating_sub(ROWS));
                 for row in 0..ROWS {
                     let i = top + row;
-                    let item = if main {
-                        MENU.get(i).map(|(k, m)| (*k, m.label()))
-                    } else {
-                        MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()))
-                    };
-                    l.clear();
-                    if let Some((hotkey, label)) = item {
-                        fill(&mut l, b" \x08 ", &[f32::from(hotkey)]);
-                        l.push_str(label);
-                    }
-                    put(
-                        fb,
-                        Cell::at(0, row_y(row), 20).inverse(i == *sel),
-                        l.bytes(),
-                    );
+                    let line = lines.get(i).map_or(&[][..], |s| s.as_bytes());
+                    put(fb, Cell::at(0, row_y(row), 20).inverse(i == *sel), line);
                 }
                 if count > ROWS {
                     scroll_bar(fb, top, count);
