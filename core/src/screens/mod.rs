@@ -83,15 +83,20 @@ fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
     l.clear();
     let mut v = vals.iter().copied();
     for &b in tpl {
-        let mut x = || v.next().unwrap_or(0.0);
-        let (text, width) = match b {
-            FIX..UINT => (fixed::format(x(), b - FIX), 0),
-            UINT..AXIS => (fixed::uint(x() as u32), b - UINT),
-            AXIS..24 => (fixed::format(x(), 2), b - AXIS),
+        // (decimals, or none for an integer; width)
+        let (decimals, width) = match b {
+            FIX..UINT => (Some(b - FIX), 0),
+            UINT..AXIS => (None, b - UINT),
+            AXIS..24 => (Some(2), b - AXIS),
             _ => {
                 l.push_ascii(b);
                 continue;
             }
+        };
+        let x = v.next().unwrap_or(0.0);
+        let text = match decimals {
+            Some(d) => fixed::format(x, d),
+            None => fixed::uint(x as u32),
         };
         for _ in text.len()..usize::from(width) {
             l.push_ascii(b' ');
