@@ -70,7 +70,7 @@ mod tests {
         let machine = MACHINE_MENU.iter().map(|e| e.0).zip(MACHINE_LINES);
         for (key, line) in main.chain(machine) {
             assert!(
-                line.starts_with(&[' ', char::from(b'0' + key), ' ']),
+                line.as_bytes().starts_with(&[b' ', b'0' + key, b' ']),
                 "{line}"
             );
             assert!(line.len() > 4);
