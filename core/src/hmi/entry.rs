@@ -13,19 +13,15 @@ use crate::keypad::Key;
 /// Longest text a field accepts ("-123.456").
 pub const FIELD_CHARS: usize = 8;
 
-/// One numeric parameter.
+/// One numeric parameter: its entry in the field table (label, unit, limits, decimals)
+/// by index, the committed value and the text being typed.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Field {
-    pub label: &'static str,
-    pub unit: &'static str,
-    pub min: f32,
-    pub max: f32,
-    /// Decimals accepted and shown.
-    pub decimals: u8,
+    spec: u8,
+    editing: bool,
     /// The committed value.
     pub value: f32,
     text: Text<FIELD_CHARS>,
-    editing: bool,
 }
 
 /// What a key did to a field.
@@ -40,25 +36,38 @@ pub enum FieldInput {
 }
 
 impl Field {
-    pub fn new(
-        label: &'static str,
-        unit: &'static str,
-        min: f32,
-        max: f32,
-        decimals: u8,
-        value: f32,
-    ) -> Self {
-        Field {
-            label,
-            unit,
-            min,
-            max,
-            decimals,
-            // Not `clamp`: that panics (formatting both f32s) if min > max.
-            value: value.max(min).min(max),
-            text: Text::new(),
+    /// The field of entry `spec` of the field table, holding `value` (clamped to its
+    /// limits).
+    pub fn new(spec: usize, value: f32) -> Self {
+        let mut f = Field {
+            spec: spec as u8,
             editing: false,
-        }
+            value: 0.0,
+            text: Text::new(),
+        };
+        // Not `clamp`: that panics (formatting both f32s) if min > max.
+        f.value = value.max(f.min()).min(f.max());
+        f
+    }
+
+    fn spec(&self) -> &'static FieldSpec {
+        FIELD_SPECS.get(usize::from(self.spec)).unwrap_or(&NO_SPEC)
+    }
+    pub fn label(&self) -> &'static str {
+        self.spec().0
+    }
+    pub fn unit(&self) -> &'static str {
+        self.spec().1
+    }
+    pub fn min(&self) -> f32 {
+        self.spec().2
+    }
+    pub fn max(&self) -> f32 {
+        self.spec().3
+    }
+    /// Decimals accepted and shown.
+    pub fn decimals(&self) -> u8 {
+        self.spec().4
     }
 
     /// Whether the user has started typing a new value.
@@ -72,7 +81,7 @@ impl Field {
         if self.editing {
             s.push_text(&self.text);
         } else {
-            s.push_fixed(self.value, self.decimals);
+            s.push_fixed(self.value, self.decimals());
         }
         s
     }
@@ -87,7 +96,7 @@ impl Field {
                 let full = t
                     .iter()
                     .position(|&c| c == b'.')
-                    .is_some_and(|dot| t.len() - dot > usize::from(self.decimals));
+                    .is_some_and(|dot| t.len() - dot > usize::from(self.decimals()));
                 if !full {
                     self.text.push_ascii(b'0' + d);
                 }
@@ -96,7 +105,7 @@ impl Field {
             Key::Dot if !repeat => {
                 self.start_editing();
                 let t = self.text.as_bytes();
-                if self.decimals > 0 && !t.contains(&b'.') {
+                if self.decimals() > 0 && !t.contains(&b'.') {
                     if t.is_empty() || t == b"-" {
                         self.text.push_ascii(b'0');
                     }
@@ -105,7 +114,7 @@ impl Field {
                 FieldInput::Edited
             }
             Key::Sign if !repeat => {
-                if self.min >= 0.0 {
+                if self.min() >= 0.0 {
                     return FieldInput::Edited;
                 }
                 // On an untouched field the sign starts a new negative number.
@@ -154,7 +163,7 @@ impl Field {
         }
         let parsed = parse_decimal(&self.text);
         match parsed {
-            Some(v) if v >= self.min && v <= self.max => {
+            Some(v) if v >= self.min() && v <= self.max() => {
                 self.value = v;
                 self.editing = false;
                 self.text.clear();
@@ -166,14 +175,15 @@ impl Field {
 
     /// "R: 0.50..100.00 mm"
     pub fn range_message(&self) -> Text<28> {
+        let (label, unit, min, max, decimals) = *self.spec();
         let mut s: Text<28> = Text::new();
-        s.push_str(self.label);
+        s.push_str(label);
         s.push_str(": ");
-        s.push_fixed(self.min, self.decimals);
+        s.push_fixed(min, decimals);
         s.push_str("..");
-        s.push_fixed(self.max, self.decimals);
+        s.push_fixed(max, decimals);
         s.push_str(" ");
-        s.push_str(self.unit);
+        s.push_str(unit);
         s
     }
 }
@@ -286,15 +296,13 @@ pub struct Form {
 
 /// An unused field slot.
 const NO_FIELD: Field = Field {
-    label: "",
-    unit: "",
-    min: 0.0,
-    max: 0.0,
-    decimals: 0,
+    spec: u8::MAX,
+    editing: false,
     value: 0.0,
     text: Text::new(),
-    editing: false,
 };
+/// What a field outside the table shows.
+const NO_SPEC: FieldSpec = ("", "", 0.0, 0.0, 0);
 
 /// The fields of every form as data: (label, unit, min, max, decimals), grouped by
 /// [`FormKind`] in [`FORM_KINDS`] order; [`FORM_FIELDS`] gives each kind's slice.
@@ -319,15 +327,11 @@ impl Form {
     pub fn new(kind: FormKind, p: &[f32; 4]) -> Self {
         let mut slots = [NO_FIELD; 4];
         let (first, n) = FORM_FIELDS.get(kind.index()).copied().unwrap_or((0, 0));
-        let specs = FIELD_SPECS
-            .iter()
-            .skip(usize::from(first))
-            .take(usize::from(n));
         let mut count = 0;
-        for ((&(label, unit, min, max, decimals), &v), slot) in
-            specs.zip(p.iter()).zip(slots.iter_mut())
+        for (spec, (&v, slot)) in
+            (usize::from(first)..usize::from(first + n)).zip(p.iter().zip(slots.iter_mut()))
         {
-            *slot = Field::new(label, unit, min, max, decimals, v);
+            *slot = Field::new(spec, v);
             count += 1;
         }
         Form {
@@ -387,6 +391,24 @@ impl Form {
 mod tests {
     use super::*;
 
+    /// The field table entry labelled `label` (its limits are checked in the tests).
+    fn spec(label: &str) -> usize {
+        FIELD_SPECS.iter().position(|s| s.0 == label).unwrap()
+    }
+
+    #[test]
+    fn field_table_entries_used_by_the_tests() {
+        for (label, want) in [
+            ("R", ("R", "mm", 0.5, 100.0, 2)),
+            ("dX", ("dX", "mm", -200.0, 200.0, 2)),
+            ("a", ("a", "mm", 0.5, 100.0, 2)),
+            ("A", ("A", "mm", -50.0, 50.0, 2)),
+        ] {
+            let f = Field::new(spec(label), 0.0);
+            assert_eq!((f.label(), f.unit(), f.min(), f.max(), f.decimals()), want);
+        }
+    }
+
     fn typed(f: &mut Field, keys: &[Key]) {
         for k in keys {
             assert_ne!(f.key(*k, false), FieldInput::Ignored);
@@ -406,7 +428,7 @@ mod tests {
 
     #[test]
     fn typing_replaces_the_default_and_commits_in_range() {
-        let mut f = Field::new("R", "mm", 0.5, 100.0, 2, 20.0);
+        let mut f = Field::new(spec("R"), 20.0);
         assert_eq!(f.display().as_str(), "20.00");
         typed(
             &mut f,
@@ -419,7 +441,7 @@ mod tests {
 
     #[test]
     fn sign_decimals_and_backspace() {
-        let mut f = Field::new("dX", "mm", -200.0, 200.0, 2, 0.0);
+        let mut f = Field::new(spec("dX"), 0.0);
         typed(&mut f, &[Key::Digit(7), Key::Sign, Key::Dot, Key::Digit(1)]);
         typed(&mut f, &[Key::Digit(2), Key::Digit(3)]); // third decimal dropped
         assert_eq!(f.display().as_str(), "-7.12");
@@ -430,19 +452,19 @@ mod tests {
 
     #[test]
     fn out_of_range_keeps_the_old_value_and_explains() {
-        let mut f = Field::new("R", "mm", 0.5, 100.0, 2, 20.0);
+        let mut f = Field::new(spec("R"), 20.0);
         typed(&mut f, &[Key::Digit(5), Key::Digit(0), Key::Digit(0)]);
         assert_eq!(f.commit().unwrap_err().as_str(), "R: 0.50..100.00 mm");
         assert_eq!(f.value, 20.0);
         // A positive-only field ignores the sign key.
-        let mut g = Field::new("a", "mm", 0.5, 100.0, 2, 3.0);
+        let mut g = Field::new(spec("a"), 3.0);
         typed(&mut g, &[Key::Sign]);
         assert_eq!(g.display().as_str(), "3.00");
     }
 
     #[test]
     fn backspace_empties_then_restores_then_cancels_but_repeat_never_cancels() {
-        let mut f = Field::new("A", "mm", -50.0, 50.0, 2, 10.0);
+        let mut f = Field::new(spec("A"), 10.0);
         typed(&mut f, &[Key::Digit(4)]);
         assert_eq!(f.key(Key::Back, true), FieldInput::Edited); // "4" -> ""
         assert_eq!(f.key(Key::Back, true), FieldInput::Edited); // repeat on empty: stays

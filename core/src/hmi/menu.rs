@@ -28,22 +28,19 @@ pub const MENU: [(u8, MenuItem); 10] = [
     (0, MenuItem::Status),
 ];
 
-impl MenuItem {
-    pub fn label(self) -> &'static str {
-        match self {
-            MenuItem::Jog => "Jog (manual)",
-            MenuItem::Draw(FormKind::Line) => "Line",
-            MenuItem::Draw(FormKind::Arc) => "Arc / circle",
-            MenuItem::Draw(FormKind::Ellipse) => "Ellipse",
-            MenuItem::Draw(FormKind::Sine) => "Sine curve",
-            MenuItem::Draw(FormKind::Star) => "Star",
-            MenuItem::Pen => "Pen up/down",
-            MenuItem::Replay => "Replay last",
-            MenuItem::Machine => "Machine...",
-            MenuItem::Status => "Status/setup",
-        }
-    }
-}
+/// The main menu's lines as shown: " hotkey label", in [`MENU`] order.
+pub const MENU_LINES: [&str; 10] = [
+    " 1 Jog (manual)",
+    " 2 Line",
+    " 3 Arc / circle",
+    " 4 Ellipse",
+    " 5 Sine curve",
+    " 6 Star",
+    " 7 Pen up/down",
+    " 8 Replay last",
+    " 9 Machine...",
+    " 0 Status/setup",
+];
 
 /// The machine submenu.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,12 +56,24 @@ pub const MACHINE_MENU: [(u8, MachineItem); 3] = [
     (3, MachineItem::Home),
 ];
 
-impl MachineItem {
-    pub fn label(self) -> &'static str {
-        match self {
-            MachineItem::GoOrigin => "Go to origin",
-            MachineItem::SetOrigin => "Set origin here",
-            MachineItem::Home => "Homing cycle",
+/// The machine submenu's lines as shown, in [`MACHINE_MENU`] order.
+pub const MACHINE_LINES: [&str; 3] = [" 1 Go to origin", " 2 Set origin here", " 3 Homing cycle"];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each shown line starts with its entry's hotkey.
+    #[test]
+    fn lines_show_the_hotkeys() {
+        let main = MENU.iter().map(|e| e.0).zip(MENU_LINES);
+        let machine = MACHINE_MENU.iter().map(|e| e.0).zip(MACHINE_LINES);
+        for (key, line) in main.chain(machine) {
+            assert!(
+                line.as_bytes().starts_with(&[b' ', b'0' + key, b' ']),
+                "{line}"
+            );
+            assert!(line.len() > 4);
         }
     }
 }

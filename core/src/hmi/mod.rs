@@ -22,7 +22,7 @@ pub mod page;
 pub mod text;
 
 pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
-pub use menu::{MachineItem, MenuItem, MACHINE_MENU, MENU};
+pub use menu::{MachineItem, MenuItem, MACHINE_LINES, MACHINE_MENU, MENU, MENU_LINES};
 pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
 
 use crate::fmath;

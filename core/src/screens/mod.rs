@@ -21,9 +21,11 @@ pub mod widgets;
 use core::convert::Infallible;
 
 use crate::fmath;
+use crate::hmi::fixed;
 use crate::hmi::job::Job;
 use crate::hmi::text::Text;
-use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Status, MACHINE_MENU, MENU};
+use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Status};
+use crate::hmi::{MACHINE_LINES, MENU_LINES};
 use crate::motion::{X, Y};
 use framebuffer::FrameBuffer;
 use plot::{Area, Plot, Trace};
@@ -67,13 +69,55 @@ fn page_key(page: &Page) -> PageKey {
 /// One line of text being built.
 type Line = Text<32>;
 
+/// Line templates: ASCII text with value slots. `FIX + d` is the next value with d
+/// (0..=3) decimals, `UINT + w` the next value as an unsigned integer right-aligned in
+/// w (0..=7) characters, `AXIS + w` the next value with 2 decimals right-aligned in w
+/// characters. One routine builds every line from its template instead of a call per
+/// piece at each place.
+const FIX: u8 = 1;
+const UINT: u8 = 8;
+const AXIS: u8 = 16;
+
+/// Build `tpl` with `vals` into `l` (cleared first); its bytes.
+fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
+    l.clear();
+    let mut v = vals.iter().copied();
+    for &b in tpl {
+        // (decimals, or none for an integer; width)
+        let (decimals, width) = match b {
+            FIX..UINT => (Some(b - FIX), 0),
+            UINT..AXIS => (None, b - UINT),
+            AXIS..24 => (Some(2), b - AXIS),
+            _ => {
+                l.push_ascii(b);
+                continue;
+            }
+        };
+        let x = v.next().unwrap_or(0.0);
+        let text = match decimals {
+            Some(d) => fixed::format(x, d),
+            None => fixed::uint(x as u32),
+        };
+        for _ in text.len()..usize::from(width) {
+            l.push_ascii(b' ');
+        }
+        l.push_text(&text);
+    }
+    l.bytes()
+}
+
+/// Put the line of template `tpl` with `vals` in cell `c`.
+fn put_line(fb: &mut FrameBuffer, c: Cell, l: &mut Line, tpl: &[u8], vals: &[f32]) {
+    put(fb, c, fill(l, tpl, vals));
+}
+
 /// Append "+X-Y" for a direction; "--" for none.
 fn push_dir(l: &mut Line, dir: [i8; 2]) {
     let at = l.len();
-    for (v, axis) in [(dir[0], "X"), (dir[1], "Y")] {
+    for (v, axis) in [(dir[0], b'X'), (dir[1], b'Y')] {
         if v != 0 {
-            l.push_str(if v > 0 { "+" } else { "-" });
-            l.push_str(axis);
+            l.push_ascii(if v > 0 { b'+' } else { b'-' });
+            l.push_ascii(axis);
         }
     }
     if l.len() == at {
@@ -85,35 +129,19 @@ fn push_dir(l: &mut Line, dir: [i8; 2]) {
 fn time_text(ms: u32) -> Line {
     let mut s = Line::new();
     let tenths = ms / 100;
-    if tenths < 600 {
-        s.push_uint(tenths / 10, 0);
-        s.push_str(".");
-        s.push_uint(tenths % 10, 0);
+    let (tpl, v): (&[u8], [u32; 2]) = if tenths < 600 {
+        (b"\x08.\x08s", [tenths / 10, tenths % 10])
     } else {
         let secs = ms / 1000;
-        s.push_uint(secs / 60, 0);
-        s.push_str(if secs % 60 < 10 { "m0" } else { "m" });
-        s.push_uint(secs % 60, 0);
-    }
-    s.push_str("s");
+        let tpl: &[u8] = if secs % 60 < 10 {
+            b"\x08m0\x08s"
+        } else {
+            b"\x08m\x08s"
+        };
+        (tpl, [secs / 60, secs % 60])
+    };
+    fill(&mut s, tpl, &v.map(|n| n as f32));
     s
-}
-
-/// "X" + value right-aligned, e.g. "X  -12.34".
-fn axis_text(axis: &str, mm: f32) -> Line {
-    let v = crate::hmi::fixed::format(mm, 2);
-    let mut s = Line::new();
-    s.push_str(axis);
-    for _ in v.len()..7 {
-        s.push_str(" ");
-    }
-    s.push_text(&v);
-    s
-}
-
-/// Put [`axis_text`] in cell `c`.
-fn put_axis(fb: &mut FrameBuffer, c: Cell, axis: &str, mm: f32) {
-    put(fb, c, axis_text(axis, mm).bytes());
 }
 
 /// The screens' retained state.
@@ -188,59 +216,46 @@ impl Screens {
             }
             Page::Menu { sel } | Page::Machine { sel } => {
                 let main = matches!(page, Page::Menu { .. });
-                let (title, count): (&[u8], usize) = if main {
-                    (b"inkstep", MENU.len())
+                let (title, lines): (&[u8], &[&str]) = if main {
+                    (b"inkstep", &MENU_LINES)
                 } else {
-                    (b"Machine", MACHINE_MENU.len())
+                    (b"Machine", &MACHINE_LINES)
                 };
+                let count = lines.len();
                 title_bar(fb, title, state);
                 let top = sel.saturating_sub(ROWS - 1).min(count.saturating_sub(ROWS));
                 for row in 0..ROWS {
                     let i = top + row;
-                    let item = if main {
-                        MENU.get(i).map(|(k, m)| (*k, m.label()))
-                    } else {
-                        MACHINE_MENU.get(i).map(|(k, m)| (*k, m.label()))
-                    };
-                    l.clear();
-                    if let Some((hotkey, label)) = item {
-                        l.push_str(" ");
-                        l.push_uint(u32::from(hotkey), 0);
-                        l.push_str(" ");
-                        l.push_str(label);
-                    }
-                    put(
-                        fb,
-                        Cell::at(0, row_y(row), 20).inverse(i == *sel),
-                        l.bytes(),
-                    );
+                    let line = lines.get(i).map_or(&[][..], |s| s.as_bytes());
+                    put(fb, Cell::at(0, row_y(row), 20).inverse(i == *sel), line);
                 }
                 if count > ROWS {
                     scroll_bar(fb, top, count);
                 }
                 // "X12.3 Y-4.5 pen up" for the menus' bottom line.
-                l.clear();
-                l.push_str("X");
-                l.push_fixed(p[X], 1);
-                l.push_str(" Y");
-                l.push_fixed(p[Y], 1);
-                l.push_str(if pen_down { " pen dn" } else { " pen up" });
-                l.bytes()
+                let tpl: &[u8] = if pen_down {
+                    b"X\x02 Y\x02 pen dn"
+                } else {
+                    b"X\x02 Y\x02 pen up"
+                };
+                fill(&mut l, tpl, &[p[X], p[Y]])
             }
             Page::Form(form) => {
                 let fields = form.fields();
-                l.push_uint(form.cur as u32 + 1, 0);
-                l.push_str("/");
-                l.push_uint(fields.len() as u32, 0);
-                title_bar(fb, form.kind.title().as_bytes(), l.bytes());
+                let count = [form.cur as f32 + 1.0, fields.len() as f32];
+                title_bar(
+                    fb,
+                    form.kind.title().as_bytes(),
+                    fill(&mut l, b"\x08/\x08", &count),
+                );
                 for (i, f) in fields.iter().take(ROWS).enumerate() {
                     let (y, current) = (row_y(i), i == form.cur);
-                    put(fb, Cell::at(0, y, 6), f.label.as_bytes());
+                    put(fb, Cell::at(0, y, 6), f.label().as_bytes());
                     l.clear();
                     l.push_text(&f.display());
                     l.push_str(if current && f.editing() { "_" } else { " " });
                     put(fb, Cell::at(36, y, 9).inverse(current).right(), l.bytes());
-                    put(fb, Cell::at(93, y + 1, 7).small(), f.unit.as_bytes());
+                    put(fb, Cell::at(93, y + 1, 7).small(), f.unit().as_bytes());
                 }
                 if fresh && fields.len() < ROWS {
                     put(fb, Cell::at(0, 44, 25).small(), form.kind.note().as_bytes());
@@ -268,49 +283,33 @@ impl Screens {
                     arrow(fb, 4, 12, 40, shown.0, shown.1);
                     self.arrow = Some(shown);
                 }
-                put_axis(fb, Cell::at(52, 12, 12), "X", p[X]);
-                put_axis(fb, Cell::at(52, 22, 12), "Y", p[Y]);
-                l.push_str("F ");
-                l.push_uint(hmi.jog_speed() as u32, 4);
-                l.push_str(" mm/m");
-                put(fb, Cell::at(52, 32, 12), l.bytes());
+                // "X" + value right-aligned, e.g. "X  -12.34".
+                put_line(fb, Cell::at(52, 12, 12), &mut l, b"X\x17", &[p[X]]);
+                put_line(fb, Cell::at(52, 22, 12), &mut l, b"Y\x17", &[p[Y]]);
+                let c = Cell::at(52, 32, 12);
+                put_line(fb, c, &mut l, b"F \x0c mm/m", &[hmi.jog_speed()]);
                 let pen: &[u8] = if pen_down { b"Pen down" } else { b"Pen up" };
                 put(fb, Cell::at(52, 42, 12), pen);
                 b"hold 1-9:move A/B:F 5:pen"
             }
             Page::Status => {
                 title_bar(fb, b"Status / setup", state);
-                l.push_str("X ");
-                l.push_fixed(p[X], 2);
-                l.push_str("  Y ");
-                l.push_fixed(p[Y], 2);
-                put(fb, Cell::at(0, row_y(0), 21), l.bytes());
-                l.clear();
-                l.push_str("Z ");
-                l.push_fixed(p[2], 2);
-                l.push_str(if pen_down { "  pen down" } else { "  pen up" });
-                put(fb, Cell::at(0, row_y(1), 21), l.bytes());
-                l.clear();
-                l.push_str("step/mm");
-                for s in hmi.config().steps_per_mm {
-                    l.push_str(" ");
-                    l.push_fixed(s, 0);
-                }
-                put(fb, Cell::at(0, row_y(2), 21), l.bytes());
-                l.clear();
-                l.push_str("Draw F ");
-                l.push_uint(hmi.draw_feed() as u32, 4);
-                l.push_str(" mm/min");
-                put(fb, Cell::at(0, row_y(3), 21).inverse(true), l.bytes());
-                l.clear();
-                l.push_str("A/B:draw F  jog F ");
-                l.push_uint(hmi.jog_speed() as u32, 0);
-                l.bytes()
+                let row = |i| Cell::at(0, row_y(i), 21);
+                put_line(fb, row(0), &mut l, b"X \x03  Y \x03", &[p[X], p[Y]]);
+                let tpl: &[u8] = if pen_down {
+                    b"Z \x03  pen down"
+                } else {
+                    b"Z \x03  pen up"
+                };
+                put_line(fb, row(1), &mut l, tpl, &[p[2]]);
+                let spmm = &hmi.config().steps_per_mm;
+                put_line(fb, row(2), &mut l, b"step/mm \x01 \x01 \x01", spmm);
+                let c = row(3).inverse(true);
+                put_line(fb, c, &mut l, b"Draw F \x0c mm/min", &[hmi.draw_feed()]);
+                fill(&mut l, b"A/B:draw F  jog F \x08", &[hmi.jog_speed()])
             }
             Page::Alarm { code } => {
-                l.push_str("#");
-                l.push_uint(u32::from(*code), 0);
-                title_bar(fb, b"!! ALARM", l.bytes());
+                title_bar(fb, b"!! ALARM", fill(&mut l, b"#\x08", &[f32::from(*code)]));
                 if fresh {
                     let text = alarm_text(*code);
                     let n = text.len().min(19);
@@ -318,12 +317,13 @@ impl Screens {
                     fb.fill(x, 17, 6 * n as i32 + 12, 16, true);
                     put(fb, Cell::at(x + 6, 20, n).inverse(true), text.as_bytes());
                 }
-                l.clear();
-                l.push_str("at X");
-                l.push_fixed(p[X], 2);
-                l.push_str(" Y");
-                l.push_fixed(p[Y], 2);
-                put(fb, Cell::at(0, 41, 21), l.bytes());
+                put_line(
+                    fb,
+                    Cell::at(0, 41, 21),
+                    &mut l,
+                    b"at X\x03 Y\x03",
+                    &[p[X], p[Y]],
+                );
                 b"D:unlock      C:menu"
             }
             Page::Error { title, text } => {
@@ -390,13 +390,18 @@ impl Screens {
         }
         // Live values.
         let p = hmi.pos_mm(st);
-        put_axis(fb, Cell::at(76, 11, 8), "X", p[X]);
-        put_axis(fb, Cell::at(76, 21, 8), "Y", p[Y]);
         let mut l = Line::new();
-        l.push_str("F ");
-        l.push_uint(st.feed_mm_min.max(0.0) as u32, 4);
-        l.push_str("mm/m");
-        put(fb, Cell::at(76, 31, 10).small(), l.bytes());
+        put_line(fb, Cell::at(76, 11, 8), &mut l, b"X\x17", &[p[X]]);
+        put_line(fb, Cell::at(76, 21, 8), &mut l, b"Y\x17", &[p[Y]]);
+        // (`as u32` saturates: a negative or NaN feed shows 0.)
+        let feed = [st.feed_mm_min];
+        put_line(
+            fb,
+            Cell::at(76, 31, 10).small(),
+            &mut l,
+            b"F \x0cmm/m",
+            &feed,
+        );
         // Teaching view: the feed direction now and the ones before it.
         l.clear();
         l.push_str("feed ");
@@ -418,7 +423,6 @@ impl Screens {
         // Progress and state.
         let frac = run.progress();
         progress(fb, 0, 56, 62, 8, frac);
-        l.clear();
         let state = match run.phase {
             RunPhase::Running if st.state == MachineState::Hold => "HOLD",
             RunPhase::Running => "RUN",
@@ -426,8 +430,7 @@ impl Screens {
             RunPhase::Done { complete: true, .. } => "DONE",
             RunPhase::Done { .. } => "SHORT",
         };
-        l.push_uint(fmath::round(frac * 100.0) as u32, 3);
-        l.push_str("% ");
+        fill(&mut l, b"\x0b% ", &[fmath::round(frac * 100.0)]);
         l.push_str(state);
         put(fb, Cell::at(65, 56, 12).small(), l.bytes());
     }
@@ -447,20 +450,14 @@ fn preview_page(hmi: &Hmi, job: &Job, fb: &mut FrameBuffer) {
     fb.fill(s.0 - 1, s.1 - 1, 3, 3, true);
     let (lo, hi, len) = job.sweep();
     let feed = hmi.draw_feed().max(1.0);
-    let rows: [(&str, f32, u8); 4] = [
-        ("W ", hi[0] - lo[0], 1),
-        ("H ", hi[1] - lo[1], 1),
-        ("L ", len, 1),
-        ("t ", len / feed * 60.0, 0),
+    let rows: [(&[u8], f32); 4] = [
+        (b"W \x02", hi[0] - lo[0]),
+        (b"H \x02", hi[1] - lo[1]),
+        (b"L \x02", len),
+        (b"t \x01s", len / feed * 60.0),
     ];
-    for (i, &(name, v, dec)) in rows.iter().enumerate() {
-        let mut l = Line::new();
-        l.push_str(name);
-        l.push_fixed(v, dec);
-        if dec == 0 {
-            l.push_str("s");
-        }
-        put(fb, Cell::at(83, row_y(i), 7), l.bytes());
+    for (i, &(tpl, v)) in rows.iter().enumerate() {
+        put_line(fb, Cell::at(83, row_y(i), 7), &mut t, tpl, &[v]);
     }
 }
 
@@ -555,7 +552,10 @@ mod tests {
         assert_eq!(dir_text([0, 0]).as_str(), "--");
         assert_eq!(time_text(12_345).as_str(), "12.3s");
         assert_eq!(time_text(125_000).as_str(), "2m05s");
-        assert_eq!(axis_text("X", -12.345).as_str(), "X -12.35");
+        let mut l = Line::new();
+        assert_eq!(fill(&mut l, b"X\x17", &[-12.345]), b"X -12.35");
+        assert_eq!(fill(&mut l, b"F \x0c mm/m", &[600.9]), b"F  600 mm/m");
+        assert_eq!(fill(&mut l, b"X\x02 Y\x01s", &[1.0, -2.5]), b"X1.0 Y-3s");
     }
 
     /// While drawing, a refresh sends only the changed cells and the new trace: far
