@@ -286,21 +286,19 @@ impl Conic {
         // within 0.5 of it). Near a sharp vertex of a thin ellipse the tangent is
         // steep while the curve ends within a step: stepping the "major" axis past the
         // vertex would leave no such point, so the other axis goes first there.
+        // One body for both orders: (major, minor) coordinates, tangent components
+        // and the major axis' coefficient, swapped back on return.
         for x_major in [x_first, !x_first] {
-            if x_major {
-                let s = if tx != 0 { sgn(tx) } else { -sgn(self.x) };
-                let nx = self.x + i64::from(s);
-                let ny = self.nearest_minor(true, nx, self.y, ty);
-                if (ny - self.y).abs() <= 1 && self.a * nx * nx <= self.c {
-                    return (nx, ny);
-                }
+            let (m, n, tm, tn, ca) = if x_major {
+                (self.x, self.y, tx, ty, self.a)
             } else {
-                let s = if ty != 0 { sgn(ty) } else { -sgn(self.y) };
-                let ny = self.y + i64::from(s);
-                let nx = self.nearest_minor(false, ny, self.x, tx);
-                if (nx - self.x).abs() <= 1 && self.b * ny * ny <= self.c {
-                    return (nx, ny);
-                }
+                (self.y, self.x, ty, tx, self.b)
+            };
+            let s = if tm != 0 { sgn(tm) } else { -sgn(m) };
+            let nm = m + i64::from(s);
+            let nn = self.nearest_minor(x_major, nm, n, tn);
+            if (nn - n).abs() <= 1 && ca * nm * nm <= self.c {
+                return if x_major { (nm, nn) } else { (nn, nm) };
             }
         }
         // Not reachable for a well-formed conic; move along the tangent to stay safe.
