@@ -108,13 +108,9 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             ];
             for k in 0..4u8 {
                 let at = f32::from(k) * (PI / 2.0);
-                let off = if ccw { wrap(at - a0) } else { wrap(a0 - at) };
-                if off <= sweep {
-                    if k & 1 == 0 {
-                        m[Y] = 1.0;
-                    } else {
-                        m[X] = 1.0;
-                    }
+                if wrap((at - a0) * sign) <= sweep {
+                    // Even k: a point on the X axis, tangent along Y; odd k: along X.
+                    m[usize::from(k & 1 == 0)] = 1.0;
                 }
             }
             let (accel, speed) = axis_limits(cfg, m);
