@@ -286,21 +286,19 @@ impl Conic {
         // within 0.5 of it). Near a sharp vertex of a thin ellipse the tangent is
         // steep while the curve ends within a step: stepping the "major" axis past the
         // vertex would leave no such point, so the other axis goes first there.
+        // One body for both orders: (major, minor) coordinates, tangent components
+        // and the major axis' coefficient, swapped back on return.
         for x_major in [x_first, !x_first] {
-            if x_major {
-                let s = if tx != 0 { sgn(tx) } else { -sgn(self.x) };
-                let nx = self.x + i64::from(s);
-                let ny = self.nearest_minor(true, nx, self.y, ty);
-                if (ny - self.y).abs() <= 1 && self.a * nx * nx <= self.c {
-                    return (nx, ny);
-                }
+            let (m, n, tm, tn, ca) = if x_major {
+                (self.x, self.y, tx, ty, self.a)
             } else {
-                let s = if ty != 0 { sgn(ty) } else { -sgn(self.y) };
-                let ny = self.y + i64::from(s);
-                let nx = self.nearest_minor(false, ny, self.x, tx);
-                if (nx - self.x).abs() <= 1 && self.b * ny * ny <= self.c {
-                    return (nx, ny);
-                }
+                (self.y, self.x, ty, tx, self.b)
+            };
+            let s = if tm != 0 { sgn(tm) } else { -sgn(m) };
+            let nm = m + i64::from(s);
+            let nn = self.nearest_minor(x_major, nm, n, tn);
+            if (nn - n).abs() <= 1 && ca * nm * nm <= self.c {
+                return if x_major { (nm, nn) } else { (nn, nm) };
             }
         }
         // Not reachable for a well-formed conic; move along the tangent to stay safe.
@@ -330,34 +328,25 @@ impl Conic {
         }
     }
 
-    fn start_tail(&mut self) -> Option<Tick> {
+    /// Moves to the neighbouring point `p`: the tick that gets there.
+    fn go(&mut self, p: (i64, i64)) -> Tick {
+        let t = tick_xy(sgn(p.0 - self.x), sgn(p.1 - self.y));
+        self.prev = (self.x, self.y);
+        (self.x, self.y) = p;
+        t
+    }
+
+    /// Switches to the straight tail from the present point to the target.
+    fn start_tail(&mut self) {
         let from = [self.x as i32, self.y as i32, 0];
         let to = [self.tx as i32, self.ty as i32, 0];
         self.tail = Some(Line::new(from, to, self.method));
-        self.next_tick()
     }
-}
 
-impl Interpolate for Conic {
-    fn next_tick(&mut self) -> Option<Tick> {
-        if self.finished {
-            return None;
-        }
-        if let Some(tail) = self.tail.as_mut() {
-            let t = tail.next_tick();
-            match t {
-                Some(t) => {
-                    let d = t.deltas();
-                    self.prev = (self.x, self.y);
-                    self.x += i64::from(d[X]);
-                    self.y += i64::from(d[Y]);
-                }
-                None => self.finished = true,
-            }
-            return t;
-        }
+    /// The next point of the trace, or `None` when the tail must take over.
+    fn trace(&mut self) -> Option<(i64, i64)> {
         if self.budget == 0 {
-            return self.start_tail();
+            return None;
         }
         self.budget -= 1;
         let (nx, ny) = match self.method {
@@ -373,22 +362,39 @@ impl Interpolate for Conic {
             // Tracing along the ray (a flat stretch): leave for the target once the
             // trace turns away from it.
             if after != 0 || !self.ahead(nx, ny) {
-                return self.start_tail();
+                return None;
             }
         } else if before < 0 && after >= 0 && self.ahead(nx, ny) {
             if self.crossings > 1 {
                 self.crossings -= 1;
             } else if after > 0 {
-                return self.start_tail();
+                return None;
             } else {
                 self.on_ray = true;
             }
         }
-        let t = tick_xy(sgn(nx - self.x), sgn(ny - self.y));
-        self.prev = (self.x, self.y);
-        self.x = nx;
-        self.y = ny;
-        Some(t)
+        Some((nx, ny))
+    }
+}
+
+impl Interpolate for Conic {
+    fn next_tick(&mut self) -> Option<Tick> {
+        if self.finished {
+            return None;
+        }
+        if self.tail.is_none() {
+            if let Some(p) = self.trace() {
+                return Some(self.go(p));
+            }
+            self.start_tail();
+        }
+        // The tail's ticks are XY steps: the point follows them like the trace's.
+        let Some(t) = self.tail.as_mut().and_then(|t| t.next_tick()) else {
+            self.finished = true;
+            return None;
+        };
+        let d = t.deltas();
+        Some(self.go((self.x + i64::from(d[X]), self.y + i64::from(d[Y]))))
     }
 }
 

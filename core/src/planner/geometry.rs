@@ -72,7 +72,7 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             if length <= 0.0 {
                 return Err(GeometryError::Empty);
             }
-            let u = normalize(d);
+            let u = [d[X] / length, d[Y] / length, d[Z] / length];
             let (accel, speed_limit) = axis_limits(cfg, u);
             Ok(Geometry {
                 length,
@@ -95,28 +95,25 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             let a1 = crate::fmath::atan2(p1.1, p1.0);
             let sweep = sweep(a0, a1, ccw, mv.target == start) + TAU * f32::from(turns);
             let sign = if ccw { 1.0 } else { -1.0 };
-            let tangent = |a: f32| {
-                [
-                    -crate::fmath::sin(a) * sign,
-                    crate::fmath::cos(a) * sign,
-                    0.0,
-                ]
-            };
-            let (us, ue) = (tangent(a0), tangent(a1));
-            let (mut accel, mut speed) = axis_limits(cfg, us);
-            let (a2, s2) = axis_limits(cfg, ue);
-            accel = accel.min(a2);
-            speed = speed.min(s2);
-            // Axis-aligned tangents inside the sweep (at position angles k * pi/2).
-            for k in 0..4 {
-                let at = k as f32 * PI / 2.0;
-                let off = if ccw { wrap(at - a0) } else { wrap(a0 - at) };
-                if off <= sweep {
-                    let (a3, s3) = axis_limits(cfg, tangent(at));
-                    accel = accel.min(a3);
-                    speed = speed.min(s3);
+            // Tangent at a point p (relative to the centre): p turned a quarter.
+            let tangent = |p: (f32, f32)| normalize([-p.1 * sign, p.0 * sign, 0.0]);
+            let (us, ue) = (tangent(p0), tangent(p1));
+            // The per-axis limits are min_i a_i / max|u_i| over the arc: the largest
+            // tangent component per axis, 1 where the sweep passes a point whose
+            // tangent is axis-aligned (position angles k * pi/2).
+            let mut m = [
+                us[X].abs().max(ue[X].abs()),
+                us[Y].abs().max(ue[Y].abs()),
+                0.0,
+            ];
+            for k in 0..4u8 {
+                let at = f32::from(k) * (PI / 2.0);
+                if wrap((at - a0) * sign) <= sweep {
+                    // Even k: a point on the X axis, tangent along Y; odd k: along X.
+                    m[usize::from(k & 1 == 0)] = 1.0;
                 }
             }
+            let (accel, speed) = axis_limits(cfg, m);
             let centripetal = crate::fmath::sqrt(accel * r);
             Ok(Geometry {
                 length: r * sweep,
@@ -142,21 +139,24 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             let t1 = crate::fmath::atan2(p1.1 / bf, p1.0 / af);
             let sweep = sweep(t0, t1, ccw, mv.target == start);
             let sign = if ccw { 1.0 } else { -1.0 };
-            let vel = |t: f32| {
-                [
-                    -af * crate::fmath::sin(t) / sx * sign,
-                    bf * crate::fmath::cos(t) / sy * sign,
-                    0.0,
-                ]
+            let c = Curve {
+                sx,
+                sy,
+                x0: 0.0,
+                xa: -af,
+                ya: bf,
+                sign,
+                theta0: t0,
+                w: 1.0,
+                span: sign * sweep,
             };
-            let param = |i: u32, n: u32| t0 + sign * sweep * i as f32 / n as f32;
-            let (length, accel, speed) = integrate(cfg, 128, |i, n| vel(param(i, n)), sweep);
+            let (length, accel, speed) = integrate(cfg, 128, &c, sweep);
             // Smallest radius of curvature of an ellipse: min(a^2/b, b^2/a) (steps).
             let r_min = (af * af / bf).min(bf * bf / af) / sx.max(sy);
             Ok(Geometry {
                 length,
-                unit_start: normalize(vel(t0)),
-                unit_end: normalize(vel(t0 + sign * sweep)),
+                unit_start: normalize(c.vel(0, 1)),
+                unit_end: normalize(c.vel(1, 1)),
                 accel,
                 speed_limit: speed.min(crate::fmath::sqrt(accel * r_min)),
             })
@@ -169,12 +169,20 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             }
             let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
             let dir = dx.signum();
-            let slope = |u: f32| amp * omega * crate::fmath::cos(omega * u + phase);
-            let vel = |u: f32| [dir / sx, dir * slope(u) / sy, 0.0];
+            let c = Curve {
+                sx,
+                sy,
+                x0: dir,
+                xa: 0.0,
+                ya: dir * (amp * omega),
+                sign: 1.0,
+                theta0: phase,
+                w: omega,
+                span: dx,
+            };
             let periods = (omega.abs() * dx.abs() / TAU) as u32;
             let n = (periods.saturating_mul(16)).clamp(64, 4096) & !1;
-            let (length, accel, speed) =
-                integrate(cfg, n, |i, n| vel(dx * i as f32 / n as f32), dx.abs());
+            let (length, accel, speed) = integrate(cfg, n, &c, dx.abs());
             let curv = (amp * omega * omega).abs();
             let r_min = if curv > 0.0 {
                 1.0 / curv / sx.max(sy)
@@ -183,8 +191,8 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             };
             Ok(Geometry {
                 length,
-                unit_start: normalize(vel(0.0)),
-                unit_end: normalize(vel(dx)),
+                unit_start: normalize(c.vel(0, 1)),
+                unit_end: normalize(c.vel(1, 1)),
                 accel,
                 speed_limit: speed.min(crate::fmath::sqrt(accel * r_min)),
             })
@@ -225,19 +233,41 @@ fn sweep(a0: f32, a1: f32, ccw: bool, full: bool) -> f32 {
     }
 }
 
+/// A planar curve's velocity in mm per parameter unit, one form for ellipses and
+/// sines (one sampler instead of a copy per curve): at parameter theta =
+/// theta0 + w * (span * i / n), velocity = ((x0 + xa sin theta) / sx * sign,
+/// ya cos theta / sy * sign).
+struct Curve {
+    sx: f32,
+    sy: f32,
+    x0: f32,
+    xa: f32,
+    ya: f32,
+    sign: f32,
+    theta0: f32,
+    w: f32,
+    span: f32,
+}
+
+impl Curve {
+    fn vel(&self, i: u32, n: u32) -> [f32; AXES] {
+        let theta = self.theta0 + self.w * (self.span * i as f32 / n as f32);
+        let (sin, cos) = crate::fmath::sin_cos(theta);
+        [
+            (self.x0 + self.xa * sin) / self.sx * self.sign,
+            self.ya * cos / self.sy * self.sign,
+            0.0,
+        ]
+    }
+}
+
 /// Simpson integral of |vel(t)| over a parameter span `span` sampled at n (even)
 /// intervals, plus the tightest per-axis limits over the samples.
-fn integrate(
-    cfg: &PlannerConfig,
-    n: u32,
-    vel: impl Fn(u32, u32) -> [f32; AXES],
-    span: f32,
-) -> (f32, f32, f32) {
+fn integrate(cfg: &PlannerConfig, n: u32, curve: &Curve, span: f32) -> (f32, f32, f32) {
     let mut sum = 0.0f32;
-    let mut accel = f32::INFINITY;
-    let mut speed = f32::INFINITY;
+    let mut most = [0.0f32; AXES];
     for i in 0..=n {
-        let v = vel(i, n);
+        let v = curve.vel(i, n);
         let m = crate::fmath::sqrt(v.iter().map(|c| c * c).sum());
         let w = if i == 0 || i == n {
             1.0
@@ -247,10 +277,15 @@ fn integrate(
             2.0
         };
         sum += w * m;
-        let (a, s) = axis_limits(cfg, normalize(v));
-        accel = accel.min(a);
-        speed = speed.min(s);
+        // min over samples of min_i a_i / |u_i| is min_i a_i / max over samples |u_i|.
+        let u = normalize(v);
+        most = [
+            most[X].max(u[X].abs()),
+            most[Y].max(u[Y].abs()),
+            most[Z].max(u[Z].abs()),
+        ];
     }
+    let (accel, speed) = axis_limits(cfg, most);
     (sum * span / (3.0 * n as f32), accel, speed)
 }
 

@@ -82,9 +82,8 @@ impl Default for PlannerConfig {
 /// One planned move.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Block {
+    /// The move (its start is where the previous block ended).
     pub mv: Move,
-    /// Where the move starts (steps).
-    pub start: StepPos,
     /// Path length, mm.
     pub length: f32,
     /// Path acceleration limit (peak), mm/s^2.
@@ -202,7 +201,6 @@ impl Planner {
         let accel = g.accel;
         let block = Block {
             mv: *mv,
-            start: self.next_start,
             length: g.length,
             accel,
             nominal,
