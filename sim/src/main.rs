@@ -122,7 +122,19 @@ fn main() -> ExitCode {
             if !(speed > 0.0 && speed.is_finite()) {
                 return fail("--speed must be a positive number");
             }
-            inkstep_sim::serve::serve(link.as_deref(), speed, || false).map(|()| ExitCode::SUCCESS)
+            // Ctrl-C, SIGTERM or SIGHUP end the loop normally, so the pty is dropped and
+            // the `--link` symlink removed instead of left dangling.
+            let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+            let flag = stop.clone();
+            if let Err(e) =
+                ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed))
+            {
+                return fail(&format!("installing the signal handler: {e}"));
+            }
+            inkstep_sim::serve::serve(link.as_deref(), speed, || {
+                stop.load(std::sync::atomic::Ordering::Relaxed)
+            })
+            .map(|()| ExitCode::SUCCESS)
         }
         Cmd::Plot {
             trace,

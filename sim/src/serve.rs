@@ -11,7 +11,7 @@ use inkstep_core::settings::Settings;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-/// Runs until `stop` returns true (never, for the command line).
+/// Runs until `stop` returns true (for the command line: on Ctrl-C, SIGTERM or SIGHUP).
 pub fn serve(
     link: Option<&Path>,
     speed: f64,

@@ -100,3 +100,36 @@ fn a_sender_talks_to_the_simulated_port() {
 }
 
 use std::os::unix::fs::OpenOptionsExt;
+
+/// A killed simulator must not leave its `--link` symlink dangling: SIGTERM (what
+/// `kill` and service managers send) ends the serve loop normally, the exit status is
+/// success and the link is gone.
+#[test]
+fn sigterm_ends_serve_and_removes_the_link() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("ttyINKSTEP");
+    let child = Command::new(env!("CARGO_BIN_EXE_inkstep-sim"))
+        .args(["serve", "--link"])
+        .arg(&link)
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut guard = Killed(child);
+    wait_for(&link);
+    let pid = rustix::process::Pid::from_child(&guard.0);
+    rustix::process::kill_process(pid, rustix::process::Signal::TERM).unwrap();
+    let end = Instant::now() + Duration::from_secs(5);
+    let status = loop {
+        if let Some(s) = guard.0.try_wait().unwrap() {
+            break s;
+        }
+        assert!(Instant::now() < end, "serve did not stop on SIGTERM");
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    assert!(status.success(), "exit status {status:?}");
+    assert!(
+        std::fs::symlink_metadata(&link).is_err(),
+        "the link {} is still there",
+        link.display()
+    );
+}
