@@ -212,11 +212,13 @@ impl Conic {
         dt * crate::fmath::sqrt(vx * vx + vy * vy)
     }
 
+    #[inline(never)]
     fn f(&self, x: i64, y: i64) -> i64 {
         self.a * x * x + self.b * y * y - self.c
     }
 
     /// Tangent direction (not normalised) at (x, y) in the feed direction.
+    #[inline(never)]
     fn tangent(&self, x: i64, y: i64) -> (i64, i64) {
         let (tx, ty) = (-self.b * y, self.a * x);
         if self.ccw {

@@ -232,7 +232,15 @@ impl Prep {
                 (_, Interp::Conic(c)) => {
                     to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
                 }
-                (_, interp) => to_q(curve_ds(&cfg, interp.direction().unwrap_or([1.0, 0.0]))),
+                (_, interp) => {
+                    // Only a sine gets here (lines have a constant length, conics are
+                    // above): the conic's tangent is not compiled in.
+                    let dir = match interp {
+                        Interp::Sine(c) => c.direction(),
+                        _ => [1.0, 0.0],
+                    };
+                    to_q(curve_ds(&cfg, dir))
+                }
             };
             let mut s_new = a.s + ds;
             if let Some(n) = a.ticks_left.as_mut() {
