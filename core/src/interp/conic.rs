@@ -232,6 +232,7 @@ impl Conic {
     /// target x p, oriented so that it grows in the feed direction. i64 is enough:
     /// every coordinate is within 2^30.5 of the centre (the limits checked in
     /// [`Conic::build`]), so each product is below 2^61.
+    #[inline(never)]
     fn side(&self, x: i64, y: i64) -> i64 {
         let cr = self.tx * y - self.ty * x;
         if self.ccw {
@@ -241,6 +242,7 @@ impl Conic {
         }
     }
 
+    #[inline(never)]
     fn ahead(&self, x: i64, y: i64) -> bool {
         self.tx * x + self.ty * y > 0
     }
