@@ -196,12 +196,11 @@ impl Prep {
     /// Prepares commands until `sink` is full, the path ends, or a hold comes to rest.
     /// `dyn`: one copy compiled in the core (size-optimised), not one per caller.
     pub fn fill(&mut self, planner: &mut Planner, sink: &mut dyn CmdSink) {
-        let cfg = *planner.config();
         while sink.has_room() {
             if self.hold == HoldState::Held {
                 return;
             }
-            if self.active.is_none() && !self.start_next(planner, &cfg) {
+            if self.active.is_none() && !self.start_next(planner) {
                 return;
             }
             if planner.generation() != self.generation {
@@ -230,7 +229,8 @@ impl Prep {
                     (c.last_cross().unsigned_abs() as f32 * m / dot) as u64
                 }
                 (_, Interp::Conic(c)) => {
-                    to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
+                    let ax = &planner.config().axes;
+                    to_q(c.last_tick_len(ax[X].steps_per_mm, ax[Y].steps_per_mm))
                 }
                 (_, interp) => {
                     // Only a sine gets here (lines have a constant length, conics are
@@ -239,7 +239,7 @@ impl Prep {
                         Interp::Sine(c) => c.direction(),
                         _ => [1.0, 0.0],
                     };
-                    to_q(curve_ds(&cfg, dir))
+                    to_q(curve_ds(planner.config(), dir))
                 }
             };
             let mut s_new = a.s + ds;
@@ -299,7 +299,7 @@ impl Prep {
         }
     }
 
-    fn start_next(&mut self, planner: &mut Planner, cfg: &PlannerConfig) -> bool {
+    fn start_next(&mut self, planner: &mut Planner) -> bool {
         loop {
             let Some(block) = planner.pop() else {
                 planner.note_stopped();
@@ -308,23 +308,26 @@ impl Prep {
                 }
                 return false;
             };
+            let cfg = planner.config();
             match Interp::new(self.pos, &block.mv, cfg.method) {
                 Ok(interp) => {
-                    let line_len = line_length(cfg, self.pos, block.mv.target);
-                    let (len_q, ticks_left) = match &interp {
-                        Interp::Line(l) => (to_q(line_len), Some(l.ticks())),
-                        _ => (to_q(block.length), None),
-                    };
-                    let len = match &interp {
-                        Interp::Line(l) => TickLen::Const(to_q(line_len / l.ticks().max(1) as f32)),
-                        Interp::Conic(c) => match c.circle_radius() {
-                            Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
-                                let sp = cfg.axes[X].steps_per_mm.max(1e-6);
-                                TickLen::Circle(Q * r / sp)
-                            }
-                            _ => TickLen::Curve,
-                        },
-                        Interp::Sine(_) => TickLen::Curve,
+                    let (len_q, ticks_left, len) = match &interp {
+                        Interp::Line(l) => {
+                            let line_len = line_length(cfg, self.pos, block.mv.target);
+                            let per = to_q(line_len / l.ticks().max(1) as f32);
+                            (to_q(line_len), Some(l.ticks()), TickLen::Const(per))
+                        }
+                        Interp::Conic(c) => {
+                            let len = match c.circle_radius() {
+                                Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
+                                    let sp = cfg.axes[X].steps_per_mm.max(1e-6);
+                                    TickLen::Circle(Q * r / sp)
+                                }
+                                _ => TickLen::Curve,
+                            };
+                            (to_q(block.length), None, len)
+                        }
+                        Interp::Sine(_) => (to_q(block.length), None, TickLen::Curve),
                     };
                     let ae = planner.plan_accel(&block);
                     self.active = Some(Active {
@@ -334,7 +337,7 @@ impl Prep {
                         s: 0,
                         len_q,
                         ticks_left,
-                        prof: Profile::new(cfg.shape, 0.0, 0.0, 0.0, 1.0, 0.0),
+                        prof: Profile::rest(cfg.shape),
                         prof_s0: 0,
                         prof_t0: self.t_last,
                         prof_done: false,
