@@ -68,6 +68,8 @@ pub fn round(x: f32) -> f32 {
 /// Correctly rounded square root (NaN for negative input): the root's 25 bits (24 and
 /// a rounding bit) digit by digit in 32-bit integers, no table, no division, no u64
 /// (checked against the hardware's square root on every f32).
+/// `!(x >= 0.0)` on purpose: one comparison is false for NaN and negatives alike.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn sqrt(x: f32) -> f32 {
     if !(x >= 0.0) {
         return f32::NAN;
