@@ -127,12 +127,13 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     let z = r * r;
     let s = r + r * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 0.166_666_55);
     let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
-    match (n as i32) & 3 {
-        0 => (s, c),
-        1 => (c, -s),
-        2 => (-s, -c),
-        _ => (-c, s),
-    }
+    // Quadrant q: (s, c), (c, -s), (-s, -c), (-c, s): odd q swaps, q = 2, 3 negate the
+    // sine, q = 1, 2 the cosine.
+    let q = n as i32;
+    let (s, c) = if q & 1 != 0 { (c, s) } else { (s, c) };
+    let s = if q & 2 != 0 { -s } else { s };
+    let c = if (q + 1) & 2 != 0 { -c } else { c };
+    (s, c)
 }
 
 /// sin x.
