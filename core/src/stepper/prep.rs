@@ -299,6 +299,7 @@ impl Prep {
         }
     }
 
+    #[inline(never)]
     fn start_next(&mut self, planner: &mut Planner) -> bool {
         loop {
             let Some(block) = planner.pop() else {
@@ -354,6 +355,7 @@ impl Prep {
         }
     }
 
+    #[inline(never)]
     fn reprofile(&mut self, planner: &Planner) {
         self.generation = planner.generation();
         let cfg = planner.config();
@@ -390,6 +392,7 @@ fn to_q(mm: f32) -> u64 {
 }
 
 /// Moves the window on by the configured length (floating point, once per window).
+#[inline(never)]
 fn advance_window(a: &mut Active, cfg: &PrepConfig) {
     // Time is kept in whole timer ticks (exact, no drift); only the profile is
     // evaluated in f32 seconds, whose rounding moves a window edge by far less than a step.
