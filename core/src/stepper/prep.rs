@@ -219,28 +219,9 @@ impl Prep {
                 self.active = None;
                 continue;
             };
-            let ds = match (a.len, &a.interp) {
-                (TickLen::Const(q), _) => q,
-                (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
-                    // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
-                    // telescope, so a whole arc adds up to its length (to < 1e-9).
-                    // f32, not a u64 division (not in the chip's instruction set).
-                    let dot = c.last_dot().unsigned_abs().max(1) as f32;
-                    (c.last_cross().unsigned_abs() as f32 * m / dot) as u64
-                }
-                (_, Interp::Conic(c)) => {
-                    let ax = &planner.config().axes;
-                    to_q(c.last_tick_len(ax[X].steps_per_mm, ax[Y].steps_per_mm))
-                }
-                (_, interp) => {
-                    // Only a sine gets here (lines have a constant length, conics are
-                    // above): the conic's tangent is not compiled in.
-                    let dir = match interp {
-                        Interp::Sine(c) => c.direction(),
-                        _ => [1.0, 0.0],
-                    };
-                    to_q(curve_ds(planner.config(), dir))
-                }
+            let ds = match a.len {
+                TickLen::Const(q) => q,
+                len => curve_tick_len(len, &a.interp, planner.config()),
             };
             let mut s_new = a.s + ds;
             if let Some(n) = a.ticks_left.as_mut() {
@@ -433,6 +414,34 @@ fn advance_window(a: &mut Active, cfg: &PrepConfig) {
     };
     if t1 >= dur {
         a.prof_done = true;
+    }
+}
+
+/// Length of the last tick along a curve, Q units (lines take the constant branch in
+/// the loop; this is out of line so the loop keeps fewer values live).
+#[inline(never)]
+fn curve_tick_len(len: TickLen, interp: &Interp, cfg: &PlannerConfig) -> u64 {
+    match (len, interp) {
+        (TickLen::Const(q), _) => q,
+        (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
+            // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
+            // telescope, so a whole arc adds up to its length (to < 1e-9).
+            // f32, not a u64 division (not in the chip's instruction set).
+            let dot = c.last_dot().unsigned_abs().max(1) as f32;
+            (c.last_cross().unsigned_abs() as f32 * m / dot) as u64
+        }
+        (_, Interp::Conic(c)) => {
+            to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
+        }
+        (_, interp) => {
+            // Only a sine gets here (conics are above): the conic's tangent is not
+            // compiled in.
+            let dir = match interp {
+                Interp::Sine(c) => c.direction(),
+                _ => [1.0, 0.0],
+            };
+            to_q(curve_ds(cfg, dir))
+        }
     }
 }
 
