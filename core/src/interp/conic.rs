@@ -382,6 +382,7 @@ impl Conic {
 }
 
 impl Interpolate for Conic {
+    #[inline(never)]
     fn next_tick(&mut self) -> Option<Tick> {
         if self.finished {
             return None;
