@@ -65,65 +65,49 @@ pub fn round(x: f32) -> f32 {
     }
 }
 
-/// Correctly rounded square root (NaN for negative input), by an integer square root of
-/// the significand: no table, no division.
+/// Correctly rounded square root (NaN for negative input): the root's 25 bits (24 and
+/// a rounding bit) digit by digit in 32-bit integers, no table, no division, no u64
+/// (checked against the hardware's square root on every f32).
+/// `!(x >= 0.0)` on purpose: one comparison is false for NaN and negatives alike.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 pub fn sqrt(x: f32) -> f32 {
-    if x.is_nan() || x < 0.0 {
+    if !(x >= 0.0) {
         return f32::NAN;
     }
     if x == 0.0 || x == f32::INFINITY {
         return x;
     }
     let bits = x.to_bits();
-    let mut exp = ((bits >> 23) & 0xff) as i32;
-    let mut mant = bits & 0x007f_ffff;
-    if exp == 0 {
+    let mut e = (bits >> 23) as i32 - 127;
+    let mut m = bits & 0x007f_ffff;
+    if e == -127 {
         // Subnormal: normalise the significand.
-        let shift = mant.leading_zeros() as i32 - 8;
-        mant <<= shift;
-        exp = 1 - shift;
+        let shift = m.leading_zeros() as i32 - 8;
+        m <<= shift;
+        e = -126 - shift;
     }
-    // x = m * 2^k with m a 24-bit integer; make k even.
-    let mut m = u64::from(mant | 0x0080_0000);
-    let mut k = exp - 127 - 23;
-    if k & 1 != 0 {
+    // x = (m / 2^23) * 2^e; with e odd, fold one factor 2 into m so e/2 is whole.
+    m |= 0x0080_0000;
+    if e & 1 != 0 {
         m <<= 1;
-        k -= 1;
     }
-    // Scale m into [2^46, 2^48) so its square root has exactly 24 bits.
-    let s = if m < 1 << 24 { 12 } else { 11 };
-    let n = m << (2 * s);
-    let (mut root, rem) = isqrt(n);
-    // Round to nearest: sqrt(n) > root + 1/2 exactly when n - root² > root (no ties).
-    if rem > root {
-        root += 1;
-    }
-    let mut e = k / 2 - s;
-    if root == 1 << 24 {
-        root >>= 1;
-        e += 1;
-    }
-    let biased = (e + 23 + 127) as u32;
-    f32::from_bits((biased << 23) | (root as u32 & 0x007f_ffff))
-}
-
-/// Floor square root of `n` and the remainder `n - root²`, bit by bit.
-fn isqrt(mut n: u64) -> (u64, u64) {
-    let mut root = 0u64;
-    let mut bit = 1u64 << 62;
-    while bit > n {
-        bit >>= 2;
-    }
+    // Root bit by bit from 2^24 (the leading 1) down: `rem` is the remainder, doubled
+    // at every step so it stays aligned with the next bit; `s` is twice the root so far.
+    let mut rem = m << 1;
+    let (mut q, mut s, mut bit) = (0u32, 0u32, 0x0100_0000u32);
     while bit != 0 {
-        if n >= root + bit {
-            n -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
+        let t = s + bit;
+        if t <= rem {
+            s = t + bit;
+            rem -= t;
+            q += bit;
         }
-        bit >>= 2;
+        rem <<= 1;
+        bit >>= 1;
     }
-    (root, n)
+    // Round to nearest on the extra bit (a square root is never exactly halfway).
+    q += q & 1;
+    f32::from_bits(((q >> 1) + 0x3f00_0000).wrapping_add(((e >> 1) << 23) as u32))
 }
 
 /// sqrt(x² + y²).
@@ -143,12 +127,13 @@ pub fn sin_cos(x: f32) -> (f32, f32) {
     let z = r * r;
     let s = r + r * z * ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 0.166_666_55);
     let c = 1.0 - 0.5 * z + z * z * ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2);
-    match (n as i32) & 3 {
-        0 => (s, c),
-        1 => (c, -s),
-        2 => (-s, -c),
-        _ => (-c, s),
-    }
+    // Quadrant q: (s, c), (c, -s), (-s, -c), (-c, s): odd q swaps, q = 2, 3 negate the
+    // sine, q = 1, 2 the cosine.
+    let q = n as i32;
+    let (s, c) = if q & 1 != 0 { (c, s) } else { (s, c) };
+    let s = if q & 2 != 0 { -s } else { s };
+    let c = if (q + 1) & 2 != 0 { -c } else { c };
+    (s, c)
 }
 
 /// sin x.

@@ -220,10 +220,12 @@ impl FineLine {
     }
 
     fn tick(&self, d_maj: i64, d_min: i64) -> Tick {
-        let mut d = [0i8; AXES];
-        d[self.major] = d_maj as i8;
-        d[1 - self.major] = d_min as i8;
-        Tick::from_deltas(d)
+        let (d_maj, d_min) = (d_maj as i8, d_min as i8);
+        if self.major == 0 {
+            super::tick_xy(d_maj, d_min)
+        } else {
+            super::tick_xy(d_min, d_maj)
+        }
     }
 }
 

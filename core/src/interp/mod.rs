@@ -104,29 +104,27 @@ pub enum Interp {
 impl Interp {
     /// Interpolator for `mv`, starting from `start`.
     pub fn new(start: StepPos, mv: &Move, method: Method) -> Result<Self, InterpError> {
+        // Everything but a plain line is planar (XY): one check for all of them.
+        if !matches!(mv.path, Path::Line) {
+            planar(start, mv.target)?;
+        }
         match mv.path {
             Path::Line => Ok(Interp::Line(line::Line::new(start, mv.target, method))),
-            Path::LineFine { from, to } => {
-                planar(start, mv.target)?;
-                Ok(Interp::Line(
-                    match (method, line::FineLine::new(start, mv.target, from, to)) {
-                        (Method::Dda, Some(l)) => line::Line::Fine(l),
-                        _ => line::Line::new(start, mv.target, method),
-                    },
-                ))
-            }
+            Path::LineFine { from, to } => Ok(Interp::Line(
+                match (method, line::FineLine::new(start, mv.target, from, to)) {
+                    (Method::Dda, Some(l)) => line::Line::Fine(l),
+                    _ => line::Line::new(start, mv.target, method),
+                },
+            )),
             Path::Arc { center, ccw, turns } => {
-                planar(start, mv.target)?;
                 conic::Conic::circle(start, center, mv.target, ccw, turns, method)
                     .map(Interp::Conic)
             }
             Path::Ellipse { center, a, b, ccw } => {
-                planar(start, mv.target)?;
                 conic::Conic::ellipse(start, center, a, b, mv.target, ccw, method)
                     .map(Interp::Conic)
             }
             Path::Sine { amp, omega, phase } => {
-                planar(start, mv.target)?;
                 let c = curve::Sine::new(amp, omega, phase)?;
                 Ok(Interp::Sine(curve::CurveTrace::new(
                     start, mv.target, c, method,
@@ -166,7 +164,8 @@ fn planar(start: StepPos, target: StepPos) -> Result<(), InterpError> {
     }
 }
 
-/// Sign of an i64 as -1, 0 or 1.
+/// Sign of an i64 as -1, 0 or 1 (out of line: a dozen callers).
+#[inline(never)]
 pub(crate) fn sgn(v: i64) -> i8 {
     i8::from(v > 0) - i8::from(v < 0)
 }

@@ -83,95 +83,25 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             })
         }
         Path::Arc { center, ccw, turns } => {
-            planar(start, mv)?;
-            let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
-            let p0 = (-center[0] as f32 / sx, -center[1] as f32 / sy);
-            let p1 = (d[X] + p0.0, d[Y] + p0.1);
-            let r = crate::fmath::hypot(p0.0, p0.1);
-            if r <= 0.0 {
-                return Err(GeometryError::Invalid);
-            }
-            let a0 = crate::fmath::atan2(p0.1, p0.0);
-            let a1 = crate::fmath::atan2(p1.1, p1.0);
-            let sweep = sweep(a0, a1, ccw, mv.target == start) + TAU * f32::from(turns);
-            let sign = if ccw { 1.0 } else { -1.0 };
-            // Tangent at a point p (relative to the centre): p turned a quarter.
-            let tangent = |p: (f32, f32)| normalize([-p.1 * sign, p.0 * sign, 0.0]);
-            let (us, ue) = (tangent(p0), tangent(p1));
-            // The per-axis limits are min_i a_i / max|u_i| over the arc: the largest
-            // tangent component per axis, 1 where the sweep passes a point whose
-            // tangent is axis-aligned (position angles k * pi/2).
-            let mut m = [
-                us[X].abs().max(ue[X].abs()),
-                us[Y].abs().max(ue[Y].abs()),
-                0.0,
-            ];
-            for k in 0..4u8 {
-                let at = f32::from(k) * (PI / 2.0);
-                if wrap((at - a0) * sign) <= sweep {
-                    // Even k: a point on the X axis, tangent along Y; odd k: along X.
-                    m[usize::from(k & 1 == 0)] = 1.0;
-                }
-            }
-            let (accel, speed) = axis_limits(cfg, m);
-            let centripetal = crate::fmath::sqrt(accel * r);
-            Ok(Geometry {
-                length: r * sweep,
-                unit_start: us,
-                unit_end: ue,
-                accel,
-                speed_limit: speed.min(centripetal),
-            })
+            // A circle is the ellipse a = b = R (in steps, as the interpolator traces it).
+            let r = crate::fmath::hypot(center[0] as f32, center[1] as f32);
+            conic(cfg, start, mv, center, r, r, ccw, turns)
         }
         Path::Ellipse { center, a, b, ccw } => {
-            planar(start, mv)?;
-            if a <= 0 || b <= 0 {
-                return Err(GeometryError::Invalid);
-            }
-            let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
-            let (af, bf) = (a as f32, b as f32);
-            let p0 = (-center[0] as f32, -center[1] as f32);
-            let p1 = (
-                p0.0 + (mv.target[X] - start[X]) as f32,
-                p0.1 + (mv.target[Y] - start[Y]) as f32,
-            );
-            let t0 = crate::fmath::atan2(p0.1 / bf, p0.0 / af);
-            let t1 = crate::fmath::atan2(p1.1 / bf, p1.0 / af);
-            let sweep = sweep(t0, t1, ccw, mv.target == start);
-            let sign = if ccw { 1.0 } else { -1.0 };
-            let c = Curve {
-                sx,
-                sy,
-                x0: 0.0,
-                xa: -af,
-                ya: bf,
-                sign,
-                theta0: t0,
-                w: 1.0,
-                span: sign * sweep,
-            };
-            let (length, accel, speed) = integrate(cfg, 128, &c, sweep);
-            // Smallest radius of curvature of an ellipse: min(a^2/b, b^2/a) (steps).
-            let r_min = (af * af / bf).min(bf * bf / af) / sx.max(sy);
-            Ok(Geometry {
-                length,
-                unit_start: normalize(c.vel(0, 1)),
-                unit_end: normalize(c.vel(1, 1)),
-                accel,
-                speed_limit: speed.min(crate::fmath::sqrt(accel * r_min)),
-            })
+            conic(cfg, start, mv, center, a as f32, b as f32, ccw, 0)
         }
         Path::Sine { amp, omega, phase } => {
             planar(start, mv)?;
-            let dx = (i64::from(mv.target[X]) - i64::from(start[X])) as f32;
-            if dx == 0.0 || !(amp.is_finite() && omega.is_finite() && phase.is_finite()) {
+            if d[X] == 0.0 || !(amp.is_finite() && omega.is_finite() && phase.is_finite()) {
                 return Err(GeometryError::Invalid);
             }
-            let (sx, sy) = (sp(cfg, X), sp(cfg, Y));
+            let dx = (i64::from(mv.target[X]) - i64::from(start[X])) as f32;
             let dir = dx.signum();
+            let periods = (omega.abs() * dx.abs() / TAU) as u32;
+            let curv = (amp * omega * omega).abs();
             let c = Curve {
-                sx,
-                sy,
+                sx: sp(cfg, X),
+                sy: sp(cfg, Y),
                 x0: dir,
                 xa: 0.0,
                 ya: dir * (amp * omega),
@@ -180,24 +110,68 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
                 w: omega,
                 span: dx,
             };
-            let periods = (omega.abs() * dx.abs() / TAU) as u32;
-            let n = (periods.saturating_mul(16)).clamp(64, 4096) & !1;
-            let (length, accel, speed) = integrate(cfg, n, &c, dx.abs());
-            let curv = (amp * omega * omega).abs();
-            let r_min = if curv > 0.0 {
-                1.0 / curv / sx.max(sy)
-            } else {
-                f32::INFINITY
-            };
-            Ok(Geometry {
-                length,
-                unit_start: normalize(c.vel(0, 1)),
-                unit_end: normalize(c.vel(1, 1)),
-                accel,
-                speed_limit: speed.min(crate::fmath::sqrt(accel * r_min)),
-            })
+            Ok(c.geometry(
+                cfg,
+                (periods.saturating_mul(16)).clamp(64, 4096) & !1,
+                dx.abs(),
+                [0.0; 2],
+                1.0 / curv,
+            ))
         }
     }
+}
+
+/// Geometry of a circular (`a == b`) or elliptical arc with semi-axes `a`, `b` (steps)
+/// around `start + center`, through the same sampler as the sine: an exact circle
+/// needs only its two ends and middle (its speed is constant), an ellipse 128 samples.
+/// On both, the tangent is axis-aligned at parameter angles k * pi/2: where the sweep
+/// passes one, that axis' tangent component reaches 1.
+#[allow(clippy::too_many_arguments)]
+fn conic(
+    cfg: &PlannerConfig,
+    start: StepPos,
+    mv: &Move,
+    center: [i32; 2],
+    af: f32,
+    bf: f32,
+    ccw: bool,
+    turns: u16,
+) -> Result<Geometry, GeometryError> {
+    planar(start, mv)?;
+    if !(af > 0.0 && bf > 0.0) {
+        return Err(GeometryError::Invalid);
+    }
+    let p0 = (-center[0] as f32, -center[1] as f32);
+    let p1 = (
+        p0.0 + (mv.target[X] - start[X]) as f32,
+        p0.1 + (mv.target[Y] - start[Y]) as f32,
+    );
+    let t0 = crate::fmath::atan2(p0.1 / bf, p0.0 / af);
+    let t1 = crate::fmath::atan2(p1.1 / bf, p1.0 / af);
+    let sweep = sweep(t0, t1, ccw, mv.target == start) + TAU * f32::from(turns);
+    let sign = if ccw { 1.0 } else { -1.0 };
+    let mut axis = [0.0f32; 2];
+    for k in 0..4u8 {
+        let at = f32::from(k) * (PI / 2.0);
+        if wrap((at - t0) * sign) <= sweep {
+            // Even k: a point on the X axis, tangent along Y; odd k: along X.
+            axis[usize::from(k & 1 == 0)] = 1.0;
+        }
+    }
+    let c = Curve {
+        sx: sp(cfg, X),
+        sy: sp(cfg, Y),
+        x0: 0.0,
+        xa: -af,
+        ya: bf,
+        sign,
+        theta0: t0,
+        w: 1.0,
+        span: sign * sweep,
+    };
+    // Smallest radius of curvature of an ellipse: min(a^2/b, b^2/a) (steps).
+    let r_min = (af * af / bf).min(bf * bf / af);
+    Ok(c.geometry(cfg, if af == bf { 2 } else { 128 }, sweep, axis, r_min))
 }
 
 fn planar(start: StepPos, mv: &Move) -> Result<(), GeometryError> {
@@ -261,32 +235,50 @@ impl Curve {
     }
 }
 
-/// Simpson integral of |vel(t)| over a parameter span `span` sampled at n (even)
-/// intervals, plus the tightest per-axis limits over the samples.
-fn integrate(cfg: &PlannerConfig, n: u32, curve: &Curve, span: f32) -> (f32, f32, f32) {
-    let mut sum = 0.0f32;
-    let mut most = [0.0f32; AXES];
-    for i in 0..=n {
-        let v = curve.vel(i, n);
-        let m = crate::fmath::sqrt(v.iter().map(|c| c * c).sum());
-        let w = if i == 0 || i == n {
-            1.0
-        } else if i % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        };
-        sum += w * m;
-        // min over samples of min_i a_i / |u_i| is min_i a_i / max over samples |u_i|.
-        let u = normalize(v);
-        most = [
-            most[X].max(u[X].abs()),
-            most[Y].max(u[Y].abs()),
-            most[Z].max(u[Z].abs()),
-        ];
+impl Curve {
+    /// Simpson integral of |vel(t)| over a parameter span `span` sampled at n (even)
+    /// intervals, the tightest per-axis limits over the samples (and `axis`, known
+    /// largest tangent components), the centripetal limit at the smallest radius of
+    /// curvature `r_min` (steps), and the end tangents.
+    fn geometry(
+        &self,
+        cfg: &PlannerConfig,
+        n: u32,
+        span: f32,
+        axis: [f32; 2],
+        r_min: f32,
+    ) -> Geometry {
+        let mut sum = 0.0f32;
+        let mut most = [axis[0], axis[1], 0.0];
+        for i in 0..=n {
+            let v = self.vel(i, n);
+            let m = crate::fmath::sqrt(v.iter().map(|c| c * c).sum());
+            let w = if i == 0 || i == n {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            sum += w * m;
+            // min over samples of min_i a_i / |u_i| is min_i a_i / max over samples |u_i|.
+            let u = normalize(v);
+            most = [
+                most[X].max(u[X].abs()),
+                most[Y].max(u[Y].abs()),
+                most[Z].max(u[Z].abs()),
+            ];
+        }
+        let (accel, speed) = axis_limits(cfg, most);
+        let r_min = r_min / self.sx.max(self.sy);
+        Geometry {
+            length: sum * span / (3.0 * n as f32),
+            unit_start: normalize(self.vel(0, 1)),
+            unit_end: normalize(self.vel(1, 1)),
+            accel,
+            speed_limit: speed.min(crate::fmath::sqrt(accel * r_min)),
+        }
     }
-    let (accel, speed) = axis_limits(cfg, most);
-    (sum * span / (3.0 * n as f32), accel, speed)
 }
 
 #[cfg(test)]

@@ -184,7 +184,8 @@ impl Planner {
         };
         let nominal = match mv.feed {
             Feed::Rapid => f32::INFINITY,
-            Feed::MmPerMin(f) if f > 0.0 && f.is_finite() => f / 60.0,
+            // NaN, zero, negative and infinite fail one of the two comparisons.
+            Feed::MmPerMin(f) if f > 0.0 && f <= f32::MAX => f / 60.0,
             Feed::MmPerMin(_) => return Err(PlanError::Invalid),
         };
         let floor = self.cfg.start_speed;

@@ -130,6 +130,23 @@ impl Profile {
         }
     }
 
+    /// At rest with nothing to cover: what [`Profile::new`] gives for no distance and
+    /// no speed (a placeholder until the first real profile).
+    pub fn rest(shape: Shape) -> Self {
+        let r = Ramp {
+            v0: 0.0,
+            v1: 0.0,
+            t: 0.0,
+        };
+        Profile {
+            shape,
+            up: r,
+            cruise_v: 0.0,
+            cruise_t: 0.0,
+            down: r,
+        }
+    }
+
     /// Total duration in seconds.
     pub fn duration(&self) -> f32 {
         self.up.t + self.cruise_t + self.down.t
@@ -196,6 +213,16 @@ mod tests {
         assert!((v_half - 50.0).abs() < 1e-3);
         let (s_end, v_end) = p.at(6.0);
         assert!((s_end - 500.0).abs() < 1e-2 && v_end.abs() < 1e-3);
+    }
+
+    #[test]
+    fn rest_is_the_empty_profile() {
+        for shape in [Shape::Trapezoid, Shape::Cosine] {
+            assert_eq!(
+                Profile::rest(shape),
+                Profile::new(shape, 0.0, 0.0, 0.0, 1.0, 0.0)
+            );
+        }
     }
 
     #[test]

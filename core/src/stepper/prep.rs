@@ -196,12 +196,11 @@ impl Prep {
     /// Prepares commands until `sink` is full, the path ends, or a hold comes to rest.
     /// `dyn`: one copy compiled in the core (size-optimised), not one per caller.
     pub fn fill(&mut self, planner: &mut Planner, sink: &mut dyn CmdSink) {
-        let cfg = *planner.config();
         while sink.has_room() {
             if self.hold == HoldState::Held {
                 return;
             }
-            if self.active.is_none() && !self.start_next(planner, &cfg) {
+            if self.active.is_none() && !self.start_next(planner) {
                 return;
             }
             if planner.generation() != self.generation {
@@ -220,19 +219,9 @@ impl Prep {
                 self.active = None;
                 continue;
             };
-            let ds = match (a.len, &a.interp) {
-                (TickLen::Const(q), _) => q,
-                (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
-                    // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
-                    // telescope, so a whole arc adds up to its length (to < 1e-9).
-                    // f32, not a u64 division (not in the chip's instruction set).
-                    let dot = c.last_dot().unsigned_abs().max(1) as f32;
-                    (c.last_cross().unsigned_abs() as f32 * m / dot) as u64
-                }
-                (_, Interp::Conic(c)) => {
-                    to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
-                }
-                (_, interp) => to_q(curve_ds(&cfg, interp.direction().unwrap_or([1.0, 0.0]))),
+            let ds = match a.len {
+                TickLen::Const(q) => q,
+                len => curve_tick_len(len, &a.interp, planner.config()),
             };
             let mut s_new = a.s + ds;
             if let Some(n) = a.ticks_left.as_mut() {
@@ -291,7 +280,8 @@ impl Prep {
         }
     }
 
-    fn start_next(&mut self, planner: &mut Planner, cfg: &PlannerConfig) -> bool {
+    #[inline(never)]
+    fn start_next(&mut self, planner: &mut Planner) -> bool {
         loop {
             let Some(block) = planner.pop() else {
                 planner.note_stopped();
@@ -300,23 +290,26 @@ impl Prep {
                 }
                 return false;
             };
+            let cfg = planner.config();
             match Interp::new(self.pos, &block.mv, cfg.method) {
                 Ok(interp) => {
-                    let line_len = line_length(cfg, self.pos, block.mv.target);
-                    let (len_q, ticks_left) = match &interp {
-                        Interp::Line(l) => (to_q(line_len), Some(l.ticks())),
-                        _ => (to_q(block.length), None),
-                    };
-                    let len = match &interp {
-                        Interp::Line(l) => TickLen::Const(to_q(line_len / l.ticks().max(1) as f32)),
-                        Interp::Conic(c) => match c.circle_radius() {
-                            Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
-                                let sp = cfg.axes[X].steps_per_mm.max(1e-6);
-                                TickLen::Circle(Q * r / sp)
-                            }
-                            _ => TickLen::Curve,
-                        },
-                        Interp::Sine(_) => TickLen::Curve,
+                    let (len_q, ticks_left, len) = match &interp {
+                        Interp::Line(l) => {
+                            let line_len = line_length(cfg, self.pos, block.mv.target);
+                            let per = to_q(line_len / l.ticks().max(1) as f32);
+                            (to_q(line_len), Some(l.ticks()), TickLen::Const(per))
+                        }
+                        Interp::Conic(c) => {
+                            let len = match c.circle_radius() {
+                                Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
+                                    let sp = cfg.axes[X].steps_per_mm.max(1e-6);
+                                    TickLen::Circle(Q * r / sp)
+                                }
+                                _ => TickLen::Curve,
+                            };
+                            (to_q(block.length), None, len)
+                        }
+                        Interp::Sine(_) => (to_q(block.length), None, TickLen::Curve),
                     };
                     let ae = planner.plan_accel(&block);
                     self.active = Some(Active {
@@ -326,7 +319,7 @@ impl Prep {
                         s: 0,
                         len_q,
                         ticks_left,
-                        prof: Profile::new(cfg.shape, 0.0, 0.0, 0.0, 1.0, 0.0),
+                        prof: Profile::rest(cfg.shape),
                         prof_s0: 0,
                         prof_t0: self.t_last,
                         prof_done: false,
@@ -343,6 +336,7 @@ impl Prep {
         }
     }
 
+    #[inline(never)]
     fn reprofile(&mut self, planner: &Planner) {
         self.generation = planner.generation();
         let cfg = planner.config();
@@ -379,6 +373,7 @@ fn to_q(mm: f32) -> u64 {
 }
 
 /// Moves the window on by the configured length (floating point, once per window).
+#[inline(never)]
 fn advance_window(a: &mut Active, cfg: &PrepConfig) {
     // Time is kept in whole timer ticks (exact, no drift); only the profile is
     // evaluated in f32 seconds, whose rounding moves a window edge by far less than a step.
@@ -419,6 +414,34 @@ fn advance_window(a: &mut Active, cfg: &PrepConfig) {
     };
     if t1 >= dur {
         a.prof_done = true;
+    }
+}
+
+/// Length of the last tick along a curve, Q units (lines take the constant branch in
+/// the loop; this is out of line so the loop keeps fewer values live).
+#[inline(never)]
+fn curve_tick_len(len: TickLen, interp: &Interp, cfg: &PlannerConfig) -> u64 {
+    match (len, interp) {
+        (TickLen::Const(q), _) => q,
+        (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
+            // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
+            // telescope, so a whole arc adds up to its length (to < 1e-9).
+            // f32, not a u64 division (not in the chip's instruction set).
+            let dot = c.last_dot().unsigned_abs().max(1) as f32;
+            (c.last_cross().unsigned_abs() as f32 * m / dot) as u64
+        }
+        (_, Interp::Conic(c)) => {
+            to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
+        }
+        (_, interp) => {
+            // Only a sine gets here (conics are above): the conic's tangent is not
+            // compiled in.
+            let dir = match interp {
+                Interp::Sine(c) => c.direction(),
+                _ => [1.0, 0.0],
+            };
+            to_q(curve_ds(cfg, dir))
+        }
     }
 }
 
