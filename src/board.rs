@@ -35,6 +35,7 @@
 //! | PC14     | keypad column 4                 | open-drain (low-speed pin, fine for a keypad)  |
 //! | PC15     | busy output                     | high while moving, for syncing controllers     |
 
+use core::mem::MaybeUninit;
 use stm32f1xx_hal::{
     flash::FlashExt,
     gpio::{self, ErasedPin, Input, Output, PushPull},
@@ -575,6 +576,31 @@ pub fn lcd_init(spi: &mut LcdSpi) -> Result<(), stm32f1xx_hal::spi::Error> {
 pub type Usb = UsbDevice<'static, UsbBusType>;
 pub type UsbSerial = usbd_serial::SerialPort<'static, UsbBusType>;
 
+/// The 'static homes of the USB stack (an RTIC init local): the bus allocator the
+/// device and the class borrow, and the device and the serial port themselves, built
+/// in place and handed out by reference rather than moved through `init`.
+pub struct UsbCells {
+    bus: MaybeUninit<UsbBusAllocator<UsbBusType>>,
+    dev: MaybeUninit<Usb>,
+    serial: MaybeUninit<UsbSerial>,
+}
+
+impl UsbCells {
+    pub const fn new() -> Self {
+        Self {
+            bus: MaybeUninit::uninit(),
+            dev: MaybeUninit::uninit(),
+            serial: MaybeUninit::uninit(),
+        }
+    }
+}
+
+impl Default for UsbCells {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The settings sector: the last four 1 KB pages of the 64 KB part (memory.x keeps the
 /// program below it).
 pub const SETTINGS_FLASH_START: u32 = 0x0800_F000;
@@ -651,8 +677,8 @@ pub struct Board {
     pub inputs: Inputs,
     pub indicators: Indicators,
     pub lcd_spi: LcdSpi,
-    pub usb: Usb,
-    pub serial: UsbSerial,
+    pub usb: &'static mut Usb,
+    pub serial: &'static mut UsbSerial,
     pub watchdog: Watchdog,
     pub flash: SettingsFlash,
     pub sysclk_hz: u32,
@@ -660,11 +686,9 @@ pub struct Board {
 
 /// Bring up the clocks and every peripheral. Called once from `init` with interrupts off.
 ///
-/// `usb_bus` is the 'static home of the USB bus allocator (an RTIC init local).
-pub fn init(
-    dp: pac::Peripherals,
-    usb_bus: &'static mut Option<UsbBusAllocator<UsbBusType>>,
-) -> Board {
+/// `usb` is the 'static home of the USB stack (an RTIC init local); each call needs
+/// its own (init runs once).
+pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
     let mut flash = dp.FLASH.constrain();
     let mut rcc = dp.RCC.freeze(
         rcc::Config::hse(8.MHz())
@@ -768,17 +792,19 @@ pub fn init(
         pin_dm: gpioa.pa11,
         pin_dp: gpioa.pa12,
     };
-    let bus: &'static UsbBusAllocator<UsbBusType> = usb_bus.insert(UsbBus::new(usb_periph));
-    let serial = usbd_serial::SerialPort::new(bus);
-    let usb = UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
-        .device_class(usbd_serial::USB_CLASS_CDC)
-        .strings(&[StringDescriptors::default()
-            .manufacturer("inkstep")
-            .product("inkstep pen plotter (Grbl 1.1)")
-            .serial_number("INKSTEP")])
-        // One language with three short strings cannot exceed the builder's limits.
-        .unwrap_or_else(|_| defmt::panic!("usb strings"))
-        .build();
+    let bus: &'static UsbBusAllocator<UsbBusType> = usb.bus.write(UsbBus::new(usb_periph));
+    let serial = usb.serial.write(usbd_serial::SerialPort::new(bus));
+    let usb = usb.dev.write(
+        UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
+            .device_class(usbd_serial::USB_CLASS_CDC)
+            .strings(&[StringDescriptors::default()
+                .manufacturer("inkstep")
+                .product("inkstep pen plotter (Grbl 1.1)")
+                .serial_number("INKSTEP")])
+            // One language with three short strings cannot exceed the builder's limits.
+            .unwrap_or_else(|_| defmt::panic!("usb strings"))
+            .build(),
+    );
 
     let watchdog = Watchdog::start(dp.IWDG);
 

@@ -55,8 +55,6 @@ mod app {
     use inkstep_core::settings_store::{BlockingFlash, SettingsStore, STORE_RANGE};
     use inkstep_core::stepper::prep::PrepConfig;
     use rtic_monotonics::systick::prelude::*;
-    use stm32f1xx_hal::usb::UsbBusType;
-    use usb_device::bus::UsbBusAllocator;
 
     systick_monotonic!(Mono, 1_000);
 
@@ -70,8 +68,8 @@ mod app {
     struct Shared {
         ctl: &'static mut Controller,
         link: &'static mut Link<BoardSide>,
-        usb: board::Usb,
-        serial: board::UsbSerial,
+        usb: &'static mut board::Usb,
+        serial: &'static mut board::UsbSerial,
     }
 
     #[local]
@@ -91,7 +89,7 @@ mod app {
     }
 
     #[init(local = [
-        usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
+        usb_cells: board::UsbCells = board::UsbCells::new(),
         steps: StepCmdQueue = StepCmdQueue::new(),
         usb_rxq: Queue<u8, USB_RX> = Queue::new(),
         usb_txq: Queue<u8, USB_TX> = Queue::new(),
@@ -99,7 +97,7 @@ mod app {
         link_cell: MaybeUninit<Link<BoardSide>> = MaybeUninit::uninit(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let b = board::init(cx.device, cx.local.usb_bus);
+        let b = board::init(cx.device, cx.local.usb_cells);
         Mono::start(cx.core.SYST, b.sysclk_hz);
 
         // Settings from flash; a corrupt store falls back to defaults and says so.
@@ -304,7 +302,7 @@ mod app {
         let rx = cx.local.usb_rx_in;
         let tx = cx.local.usb_tx_out;
         (cx.shared.usb, cx.shared.serial).lock(|usb, serial| {
-            usb.poll(&mut [serial]);
+            usb.poll(&mut [&mut **serial]);
             let mut buf = [0u8; 64];
             let room = rx.capacity() - rx.len();
             if room >= buf.len() {
