@@ -63,11 +63,11 @@ mod app {
     // The controller (2 KB) and the link (4 KB, the planner's buffer) are built in
     // place in init's static cells and shared by reference: returned by value they
     // would be built on init's stack (more than the stack left beside the statics)
-    // and copied.
+    // and copied. They are one resource (`Core`), locked together; so are the USB
+    // device and its serial port, likewise built in place (`board::UsbCells`).
     #[shared]
     struct Shared {
-        ctl: &'static mut Controller,
-        link: &'static mut Link<BoardSide>,
+        core: Core,
         usb: &'static mut board::Usb,
         serial: &'static mut board::UsbSerial,
     }
@@ -153,8 +153,7 @@ mod app {
         lcd_refresh::spawn().ok();
         (
             Shared {
-                ctl,
-                link,
+                core: Core { ctl, link },
                 usb: b.usb,
                 serial: b.serial,
             },
@@ -173,6 +172,20 @@ mod app {
                 usb_tx_out,
             },
         )
+    }
+
+    /// The controller and the motion link, one resource: every task that uses the
+    /// controller also drives the link, so one lock (at the preparation task's
+    /// priority) covers both.
+    pub struct Core {
+        ctl: &'static mut Controller,
+        link: &'static mut Link<BoardSide>,
+    }
+
+    impl Core {
+        fn parts(&mut self) -> (&mut Controller, &mut Link<BoardSide>) {
+            (&mut *self.ctl, &mut *self.link)
+        }
     }
 
     /// What waits to be written to flash (at rest).
@@ -331,10 +344,11 @@ mod app {
 
     /// Segment preparation: keep ~10 ms of step commands queued ahead of the interrupt
     /// and start the timer when it is idle and commands wait.
-    #[task(priority = 5, shared = [link])]
+    #[task(priority = 5, shared = [core])]
     async fn prepare(mut cx: prepare::Context) {
         loop {
-            let kick = cx.shared.link.lock(|link| {
+            let kick = cx.shared.core.lock(|c| {
+                let link = &mut *c.link;
                 link.fill();
                 link.side().queued() > 0
             });
@@ -348,7 +362,7 @@ mod app {
     /// The protocol, the machine state and the G-code interpreter, every millisecond:
     /// inputs, received bytes (only those the protocol takes: back-pressure), the
     /// periodic work, replies, the busy LED, the pen servo and settings persistence.
-    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: Carry = Carry::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
+    #[task(priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: Carry = Carry::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
     async fn protocol(mut cx: protocol::Context) {
         loop {
             let now = Mono::now().ticks();
@@ -356,55 +370,50 @@ mod app {
             let carry = &mut *cx.local.carry;
             carry.fill(cx.local.usb_rx_out);
             let tx = &mut *cx.local.usb_tx_in;
-            let (busy, settings_changed, pen_down, pen_pulse) =
-                (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                    let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
-                    let s = ctl.protocol().machine().settings();
-                    let inputs = Inputs {
-                        estop: pins.estop_open() != s.invert_inputs(),
-                        limits: [
-                            pins.limit_x_open() != s.invert_limits(),
-                            pins.limit_y_open() != s.invert_limits(),
-                            false,
-                        ],
-                        feed_hold: pins.feed_hold_low(),
-                        cycle_start: pins.cycle_start_low(),
-                    };
-                    ctl.protocol_mut().set_inputs(inputs, link, now);
-                    let taken = ctl.usb_rx(carry.bytes(), link, now);
-                    carry.consume(taken);
-                    ctl.poll(link, now);
-                    let mut out = [0u8; 64];
-                    let room = (tx.capacity() - tx.len()).min(out.len());
-                    let n = ctl.usb_tx(&mut out[..room]);
-                    for &b in out.iter().take(n) {
-                        let _ = tx.enqueue(b);
-                    }
-                    // The planner took new settings when they changed (at rest, before
-                    // the next line); what is left is the HMI, the outputs and the save.
-                    let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
-                    if changed {
-                        ctl.settings_changed();
-                    }
-                    let busy = ctl.take_outputs().busy_led;
-                    let pen_down = link.pen_down();
-                    // Only what the outputs need is read here; the settings stay in place.
-                    let s = ctl.protocol().machine().settings();
-                    if changed {
-                        publish_output_settings(s);
-                    }
-                    let pen_pulse =
-                        (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
-                    (busy, changed, pen_down, pen_pulse)
-                });
+            let (busy, settings_changed, pen_down, pen_pulse, alarmed) = cx.shared.core.lock(|c| {
+                let (ctl, link) = c.parts();
+                let s = ctl.protocol().machine().settings();
+                let inputs = Inputs {
+                    estop: pins.estop_open() != s.invert_inputs(),
+                    limits: [
+                        pins.limit_x_open() != s.invert_limits(),
+                        pins.limit_y_open() != s.invert_limits(),
+                        false,
+                    ],
+                    feed_hold: pins.feed_hold_low(),
+                    cycle_start: pins.cycle_start_low(),
+                };
+                ctl.protocol_mut().set_inputs(inputs, link, now);
+                let taken = ctl.usb_rx(carry.bytes(), link, now);
+                carry.consume(taken);
+                ctl.poll(link, now);
+                let mut out = [0u8; 64];
+                let room = (tx.capacity() - tx.len()).min(out.len());
+                let n = ctl.usb_tx(&mut out[..room]);
+                for &b in out.iter().take(n) {
+                    let _ = tx.enqueue(b);
+                }
+                // The planner took new settings when they changed (at rest, before
+                // the next line); what is left is the HMI, the outputs and the save.
+                let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
+                if changed {
+                    ctl.settings_changed();
+                }
+                let busy = ctl.take_outputs().busy_led;
+                let pen_down = link.pen_down();
+                // Only what the outputs need is read here; the settings stay in place.
+                let s = ctl.protocol().machine().settings();
+                if changed {
+                    publish_output_settings(s);
+                }
+                let pen_pulse =
+                    (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
+                let alarmed = ctl.protocol().machine().alarm().is_some();
+                (busy, changed, pen_down, pen_pulse, alarmed)
+            });
             rtic::pend(stm32f1xx_hal::pac::Interrupt::USB_LP_CAN_RX0);
             // A reset from the alarm (soft reset / $X) clears the latched halt.
-            if steps::is_halted()
-                && !cx
-                    .shared
-                    .ctl
-                    .lock(|c| c.protocol().machine().alarm().is_some())
-            {
+            if steps::is_halted() && !alarmed {
                 steps::clear_halt();
             }
             if settings_changed {
@@ -417,7 +426,8 @@ mod app {
             // Flash writes stall the CPU (instruction fetch waits), so only at rest.
             let saves = &mut *cx.local.saves;
             let store = &mut *cx.local.store;
-            cx.shared.ctl.lock(|ctl| {
+            cx.shared.core.lock(|c| {
+                let ctl = &mut *c.ctl;
                 saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
                 saves.startup |= ctl.protocol_mut().take_startup_dirty();
                 if busy {
@@ -451,12 +461,12 @@ mod app {
     }
 
     /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.
-    #[task(binds = EXTI4, priority = 4, shared = [ctl, link])]
+    #[task(binds = EXTI4, priority = 4, shared = [core])]
     fn feed_hold(mut cx: feed_hold::Context) {
         if board::exti_take_pending(4) {
             let now = Mono::now().ticks();
-            (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
+            cx.shared.core.lock(|c| {
+                let (ctl, link) = c.parts();
                 let mut i = ctl.protocol().machine().inputs();
                 i.feed_hold = board::Inputs::read_feed_hold_low();
                 ctl.protocol_mut().set_inputs(i, link, now);
@@ -464,12 +474,12 @@ mod app {
         }
     }
 
-    #[task(binds = EXTI9_5, priority = 4, shared = [ctl, link])]
+    #[task(binds = EXTI9_5, priority = 4, shared = [core])]
     fn cycle_start(mut cx: cycle_start::Context) {
         if board::exti_take_pending(5) {
             let now = Mono::now().ticks();
-            (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
+            cx.shared.core.lock(|c| {
+                let (ctl, link) = c.parts();
                 let mut i = ctl.protocol().machine().inputs();
                 i.cycle_start = board::Inputs::read_cycle_start_low();
                 ctl.protocol_mut().set_inputs(i, link, now);
@@ -480,19 +490,19 @@ mod app {
     /// The keypad: drive the column the scanner asks for, read its rows one scan
     /// period later (no busy wait for the lines to settle), hand them to the core.
     /// Also plays the buzzer patterns and feeds the watchdog.
-    #[task(priority = 3, shared = [ctl, link], local = [keypad, watchdog, indicators])]
+    #[task(priority = 3, shared = [core], local = [keypad, watchdog, indicators])]
     async fn keypad_scan(mut cx: keypad_scan::Context) {
         /// One keypad column per tick; the buzzer pattern advances by the same tick.
         const SCAN_MS: u32 = 5;
         let mut buzzer = Buzzer::new();
         loop {
-            let col = cx.shared.ctl.lock(|c| c.keypad().column());
+            let col = cx.shared.core.lock(|c| c.ctl.keypad().column());
             cx.local.keypad.select_column(col);
             Mono::delay(SCAN_MS.millis()).await;
             let rows = cx.local.keypad.read_rows();
             let now = Mono::now().ticks();
-            let out = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
+            let out = cx.shared.core.lock(|c| {
+                let (ctl, link) = c.parts();
                 ctl.key_scan(rows, link, now);
                 ctl.take_outputs()
             });
@@ -509,7 +519,7 @@ mod app {
     /// under a short lock, draw it into the frame buffer, send only the changed words.
     /// The SPI waits here are the only blocking waits in the firmware; every other
     /// task preempts them.
-    #[task(priority = 1, shared = [ctl, link], local = [lcd_spi])]
+    #[task(priority = 1, shared = [core], local = [lcd_spi])]
     async fn lcd_refresh(mut cx: lcd_refresh::Context) {
         let spi = cx.local.lcd_spi;
         // Retained state of the screens and the 1 KB frame buffer live in this task.
@@ -526,8 +536,8 @@ mod app {
             let now = Mono::now().ticks();
             // The teaching view's feed directions: which way each axis moved since the
             // last refresh (the step interrupt stays free of bookkeeping for it).
-            let (hmi, status) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
+            let (hmi, status) = cx.shared.core.lock(|c| {
+                let (ctl, link) = c.parts();
                 let pos = link.side().position();
                 if pos != last_pos {
                     let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
