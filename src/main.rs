@@ -14,9 +14,9 @@
 #![no_std]
 #![no_main]
 
-use core::sync::atomic::{AtomicBool, Ordering};
+use core::cell::UnsafeCell;
+use core::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use defmt_rtt as _;
-use heapless::spsc::{Consumer, Producer};
 use inkstep::board;
 use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
 use inkstep_core::link::StepSide;
@@ -25,6 +25,112 @@ use inkstep_core::stepper::exec::Executor;
 /// USB byte queues. RX holds more than Grbl's 128-byte character-counting window.
 const USB_RX: usize = 256;
 const USB_TX: usize = 512;
+
+/// One direction of the USB byte stream: a FIFO between exactly one producing and one
+/// consuming context (the USB interrupt and the protocol task), handed out as one
+/// [`RingIn`] and one [`RingOut`]. Its size is a power of two: the indices run freely
+/// and are masked, where heapless' SPSC queue views wrap with a run-time `%` (a
+/// division and its panic path per byte).
+pub struct ByteRing<const N: usize> {
+    ends: Ends,
+    buf: UnsafeCell<[u8; N]>,
+}
+
+// SAFETY: `split` hands out one producer and one consumer; each slot is written only by
+// the producer while it is free and read only by the consumer while it is filled, and
+// the indices publish the slots with release/acquire ordering.
+unsafe impl<const N: usize> Sync for ByteRing<N> {}
+
+/// The ring's indices: bytes `head..tail` (wrapping) are filled.
+struct Ends {
+    /// Next byte to read; only the consumer moves it.
+    head: AtomicUsize,
+    /// Next byte to write; only the producer moves it.
+    tail: AtomicUsize,
+}
+
+impl Ends {
+    /// Free bytes, seen from the producer.
+    fn free(&self, size: usize) -> usize {
+        size - self
+            .tail
+            .load(Ordering::Relaxed)
+            .wrapping_sub(self.head.load(Ordering::Acquire))
+    }
+
+    /// Producer: append as much of `data` as fits into the ring at `buf` (`size` bytes,
+    /// a power of two); returns how many bytes it took.
+    fn push(&self, buf: *mut u8, size: usize, data: &[u8]) -> usize {
+        let mut tail = self.tail.load(Ordering::Relaxed);
+        let n = data.len().min(self.free(size));
+        for &b in data.iter().take(n) {
+            // SAFETY: `tail & (size - 1)` is inside the buffer, and the slot is free
+            // (at most `free` bytes are written): the consumer does not read it.
+            unsafe { buf.add(tail & (size - 1)).write(b) };
+            tail = tail.wrapping_add(1);
+        }
+        self.tail.store(tail, Ordering::Release);
+        n
+    }
+
+    /// Consumer: move up to `out.len()` bytes out of the ring; returns how many.
+    fn pop(&self, buf: *const u8, size: usize, out: &mut [u8]) -> usize {
+        let mut head = self.head.load(Ordering::Relaxed);
+        let n = out
+            .len()
+            .min(self.tail.load(Ordering::Acquire).wrapping_sub(head));
+        for slot in out.iter_mut().take(n) {
+            // SAFETY: inside the buffer, and filled (published by the producer's
+            // release store of `tail`), so the producer does not write it.
+            *slot = unsafe { buf.add(head & (size - 1)).read() };
+            head = head.wrapping_add(1);
+        }
+        self.head.store(head, Ordering::Release);
+        n
+    }
+}
+
+impl<const N: usize> ByteRing<N> {
+    pub const fn new() -> Self {
+        assert!(N.is_power_of_two());
+        Self {
+            ends: Ends {
+                head: AtomicUsize::new(0),
+                tail: AtomicUsize::new(0),
+            },
+            buf: UnsafeCell::new([0; N]),
+        }
+    }
+
+    /// The producer and the consumer (once: the ring is borrowed for good).
+    pub fn split(&'static mut self) -> (RingIn<N>, RingOut<N>) {
+        let ring: &'static Self = self;
+        (RingIn(ring), RingOut(ring))
+    }
+}
+
+/// The producing end of a [`ByteRing`].
+pub struct RingIn<const N: usize>(&'static ByteRing<N>);
+
+impl<const N: usize> RingIn<N> {
+    pub fn free(&self) -> usize {
+        self.0.ends.free(N)
+    }
+    /// Append as much of `data` as fits; returns how many bytes were taken.
+    pub fn push(&mut self, data: &[u8]) -> usize {
+        self.0.ends.push(self.0.buf.get().cast(), N, data)
+    }
+}
+
+/// The consuming end of a [`ByteRing`].
+pub struct RingOut<const N: usize>(&'static ByteRing<N>);
+
+impl<const N: usize> RingOut<N> {
+    /// Move up to `out.len()` bytes out; returns how many.
+    pub fn pop(&mut self, out: &mut [u8]) -> usize {
+        self.0.ends.pop(self.0.buf.get().cast(), N, out)
+    }
+}
 
 /// Hard limits stop stepping at once only when `$21` is on.
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
@@ -44,7 +150,6 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
 mod app {
     use super::*;
     use core::mem::MaybeUninit;
-    use heapless::spsc::Queue;
     use inkstep_core::controller::Controller;
     use inkstep_core::hmi::buzzer::Buzzer;
     use inkstep_core::link::Link;
@@ -82,17 +187,17 @@ mod app {
         lcd_spi: board::LcdSpi,
         watchdog: board::Watchdog,
         store: Store,
-        usb_rx_in: Producer<'static, u8>,
-        usb_rx_out: Consumer<'static, u8>,
-        usb_tx_in: Producer<'static, u8>,
-        usb_tx_out: Consumer<'static, u8>,
+        usb_rx_in: RingIn<USB_RX>,
+        usb_rx_out: RingOut<USB_RX>,
+        usb_tx_in: RingIn<USB_TX>,
+        usb_tx_out: RingOut<USB_TX>,
     }
 
     #[init(local = [
         usb_cells: board::UsbCells = board::UsbCells::new(),
         steps: StepCmdQueue = StepCmdQueue::new(),
-        usb_rxq: Queue<u8, USB_RX> = Queue::new(),
-        usb_txq: Queue<u8, USB_TX> = Queue::new(),
+        usb_rxq: ByteRing<USB_RX> = ByteRing::new(),
+        usb_txq: ByteRing<USB_TX> = ByteRing::new(),
         ctl_cell: MaybeUninit<Controller> = MaybeUninit::uninit(),
         link_cell: MaybeUninit<Link<BoardSide>> = MaybeUninit::uninit(),
     ])]
@@ -221,13 +326,9 @@ mod app {
         }
 
         /// Top up from the USB receive queue.
-        fn fill(&mut self, rx: &mut Consumer<'static, u8>) {
-            for slot in self.buf.iter_mut().skip(self.len) {
-                match rx.dequeue() {
-                    Some(b) => *slot = b,
-                    None => break,
-                }
-                self.len += 1;
+        fn fill(&mut self, rx: &mut RingOut<USB_RX>) {
+            if let Some(free) = self.buf.get_mut(self.len..) {
+                self.len += rx.pop(free);
             }
         }
 
@@ -317,23 +418,13 @@ mod app {
         (cx.shared.usb, cx.shared.serial).lock(|usb, serial| {
             usb.poll(&mut [&mut **serial]);
             let mut buf = [0u8; 64];
-            let room = rx.capacity() - rx.len();
-            if room >= buf.len() {
+            if rx.free() >= buf.len() {
                 if let Ok(n) = serial.read(&mut buf) {
-                    for &b in buf.iter().take(n) {
-                        let _ = rx.enqueue(b);
-                    }
+                    rx.push(buf.get(..n).unwrap_or(&[]));
                 }
             }
             let mut out = [0u8; 64];
-            let mut n = 0;
-            for slot in out.iter_mut() {
-                match tx.dequeue() {
-                    Some(b) => *slot = b,
-                    None => break,
-                }
-                n += 1;
-            }
+            let n = tx.pop(&mut out);
             if n > 0 {
                 // The CDC class buffers what the endpoint cannot take yet; bytes it
                 // refuses are dropped only if the host stopped reading.
@@ -388,11 +479,9 @@ mod app {
                 carry.consume(taken);
                 ctl.poll(link, now);
                 let mut out = [0u8; 64];
-                let room = (tx.capacity() - tx.len()).min(out.len());
+                let room = tx.free().min(out.len());
                 let n = ctl.usb_tx(&mut out[..room]);
-                for &b in out.iter().take(n) {
-                    let _ = tx.enqueue(b);
-                }
+                tx.push(out.get(..n).unwrap_or(&[]));
                 // The planner took new settings when they changed (at rest, before
                 // the next line); what is left is the HMI, the outputs and the save.
                 let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
