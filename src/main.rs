@@ -15,7 +15,7 @@
 #![no_main]
 
 use core::cell::UnsafeCell;
-use core::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use core::sync::atomic::{compiler_fence, AtomicBool, AtomicUsize, Ordering};
 use defmt_rtt as _;
 use inkstep::board;
 use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
@@ -30,15 +30,18 @@ const USB_TX: usize = 512;
 /// consuming context (the USB interrupt and the protocol task), handed out as one
 /// [`RingIn`] and one [`RingOut`]. Its size is a power of two: the indices run freely
 /// and are masked, where heapless' SPSC queue views wrap with a run-time `%` (a
-/// division and its panic path per byte).
+/// division and its panic path per byte) and fence with barrier instructions.
 pub struct ByteRing<const N: usize> {
     ends: Ends,
     buf: UnsafeCell<[u8; N]>,
 }
 
 // SAFETY: `split` hands out one producer and one consumer; each slot is written only by
-// the producer while it is free and read only by the consumer while it is filled, and
-// the indices publish the slots with release/acquire ordering.
+// the producer while it is free and read only by the consumer while it is filled. The
+// indices publish the slots: on this single core both ends run on the same CPU (one
+// preempting the other), which sees its own memory accesses in program order, so only
+// the compiler must keep the slot accesses on their side of an index update; the
+// compiler fences do that without a barrier instruction.
 unsafe impl<const N: usize> Sync for ByteRing<N> {}
 
 /// The ring's indices: bytes `head..tail` (wrapping) are filled.
@@ -52,10 +55,9 @@ struct Ends {
 impl Ends {
     /// Free bytes, seen from the producer.
     fn free(&self, size: usize) -> usize {
-        size - self
-            .tail
-            .load(Ordering::Relaxed)
-            .wrapping_sub(self.head.load(Ordering::Acquire))
+        let head = self.head.load(Ordering::Relaxed);
+        compiler_fence(Ordering::Acquire);
+        size - self.tail.load(Ordering::Relaxed).wrapping_sub(head)
     }
 
     /// Producer: append as much of `data` as fits into the ring at `buf` (`size` bytes,
@@ -69,23 +71,25 @@ impl Ends {
             unsafe { buf.add(tail & (size - 1)).write(b) };
             tail = tail.wrapping_add(1);
         }
-        self.tail.store(tail, Ordering::Release);
+        compiler_fence(Ordering::Release);
+        self.tail.store(tail, Ordering::Relaxed);
         n
     }
 
     /// Consumer: move up to `out.len()` bytes out of the ring; returns how many.
     fn pop(&self, buf: *const u8, size: usize, out: &mut [u8]) -> usize {
         let mut head = self.head.load(Ordering::Relaxed);
-        let n = out
-            .len()
-            .min(self.tail.load(Ordering::Acquire).wrapping_sub(head));
+        let tail = self.tail.load(Ordering::Relaxed);
+        compiler_fence(Ordering::Acquire);
+        let n = out.len().min(tail.wrapping_sub(head));
         for slot in out.iter_mut().take(n) {
             // SAFETY: inside the buffer, and filled (published by the producer's
-            // release store of `tail`), so the producer does not write it.
+            // store of `tail`), so the producer does not write it.
             *slot = unsafe { buf.add(head & (size - 1)).read() };
             head = head.wrapping_add(1);
         }
-        self.head.store(head, Ordering::Release);
+        compiler_fence(Ordering::Release);
+        self.head.store(head, Ordering::Relaxed);
         n
     }
 }
