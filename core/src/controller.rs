@@ -51,7 +51,6 @@ pub fn hmi_config(s: &Settings) -> hmi::Config {
 }
 
 impl Controller {
-    #[inline(never)]
     pub fn new(settings: Settings, now_ms: u32) -> Controller {
         let cfg = hmi_config(&settings);
         Controller {

@@ -105,7 +105,6 @@ pub struct Link<S: StepSide> {
 }
 
 impl<S: StepSide> Link<S> {
-    #[inline(never)]
     pub fn new(s: &Settings, prep: PrepConfig, side: S) -> Self {
         let pos = side.position();
         Link {
