@@ -617,31 +617,35 @@ mod app {
         let spi = cx.local.lcd_spi;
         // Retained state of the screens and the 1 KB frame buffer live in this task.
         let mut screens = Screens::new();
+        // Entirely dirty from the start: the first flush sends the whole screen.
         let mut fb = FrameBuffer::new();
         // The controller comes up in graphics mode; after that only the changed bytes
         // are sent (core::screens::st7920).
         if board::lcd_init(spi).is_err() {
             defmt::warn!("LCD init failed");
         }
-        fb.mark_all_dirty();
         let mut last_pos = [0i32; 3];
         loop {
-            let now = Mono::now().ticks();
-            // The teaching view's feed directions: which way each axis moved since the
-            // last refresh (the step interrupt stays free of bookkeeping for it).
-            let (hmi, status) = cx.shared.core.lock(|c| {
-                let (ctl, link) = c.parts();
-                let pos = link.side().position();
-                if pos != last_pos {
-                    let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
-                    ctl.note_direction([sign(0), sign(1)]);
-                    last_pos = pos;
+            // The snapshot lives only until the flush (not in the task's state across
+            // the wait).
+            {
+                let now = Mono::now().ticks();
+                // The teaching view's feed directions: which way each axis moved since
+                // the last refresh (the step interrupt stays free of bookkeeping for it).
+                let (hmi, status) = cx.shared.core.lock(|c| {
+                    let (ctl, link) = c.parts();
+                    let pos = link.side().position();
+                    if pos != last_pos {
+                        let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
+                        ctl.note_direction([sign(0), sign(1)]);
+                        last_pos = pos;
+                    }
+                    (ctl.hmi().clone(), ctl.status(link))
+                });
+                let _ = screens.render(&hmi, &status, now, &mut fb);
+                if st7920::flush(&mut fb, |bytes| spi.write(bytes)).is_err() {
+                    defmt::warn!("LCD write failed");
                 }
-                (ctl.hmi().clone(), ctl.status(link))
-            });
-            let _ = screens.render(&hmi, &status, now, &mut fb);
-            if st7920::flush(&mut fb, |bytes| spi.write(bytes)).is_err() {
-                defmt::warn!("LCD write failed");
             }
             Mono::delay(100.millis()).await;
         }
