@@ -117,7 +117,7 @@ pub struct StepPins {
 /// that the interrupt-cost bench (bench/isr-cost) builds the very same parts.
 pub fn step_outputs(pins: StepPins, tim2: pac::TIM2) -> (StepPort, StepTimer) {
     // The pins are configured; the port writes their registers from here on.
-    drop(pins);
+    let StepPins { pins: _, enable: _ } = pins;
     (StepPort { _owned: () }, StepTimer::new(tim2))
 }
 

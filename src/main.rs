@@ -31,7 +31,7 @@ const USB_TX: usize = 512;
 /// [`RingIn`] and one [`RingOut`]. Its size is a power of two: the indices run freely
 /// and are masked, where heapless' SPSC queue views wrap with a run-time `%` (a
 /// division and its panic path per byte) and fence with barrier instructions.
-pub struct ByteRing<const N: usize> {
+struct ByteRing<const N: usize> {
     ends: Ends,
     buf: UnsafeCell<[u8; N]>,
 }
@@ -95,7 +95,7 @@ impl Ends {
 }
 
 impl<const N: usize> ByteRing<N> {
-    pub const fn new() -> Self {
+    const fn new() -> Self {
         assert!(N.is_power_of_two());
         Self {
             ends: Ends {
@@ -107,31 +107,31 @@ impl<const N: usize> ByteRing<N> {
     }
 
     /// The producer and the consumer (once: the ring is borrowed for good).
-    pub fn split(&'static mut self) -> (RingIn<N>, RingOut<N>) {
+    fn split(&'static mut self) -> (RingIn<N>, RingOut<N>) {
         let ring: &'static Self = self;
         (RingIn(ring), RingOut(ring))
     }
 }
 
 /// The producing end of a [`ByteRing`].
-pub struct RingIn<const N: usize>(&'static ByteRing<N>);
+struct RingIn<const N: usize>(&'static ByteRing<N>);
 
 impl<const N: usize> RingIn<N> {
-    pub fn free(&self) -> usize {
+    fn free(&self) -> usize {
         self.0.ends.free(N)
     }
     /// Append as much of `data` as fits; returns how many bytes were taken.
-    pub fn push(&mut self, data: &[u8]) -> usize {
+    fn push(&mut self, data: &[u8]) -> usize {
         self.0.ends.push(self.0.buf.get().cast(), N, data)
     }
 }
 
 /// The consuming end of a [`ByteRing`].
-pub struct RingOut<const N: usize>(&'static ByteRing<N>);
+struct RingOut<const N: usize>(&'static ByteRing<N>);
 
 impl<const N: usize> RingOut<N> {
     /// Move up to `out.len()` bytes out; returns how many.
-    pub fn pop(&mut self, out: &mut [u8]) -> usize {
+    fn pop(&mut self, out: &mut [u8]) -> usize {
         self.0.ends.pop(self.0.buf.get().cast(), N, out)
     }
 }
