@@ -172,17 +172,18 @@ mod app {
     // The controller (2 KB) and the link (4 KB, the planner's buffer) are built in
     // place in init's static cells and shared by reference: returned by value they
     // would be built on init's stack (more than the stack left beside the statics)
-    // and copied. They are one resource (`Core`), locked together; so are the USB
-    // device and its serial port, likewise built in place (`board::UsbCells`).
+    // and copied. They are one resource (`Core`), locked together. The USB device and
+    // its serial port, likewise built in place (`board::UsbCells`), belong to the USB
+    // task alone.
     #[shared]
     struct Shared {
         core: Core,
-        usb: &'static mut board::Usb,
-        serial: &'static mut board::UsbSerial,
     }
 
     #[local]
     struct Local {
+        usb: &'static mut board::Usb,
+        serial: &'static mut board::UsbSerial,
         step_out: StepOutput,
         servo: board::PenServo,
         keypad: board::KeypadMatrix,
@@ -263,10 +264,10 @@ mod app {
         (
             Shared {
                 core: Core { ctl, link },
-                usb: b.usb,
-                serial: b.serial,
             },
             Local {
+                usb: b.usb,
+                serial: b.serial,
                 step_out,
                 servo: b.servo,
                 keypad: b.keypad,
@@ -415,26 +416,24 @@ mod app {
 
     /// USB: poll the device, take bytes from the endpoint only while the RX queue has
     /// room (so a full queue NAKs the host instead of dropping), send queued output.
-    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial], local = [usb_rx_in, usb_tx_out])]
+    #[task(binds = USB_LP_CAN_RX0, priority = 5, local = [usb, serial, usb_rx_in, usb_tx_out])]
     fn usb_lp(cx: usb_lp::Context) {
         let rx = cx.local.usb_rx_in;
         let tx = cx.local.usb_tx_out;
-        (cx.shared.usb, cx.shared.serial).lock(|usb, serial| {
-            usb.poll(&mut [&mut **serial]);
-            let mut buf = [0u8; 64];
-            if rx.free() >= buf.len() {
-                if let Ok(n) = serial.read(&mut buf) {
-                    rx.push(buf.get(..n).unwrap_or(&[]));
-                }
+        let serial = &mut **cx.local.serial;
+        cx.local.usb.poll(&mut [&mut *serial]);
+        let mut buf = [0u8; 64];
+        if rx.free() >= buf.len() {
+            if let Ok(n) = serial.read(&mut buf) {
+                rx.push(buf.get(..n).unwrap_or(&[]));
             }
-            let mut out = [0u8; 64];
-            let n = tx.pop(&mut out);
-            if n > 0 {
-                // The CDC class buffers what the endpoint cannot take yet; bytes it
-                // refuses are dropped only if the host stopped reading.
-                let _ = serial.write(out.get(..n).unwrap_or(&[]));
-            }
-        });
+        }
+        let n = tx.pop(&mut buf);
+        if n > 0 {
+            // The CDC class buffers what the endpoint cannot take yet; bytes it refuses
+            // are dropped only if the host stopped reading.
+            let _ = serial.write(buf.get(..n).unwrap_or(&[]));
+        }
     }
 
     /// Segment preparation: keep ~10 ms of step commands queued ahead of the interrupt
