@@ -167,6 +167,13 @@ mod app {
 
     systick_monotonic!(Mono, 1_000);
 
+    /// Milliseconds since boot, the core's clock: one copy of the monotonic's read
+    /// (an overflow check with barriers) for every task that asks.
+    #[inline(never)]
+    fn now_ms() -> u32 {
+        Mono::now().ticks()
+    }
+
     type Store = SettingsStore<BlockingFlash<board::SettingsFlash>>;
 
     // The controller (2 KB) and the link (4 KB, the planner's buffer) are built in
@@ -459,7 +466,7 @@ mod app {
     #[task(priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: Carry = Carry::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
     async fn protocol(mut cx: protocol::Context) {
         loop {
-            let now = Mono::now().ticks();
+            let now = now_ms();
             let pins = &mut *cx.local.inputs;
             let carry = &mut *cx.local.carry;
             carry.fill(cx.local.usb_rx_out);
@@ -556,7 +563,7 @@ mod app {
     #[task(binds = EXTI4, priority = 4, shared = [core])]
     fn feed_hold(mut cx: feed_hold::Context) {
         if board::exti_take_pending(4) {
-            let now = Mono::now().ticks();
+            let now = now_ms();
             cx.shared.core.lock(|c| {
                 let (ctl, link) = c.parts();
                 let mut i = ctl.protocol().machine().inputs();
@@ -569,7 +576,7 @@ mod app {
     #[task(binds = EXTI9_5, priority = 4, shared = [core])]
     fn cycle_start(mut cx: cycle_start::Context) {
         if board::exti_take_pending(5) {
-            let now = Mono::now().ticks();
+            let now = now_ms();
             cx.shared.core.lock(|c| {
                 let (ctl, link) = c.parts();
                 let mut i = ctl.protocol().machine().inputs();
@@ -592,7 +599,7 @@ mod app {
             cx.local.keypad.select_column(col);
             Mono::delay(SCAN_MS.millis()).await;
             let rows = cx.local.keypad.read_rows();
-            let now = Mono::now().ticks();
+            let now = now_ms();
             let out = cx.shared.core.lock(|c| {
                 let (ctl, link) = c.parts();
                 ctl.key_scan(rows, link, now);
@@ -628,7 +635,7 @@ mod app {
             // The snapshot lives only until the flush (not in the task's state across
             // the wait).
             {
-                let now = Mono::now().ticks();
+                let now = now_ms();
                 // The teaching view's feed directions: which way each axis moved since
                 // the last refresh (the step interrupt stays free of bookkeeping for it).
                 let (hmi, status) = cx.shared.core.lock(|c| {
