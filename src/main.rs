@@ -638,7 +638,7 @@ mod app {
                 let now = now_ms();
                 // The teaching view's feed directions: which way each axis moved since
                 // the last refresh (the step interrupt stays free of bookkeeping for it).
-                let (hmi, status) = cx.shared.core.lock(|c| {
+                let snap = cx.shared.core.lock(|c| {
                     let (ctl, link) = c.parts();
                     let pos = link.side().position();
                     if pos != last_pos {
@@ -648,7 +648,7 @@ mod app {
                     }
                     (ctl.hmi().clone(), ctl.status(link))
                 });
-                let _ = screens.render(&hmi, &status, now, &mut fb);
+                let _ = screens.render(&snap.0, &snap.1, now, &mut fb);
                 if st7920::flush(&mut fb, |bytes| spi.write(bytes)).is_err() {
                     defmt::warn!("LCD write failed");
                 }
