@@ -403,14 +403,18 @@ mod app {
     /// (drivers stay enabled so the position is held); the machine raises the alarm.
     #[task(binds = EXTI1, priority = 7)]
     fn limit_x(_: limit_x::Context) {
-        if board::exti_take_pending(1) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
-            steps::halt();
-        }
+        limit_switch(1);
     }
 
     #[task(binds = EXTI3, priority = 7)]
     fn limit_y(_: limit_y::Context) {
-        if board::exti_take_pending(3) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
+        limit_switch(3);
+    }
+
+    /// A limit switch on EXTI line `line` changed (one body for both axes).
+    #[inline(never)]
+    fn limit_switch(line: u8) {
+        if board::exti_take_pending(line) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
             steps::halt();
         }
     }
