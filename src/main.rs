@@ -568,12 +568,7 @@ mod app {
     fn feed_hold(mut cx: feed_hold::Context) {
         if board::exti_take_pending(4) {
             let now = now_ms();
-            cx.shared.core.lock(|c| {
-                let (ctl, link) = c.parts();
-                let mut i = ctl.protocol().machine().inputs();
-                i.feed_hold = board::Inputs::read_feed_hold_low();
-                ctl.protocol_mut().set_inputs(i, link, now);
-            });
+            cx.shared.core.lock(|c| input_edge(c, now, false));
         }
     }
 
@@ -581,13 +576,22 @@ mod app {
     fn cycle_start(mut cx: cycle_start::Context) {
         if board::exti_take_pending(5) {
             let now = now_ms();
-            cx.shared.core.lock(|c| {
-                let (ctl, link) = c.parts();
-                let mut i = ctl.protocol().machine().inputs();
-                i.cycle_start = board::Inputs::read_cycle_start_low();
-                ctl.protocol_mut().set_inputs(i, link, now);
-            });
+            cx.shared.core.lock(|c| input_edge(c, now, true));
         }
+    }
+
+    /// The feed-hold (`cycle_start` false) or cycle-start input's new level into the
+    /// machine (one body for both interrupts).
+    #[inline(never)]
+    fn input_edge(c: &mut Core, now: u32, cycle_start: bool) {
+        let (ctl, link) = c.parts();
+        let mut i = ctl.protocol().machine().inputs();
+        if cycle_start {
+            i.cycle_start = board::Inputs::read_cycle_start_low();
+        } else {
+            i.feed_hold = board::Inputs::read_feed_hold_low();
+        }
+        ctl.protocol_mut().set_inputs(i, link, now);
     }
 
     /// The keypad: drive the column the scanner asks for, read its rows one scan
