@@ -537,7 +537,7 @@ mod app {
             ctl.poll(link, now);
             let mut out = [0u8; 64];
             let room = tx.free().min(out.len());
-            let n = ctl.usb_tx(&mut out[..room]);
+            let n = out.get_mut(..room).map_or(0, |b| ctl.usb_tx(b));
             tx.push(out.get(..n).unwrap_or(&[]));
             // The planner took new settings when they changed (at rest, before
             // the next line); what is left is the HMI, the outputs and the save.
