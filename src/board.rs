@@ -35,9 +35,10 @@
 //! | PC14     | keypad column 4                 | open-drain (low-speed pin, fine for a keypad)  |
 //! | PC15     | busy output                     | high while moving, for syncing controllers     |
 
+use core::mem::MaybeUninit;
 use stm32f1xx_hal::{
     flash::FlashExt,
-    gpio::{self, ErasedPin, Input, OpenDrain, Output, PullUp, PushPull},
+    gpio::{self, ErasedPin, Input, Output, PushPull},
     pac,
     prelude::*,
     rcc,
@@ -74,11 +75,11 @@ pub const fn bsrr_word(high: u8, low: u8) -> u32 {
 
 /// The step, direction and coil outputs on PA0-PA7 plus the driver enable on PA9.
 ///
-/// Owns the HAL pins (so nothing else can take them) but writes GPIOA's BSRR directly:
-/// one store per interrupt, no read-modify-write, safe against preemption.
+/// Made only by [`init`] (or [`step_outputs`]), which configure the pins; writes
+/// GPIOA's BSRR directly: one store per interrupt, no read-modify-write, safe against
+/// preemption.
 pub struct StepPort {
-    _pins: [ErasedPin<Output<PushPull>>; 8],
-    enable: gpio::PA9<Output<PushPull>>,
+    _owned: (),
 }
 
 impl StepPort {
@@ -100,15 +101,13 @@ impl StepPort {
 
     /// Enable or disable the stepper drivers. `active_low` is true for A4988-style /EN.
     pub fn set_drivers_enabled(&mut self, enabled: bool, active_low: bool) {
-        if enabled != active_low {
-            self.enable.set_high();
-        } else {
-            self.enable.set_low();
-        }
+        let high = enabled != active_low;
+        bsrr(pac::GPIOA::ptr(), pin_word(9, high));
     }
 }
 
-/// The motion output pins, configured as push-pull outputs.
+/// The motion output pins, configured as push-pull outputs (for the interrupt-cost
+/// bench, which configures them through the HAL; [`init`] writes the registers).
 pub struct StepPins {
     pub pins: [ErasedPin<Output<PushPull>>; 8],
     pub enable: gpio::PA9<Output<PushPull>>,
@@ -117,13 +116,39 @@ pub struct StepPins {
 /// The step port and step timer from their pins and TIM2. Separate from [`init`] so
 /// that the interrupt-cost bench (bench/isr-cost) builds the very same parts.
 pub fn step_outputs(pins: StepPins, tim2: pac::TIM2) -> (StepPort, StepTimer) {
-    (
-        StepPort {
-            _pins: pins.pins,
-            enable: pins.enable,
-        },
-        StepTimer::new(tim2),
-    )
+    // The pins are configured; the port writes their registers from here on.
+    let StepPins { pins: _, enable: _ } = pins;
+    (StepPort { _owned: () }, StepTimer::new(tim2))
+}
+
+/// A GPIO port's register block (GPIOA, GPIOB and GPIOC share the layout).
+type GpioRegs = pac::gpioa::RegisterBlock;
+
+/// One store to a GPIO port's bit set/reset register.
+#[inline(always)]
+fn bsrr(port: *const GpioRegs, word: u32) {
+    // SAFETY: BSRR is write-only and atomic per bit; callers only name pins that their
+    // owner (a struct made by `init`) drives.
+    unsafe {
+        (*port).bsrr().write(|w| w.bits(word));
+    }
+}
+
+/// The BSRR word that drives pin `n` high or low.
+#[inline(always)]
+const fn pin_word(n: u32, high: bool) -> u32 {
+    if high {
+        1 << n
+    } else {
+        1 << (n + 16)
+    }
+}
+
+/// A port's input data register.
+#[inline(always)]
+fn idr(port: *const GpioRegs) -> u32 {
+    // SAFETY: read-only access to an input register.
+    unsafe { (*port).idr().read().bits() }
 }
 
 /// Disable every motor driver and drop all step/coil outputs, from any context.
@@ -357,11 +382,7 @@ impl PenServo {
 
 /// The 4x4 keypad: rows PB6-PB9 (pull-up inputs), columns PB10, PB11, PA15, PC14 (open drain).
 pub struct KeypadMatrix {
-    _rows: [ErasedPin<Input<PullUp>>; 4],
-    col1: gpio::PB10<Output<OpenDrain>>,
-    col2: gpio::PB11<Output<OpenDrain>>,
-    col3: gpio::PA15<Output<OpenDrain>>,
-    col4: gpio::PC14<Output<OpenDrain>>,
+    _owned: (),
 }
 
 impl KeypadMatrix {
@@ -370,23 +391,22 @@ impl KeypadMatrix {
     /// Drive column `col` low (all others released). The rows settle within a few µs,
     /// which is why the scan task reads them on its next tick rather than busy-waiting.
     pub fn select_column(&mut self, col: usize) {
-        self.col1.set_high();
-        self.col2.set_high();
-        self.col3.set_high();
-        self.col4.set_high();
-        match col {
-            0 => self.col1.set_low(),
-            1 => self.col2.set_low(),
-            2 => self.col3.set_low(),
-            _ => self.col4.set_low(),
-        }
+        // One BSRR word per port: the selected column low, the others released high
+        // (a pin is never named in both halves, where setting would win).
+        let (b, a, c) = match col {
+            0 => (pin_word(10, false) | pin_word(11, true), 1 << 15, 1 << 14),
+            1 => (pin_word(10, true) | pin_word(11, false), 1 << 15, 1 << 14),
+            2 => (3 << 10, pin_word(15, false), 1 << 14),
+            _ => (3 << 10, 1 << 15, pin_word(14, false)),
+        };
+        bsrr(pac::GPIOB::ptr(), b);
+        bsrr(pac::GPIOA::ptr(), a);
+        bsrr(pac::GPIOC::ptr(), c);
     }
 
     /// Row bits of the selected column: bit r set = key in row r pressed (active low).
     pub fn read_rows(&self) -> u8 {
-        // SAFETY: read-only access to GPIOB's input register.
-        let idr = unsafe { (*pac::GPIOB::ptr()).idr().read().bits() };
-        (!(idr >> 6) & 0x0F) as u8
+        (!(idr(pac::GPIOB::ptr()) >> 6) & 0x0F) as u8
     }
 }
 
@@ -400,36 +420,32 @@ pub struct InputLevels {
     pub cycle_start_low: bool,
 }
 
-/// Safety and control inputs on EXTI.
+/// Safety and control inputs on EXTI: e-stop PB0, limits PB1 and PB3, feed hold PB4,
+/// cycle start PB5 (pull-up inputs).
 pub struct Inputs {
-    pub estop: gpio::PB0<Input<PullUp>>,
-    pub limit_x: gpio::PB1<Input<PullUp>>,
-    pub limit_y: gpio::PB3<Input<PullUp>>,
-    pub feed_hold: gpio::PB4<Input<PullUp>>,
-    pub cycle_start: gpio::PB5<Input<PullUp>>,
+    _owned: (),
 }
 
 impl Inputs {
     /// Raw levels: true = switch open / input high.
     pub fn estop_open(&self) -> bool {
-        self.estop.is_high()
+        idr(pac::GPIOB::ptr()) & (1 << 0) != 0
     }
     pub fn limit_x_open(&self) -> bool {
-        self.limit_x.is_high()
+        idr(pac::GPIOB::ptr()) & (1 << 1) != 0
     }
     pub fn limit_y_open(&self) -> bool {
-        self.limit_y.is_high()
+        idr(pac::GPIOB::ptr()) & (1 << 3) != 0
     }
     pub fn feed_hold_low(&self) -> bool {
-        self.feed_hold.is_low()
+        Self::read_feed_hold_low()
     }
     pub fn cycle_start_low(&self) -> bool {
-        self.cycle_start.is_low()
+        Self::read_cycle_start_low()
     }
     /// All input levels in one read of GPIOB (usable from any context).
     pub fn levels() -> InputLevels {
-        // SAFETY: read-only access to GPIOB's input register.
-        let idr = unsafe { (*pac::GPIOB::ptr()).idr().read().bits() };
+        let idr = idr(pac::GPIOB::ptr());
         InputLevels {
             estop_open: idr & (1 << 0) != 0,
             limit_x_open: idr & (1 << 1) != 0,
@@ -441,39 +457,26 @@ impl Inputs {
     /// The feed-hold level read straight from GPIOB, for the EXTI handler (which does
     /// not own the pins). Low = hold.
     pub fn read_feed_hold_low() -> bool {
-        // SAFETY: read-only access to GPIOB's input register.
-        unsafe { (*pac::GPIOB::ptr()).idr().read().bits() & (1 << 4) == 0 }
+        idr(pac::GPIOB::ptr()) & (1 << 4) == 0
     }
     /// The cycle-start level straight from GPIOB. Low = pressed.
     pub fn read_cycle_start_low() -> bool {
-        // SAFETY: read-only access to GPIOB's input register.
-        unsafe { (*pac::GPIOB::ptr()).idr().read().bits() & (1 << 5) == 0 }
+        idr(pac::GPIOB::ptr()) & (1 << 5) == 0
     }
 }
 
 /// Busy LED (PC13, active low), busy output (PC15) and buzzer (PA10).
 pub struct Indicators {
-    led: gpio::PC13<Output<PushPull>>,
-    busy_out: gpio::PC15<Output<PushPull>>,
-    buzzer: gpio::PA10<Output<PushPull>>,
+    _owned: (),
 }
 
 impl Indicators {
     pub fn set_busy(&mut self, busy: bool) {
-        if busy {
-            self.led.set_low();
-            self.busy_out.set_high();
-        } else {
-            self.led.set_high();
-            self.busy_out.set_low();
-        }
+        // LED low and output high while busy, in one store.
+        bsrr(pac::GPIOC::ptr(), pin_word(13, !busy) | pin_word(15, busy));
     }
     pub fn set_buzzer(&mut self, on: bool) {
-        if on {
-            self.buzzer.set_high();
-        } else {
-            self.buzzer.set_low();
-        }
+        bsrr(pac::GPIOA::ptr(), pin_word(10, on));
     }
 }
 
@@ -534,15 +537,14 @@ const _: () = assert!(matches!(Watchdog::timing(500), (1, 2500)));
 /// and the controller's chip select on PB12, which is active high.
 pub struct LcdSpi {
     spi: Spi<pac::SPI2, u8>,
-    cs: gpio::PB12<Output<PushPull>>,
 }
 
 impl LcdSpi {
     /// Send `bytes` as one transaction: chip select raised around them.
     pub fn write(&mut self, bytes: &[u8]) -> Result<(), stm32f1xx_hal::spi::Error> {
-        self.cs.set_high();
+        bsrr(pac::GPIOB::ptr(), pin_word(12, true));
         let sent = self.spi.write(bytes);
-        self.cs.set_low();
+        bsrr(pac::GPIOB::ptr(), pin_word(12, false));
         sent
     }
 }
@@ -574,6 +576,31 @@ pub fn lcd_init(spi: &mut LcdSpi) -> Result<(), stm32f1xx_hal::spi::Error> {
 pub type Usb = UsbDevice<'static, UsbBusType>;
 pub type UsbSerial = usbd_serial::SerialPort<'static, UsbBusType>;
 
+/// The 'static homes of the USB stack (an RTIC init local): the bus allocator the
+/// device and the class borrow, and the device and the serial port themselves, built
+/// in place and handed out by reference rather than moved through `init`.
+pub struct UsbCells {
+    bus: MaybeUninit<UsbBusAllocator<UsbBusType>>,
+    dev: MaybeUninit<Usb>,
+    serial: MaybeUninit<UsbSerial>,
+}
+
+impl UsbCells {
+    pub const fn new() -> Self {
+        Self {
+            bus: MaybeUninit::uninit(),
+            dev: MaybeUninit::uninit(),
+            serial: MaybeUninit::uninit(),
+        }
+    }
+}
+
+impl Default for UsbCells {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// The settings sector: the last four 1 KB pages of the 64 KB part (memory.x keeps the
 /// program below it).
 pub const SETTINGS_FLASH_START: u32 = 0x0800_F000;
@@ -582,6 +609,64 @@ pub const FLASH_PAGE_SIZE: u32 = 1024;
 /// The chip's flash size and the settings pages as chip flash offsets.
 pub const FLASH_SIZE: u32 = 64 * 1024;
 pub const SETTINGS_OFFSET: u32 = SETTINGS_FLASH_START - 0x0800_0000;
+
+/// Pin configuration nibbles (RM0008 9.2: CNF[1:0] MODE[1:0]; outputs at 50 MHz, the
+/// same values as the HAL's pin modes). A pull-up input also needs its ODR bit set.
+const IN_FLOAT: u32 = 0x4;
+const IN_PULL: u32 = 0x8;
+const OUT_PP: u32 = 0x3;
+const OUT_OD: u32 = 0x7;
+const AF_PP: u32 = 0xB;
+
+/// A configuration register from the nibbles of its eight pins (lowest pin first).
+const fn cr(n: [u32; 8]) -> u32 {
+    let mut v = 0;
+    let mut i = 0;
+    while i < 8 {
+        v |= n[i] << (4 * i);
+        i += 1;
+    }
+    v
+}
+
+/// GPIOA: PA0-PA7 motion outputs; PA8 servo (TIM1 CH1); PA9 driver enable, high =
+/// disabled; PA10 buzzer; PA11/PA12 USB (PA12 first driven low, see `init`); PA13/14
+/// SWD as reset; PA15 keypad column 3, released high.
+const PA_CRH: [u32; 8] = [
+    AF_PP, OUT_PP, OUT_PP, IN_FLOAT, OUT_PP, IN_FLOAT, IN_FLOAT, OUT_OD,
+];
+const PA_CRH_USB: u32 = (cr(PA_CRH) & !(0xF << 16)) | (IN_FLOAT << 16);
+/// (port, ODR, CRL, CRH) of GPIOA, GPIOB and GPIOC, the pin table at the top.
+const PORTS: [(*const GpioRegs, u32, u32, u32); 3] = [
+    (
+        pac::GPIOA::ptr(),
+        (1 << 9) | (1 << 15),
+        cr([OUT_PP; 8]),
+        cr(PA_CRH),
+    ),
+    // PB0, PB1, PB3-PB5 switch inputs and PB6-PB9 keypad rows with pull-ups; PB2
+    // (BOOT1) as reset; PB10/PB11 keypad columns released high; PB12 LCD CS low;
+    // PB13/PB15 SPI2 SCK/MOSI; PB14 unused.
+    (
+        pac::GPIOB::ptr(),
+        0x0FFB,
+        cr([
+            IN_PULL, IN_PULL, IN_FLOAT, IN_PULL, IN_PULL, IN_PULL, IN_PULL, IN_PULL,
+        ]),
+        cr([
+            IN_PULL, IN_PULL, OUT_OD, OUT_OD, OUT_PP, AF_PP, IN_FLOAT, AF_PP,
+        ]),
+    ),
+    // PC13 busy LED off (high), PC14 keypad column 4 released high, PC15 busy out low.
+    (
+        pac::GPIOC::ptr(),
+        (1 << 13) | (1 << 14),
+        cr([IN_FLOAT; 8]),
+        cr([
+            IN_FLOAT, IN_FLOAT, IN_FLOAT, IN_FLOAT, IN_FLOAT, OUT_PP, OUT_OD, OUT_PP,
+        ]),
+    ),
+];
 
 /// Everything `init` hands to the RTIC app.
 pub struct Board {
@@ -592,8 +677,8 @@ pub struct Board {
     pub inputs: Inputs,
     pub indicators: Indicators,
     pub lcd_spi: LcdSpi,
-    pub usb: Usb,
-    pub serial: UsbSerial,
+    pub usb: &'static mut Usb,
+    pub serial: &'static mut UsbSerial,
     pub watchdog: Watchdog,
     pub flash: SettingsFlash,
     pub sysclk_hz: u32,
@@ -601,11 +686,9 @@ pub struct Board {
 
 /// Bring up the clocks and every peripheral. Called once from `init` with interrupts off.
 ///
-/// `usb_bus` is the 'static home of the USB bus allocator (an RTIC init local).
-pub fn init(
-    dp: pac::Peripherals,
-    usb_bus: &'static mut Option<UsbBusAllocator<UsbBusType>>,
-) -> Board {
+/// `usb` is the 'static home of the USB stack (an RTIC init local); each call needs
+/// its own (init runs once).
+pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
     let mut flash = dp.FLASH.constrain();
     let mut rcc = dp.RCC.freeze(
         rcc::Config::hse(8.MHz())
@@ -618,34 +701,30 @@ pub fn init(
     let sysclk_hz = rcc.clocks.sysclk().raw();
 
     let mut afio = dp.AFIO.constrain(&mut rcc);
+    // Clocks on and ports reset by the HAL; the pin modes are written below.
     let mut gpioa = dp.GPIOA.split(&mut rcc);
     let mut gpiob = dp.GPIOB.split(&mut rcc);
-    let mut gpioc = dp.GPIOC.split(&mut rcc);
+    let _ = dp.GPIOC.split(&mut rcc);
     let exti = dp.EXTI;
 
     // JTAG off, SWD on: frees PA15, PB3, PB4.
-    let (pa15, pb3, pb4) = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
+    let _ = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
 
-    let (step_port, step_timer) = step_outputs(
-        StepPins {
-            pins: [
-                gpioa.pa0.into_push_pull_output(&mut gpioa.crl).erase(),
-                gpioa.pa1.into_push_pull_output(&mut gpioa.crl).erase(),
-                gpioa.pa2.into_push_pull_output(&mut gpioa.crl).erase(),
-                gpioa.pa3.into_push_pull_output(&mut gpioa.crl).erase(),
-                gpioa.pa4.into_push_pull_output(&mut gpioa.crl).erase(),
-                gpioa.pa5.into_push_pull_output(&mut gpioa.crl).erase(),
-                gpioa.pa6.into_push_pull_output(&mut gpioa.crl).erase(),
-                gpioa.pa7.into_push_pull_output(&mut gpioa.crl).erase(),
-            ],
-            // Drivers disabled first (ENABLE high = disabled for active-low drivers).
-            enable: gpioa
-                .pa9
-                .into_push_pull_output_with_state(&mut gpioa.crh, gpio::PinState::High),
-        },
-        dp.TIM2,
-    );
+    // Every pin's mode in one store per configuration register, the output levels
+    // first (see the pin table above; `PORTS`). PA12 (USB D+) starts as an output
+    // driven low: the re-enumeration pulse below.
+    for (port, odr, crl, crh) in PORTS {
+        // SAFETY: the ports were just reset; these are their documented registers and
+        // the values configure only the pins in the table.
+        unsafe {
+            (*port).odr().write(|w| w.bits(odr));
+            (*port).crl().write(|w| w.bits(crl));
+            (*port).crh().write(|w| w.bits(crh));
+        }
+    }
+    let (step_port, step_timer) = (StepPort { _owned: () }, StepTimer::new(dp.TIM2));
 
+    // The peripherals' pins as the HAL's types (their nibbles are already set).
     let servo_pin = gpioa.pa8.into_alternate_push_pull(&mut gpioa.crh);
     let mut pwm = dp
         .TIM1
@@ -653,30 +732,8 @@ pub fn init(
     pwm.enable(Channel::C1);
     let servo = PenServo { pwm: pwm.split() };
 
-    let keypad = KeypadMatrix {
-        _rows: [
-            gpiob.pb6.into_pull_up_input(&mut gpiob.crl).erase(),
-            gpiob.pb7.into_pull_up_input(&mut gpiob.crl).erase(),
-            gpiob.pb8.into_pull_up_input(&mut gpiob.crh).erase(),
-            gpiob.pb9.into_pull_up_input(&mut gpiob.crh).erase(),
-        ],
-        col1: gpiob
-            .pb10
-            .into_open_drain_output_with_state(&mut gpiob.crh, gpio::PinState::High),
-        col2: gpiob
-            .pb11
-            .into_open_drain_output_with_state(&mut gpiob.crh, gpio::PinState::High),
-        col3: pa15.into_open_drain_output_with_state(&mut gpioa.crh, gpio::PinState::High),
-        col4: gpioc
-            .pc14
-            .into_open_drain_output_with_state(&mut gpioc.crh, gpio::PinState::High),
-    };
+    let keypad = KeypadMatrix { _owned: () };
 
-    let estop = gpiob.pb0.into_pull_up_input(&mut gpiob.crl);
-    let limit_x = gpiob.pb1.into_pull_up_input(&mut gpiob.crl);
-    let limit_y = pb3.into_pull_up_input(&mut gpiob.crl);
-    let feed_hold = pb4.into_pull_up_input(&mut gpiob.crl);
-    let cycle_start = gpiob.pb5.into_pull_up_input(&mut gpiob.crl);
     // EXTI lines 0, 1, 3, 4, 5 from port B. E-stop and limits: NC switches to GND, so
     // opening (rising edge) is the event; both edges are taken so that releasing is
     // seen too, and feed hold likewise. Cycle start acts on pressing (falling edge).
@@ -700,25 +757,13 @@ pub fn init(
         .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
     exti.imr()
         .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
-    let inputs = Inputs {
-        estop,
-        limit_x,
-        limit_y,
-        feed_hold,
-        cycle_start,
-    };
-
-    let mut indicators = Indicators {
-        led: gpioc.pc13.into_push_pull_output(&mut gpioc.crh),
-        busy_out: gpioc.pc15.into_push_pull_output(&mut gpioc.crh),
-        buzzer: gpioa.pa10.into_push_pull_output(&mut gpioa.crh),
-    };
-    indicators.set_busy(false);
+    let inputs = Inputs { _owned: () };
+    // Not busy: the LED (active low) off and the busy output low, as in `PORTS`.
+    let indicators = Indicators { _owned: () };
 
     // LCD on SPI2. The ST7920 samples on the rising edge with the clock idle low.
     let sck = gpiob.pb13.into_alternate_push_pull(&mut gpiob.crh);
     let mosi = gpiob.pb15.into_alternate_push_pull(&mut gpiob.crh);
-    let cs = gpiob.pb12.into_push_pull_output(&mut gpiob.crh);
     let spi = Spi::new(
         dp.SPI2,
         (
@@ -733,30 +778,33 @@ pub fn init(
         LCD_SPI_HZ.Hz(),
         &mut rcc,
     );
-    let lcd_spi = LcdSpi { spi, cs };
+    let lcd_spi = LcdSpi { spi };
 
     // USB: force a re-enumeration by pulling D+ low briefly (the Blue Pill has a fixed
     // pull-up on D+), then hand the pins to the USB peripheral.
-    let mut usb_dp = gpioa.pa12.into_push_pull_output(&mut gpioa.crh);
-    usb_dp.set_low();
+    // PA12 has been driven low since the port setup.
     cortex_m::asm::delay(sysclk_hz / 100);
-    let usb_dp = usb_dp.into_floating_input(&mut gpioa.crh);
+    // SAFETY: GPIOA's CRH with PA12 back to the floating input the USB pins need
+    // (`PA_CRH_USB`); the other pins keep the modes written above.
+    unsafe { (*pac::GPIOA::ptr()).crh().write(|w| w.bits(PA_CRH_USB)) };
     let usb_periph = Peripheral {
         usb: dp.USB,
         pin_dm: gpioa.pa11,
-        pin_dp: usb_dp,
+        pin_dp: gpioa.pa12,
     };
-    let bus: &'static UsbBusAllocator<UsbBusType> = usb_bus.insert(UsbBus::new(usb_periph));
-    let serial = usbd_serial::SerialPort::new(bus);
-    let usb = UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
-        .device_class(usbd_serial::USB_CLASS_CDC)
-        .strings(&[StringDescriptors::default()
-            .manufacturer("inkstep")
-            .product("inkstep pen plotter (Grbl 1.1)")
-            .serial_number("INKSTEP")])
-        // One language with three short strings cannot exceed the builder's limits.
-        .unwrap_or_else(|_| defmt::panic!("usb strings"))
-        .build();
+    let bus: &'static UsbBusAllocator<UsbBusType> = usb.bus.write(UsbBus::new(usb_periph));
+    let serial = usb.serial.write(usbd_serial::SerialPort::new(bus));
+    let usb = usb.dev.write(
+        UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
+            .device_class(usbd_serial::USB_CLASS_CDC)
+            .strings(&[StringDescriptors::default()
+                .manufacturer("inkstep")
+                .product("inkstep pen plotter (Grbl 1.1)")
+                .serial_number("INKSTEP")])
+            // One language with three short strings cannot exceed the builder's limits.
+            .unwrap_or_else(|_| defmt::panic!("usb strings"))
+            .build(),
+    );
 
     let watchdog = Watchdog::start(dp.IWDG);
 

@@ -4,19 +4,27 @@
 //! and `Link` that the simulator drives.
 //!
 //! Priorities (higher preempts lower), as in DESIGN.md:
-//!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3): outputs off at once
+//!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3): outputs off at once; the 1 ms
+//!      tick (SysTick, above every lock so that no millisecond is lost): the clock and
+//!      the start of the periodic tasks below
 //!   6  step timer (TIM2): the core's `Executor`, integer work only
-//!   5  USB (endpoint <-> SPSC byte queues) and segment preparation (`Link::fill`)
-//!   4  protocol / G-code / machine state, feed-hold and cycle-start inputs
+//!   5  USB (endpoint <-> byte queues) and segment preparation (`Link::fill`, every
+//!      tick)
+//!   4  protocol / G-code / machine state (every tick), feed-hold and cycle-start inputs
 //!   3  keypad scan (one column every 5 ms), buzzer, the watchdog
-//!   1  LCD refresh: the only task that waits (on its SPI); everything preempts it
+//!   1  LCD refresh (every 100 ms): the only task that waits (on its SPI); everything
+//!      preempts it
 //!   0  idle: WFI
+//!
+//! Every task is an interrupt handler: the periodic ones run on interrupts that the
+//! tick pends (I2C1_EV, SPI1, USART3, USART2, otherwise unused), so the image carries
+//! no async executor and no timer queue.
 #![no_std]
 #![no_main]
 
-use core::sync::atomic::{AtomicBool, Ordering};
+use core::cell::UnsafeCell;
+use core::sync::atomic::{compiler_fence, AtomicBool, AtomicU32, AtomicUsize, Ordering};
 use defmt_rtt as _;
-use heapless::spsc::{Consumer, Producer};
 use inkstep::board;
 use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
 use inkstep_core::link::StepSide;
@@ -25,6 +33,116 @@ use inkstep_core::stepper::exec::Executor;
 /// USB byte queues. RX holds more than Grbl's 128-byte character-counting window.
 const USB_RX: usize = 256;
 const USB_TX: usize = 512;
+
+/// One direction of the USB byte stream: a FIFO between exactly one producing and one
+/// consuming context (the USB interrupt and the protocol task), handed out as one
+/// [`RingIn`] and one [`RingOut`]. Its size is a power of two: the indices run freely
+/// and are masked, where heapless' SPSC queue views wrap with a run-time `%` (a
+/// division and its panic path per byte) and fence with barrier instructions.
+struct ByteRing<const N: usize> {
+    ends: Ends,
+    buf: UnsafeCell<[u8; N]>,
+}
+
+// SAFETY: `split` hands out one producer and one consumer; each slot is written only by
+// the producer while it is free and read only by the consumer while it is filled. The
+// indices publish the slots: on this single core both ends run on the same CPU (one
+// preempting the other), which sees its own memory accesses in program order, so only
+// the compiler must keep the slot accesses on their side of an index update; the
+// compiler fences do that without a barrier instruction.
+unsafe impl<const N: usize> Sync for ByteRing<N> {}
+
+/// The ring's indices: bytes `head..tail` (wrapping) are filled.
+struct Ends {
+    /// Next byte to read; only the consumer moves it.
+    head: AtomicUsize,
+    /// Next byte to write; only the producer moves it.
+    tail: AtomicUsize,
+}
+
+impl Ends {
+    /// Free bytes, seen from the producer.
+    fn free(&self, size: usize) -> usize {
+        let head = self.head.load(Ordering::Relaxed);
+        compiler_fence(Ordering::Acquire);
+        size - self.tail.load(Ordering::Relaxed).wrapping_sub(head)
+    }
+
+    /// Producer: append as much of `data` as fits into the ring at `buf` (`size` bytes,
+    /// a power of two); returns how many bytes it took.
+    fn push(&self, buf: *mut u8, size: usize, data: &[u8]) -> usize {
+        let mut tail = self.tail.load(Ordering::Relaxed);
+        let n = data.len().min(self.free(size));
+        for &b in data.iter().take(n) {
+            // SAFETY: `tail & (size - 1)` is inside the buffer, and the slot is free
+            // (at most `free` bytes are written): the consumer does not read it.
+            unsafe { buf.add(tail & (size - 1)).write(b) };
+            tail = tail.wrapping_add(1);
+        }
+        compiler_fence(Ordering::Release);
+        self.tail.store(tail, Ordering::Relaxed);
+        n
+    }
+
+    /// Consumer: move up to `out.len()` bytes out of the ring; returns how many.
+    fn pop(&self, buf: *const u8, size: usize, out: &mut [u8]) -> usize {
+        let mut head = self.head.load(Ordering::Relaxed);
+        let tail = self.tail.load(Ordering::Relaxed);
+        compiler_fence(Ordering::Acquire);
+        let n = out.len().min(tail.wrapping_sub(head));
+        for slot in out.iter_mut().take(n) {
+            // SAFETY: inside the buffer, and filled (published by the producer's
+            // store of `tail`), so the producer does not write it.
+            *slot = unsafe { buf.add(head & (size - 1)).read() };
+            head = head.wrapping_add(1);
+        }
+        compiler_fence(Ordering::Release);
+        self.head.store(head, Ordering::Relaxed);
+        n
+    }
+}
+
+impl<const N: usize> ByteRing<N> {
+    const fn new() -> Self {
+        assert!(N.is_power_of_two());
+        Self {
+            ends: Ends {
+                head: AtomicUsize::new(0),
+                tail: AtomicUsize::new(0),
+            },
+            buf: UnsafeCell::new([0; N]),
+        }
+    }
+
+    /// The producer and the consumer (once: the ring is borrowed for good).
+    fn split(&'static mut self) -> (RingIn<N>, RingOut<N>) {
+        let ring: &'static Self = self;
+        (RingIn(ring), RingOut(ring))
+    }
+}
+
+/// The producing end of a [`ByteRing`].
+struct RingIn<const N: usize>(&'static ByteRing<N>);
+
+impl<const N: usize> RingIn<N> {
+    fn free(&self) -> usize {
+        self.0.ends.free(N)
+    }
+    /// Append as much of `data` as fits; returns how many bytes were taken.
+    fn push(&mut self, data: &[u8]) -> usize {
+        self.0.ends.push(self.0.buf.get().cast(), N, data)
+    }
+}
+
+/// The consuming end of a [`ByteRing`].
+struct RingOut<const N: usize>(&'static ByteRing<N>);
+
+impl<const N: usize> RingOut<N> {
+    /// Move up to `out.len()` bytes out; returns how many.
+    fn pop(&mut self, out: &mut [u8]) -> usize {
+        self.0.ends.pop(self.0.buf.get().cast(), N, out)
+    }
+}
 
 /// Hard limits stop stepping at once only when `$21` is on.
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
@@ -40,11 +158,11 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     inkstep::fault::on_panic(info)
 }
 
-#[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3, SPI1, I2C1_EV])]
+#[rtic::app(device = stm32f1xx_hal::pac, peripherals = true)]
 mod app {
     use super::*;
     use core::mem::MaybeUninit;
-    use heapless::spsc::Queue;
+    use cortex_m::peripheral::syst::SystClkSource;
     use inkstep_core::controller::Controller;
     use inkstep_core::hmi::buzzer::Buzzer;
     use inkstep_core::link::Link;
@@ -54,53 +172,73 @@ mod app {
     use inkstep_core::settings::{OutputMode, PenMode, Settings};
     use inkstep_core::settings_store::{BlockingFlash, SettingsStore, STORE_RANGE};
     use inkstep_core::stepper::prep::PrepConfig;
-    use rtic_monotonics::systick::prelude::*;
-    use stm32f1xx_hal::usb::UsbBusType;
-    use usb_device::bus::UsbBusAllocator;
+    use stm32f1xx_hal::pac::Interrupt;
 
-    systick_monotonic!(Mono, 1_000);
+    /// Milliseconds since boot, the core's clock: counted by the tick (its only
+    /// writer), read by every task.
+    static NOW_MS: AtomicU32 = AtomicU32::new(0);
+
+    fn now_ms() -> u32 {
+        NOW_MS.load(Ordering::Relaxed)
+    }
+
+    /// One keypad column per scan; the buzzer pattern advances by the same period.
+    const KEYPAD_MS: u32 = 5;
+    /// The LCD refresh period.
+    const LCD_MS: u32 = 100;
 
     type Store = SettingsStore<BlockingFlash<board::SettingsFlash>>;
 
     // The controller (2 KB) and the link (4 KB, the planner's buffer) are built in
     // place in init's static cells and shared by reference: returned by value they
     // would be built on init's stack (more than the stack left beside the statics)
-    // and copied.
+    // and copied. They are one resource (`Core`), locked together. The USB device and
+    // its serial port, likewise built in place (`board::UsbCells`), belong to the USB
+    // task alone.
     #[shared]
     struct Shared {
-        ctl: &'static mut Controller,
-        link: &'static mut Link<BoardSide>,
-        usb: board::Usb,
-        serial: board::UsbSerial,
+        core: Core,
     }
 
     #[local]
     struct Local {
+        usb: &'static mut board::Usb,
+        serial: &'static mut board::UsbSerial,
         step_out: StepOutput,
         servo: board::PenServo,
         keypad: board::KeypadMatrix,
         inputs: board::Inputs,
         indicators: board::Indicators,
         lcd_spi: board::LcdSpi,
+        screens: &'static mut Screens,
+        fb: &'static mut FrameBuffer,
         watchdog: board::Watchdog,
         store: Store,
-        usb_rx_in: Producer<'static, u8>,
-        usb_rx_out: Consumer<'static, u8>,
-        usb_tx_in: Producer<'static, u8>,
-        usb_tx_out: Consumer<'static, u8>,
+        usb_rx_in: RingIn<USB_RX>,
+        usb_rx_out: RingOut<USB_RX>,
+        usb_tx_in: RingIn<USB_TX>,
+        usb_tx_out: RingOut<USB_TX>,
     }
 
     #[init(local = [
-        usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
+        usb_cells: board::UsbCells = board::UsbCells::new(),
         steps: StepCmdQueue = StepCmdQueue::new(),
-        usb_rxq: Queue<u8, USB_RX> = Queue::new(),
-        usb_txq: Queue<u8, USB_TX> = Queue::new(),
+        usb_rxq: ByteRing<USB_RX> = ByteRing::new(),
+        usb_txq: ByteRing<USB_TX> = ByteRing::new(),
         ctl_cell: MaybeUninit<Controller> = MaybeUninit::uninit(),
+        screens_cell: MaybeUninit<Screens> = MaybeUninit::uninit(),
+        fb_cell: MaybeUninit<FrameBuffer> = MaybeUninit::uninit(),
         link_cell: MaybeUninit<Link<BoardSide>> = MaybeUninit::uninit(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let b = board::init(cx.device, cx.local.usb_bus);
-        Mono::start(cx.core.SYST, b.sysclk_hz);
+        let b = board::init(cx.device, cx.local.usb_cells);
+        // The 1 ms tick from the core clock.
+        let mut syst = cx.core.SYST;
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(b.sysclk_hz / 1_000 - 1);
+        syst.clear_current();
+        syst.enable_interrupt();
+        syst.enable_counter();
 
         // Settings from flash; a corrupt store falls back to defaults and says so.
         let mut store = match SettingsStore::new(BlockingFlash(b.flash), STORE_RANGE) {
@@ -149,24 +287,29 @@ mod app {
             env!("CARGO_PKG_VERSION"),
             b.sysclk_hz
         );
-        prepare::spawn().ok();
-        protocol::spawn().ok();
-        keypad_scan::spawn().ok();
-        lcd_refresh::spawn().ok();
+        // The keypad's first column, read one scan period from now; the LCD comes up
+        // at once (the tick starts the rest).
+        let mut keypad = b.keypad;
+        keypad.select_column(ctl.keypad().column());
+        rtic::pend(Interrupt::USART2);
         (
             Shared {
-                ctl,
-                link,
-                usb: b.usb,
-                serial: b.serial,
+                core: Core { ctl, link },
             },
             Local {
+                usb: b.usb,
+                serial: b.serial,
                 step_out,
                 servo: b.servo,
-                keypad: b.keypad,
+                keypad,
                 inputs: b.inputs,
                 indicators: b.indicators,
                 lcd_spi: b.lcd_spi,
+                // The LCD task's retained state: the screens and the 1 KB frame buffer
+                // (entirely dirty from the start: the first flush sends the whole
+                // screen), built here in .bss rather than on that task's stack.
+                screens: cx.local.screens_cell.write(Screens::new()),
+                fb: cx.local.fb_cell.write(FrameBuffer::new()),
                 watchdog: b.watchdog,
                 store,
                 usb_rx_in,
@@ -175,6 +318,20 @@ mod app {
                 usb_tx_out,
             },
         )
+    }
+
+    /// The controller and the motion link, one resource: every task that uses the
+    /// controller also drives the link, so one lock (at the tick's priority, where
+    /// the segment preparation runs) covers both.
+    pub struct Core {
+        ctl: &'static mut Controller,
+        link: &'static mut Link<BoardSide>,
+    }
+
+    impl Core {
+        fn parts(&mut self) -> (&mut Controller, &mut Link<BoardSide>) {
+            (&mut *self.ctl, &mut *self.link)
+        }
     }
 
     /// What waits to be written to flash (at rest).
@@ -210,13 +367,9 @@ mod app {
         }
 
         /// Top up from the USB receive queue.
-        fn fill(&mut self, rx: &mut Consumer<'static, u8>) {
-            for slot in self.buf.iter_mut().skip(self.len) {
-                match rx.dequeue() {
-                    Some(b) => *slot = b,
-                    None => break,
-                }
-                self.len += 1;
+        fn fill(&mut self, rx: &mut RingOut<USB_RX>) {
+            if let Some(free) = self.buf.get_mut(self.len..) {
+                self.len += rx.pop(free);
             }
         }
 
@@ -279,14 +432,18 @@ mod app {
     /// (drivers stay enabled so the position is held); the machine raises the alarm.
     #[task(binds = EXTI1, priority = 7)]
     fn limit_x(_: limit_x::Context) {
-        if board::exti_take_pending(1) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
-            steps::halt();
-        }
+        limit_switch(1);
     }
 
     #[task(binds = EXTI3, priority = 7)]
     fn limit_y(_: limit_y::Context) {
-        if board::exti_take_pending(3) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
+        limit_switch(3);
+    }
+
+    /// A limit switch on EXTI line `line` changed (one body for both axes).
+    #[inline(never)]
+    fn limit_switch(line: u8) {
+        if board::exti_take_pending(line) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
             steps::halt();
         }
     }
@@ -299,250 +456,250 @@ mod app {
 
     /// USB: poll the device, take bytes from the endpoint only while the RX queue has
     /// room (so a full queue NAKs the host instead of dropping), send queued output.
-    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial], local = [usb_rx_in, usb_tx_out])]
+    #[task(binds = USB_LP_CAN_RX0, priority = 5, local = [usb, serial, usb_rx_in, usb_tx_out])]
     fn usb_lp(cx: usb_lp::Context) {
         let rx = cx.local.usb_rx_in;
         let tx = cx.local.usb_tx_out;
-        (cx.shared.usb, cx.shared.serial).lock(|usb, serial| {
-            usb.poll(&mut [serial]);
-            let mut buf = [0u8; 64];
-            let room = rx.capacity() - rx.len();
-            if room >= buf.len() {
-                if let Ok(n) = serial.read(&mut buf) {
-                    for &b in buf.iter().take(n) {
-                        let _ = rx.enqueue(b);
-                    }
-                }
+        let serial = &mut **cx.local.serial;
+        cx.local.usb.poll(&mut [&mut *serial]);
+        let mut buf = [0u8; 64];
+        if rx.free() >= buf.len() {
+            if let Ok(n) = serial.read(&mut buf) {
+                rx.push(buf.get(..n).unwrap_or(&[]));
             }
-            let mut out = [0u8; 64];
-            let mut n = 0;
-            for slot in out.iter_mut() {
-                match tx.dequeue() {
-                    Some(b) => *slot = b,
-                    None => break,
-                }
-                n += 1;
-            }
-            if n > 0 {
-                // The CDC class buffers what the endpoint cannot take yet; bytes it
-                // refuses are dropped only if the host stopped reading.
-                let _ = serial.write(out.get(..n).unwrap_or(&[]));
-            }
-        });
+        }
+        let n = tx.pop(&mut buf);
+        if n > 0 {
+            // The CDC class buffers what the endpoint cannot take yet; bytes it refuses
+            // are dropped only if the host stopped reading.
+            let _ = serial.write(buf.get(..n).unwrap_or(&[]));
+        }
     }
 
-    /// Segment preparation: keep ~10 ms of step commands queued ahead of the interrupt
-    /// and start the timer when it is idle and commands wait.
-    #[task(priority = 5, shared = [link])]
-    async fn prepare(mut cx: prepare::Context) {
-        loop {
-            let kick = cx.shared.link.lock(|link| {
-                link.fill();
-                link.side().queued() > 0
-            });
-            if kick {
-                steps::kick();
-            }
-            Mono::delay(1.millis()).await;
+    /// The 1 ms tick: the clock, and the periodic tasks started at their periods
+    /// (segment preparation and the protocol every tick, the keypad scan, the LCD).
+    /// Above every lock ceiling, so that a long critical section delays the tasks but
+    /// not the clock.
+    #[task(binds = SysTick, priority = 7)]
+    fn tick(_: tick::Context) {
+        let now = NOW_MS.load(Ordering::Relaxed).wrapping_add(1);
+        NOW_MS.store(now, Ordering::Relaxed);
+        rtic::pend(Interrupt::I2C1_EV);
+        rtic::pend(Interrupt::SPI1);
+        if now.is_multiple_of(KEYPAD_MS) {
+            rtic::pend(Interrupt::USART3);
+        }
+        if now.is_multiple_of(LCD_MS) {
+            rtic::pend(Interrupt::USART2);
+        }
+    }
+
+    /// Segment preparation, every tick: keep a few ms of step commands queued ahead of
+    /// the interrupt and start the timer when it is idle and commands wait.
+    #[task(binds = I2C1_EV, priority = 5, shared = [core])]
+    fn prepare(mut cx: prepare::Context) {
+        let kick = cx.shared.core.lock(|c| {
+            let link = &mut *c.link;
+            link.fill();
+            link.side().queued() > 0
+        });
+        if kick {
+            steps::kick();
         }
     }
 
     /// The protocol, the machine state and the G-code interpreter, every millisecond:
     /// inputs, received bytes (only those the protocol takes: back-pressure), the
     /// periodic work, replies, the busy LED, the pen servo and settings persistence.
-    #[task(priority = 4, shared = [ctl, link], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: Carry = Carry::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
-    async fn protocol(mut cx: protocol::Context) {
-        loop {
-            let now = Mono::now().ticks();
-            let pins = &mut *cx.local.inputs;
-            let carry = &mut *cx.local.carry;
-            carry.fill(cx.local.usb_rx_out);
-            let tx = &mut *cx.local.usb_tx_in;
-            let (busy, settings_changed, pen_down, pen_pulse) =
-                (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                    let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
-                    let s = ctl.protocol().machine().settings();
-                    let inputs = Inputs {
-                        estop: pins.estop_open() != s.invert_inputs(),
-                        limits: [
-                            pins.limit_x_open() != s.invert_limits(),
-                            pins.limit_y_open() != s.invert_limits(),
-                            false,
-                        ],
-                        feed_hold: pins.feed_hold_low(),
-                        cycle_start: pins.cycle_start_low(),
-                    };
-                    ctl.protocol_mut().set_inputs(inputs, link, now);
-                    let taken = ctl.usb_rx(carry.bytes(), link, now);
-                    carry.consume(taken);
-                    ctl.poll(link, now);
-                    let mut out = [0u8; 64];
-                    let room = (tx.capacity() - tx.len()).min(out.len());
-                    let n = ctl.usb_tx(&mut out[..room]);
-                    for &b in out.iter().take(n) {
-                        let _ = tx.enqueue(b);
-                    }
-                    // The planner took new settings when they changed (at rest, before
-                    // the next line); what is left is the HMI, the outputs and the save.
-                    let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
-                    if changed {
-                        ctl.settings_changed();
-                    }
-                    let busy = ctl.take_outputs().busy_led;
-                    let pen_down = link.pen_down();
-                    // Only what the outputs need is read here; the settings stay in place.
-                    let s = ctl.protocol().machine().settings();
-                    if changed {
-                        publish_output_settings(s);
-                    }
-                    let pen_pulse =
-                        (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
-                    (busy, changed, pen_down, pen_pulse)
-                });
-            rtic::pend(stm32f1xx_hal::pac::Interrupt::USB_LP_CAN_RX0);
-            // A reset from the alarm (soft reset / $X) clears the latched halt.
-            if steps::is_halted()
-                && !cx
-                    .shared
-                    .ctl
-                    .lock(|c| c.protocol().machine().alarm().is_some())
-            {
-                steps::clear_halt();
+    #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: Carry = Carry::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
+    fn protocol(mut cx: protocol::Context) {
+        let now = now_ms();
+        let pins = &mut *cx.local.inputs;
+        let carry = &mut *cx.local.carry;
+        carry.fill(cx.local.usb_rx_out);
+        let tx = &mut *cx.local.usb_tx_in;
+        let (busy, settings_changed, pen_down, pen_pulse, alarmed) = cx.shared.core.lock(|c| {
+            let (ctl, link) = c.parts();
+            let s = ctl.protocol().machine().settings();
+            let inputs = Inputs {
+                estop: pins.estop_open() != s.invert_inputs(),
+                limits: [
+                    pins.limit_x_open() != s.invert_limits(),
+                    pins.limit_y_open() != s.invert_limits(),
+                    false,
+                ],
+                feed_hold: pins.feed_hold_low(),
+                cycle_start: pins.cycle_start_low(),
+            };
+            ctl.protocol_mut().set_inputs(inputs, link, now);
+            let taken = ctl.usb_rx(carry.bytes(), link, now);
+            carry.consume(taken);
+            ctl.poll(link, now);
+            let mut out = [0u8; 64];
+            let room = tx.free().min(out.len());
+            let n = out.get_mut(..room).map_or(0, |b| ctl.usb_tx(b));
+            tx.push(out.get(..n).unwrap_or(&[]));
+            // The planner took new settings when they changed (at rest, before
+            // the next line); what is left is the HMI, the outputs and the save.
+            let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
+            if changed {
+                ctl.settings_changed();
             }
-            if settings_changed {
-                cx.local.saves.settings = true;
+            let busy = ctl.take_outputs().busy_led;
+            let pen_down = link.pen_down();
+            // Only what the outputs need is read here; the settings stay in place.
+            let s = ctl.protocol().machine().settings();
+            if changed {
+                publish_output_settings(s);
             }
-            if let Some(us) = pen_pulse.filter(|_| *cx.local.pen != Some(pen_down)) {
-                cx.local.servo.set_pulse_us(us);
-                *cx.local.pen = Some(pen_down);
-            }
-            // Flash writes stall the CPU (instruction fetch waits), so only at rest.
-            let saves = &mut *cx.local.saves;
-            let store = &mut *cx.local.store;
-            cx.shared.ctl.lock(|ctl| {
-                saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
-                saves.startup |= ctl.protocol_mut().take_startup_dirty();
-                if busy {
-                    return;
-                }
-                if core::mem::take(&mut saves.settings)
-                    && store
-                        .save_settings(ctl.protocol().machine().settings())
-                        .is_err()
-                {
-                    defmt::warn!("settings save failed");
-                }
-                if core::mem::take(&mut saves.coords)
-                    && store
-                        .save_coords(ctl.protocol().machine().interp().coords())
-                        .is_err()
-                {
-                    defmt::warn!("offsets save failed");
-                }
-                if core::mem::take(&mut saves.startup) {
-                    for i in 0..STARTUP_LINES {
-                        let line = ctl.protocol().startup_line(i).unwrap_or("");
-                        if store.save_startup(i, line).is_err() {
-                            defmt::warn!("startup line save failed");
-                        }
-                    }
-                }
-            });
-            Mono::delay(1.millis()).await;
+            let pen_pulse =
+                (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
+            let alarmed = ctl.protocol().machine().alarm().is_some();
+            (busy, changed, pen_down, pen_pulse, alarmed)
+        });
+        rtic::pend(Interrupt::USB_LP_CAN_RX0);
+        // A reset from the alarm (soft reset / $X) clears the latched halt.
+        if steps::is_halted() && !alarmed {
+            steps::clear_halt();
         }
+        if settings_changed {
+            cx.local.saves.settings = true;
+        }
+        if let Some(us) = pen_pulse.filter(|_| *cx.local.pen != Some(pen_down)) {
+            cx.local.servo.set_pulse_us(us);
+            *cx.local.pen = Some(pen_down);
+        }
+        // Flash writes stall the CPU (instruction fetch waits), so only at rest.
+        let saves = &mut *cx.local.saves;
+        let store = &mut *cx.local.store;
+        cx.shared.core.lock(|c| {
+            let ctl = &mut *c.ctl;
+            saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
+            saves.startup |= ctl.protocol_mut().take_startup_dirty();
+            if busy {
+                return;
+            }
+            if core::mem::take(&mut saves.settings)
+                && store
+                    .save_settings(ctl.protocol().machine().settings())
+                    .is_err()
+            {
+                defmt::warn!("settings save failed");
+            }
+            if core::mem::take(&mut saves.coords)
+                && store
+                    .save_coords(ctl.protocol().machine().interp().coords())
+                    .is_err()
+            {
+                defmt::warn!("offsets save failed");
+            }
+            if core::mem::take(&mut saves.startup) {
+                for i in 0..STARTUP_LINES {
+                    let line = ctl.protocol().startup_line(i).unwrap_or("");
+                    if store.save_startup(i, line).is_err() {
+                        defmt::warn!("startup line save failed");
+                    }
+                }
+            }
+        });
+        // A tick that came while this ran is dropped: the next run starts at the next
+        // tick, so the tasks below always get a turn between two runs.
+        cortex_m::peripheral::NVIC::unpend(Interrupt::SPI1);
     }
 
     /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.
-    #[task(binds = EXTI4, priority = 4, shared = [ctl, link])]
+    #[task(binds = EXTI4, priority = 4, shared = [core])]
     fn feed_hold(mut cx: feed_hold::Context) {
         if board::exti_take_pending(4) {
-            let now = Mono::now().ticks();
-            (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
-                let mut i = ctl.protocol().machine().inputs();
-                i.feed_hold = board::Inputs::read_feed_hold_low();
-                ctl.protocol_mut().set_inputs(i, link, now);
-            });
+            let now = now_ms();
+            cx.shared.core.lock(|c| input_edge(c, now, false));
         }
     }
 
-    #[task(binds = EXTI9_5, priority = 4, shared = [ctl, link])]
+    #[task(binds = EXTI9_5, priority = 4, shared = [core])]
     fn cycle_start(mut cx: cycle_start::Context) {
         if board::exti_take_pending(5) {
-            let now = Mono::now().ticks();
-            (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
-                let mut i = ctl.protocol().machine().inputs();
-                i.cycle_start = board::Inputs::read_cycle_start_low();
-                ctl.protocol_mut().set_inputs(i, link, now);
-            });
+            let now = now_ms();
+            cx.shared.core.lock(|c| input_edge(c, now, true));
         }
+    }
+
+    /// The feed-hold (`cycle_start` false) or cycle-start input's new level into the
+    /// machine (one body for both interrupts).
+    #[inline(never)]
+    fn input_edge(c: &mut Core, now: u32, cycle_start: bool) {
+        let (ctl, link) = c.parts();
+        let mut i = ctl.protocol().machine().inputs();
+        if cycle_start {
+            i.cycle_start = board::Inputs::read_cycle_start_low();
+        } else {
+            i.feed_hold = board::Inputs::read_feed_hold_low();
+        }
+        ctl.protocol_mut().set_inputs(i, link, now);
     }
 
     /// The keypad: drive the column the scanner asks for, read its rows one scan
     /// period later (no busy wait for the lines to settle), hand them to the core.
     /// Also plays the buzzer patterns and feeds the watchdog.
-    #[task(priority = 3, shared = [ctl, link], local = [keypad, watchdog, indicators])]
-    async fn keypad_scan(mut cx: keypad_scan::Context) {
-        /// One keypad column per tick; the buzzer pattern advances by the same tick.
-        const SCAN_MS: u32 = 5;
-        let mut buzzer = Buzzer::new();
-        loop {
-            let col = cx.shared.ctl.lock(|c| c.keypad().column());
-            cx.local.keypad.select_column(col);
-            Mono::delay(SCAN_MS.millis()).await;
-            let rows = cx.local.keypad.read_rows();
-            let now = Mono::now().ticks();
-            let out = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
-                ctl.key_scan(rows, link, now);
-                ctl.take_outputs()
-            });
-            cx.local.indicators.set_busy(out.busy_led);
-            if let Some(b) = out.beep {
-                buzzer.play(b);
-            }
-            cx.local.indicators.set_buzzer(buzzer.tick(SCAN_MS));
-            cx.local.watchdog.feed();
+    #[task(binds = USART3, priority = 3, shared = [core], local = [keypad, watchdog, indicators, buzzer: Buzzer = Buzzer::new()])]
+    fn keypad_scan(mut cx: keypad_scan::Context) {
+        // The rows of the column selected one scan period ago.
+        let rows = cx.local.keypad.read_rows();
+        let now = now_ms();
+        let (out, col) = cx.shared.core.lock(|c| {
+            let (ctl, link) = c.parts();
+            ctl.key_scan(rows, link, now);
+            (ctl.take_outputs(), ctl.keypad().column())
+        });
+        cx.local.keypad.select_column(col);
+        let buzzer = cx.local.buzzer;
+        cx.local.indicators.set_busy(out.busy_led);
+        if let Some(b) = out.beep {
+            buzzer.play(b);
         }
+        cx.local.indicators.set_buzzer(buzzer.tick(KEYPAD_MS));
+        cx.local.watchdog.feed();
     }
 
     /// The LCD at 10 Hz, lowest priority: take a snapshot of the HMI and the status
     /// under a short lock, draw it into the frame buffer, send only the changed words.
     /// The SPI waits here are the only blocking waits in the firmware; every other
     /// task preempts them.
-    #[task(priority = 1, shared = [ctl, link], local = [lcd_spi])]
-    async fn lcd_refresh(mut cx: lcd_refresh::Context) {
+    #[task(binds = USART2, priority = 1, shared = [core], local = [
+        lcd_spi,
+        screens,
+        fb,
+        up: bool = false,
+        last_pos: [i32; 3] = [0; 3],
+    ])]
+    fn lcd_refresh(mut cx: lcd_refresh::Context) {
         let spi = cx.local.lcd_spi;
-        // Retained state of the screens and the 1 KB frame buffer live in this task.
-        let mut screens = Screens::new();
-        let mut fb = FrameBuffer::new();
-        // The controller comes up in graphics mode; after that only the changed bytes
-        // are sent (core::screens::st7920).
-        if board::lcd_init(spi).is_err() {
-            defmt::warn!("LCD init failed");
-        }
-        fb.mark_all_dirty();
-        let mut last_pos = [0i32; 3];
-        loop {
-            let now = Mono::now().ticks();
-            // The teaching view's feed directions: which way each axis moved since the
-            // last refresh (the step interrupt stays free of bookkeeping for it).
-            let (hmi, status) = (&mut cx.shared.ctl, &mut cx.shared.link).lock(|ctl, link| {
-                let (ctl, link): (&mut Controller, &mut Link<BoardSide>) = (ctl, link);
-                let pos = link.side().position();
-                if pos != last_pos {
-                    let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
-                    ctl.note_direction([sign(0), sign(1)]);
-                    last_pos = pos;
-                }
-                (ctl.hmi().clone(), ctl.status(link))
-            });
-            let _ = screens.render(&hmi, &status, now, &mut fb);
-            if st7920::flush(&mut fb, |bytes| spi.write(bytes)).is_err() {
-                defmt::warn!("LCD write failed");
+        if !*cx.local.up {
+            // The controller comes up in graphics mode; after that only the changed
+            // bytes are sent (core::screens::st7920).
+            if board::lcd_init(spi).is_err() {
+                defmt::warn!("LCD init failed");
             }
-            Mono::delay(100.millis()).await;
+            *cx.local.up = true;
+        }
+        let (screens, fb) = (&mut **cx.local.screens, &mut **cx.local.fb);
+        let last_pos = cx.local.last_pos;
+        let now = now_ms();
+        // The teaching view's feed directions: which way each axis moved since the
+        // last refresh (the step interrupt stays free of bookkeeping for it).
+        let snap = cx.shared.core.lock(|c| {
+            let (ctl, link) = c.parts();
+            let pos = link.side().position();
+            if pos != *last_pos {
+                let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
+                ctl.note_direction([sign(0), sign(1)]);
+                *last_pos = pos;
+            }
+            (ctl.hmi().clone(), ctl.status(link))
+        });
+        let _ = screens.render(&snap.0, &snap.1, now, fb);
+        if st7920::flush(fb, |bytes| spi.write(bytes)).is_err() {
+            defmt::warn!("LCD write failed");
         }
     }
 }

@@ -11,18 +11,17 @@ use panic_probe as _;
 #[defmt_test::tests]
 mod tests {
     use inkstep::board::{self, Board};
-    use stm32f1xx_hal::{pac, usb::UsbBusType};
-    use usb_device::bus::UsbBusAllocator;
+    use stm32f1xx_hal::pac;
 
     #[init]
     fn init() -> Board {
         let dp = pac::Peripherals::take().unwrap_or_else(|| defmt::panic!("peripherals taken"));
-        let bus = cortex_m::singleton!(: Option<UsbBusAllocator<UsbBusType>> = None)
+        let usb = cortex_m::singleton!(: board::UsbCells = board::UsbCells::new())
             .unwrap_or_else(|| defmt::panic!("singleton"));
         let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| defmt::panic!("core taken"));
         cp.DCB.enable_trace();
         cp.DWT.enable_cycle_counter();
-        board::init(dp, bus)
+        board::init(dp, usb)
     }
 
     #[test]

@@ -155,15 +155,12 @@ impl Controller {
 
     fn apply_one<M: MotionControl>(&mut self, a: &Action, m: &mut M, now_ms: u32) {
         let machine = self.protocol.machine_mut();
-        match *a {
-            Action::Queue(mv) => {
-                // Through the machine state: the same locks and soft limits as G-code,
-                // and the interpreter continues from the move's end. The HMI only
-                // starts a job that fits the queue; a refusal is shown as an error beep.
-                if machine.queue(Command::Move(mv), m, now_ms).is_err() {
-                    self.outputs.beep = Some(Beep::Error);
-                }
-            }
+        // A refused action is shown as an error beep.
+        let refused = match *a {
+            // Through the machine state: the same locks and soft limits as G-code, and
+            // the interpreter continues from the move's end. The HMI only starts a job
+            // that fits the queue.
+            Action::Queue(mv) => machine.queue(Command::Move(mv), m, now_ms).is_err(),
             Action::JogStart { dir, feed_mm_min } => {
                 // Whole numbers only, through the protocol's number writer.
                 let mut body: Vec<u8, 64> = Vec::new();
@@ -176,19 +173,25 @@ impl Controller {
                 }
                 body.put(b"F");
                 put_int(&mut body, crate::fmath::round(feed_mm_min) as i32);
-                if machine.jog(&body, m).is_err() {
-                    self.outputs.beep = Some(Beep::Error);
-                }
+                machine.jog(&body, m).is_err()
             }
-            Action::JogStop => machine.jog_cancel(m),
-            Action::FeedHold => machine.feed_hold(m),
-            Action::Resume => machine.cycle_start(m),
-            Action::Abort => machine.stop_and_clear(m),
-            Action::Home => {
-                if machine.start_homing(m).is_err() {
-                    self.outputs.beep = Some(Beep::Error);
-                }
+            Action::JogStop => {
+                machine.jog_cancel(m);
+                false
             }
+            Action::FeedHold => {
+                machine.feed_hold(m);
+                false
+            }
+            Action::Resume => {
+                machine.cycle_start(m);
+                false
+            }
+            Action::Abort => {
+                machine.stop_and_clear(m);
+                false
+            }
+            Action::Home => machine.start_homing(m).is_err(),
             Action::SetOrigin => {
                 if m.is_idle() {
                     let p = m.position();
@@ -197,12 +200,23 @@ impl Controller {
                     // into the G-code interpreter so later lines start from here.
                     machine.soft_reset(m);
                 }
+                false
             }
             Action::Unlock => {
                 let _ = machine.unlock();
+                false
             }
-            Action::Beep(b) => self.outputs.beep = Some(b),
-            Action::BusyLed(on) => self.outputs.busy_led = on,
+            Action::Beep(b) => {
+                self.outputs.beep = Some(b);
+                false
+            }
+            Action::BusyLed(on) => {
+                self.outputs.busy_led = on;
+                false
+            }
+        };
+        if refused {
+            self.outputs.beep = Some(Beep::Error);
         }
     }
 }

@@ -44,8 +44,6 @@ mod app {
     use inkstep_core::stepper::exec::Executor;
     use inkstep_core::stepper::{CmdSink, StepCmd};
     use rtic_monotonics::systick::prelude::*;
-    use stm32f1xx_hal::usb::UsbBusType;
-    use usb_device::bus::UsbBusAllocator;
 
     systick_monotonic!(Mono, 1_000);
 
@@ -54,8 +52,8 @@ mod app {
 
     #[shared]
     struct Shared {
-        usb: board::Usb,
-        serial: board::UsbSerial,
+        usb: &'static mut board::Usb,
+        serial: &'static mut board::UsbSerial,
         /// Held jog direction (signs of X, Y), or none.
         jog: Option<[i8; 2]>,
         last_key: &'static str,
@@ -75,11 +73,11 @@ mod app {
     }
 
     #[init(local = [
-        usb_bus: Option<UsbBusAllocator<UsbBusType>> = None,
+        usb_cells: board::UsbCells = board::UsbCells::new(),
         steps: StepCmdQueue = StepCmdQueue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let b = board::init(cx.device, cx.local.usb_bus);
+        let b = board::init(cx.device, cx.local.usb_cells);
         Mono::start(cx.core.SYST, b.sysclk_hz);
         let (steps_tx, steps_rx) = cx.local.steps.split();
         let mut port = b.step_port;
@@ -136,7 +134,7 @@ mod app {
     #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial, usb_bytes])]
     fn usb_lp(cx: usb_lp::Context) {
         (cx.shared.usb, cx.shared.serial, cx.shared.usb_bytes).lock(|usb, serial, count| {
-            if usb.poll(&mut [serial]) {
+            if usb.poll(&mut [&mut **serial]) {
                 let mut buf = [0u8; 64];
                 if let Ok(n) = serial.read(&mut buf) {
                     if *count == 0 {
