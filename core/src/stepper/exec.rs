@@ -136,7 +136,9 @@ impl Executor {
         self.turn_guard = if ticks == 0 {
             0
         } else {
-            ticks.clamp(2, self.max_reload)
+            // max/min, not clamp: clamp's min <= max assertion (max_reload >= 4 here)
+            // would link core's formatting machinery into the firmware (~330 B).
+            ticks.max(2).min(self.max_reload)
         };
     }
 
