@@ -467,6 +467,14 @@ mod app {
             if let Ok(n) = serial.read(&mut buf) {
                 rx.push(buf.get(..n).unwrap_or(&[]));
             }
+        } else {
+            // A packet left in the endpoint keeps the peripheral's transfer flag set,
+            // and with it this interrupt: it would fire again at once, forever, and
+            // starve the protocol task that empties the queue (the watchdog then
+            // resets the board). Masked here, unmasked by the protocol task after each
+            // run, so while the queue is full this task runs once per millisecond:
+            // the host is NAKed (back-pressure) and output still flows.
+            cortex_m::peripheral::NVIC::mask(Interrupt::USB_LP_CAN_RX0);
         }
         let n = tx.pop(&mut buf);
         if n > 0 {
@@ -557,6 +565,9 @@ mod app {
             let alarmed = ctl.protocol().machine().alarm().is_some();
             (busy, changed, pen_down, pen_pulse, alarmed)
         });
+        // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes the
+        // USB task's own back-pressure mask (see `usb_lp`).
+        unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
         rtic::pend(Interrupt::USB_LP_CAN_RX0);
         // A reset from the alarm (soft reset / $X) clears the latched halt.
         if steps::is_halted() && !alarmed {
