@@ -4,6 +4,12 @@
 //! land in the on-target tests, which use panic-probe).
 
 use crate::board;
+use core::sync::atomic::{AtomicBool, Ordering};
+
+/// Set on the first panic: a panic inside the panic path (the defmt logger already
+/// taken, say) skips the log instead of recursing, so the panic path's stack is
+/// bounded (`.ci/stack-depth` counts it once).
+static PANICKING: AtomicBool = AtomicBool::new(false);
 
 /// The panic path: drivers off, then what panic-probe does (print over defmt, then an
 /// undefined instruction escalated to HardFault, so that probe-rs stops and shows the
@@ -11,9 +17,13 @@ use crate::board;
 pub fn on_panic(info: &core::panic::PanicInfo) -> ! {
     board::emergency_outputs_off();
     cortex_m::interrupt::disable();
+    // Interrupts are off: a plain load and store cannot be torn by another panic.
+    let again = PANICKING.load(Ordering::Relaxed);
+    PANICKING.store(true, Ordering::Relaxed);
     // The location only: formatting the message would link core::fmt's machinery
     // (and every panic site's argument formatting) into the image.
     match info.location() {
+        _ if again => {}
         Some(l) => defmt::error!("panic at {}:{}", l.file(), l.line()),
         None => defmt::error!("panic"),
     }
