@@ -10,7 +10,7 @@
 use super::homing::{Homing, HomingError, Progress};
 use super::{Command, MotionControl};
 use crate::gcode::interp::to_mm;
-use crate::gcode::{Interp, Reject, Status, Stop};
+use crate::gcode::{Interp, Outcome, Reject, Status, Stop};
 use crate::motion::{Move, AXES};
 use crate::settings::Settings;
 use heapless::Deque;
@@ -325,16 +325,16 @@ impl Machine {
         }
         // Interpret on a copy; commit only if the planner has room for the result.
         let mut trial = self.interp.clone();
-        let result = trial.execute(line, &self.settings, line_no);
-        let out = match result {
-            Ok(out) => out,
+        let mut out = Outcome::default();
+        match trial.execute_into(line, &self.settings, line_no, &mut out) {
+            Ok(()) => {}
             Err(Reject::Error(e)) => return Some(Err(e)),
             Err(Reject::SoftLimit) => {
                 // Grbl: the line is answered ok, motion stops, alarm 2 (no reset needed).
                 self.raise(Alarm::SoftLimit, m);
                 return Some(Ok(()));
             }
-        };
+        }
         // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
         // motion before it has finished, so its `ok` means "program done".
         let ends = out.stop == Some(Stop::End);
@@ -375,7 +375,11 @@ impl Machine {
 
     /// Check a line (for `$N`) without running it or changing any state.
     pub fn validate(&self, line: &[u8]) -> Result<(), Status> {
-        match self.interp.clone().execute(line, &self.settings, 0) {
+        match self
+            .interp
+            .clone()
+            .execute_into(line, &self.settings, 0, &mut Outcome::default())
+        {
             Err(Reject::Error(e)) => Err(e),
             _ => Ok(()),
         }
