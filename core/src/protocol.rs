@@ -30,7 +30,7 @@
 //! The e-stop interrupt stops the step engine itself before the protocol task
 //! learns of it through `set_inputs`.
 
-use crate::fmath;
+use crate::gcode::interp::round_i32;
 use crate::gcode::{LineCleaner, Status};
 use crate::machine::state::Event;
 use crate::machine::{Inputs, Machine, MotionControl, RunState};
@@ -708,7 +708,7 @@ impl Protocol {
         // The pen is the spindle: report S while it is down.
         let interp = self.machine.interp();
         let spindle = if interp.modal().pen_down {
-            fmath::round(interp.spindle()) as i32
+            round_i32(interp.spindle())
         } else {
             0
         };
@@ -743,7 +743,7 @@ impl Protocol {
             put_int(&mut w, rx_free as i32);
         }
         w.put(b"|FS:");
-        put_int(&mut w, fmath::round(speed) as i32);
+        put_int(&mut w, round_i32(speed));
         w.put(b",");
         put_int(&mut w, spindle);
         let pins = [

@@ -242,10 +242,17 @@ impl Default for Interp {
     }
 }
 
+/// `x` rounded half away from zero to an `i32` (saturating): one copy of the
+/// conversion's range checks for every caller.
+#[inline(never)]
+pub fn round_i32(x: f32) -> i32 {
+    fmath::round(x) as i32
+}
+
 /// mm to steps for one axis, rounding half away from zero (saturating).
 #[inline(never)]
 pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
-    fmath::round(mm * steps_per_mm) as i32
+    round_i32(mm * steps_per_mm)
 }
 
 /// Machine mm to a step position.
@@ -414,9 +421,9 @@ impl Interp {
         w.put(if m.pen_down { b" M3" } else { b" M5" });
         w.put(b" M9 T0 F");
         let scale = if m.inches { MM_PER_INCH } else { 1.0 };
-        put_int(w, fmath::round(self.feed / scale) as i32);
+        put_int(w, round_i32(self.feed / scale));
         w.put(b" S");
-        put_int(w, fmath::round(self.spindle) as i32);
+        put_int(w, round_i32(self.spindle));
     }
 
     /// Interpret one cleaned line (no spaces, upper case, no comments).
@@ -1011,8 +1018,8 @@ fn arc_path(g: &ArcGeom, start: &[f32; AXES], ccw: bool, s: &Settings) -> Path {
             turns: 0,
         }
     } else {
-        let a = fmath::round(g.radius * sx) as i32;
-        let b = fmath::round(g.radius * sy) as i32;
+        let a = mm_to_steps(g.radius, sx);
+        let b = mm_to_steps(g.radius, sy);
         Path::Ellipse { center, a, b, ccw }
     }
 }

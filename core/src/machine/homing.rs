@@ -7,6 +7,7 @@
 //! the planner, the alarms and the position it sets at the end.
 
 use super::{Command, MotionControl};
+use crate::gcode::interp::mm_to_steps;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::Settings;
 
@@ -183,7 +184,7 @@ impl Homing {
     ) -> bool {
         let mut target = m.position();
         if let Some(t) = target.get_mut(axis) {
-            *t = t.saturating_add(crate::fmath::round(mm * s.steps_per_mm(axis)) as i32);
+            *t = t.saturating_add(mm_to_steps(mm, s.steps_per_mm(axis)));
         }
         let mv = Move {
             target,
@@ -200,14 +201,14 @@ impl Homing {
     fn home_position(&self, s: &Settings, mut pos: StepPos) -> StepPos {
         for &axis in self.order.iter() {
             let a = usize::from(axis);
-            let off = s.homing_pulloff() * s.steps_per_mm(a);
-            let sign = if s.homing_dir_mask() & (1 << axis) != 0 {
-                1.0
-            } else {
-                -1.0
-            };
+            let off = mm_to_steps(s.homing_pulloff(), s.steps_per_mm(a));
             if let Some(p) = pos.get_mut(a) {
-                *p = crate::fmath::round(sign * off) as i32;
+                // Rounding is symmetric, so negating the rounded value is exact.
+                *p = if s.homing_dir_mask() & (1 << axis) != 0 {
+                    off
+                } else {
+                    -off
+                };
             }
         }
         pos
