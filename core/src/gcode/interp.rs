@@ -15,6 +15,7 @@ use crate::fmath;
 use crate::machine::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::{put_int, PenMode, Settings, Sink};
+pub use crate::settings::{round_i32, to_u32};
 use core::f32::consts::{FRAC_PI_2, TAU};
 use heapless::Vec;
 
@@ -242,13 +243,6 @@ impl Default for Interp {
     }
 }
 
-/// `x` rounded half away from zero to an `i32` (saturating): one copy of the
-/// conversion's range checks for every caller.
-#[inline(never)]
-pub fn round_i32(x: f32) -> i32 {
-    fmath::round(x) as i32
-}
-
 /// mm to steps for one axis, rounding half away from zero (saturating).
 #[inline(never)]
 pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
@@ -474,7 +468,7 @@ impl Interp {
         if n_word.is_some_and(|n| n > MAX_LINE_NUMBER) {
             return Err(Status::InvalidLineNumber.into());
         }
-        let line_tag = n_word.map_or(line_no, |n| n as u32);
+        let line_tag = n_word.map_or(line_no, to_u32);
         if b.take(b'T').is_some_and(|t| t > 255.0) {
             return Err(Status::MaxValueExceeded.into());
         }
@@ -589,13 +583,9 @@ impl Interp {
         match non_modal {
             Some(NonModal::Dwell) => {
                 let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
-                let ms = fmath::round(p * 1000.0);
-                push(
-                    out,
-                    Command::Dwell {
-                        ms: ms.min(u32::MAX as f32) as u32,
-                    },
-                )?;
+                // Saturates at u32::MAX ms (the value is finite: P has at most 19 digits).
+                let ms = to_u32(fmath::round(p * 1000.0));
+                push(out, Command::Dwell { ms })?;
             }
             Some(NonModal::SetCoord) => {
                 let l = b.take(b'L').ok_or(Status::ValueWordMissing)?;
@@ -612,9 +602,9 @@ impl Interp {
                 let idx = if p == 0.0 {
                     usize::from(modal.wcs)
                 } else {
-                    p as usize - 1
+                    to_u32(p) as usize - 1
                 };
-                let from = match l as u32 {
+                let from = match to_u32(l) {
                     2 => None,
                     20 => Some(&g92),
                     _ => return Err(Status::UnsupportedCommand.into()),
