@@ -434,28 +434,28 @@ impl Protocol {
         );
         // Everything but help, $G, $C (checks itself) and jogging needs the machine at
         // rest; refuse before doing anything.
-        let anytime = cmd.is_empty() || cmd == b"G" || cmd == b"C" || cmd.starts_with(b"J=");
+        let anytime = matches!(cmd, [] | [b'G'] | [b'C'] | [b'J', b'=', ..]);
         if !anytime && !at_rest {
             return Some(Err(Status::IdleError));
         }
         Some(match cmd {
-            b"" => {
+            [] => {
                 self.say(&[b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"]);
                 Ok(())
             }
-            b"$" => {
+            [b'$'] => {
                 self.listing = Some(Listing::Settings(0));
                 Ok(())
             }
-            b"#" => {
+            [b'#'] => {
                 self.listing = Some(Listing::Coords(0));
                 Ok(())
             }
-            b"N" => {
+            [b'N'] => {
                 self.listing = Some(Listing::Startup(0));
                 Ok(())
             }
-            b"G" => {
+            [b'G'] => {
                 let mut w = OutWriter {
                     out: &mut self.out,
                     truncated: &mut self.truncated,
@@ -465,7 +465,7 @@ impl Protocol {
                 w.put(b"]\r\n");
                 Ok(())
             }
-            b"I" => {
+            [b'I'] => {
                 self.say(&[
                     b"[VER:1.1h.inkstep-",
                     VERSION.as_bytes(),
@@ -480,7 +480,7 @@ impl Protocol {
                 w.put(b"]\r\n");
                 Ok(())
             }
-            b"C" => {
+            [b'C'] => {
                 let was = self.machine.check_mode();
                 let r = self.machine.toggle_check(m);
                 if was && r.is_ok() {
@@ -490,19 +490,16 @@ impl Protocol {
                 }
                 r
             }
-            b"X" => self.machine.unlock(),
-            b"H" => self.machine.start_homing(m),
-            b"RST=$" => {
-                self.machine.replace_settings(Settings::default(), m);
-                Ok(())
-            }
-            b"RST=#" => {
-                self.machine.clear_coords();
-                Ok(())
-            }
-            b"RST=*" => {
-                self.machine.replace_settings(Settings::default(), m);
-                self.machine.clear_coords();
+            [b'X'] => self.machine.unlock(),
+            [b'H'] => self.machine.start_homing(m),
+            // $RST=$ settings, $RST=# coordinate data, $RST=* both.
+            [b'R', b'S', b'T', b'=', what @ (b'$' | b'#' | b'*')] => {
+                if *what != b'#' {
+                    self.machine.replace_settings(Settings::default(), m);
+                }
+                if *what != b'$' {
+                    self.machine.clear_coords();
+                }
                 Ok(())
             }
             _ => {
