@@ -402,18 +402,20 @@ impl Interp {
     pub fn write_modal(&self, w: &mut dyn Sink) {
         let m = &self.modal;
         w.put(match m.motion {
-            MotionMode::Rapid => b"GC:G0 G",
-            MotionMode::Linear => b"GC:G1 G",
-            MotionMode::ArcCw => b"GC:G2 G",
-            MotionMode::ArcCcw => b"GC:G3 G",
-            MotionMode::Cancel => b"GC:G80 G",
+            MotionMode::Rapid => b"GC:G0",
+            MotionMode::Linear => b"GC:G1",
+            MotionMode::ArcCw => b"GC:G2",
+            MotionMode::ArcCcw => b"GC:G3",
+            MotionMode::Cancel => b"GC:G80",
         });
-        put_int(w, i32::from(54 + m.wcs));
-        w.put(if m.inches { b" G17 G20" } else { b" G17 G21" });
-        w.put(if m.incremental { b" G91" } else { b" G90" });
-        w.put(if m.inverse_time { b" G93" } else { b" G94" });
-        w.put(if m.pen_down { b" M3" } else { b" M5" });
-        w.put(b" M9 T0 F");
+        // The defaults, with the digits that the modal state changes patched in.
+        let mut tail = *b" G54 G17 G21 G90 G94 M5 M9 T0 F";
+        tail[3] = b'4' + m.wcs.min(5); // G54..G59
+        tail[11] -= u8::from(m.inches); // G20
+        tail[15] += u8::from(m.incremental); // G91
+        tail[19] -= u8::from(m.inverse_time); // G93
+        tail[22] -= 2 * u8::from(m.pen_down); // M3
+        w.put(&tail);
         let scale = if m.inches { MM_PER_INCH } else { 1.0 };
         put_int(w, round_i32(self.feed / scale));
         w.put(b" S");
@@ -1434,6 +1436,22 @@ mod tests {
         let o = run(&mut it, &s, "M3").unwrap();
         assert!(o.cmds.is_empty(), "no change, nothing queued");
         assert_eq!(run(&mut it, &s, "M0").unwrap().stop, Some(Stop::Pause));
+    }
+
+    #[test]
+    fn modal_report_names_every_changed_mode() {
+        let s = Settings::default();
+        let report = |it: &Interp| {
+            let mut v: heapless::Vec<u8, 64> = heapless::Vec::new();
+            it.write_modal(&mut v);
+            std::string::String::from_utf8(v.to_vec()).unwrap()
+        };
+        let mut it = Interp::new();
+        assert_eq!(report(&it), "GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0");
+        run(&mut it, &s, "G20 G91 G93 G59 M3 G1 X1 F1 S12").unwrap();
+        assert_eq!(report(&it), "GC:G1 G59 G17 G20 G91 G93 M3 M9 T0 F0 S12");
+        run(&mut it, &s, "G21 G90 G94 G56 M5 G80 F300").unwrap();
+        assert_eq!(report(&it), "GC:G80 G56 G17 G21 G90 G94 M5 M9 T0 F300 S12");
     }
 
     #[test]
