@@ -92,6 +92,15 @@ pub struct Outcome {
     pub coords_changed: bool,
 }
 
+/// What the caller of [`Interp::execute_into`] can take now.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Room {
+    /// Commands that fit the planner queue.
+    pub cmds: usize,
+    /// The queue has run empty (a program end may run).
+    pub idle: bool,
+}
+
 /// Why a block was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reject {
@@ -426,19 +435,26 @@ impl Interp {
     /// `line_no` is used for the queued moves when the block has no N word.
     pub fn execute(&mut self, line: &[u8], s: &Settings, line_no: u32) -> Result<Outcome, Reject> {
         let mut out = Outcome::default();
-        self.execute_into(line, s, line_no, &mut out)?;
+        let all = Room {
+            cmds: usize::MAX,
+            idle: true,
+        };
+        self.execute_into(line, s, line_no, &mut out, Some(all))?;
         Ok(out)
     }
 
-    /// [`Interp::execute`] into `out` (which must be empty): the machine keeps one
-    /// outcome instead of moving it through a `Result`.
+    /// [`Interp::execute`] into `out` (which must be empty), committing the block only
+    /// if the caller has `room` for it: `Ok(false)` leaves the interpreter unchanged
+    /// (the outcome is still filled in), and `room: None` only checks the block. The
+    /// machine needs no trial copy of the interpreter that way.
     pub fn execute_into(
         &mut self,
         line: &[u8],
         s: &Settings,
         line_no: u32,
         out: &mut Outcome,
-    ) -> Result<(), Reject> {
+        room: Option<Room>,
+    ) -> Result<bool, Reject> {
         let mut b = Block::parse(line)?;
 
         // --- Group the codes (one modal group may be named once per block). ---
@@ -720,6 +736,15 @@ impl Interp {
             };
         }
 
+        out.stop = stop;
+        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
+        // motion before it has finished, so its `ok` means "program done".
+        let fits =
+            room.is_some_and(|r| out.cmds.len() <= r.cmds && (r.idle || stop != Some(Stop::End)));
+        if !fits {
+            return Ok(false);
+        }
+
         // Commit.
         self.modal = modal;
         self.feed = if modal.inverse_time { 0.0 } else { feed };
@@ -729,8 +754,7 @@ impl Interp {
         self.pos = pos;
         self.coords = coords;
         self.g92 = g92;
-        out.stop = stop;
-        Ok(())
+        Ok(true)
     }
 
     /// Interpret the body of a `$J=` jog line (cleaned, without `$J=`): only G20/G21,
