@@ -506,22 +506,25 @@ impl Settings {
         if number == 20 && v != 0.0 && !self.homing_enabled() {
             return Err(SettingError::SoftLimitsNeedHoming);
         }
-        let mut next = self.clone();
-        if let Some(slot) = next.vals.get_mut(i) {
-            *slot = v;
-        }
+        // Try the value in place; put the old one back if the step rate is too high.
+        let Some(slot) = self.vals.get_mut(i) else {
+            return Err(SettingError::Invalid);
+        };
+        let old = core::mem::replace(slot, v);
         for axis in 0..AXES {
-            if next.steps_per_mm(axis) * next.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ {
+            if self.steps_per_mm(axis) * self.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ {
+                if let Some(slot) = self.vals.get_mut(i) {
+                    *slot = old;
+                }
                 return Err(SettingError::StepRateTooHigh);
             }
         }
         // Turning homing off also turns soft limits off: they would refer to nothing.
         if number == 22 && v == 0.0 {
-            if let Some(slot) = next.vals.get_mut(const { ix(20) }) {
+            if let Some(slot) = self.vals.get_mut(const { ix(20) }) {
                 *slot = 0.0;
             }
         }
-        *self = next;
         Ok(())
     }
 
