@@ -455,7 +455,8 @@ impl Interp {
         out: &mut Outcome,
         room: Option<Room>,
     ) -> Result<bool, Reject> {
-        let mut b = Block::parse(line)?;
+        let mut b = Block::default();
+        b.parse_into(line)?;
 
         // --- Group the codes (one modal group may be named once per block). ---
         let mut groups = [NONE; GROUPS];
@@ -761,7 +762,8 @@ impl Interp {
     /// G90/G91, G53, axis words, F and N are allowed; modal state is left unchanged.
     /// A target outside travel with soft limits on is `error:15`.
     pub fn jog(&mut self, line: &[u8], s: &Settings) -> Result<Move, Status> {
-        let mut b = Block::parse(line)?;
+        let mut b = Block::default();
+        b.parse_into(line)?;
         if !b.m.is_empty() {
             return Err(Status::InvalidJogCommand);
         }

@@ -84,8 +84,18 @@ pub struct Block {
     values: [f32; 26],
 }
 
-/// Letters that carry values (everything else except G and M is unsupported).
-const VALUE_LETTERS: &[u8] = b"FIJKLNPRSTXYZ";
+/// Letters that carry values (everything else except G and M is unsupported), as a
+/// mask with A = bit 0.
+const VALUE_LETTERS: u32 = {
+    let letters = b"FIJKLNPRSTXYZ";
+    let mut mask = 0;
+    let mut i = 0;
+    while i < letters.len() {
+        mask |= 1 << (letters[i] - b'A');
+        i += 1;
+    }
+    mask
+};
 
 impl Block {
     /// Value word for `letter` (upper case), if present.
@@ -110,6 +120,13 @@ impl Block {
     /// Parse a cleaned line (upper case, no spaces or comments).
     pub fn parse(line: &[u8]) -> Result<Block, Status> {
         let mut b = Block::default();
+        b.parse_into(line)?;
+        Ok(b)
+    }
+
+    /// [`Block::parse`] into an empty block (no block moved through a `Result`).
+    pub fn parse_into(&mut self, line: &[u8]) -> Result<(), Status> {
+        let b = self;
         let mut rest = line;
         while let Some((&letter, tail)) = rest.split_first() {
             if !letter.is_ascii_uppercase() {
@@ -126,7 +143,7 @@ impl Block {
                     let list = if letter == b'G' { &mut b.g } else { &mut b.m };
                     list.push(code).map_err(|_| Status::ModalGroupViolation)?;
                 }
-                _ if VALUE_LETTERS.contains(&letter) => {
+                _ if VALUE_LETTERS >> (letter - b'A') & 1 != 0 => {
                     let i = letter - b'A';
                     if b.present & (1 << i) != 0 {
                         return Err(Status::WordRepeated);
@@ -139,7 +156,7 @@ impl Block {
                 _ => return Err(Status::UnsupportedCommand),
             }
         }
-        Ok(b)
+        Ok(())
     }
 }
 
