@@ -478,7 +478,7 @@ impl Interp {
         };
 
         // --- Value words. ---
-        for letter in *b"FNPSTL" {
+        for &letter in b"FNPSTL" {
             if b.get(letter).is_some_and(|v| v < 0.0) {
                 return Err(Status::NegativeValue.into());
             }
@@ -523,7 +523,7 @@ impl Interp {
         // Axis words in mm, and the mask of the axes named.
         let mut words = [0.0f32; AXES];
         let mut axes = 0u8;
-        for (k, (w, letter)) in words.iter_mut().zip(*b"XYZ").enumerate() {
+        for (k, (w, &letter)) in words.iter_mut().zip(b"XYZ").enumerate() {
             if let Some(v) = b.take(letter) {
                 *w = v * scale;
                 axes |= 1 << k;
@@ -793,7 +793,7 @@ impl Interp {
         let offset = self.work_offset();
         let mut target = self.pos;
         let mut any = false;
-        for (axis, letter) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
+        for (axis, &letter) in b"XYZ".iter().enumerate() {
             if let Some(v) = b.take(letter) {
                 any = true;
                 let v = v * scale;
@@ -1070,7 +1070,7 @@ fn arc_extremes(
     pts.add(target, s);
     // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
     let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
-    for (k, (cs, sn)) in axes_dirs.into_iter().enumerate() {
+    for (k, &(cs, sn)) in axes_dirs.iter().enumerate() {
         let angle = k as f32 * FRAC_PI_2;
         let from_start = if ccw {
             positive_sweep(angle - g.start_angle)

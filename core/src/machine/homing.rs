@@ -68,7 +68,7 @@ impl Homing {
     /// Start a cycle over the axes that have switches ($214). `None` if there are none.
     pub fn start(s: &Settings) -> Option<Homing> {
         let mut order = heapless::Vec::new();
-        for axis in [2u8, 0, 1] {
+        for &axis in &[2u8, 0, 1] {
             if s.switch_mask() & (1 << axis) != 0 {
                 let _ = order.push(axis);
             }
