@@ -326,18 +326,20 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     /// reported as corrupt rather than taken for a first boot.
     pub fn load_settings(&mut self) -> (Settings, LoadStatus) {
         let mut img = [0u8; IMAGE_LEN];
-        match self.fetch(KEY_SETTINGS, &mut img) {
+        let status = match self.fetch(KEY_SETTINGS, &mut img) {
             (_, LoadStatus::Empty) if !self.blank(self.range.start, self.range.end) => {
-                (Settings::default(), LoadStatus::Corrupt)
+                LoadStatus::Corrupt
             }
             (len, LoadStatus::Loaded) => {
                 match Settings::from_image(img.get(..len).unwrap_or(&[])) {
-                    Ok(s) => (s, LoadStatus::Loaded),
-                    Err(_) => (Settings::default(), LoadStatus::Corrupt),
+                    Ok(s) => return (s, LoadStatus::Loaded),
+                    Err(_) => LoadStatus::Corrupt,
                 }
             }
-            (_, status) => (Settings::default(), status),
-        }
+            (_, status) => status,
+        };
+        // One place builds the defaults for every reason to use them.
+        (Settings::default(), status)
     }
 
     pub fn save_settings(&mut self, s: &Settings) -> Result<(), StoreError<F::Error>> {
@@ -347,14 +349,15 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     /// Load G54-G59, G28 and G30 data.
     pub fn load_coords(&mut self) -> (Coords, LoadStatus) {
         let mut img = [0u8; COORDS_LEN];
-        match self.fetch(KEY_COORDS, &mut img) {
+        let status = match self.fetch(KEY_COORDS, &mut img) {
             (COORDS_LEN, LoadStatus::Loaded) => match coords_from_image(&img) {
-                Some(c) => (c, LoadStatus::Loaded),
-                None => (Coords::default(), LoadStatus::Corrupt),
+                Some(c) => return (c, LoadStatus::Loaded),
+                None => LoadStatus::Corrupt,
             },
-            (_, LoadStatus::Loaded) => (Coords::default(), LoadStatus::Corrupt),
-            (_, status) => (Coords::default(), status),
-        }
+            (_, LoadStatus::Loaded) => LoadStatus::Corrupt,
+            (_, status) => status,
+        };
+        (Coords::default(), status)
     }
 
     pub fn save_coords(&mut self, c: &Coords) -> Result<(), StoreError<F::Error>> {
