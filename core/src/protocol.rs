@@ -687,30 +687,16 @@ impl Protocol {
     /// `<State|MPos:...|FS:...|Bf:...|...>`.
     fn status_report<M: MotionControl>(&mut self, m: &M) {
         self.status_requested = false;
-        let st = self.machine.state(m);
-        let settings = self.machine.settings();
-        let scale = if settings.report_inches() { 25.4 } else { 1.0 };
-        let mask = settings.status_mask();
-        let mpos = self.machine.machine_position(m);
-        let wco = self.machine.interp().work_offset();
         self.reports = self.reports.wrapping_add(1);
-        let refresh = self.reports % REFRESH_EVERY == 1;
-        let show_wco = refresh || wco != self.wco_shown;
-        let show_ov = self.machine.take_overrides_changed() || self.reports % REFRESH_EVERY == 6;
-        let (fo, ro) = self.machine.overrides();
-        let inputs = self.machine.inputs();
-        let rx_free = self.rx_free();
-        let blocks_free = m.free();
-        let speed = m.speed() / scale;
-        // The pen is the spindle: report S while it is down.
-        let interp = self.machine.interp();
-        let spindle = if interp.modal().pen_down {
-            round_i32(interp.spindle())
-        } else {
-            0
+        let reports = self.reports;
+        // Each value is fetched where it is written: fewer live values to spill. The
+        // writer borrows only the output fields, so the machine stays reachable.
+        let machine = &mut self.machine;
+        let mut w = OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
         };
-        let mut w = self.w();
-        w.put(match st {
+        w.put(match machine.state(m) {
             RunState::Idle => b"<Idle",
             RunState::Run => b"<Run",
             RunState::Hold { complete: true } => b"<Hold:0",
@@ -722,27 +708,40 @@ impl Protocol {
             RunState::Home => b"<Home",
             RunState::Check => b"<Check",
         });
+        let settings = machine.settings();
+        let scale = if settings.report_inches() { 25.4 } else { 1.0 };
+        let mask = settings.status_mask();
+        let mut pos = machine.machine_position(m);
+        let wco = machine.interp().work_offset();
         if mask & 1 != 0 {
             w.put(b"|MPos:");
-            axis_triplet(&mut w, &mpos, scale);
         } else {
-            let mut wpos = mpos;
-            for (p, o) in wpos.iter_mut().zip(wco.iter()) {
+            for (p, o) in pos.iter_mut().zip(wco.iter()) {
                 *p -= o;
             }
             w.put(b"|WPos:");
-            axis_triplet(&mut w, &wpos, scale);
         }
+        axis_triplet(&mut w, &pos, scale);
         if mask & 2 != 0 {
             w.put(b"|Bf:");
-            put_int(&mut w, blocks_free as i32);
+            put_int(&mut w, m.free() as i32);
             w.put(b",");
-            put_int(&mut w, rx_free as i32);
+            put_int(&mut w, (RX_BUFFER_SIZE - self.rx.len()) as i32);
         }
         w.put(b"|FS:");
-        put_int(&mut w, round_i32(speed));
+        put_int(&mut w, round_i32(m.speed() / scale));
         w.put(b",");
-        put_int(&mut w, spindle);
+        // The pen is the spindle: report S while it is down.
+        let interp = machine.interp();
+        put_int(
+            &mut w,
+            if interp.modal().pen_down {
+                round_i32(interp.spindle())
+            } else {
+                0
+            },
+        );
+        let inputs = machine.inputs();
         let pins = [
             inputs.limits[0],
             inputs.limits[1],
@@ -759,11 +758,13 @@ impl Protocol {
                 }
             }
         }
-        if show_wco {
+        if reports % REFRESH_EVERY == 1 || wco != self.wco_shown {
             w.put(b"|WCO:");
             axis_triplet(&mut w, &wco, scale);
+            self.wco_shown = wco;
         }
-        if show_ov {
+        if machine.take_overrides_changed() || reports % REFRESH_EVERY == 6 {
+            let (fo, ro) = machine.overrides();
             w.put(b"|Ov:");
             put_int(&mut w, i32::from(fo));
             w.put(b",");
@@ -771,8 +772,5 @@ impl Protocol {
             w.put(b",100");
         }
         w.put(b">\r\n");
-        if show_wco {
-            self.wco_shown = wco;
-        }
     }
 }
