@@ -57,8 +57,9 @@ pub enum Progress {
 /// A running homing cycle.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Homing {
-    order: heapless::Vec<u8, AXES>,
-    current: usize,
+    /// Axes to home (X = bit 0), and those not homed yet.
+    axes: u8,
+    left: u8,
     phase: Phase,
     /// A move of the current phase has been queued.
     issued: bool,
@@ -67,26 +68,24 @@ pub struct Homing {
 impl Homing {
     /// Start a cycle over the axes that have switches ($214). `None` if there are none.
     pub fn start(s: &Settings) -> Option<Homing> {
-        let mut order = heapless::Vec::new();
-        for &axis in &[2u8, 0, 1] {
-            if s.switch_mask() & (1 << axis) != 0 {
-                let _ = order.push(axis);
-            }
-        }
-        if order.is_empty() {
-            return None;
-        }
-        Some(Homing {
-            order,
-            current: 0,
+        let axes = s.switch_mask() & 7;
+        (axes != 0).then_some(Homing {
+            axes,
+            left: axes,
             phase: Phase::Seek,
             issued: false,
         })
     }
 
-    /// Axis being homed.
+    /// Axis being homed: Z first, then X, then Y.
     pub fn axis(&self) -> usize {
-        usize::from(self.order.get(self.current).copied().unwrap_or(0))
+        if self.left & 4 != 0 {
+            2
+        } else if self.left & 1 != 0 {
+            0
+        } else {
+            1
+        }
     }
 
     /// Advance with the current switch levels (`limits[axis]`, true = pressed).
@@ -160,10 +159,10 @@ impl Homing {
                         self.phase = Phase::Locate;
                         self.issued = false;
                     } else {
-                        self.current += 1;
+                        self.left &= !(1 << axis);
                         self.phase = Phase::Seek;
                         self.issued = false;
-                        if self.current >= self.order.len() {
+                        if self.left == 0 {
                             return Progress::Done(self.home_position(s, m.position()));
                         }
                     }
@@ -199,7 +198,10 @@ impl Homing {
     /// Position after homing: homed axes sit at the pull-off distance inside their
     /// travel (+pull-off when homing toward -, -pull-off when toward +).
     fn home_position(&self, s: &Settings, mut pos: StepPos) -> StepPos {
-        for &axis in self.order.iter() {
+        for axis in 0..AXES as u8 {
+            if self.axes & (1 << axis) == 0 {
+                continue;
+            }
             let a = usize::from(axis);
             let off = mm_to_steps(s.homing_pulloff(), s.steps_per_mm(a));
             if let Some(p) = pos.get_mut(a) {
