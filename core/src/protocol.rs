@@ -624,64 +624,65 @@ impl Protocol {
 
     /// Write one line of a listing; the next step, `None` past the end.
     fn listing_line(&mut self, l: Listing) -> Option<Listing> {
-        let scale = if self.machine.settings().report_inches() {
-            25.4
-        } else {
-            1.0
+        let machine = &self.machine;
+        let mut w = OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
         };
-        match l {
+        let next = match l {
             Listing::Settings(i) => {
-                let mut w = OutWriter {
-                    out: &mut self.out,
-                    truncated: &mut self.truncated,
-                };
-                self.machine.settings().write_entry(i, &mut w)?;
-                w.put(b"\r\n");
-                Some(Listing::Settings(i + 1))
+                machine.settings().write_entry(i, &mut w)?;
+                Listing::Settings(i + 1)
             }
             Listing::Coords(i) => {
-                let interp = self.machine.interp();
+                let interp = machine.interp();
                 let c = interp.coords();
-                let (code, v): (u8, &[f32; AXES]) = match i {
-                    0..=5 => (54 + i as u8, c.wcs.get(i).unwrap_or(&[0.0; AXES])),
-                    6 => (28, &c.g28),
-                    7 => (30, &c.g30),
-                    8 => (92, interp.g92()),
-                    _ => (0, &[0.0; AXES]),
-                };
-                let v = *v;
-                let mut w = OutWriter {
-                    out: &mut self.out,
-                    truncated: &mut self.truncated,
-                };
-                match i {
-                    0..=8 => {
-                        w.put(b"[G");
-                        put_int(&mut w, i32::from(code));
-                        w.put(b":");
-                        axis_triplet(&mut w, &v, scale);
-                        w.put(b"]\r\n");
+                let v = match i {
+                    0..=5 => c.wcs.get(i),
+                    6 => Some(&c.g28),
+                    7 => Some(&c.g30),
+                    8 => Some(interp.g92()),
+                    9 => {
+                        w.put(b"[TLO:0.000]");
+                        None
                     }
-                    9 => w.put(b"[TLO:0.000]\r\n"),
-                    10 => w.put(b"[PRB:0.000,0.000,0.000:0]\r\n"),
-                    _ => {}
+                    10 => {
+                        w.put(b"[PRB:0.000,0.000,0.000:0]");
+                        None
+                    }
+                    _ => return None,
+                };
+                if let Some(v) = v {
+                    // [G54:..] .. [G59:..], [G28:..], [G30:..], [G92:..].
+                    let mut head = *b"[G54:";
+                    if let (Some(code), Some(d)) = (
+                        b"545556575859283092".get(2 * i..2 * i + 2),
+                        head.get_mut(2..4),
+                    ) {
+                        d.copy_from_slice(code);
+                    }
+                    w.put(&head);
+                    let scale = if machine.settings().report_inches() {
+                        25.4
+                    } else {
+                        1.0
+                    };
+                    axis_triplet(&mut w, v, scale);
+                    w.put(b"]");
                 }
-                (i <= 10).then_some(Listing::Coords(i + 1))
+                Listing::Coords(i + 1)
             }
             Listing::Startup(i) => {
                 let text = self.startup.get(i)?;
-                let mut w = OutWriter {
-                    out: &mut self.out,
-                    truncated: &mut self.truncated,
-                };
                 w.put(b"$N");
                 put_int(&mut w, i as i32);
                 w.put(b"=");
                 w.put(text.as_bytes());
-                w.put(b"\r\n");
-                Some(Listing::Startup(i + 1))
+                Listing::Startup(i + 1)
             }
-        }
+        };
+        w.put(b"\r\n");
+        Some(next)
     }
 
     /// `<State|MPos:...|FS:...|Bf:...|...>`.
