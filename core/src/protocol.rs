@@ -559,7 +559,8 @@ impl Protocol {
         if let Some(slot) = self.startup.get_mut(idx) {
             slot.clear();
             for &b in line.iter().take(LINE_MAX) {
-                let _ = slot.push(char::from(b));
+                // Masked: the compiler then knows the char is one UTF-8 byte.
+                let _ = slot.push(char::from(b & 0x7F));
             }
         }
         self.startup_dirty = true;

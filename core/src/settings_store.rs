@@ -376,7 +376,8 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
             (len, LoadStatus::Loaded) => match raw.get(..len) {
                 Some(text) if len <= LINE_MAX && text.is_ascii() => {
                     for &b in text {
-                        let _ = line.push(char::from(b));
+                        // Masked (no-op): a one-byte char, no UTF-8 encoder.
+                        let _ = line.push(char::from(b & 0x7F));
                     }
                     LoadStatus::Loaded
                 }
