@@ -379,15 +379,11 @@ impl Interp {
 
     /// Offset of coordinate system `wcs` (0 = G54) plus G92, mm.
     fn offset_of(&self, wcs: u8) -> [f32; AXES] {
-        let wcs = self
-            .coords
-            .wcs
-            .get(usize::from(wcs))
-            .copied()
-            .unwrap_or([0.0; AXES]);
-        let mut o = [0.0; AXES];
-        for ((o, w), g) in o.iter_mut().zip(wcs.iter()).zip(self.g92.iter()) {
-            *o = w + g;
+        let mut o = self.g92;
+        if let Some(w) = self.coords.wcs.get(usize::from(wcs)) {
+            for (o, w) in o.iter_mut().zip(w.iter()) {
+                *o += w; // f32 addition commutes exactly: same as w + g92
+            }
         }
         o
     }
