@@ -656,9 +656,8 @@ impl Interp {
                 let w = coords
                     .wcs
                     .get(usize::from(modal.wcs))
-                    .copied()
-                    .unwrap_or([0.0; AXES]);
-                set_axes(&mut g92, axes, &words, &pos, Some(&w));
+                    .unwrap_or(&[0.0; AXES]);
+                set_axes(&mut g92, axes, &words, &pos, Some(w));
             }
             Some(NonModal::ResetG92) => g92 = [0.0; AXES],
             Some(NonModal::Absolute) | None => {}
