@@ -30,7 +30,7 @@
 //! The e-stop interrupt stops the step engine itself before the protocol task
 //! learns of it through `set_inputs`.
 
-use crate::fmath;
+use crate::gcode::interp::round_i32;
 use crate::gcode::{LineCleaner, Status};
 use crate::machine::state::Event;
 use crate::machine::{Inputs, Machine, MotionControl, RunState};
@@ -434,28 +434,28 @@ impl Protocol {
         );
         // Everything but help, $G, $C (checks itself) and jogging needs the machine at
         // rest; refuse before doing anything.
-        let anytime = cmd.is_empty() || cmd == b"G" || cmd == b"C" || cmd.starts_with(b"J=");
+        let anytime = matches!(cmd, [] | [b'G'] | [b'C'] | [b'J', b'=', ..]);
         if !anytime && !at_rest {
             return Some(Err(Status::IdleError));
         }
         Some(match cmd {
-            b"" => {
+            [] => {
                 self.say(&[b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"]);
                 Ok(())
             }
-            b"$" => {
+            [b'$'] => {
                 self.listing = Some(Listing::Settings(0));
                 Ok(())
             }
-            b"#" => {
+            [b'#'] => {
                 self.listing = Some(Listing::Coords(0));
                 Ok(())
             }
-            b"N" => {
+            [b'N'] => {
                 self.listing = Some(Listing::Startup(0));
                 Ok(())
             }
-            b"G" => {
+            [b'G'] => {
                 let mut w = OutWriter {
                     out: &mut self.out,
                     truncated: &mut self.truncated,
@@ -465,7 +465,7 @@ impl Protocol {
                 w.put(b"]\r\n");
                 Ok(())
             }
-            b"I" => {
+            [b'I'] => {
                 self.say(&[
                     b"[VER:1.1h.inkstep-",
                     VERSION.as_bytes(),
@@ -480,7 +480,7 @@ impl Protocol {
                 w.put(b"]\r\n");
                 Ok(())
             }
-            b"C" => {
+            [b'C'] => {
                 let was = self.machine.check_mode();
                 let r = self.machine.toggle_check(m);
                 if was && r.is_ok() {
@@ -490,19 +490,16 @@ impl Protocol {
                 }
                 r
             }
-            b"X" => self.machine.unlock(),
-            b"H" => self.machine.start_homing(m),
-            b"RST=$" => {
-                self.machine.replace_settings(Settings::default(), m);
-                Ok(())
-            }
-            b"RST=#" => {
-                self.machine.clear_coords();
-                Ok(())
-            }
-            b"RST=*" => {
-                self.machine.replace_settings(Settings::default(), m);
-                self.machine.clear_coords();
+            [b'X'] => self.machine.unlock(),
+            [b'H'] => self.machine.start_homing(m),
+            // $RST=$ settings, $RST=# coordinate data, $RST=* both.
+            [b'R', b'S', b'T', b'=', what @ (b'$' | b'#' | b'*')] => {
+                if *what != b'#' {
+                    self.machine.replace_settings(Settings::default(), m);
+                }
+                if *what != b'$' {
+                    self.machine.clear_coords();
+                }
                 Ok(())
             }
             _ => {
@@ -562,7 +559,8 @@ impl Protocol {
         if let Some(slot) = self.startup.get_mut(idx) {
             slot.clear();
             for &b in line.iter().take(LINE_MAX) {
-                let _ = slot.push(char::from(b));
+                // Masked: the compiler then knows the char is one UTF-8 byte.
+                let _ = slot.push(char::from(b & 0x7F));
             }
         }
         self.startup_dirty = true;
@@ -627,93 +625,80 @@ impl Protocol {
 
     /// Write one line of a listing; the next step, `None` past the end.
     fn listing_line(&mut self, l: Listing) -> Option<Listing> {
-        let scale = if self.machine.settings().report_inches() {
-            25.4
-        } else {
-            1.0
+        let machine = &self.machine;
+        let mut w = OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
         };
-        match l {
+        let next = match l {
             Listing::Settings(i) => {
-                let mut w = OutWriter {
-                    out: &mut self.out,
-                    truncated: &mut self.truncated,
-                };
-                self.machine.settings().write_entry(i, &mut w)?;
-                w.put(b"\r\n");
-                Some(Listing::Settings(i + 1))
+                machine.settings().write_entry(i, &mut w)?;
+                Listing::Settings(i + 1)
             }
             Listing::Coords(i) => {
-                let interp = self.machine.interp();
+                let interp = machine.interp();
                 let c = interp.coords();
-                let (code, v): (u8, &[f32; AXES]) = match i {
-                    0..=5 => (54 + i as u8, c.wcs.get(i).unwrap_or(&[0.0; AXES])),
-                    6 => (28, &c.g28),
-                    7 => (30, &c.g30),
-                    8 => (92, interp.g92()),
-                    _ => (0, &[0.0; AXES]),
-                };
-                let v = *v;
-                let mut w = OutWriter {
-                    out: &mut self.out,
-                    truncated: &mut self.truncated,
-                };
-                match i {
-                    0..=8 => {
-                        w.put(b"[G");
-                        put_int(&mut w, i32::from(code));
-                        w.put(b":");
-                        axis_triplet(&mut w, &v, scale);
-                        w.put(b"]\r\n");
+                let v = match i {
+                    0..=5 => c.wcs.get(i),
+                    6 => Some(&c.g28),
+                    7 => Some(&c.g30),
+                    8 => Some(interp.g92()),
+                    9 => {
+                        w.put(b"[TLO:0.000]");
+                        None
                     }
-                    9 => w.put(b"[TLO:0.000]\r\n"),
-                    10 => w.put(b"[PRB:0.000,0.000,0.000:0]\r\n"),
-                    _ => {}
+                    10 => {
+                        w.put(b"[PRB:0.000,0.000,0.000:0]");
+                        None
+                    }
+                    _ => return None,
+                };
+                if let Some(v) = v {
+                    // [G54:..] .. [G59:..], [G28:..], [G30:..], [G92:..].
+                    let mut head = *b"[G54:";
+                    if let (Some(code), Some(d)) = (
+                        b"545556575859283092".get(2 * i..2 * i + 2),
+                        head.get_mut(2..4),
+                    ) {
+                        d.copy_from_slice(code);
+                    }
+                    w.put(&head);
+                    let scale = if machine.settings().report_inches() {
+                        25.4
+                    } else {
+                        1.0
+                    };
+                    axis_triplet(&mut w, v, scale);
+                    w.put(b"]");
                 }
-                (i <= 10).then_some(Listing::Coords(i + 1))
+                Listing::Coords(i + 1)
             }
             Listing::Startup(i) => {
                 let text = self.startup.get(i)?;
-                let mut w = OutWriter {
-                    out: &mut self.out,
-                    truncated: &mut self.truncated,
-                };
                 w.put(b"$N");
                 put_int(&mut w, i as i32);
                 w.put(b"=");
                 w.put(text.as_bytes());
-                w.put(b"\r\n");
-                Some(Listing::Startup(i + 1))
+                Listing::Startup(i + 1)
             }
-        }
+        };
+        w.put(b"\r\n");
+        Some(next)
     }
 
     /// `<State|MPos:...|FS:...|Bf:...|...>`.
     fn status_report<M: MotionControl>(&mut self, m: &M) {
         self.status_requested = false;
-        let st = self.machine.state(m);
-        let settings = self.machine.settings();
-        let scale = if settings.report_inches() { 25.4 } else { 1.0 };
-        let mask = settings.status_mask();
-        let mpos = self.machine.machine_position(m);
-        let wco = self.machine.interp().work_offset();
         self.reports = self.reports.wrapping_add(1);
-        let refresh = self.reports % REFRESH_EVERY == 1;
-        let show_wco = refresh || wco != self.wco_shown;
-        let show_ov = self.machine.take_overrides_changed() || self.reports % REFRESH_EVERY == 6;
-        let (fo, ro) = self.machine.overrides();
-        let inputs = self.machine.inputs();
-        let rx_free = self.rx_free();
-        let blocks_free = m.free();
-        let speed = m.speed() / scale;
-        // The pen is the spindle: report S while it is down.
-        let interp = self.machine.interp();
-        let spindle = if interp.modal().pen_down {
-            fmath::round(interp.spindle()) as i32
-        } else {
-            0
+        let reports = self.reports;
+        // Each value is fetched where it is written: fewer live values to spill. The
+        // writer borrows only the output fields, so the machine stays reachable.
+        let machine = &mut self.machine;
+        let mut w = OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
         };
-        let mut w = self.w();
-        w.put(match st {
+        w.put(match machine.state(m) {
             RunState::Idle => b"<Idle",
             RunState::Run => b"<Run",
             RunState::Hold { complete: true } => b"<Hold:0",
@@ -725,27 +710,40 @@ impl Protocol {
             RunState::Home => b"<Home",
             RunState::Check => b"<Check",
         });
+        let settings = machine.settings();
+        let scale = if settings.report_inches() { 25.4 } else { 1.0 };
+        let mask = settings.status_mask();
+        let mut pos = machine.machine_position(m);
+        let wco = machine.interp().work_offset();
         if mask & 1 != 0 {
             w.put(b"|MPos:");
-            axis_triplet(&mut w, &mpos, scale);
         } else {
-            let mut wpos = mpos;
-            for (p, o) in wpos.iter_mut().zip(wco.iter()) {
+            for (p, o) in pos.iter_mut().zip(wco.iter()) {
                 *p -= o;
             }
             w.put(b"|WPos:");
-            axis_triplet(&mut w, &wpos, scale);
         }
+        axis_triplet(&mut w, &pos, scale);
         if mask & 2 != 0 {
             w.put(b"|Bf:");
-            put_int(&mut w, blocks_free as i32);
+            put_int(&mut w, m.free() as i32);
             w.put(b",");
-            put_int(&mut w, rx_free as i32);
+            put_int(&mut w, (RX_BUFFER_SIZE - self.rx.len()) as i32);
         }
         w.put(b"|FS:");
-        put_int(&mut w, fmath::round(speed) as i32);
+        put_int(&mut w, round_i32(m.speed() / scale));
         w.put(b",");
-        put_int(&mut w, spindle);
+        // The pen is the spindle: report S while it is down.
+        let interp = machine.interp();
+        put_int(
+            &mut w,
+            if interp.modal().pen_down {
+                round_i32(interp.spindle())
+            } else {
+                0
+            },
+        );
+        let inputs = machine.inputs();
         let pins = [
             inputs.limits[0],
             inputs.limits[1],
@@ -762,11 +760,13 @@ impl Protocol {
                 }
             }
         }
-        if show_wco {
+        if reports % REFRESH_EVERY == 1 || wco != self.wco_shown {
             w.put(b"|WCO:");
             axis_triplet(&mut w, &wco, scale);
+            self.wco_shown = wco;
         }
-        if show_ov {
+        if machine.take_overrides_changed() || reports % REFRESH_EVERY == 6 {
+            let (fo, ro) = machine.overrides();
             w.put(b"|Ov:");
             put_int(&mut w, i32::from(fo));
             w.put(b",");
@@ -774,8 +774,5 @@ impl Protocol {
             w.put(b",100");
         }
         w.put(b">\r\n");
-        if show_wco {
-            self.wco_shown = wco;
-        }
     }
 }

@@ -506,22 +506,25 @@ impl Settings {
         if number == 20 && v != 0.0 && !self.homing_enabled() {
             return Err(SettingError::SoftLimitsNeedHoming);
         }
-        let mut next = self.clone();
-        if let Some(slot) = next.vals.get_mut(i) {
-            *slot = v;
-        }
+        // Try the value in place; put the old one back if the step rate is too high.
+        let Some(slot) = self.vals.get_mut(i) else {
+            return Err(SettingError::Invalid);
+        };
+        let old = core::mem::replace(slot, v);
         for axis in 0..AXES {
-            if next.steps_per_mm(axis) * next.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ {
+            if self.steps_per_mm(axis) * self.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ {
+                if let Some(slot) = self.vals.get_mut(i) {
+                    *slot = old;
+                }
                 return Err(SettingError::StepRateTooHigh);
             }
         }
         // Turning homing off also turns soft limits off: they would refer to nothing.
         if number == 22 && v == 0.0 {
-            if let Some(slot) = next.vals.get_mut(const { ix(20) }) {
+            if let Some(slot) = self.vals.get_mut(const { ix(20) }) {
                 *slot = 0.0;
             }
         }
-        *self = next;
         Ok(())
     }
 
@@ -532,20 +535,22 @@ impl Settings {
         self.at(const { ix(N) })
     }
     fn flag<const N: u16>(&self) -> bool {
-        self.v::<N>() != 0.0
+        // `!= 0.0` without a soft-float compare: values are never NaN, and the shift
+        // drops the sign so that -0.0 is zero too.
+        self.v::<N>().to_bits() << 1 != 0
     }
     fn mask<const N: u16>(&self) -> u8 {
-        self.v::<N>() as u8
+        to_u32(self.v::<N>()) as u8
     }
     fn axis<const BASE: u16>(&self, axis: usize) -> f32 {
         self.at(const { ix(BASE) } + axis.min(AXES - 1))
     }
 
     pub fn step_pulse_us(&self) -> u8 {
-        self.v::<0>() as u8
+        to_u32(self.v::<0>()) as u8
     }
     pub fn step_idle_delay_ms(&self) -> u8 {
-        self.v::<1>() as u8
+        to_u32(self.v::<1>()) as u8
     }
     pub fn step_invert_mask(&self) -> u8 {
         self.mask::<2>()
@@ -590,7 +595,7 @@ impl Settings {
         self.v::<25>()
     }
     pub fn homing_debounce_ms(&self) -> u32 {
-        self.v::<26>() as u32
+        to_u32(self.v::<26>())
     }
     pub fn homing_pulloff(&self) -> f32 {
         self.v::<27>()
@@ -639,10 +644,10 @@ impl Settings {
         } else {
             self.pen_up_angle()
         };
-        500 + (angle.clamp(0.0, 180.0) * (2000.0 / 180.0)) as u32
+        500 + to_u32(angle.clamp(0.0, 180.0) * (2000.0 / 180.0))
     }
     pub fn pen_lift_ms(&self) -> u32 {
-        self.v::<204>() as u32
+        to_u32(self.v::<204>())
     }
     pub fn pen_z_up(&self) -> f32 {
         self.v::<205>()
@@ -689,7 +694,8 @@ impl Settings {
         if kind == Kind::Float {
             write_fixed3(w, v);
         } else {
-            put_int(w, v as i32);
+            // Whole, non-negative and below 2^24 (checked on set and load).
+            put_int(w, to_u32(v) as i32);
         }
         Some(())
     }
@@ -809,6 +815,19 @@ pub fn put_decimal(w: &mut dyn Sink, a: u64, neg: bool, decimals: usize) {
         }
     }
     w.put(buf.get(start..).unwrap_or(&[]));
+}
+
+/// `x` rounded half away from zero to an `i32` (saturating): one copy of the
+/// conversion's range checks for every caller.
+#[inline(never)]
+pub fn round_i32(x: f32) -> i32 {
+    fmath::round(x) as i32
+}
+
+/// `x` truncated to a `u32` (saturating, NaN = 0), out of line for the same reason.
+#[inline(never)]
+pub fn to_u32(x: f32) -> u32 {
+    x as u32
 }
 
 /// A whole number in decimal.

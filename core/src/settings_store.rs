@@ -113,6 +113,15 @@ struct Scan {
     free: u32,
 }
 
+impl Scan {
+    const EMPTY: Scan = Scan {
+        page: 0,
+        seq: 0,
+        latest: [None; KEYS],
+        free: 0,
+    };
+}
+
 /// The store over a flash region.
 pub struct SettingsStore<F> {
     flash: F,
@@ -181,11 +190,14 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         best
     }
 
-    /// Walk the records of the current page.
-    fn scan(&mut self) -> Option<Scan> {
-        let (page, seq) = self.current()?;
+    /// Walk the records of the current page into `s` (filled in place, not moved
+    /// through an `Option`); false if no page is valid.
+    fn scan(&mut self, s: &mut Scan) -> bool {
+        let Some((page, seq)) = self.current() else {
+            return false;
+        };
         let end = page + self.page_size;
-        let mut s = Scan {
+        *s = Scan {
             page,
             seq,
             latest: [None; KEYS],
@@ -214,14 +226,17 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
             }
             at += size;
         }
-        Some(s)
+        true
     }
 
     /// Fetch the newest valid value of `key` into `out`.
     fn fetch(&mut self, key: u8, out: &mut [u8]) -> (usize, LoadStatus) {
-        let latest = self
-            .scan()
-            .and_then(|s| s.latest.get(usize::from(key)).copied().flatten());
+        let mut s = Scan::EMPTY;
+        let latest = if self.scan(&mut s) {
+            s.latest.get(usize::from(key)).copied().flatten()
+        } else {
+            None
+        };
         let Some((at, n)) = latest else {
             return (0, LoadStatus::Empty);
         };
@@ -262,13 +277,18 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     fn store_raw(&mut self, key: u8, bytes: &[u8]) -> Result<(), StoreError<F::Error>> {
         let n = u8::try_from(bytes.len()).map_err(|_| StoreError::Full)?;
         let size = rec_size(bytes.len());
-        let scan = self.scan();
+        let mut found = Scan::EMPTY;
+        let scan = if self.scan(&mut found) {
+            Some(&found)
+        } else {
+            None
+        };
         let stage = |buf: &mut [u8; BUF_LEN]| {
             if let Some(d) = buf.get_mut(REC_HEAD..REC_HEAD + bytes.len()) {
                 d.copy_from_slice(bytes);
             }
         };
-        if let Some(s) = &scan {
+        if let Some(s) = scan {
             if s.free + size <= s.page + self.page_size {
                 stage(&mut self.buf);
                 self.write_record(s.free, key, n)?;
@@ -276,7 +296,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
             }
         }
         // Next page of the ring (the first if nothing valid is stored).
-        let (target, seq) = match &scan {
+        let (target, seq) = match scan {
             Some(s) if s.page + self.page_size < self.range.end => (s.page + self.page_size, s.seq),
             Some(s) => (self.range.start, s.seq),
             None => (self.range.start, 0),
@@ -288,9 +308,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         }
         let mut at = target + PAGE_HEAD;
         for k in 0..KEYS as u8 {
-            let old = scan
-                .as_ref()
-                .and_then(|s| s.latest.get(usize::from(k)).copied().flatten());
+            let old = scan.and_then(|s| s.latest.get(usize::from(k)).copied().flatten());
             let n = if k == key {
                 stage(&mut self.buf);
                 n
@@ -326,18 +344,20 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     /// reported as corrupt rather than taken for a first boot.
     pub fn load_settings(&mut self) -> (Settings, LoadStatus) {
         let mut img = [0u8; IMAGE_LEN];
-        match self.fetch(KEY_SETTINGS, &mut img) {
+        let status = match self.fetch(KEY_SETTINGS, &mut img) {
             (_, LoadStatus::Empty) if !self.blank(self.range.start, self.range.end) => {
-                (Settings::default(), LoadStatus::Corrupt)
+                LoadStatus::Corrupt
             }
             (len, LoadStatus::Loaded) => {
                 match Settings::from_image(img.get(..len).unwrap_or(&[])) {
-                    Ok(s) => (s, LoadStatus::Loaded),
-                    Err(_) => (Settings::default(), LoadStatus::Corrupt),
+                    Ok(s) => return (s, LoadStatus::Loaded),
+                    Err(_) => LoadStatus::Corrupt,
                 }
             }
-            (_, status) => (Settings::default(), status),
-        }
+            (_, status) => status,
+        };
+        // One place builds the defaults for every reason to use them.
+        (Settings::default(), status)
     }
 
     pub fn save_settings(&mut self, s: &Settings) -> Result<(), StoreError<F::Error>> {
@@ -347,14 +367,15 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     /// Load G54-G59, G28 and G30 data.
     pub fn load_coords(&mut self) -> (Coords, LoadStatus) {
         let mut img = [0u8; COORDS_LEN];
-        match self.fetch(KEY_COORDS, &mut img) {
+        let status = match self.fetch(KEY_COORDS, &mut img) {
             (COORDS_LEN, LoadStatus::Loaded) => match coords_from_image(&img) {
-                Some(c) => (c, LoadStatus::Loaded),
-                None => (Coords::default(), LoadStatus::Corrupt),
+                Some(c) => return (c, LoadStatus::Loaded),
+                None => LoadStatus::Corrupt,
             },
-            (_, LoadStatus::Loaded) => (Coords::default(), LoadStatus::Corrupt),
-            (_, status) => (Coords::default(), status),
-        }
+            (_, LoadStatus::Loaded) => LoadStatus::Corrupt,
+            (_, status) => status,
+        };
+        (Coords::default(), status)
     }
 
     pub fn save_coords(&mut self, c: &Coords) -> Result<(), StoreError<F::Error>> {
@@ -373,7 +394,8 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
             (len, LoadStatus::Loaded) => match raw.get(..len) {
                 Some(text) if len <= LINE_MAX && text.is_ascii() => {
                     for &b in text {
-                        let _ = line.push(char::from(b));
+                        // Masked (no-op): a one-byte char, no UTF-8 encoder.
+                        let _ = line.push(char::from(b & 0x7F));
                     }
                     LoadStatus::Loaded
                 }

@@ -410,6 +410,28 @@ fn settings_listing_and_changes() {
 }
 
 #[test]
+fn offsets_listing_names_every_slot() {
+    let (mut p, mut m) = boot();
+    send(
+        &mut p,
+        &mut m,
+        "G10 L2 P1 X5\nG10 L2 P6 Y-2.5\nG28.1\nG0 X1\nG30.1\nG92 X0\n",
+    );
+    m.run_all();
+    let out = send(&mut p, &mut m, "$#\n");
+    let zero = "0.000,0.000,0.000";
+    assert_eq!(
+        out,
+        format!(
+            "[G54:5.000,0.000,0.000]\r\n[G55:{zero}]\r\n[G56:{zero}]\r\n[G57:{zero}]\r\n\
+             [G58:{zero}]\r\n[G59:0.000,-2.500,0.000]\r\n[G28:{zero}]\r\n\
+             [G30:6.000,0.000,0.000]\r\n[G92:1.000,0.000,0.000]\r\n[TLO:0.000]\r\n\
+             [PRB:0.000,0.000,0.000:0]\r\nok\r\n"
+        )
+    );
+}
+
+#[test]
 fn info_modal_state_offsets_and_startup_lines() {
     let (mut p, mut m) = boot();
     let out = send(&mut p, &mut m, "$G\n");

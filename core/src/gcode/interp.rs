@@ -9,12 +9,13 @@
 //! here, on every target of the block (for arcs, on their extent), before any command
 //! leaves.
 
-use super::parser::Block;
+use super::parser::{Block, Code};
 use super::Status;
 use crate::fmath;
 use crate::machine::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::{put_int, PenMode, Settings, Sink};
+pub use crate::settings::{round_i32, to_u32};
 use core::f32::consts::{FRAC_PI_2, TAU};
 use heapless::Vec;
 
@@ -91,6 +92,15 @@ pub struct Outcome {
     pub coords_changed: bool,
 }
 
+/// What the caller of [`Interp::execute_into`] can take now.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Room {
+    /// Commands that fit the planner queue.
+    pub cmds: usize,
+    /// The queue has run empty (a program end may run).
+    pub idle: bool,
+}
+
 /// Why a block was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reject {
@@ -140,13 +150,11 @@ const NON_MODAL: [NonModal; 9] = [
 // Modal groups of the G codes; the plane, arc distance, cutter compensation, tool
 // length offset and path mode groups are accepted (only their default exists) and
 // checked for repeats.
-const G_MOTION: usize = 0;
-const G_NON_MODAL: usize = 1;
-const G_UNITS: usize = 2;
-const G_DISTANCE: usize = 3;
-const G_FEED_MODE: usize = 4;
-const G_WCS: usize = 5;
-const G_GROUPS: usize = 11;
+// Groups 0-10 are the G groups (motion, non-modal, units, distance, feed mode,
+// coordinate system, then the accepted defaults); 11-14 the M groups (stop, M1, pen,
+// coolant). A group not named in the block holds NONE.
+const GROUPS: usize = 15;
+const NONE: u8 = u8::MAX;
 /// G code (x10), its group and its value in the group (an index into MOTION_MODES
 /// or NON_MODAL; 1 = inches / incremental / inverse time; the coordinate system).
 const G_CODES: [(u16, u8, u8); 31] = [
@@ -182,6 +190,48 @@ const G_CODES: [(u16, u8, u8); 31] = [
     (490, 9, 0),
     (610, 10, 0),
 ];
+/// M codes in the same form: stop 0 = M0, 1 = M2/M30; M1; pen 1 = down (M3/M4),
+/// 0 = up (M5); coolant (accepted, nothing to switch).
+const M_CODES: [(u16, u8, u8); 10] = [
+    (0, 11, 0),
+    (20, 11, 1),
+    (300, 11, 1),
+    (10, 12, 0),
+    (30, 13, 1),
+    (40, 13, 1),
+    (50, 13, 0),
+    (70, 14, 0),
+    (80, 14, 0),
+    (90, 14, 0),
+];
+
+/// Put each code's value into its group; a group named twice is error 21, an unknown
+/// code the error Grbl gives for it.
+fn group_codes(
+    codes: &[Code],
+    table: &[(u16, u8, u8)],
+    groups: &mut [u8; GROUPS],
+    g: bool,
+) -> Result<(), Status> {
+    for &code in codes {
+        let Some(&(_, group, value)) = table.iter().find(|e| e.0 == code) else {
+            return Err(if g && (591..=599).contains(&code) {
+                Status::UnsupportedCoordSys
+            } else if code % 10 != 0 && !(g && matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61)) {
+                Status::CommandValueNotInteger
+            } else {
+                Status::UnsupportedCommand
+            });
+        };
+        if let Some(slot) = groups.get_mut(usize::from(group)) {
+            if *slot != NONE {
+                return Err(Status::ModalGroupViolation);
+            }
+            *slot = value;
+        }
+    }
+    Ok(())
+}
 
 /// The interpreter.
 #[derive(Clone, Debug, PartialEq)]
@@ -202,18 +252,10 @@ impl Default for Interp {
     }
 }
 
-fn set_once<T>(slot: &mut Option<T>, v: T) -> Result<(), Status> {
-    if slot.is_some() {
-        return Err(Status::ModalGroupViolation);
-    }
-    *slot = Some(v);
-    Ok(())
-}
-
 /// mm to steps for one axis, rounding half away from zero (saturating).
 #[inline(never)]
 pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
-    fmath::round(mm * steps_per_mm) as i32
+    round_i32(mm * steps_per_mm)
 }
 
 /// Machine mm to a step position.
@@ -337,15 +379,11 @@ impl Interp {
 
     /// Offset of coordinate system `wcs` (0 = G54) plus G92, mm.
     fn offset_of(&self, wcs: u8) -> [f32; AXES] {
-        let wcs = self
-            .coords
-            .wcs
-            .get(usize::from(wcs))
-            .copied()
-            .unwrap_or([0.0; AXES]);
-        let mut o = [0.0; AXES];
-        for ((o, w), g) in o.iter_mut().zip(wcs.iter()).zip(self.g92.iter()) {
-            *o = w + g;
+        let mut o = self.g92;
+        if let Some(w) = self.coords.wcs.get(usize::from(wcs)) {
+            for (o, w) in o.iter_mut().zip(w.iter()) {
+                *o += w; // f32 addition commutes exactly: same as w + g92
+            }
         }
         o
     }
@@ -369,81 +407,74 @@ impl Interp {
     pub fn write_modal(&self, w: &mut dyn Sink) {
         let m = &self.modal;
         w.put(match m.motion {
-            MotionMode::Rapid => b"GC:G0 G",
-            MotionMode::Linear => b"GC:G1 G",
-            MotionMode::ArcCw => b"GC:G2 G",
-            MotionMode::ArcCcw => b"GC:G3 G",
-            MotionMode::Cancel => b"GC:G80 G",
+            MotionMode::Rapid => b"GC:G0",
+            MotionMode::Linear => b"GC:G1",
+            MotionMode::ArcCw => b"GC:G2",
+            MotionMode::ArcCcw => b"GC:G3",
+            MotionMode::Cancel => b"GC:G80",
         });
-        put_int(w, i32::from(54 + m.wcs));
-        w.put(if m.inches { b" G17 G20" } else { b" G17 G21" });
-        w.put(if m.incremental { b" G91" } else { b" G90" });
-        w.put(if m.inverse_time { b" G93" } else { b" G94" });
-        w.put(if m.pen_down { b" M3" } else { b" M5" });
-        w.put(b" M9 T0 F");
+        // The defaults, with the digits that the modal state changes patched in.
+        let mut tail = *b" G54 G17 G21 G90 G94 M5 M9 T0 F";
+        tail[3] = b'4' + m.wcs.min(5); // G54..G59
+        tail[11] -= u8::from(m.inches); // G20
+        tail[15] += u8::from(m.incremental); // G91
+        tail[19] -= u8::from(m.inverse_time); // G93
+        tail[22] -= 2 * u8::from(m.pen_down); // M3
+        w.put(&tail);
         let scale = if m.inches { MM_PER_INCH } else { 1.0 };
-        put_int(w, fmath::round(self.feed / scale) as i32);
+        put_int(w, round_i32(self.feed / scale));
         w.put(b" S");
-        put_int(w, fmath::round(self.spindle) as i32);
+        put_int(w, round_i32(self.spindle));
     }
 
     /// Interpret one cleaned line (no spaces, upper case, no comments).
     /// `line_no` is used for the queued moves when the block has no N word.
     pub fn execute(&mut self, line: &[u8], s: &Settings, line_no: u32) -> Result<Outcome, Reject> {
-        let mut b = Block::parse(line)?;
+        let mut out = Outcome::default();
+        let all = Room {
+            cmds: usize::MAX,
+            idle: true,
+        };
+        self.execute_into(line, s, line_no, &mut out, Some(all))?;
+        Ok(out)
+    }
+
+    /// [`Interp::execute`] into `out` (which must be empty), committing the block only
+    /// if the caller has `room` for it: `Ok(false)` leaves the interpreter unchanged
+    /// (the outcome is still filled in), and `room: None` only checks the block. The
+    /// machine needs no trial copy of the interpreter that way.
+    pub fn execute_into(
+        &mut self,
+        line: &[u8],
+        s: &Settings,
+        line_no: u32,
+        out: &mut Outcome,
+        room: Option<Room>,
+    ) -> Result<bool, Reject> {
+        let mut b = Block::default();
+        b.parse_into(line)?;
 
         // --- Group the codes (one modal group may be named once per block). ---
-        let mut groups: [Option<u8>; G_GROUPS] = [None; G_GROUPS];
-        for &code in b.g.iter() {
-            let Some(&(_, group, value)) = G_CODES.iter().find(|e| e.0 == code) else {
-                return Err(match code {
-                    591..=599 => Status::UnsupportedCoordSys,
-                    _ if code % 10 != 0 && !matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61) => {
-                        Status::CommandValueNotInteger
-                    }
-                    _ => Status::UnsupportedCommand,
-                }
-                .into());
-            };
-            if let Some(slot) = groups.get_mut(usize::from(group)) {
-                set_once(slot, value)?;
-            }
-        }
-        let group = |g: usize| groups.get(g).copied().flatten();
-        let motion = group(G_MOTION).and_then(|v| MOTION_MODES.get(usize::from(v)).copied());
-        let non_modal = group(G_NON_MODAL).and_then(|v| NON_MODAL.get(usize::from(v)).copied());
-        let units = group(G_UNITS).map(|v| v != 0);
-        let distance = group(G_DISTANCE).map(|v| v != 0);
-        let feed_mode = group(G_FEED_MODE).map(|v| v != 0);
-        let wcs = group(G_WCS);
-        let mut stop: Option<Stop> = None;
-        let mut optional_stop = false;
-        let mut pen: Option<bool> = None;
-        let mut coolant = None;
-        for &code in b.m.iter() {
-            match code {
-                0 => set_once(&mut stop, Stop::Pause)?,
-                // M1 (optional stop) is ignored, as Grbl does without a stop switch.
-                10 => {
-                    if optional_stop {
-                        return Err(Status::ModalGroupViolation.into());
-                    }
-                    optional_stop = true;
-                }
-                20 | 300 => set_once(&mut stop, Stop::End)?,
-                30 | 40 => set_once(&mut pen, true)?,
-                50 => set_once(&mut pen, false)?,
-                70 | 80 | 90 => set_once(&mut coolant, ())?,
-                _ if code % 10 != 0 => return Err(Status::CommandValueNotInteger.into()),
-                _ => return Err(Status::UnsupportedCommand.into()),
-            }
-        }
-        if optional_stop && stop.is_some() {
+        let mut groups = [NONE; GROUPS];
+        group_codes(&b.g, &G_CODES, &mut groups, true)?;
+        group_codes(&b.m, &M_CODES, &mut groups, false)?;
+        let [motion, non_modal, units, distance, feed_mode, wcs, _, _, _, _, _, stop, m1, pen, _] =
+            groups;
+        let motion = MOTION_MODES.get(usize::from(motion)).copied();
+        let non_modal = NON_MODAL.get(usize::from(non_modal)).copied();
+        // M1 (optional stop) is ignored, as Grbl does without a stop switch, but it
+        // shares the stop group.
+        if m1 != NONE && stop != NONE {
             return Err(Status::ModalGroupViolation.into());
         }
+        let stop = match stop {
+            0 => Some(Stop::Pause),
+            1 => Some(Stop::End),
+            _ => None,
+        };
 
         // --- Value words. ---
-        for letter in [b'F', b'N', b'P', b'S', b'T', b'L'] {
+        for &letter in b"FNPSTL" {
             if b.get(letter).is_some_and(|v| v < 0.0) {
                 return Err(Status::NegativeValue.into());
             }
@@ -452,30 +483,31 @@ impl Interp {
         if n_word.is_some_and(|n| n > MAX_LINE_NUMBER) {
             return Err(Status::InvalidLineNumber.into());
         }
-        let line_tag = n_word.map(|n| n as u32).unwrap_or(line_no);
+        let line_tag = n_word.map_or(line_no, to_u32);
         if b.take(b'T').is_some_and(|t| t > 255.0) {
             return Err(Status::MaxValueExceeded.into());
         }
         let spindle = b.take(b'S');
 
         let mut modal = self.modal;
-        if let Some(u) = units {
-            modal.inches = u;
+        if units != NONE {
+            modal.inches = units != 0;
         }
-        if let Some(d) = distance {
-            modal.incremental = d;
+        if distance != NONE {
+            modal.incremental = distance != 0;
         }
-        if let Some(w) = wcs {
-            modal.wcs = w;
+        if wcs != NONE {
+            modal.wcs = wcs;
         }
         let scale = if modal.inches { MM_PER_INCH } else { 1.0 };
 
         let mut feed = self.feed;
-        if let Some(fm) = feed_mode {
-            if fm != modal.inverse_time {
+        if feed_mode != NONE {
+            let inverse = feed_mode != 0;
+            if inverse != modal.inverse_time {
                 feed = 0.0; // switching feed modes leaves the feed undefined
             }
-            modal.inverse_time = fm;
+            modal.inverse_time = inverse;
         }
         let f_word = b.take(b'F');
         if modal.inverse_time {
@@ -484,11 +516,16 @@ impl Interp {
             feed = f * scale;
         }
 
-        let mut axis_words = [None::<f32>; AXES];
-        for (slot, letter) in axis_words.iter_mut().zip([b'X', b'Y', b'Z']) {
-            *slot = b.take(letter).map(|v| v * scale);
+        // Axis words in mm, and the mask of the axes named.
+        let mut words = [0.0f32; AXES];
+        let mut axes = 0u8;
+        for (k, (w, &letter)) in words.iter_mut().zip(b"XYZ").enumerate() {
+            if let Some(v) = b.take(letter) {
+                *w = v * scale;
+                axes |= 1 << k;
+            }
         }
-        let has_axis = axis_words.iter().any(Option::is_some);
+        let has_axis = axes != 0;
 
         // Which command uses the axis words.
         let nm_uses_axes = matches!(
@@ -506,7 +543,8 @@ impl Interp {
         if motion_cmd && modal.motion == MotionMode::Cancel && has_axis {
             return Err(Status::AxisWordsExist.into());
         }
-        if non_modal == Some(NonModal::Absolute)
+        let absolute_override = non_modal == Some(NonModal::Absolute);
+        if absolute_override
             && !(motion_cmd && matches!(modal.motion, MotionMode::Rapid | MotionMode::Linear))
         {
             return Err(Status::G53InvalidMotionMode.into());
@@ -520,7 +558,6 @@ impl Interp {
             return Err(Status::UndefinedFeedRate.into());
         }
 
-        let mut out = Outcome::default();
         let mut coords = self.coords;
         let mut g92 = self.g92;
         let mut pos = self.pos;
@@ -530,37 +567,30 @@ impl Interp {
         };
 
         // Pen (M3/M4/M5) runs before motion.
-        let pen_change = pen.filter(|&down| down != modal.pen_down);
-        if let Some(down) = pen {
-            modal.pen_down = down;
-        }
-        if let Some(down) = pen_change {
-            match s.pen_mode() {
-                PenMode::Servo => push(&mut out, Command::Pen { down })?,
-                PenMode::ZAxis => {
-                    let mut p = pos;
-                    p[2] = if down { s.pen_z_down() } else { s.pen_z_up() };
-                    planned.add(&p, s);
-                    push(&mut out, rapid(&p, s, line_tag))?;
-                    pos = p;
-                }
+        if pen != NONE {
+            let down = pen != 0;
+            if down != modal.pen_down {
+                pen_move(out, &mut pos, down, s, line_tag, &mut planned)?;
             }
+            modal.pen_down = down;
         }
 
         // --- Targets, in machine mm. ---
         let offset = self.offset_of(modal.wcs);
-        let absolute_override = non_modal == Some(NonModal::Absolute);
         let mut target = pos;
-        for (axis, t) in target.iter_mut().enumerate() {
-            if let Some(v) = axis_words.get(axis).copied().flatten() {
-                let base = pos.get(axis).copied().unwrap_or(0.0);
-                let off = offset.get(axis).copied().unwrap_or(0.0);
+        for (k, ((t, &v), (&p, &o))) in target
+            .iter_mut()
+            .zip(words.iter())
+            .zip(pos.iter().zip(offset.iter()))
+            .enumerate()
+        {
+            if axes >> k & 1 != 0 {
                 *t = if absolute_override {
                     v
                 } else if modal.incremental {
-                    base + v
+                    p + v
                 } else {
-                    v + off
+                    v + o
                 };
             }
         }
@@ -568,13 +598,9 @@ impl Interp {
         match non_modal {
             Some(NonModal::Dwell) => {
                 let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
-                let ms = fmath::round(p * 1000.0);
-                push(
-                    &mut out,
-                    Command::Dwell {
-                        ms: ms.min(u32::MAX as f32) as u32,
-                    },
-                )?;
+                // Saturates at u32::MAX ms (the value is finite: P has at most 19 digits).
+                let ms = to_u32(fmath::round(p * 1000.0));
+                push(out, Command::Dwell { ms })?;
             }
             Some(NonModal::SetCoord) => {
                 let l = b.take(b'L').ok_or(Status::ValueWordMissing)?;
@@ -591,25 +617,15 @@ impl Interp {
                 let idx = if p == 0.0 {
                     usize::from(modal.wcs)
                 } else {
-                    p as usize - 1
+                    to_u32(p) as usize - 1
                 };
-                let l20 = match l as u32 {
-                    2 => false,
-                    20 => true,
+                let from = match to_u32(l) {
+                    2 => None,
+                    20 => Some(&g92),
                     _ => return Err(Status::UnsupportedCommand.into()),
                 };
                 if let Some(sys) = coords.wcs.get_mut(idx) {
-                    for (axis, o) in sys.iter_mut().enumerate() {
-                        if let Some(v) = axis_words.get(axis).copied().flatten() {
-                            *o = if l20 {
-                                pos.get(axis).copied().unwrap_or(0.0)
-                                    - g92.get(axis).copied().unwrap_or(0.0)
-                                    - v
-                            } else {
-                                v
-                            };
-                        }
-                    }
+                    set_axes(sys, axes, &words, &pos, from);
                 }
                 out.coords_changed = true;
             }
@@ -620,11 +636,9 @@ impl Interp {
                     coords.g30
                 };
                 if has_axis {
-                    planned.add(&target, s);
-                    push(&mut out, rapid(&target, s, line_tag))?;
+                    push_rapid(out, &target, s, line_tag, &mut planned)?;
                 }
-                planned.add(&stored, s);
-                push(&mut out, rapid(&stored, s, line_tag))?;
+                push_rapid(out, &stored, s, line_tag, &mut planned)?;
                 pos = stored;
             }
             Some(NonModal::Set28) => {
@@ -642,56 +656,32 @@ impl Interp {
                 let w = coords
                     .wcs
                     .get(usize::from(modal.wcs))
-                    .copied()
-                    .unwrap_or([0.0; AXES]);
-                for (axis, g) in g92.iter_mut().enumerate() {
-                    if let Some(v) = axis_words.get(axis).copied().flatten() {
-                        *g = pos.get(axis).copied().unwrap_or(0.0)
-                            - w.get(axis).copied().unwrap_or(0.0)
-                            - v;
-                    }
-                }
+                    .unwrap_or(&[0.0; AXES]);
+                set_axes(&mut g92, axes, &words, &pos, Some(w));
             }
             Some(NonModal::ResetG92) => g92 = [0.0; AXES],
             Some(NonModal::Absolute) | None => {}
         }
 
         if motion_cmd {
-            let len_and_path = match modal.motion {
-                MotionMode::Rapid | MotionMode::Linear if has_axis => Some((
-                    path_length(&pos, &target),
-                    line_path(&pos, &target, s),
-                    None,
-                )),
-                MotionMode::ArcCw | MotionMode::ArcCcw => {
+            let arc = matches!(modal.motion, MotionMode::ArcCw | MotionMode::ArcCcw);
+            if arc || (has_axis && modal.motion != MotionMode::Cancel) {
+                let ccw = modal.motion == MotionMode::ArcCcw;
+                let (len, path) = if arc {
                     if !has_axis {
                         return Err(Status::NoAxisWords.into());
                     }
-                    if axis_words[0].is_none() && axis_words[1].is_none() {
+                    if axes & 3 == 0 {
                         return Err(Status::NoAxisWordsInPlane.into());
                     }
-                    let ccw = modal.motion == MotionMode::ArcCcw;
                     let g = arc_geometry(&mut b, &pos, &target, ccw, scale)?;
-                    let dz = target[2] - pos[2];
-                    let arc_len = hypot(g.radius * g.sweep, dz);
-                    let path = arc_path(&g, &pos, &target, ccw, s);
-                    Some((arc_len, path, Some(g)))
-                }
-                _ => None,
-            };
-            if let Some((len, path, geom)) = len_and_path {
-                if let Some(g) = &geom {
-                    arc_extremes(
-                        g,
-                        &pos,
-                        &target,
-                        modal.motion == MotionMode::ArcCcw,
-                        &mut planned,
-                        s,
-                    );
+                    arc_extremes(&g, &pos, &target, ccw, &mut planned, s);
+                    let arc_len = hypot(g.radius * g.sweep, target[2] - pos[2]);
+                    (arc_len, arc_path(&g, &pos, ccw, s))
                 } else {
                     planned.add(&target, s);
-                }
+                    (path_length(&pos, &target), line_path(&pos, &target, s))
+                };
                 let f = if modal.motion == MotionMode::Rapid {
                     Feed::Rapid
                 } else if modal.inverse_time {
@@ -700,9 +690,9 @@ impl Interp {
                     Feed::MmPerMin(feed)
                 };
                 let steps = to_steps(&target, s);
-                if steps != to_steps(&pos, s) || geom.is_some() {
+                if arc || steps != to_steps(&pos, s) {
                     push(
-                        &mut out,
+                        out,
                         Command::Move(Move {
                             target: steps,
                             path,
@@ -731,23 +721,24 @@ impl Interp {
         }
 
         if stop == Some(Stop::End) {
-            let pen_was_down = modal.pen_down;
+            if modal.pen_down {
+                // Checked already: the lift stays where the block's moves went.
+                pen_move(out, &mut pos, false, s, line_tag, &mut planned)?;
+            }
             modal = Modal {
                 inches: modal.inches,
+                motion: MotionMode::Linear,
                 ..Modal::default()
             };
-            modal.motion = MotionMode::Linear;
-            if pen_was_down {
-                match s.pen_mode() {
-                    PenMode::Servo => push(&mut out, Command::Pen { down: false })?,
-                    PenMode::ZAxis => {
-                        let mut p = pos;
-                        p[2] = s.pen_z_up();
-                        push(&mut out, rapid(&p, s, line_tag))?;
-                        pos = p;
-                    }
-                }
-            }
+        }
+
+        out.stop = stop;
+        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
+        // motion before it has finished, so its `ok` means "program done".
+        let fits =
+            room.is_some_and(|r| out.cmds.len() <= r.cmds && (r.idle || stop != Some(Stop::End)));
+        if !fits {
+            return Ok(false);
         }
 
         // Commit.
@@ -759,15 +750,15 @@ impl Interp {
         self.pos = pos;
         self.coords = coords;
         self.g92 = g92;
-        out.stop = stop;
-        Ok(out)
+        Ok(true)
     }
 
     /// Interpret the body of a `$J=` jog line (cleaned, without `$J=`): only G20/G21,
     /// G90/G91, G53, axis words, F and N are allowed; modal state is left unchanged.
     /// A target outside travel with soft limits on is `error:15`.
     pub fn jog(&mut self, line: &[u8], s: &Settings) -> Result<Move, Status> {
-        let mut b = Block::parse(line)?;
+        let mut b = Block::default();
+        b.parse_into(line)?;
         if !b.m.is_empty() {
             return Err(Status::InvalidJogCommand);
         }
@@ -797,7 +788,7 @@ impl Interp {
         let offset = self.work_offset();
         let mut target = self.pos;
         let mut any = false;
-        for (axis, letter) in [b'X', b'Y', b'Z'].into_iter().enumerate() {
+        for (axis, &letter) in b"XYZ".iter().enumerate() {
             if let Some(v) = b.take(letter) {
                 any = true;
                 let v = v * scale;
@@ -863,13 +854,65 @@ fn push(out: &mut Outcome, c: Command) -> Result<(), Status> {
     out.cmds.push(c).map_err(|_| Status::Overflow)
 }
 
-fn rapid(p: &[f32; AXES], s: &Settings, line: u32) -> Command {
-    Command::Move(Move {
-        target: to_steps(p, s),
-        path: Path::Line,
-        feed: Feed::Rapid,
-        line,
-    })
+/// A rapid straight move to `p` (checked as planned).
+fn push_rapid(
+    out: &mut Outcome,
+    p: &[f32; AXES],
+    s: &Settings,
+    line: u32,
+    planned: &mut Reach,
+) -> Result<(), Status> {
+    planned.add(p, s);
+    push(
+        out,
+        Command::Move(Move {
+            target: to_steps(p, s),
+            path: Path::Line,
+            feed: Feed::Rapid,
+            line,
+        }),
+    )
+}
+
+/// Lift or drop the pen: a servo command, or a rapid Z move to $205 / $206.
+fn pen_move(
+    out: &mut Outcome,
+    pos: &mut [f32; AXES],
+    down: bool,
+    s: &Settings,
+    line: u32,
+    planned: &mut Reach,
+) -> Result<(), Status> {
+    match s.pen_mode() {
+        PenMode::Servo => push(out, Command::Pen { down }),
+        PenMode::ZAxis => {
+            pos[2] = if down { s.pen_z_down() } else { s.pen_z_up() };
+            push_rapid(out, pos, s, line, planned)
+        }
+    }
+}
+
+/// G10 / G92: each named axis of `dst` becomes its word (`from` None), or the offset
+/// that makes the current position read as the word (`pos - from - word`).
+fn set_axes(
+    dst: &mut [f32; AXES],
+    axes: u8,
+    words: &[f32; AXES],
+    pos: &[f32; AXES],
+    from: Option<&[f32; AXES]>,
+) {
+    let zero = [0.0; AXES];
+    let base = from.unwrap_or(&zero);
+    for (k, ((d, &v), (&p, &b))) in dst
+        .iter_mut()
+        .zip(words.iter())
+        .zip(pos.iter().zip(base.iter()))
+        .enumerate()
+    {
+        if axes >> k & 1 != 0 {
+            *d = if from.is_some() { p - b - v } else { v };
+        }
+    }
 }
 
 /// sqrt(a^2 + b^2) in f32: libm's hypotf works in f64, which would pull the
@@ -973,13 +1016,7 @@ fn arc_geometry(
 
 /// The arc in step space: a circle if X and Y have the same resolution, else the
 /// ellipse the circle becomes.
-fn arc_path(
-    g: &ArcGeom,
-    start: &[f32; AXES],
-    _target: &[f32; AXES],
-    ccw: bool,
-    s: &Settings,
-) -> Path {
+fn arc_path(g: &ArcGeom, start: &[f32; AXES], ccw: bool, s: &Settings) -> Path {
     let sx = s.steps_per_mm(0);
     let sy = s.steps_per_mm(1);
     let start_steps = [mm_to_steps(start[0], sx), mm_to_steps(start[1], sy)];
@@ -994,8 +1031,8 @@ fn arc_path(
             turns: 0,
         }
     } else {
-        let a = fmath::round(g.radius * sx) as i32;
-        let b = fmath::round(g.radius * sy) as i32;
+        let a = mm_to_steps(g.radius, sx);
+        let b = mm_to_steps(g.radius, sy);
         Path::Ellipse { center, a, b, ccw }
     }
 }
@@ -1028,7 +1065,7 @@ fn arc_extremes(
     pts.add(target, s);
     // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
     let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
-    for (k, (cs, sn)) in axes_dirs.into_iter().enumerate() {
+    for (k, &(cs, sn)) in axes_dirs.iter().enumerate() {
         let angle = k as f32 * FRAC_PI_2;
         let from_start = if ccw {
             positive_sweep(angle - g.start_angle)
@@ -1420,6 +1457,22 @@ mod tests {
         let o = run(&mut it, &s, "M3").unwrap();
         assert!(o.cmds.is_empty(), "no change, nothing queued");
         assert_eq!(run(&mut it, &s, "M0").unwrap().stop, Some(Stop::Pause));
+    }
+
+    #[test]
+    fn modal_report_names_every_changed_mode() {
+        let s = Settings::default();
+        let report = |it: &Interp| {
+            let mut v: heapless::Vec<u8, 64> = heapless::Vec::new();
+            it.write_modal(&mut v);
+            std::string::String::from_utf8(v.to_vec()).unwrap()
+        };
+        let mut it = Interp::new();
+        assert_eq!(report(&it), "GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0");
+        run(&mut it, &s, "G20 G91 G93 G59 M3 G1 X1 F1 S12").unwrap();
+        assert_eq!(report(&it), "GC:G1 G59 G17 G20 G91 G93 M3 M9 T0 F0 S12");
+        run(&mut it, &s, "G21 G90 G94 G56 M5 G80 F300").unwrap();
+        assert_eq!(report(&it), "GC:G80 G56 G17 G21 G90 G94 M5 M9 T0 F300 S12");
     }
 
     #[test]

@@ -74,37 +74,59 @@ pub const MAX_CODES: usize = 8;
 pub type Code = u16;
 
 /// One parsed block: the G and M codes in order, and the value words by letter.
+/// A value word is present while its bit (A = bit 0) is set in `present`: a mask and
+/// plain floats are smaller to test and clear than 26 `Option<f32>`s.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Block {
     pub g: Vec<Code, MAX_CODES>,
     pub m: Vec<Code, MAX_CODES>,
-    values: [Option<f32>; 26],
+    present: u32,
+    values: [f32; 26],
 }
 
-/// Letters that carry values (everything else except G and M is unsupported).
-const VALUE_LETTERS: &[u8] = b"FIJKLNPRSTXYZ";
+/// Letters that carry values (everything else except G and M is unsupported), as a
+/// mask with A = bit 0.
+const VALUE_LETTERS: u32 = {
+    let letters = b"FIJKLNPRSTXYZ";
+    let mut mask = 0;
+    let mut i = 0;
+    while i < letters.len() {
+        mask |= 1 << (letters[i] - b'A');
+        i += 1;
+    }
+    mask
+};
 
 impl Block {
     /// Value word for `letter` (upper case), if present.
     pub fn get(&self, letter: u8) -> Option<f32> {
-        let i = letter.checked_sub(b'A')?;
-        self.values.get(usize::from(i)).copied().flatten()
+        let i = usize::from(letter.wrapping_sub(b'A'));
+        let v = *self.values.get(i)?;
+        (self.present >> i & 1 != 0).then_some(v)
     }
 
     /// Remove and return the value word for `letter` (used to track unused words).
     pub fn take(&mut self, letter: u8) -> Option<f32> {
-        let i = letter.checked_sub(b'A')?;
-        self.values.get_mut(usize::from(i)).and_then(Option::take)
+        let v = self.get(letter)?;
+        self.present &= !(1 << (letter - b'A'));
+        Some(v)
     }
 
     /// Letters that still hold a value.
     pub fn any_value(&self) -> bool {
-        self.values.iter().any(Option::is_some)
+        self.present != 0
     }
 
     /// Parse a cleaned line (upper case, no spaces or comments).
     pub fn parse(line: &[u8]) -> Result<Block, Status> {
         let mut b = Block::default();
+        b.parse_into(line)?;
+        Ok(b)
+    }
+
+    /// [`Block::parse`] into an empty block (no block moved through a `Result`).
+    pub fn parse_into(&mut self, line: &[u8]) -> Result<(), Status> {
+        let b = self;
         let mut rest = line;
         while let Some((&letter, tail)) = rest.split_first() {
             if !letter.is_ascii_uppercase() {
@@ -121,18 +143,20 @@ impl Block {
                     let list = if letter == b'G' { &mut b.g } else { &mut b.m };
                     list.push(code).map_err(|_| Status::ModalGroupViolation)?;
                 }
-                _ if VALUE_LETTERS.contains(&letter) => {
-                    let slot = usize::from(letter - b'A');
-                    match b.values.get_mut(slot) {
-                        Some(s @ None) => *s = Some(value),
-                        Some(Some(_)) => return Err(Status::WordRepeated),
-                        None => return Err(Status::ExpectedCommandLetter),
+                _ if VALUE_LETTERS >> (letter - b'A') & 1 != 0 => {
+                    let i = letter - b'A';
+                    if b.present & (1 << i) != 0 {
+                        return Err(Status::WordRepeated);
+                    }
+                    b.present |= 1 << i;
+                    if let Some(slot) = b.values.get_mut(usize::from(i)) {
+                        *slot = value;
                     }
                 }
                 _ => return Err(Status::UnsupportedCommand),
             }
         }
-        Ok(b)
+        Ok(())
     }
 }
 
@@ -141,7 +165,7 @@ fn code_of(value: f32) -> Result<Code, Status> {
     if value > 999.0 {
         return Err(Status::UnsupportedCommand);
     }
-    let hundredths = crate::fmath::round(value * 100.0) as u32;
+    let hundredths = crate::settings::to_u32(crate::fmath::round(value * 100.0));
     if !hundredths.is_multiple_of(10) {
         return Err(Status::CommandValueNotInteger);
     }

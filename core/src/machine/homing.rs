@@ -7,6 +7,7 @@
 //! the planner, the alarms and the position it sets at the end.
 
 use super::{Command, MotionControl};
+use crate::gcode::interp::mm_to_steps;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::Settings;
 
@@ -56,8 +57,9 @@ pub enum Progress {
 /// A running homing cycle.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Homing {
-    order: heapless::Vec<u8, AXES>,
-    current: usize,
+    /// Axes to home (X = bit 0), and those not homed yet.
+    axes: u8,
+    left: u8,
     phase: Phase,
     /// A move of the current phase has been queued.
     issued: bool,
@@ -66,26 +68,24 @@ pub struct Homing {
 impl Homing {
     /// Start a cycle over the axes that have switches ($214). `None` if there are none.
     pub fn start(s: &Settings) -> Option<Homing> {
-        let mut order = heapless::Vec::new();
-        for axis in [2u8, 0, 1] {
-            if s.switch_mask() & (1 << axis) != 0 {
-                let _ = order.push(axis);
-            }
-        }
-        if order.is_empty() {
-            return None;
-        }
-        Some(Homing {
-            order,
-            current: 0,
+        let axes = s.switch_mask() & 7;
+        (axes != 0).then_some(Homing {
+            axes,
+            left: axes,
             phase: Phase::Seek,
             issued: false,
         })
     }
 
-    /// Axis being homed.
+    /// Axis being homed: Z first, then X, then Y.
     pub fn axis(&self) -> usize {
-        usize::from(self.order.get(self.current).copied().unwrap_or(0))
+        if self.left & 4 != 0 {
+            2
+        } else if self.left & 1 != 0 {
+            0
+        } else {
+            1
+        }
     }
 
     /// Advance with the current switch levels (`limits[axis]`, true = pressed).
@@ -159,10 +159,10 @@ impl Homing {
                         self.phase = Phase::Locate;
                         self.issued = false;
                     } else {
-                        self.current += 1;
+                        self.left &= !(1 << axis);
                         self.phase = Phase::Seek;
                         self.issued = false;
-                        if self.current >= self.order.len() {
+                        if self.left == 0 {
                             return Progress::Done(self.home_position(s, m.position()));
                         }
                     }
@@ -183,7 +183,7 @@ impl Homing {
     ) -> bool {
         let mut target = m.position();
         if let Some(t) = target.get_mut(axis) {
-            *t = t.saturating_add(crate::fmath::round(mm * s.steps_per_mm(axis)) as i32);
+            *t = t.saturating_add(mm_to_steps(mm, s.steps_per_mm(axis)));
         }
         let mv = Move {
             target,
@@ -198,16 +198,19 @@ impl Homing {
     /// Position after homing: homed axes sit at the pull-off distance inside their
     /// travel (+pull-off when homing toward -, -pull-off when toward +).
     fn home_position(&self, s: &Settings, mut pos: StepPos) -> StepPos {
-        for &axis in self.order.iter() {
+        for axis in 0..AXES as u8 {
+            if self.axes & (1 << axis) == 0 {
+                continue;
+            }
             let a = usize::from(axis);
-            let off = s.homing_pulloff() * s.steps_per_mm(a);
-            let sign = if s.homing_dir_mask() & (1 << axis) != 0 {
-                1.0
-            } else {
-                -1.0
-            };
+            let off = mm_to_steps(s.homing_pulloff(), s.steps_per_mm(a));
             if let Some(p) = pos.get_mut(a) {
-                *p = crate::fmath::round(sign * off) as i32;
+                // Rounding is symmetric, so negating the rounded value is exact.
+                *p = if s.homing_dir_mask() & (1 << axis) != 0 {
+                    off
+                } else {
+                    -off
+                };
             }
         }
         pos

@@ -10,7 +10,8 @@
 use super::homing::{Homing, HomingError, Progress};
 use super::{Command, MotionControl};
 use crate::gcode::interp::to_mm;
-use crate::gcode::{Interp, Reject, Status, Stop};
+use crate::gcode::interp::Room;
+use crate::gcode::{Interp, Outcome, Reject, Status, Stop};
 use crate::motion::{Move, AXES};
 use crate::settings::Settings;
 use heapless::Deque;
@@ -323,29 +324,34 @@ impl Machine {
         if !self.can_accept() {
             return None;
         }
-        // Interpret on a copy; commit only if the planner has room for the result.
-        let mut trial = self.interp.clone();
-        let result = trial.execute(line, &self.settings, line_no);
-        let out = match result {
-            Ok(out) => out,
+        // Committed only if the planner has room for the result (check mode queues
+        // nothing); M2/M30 also waits for the queue to run empty.
+        let room = if self.check_mode {
+            Room {
+                cmds: usize::MAX,
+                idle: true,
+            }
+        } else {
+            Room {
+                cmds: m.free(),
+                idle: m.is_idle(),
+            }
+        };
+        let mut out = Outcome::default();
+        match self
+            .interp
+            .execute_into(line, &self.settings, line_no, &mut out, Some(room))
+        {
+            Ok(true) => {}
+            Ok(false) => return None,
             Err(Reject::Error(e)) => return Some(Err(e)),
             Err(Reject::SoftLimit) => {
                 // Grbl: the line is answered ok, motion stops, alarm 2 (no reset needed).
                 self.raise(Alarm::SoftLimit, m);
                 return Some(Ok(()));
             }
-        };
-        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
-        // motion before it has finished, so its `ok` means "program done".
-        let ends = out.stop == Some(Stop::End);
-        if ends && !self.check_mode && !m.is_idle() {
-            return None;
         }
-        if !self.check_mode && out.cmds.len() > m.free() {
-            return None;
-        }
-        self.interp = trial;
-        if ends {
+        if out.stop == Some(Stop::End) {
             self.event(Event::Msg("Pgm End"));
         }
         if out.coords_changed {
@@ -374,8 +380,13 @@ impl Machine {
     }
 
     /// Check a line (for `$N`) without running it or changing any state.
-    pub fn validate(&self, line: &[u8]) -> Result<(), Status> {
-        match self.interp.clone().execute(line, &self.settings, 0) {
+    pub fn validate(&mut self, line: &[u8]) -> Result<(), Status> {
+        // `room: None`: checked, never committed.
+        let mut out = Outcome::default();
+        match self
+            .interp
+            .execute_into(line, &self.settings, 0, &mut out, None)
+        {
             Err(Reject::Error(e)) => Err(e),
             _ => Ok(()),
         }
