@@ -536,7 +536,8 @@ impl Hmi {
         if ev.key == Key::Enter && form.is_last() {
             let job = form.job();
             let values = form.values();
-            match job.plan([0; 3], &self.cfg) {
+            // Planned once from the origin only to check it (the moves are dropped).
+            match job.plan([0; 3], &self.cfg, &mut Actions::new()) {
                 Ok(_) => {
                     if let Some(slot) = self.params.get_mut(kind.index()) {
                         *slot = values;
@@ -567,11 +568,8 @@ impl Hmi {
             draw_feed_mm_min: self.draw_feed,
             ..self.cfg
         };
-        match job.plan(st.pos, &cfg) {
-            Ok(plan) => {
-                for m in &plan.moves {
-                    push(out, Action::Queue(*m));
-                }
+        match job.plan(st.pos, &cfg, out) {
+            Ok(end) => {
                 if job.draws() {
                     self.last_job = Some(job);
                 }
@@ -579,7 +577,7 @@ impl Hmi {
                 self.page = Page::Run(RunPage {
                     job,
                     start: st.pos,
-                    end: plan.end,
+                    end,
                     started_ms: now_ms,
                     phase: RunPhase::Running,
                     traveled_mm: 0.0,
