@@ -60,13 +60,10 @@ impl JobError {
     }
 }
 
-/// Largest |steps| accepted for a coordinate (keeps sums far from i32 overflow).
-const STEP_LIMIT: f32 = 1.0e9;
-
-/// `v` steps rounded to whole steps; None if not finite or beyond [`STEP_LIMIT`].
+/// `v` steps rounded to whole steps; None if not finite or 10^9 or more (which keeps
+/// sums far from i32 overflow).
 fn steps(v: f32) -> Option<i32> {
-    let s = fmath::round(v);
-    (s.is_finite() && s.abs() < STEP_LIMIT).then_some(s as i32)
+    super::fixed::round_checked(v)
 }
 
 /// `from` moved by `d` steps (each rounded), at pen height `z`; None if out of range.

@@ -106,12 +106,9 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
 
 /// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
 fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
-    let z = fmath::round(z_mm * steps_per_mm);
-    if !z.is_finite() || z.abs() >= 1.0e9 {
-        return None;
-    }
+    let z = fixed::round_checked(z_mm * steps_per_mm)?;
     Some(Action::Queue(Move {
-        target: [st.pos[X], st.pos[Y], z as i32],
+        target: [st.pos[X], st.pos[Y], z],
         path: Path::Line,
         feed: Feed::Rapid,
         line: 0,
