@@ -47,57 +47,79 @@ pub fn round_checked(v: f32) -> Option<i32> {
     (v.is_finite() && n.unsigned_abs() < 1_000_000_000).then_some(n)
 }
 
-/// `v` with exactly `decimals` (0..=3) digits after the point; "----" if not finite
-/// or too large. Built digit by digit in u32 (no core::fmt, no 64-bit division).
-pub fn format(v: f32, decimals: u8) -> Fixed {
-    let decimals = decimals.min(3);
-    let scale: u32 = [1, 10, 100, 1000][decimals as usize];
-    match round_checked(v * scale as f32) {
-        Some(n) => digits(n < 0, n.unsigned_abs(), decimals),
-        None => Text::truncated("----"),
+/// A number to show: n / 10^decimals with a sign (`true`: negative), or None for a
+/// value that cannot be shown ("----").
+pub type Number = Option<(bool, u32)>;
+
+/// `v` scaled to `decimals` (at most 3) digits after the point and rounded; None if
+/// not finite or too large.
+pub fn scaled(v: f32, decimals: u8) -> Number {
+    let scale: u32 = [1, 10, 100, 1000][usize::from(decimals.min(3))];
+    round_checked(v * scale as f32).map(|n| (n < 0, n.unsigned_abs()))
+}
+
+/// Append `num` with `decimals` digits after the point ("-" first if negative and not
+/// 0, at least one integer digit: "0.05", "----" for None), right-aligned in `width`
+/// characters, to the text `buf[..*len]`: whole, or nothing and false if it does not
+/// fit. Built from the end in u32 (no core::fmt, no 64-bit division); one routine for
+/// every text capacity.
+#[inline(never)]
+pub(super) fn append_number(
+    buf: &mut [u8],
+    len: &mut u8,
+    num: Number,
+    decimals: u8,
+    width: usize,
+) -> bool {
+    // Spaces for the padding, the characters written backwards from the end (at
+    // most 12: the index wraps within the array, so it needs no bounds check).
+    let mut tmp = [b' '; 32];
+    let mut at = tmp.len();
+    let mut put = |c: u8| {
+        at = at.wrapping_sub(1);
+        tmp[at & 31] = c;
+    };
+    match num {
+        None => {
+            for _ in 0..4 {
+                put(b'-');
+            }
+        }
+        Some((neg, n)) => {
+            let d = u32::from(decimals);
+            let mut rest = n;
+            let mut k = 0;
+            loop {
+                if k == d && d > 0 {
+                    put(b'.');
+                }
+                put(b'0' + (rest % 10) as u8);
+                rest /= 10;
+                k += 1;
+                if rest == 0 && k > d {
+                    break;
+                }
+            }
+            if neg && n != 0 {
+                put(b'-');
+            }
+        }
     }
+    let start = at.min(32usize.saturating_sub(width));
+    super::text::append(buf, len, tmp.get(start..).unwrap_or(&[]))
+}
+
+/// `v` with exactly `decimals` (0..=3) digits after the point; "----" if not finite
+/// or too large.
+pub fn format(v: f32, decimals: u8) -> Fixed {
+    fixed(v, decimals)
 }
 
 /// `n` in decimal.
 pub fn uint(n: u32) -> Fixed {
-    digits(false, n, 0)
-}
-
-/// `n` (already scaled by 10^decimals) as text, "-" first if `neg` and n != 0.
-fn digits(neg: bool, n: u32, decimals: u8) -> Fixed {
-    // Digits, least significant first, with the point after `decimals` of them.
-    let mut rev = [0u8; 16];
-    let mut len = 0;
-    let mut rest = n;
-    // At least "0" or "0.0..": one integer digit, the point and the decimals.
-    let min_len = if decimals > 0 {
-        decimals as usize + 2
-    } else {
-        1
-    };
-    while let Some(slot) = rev.get_mut(len) {
-        if rest == 0 && len >= min_len {
-            break;
-        }
-        if decimals > 0 && len == decimals as usize {
-            *slot = b'.';
-        } else {
-            *slot = b'0' + (rest % 10) as u8;
-            rest /= 10;
-        }
-        len += 1;
-    }
-    if neg && n != 0 {
-        if let Some(slot) = rev.get_mut(len) {
-            *slot = b'-';
-            len += 1;
-        }
-    }
-    let mut out = Fixed::new();
-    for &c in rev.get(..len).unwrap_or(&[]).iter().rev() {
-        out.push_ascii(c);
-    }
-    out
+    let mut s = Text::new();
+    s.push_uint(n, 0);
+    s
 }
 
 /// Append [`format`]`(v, decimals)`; false if `out` ran out of room.

@@ -85,7 +85,7 @@ fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
     for &b in tpl {
         // (decimals, or none for an integer; width)
         let (decimals, width) = match b {
-            FIX..UINT => (Some(b - FIX), 0),
+            FIX..UINT => (Some((b - FIX).min(3)), 0),
             UINT..AXIS => (None, b - UINT),
             AXIS..24 => (Some(2), b - AXIS),
             _ => {
@@ -94,14 +94,11 @@ fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
             }
         };
         let x = v.next().unwrap_or(0.0);
-        let text = match decimals {
-            Some(d) => fixed::format(x, d),
-            None => fixed::uint(x as u32),
+        let (num, decimals) = match decimals {
+            Some(d) => (fixed::scaled(x, d), d),
+            None => (Some((false, x as u32)), 0),
         };
-        for _ in text.len()..usize::from(width) {
-            l.push_ascii(b' ');
-        }
-        l.push_text(&text);
+        l.push_number(num, decimals, usize::from(width));
     }
     l.bytes()
 }
