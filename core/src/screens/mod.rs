@@ -126,18 +126,15 @@ fn push_dir(l: &mut Line, dir: [i8; 2]) {
 fn time_text(ms: u32) -> Line {
     let mut s = Line::new();
     let tenths = ms / 100;
-    let (tpl, v): (&[u8], [u32; 2]) = if tenths < 600 {
-        (b"\x08.\x08s", [tenths / 10, tenths % 10])
+    if tenths < 600 {
+        s.push_number(Some((false, tenths)), 1, 0);
     } else {
         let secs = ms / 1000;
-        let tpl: &[u8] = if secs % 60 < 10 {
-            b"\x08m0\x08s"
-        } else {
-            b"\x08m\x08s"
-        };
-        (tpl, [secs / 60, secs % 60])
-    };
-    fill(&mut s, tpl, &v.map(|n| n as f32));
+        s.push_uint(secs / 60, 0);
+        s.push_str(if secs % 60 < 10 { "m0" } else { "m" });
+        s.push_uint(secs % 60, 0);
+    }
+    s.push_ascii(b's');
     s
 }
 
