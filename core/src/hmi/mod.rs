@@ -230,17 +230,7 @@ impl Hmi {
             Page::Menu { sel } | Page::Machine { sel } => {
                 let sel = *sel;
                 let main = matches!(self.page, Page::Menu { .. });
-                let (n, hotkey) = if main {
-                    (
-                        MENU.len(),
-                        MENU.iter().position(|(k, _)| Key::Digit(*k) == ev.key),
-                    )
-                } else {
-                    let pos = MACHINE_MENU
-                        .iter()
-                        .position(|(k, _)| Key::Digit(*k) == ev.key);
-                    (MACHINE_MENU.len(), pos)
-                };
+                let n = if main { MENU.len() } else { MACHINE_MENU.len() };
                 let at = |sel: usize| {
                     if main {
                         Page::Menu { sel }
@@ -262,7 +252,8 @@ impl Hmi {
                         None
                     }
                     Key::Enter if press => Some(sel),
-                    Key::Digit(_) if press => hotkey,
+                    // Both menus' hotkeys are 1, 2, ... 9, 0 in order.
+                    Key::Digit(d) if press => Some((usize::from(d) + 9) % 10).filter(|&i| i < n),
                     _ => None,
                 };
                 if let Some(i) = chosen {
@@ -510,11 +501,10 @@ impl Hmi {
         match field.key(ev.key, repeat) {
             FieldInput::Edited => return,
             FieldInput::Cancel => {
-                let sel = MENU
-                    .iter()
-                    .position(|(_, m)| *m == MenuItem::Draw(kind))
-                    .unwrap_or(0);
-                self.page = Page::Menu { sel };
+                // The drawing modes follow Jog in the menu, in form order.
+                self.page = Page::Menu {
+                    sel: kind.index() + 1,
+                };
                 return;
             }
             FieldInput::Ignored => {}
