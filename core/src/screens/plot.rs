@@ -29,17 +29,15 @@ impl Plot {
     pub fn fit(job: &Job, area: Area) -> Self {
         let [x, y, w, h] = area;
         let (lo, hi) = job.bounds();
-        let inner_w = (w - 5) as f32;
-        let inner_h = (h - 5) as f32;
         let bw = hi[0] - lo[0];
         let bh = hi[1] - lo[1];
         let sx = if bw > 1e-3 {
-            inner_w / bw
+            (w - 5) as f32 / bw
         } else {
             f32::INFINITY
         };
         let sy = if bh > 1e-3 {
-            inner_h / bh
+            (h - 5) as f32 / bh
         } else {
             f32::INFINITY
         };
@@ -47,9 +45,9 @@ impl Plot {
         if !scale.is_finite() {
             scale = 1.0;
         }
-        // Centre the drawing in the area.
-        let cx = x as f32 + w as f32 / 2.0;
-        let cy = y as f32 + h as f32 / 2.0;
+        // Centre the drawing in the area (centre x + w / 2, exact in halves).
+        let cx = (2 * x + w) as f32 * 0.5;
+        let cy = (2 * y + h) as f32 * 0.5;
         let mid = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         Plot {
             area,
