@@ -156,7 +156,8 @@ impl Job {
             Job::Star { size } => {
                 let r = size / 2.0;
                 let s = t * 5.0;
-                let k = (fmath::floor(s) as usize).min(4);
+                // s >= 0: the cast is the floor.
+                let k = (s as usize).min(4);
                 let f = s - k as f32;
                 let (p0, p1) = (star_point(r, k), star_point(r, k + 1));
                 [p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f]

@@ -423,7 +423,6 @@ impl Hmi {
             return;
         };
         let mut jog = *jog;
-        let speed = |i: usize| JOG_SPEEDS.get(i).copied().unwrap_or(100.0);
         match (ev.kind, ev.key) {
             (KeyKind::Press, k) if k.jog_dir().is_some() => {
                 if let Some(dir) = k.jog_dir() {
@@ -438,7 +437,7 @@ impl Hmi {
                         out,
                         Action::JogStart {
                             dir,
-                            feed_mm_min: speed(self.jog_speed),
+                            feed_mm_min: self.jog_speed(),
                         },
                     );
                     jog.active = Some((k, dir));
@@ -461,7 +460,7 @@ impl Hmi {
                         out,
                         Action::JogStart {
                             dir,
-                            feed_mm_min: speed(self.jog_speed),
+                            feed_mm_min: self.jog_speed(),
                         },
                     );
                 }

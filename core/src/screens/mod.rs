@@ -236,12 +236,12 @@ impl Screens {
             }
             Page::Form(form) => {
                 let fields = form.fields();
-                let count = [form.cur as f32 + 1.0, fields.len() as f32];
-                title_bar(
-                    fb,
-                    form.kind.title().as_bytes(),
-                    fill(&mut l, b"\x08/\x08", &count),
-                );
+                // "2/4": the field and the count.
+                l.clear();
+                l.push_uint(form.cur as u32 + 1, 0);
+                l.push_ascii(b'/');
+                l.push_uint(fields.len() as u32, 0);
+                title_bar(fb, form.kind.title().as_bytes(), l.bytes());
                 for (i, f) in fields.iter().take(ROWS).enumerate() {
                     let (y, current) = (row_y(i), i == form.cur);
                     put(fb, Cell::at(0, y, 6), f.label().as_bytes());
