@@ -66,13 +66,9 @@ fn steps(v: f32) -> Option<i32> {
     super::fixed::round_checked(v)
 }
 
-/// `from` moved by `d` steps (each rounded), at pen height `z`; None if out of range.
-fn moved(from: [i32; 2], d: [f32; 2], z: i32) -> Option<StepPos> {
-    Some([
-        from[X].checked_add(steps(d[0])?)?,
-        from[Y].checked_add(steps(d[1])?)?,
-        z,
-    ])
+/// [`steps`], out of range as the job error.
+fn steps_or_err(v: f32) -> Result<i32, JobError> {
+    steps(v).ok_or(JobError::TooLarge)
 }
 
 /// (cos, sin) of star point k's angle, pi/2 - k 4pi/5 (top point first, every second
@@ -221,10 +217,10 @@ impl Job {
         cfg: &Config,
         out: &mut Actions,
     ) -> Result<StepPos, JobError> {
-        use JobError::{Empty, TooLarge};
+        use JobError::Empty;
         let spmm = cfg.steps_per_mm;
-        let z_down = steps(cfg.pen_down_mm * spmm[Z]).ok_or(TooLarge)?;
-        let z_up = steps(cfg.pen_up_mm * spmm[Z]).ok_or(TooLarge)?;
+        let z_down = steps_or_err(cfg.pen_down_mm * spmm[Z])?;
+        let z_up = steps_or_err(cfg.pen_up_mm * spmm[Z])?;
         let draws = self.draws();
         let (z, feed) = if draws {
             (z_down, Feed::MmPerMin(cfg.draw_feed_mm_min))
@@ -234,18 +230,17 @@ impl Job {
         // Pen to its working height at the start point first.
         let here = [start[X], start[Y], z];
         add(out, here, Path::Line, Feed::Rapid)?;
-        // A point `d` mm from the start.
-        let at = |d: [f32; 2]| moved([start[X], start[Y]], [d[0] * spmm[X], d[1] * spmm[Y]], z);
-        let last = match *self {
-            Job::Line { dx, dy } | Job::Travel { dx, dy } => {
-                let end = at([dx, dy]).ok_or(TooLarge)?;
-                // A drawn line must move; going to the origin from there is fine.
-                if draws && end == here {
-                    return Err(Empty);
-                }
-                add(out, end, Path::Line, feed)?;
-                end
+        // A straight line to `d` mm from the start; if `must_move`, refused if it
+        // would not move (a drawn line; going to the origin from there is fine).
+        let line_to = |out: &mut Actions, d: [f32; 2], must_move: bool| {
+            let rel = [steps_or_err(d[0] * spmm[X])?, steps_or_err(d[1] * spmm[Y])?];
+            if must_move && rel == [0, 0] {
+                return Err(Empty);
             }
+            add_rel(out, here, rel, Path::Line, feed)
+        };
+        match *self {
+            Job::Line { dx, dy } | Job::Travel { dx, dy } => line_to(out, [dx, dy], draws)?,
             Job::Arc { r, theta } => {
                 if theta == 0.0 {
                     return Err(Empty);
@@ -262,43 +257,35 @@ impl Job {
                 let amp_steps = amp * spmm[Y];
                 let omega_steps = omega / spmm[X];
                 let ph = phase.to_radians();
-                let len_steps = steps(len * spmm[X]).ok_or(TooLarge)?;
+                let len_steps = steps_or_err(len * spmm[X])?;
                 if len_steps == 0 {
                     return Err(Empty);
                 }
                 let rise = amp_steps * fmath::sin(omega_steps * len_steps as f32 + ph)
                     - amp_steps * fmath::sin(ph);
-                let end = [
-                    start[X].checked_add(len_steps).ok_or(TooLarge)?,
-                    start[Y]
-                        .checked_add(steps(rise).ok_or(TooLarge)?)
-                        .ok_or(TooLarge)?,
-                    z,
-                ];
                 let path = Path::Sine {
                     amp: amp_steps,
                     omega: omega_steps,
                     phase: ph,
                 };
-                add(out, end, path, feed)?;
-                end
+                add_rel(out, here, [len_steps, steps_or_err(rise)?], path, feed)?;
             }
             Job::Star { size } => {
                 let r = size / 2.0;
-                if steps(r * spmm[X]).ok_or(TooLarge)? == 0 {
+                if steps_or_err(r * spmm[X])? == 0 {
                     return Err(Empty);
                 }
-                for k in 1..6 {
-                    // The fifth line closes exactly on the start.
-                    let target = if k == 5 {
-                        here
-                    } else {
-                        at(star_point(r, k)).ok_or(TooLarge)?
-                    };
-                    add(out, target, Path::Line, feed)?;
+                for k in 1..5 {
+                    line_to(out, star_point(r, k), false)?;
                 }
-                here
+                // The fifth line closes exactly on the start.
+                add(out, here, Path::Line, feed)?;
             }
+        }
+        // Where the path ended (its last move), with the pen lifted.
+        let last = match out.last() {
+            Some(Action::Queue(m)) => m.target,
+            _ => here,
         };
         let end = [last[X], last[Y], z_up];
         if draws {
@@ -320,57 +307,62 @@ fn add(out: &mut Actions, target: StepPos, path: Path, feed: Feed) -> Result<(),
     out.push(Action::Queue(m)).map_err(|_| JobError::TooLarge)
 }
 
+/// Append a move to `from` + `rel` (X, Y in steps) at `from`'s pen height.
+fn add_rel(
+    out: &mut Actions,
+    from: StepPos,
+    rel: [i32; 2],
+    path: Path,
+    feed: Feed,
+) -> Result<(), JobError> {
+    let to = |a: usize| from[a].checked_add(rel[a]).ok_or(JobError::TooLarge);
+    add(out, [to(X)?, to(Y)?, from[Z]], path, feed)
+}
+
 /// Arc or ellipse from `from` (its 0° point) through `theta` degrees, semi-axes `semi`
-/// in steps (rounded here); returns its end. A circle in mm is a circle in steps only
-/// when X and Y have the same steps/mm; otherwise it is sent as an ellipse. Full turns
-/// go as two half turns so that no move has target == start.
+/// in steps (rounded here). A circle in mm is a circle in steps only when X and Y have
+/// the same steps/mm; otherwise it is sent as an ellipse. Full turns go as two half
+/// turns so that no move has target == start.
 fn conic(
     out: &mut Actions,
     from: StepPos,
     semi: [f32; 2],
     theta: f32,
     feed: Feed,
-) -> Result<StepPos, JobError> {
+) -> Result<(), JobError> {
     use JobError::{Empty, TooLarge};
-    let a = steps(semi[0]).ok_or(TooLarge)?;
-    let b = steps(semi[1]).ok_or(TooLarge)?;
+    let a = steps_or_err(semi[0])?;
+    let b = steps_or_err(semi[1])?;
     if a <= 0 || b <= 0 {
         return Err(Empty);
     }
+    // The centre (a to the left of the start) must be a position too.
+    from[X].checked_sub(a).ok_or(TooLarge)?;
     let ccw = theta > 0.0;
-    let center = [from[X].checked_sub(a).ok_or(TooLarge)?, from[Y]];
-    let path_from = |p: StepPos| {
-        let rel = [center[0] - p[X], center[1] - p[Y]];
+    // The centre relative to a point `rel` from the start.
+    let path = |rel: [i32; 2]| {
+        let center = [-a - rel[0], -rel[1]];
         if a == b {
             Path::Arc {
-                center: rel,
+                center,
                 ccw,
                 turns: 0,
             }
         } else {
-            Path::Ellipse {
-                center: rel,
-                a,
-                b,
-                ccw,
-            }
+            Path::Ellipse { center, a, b, ccw }
         }
     };
-    let full = theta.abs() >= 360.0;
-    let end = if full {
-        // Exactly opposite the start: (center - a, center).
-        [center[0] - a, center[1], from[Z]]
-    } else {
-        let t = theta.to_radians();
-        let d = [a as f32 * fmath::cos(t), b as f32 * fmath::sin(t)];
-        moved(center, d, from[Z]).ok_or(TooLarge)?
-    };
-    add(out, end, path_from(from), feed)?;
-    if full {
-        add(out, from, path_from(end), feed)?;
-        return Ok(from);
+    if theta.abs() >= 360.0 {
+        // Exactly opposite the start, then back.
+        add_rel(out, from, [-2 * a, 0], path([0, 0]), feed)?;
+        return add(out, from, path([-2 * a, 0]), feed);
     }
-    Ok(end)
+    let t = theta.to_radians();
+    let rel = [
+        steps_or_err(a as f32 * fmath::cos(t))? - a,
+        steps_or_err(b as f32 * fmath::sin(t))?,
+    ];
+    add_rel(out, from, rel, path([0, 0]), feed)
 }
 
 #[cfg(test)]
