@@ -50,6 +50,8 @@ impl Field {
         f
     }
 
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     fn spec(&self) -> &'static FieldSpec {
         FIELD_SPECS.get(usize::from(self.spec)).unwrap_or(&NO_SPEC)
     }
@@ -76,6 +78,8 @@ impl Field {
     }
 
     /// What the field shows: the text being typed, or the committed value.
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn display(&self) -> Text<12> {
         let mut s = Text::new();
         if self.editing {
@@ -174,6 +178,8 @@ impl Field {
     }
 
     /// "R: 0.50..100.00 mm"
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn range_message(&self) -> Text<28> {
         let (label, unit, min, max, decimals) = *self.spec();
         let mut s: Text<28> = Text::new();
@@ -367,6 +373,8 @@ impl Form {
     }
 
     /// The job described by the committed values.
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn job(&self) -> Job {
         let v = self.values();
         match self.kind {

@@ -66,6 +66,8 @@ impl<const N: usize> Text<N> {
     }
 
     /// The text's bytes (UTF-8), without re-checking them.
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn bytes(&self) -> &[u8] {
         self.buf.get(..usize::from(self.len)).unwrap_or(&[])
     }
