@@ -98,6 +98,8 @@ impl Clone for Hmi {
     }
 }
 
+#[inline(always)]
+// (Inlined: smaller than the call and its argument moves, measured.)
 fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
     let dx = (b[X].wrapping_sub(a[X])) as f32 / spmm[X];
     let dy = (b[Y].wrapping_sub(a[Y])) as f32 / spmm[Y];
@@ -105,6 +107,8 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
 }
 
 /// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
+#[inline(always)]
+// (Inlined: smaller than the call and its argument moves, measured.)
 fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
     let z = fixed::round_checked(z_mm * steps_per_mm)?;
     Some(Action::Queue(Move {
