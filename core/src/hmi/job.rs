@@ -137,10 +137,11 @@ impl Job {
     /// The ideal path point at parameter `t` in [0, 1], in mm relative to the start.
     pub fn point_at(&self, t: f32) -> [f32; 2] {
         let t = t.clamp(0.0, 1.0);
-        match *self {
-            Job::Line { dx, dy } | Job::Travel { dx, dy } => [dx * t, dy * t],
-            Job::Arc { r, theta } => conic_point(r, r, theta.to_radians() * t),
-            Job::Ellipse { a, b } => conic_point(a, b, 2.0 * PI * t),
+        // The arc and the ellipse share one conic evaluation: (a, b, angle).
+        let (a, b, angle) = match *self {
+            Job::Line { dx, dy } | Job::Travel { dx, dy } => return [dx * t, dy * t],
+            Job::Arc { r, theta } => (r, r, theta.to_radians() * t),
+            Job::Ellipse { a, b } => (a, b, 2.0 * PI * t),
             Job::Sine {
                 amp,
                 omega,
@@ -149,7 +150,7 @@ impl Job {
             } => {
                 let x = len * t;
                 let ph = phase.to_radians();
-                [x, amp * fmath::sin(omega * x + ph) - amp * fmath::sin(ph)]
+                return [x, amp * fmath::sin(omega * x + ph) - amp * fmath::sin(ph)];
             }
             Job::Star { size } => {
                 let r = size / 2.0;
@@ -158,9 +159,10 @@ impl Job {
                 let k = (s as usize).min(4);
                 let f = s - k as f32;
                 let (p0, p1) = (star_point(r, k), star_point(r, k + 1));
-                [p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f]
+                return [p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f];
             }
-        }
+        };
+        conic_point(a, b, angle)
     }
 
     /// Path length in mm (chords of 160 samples, a multiple of the star's 5 sides, so
