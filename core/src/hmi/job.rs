@@ -245,15 +245,17 @@ impl Job {
             }
             add_rel(out, here, rel, Path::Line, feed)
         };
+        // The arc and the ellipse share one conic: (semi-axes in mm, angle).
+        let mut conic_mm = None;
         match *self {
             Job::Line { dx, dy } | Job::Travel { dx, dy } => line_to(out, [dx, dy], draws)?,
             Job::Arc { r, theta } => {
                 if theta == 0.0 {
                     return Err(Empty);
                 }
-                conic(out, here, [r * spmm[X], r * spmm[Y]], theta, feed)?
+                conic_mm = Some((r, r, theta));
             }
-            Job::Ellipse { a, b } => conic(out, here, [a * spmm[X], b * spmm[Y]], 360.0, feed)?,
+            Job::Ellipse { a, b } => conic_mm = Some((a, b, 360.0)),
             Job::Sine {
                 amp,
                 omega,
@@ -287,6 +289,9 @@ impl Job {
                 // The fifth line closes exactly on the start.
                 add(out, here, Path::Line, feed)?;
             }
+        }
+        if let Some((a, b, theta)) = conic_mm {
+            conic(out, here, [a * spmm[X], b * spmm[Y]], theta, feed)?;
         }
         // Where the path ended (its last move), with the pen lifted.
         let last = match out.last() {
