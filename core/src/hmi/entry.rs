@@ -331,15 +331,13 @@ const FORM_FIELDS: [(u8, u8); 5] = [(0, 2), (2, 2), (4, 2), (6, 4), (10, 1)];
 
 impl Form {
     pub fn new(kind: FormKind, p: &[f32; 4]) -> Self {
-        let mut slots = [NO_FIELD; 4];
         let (first, n) = FORM_FIELDS.get(kind.index()).copied().unwrap_or((0, 0));
-        let mut count = 0;
-        for (spec, (&v, slot)) in
-            (usize::from(first)..usize::from(first + n)).zip(p.iter().zip(slots.iter_mut()))
-        {
-            *slot = Field::new(spec, v);
-            count += 1;
-        }
+        // Fields first + 0, 1, ... of the table (at most 4), the other slots unused.
+        let count = n.min(4);
+        let slots = core::array::from_fn(|i| match p.get(i) {
+            Some(&v) if i < usize::from(count) => Field::new(usize::from(first) + i, v),
+            _ => NO_FIELD,
+        });
         Form {
             kind,
             cur: 0,
