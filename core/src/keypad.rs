@@ -37,8 +37,6 @@
 //! rectangle; the phantom fourth key then reads as pressed. Nothing here needs chords
 //! (diagonals are single keys), so this is accepted, not corrected.
 
-use heapless::Vec;
-
 /// Number of row lines (inputs) and column lines (driven outputs).
 pub const ROWS: usize = 4;
 pub const COLS: usize = 4;
@@ -93,6 +91,8 @@ impl Key {
     }
 
     /// Whether holding this key auto-repeats. Digits never do (one press, one digit).
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn repeats(self) -> bool {
         matches!(self, Key::Back | Key::Up | Key::Down)
     }
@@ -165,8 +165,74 @@ struct KeyState {
     next_repeat: u32,
 }
 
-/// Events from one column scan: at most one per key of that column.
-pub type ScanEvents = Vec<KeyEvent, ROWS>;
+/// Events from one column scan: at most one per key of that column, in row order.
+/// Plain data (a copy, iterated by value without a drop or bounds check).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScanEvents {
+    /// The first `len` are the events.
+    events: [KeyEvent; ROWS],
+    len: u8,
+}
+
+impl ScanEvents {
+    const fn new() -> Self {
+        // Filler for the unused slots.
+        let none = KeyEvent {
+            key: Key::Back,
+            kind: KeyKind::Release,
+        };
+        ScanEvents {
+            events: [none; ROWS],
+            len: 0,
+        }
+    }
+
+    fn push(&mut self, ev: KeyEvent) {
+        if let Some(slot) = self.events.get_mut(usize::from(self.len)) {
+            *slot = ev;
+            self.len += 1;
+        }
+    }
+
+    pub fn as_slice(&self) -> &[KeyEvent] {
+        self.events.get(..usize::from(self.len)).unwrap_or(&[])
+    }
+
+    pub fn len(&self) -> usize {
+        usize::from(self.len)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+impl IntoIterator for ScanEvents {
+    type Item = KeyEvent;
+    type IntoIter = ScanIter;
+    fn into_iter(self) -> ScanIter {
+        ScanIter {
+            events: self,
+            at: 0,
+        }
+    }
+}
+
+/// The events of a [`ScanEvents`], by value.
+#[derive(Clone, Debug)]
+pub struct ScanIter {
+    events: ScanEvents,
+    at: u8,
+}
+
+impl Iterator for ScanIter {
+    type Item = KeyEvent;
+    fn next(&mut self) -> Option<KeyEvent> {
+        let ev = self.events.as_slice().get(usize::from(self.at)).copied()?;
+        self.at += 1;
+        Some(ev)
+    }
+}
 
 /// The keypad scanner state.
 #[derive(Debug)]
@@ -238,8 +304,8 @@ impl Keypad {
                 None
             };
             if let Some(kind) = event {
-                // Capacity is ROWS and there is at most one event per row.
-                let _ = out.push(KeyEvent { key, kind });
+                // Room for one event per row.
+                out.push(KeyEvent { key, kind });
             }
         }
         out

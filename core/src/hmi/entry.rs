@@ -50,6 +50,8 @@ impl Field {
         f
     }
 
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     fn spec(&self) -> &'static FieldSpec {
         FIELD_SPECS.get(usize::from(self.spec)).unwrap_or(&NO_SPEC)
     }
@@ -76,6 +78,8 @@ impl Field {
     }
 
     /// What the field shows: the text being typed, or the committed value.
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn display(&self) -> Text<12> {
         let mut s = Text::new();
         if self.editing {
@@ -174,6 +178,8 @@ impl Field {
     }
 
     /// "R: 0.50..100.00 mm"
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn range_message(&self) -> Text<28> {
         let (label, unit, min, max, decimals) = *self.spec();
         let mut s: Text<28> = Text::new();
@@ -325,15 +331,13 @@ const FORM_FIELDS: [(u8, u8); 5] = [(0, 2), (2, 2), (4, 2), (6, 4), (10, 1)];
 
 impl Form {
     pub fn new(kind: FormKind, p: &[f32; 4]) -> Self {
-        let mut slots = [NO_FIELD; 4];
         let (first, n) = FORM_FIELDS.get(kind.index()).copied().unwrap_or((0, 0));
-        let mut count = 0;
-        for (spec, (&v, slot)) in
-            (usize::from(first)..usize::from(first + n)).zip(p.iter().zip(slots.iter_mut()))
-        {
-            *slot = Field::new(spec, v);
-            count += 1;
-        }
+        // Fields first + 0, 1, ... of the table (at most 4), the other slots unused.
+        let count = n.min(4);
+        let slots = core::array::from_fn(|i| match p.get(i) {
+            Some(&v) if i < usize::from(count) => Field::new(usize::from(first) + i, v),
+            _ => NO_FIELD,
+        });
         Form {
             kind,
             cur: 0,
@@ -358,6 +362,8 @@ impl Form {
     }
 
     /// The committed values, in field order (unused slots 0).
+    #[inline(always)]
+    // (Inlined: smaller than the call and its argument moves, measured.)
     pub fn values(&self) -> [f32; 4] {
         let mut v = [0.0; 4];
         for (slot, f) in v.iter_mut().zip(self.fields()) {
@@ -367,6 +373,8 @@ impl Form {
     }
 
     /// The job described by the committed values.
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn job(&self) -> Job {
         let v = self.values();
         match self.kind {

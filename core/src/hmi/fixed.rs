@@ -5,63 +5,121 @@
 //! integer formatting. Values too large for the requested width print as "----".
 
 use super::text::Text;
-use crate::fmath;
 
 /// Longest text produced: "-999999999.999".
 pub type Fixed = Text<16>;
 
-/// `v` with exactly `decimals` (0..=3) digits after the point; "----" if not finite
-/// or too large. Built digit by digit in u32 (no core::fmt, no 64-bit division).
-pub fn format(v: f32, decimals: u8) -> Fixed {
-    let decimals = decimals.min(3);
-    let scale: u32 = [1, 10, 100, 1000][decimals as usize];
-    let scaled = fmath::round(v * scale as f32);
-    if !scaled.is_finite() || scaled.abs() >= 1.0e9 {
-        return Text::truncated("----");
+/// `v` rounded to the nearest integer, halves away from zero, saturating (NaN gives 0):
+/// exactly `fmath::round(v) as i32`, from the bits alone (no soft-float calls).
+#[inline(never)]
+pub fn round_i32(v: f32) -> i32 {
+    let bits = v.to_bits();
+    let exp = (bits >> 23 & 0xff) as i32;
+    let mant = bits & 0x7f_ffff | 0x80_0000;
+    // v = ±mant * 2^shift.
+    let shift = exp - 150;
+    let mag = if exp < 126 {
+        // |v| < 0.5 (and zeros, subnormals).
+        0
+    } else if bits & 0x7fff_ffff > 0x7f80_0000 {
+        // NaN.
+        return 0;
+    } else if shift >= 8 {
+        // |v| >= 2^31 (and infinities): saturate.
+        return if bits >> 31 != 0 { i32::MIN } else { i32::MAX };
+    } else if shift >= 0 {
+        mant << shift
+    } else {
+        // Add half of the last kept place, then drop the fraction.
+        let k = -shift as u32;
+        (mant + (1 << (k - 1))) >> k
+    };
+    if bits >> 31 != 0 {
+        -(mag as i32)
+    } else {
+        mag as i32
     }
-    digits(scaled < 0.0, scaled.abs() as u32, decimals)
+}
+
+/// `v` rounded to an integer ([`round_i32`]) if finite and below 10^9 in magnitude.
+pub fn round_checked(v: f32) -> Option<i32> {
+    let n = round_i32(v);
+    (v.is_finite() && n.unsigned_abs() < 1_000_000_000).then_some(n)
+}
+
+/// A number to show: n / 10^decimals with a sign (`true`: negative), or None for a
+/// value that cannot be shown ("----").
+pub type Number = Option<(bool, u32)>;
+
+/// `v` scaled to `decimals` (at most 3) digits after the point and rounded; None if
+/// not finite or too large.
+pub fn scaled(v: f32, decimals: u8) -> Number {
+    let scale: u32 = [1, 10, 100, 1000][usize::from(decimals.min(3))];
+    round_checked(v * scale as f32).map(|n| (n < 0, n.unsigned_abs()))
+}
+
+/// Append `num` with `decimals` digits after the point ("-" first if negative and not
+/// 0, at least one integer digit: "0.05", "----" for None), right-aligned in `width`
+/// characters, to the text `buf[..*len]`: whole, or nothing and false if it does not
+/// fit. Built from the end in u32 (no core::fmt, no 64-bit division); one routine for
+/// every text capacity.
+#[inline(never)]
+pub(super) fn append_number(
+    buf: &mut [u8],
+    len: &mut u8,
+    num: Number,
+    decimals: u8,
+    width: usize,
+) -> bool {
+    // Spaces for the padding, the characters written backwards from the end (at
+    // most 12: the index wraps within the array, so it needs no bounds check).
+    let mut tmp = [b' '; 32];
+    let mut at = tmp.len();
+    let mut put = |c: u8| {
+        at = at.wrapping_sub(1);
+        tmp[at & 31] = c;
+    };
+    match num {
+        None => {
+            for _ in 0..4 {
+                put(b'-');
+            }
+        }
+        Some((neg, n)) => {
+            let d = u32::from(decimals);
+            let mut rest = n;
+            let mut k = 0;
+            loop {
+                if k == d && d > 0 {
+                    put(b'.');
+                }
+                put(b'0' + (rest % 10) as u8);
+                rest /= 10;
+                k += 1;
+                if rest == 0 && k > d {
+                    break;
+                }
+            }
+            if neg && n != 0 {
+                put(b'-');
+            }
+        }
+    }
+    let start = at.min(32usize.saturating_sub(width));
+    super::text::append(buf, len, tmp.get(start..).unwrap_or(&[]))
+}
+
+/// `v` with exactly `decimals` (0..=3) digits after the point; "----" if not finite
+/// or too large.
+pub fn format(v: f32, decimals: u8) -> Fixed {
+    fixed(v, decimals)
 }
 
 /// `n` in decimal.
 pub fn uint(n: u32) -> Fixed {
-    digits(false, n, 0)
-}
-
-/// `n` (already scaled by 10^decimals) as text, "-" first if `neg` and n != 0.
-fn digits(neg: bool, n: u32, decimals: u8) -> Fixed {
-    // Digits, least significant first, with the point after `decimals` of them.
-    let mut rev = [0u8; 16];
-    let mut len = 0;
-    let mut rest = n;
-    // At least "0" or "0.0..": one integer digit, the point and the decimals.
-    let min_len = if decimals > 0 {
-        decimals as usize + 2
-    } else {
-        1
-    };
-    while let Some(slot) = rev.get_mut(len) {
-        if rest == 0 && len >= min_len {
-            break;
-        }
-        if decimals > 0 && len == decimals as usize {
-            *slot = b'.';
-        } else {
-            *slot = b'0' + (rest % 10) as u8;
-            rest /= 10;
-        }
-        len += 1;
-    }
-    if neg && n != 0 {
-        if let Some(slot) = rev.get_mut(len) {
-            *slot = b'-';
-            len += 1;
-        }
-    }
-    let mut out = Fixed::new();
-    for &c in rev.get(..len).unwrap_or(&[]).iter().rev() {
-        out.push_ascii(c);
-    }
-    out
+    let mut s = Text::new();
+    s.push_uint(n, 0);
+    s
 }
 
 /// Append [`format`]`(v, decimals)`; false if `out` ran out of room.
@@ -97,6 +155,48 @@ mod tests {
         assert_eq!(fixed::<12>(0.0, 0).as_str(), "0");
         assert_eq!(fixed::<12>(0.05, 2).as_str(), "0.05");
         assert_eq!(fixed::<16>(-12345.678, 3).as_str(), "-12345.678");
+    }
+
+    #[test]
+    fn round_i32_is_round_then_cast() {
+        let mut cases = std::vec![
+            0.0f32,
+            -0.0,
+            0.5,
+            -0.5,
+            0.49999997,
+            1.5,
+            2.5,
+            -2.5,
+            8388607.5,
+            8388608.0,
+            16777215.0,
+            2147483520.0,
+            2147483648.0,
+            -2147483648.0,
+            -2147483904.0,
+            1.0e20,
+            -1.0e20,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            1.0e-40,
+            -1.0e-40,
+        ];
+        // And a spread of bit patterns over every exponent.
+        let mut x = 0x1234_5678u32;
+        for _ in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            cases.push(f32::from_bits(x));
+        }
+        for v in cases {
+            let want = libm::roundf(v) as i32;
+            assert_eq!(round_i32(v), want, "{v:e} ({:#x})", v.to_bits());
+            let checked = (v.is_finite() && want.unsigned_abs() < 1_000_000_000).then_some(want);
+            assert_eq!(round_checked(v), checked, "{v:e}");
+        }
     }
 
     #[test]

@@ -13,13 +13,8 @@
 use crate::fmath;
 use core::f32::consts::PI;
 
-use heapless::Vec;
-
-use super::Config;
+use super::{Action, Actions, Config};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
-
-/// The most moves one job produces (pen down + five star lines + pen up).
-pub const MAX_MOVES: usize = 8;
 
 /// One drawing job, parameters in mm / degrees, relative to the start position.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,33 +60,15 @@ impl JobError {
     }
 }
 
-/// The moves of a job and where it ends.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Plan {
-    pub moves: Vec<Move, MAX_MOVES>,
-    pub end: StepPos,
+/// `v` steps rounded to whole steps; None if not finite or 10^9 or more (which keeps
+/// sums far from i32 overflow).
+fn steps(v: f32) -> Option<i32> {
+    super::fixed::round_checked(v)
 }
 
-/// Largest |steps| accepted for a coordinate (keeps sums far from i32 overflow).
-const STEP_LIMIT: f32 = 1.0e9;
-
-fn to_steps(mm: f32, steps_per_mm: f32) -> Result<i32, JobError> {
-    let s = fmath::round(mm * steps_per_mm);
-    if s.is_finite() && s.abs() < STEP_LIMIT {
-        Ok(s as i32)
-    } else {
-        Err(JobError::TooLarge)
-    }
-}
-
-fn offset(start: StepPos, d: [f32; 2], z: i32, cfg: &Config) -> Result<StepPos, JobError> {
-    let dx = to_steps(d[0], cfg.steps_per_mm[X])?;
-    let dy = to_steps(d[1], cfg.steps_per_mm[Y])?;
-    Ok([
-        start[X].checked_add(dx).ok_or(JobError::TooLarge)?,
-        start[Y].checked_add(dy).ok_or(JobError::TooLarge)?,
-        z,
-    ])
+/// [`steps`], out of range as the job error.
+fn steps_or_err(v: f32) -> Result<i32, JobError> {
+    steps(v).ok_or(JobError::TooLarge)
 }
 
 /// (cos, sin) of star point k's angle, pi/2 - k 4pi/5 (top point first, every second
@@ -114,6 +91,8 @@ fn star_point(r: f32, k: usize) -> [f32; 2] {
 
 /// A point of the ellipse with semi-axes (a, b) at `angle` (radians) from its 0° point,
 /// relative to that point.
+#[inline(always)]
+// (Inlined: smaller than the call and its argument moves, measured.)
 fn conic_point(a: f32, b: f32, angle: f32) -> [f32; 2] {
     [a * fmath::cos(angle) - a, b * fmath::sin(angle)]
 }
@@ -158,10 +137,11 @@ impl Job {
     /// The ideal path point at parameter `t` in [0, 1], in mm relative to the start.
     pub fn point_at(&self, t: f32) -> [f32; 2] {
         let t = t.clamp(0.0, 1.0);
-        match *self {
-            Job::Line { dx, dy } | Job::Travel { dx, dy } => [dx * t, dy * t],
-            Job::Arc { r, theta } => conic_point(r, r, theta.to_radians() * t),
-            Job::Ellipse { a, b } => conic_point(a, b, 2.0 * PI * t),
+        // The arc and the ellipse share one conic evaluation: (a, b, angle).
+        let (a, b, angle) = match *self {
+            Job::Line { dx, dy } | Job::Travel { dx, dy } => return [dx * t, dy * t],
+            Job::Arc { r, theta } => (r, r, theta.to_radians() * t),
+            Job::Ellipse { a, b } => (a, b, 2.0 * PI * t),
             Job::Sine {
                 amp,
                 omega,
@@ -170,21 +150,25 @@ impl Job {
             } => {
                 let x = len * t;
                 let ph = phase.to_radians();
-                [x, amp * fmath::sin(omega * x + ph) - amp * fmath::sin(ph)]
+                return [x, amp * fmath::sin(omega * x + ph) - amp * fmath::sin(ph)];
             }
             Job::Star { size } => {
                 let r = size / 2.0;
                 let s = t * 5.0;
-                let k = (fmath::floor(s) as usize).min(4);
+                // s >= 0: the cast is the floor.
+                let k = (s as usize).min(4);
                 let f = s - k as f32;
                 let (p0, p1) = (star_point(r, k), star_point(r, k + 1));
-                [p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f]
+                return [p0[0] + (p1[0] - p0[0]) * f, p0[1] + (p1[1] - p0[1]) * f];
             }
-        }
+        };
+        conic_point(a, b, angle)
     }
 
     /// Path length in mm (chords of 160 samples, a multiple of the star's 5 sides, so
     /// exact for lines and the star).
+    #[inline(always)]
+    // (Inlined: smaller than the call and its argument moves, measured.)
     pub fn length_mm(&self) -> f32 {
         self.sweep().2
     }
@@ -216,172 +200,208 @@ impl Job {
         (lo, hi, len)
     }
 
-    /// The planner moves for this job from `start` (pen down, path, pen up).
-    pub fn plan(&self, start: StepPos, cfg: &Config) -> Result<Plan, JobError> {
-        let z_down = to_steps(cfg.pen_down_mm, cfg.steps_per_mm[Z])?;
-        let z_up = to_steps(cfg.pen_up_mm, cfg.steps_per_mm[Z])?;
-        let feed = Feed::MmPerMin(cfg.draw_feed_mm_min);
-        let mut moves: Vec<Move, MAX_MOVES> = Vec::new();
-        let push =
-            &mut |target: StepPos, path: Path, feed: Feed| add(&mut moves, target, path, feed);
-        let z = if self.draws() { z_down } else { z_up };
+    /// Queue this job's planner moves from `start` (pen down, path, pen up) in `out`
+    /// as [`Action::Queue`]s (at most 7: pen down, five star lines, pen up) and return
+    /// where it ends. On an error `out` is left as it was.
+    pub fn plan(
+        &self,
+        start: StepPos,
+        cfg: &Config,
+        out: &mut Actions,
+    ) -> Result<StepPos, JobError> {
+        let n = out.len();
+        let r = self.plan_moves(start, cfg, out);
+        if r.is_err() {
+            out.truncate(n);
+        }
+        r
+    }
+
+    fn plan_moves(
+        &self,
+        start: StepPos,
+        cfg: &Config,
+        out: &mut Actions,
+    ) -> Result<StepPos, JobError> {
+        use JobError::Empty;
+        let spmm = cfg.steps_per_mm;
+        let z_down = steps_or_err(cfg.pen_down_mm * spmm[Z])?;
+        let z_up = steps_or_err(cfg.pen_up_mm * spmm[Z])?;
+        let draws = self.draws();
+        let (z, feed) = if draws {
+            (z_down, Feed::MmPerMin(cfg.draw_feed_mm_min))
+        } else {
+            (z_up, Feed::Rapid)
+        };
         // Pen to its working height at the start point first.
-        push([start[X], start[Y], z], Path::Line, Feed::Rapid)?;
-        match *self {
-            Job::Line { dx, dy } | Job::Travel { dx, dy } => {
-                let end = offset(start, [dx, dy], z, cfg)?;
-                let draws = self.draws();
-                // A drawn line must move; going to the origin from there is fine.
-                if draws && end[X] == start[X] && end[Y] == start[Y] {
-                    return Err(JobError::Empty);
-                }
-                push(end, Path::Line, if draws { feed } else { Feed::Rapid })?;
+        let here = [start[X], start[Y], z];
+        add(out, here, Path::Line, Feed::Rapid)?;
+        // A straight line to `d` mm from the start; if `must_move`, refused if it
+        // would not move (a drawn line; going to the origin from there is fine).
+        let line_to = |out: &mut Actions, d: [f32; 2], must_move: bool| {
+            let rel = [steps_or_err(d[0] * spmm[X])?, steps_or_err(d[1] * spmm[Y])?];
+            if must_move && rel == [0, 0] {
+                return Err(Empty);
             }
+            add_rel(out, here, rel, Path::Line, feed)
+        };
+        // The arc and the ellipse share one conic: (semi-axes in mm, angle).
+        let mut conic_mm = None;
+        match *self {
+            Job::Line { dx, dy } | Job::Travel { dx, dy } => line_to(out, [dx, dy], draws)?,
             Job::Arc { r, theta } => {
                 if theta == 0.0 {
-                    return Err(JobError::Empty);
+                    return Err(Empty);
                 }
-                conic(push, start, [r, r], theta, z, feed, cfg)?;
+                conic_mm = Some((r, r, theta));
             }
-            Job::Ellipse { a, b } => conic(push, start, [a, b], 360.0, z, feed, cfg)?,
+            Job::Ellipse { a, b } => conic_mm = Some((a, b, 360.0)),
             Job::Sine {
                 amp,
                 omega,
                 phase,
                 len,
             } => {
-                let spx = cfg.steps_per_mm[X];
-                let amp_steps = amp * cfg.steps_per_mm[Y];
-                let omega_steps = omega / spx;
+                let amp_steps = amp * spmm[Y];
+                let omega_steps = omega / spmm[X];
                 let ph = phase.to_radians();
-                let len_steps = to_steps(len, spx)?;
+                let len_steps = steps_or_err(len * spmm[X])?;
                 if len_steps == 0 {
-                    return Err(JobError::Empty);
+                    return Err(Empty);
                 }
                 let rise = amp_steps * fmath::sin(omega_steps * len_steps as f32 + ph)
                     - amp_steps * fmath::sin(ph);
-                let end = [
-                    start[X].checked_add(len_steps).ok_or(JobError::TooLarge)?,
-                    start[Y]
-                        .checked_add(to_steps(rise, 1.0)?)
-                        .ok_or(JobError::TooLarge)?,
-                    z,
-                ];
-                push(
-                    end,
-                    Path::Sine {
-                        amp: amp_steps,
-                        omega: omega_steps,
-                        phase: ph,
-                    },
-                    feed,
-                )?;
+                let path = Path::Sine {
+                    amp: amp_steps,
+                    omega: omega_steps,
+                    phase: ph,
+                };
+                add_rel(out, here, [len_steps, steps_or_err(rise)?], path, feed)?;
             }
             Job::Star { size } => {
                 let r = size / 2.0;
-                if to_steps(r, cfg.steps_per_mm[X])? == 0 {
-                    return Err(JobError::Empty);
+                if steps_or_err(r * spmm[X])? == 0 {
+                    return Err(Empty);
                 }
-                for k in 1..6 {
-                    let target = if k == 5 {
-                        [start[X], start[Y], z]
-                    } else {
-                        offset(start, star_point(r, k), z, cfg)?
-                    };
-                    push(target, Path::Line, feed)?;
+                for k in 1..5 {
+                    line_to(out, star_point(r, k), false)?;
                 }
+                // The fifth line closes exactly on the start.
+                add(out, here, Path::Line, feed)?;
             }
         }
-        let last = moves.last().map(|m| m.target).unwrap_or(start);
-        let end = [last[X], last[Y], z_up];
-        if self.draws() {
-            add(&mut moves, end, Path::Line, Feed::Rapid)?;
+        if let Some((a, b, theta)) = conic_mm {
+            conic(out, here, [a * spmm[X], b * spmm[Y]], theta, feed)?;
         }
-        Ok(Plan { moves, end })
+        // Where the path ended (its last move), with the pen lifted.
+        let last = match out.last() {
+            Some(Action::Queue(m)) => m.target,
+            _ => here,
+        };
+        let end = [last[X], last[Y], z_up];
+        if draws {
+            add(out, end, Path::Line, Feed::Rapid)?;
+        }
+        Ok(end)
     }
 }
 
 /// Append a move (no room: the job is too complex, which the fixed jobs never are).
-fn add(
-    moves: &mut Vec<Move, MAX_MOVES>,
-    target: StepPos,
+#[inline(never)]
+fn add(out: &mut Actions, target: StepPos, path: Path, feed: Feed) -> Result<(), JobError> {
+    let m = Move {
+        target,
+        path,
+        feed,
+        line: 0,
+    };
+    out.push(Action::Queue(m)).map_err(|_| JobError::TooLarge)
+}
+
+/// Append a move to `from` + `rel` (X, Y in steps) at `from`'s pen height.
+fn add_rel(
+    out: &mut Actions,
+    from: StepPos,
+    rel: [i32; 2],
     path: Path,
     feed: Feed,
 ) -> Result<(), JobError> {
-    moves
-        .push(Move {
-            target,
-            path,
-            feed,
-            line: 0,
-        })
-        .map_err(|_| JobError::TooLarge)
+    let to = |a: usize| from[a].checked_add(rel[a]).ok_or(JobError::TooLarge);
+    add(out, [to(X)?, to(Y)?, from[Z]], path, feed)
 }
 
-/// Arc or ellipse from `start` (its 0° point) through `theta` degrees. A circle in mm is
-/// a circle in steps only when X and Y have the same steps/mm; otherwise it is sent as
-/// an ellipse. Full turns go as two half turns so that no move has target == start.
+/// Arc or ellipse from `from` (its 0° point) through `theta` degrees, semi-axes `semi`
+/// in steps (rounded here). A circle in mm is a circle in steps only when X and Y have
+/// the same steps/mm; otherwise it is sent as an ellipse. Full turns go as two half
+/// turns so that no move has target == start.
 fn conic(
-    push: &mut impl FnMut(StepPos, Path, Feed) -> Result<(), JobError>,
-    start: StepPos,
-    semi_mm: [f32; 2],
+    out: &mut Actions,
+    from: StepPos,
+    semi: [f32; 2],
     theta: f32,
-    z: i32,
     feed: Feed,
-    cfg: &Config,
 ) -> Result<(), JobError> {
-    let a = to_steps(semi_mm[0], cfg.steps_per_mm[X])?;
-    let b = to_steps(semi_mm[1], cfg.steps_per_mm[Y])?;
+    use JobError::{Empty, TooLarge};
+    let a = steps_or_err(semi[0])?;
+    let b = steps_or_err(semi[1])?;
     if a <= 0 || b <= 0 {
-        return Err(JobError::Empty);
+        return Err(Empty);
     }
+    // The centre (a to the left of the start) must be a position too.
+    from[X].checked_sub(a).ok_or(TooLarge)?;
     let ccw = theta > 0.0;
-    let center = [start[X].checked_sub(a).ok_or(JobError::TooLarge)?, start[Y]];
-    let path_from = |from: StepPos| {
-        let rel = [center[0] - from[X], center[1] - from[Y]];
+    // The centre relative to a point `rel` from the start.
+    let path = |rel: [i32; 2]| {
+        let center = [-a - rel[0], -rel[1]];
         if a == b {
             Path::Arc {
-                center: rel,
+                center,
                 ccw,
                 turns: 0,
             }
         } else {
-            Path::Ellipse {
-                center: rel,
-                a,
-                b,
-                ccw,
-            }
+            Path::Ellipse { center, a, b, ccw }
         }
     };
-    let point = |deg: f32| -> Result<StepPos, JobError> {
-        let t = deg.to_radians();
-        let px = to_steps(a as f32 * fmath::cos(t), 1.0)?;
-        let py = to_steps(b as f32 * fmath::sin(t), 1.0)?;
-        Ok([
-            center[0].checked_add(px).ok_or(JobError::TooLarge)?,
-            center[1].checked_add(py).ok_or(JobError::TooLarge)?,
-            z,
-        ])
-    };
-    let full = theta.abs() >= 360.0;
-    let first_end = if full {
-        // Exactly opposite the start: (center - a, center).
-        [center[0] - a, center[1], z]
-    } else {
-        point(theta)?
-    };
-    let from = [start[X], start[Y], z];
-    push(first_end, path_from(from), feed)?;
-    if full {
-        push(from, path_from(first_end), feed)?;
+    if theta.abs() >= 360.0 {
+        // Exactly opposite the start, then back.
+        add_rel(out, from, [-2 * a, 0], path([0, 0]), feed)?;
+        return add(out, from, path([-2 * a, 0]), feed);
     }
-    Ok(())
+    let t = theta.to_radians();
+    let rel = [
+        steps_or_err(a as f32 * fmath::cos(t))? - a,
+        steps_or_err(b as f32 * fmath::sin(t))?,
+    ];
+    add_rel(out, from, rel, path([0, 0]), feed)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The moves of a plan and where it ends.
+    #[derive(Debug, PartialEq)]
+    struct Plan {
+        moves: std::vec::Vec<Move>,
+        end: StepPos,
+    }
+
+    impl Job {
+        /// [`Job::plan`] into a fresh list, as moves.
+        fn planned(&self, start: StepPos, cfg: &Config) -> Result<Plan, JobError> {
+            let mut out = Actions::new();
+            let end = self.plan(start, cfg, &mut out)?;
+            let moves = out
+                .iter()
+                .map(|a| match a {
+                    Action::Queue(m) => *m,
+                    other => panic!("not a move: {other:?}"),
+                })
+                .collect();
+            Ok(Plan { moves, end })
+        }
+    }
 
     fn cfg() -> Config {
         Config {
@@ -395,7 +415,9 @@ mod tests {
     #[test]
     fn line_in_each_quadrant_lands_on_the_rounded_target() {
         for (dx, dy) in [(10.0, 5.0), (-10.0, 5.0), (-10.0, -5.0), (10.0, -5.0)] {
-            let plan = Job::Line { dx, dy }.plan([100, 200, 500], &cfg()).unwrap();
+            let plan = Job::Line { dx, dy }
+                .planned([100, 200, 500], &cfg())
+                .unwrap();
             let m = plan.moves.as_slice();
             assert_eq!(m.len(), 3);
             assert_eq!(m[0].target, [100, 200, 0], "pen down at the start");
@@ -415,7 +437,7 @@ mod tests {
             r: 10.0,
             theta: 360.0,
         }
-        .plan([0, 0, 0], &cfg())
+        .planned([0, 0, 0], &cfg())
         .unwrap();
         let m = plan.moves.as_slice();
         assert_eq!(m[1].target, [-1600, 0, 0]);
@@ -444,7 +466,7 @@ mod tests {
             r: 10.0,
             theta: -90.0,
         }
-        .plan([0, 0, 0], &cfg())
+        .planned([0, 0, 0], &cfg())
         .unwrap();
         let m = plan.moves.as_slice();
         assert_eq!(m[1].target, [-800, -800, 0]);
@@ -466,7 +488,7 @@ mod tests {
             r: 10.0,
             theta: 90.0,
         }
-        .plan([0, 0, 0], &c)
+        .planned([0, 0, 0], &c)
         .unwrap();
         assert_eq!(
             plan.moves[1].path,
@@ -488,7 +510,7 @@ mod tests {
             phase: 90.0,
             len: 20.0,
         };
-        let plan = job.plan([0, 0, 0], &cfg()).unwrap();
+        let plan = job.planned([0, 0, 0], &cfg()).unwrap();
         let m = plan.moves[1];
         let Path::Sine { amp, omega, phase } = m.path else {
             panic!("not a sine: {m:?}")
@@ -504,7 +526,7 @@ mod tests {
     #[test]
     fn star_closes_on_its_start_and_has_five_equal_sides() {
         let plan = Job::Star { size: 40.0 }
-            .plan([1000, 1000, 0], &cfg())
+            .planned([1000, 1000, 0], &cfg())
             .unwrap();
         let m = plan.moves.as_slice();
         assert_eq!(m.len(), 7);
@@ -525,19 +547,19 @@ mod tests {
     #[test]
     fn degenerate_and_huge_jobs_are_refused() {
         assert_eq!(
-            Job::Line { dx: 0.0, dy: 0.001 }.plan([0; 3], &cfg()),
+            Job::Line { dx: 0.0, dy: 0.001 }.planned([0; 3], &cfg()),
             Err(JobError::Empty)
         );
         assert_eq!(
-            Job::Arc { r: 5.0, theta: 0.0 }.plan([0; 3], &cfg()),
+            Job::Arc { r: 5.0, theta: 0.0 }.planned([0; 3], &cfg()),
             Err(JobError::Empty)
         );
         assert_eq!(
-            Job::Line { dx: 1.0e9, dy: 0.0 }.plan([0; 3], &cfg()),
+            Job::Line { dx: 1.0e9, dy: 0.0 }.planned([0; 3], &cfg()),
             Err(JobError::TooLarge)
         );
         assert_eq!(
-            Job::Line { dx: 1.0, dy: 0.0 }.plan([i32::MAX - 10, 0, 0], &cfg()),
+            Job::Line { dx: 1.0, dy: 0.0 }.planned([i32::MAX - 10, 0, 0], &cfg()),
             Err(JobError::TooLarge)
         );
     }

@@ -76,4 +76,19 @@ mod tests {
             assert!(line.len() > 4);
         }
     }
+
+    /// What the state machine computes instead of searching the tables: hotkey d is
+    /// entry (d + 9) % 10, and the drawing modes follow Jog in form order.
+    #[test]
+    fn hotkeys_and_draw_entries_are_in_order() {
+        for (i, (key, _)) in MENU.iter().enumerate() {
+            assert_eq!((usize::from(*key) + 9) % 10, i);
+        }
+        for (i, (key, _)) in MACHINE_MENU.iter().enumerate() {
+            assert_eq!((usize::from(*key) + 9) % 10, i);
+        }
+        for kind in crate::hmi::entry::FORM_KINDS {
+            assert_eq!(MENU[kind.index() + 1].1, MenuItem::Draw(kind));
+        }
+    }
 }

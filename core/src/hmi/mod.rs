@@ -98,6 +98,8 @@ impl Clone for Hmi {
     }
 }
 
+#[inline(always)]
+// (Inlined: smaller than the call and its argument moves, measured.)
 fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
     let dx = (b[X].wrapping_sub(a[X])) as f32 / spmm[X];
     let dy = (b[Y].wrapping_sub(a[Y])) as f32 / spmm[Y];
@@ -105,13 +107,12 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
 }
 
 /// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
+#[inline(always)]
+// (Inlined: smaller than the call and its argument moves, measured.)
 fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
-    let z = fmath::round(z_mm * steps_per_mm);
-    if !z.is_finite() || z.abs() >= 1.0e9 {
-        return None;
-    }
+    let z = fixed::round_checked(z_mm * steps_per_mm)?;
     Some(Action::Queue(Move {
-        target: [st.pos[X], st.pos[Y], z as i32],
+        target: [st.pos[X], st.pos[Y], z],
         path: Path::Line,
         feed: Feed::Rapid,
         line: 0,
@@ -233,17 +234,7 @@ impl Hmi {
             Page::Menu { sel } | Page::Machine { sel } => {
                 let sel = *sel;
                 let main = matches!(self.page, Page::Menu { .. });
-                let (n, hotkey) = if main {
-                    (
-                        MENU.len(),
-                        MENU.iter().position(|(k, _)| Key::Digit(*k) == ev.key),
-                    )
-                } else {
-                    let pos = MACHINE_MENU
-                        .iter()
-                        .position(|(k, _)| Key::Digit(*k) == ev.key);
-                    (MACHINE_MENU.len(), pos)
-                };
+                let n = if main { MENU.len() } else { MACHINE_MENU.len() };
                 let at = |sel: usize| {
                     if main {
                         Page::Menu { sel }
@@ -265,7 +256,8 @@ impl Hmi {
                         None
                     }
                     Key::Enter if press => Some(sel),
-                    Key::Digit(_) if press => hotkey,
+                    // Both menus' hotkeys are 1, 2, ... 9, 0 in order.
+                    Key::Digit(d) if press => Some((usize::from(d) + 9) % 10).filter(|&i| i < n),
                     _ => None,
                 };
                 if let Some(i) = chosen {
@@ -435,7 +427,6 @@ impl Hmi {
             return;
         };
         let mut jog = *jog;
-        let speed = |i: usize| JOG_SPEEDS.get(i).copied().unwrap_or(100.0);
         match (ev.kind, ev.key) {
             (KeyKind::Press, k) if k.jog_dir().is_some() => {
                 if let Some(dir) = k.jog_dir() {
@@ -450,7 +441,7 @@ impl Hmi {
                         out,
                         Action::JogStart {
                             dir,
-                            feed_mm_min: speed(self.jog_speed),
+                            feed_mm_min: self.jog_speed(),
                         },
                     );
                     jog.active = Some((k, dir));
@@ -473,7 +464,7 @@ impl Hmi {
                         out,
                         Action::JogStart {
                             dir,
-                            feed_mm_min: speed(self.jog_speed),
+                            feed_mm_min: self.jog_speed(),
                         },
                     );
                 }
@@ -513,11 +504,10 @@ impl Hmi {
         match field.key(ev.key, repeat) {
             FieldInput::Edited => return,
             FieldInput::Cancel => {
-                let sel = MENU
-                    .iter()
-                    .position(|(_, m)| *m == MenuItem::Draw(kind))
-                    .unwrap_or(0);
-                self.page = Page::Menu { sel };
+                // The drawing modes follow Jog in the menu, in form order.
+                self.page = Page::Menu {
+                    sel: kind.index() + 1,
+                };
                 return;
             }
             FieldInput::Ignored => {}
@@ -536,7 +526,8 @@ impl Hmi {
         if ev.key == Key::Enter && form.is_last() {
             let job = form.job();
             let values = form.values();
-            match job.plan([0; 3], &self.cfg) {
+            // Planned once from the origin only to check it (the moves are dropped).
+            match job.plan([0; 3], &self.cfg, &mut Actions::new()) {
                 Ok(_) => {
                     if let Some(slot) = self.params.get_mut(kind.index()) {
                         *slot = values;
@@ -567,11 +558,8 @@ impl Hmi {
             draw_feed_mm_min: self.draw_feed,
             ..self.cfg
         };
-        match job.plan(st.pos, &cfg) {
-            Ok(plan) => {
-                for m in &plan.moves {
-                    push(out, Action::Queue(*m));
-                }
+        match job.plan(st.pos, &cfg, out) {
+            Ok(end) => {
                 if job.draws() {
                     self.last_job = Some(job);
                 }
@@ -579,7 +567,7 @@ impl Hmi {
                 self.page = Page::Run(RunPage {
                     job,
                     start: st.pos,
-                    end: plan.end,
+                    end,
                     started_ms: now_ms,
                     phase: RunPhase::Running,
                     traveled_mm: 0.0,

@@ -28,6 +28,8 @@ impl<const N: usize> Text<N> {
     }
 
     /// The longest prefix of `s` that fits, cut at a character boundary.
+    #[inline(always)]
+    // (Inlined: smaller than the call and its argument moves, measured.)
     pub fn truncated(s: &str) -> Self {
         let mut end = s.len().min(N);
         while !s.is_char_boundary(end) {
@@ -66,6 +68,8 @@ impl<const N: usize> Text<N> {
     }
 
     /// The text's bytes (UTF-8), without re-checking them.
+    #[inline(never)]
+    // (A call: inlined at its callers it costs more flash.)
     pub fn bytes(&self) -> &[u8] {
         self.buf.get(..usize::from(self.len)).unwrap_or(&[])
     }
@@ -92,17 +96,19 @@ impl<const N: usize> Text<N> {
 
     /// Append [`super::fixed::format`]`(v, decimals)`; false if it does not fit.
     pub fn push_fixed(&mut self, v: f32, decimals: u8) -> bool {
-        self.push_text(&super::fixed::format(v, decimals))
+        let num = super::fixed::scaled(v, decimals);
+        self.push_number(num, decimals.min(3), 0)
     }
 
     /// Append the unsigned integer `n` right-aligned in `width` characters.
     pub fn push_uint(&mut self, n: u32, width: usize) -> bool {
-        let text = super::fixed::uint(n);
-        let mut ok = true;
-        for _ in text.len()..width {
-            ok &= self.push_str(" ");
-        }
-        ok && self.push_text(&text)
+        self.push_number(Some((false, n)), 0, width)
+    }
+
+    /// Append `num` with `decimals` digits, right-aligned in `width` characters (see
+    /// [`super::fixed::append_number`]); false (and unchanged) if it does not fit.
+    pub fn push_number(&mut self, num: super::fixed::Number, decimals: u8, width: usize) -> bool {
+        super::fixed::append_number(&mut self.buf, &mut self.len, num, decimals, width)
     }
 
     /// Remove the last character; false if the text was empty.
@@ -125,7 +131,7 @@ impl<const N: usize> Text<N> {
 /// The work of [`Text::push_str`] for every capacity: append `s` whole to the first
 /// `len` bytes of `buf`, or change nothing.
 #[inline(never)]
-fn append(buf: &mut [u8], len: &mut u8, s: &[u8]) -> bool {
+pub(super) fn append(buf: &mut [u8], len: &mut u8, s: &[u8]) -> bool {
     let at = usize::from(*len);
     let end = at + s.len();
     match buf.get_mut(at..end) {

@@ -85,7 +85,7 @@ fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
     for &b in tpl {
         // (decimals, or none for an integer; width)
         let (decimals, width) = match b {
-            FIX..UINT => (Some(b - FIX), 0),
+            FIX..UINT => (Some((b - FIX).min(3)), 0),
             UINT..AXIS => (None, b - UINT),
             AXIS..24 => (Some(2), b - AXIS),
             _ => {
@@ -94,14 +94,11 @@ fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
             }
         };
         let x = v.next().unwrap_or(0.0);
-        let text = match decimals {
-            Some(d) => fixed::format(x, d),
-            None => fixed::uint(x as u32),
+        let (num, decimals) = match decimals {
+            Some(d) => (fixed::scaled(x, d), d),
+            None => (Some((false, x as u32)), 0),
         };
-        for _ in text.len()..usize::from(width) {
-            l.push_ascii(b' ');
-        }
-        l.push_text(&text);
+        l.push_number(num, decimals, usize::from(width));
     }
     l.bytes()
 }
@@ -129,18 +126,15 @@ fn push_dir(l: &mut Line, dir: [i8; 2]) {
 fn time_text(ms: u32) -> Line {
     let mut s = Line::new();
     let tenths = ms / 100;
-    let (tpl, v): (&[u8], [u32; 2]) = if tenths < 600 {
-        (b"\x08.\x08s", [tenths / 10, tenths % 10])
+    if tenths < 600 {
+        s.push_number(Some((false, tenths)), 1, 0);
     } else {
         let secs = ms / 1000;
-        let tpl: &[u8] = if secs % 60 < 10 {
-            b"\x08m0\x08s"
-        } else {
-            b"\x08m\x08s"
-        };
-        (tpl, [secs / 60, secs % 60])
-    };
-    fill(&mut s, tpl, &v.map(|n| n as f32));
+        s.push_uint(secs / 60, 0);
+        s.push_str(if secs % 60 < 10 { "m0" } else { "m" });
+        s.push_uint(secs % 60, 0);
+    }
+    s.push_ascii(b's');
     s
 }
 
@@ -242,12 +236,12 @@ impl Screens {
             }
             Page::Form(form) => {
                 let fields = form.fields();
-                let count = [form.cur as f32 + 1.0, fields.len() as f32];
-                title_bar(
-                    fb,
-                    form.kind.title().as_bytes(),
-                    fill(&mut l, b"\x08/\x08", &count),
-                );
+                // "2/4": the field and the count.
+                l.clear();
+                l.push_uint(form.cur as u32 + 1, 0);
+                l.push_ascii(b'/');
+                l.push_uint(fields.len() as u32, 0);
+                title_bar(fb, form.kind.title().as_bytes(), l.bytes());
                 for (i, f) in fields.iter().take(ROWS).enumerate() {
                     let (y, current) = (row_y(i), i == form.cur);
                     put(fb, Cell::at(0, y, 6), f.label().as_bytes());

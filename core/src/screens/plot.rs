@@ -9,7 +9,7 @@
 
 use super::framebuffer::FrameBuffer;
 use super::widgets::{line, Px};
-use crate::fmath;
+use crate::hmi::fixed::round_i32;
 use crate::hmi::job::Job;
 
 /// A screen box: x, y, width, height in pixels.
@@ -29,17 +29,15 @@ impl Plot {
     pub fn fit(job: &Job, area: Area) -> Self {
         let [x, y, w, h] = area;
         let (lo, hi) = job.bounds();
-        let inner_w = (w - 5) as f32;
-        let inner_h = (h - 5) as f32;
         let bw = hi[0] - lo[0];
         let bh = hi[1] - lo[1];
         let sx = if bw > 1e-3 {
-            inner_w / bw
+            (w - 5) as f32 / bw
         } else {
             f32::INFINITY
         };
         let sy = if bh > 1e-3 {
-            inner_h / bh
+            (h - 5) as f32 / bh
         } else {
             f32::INFINITY
         };
@@ -47,9 +45,9 @@ impl Plot {
         if !scale.is_finite() {
             scale = 1.0;
         }
-        // Centre the drawing in the area.
-        let cx = x as f32 + w as f32 / 2.0;
-        let cy = y as f32 + h as f32 / 2.0;
+        // Centre the drawing in the area (centre x + w / 2, exact in halves).
+        let cx = (2 * x + w) as f32 * 0.5;
+        let cy = (2 * y + h) as f32 * 0.5;
         let mid = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
         Plot {
             area,
@@ -66,12 +64,12 @@ impl Plot {
     /// Screen pixel of a point in mm (relative to the job start), clamped to the area.
     pub fn to_px(&self, mm: [f32; 2]) -> Px {
         let [x, y, w, h] = self.area;
-        let px = fmath::round(self.origin[0] + mm[0] * self.scale);
-        let py = fmath::round(self.origin[1] - mm[1] * self.scale);
-        // max/min rather than clamp: no "min > max" assertion to carry.
+        let px = self.origin[0] + mm[0] * self.scale;
+        let py = self.origin[1] - mm[1] * self.scale;
+        // Rounded; max/min rather than clamp: no "min > max" assertion to carry.
         let clamp = |v: f32, lo: i32, hi: i32| {
             if v.is_finite() {
-                (v as i32).max(lo).min(hi)
+                round_i32(v).max(lo).min(hi)
             } else {
                 lo
             }
@@ -82,7 +80,7 @@ impl Plot {
     /// Draw the ideal path dotted (a pixel every ~2.5 px of path).
     pub fn draw_preview(&self, job: &Job, fb: &mut FrameBuffer) {
         let len_px = job.length_mm() * self.scale;
-        let n = fmath::round(len_px / 2.5).clamp(8.0, 400.0) as u32;
+        let n = round_i32(len_px / 2.5).clamp(8, 400) as u32;
         for i in 0..n + 1 {
             let p = self.to_px(job.point_at(i as f32 / n as f32));
             fb.set(p.0, p.1, true);

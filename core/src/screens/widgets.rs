@@ -7,24 +7,11 @@
 //! frame buffer stays clean: that is what makes "redraw only what changed" work without
 //! a second buffer.
 
-use super::fonts::{BODY_BITS, SMALL_BITS};
+use super::fonts::{glyph, BODY_BITS, SMALL_BITS};
 use super::framebuffer::FrameBuffer;
-use crate::fmath;
 
 /// A pixel position (x, y).
 pub type Px = (i32, i32);
-
-/// Glyph index, in the screens' fonts, of the character whose UTF-8 encoding starts
-/// with byte `lead`. Both fonts are embedded-graphics' ASCII fonts: ' '..='\u{7f}' in
-/// order, anything else shown as '?'. The same as the fonts' `glyph_mapping` (checked in
-/// the tests) without its dynamic, string-walking lookup or UTF-8 decoding.
-fn ascii_glyph(lead: u8) -> u32 {
-    if (b' '..=0x7f).contains(&lead) {
-        u32::from(lead) - 32
-    } else {
-        u32::from(b'?') - 32
-    }
-}
 
 /// Whether `b` starts a character in UTF-8 (is not a continuation byte).
 fn starts_char(b: &u8) -> bool {
@@ -106,16 +93,15 @@ pub fn put(fb: &mut FrameBuffer, c: Cell, s: &[u8]) {
         } else {
             text.next().unwrap_or(b' ')
         };
-        let g = ascii_glyph(lead);
-        // Row `row` of glyph g starts at this bit of the 16-glyph-wide strip image.
-        let mut i = (g / 16 * h * 16 + g % 16) * gw;
+        // The glyph's rows follow each other from this bit on.
+        let mut i = glyph(lead) * gw * h;
         for y in y0..y0 + h as i32 {
             for dx in 0..gw {
                 let b = (i + dx) as usize;
                 let on = bits.get(b / 8).is_some_and(|v| v & (0x80 >> (b % 8)) != 0);
                 fb.set(x + dx as i32, y, on != inverse);
             }
-            i += 16 * gw;
+            i += gw;
         }
         x += gw as i32;
     }
@@ -161,7 +147,7 @@ pub fn progress(fb: &mut FrameBuffer, x: i32, y: i32, w: i32, h: i32, frac: f32)
     } else {
         0.0
     };
-    let filled = fmath::round(inner_w as f32 * f) as i32;
+    let filled = crate::hmi::fixed::round_i32(inner_w as f32 * f);
     fb.fill(x + 2, y + 2, filled, h - 4, true);
     fb.fill(x + 2 + filled, y + 2, inner_w - filled, h - 4, false);
     // The 1-pixel gap between frame and bar.
@@ -298,7 +284,11 @@ mod tests {
                 .text_color(fg)
                 .background_color(bg)
                 .build();
-            let all: std::vec::Vec<char> = s.chars().collect();
+            // Only the fonts' stored characters have their own glyph, the others are
+            // '?' (embedded-graphics does that itself for non-ASCII ones).
+            let stored = |c: char| !c.is_ascii() || glyph(c as u8) != glyph(b'?');
+            let all: std::vec::Vec<char> =
+                s.chars().map(|c| if stored(c) { c } else { '?' }).collect();
             let n = all.len().min(chars);
             let shown: std::string::String = if right {
                 all[all.len() - n..].iter().collect()
@@ -388,8 +378,12 @@ mod tests {
         }
     }
 
+    /// Characters are looked up by their first byte: a stored ASCII character is its
+    /// own glyph (checked pixel for pixel in the fonts' tests), anything else the '?'
+    /// that embedded-graphics' mapping also gives non-ASCII characters.
     #[test]
-    fn ascii_glyph_matches_the_fonts_mapping() {
+    fn glyph_lookup_matches_the_fonts_mapping() {
+        let question = glyph(b'?');
         for font in [&BODY, &SMALL] {
             for c in (0..0x300)
                 .filter_map(char::from_u32)
@@ -398,11 +392,10 @@ mod tests {
                 let mut buf = [0; 4];
                 let utf8 = c.encode_utf8(&mut buf).as_bytes();
                 let lead = utf8[0];
-                assert_eq!(
-                    ascii_glyph(lead) as usize,
-                    font.glyph_mapping.index(c),
-                    "{c:?}"
-                );
+                if !c.is_ascii() || c < ' ' {
+                    assert_eq!(font.glyph_mapping.index(c), font.glyph_mapping.index('?'));
+                    assert_eq!(glyph(lead), question, "{c:?}");
+                }
                 assert_eq!(utf8.iter().filter(|b| starts_char(b)).count(), 1, "{c:?}");
             }
         }
