@@ -257,14 +257,14 @@ impl Planner {
         }
     }
 
-    /// Maximum speed of `b` with the overrides applied (mm/s).
+    /// Maximum speed of `b` with the overrides applied (mm/s). A rapid's nominal speed
+    /// is unbounded (as fast as the axes allow): its override scales the axis limit.
     pub fn max_speed(&self, b: &Block) -> f32 {
-        let ovr = if b.is_rapid() {
-            self.rapid_override
+        if b.is_rapid() {
+            b.limit * self.rapid_override
         } else {
-            self.feed_override
-        };
-        (b.nominal * ovr).min(b.limit)
+            (b.nominal * self.feed_override).min(b.limit)
+        }
     }
 
     /// Feed override in percent (Grbl: 10..200).
@@ -284,6 +284,15 @@ impl Planner {
     /// Effective (planning) acceleration of a block.
     pub fn plan_accel(&self, b: &Block) -> f32 {
         self.cfg.shape.effective_accel(b.accel)
+    }
+
+    /// New limits (settings change only at rest, with nothing queued): drops what is
+    /// queued and restarts from `position` like [`Planner::clear`], but keeps the feed
+    /// and rapid overrides, which the machine still reports. Configures in place: no
+    /// second planner on the stack.
+    pub fn reconfigure(&mut self, cfg: &PlannerConfig, position: StepPos) {
+        self.cfg = *cfg;
+        self.clear(position);
     }
 
     /// Drops every queued block (after a hold, for abort) and restarts from `position`.
@@ -434,6 +443,17 @@ mod tests {
         p.set_feed_override(10);
         assert!((p.max_speed(&b) - 5.0).abs() < 1e-4);
         assert_eq!(p.feed_override(), 10);
+        // A rapid runs at the axis limit (5000 mm/min); its override scales that.
+        let mut p = Planner::new(PlannerConfig::default(), [0; 3]);
+        p.push(&Move {
+            feed: Feed::Rapid,
+            ..line(8000, 0, 1.0)
+        })
+        .unwrap();
+        let b = *p.blocks.front().unwrap();
+        assert!((p.max_speed(&b) - 5000.0 / 60.0).abs() < 1e-3);
+        p.set_rapid_override(25);
+        assert!((p.max_speed(&b) - 1250.0 / 60.0).abs() < 1e-3);
     }
 
     #[test]
