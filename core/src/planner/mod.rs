@@ -21,7 +21,7 @@ pub mod geometry;
 pub mod profile;
 
 use crate::interp::Method;
-use crate::motion::{Feed, Move, StepPos, AXES};
+use crate::motion::{Feed, Move, StepPos, AXES, POS_LIMIT};
 use heapless::Deque;
 pub use profile::{Profile, Shape};
 
@@ -172,10 +172,15 @@ impl Planner {
         self.next_start
     }
 
-    /// Queues a move. Zero-length moves are accepted and dropped.
+    /// Queues a move. Zero-length moves are accepted and dropped; a move that starts
+    /// or ends outside +-[`POS_LIMIT`] steps is invalid.
     pub fn push(&mut self, mv: &Move) -> Result<(), PlanError> {
         if self.blocks.is_full() {
             return Err(PlanError::Full);
+        }
+        let ends = mv.target.iter().chain(self.next_start.iter());
+        if ends.into_iter().any(|v| v.unsigned_abs() >= POS_LIMIT) {
+            return Err(PlanError::Invalid);
         }
         let g = match geometry::of_move(&self.cfg, self.next_start, mv) {
             Ok(g) => g,
@@ -489,6 +494,20 @@ mod tests {
         assert_eq!(p.push(&bad), Err(PlanError::Invalid));
         assert_eq!(p.push(&line(10, 0, -5.0)), Err(PlanError::Invalid));
         assert_eq!(p.push(&line(0, 0, 100.0)), Ok(()));
+        assert!(p.is_empty());
+        // Endpoints must lie strictly inside +-2^30 steps (a line's travel then
+        // fits the interpolators' u32 counters).
+        let edge = (1 << 30) - 1;
+        assert_eq!(p.push(&line(1 << 30, 0, 100.0)), Err(PlanError::Invalid));
+        assert_eq!(p.push(&line(0, -(1 << 30), 100.0)), Err(PlanError::Invalid));
+        assert_eq!(p.push(&line(0, i32::MIN, 100.0)), Err(PlanError::Invalid));
+        assert!(p.is_empty());
+        assert_eq!(p.push(&line(edge, -edge, 100.0)), Ok(()));
+        assert_eq!(p.push(&line(-edge, edge, 100.0)), Ok(()));
+        assert_eq!(p.len(), 2);
+        // A start outside the range (a position set there) is refused as well.
+        let mut p = Planner::new(PlannerConfig::default(), [1 << 30, 0, 0]);
+        assert_eq!(p.push(&line(0, 0, 100.0)), Err(PlanError::Invalid));
         assert!(p.is_empty());
     }
 }
