@@ -152,12 +152,13 @@ const FINE_LIMIT: i64 = 1 << 21;
 pub struct FineLine {
     /// Major axis index (0 = X, 1 = Y) and directions.
     major: usize,
-    dir_maj: i64,
-    /// Present integer position (major, minor) and the integer target.
-    pos: (i64, i64),
-    end: (i64, i64),
+    dir_maj: i32,
+    /// Present integer position (major, minor) and the integer target (i32: within
+    /// FINE_LIMIT).
+    pos: (i32, i32),
+    end: (i32, i32),
     /// Rounding state: desired minor `n`, remainder r in [0, 256 D), increment per step.
-    n: i64,
+    n: i32,
     r: i64,
     inc: i64,
     den: i64,
@@ -217,17 +218,17 @@ impl FineLine {
         let inc = 256 * d_min * s * dir_maj;
         Some(FineLine {
             major,
-            dir_maj,
-            pos: p0,
-            end: (i64::from(target[major]), i64::from(target[minor])),
-            n,
+            dir_maj: dir_maj as i32,
+            pos: (start[major], start[minor]),
+            end: (target[major], target[minor]),
+            n: n as i32,
             r,
             inc,
             den: q,
         })
     }
 
-    fn tick(&self, d_maj: i64, d_min: i64) -> Tick {
+    fn tick(&self, d_maj: i32, d_min: i32) -> Tick {
         let (d_maj, d_min) = (d_maj as i8, d_min as i8);
         if self.major == 0 {
             super::tick_xy(d_maj, d_min)
@@ -298,7 +299,7 @@ impl Line {
         match self {
             Line::Dda(l) => u64::from(l.major),
             Line::Classic(l) => l.len.iter().map(|&v| u64::from(v)).sum(),
-            Line::Fine(l) => (l.end.0 - l.pos.0).unsigned_abs(),
+            Line::Fine(l) => u64::from((l.end.0 - l.pos.0).unsigned_abs()),
         }
     }
 }
