@@ -6,7 +6,9 @@
 //!
 //! Range: moves start and end within +-[`POS_LIMIT`] steps on every axis (13 km at
 //! 80 steps/mm); the planner rejects any other move as invalid, so the interpolators'
-//! counters stay 32-bit.
+//! counters stay 32-bit (a line between any two points of the range is exact; a sine
+//! is limited to an amplitude of 2^28 steps). Nothing panics outside the range, the
+//! ticks are then just not meaningful.
 
 /// Number of axes: X, Y and Z (the pen).
 pub const AXES: usize = 3;

@@ -84,7 +84,9 @@ impl Interpolate for DdaLine {
                 *rem -= thr;
                 *delta = dir;
             } else {
-                *rem += inc;
+                // Wrapping: cannot wrap for travels below 2^31 (and must not panic
+                // for the meaningless longer ones).
+                *rem = rem.wrapping_add(inc);
             }
         }
         Some(Tick::from_deltas(d))
