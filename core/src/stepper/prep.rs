@@ -427,8 +427,10 @@ fn curve_tick_len(len: TickLen, interp: &Interp, cfg: &PlannerConfig) -> u64 {
             // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
             // telescope, so a whole arc adds up to its length (to < 1e-9).
             // f32, not a u64 division (not in the chip's instruction set).
+            // The cross product of neighbours is below 2^31 (see Conic::last_tick_len):
+            // the same f32 through u32.
             let dot = c.last_dot().unsigned_abs().max(1) as f32;
-            (c.last_cross().unsigned_abs() as f32 * m / dot) as u64
+            (c.last_cross().unsigned_abs() as u32 as f32 * m / dot) as u64
         }
         (_, Interp::Conic(c)) => {
             to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
