@@ -236,7 +236,7 @@ mod tests {
                                dx in -1500i32..1500, classic in any::<bool>()) {
             let s = Sine::new(amp, omega, phase).unwrap();
             let start = [17, -40, 3];
-            let ideal_end = nearest(s.eval(dx as f32)) as i32;
+            let ideal_end = nearest(s.eval(dx as f32));
             let target = [17 + dx, -40 + ideal_end, 3];
             let method = if classic { Method::Classic } else { Method::Dda };
             let mut it = CurveTrace::new(start, target, s, method);
