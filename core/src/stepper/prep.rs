@@ -447,11 +447,12 @@ fn curve_tick_len(len: TickLen, interp: &Interp, cfg: &PlannerConfig) -> u64 {
     }
 }
 
-/// Length of a line, mm.
+/// Length of a line, mm (travels below 2^31: the planner keeps both ends within
+/// motion::POS_LIMIT, so i32 differences give the same f32 as i64 ones).
 fn line_length(cfg: &PlannerConfig, from: StepPos, to: StepPos) -> f32 {
     let mut len2 = 0.0f32;
     for ((&t, &f), ax) in to.iter().zip(from.iter()).zip(cfg.axes.iter()) {
-        let mm = (i64::from(t) - i64::from(f)) as f32 / ax.steps_per_mm.max(1e-6);
+        let mm = t.wrapping_sub(f) as f32 / ax.steps_per_mm.max(1e-6);
         len2 += mm * mm;
     }
     crate::fmath::sqrt(len2)
