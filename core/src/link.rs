@@ -130,13 +130,14 @@ impl<S: StepSide> Link<S> {
     pub fn planner(&self) -> &Planner {
         &self.planner
     }
-    /// Take new limits from the settings (they only change at rest).
-    /// Settings change only at rest (the machine refuses `$n=v` otherwise), when the
-    /// planner is empty; rebuilding it then loses nothing. Called by the machine
-    /// through [`MotionControl::configure`] as soon as a setting changes.
+    /// Take new limits from the settings. Settings change only at rest (the machine
+    /// refuses `$n=v` otherwise), when the planner is empty; it is reconfigured in
+    /// place and keeps the feed and rapid overrides (the machine keeps reporting
+    /// them). Called by the machine through [`MotionControl::configure`] as soon as a
+    /// setting changes.
     fn reconfigure(&mut self, s: &Settings) {
         let pos = self.side.position();
-        self.planner = Planner::new(planner_config(s), pos);
+        self.planner.reconfigure(&planner_config(s), pos);
         self.pen_lift_ms = s.pen_lift_ms();
     }
     /// The servo pen's commanded state.
@@ -339,5 +340,104 @@ impl<S: StepSide> MotionControl for Link<S> {
     }
     fn configure(&mut self, s: &Settings) {
         self.reconfigure(s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::{Feed, X, Y};
+    use heapless::spsc::Queue;
+
+    /// A side whose "interrupt" is the test: it drains the queue by hand.
+    struct TestSide {
+        queue: Queue<StepCmd, 256>,
+        pos: StepPos,
+    }
+
+    impl StepSide for TestSide {
+        type Sink = Queue<StepCmd, 256>;
+        fn sink(&mut self) -> &mut Self::Sink {
+            &mut self.queue
+        }
+        fn position(&self) -> StepPos {
+            self.pos
+        }
+        fn is_running(&self) -> bool {
+            !self.queue.is_empty()
+        }
+        fn queued(&self) -> usize {
+            self.queue.len()
+        }
+        fn flush(&mut self) {
+            while self.queue.dequeue().is_some() {}
+        }
+        fn set_position(&mut self, p: StepPos) {
+            self.pos = p;
+        }
+    }
+
+    /// Runs everything queued; returns the shortest wait between two steps of `axis`
+    /// (timer ticks), i.e. the cruise speed.
+    fn run(link: &mut Link<TestSide>, axis: usize) -> u32 {
+        let mut fastest = u32::MAX;
+        for _ in 0..1_000_000 {
+            link.fill();
+            let side = link.side_mut();
+            if side.queue.is_empty() {
+                break;
+            }
+            while let Some(c) = side.queue.dequeue() {
+                c.tick().apply(&mut side.pos);
+                if c.tick().steps() & (1 << axis) != 0 {
+                    fastest = fastest.min(c.wait());
+                }
+            }
+        }
+        fastest
+    }
+
+    fn mv(target: StepPos, feed: Feed) -> Command {
+        Command::Move(Move {
+            target,
+            path: Path::Line,
+            feed,
+            line: 0,
+        })
+    }
+
+    #[test]
+    fn overrides_survive_a_setting_change() {
+        let mut s = Settings::default();
+        let mut link = Link::new(
+            &s,
+            PrepConfig::default(),
+            TestSide {
+                queue: Queue::new(),
+                pos: [0; 3],
+            },
+        );
+        link.set_overrides(150, 50);
+        // A setting changes at rest (the machine still reports Ov:150,50).
+        s.set(120, 300.0).unwrap();
+        link.configure(&s);
+        assert_eq!(link.planner().feed_override(), 150);
+        assert_eq!(link.planner().config().axes[X].accel, 300.0);
+
+        // 100 mm at F1000 with 150 %: 25 mm/s = 2000 steps/s = 36,000 timer ticks.
+        link.push(mv([8000, 0, 0], Feed::MmPerMin(1000.0))).unwrap();
+        let wait = run(&mut link, X);
+        assert!(
+            (35_900..=36_100).contains(&wait),
+            "feed: {wait} ticks per step"
+        );
+        // Rapid at 50 % of 3000 mm/min: 25 mm/s again.
+        link.push(mv([8000, 8000, 0], Feed::Rapid)).unwrap();
+        let wait = run(&mut link, Y);
+        assert!(
+            (35_900..=36_100).contains(&wait),
+            "rapid: {wait} ticks per step"
+        );
+        assert_eq!(link.position(), [8000, 8000, 0]);
     }
 }

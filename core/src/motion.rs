@@ -3,6 +3,12 @@
 //! planner converts rates and accelerations with the settings' steps/mm.
 //!
 //! Kept tiny and stable on purpose: several modules depend on these types.
+//!
+//! Range: moves start and end within +-[`POS_LIMIT`] steps on every axis (13 km at
+//! 80 steps/mm); the planner rejects any other move as invalid, so the interpolators'
+//! counters stay 32-bit (a line between any two points of the range is exact; a sine
+//! is limited to an amplitude of 2^28 steps). Nothing panics outside the range, the
+//! ticks are then just not meaningful.
 
 /// Number of axes: X, Y and Z (the pen).
 pub const AXES: usize = 3;
@@ -13,6 +19,10 @@ pub const Z: usize = 2;
 
 /// An absolute machine position in steps.
 pub type StepPos = [i32; AXES];
+
+/// Moves start and end strictly inside +-POS_LIMIT steps on every axis (2^30): a
+/// line's travel is then below 2^31 steps, which the interpolators count in u32.
+pub const POS_LIMIT: u32 = 1 << 30;
 
 /// The shape of one move, from the current position to [`Move::target`], in step space.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -193,12 +193,17 @@ impl Conic {
     pub fn last_tick_len(&self, spx: f32, spy: f32) -> f32 {
         let (x1, y1) = self.prev;
         let (x2, y2) = (self.x, self.y);
+        // Steps (-1..=1), the cross product of neighbours (|x| + |y|) and sums of two
+        // coordinates fit i32 (every point is within 2^29.5 + 1 of the centre, see
+        // [`Conic::build`]): converted as i32, the same f32 as from i64, without the
+        // 64-bit conversion routine's argument pair.
+        let f = |v: i64| v as i32 as f32;
         if self.tail.is_some() {
-            let (dx, dy) = ((x2 - x1) as f32 / spx, (y2 - y1) as f32 / spy);
+            let (dx, dy) = (f(x2 - x1) / spx, f(y2 - y1) / spy);
             return crate::fmath::sqrt(dx * dx + dy * dy);
         }
         let (a, b) = (self.a as f32, self.b as f32);
-        let cross = (x1 * y2 - x2 * y1) as f32;
+        let cross = f(x1 * y2 - x2 * y1);
         let dot = a * (x1 * x2) as f32 + b * (y1 * y2) as f32;
         if dot <= 0.0 {
             return 0.0;
@@ -206,7 +211,7 @@ impl Conic {
         // One step turns the radius by about 1/R: atan(x) = x - x^3/3 differs by
         // < 1e-9 relative for any radius of more than a few steps.
         let dt = cross.abs() * crate::fmath::sqrt(a * b) / dot;
-        let (mx, my) = ((x1 + x2) as f32 * 0.5, (y1 + y2) as f32 * 0.5);
+        let (mx, my) = (f(x1 + x2) * 0.5, f(y1 + y2) * 0.5);
         let vx = crate::fmath::sqrt(b / a) * my / spx;
         let vy = crate::fmath::sqrt(a / b) * mx / spy;
         dt * crate::fmath::sqrt(vx * vx + vy * vy)

@@ -17,6 +17,9 @@ use super::line::Line;
 use super::{tick_xy, InterpError, Interpolate, Method, Tick};
 use crate::motion::{StepPos, X, Y};
 
+/// Largest sine amplitude, steps (2^28, 3.3 km at 80 steps/mm).
+const AMP_LIMIT: f32 = 268_435_456.0;
+
 /// A function y = f(u), u = x - x_start in steps, y relative to the start in steps.
 pub trait Curve {
     fn eval(&self, u: f32) -> f32;
@@ -46,7 +49,8 @@ impl Sine {
         if !(amp.is_finite() && omega.is_finite() && phase.is_finite()) {
             return Err(InterpError::Degenerate);
         }
-        if amp.abs() > 1.0e9 {
+        // |f| <= 2 |amp| < 2^29: rows and their differences fit the trace's i32.
+        if amp.abs() >= AMP_LIMIT {
             return Err(InterpError::TooLarge);
         }
         Ok(Sine {
@@ -74,36 +78,37 @@ impl Curve for Sine {
 pub struct CurveTrace<C> {
     curve: C,
     /// +1 or -1: direction of x.
-    dir: i64,
-    /// Columns to walk.
-    cols: i64,
+    dir: i32,
+    /// Columns to walk (below 2^31: moves stay within motion::POS_LIMIT).
+    cols: i32,
     /// Current column (relative) and row (relative to the start).
-    k: i64,
-    y: i64,
+    k: i32,
+    y: i32,
     /// Rows still to climb before the column crossing, and after it.
-    first: i64,
-    second: i64,
+    first: i32,
+    second: i32,
     /// The crossing tick of the current column is still to come.
     crossing: bool,
     method: Method,
     /// Exact target relative to the start.
-    end: (i64, i64),
+    end: (i32, i32),
     tail: Option<Line>,
 }
 
-fn nearest(v: f32) -> i64 {
+fn nearest(v: f32) -> i32 {
     // Saturating conversion; NaN becomes 0.
-    crate::fmath::round(v) as i64
+    crate::fmath::round(v) as i32
 }
 
 impl<C: Curve> CurveTrace<C> {
     pub fn new(start: StepPos, target: StepPos, curve: C, method: Method) -> Self {
-        let dx = i64::from(target[X]) - i64::from(start[X]);
-        let dy = i64::from(target[Y]) - i64::from(start[Y]);
+        // Wrapping: exact for moves within motion::POS_LIMIT.
+        let dx = target[X].wrapping_sub(start[X]);
+        let dy = target[Y].wrapping_sub(start[Y]);
         let mut t = CurveTrace {
             curve,
             dir: if dx < 0 { -1 } else { 1 },
-            cols: dx.abs(),
+            cols: dx.wrapping_abs(),
             k: 0,
             y: 0,
             first: 0,
@@ -123,35 +128,33 @@ impl<C: Curve> CurveTrace<C> {
         [self.dir as f32, self.dir as f32 * self.curve.slope(u)]
     }
 
-    fn at(&self, k2: i64) -> i64 {
+    fn at(&self, k2: i64) -> i32 {
         // f at u = dir * k2 / 2.
-        nearest(self.curve.eval((self.dir * k2) as f32 * 0.5))
+        nearest(self.curve.eval((i64::from(self.dir) * k2) as f32 * 0.5))
     }
 
     /// Sets up the climbs of column k -> k+1 (or the tail after the last column).
     fn plan_column(&mut self) {
         if self.k >= self.cols {
             self.crossing = false;
-            let from = [0, self.y as i32, 0];
-            let to = [
-                (self.end.0 - self.dir * self.k) as i32,
-                self.end.1 as i32,
-                0,
-            ];
-            let to = [to[0].saturating_mul(self.dir as i32), to[1], 0];
+            let from = [0, self.y, 0];
+            let to = [self.end.0.wrapping_sub(self.dir * self.k), self.end.1, 0];
+            let to = [to[0].saturating_mul(self.dir), to[1], 0];
             self.tail = Some(Line::new(from, to, self.method));
             return;
         }
-        let mid = self.at(2 * self.k + 1);
-        let next = self.at(2 * self.k + 2);
-        self.first = mid - self.y;
-        self.second = next - mid;
+        let k2 = 2 * i64::from(self.k);
+        let mid = self.at(k2 + 1);
+        let next = self.at(k2 + 2);
+        // Saturating: exact for a sine (|f| < 2^29); no panic for a wild closure.
+        self.first = mid.saturating_sub(self.y);
+        self.second = next.saturating_sub(mid);
         self.crossing = true;
     }
 
-    fn climb(v: &mut i64) -> i8 {
-        let s = super::sgn(*v);
-        *v -= i64::from(s);
+    fn climb(v: &mut i32) -> i8 {
+        let s = super::sgn(i64::from(*v));
+        *v -= i32::from(s);
         s
     }
 }
@@ -169,9 +172,9 @@ impl<C: Curve> Interpolate for CurveTrace<C> {
         // Climb at this column, keeping the last step to merge with the crossing when
         // nothing is to be climbed after it.
         let keep_one = merge && self.second == 0 && self.first != 0;
-        if self.first.abs() > i64::from(keep_one) {
+        if self.first.abs() > i32::from(keep_one) {
             let s = Self::climb(&mut self.first);
-            self.y += i64::from(s);
+            self.y += i32::from(s);
             return Some(tick_xy(0, s));
         }
         if self.crossing {
@@ -184,13 +187,13 @@ impl<C: Curve> Interpolate for CurveTrace<C> {
                     sy = Self::climb(&mut self.second);
                 }
             }
-            self.y += i64::from(sy);
+            self.y += i32::from(sy);
             self.k += 1;
             return Some(tick_xy(self.dir as i8, sy));
         }
         if self.second != 0 {
             let s = Self::climb(&mut self.second);
-            self.y += i64::from(s);
+            self.y += i32::from(s);
             return Some(tick_xy(0, s));
         }
         self.plan_column();
@@ -233,7 +236,7 @@ mod tests {
                                dx in -1500i32..1500, classic in any::<bool>()) {
             let s = Sine::new(amp, omega, phase).unwrap();
             let start = [17, -40, 3];
-            let ideal_end = nearest(s.eval(dx as f32)) as i32;
+            let ideal_end = nearest(s.eval(dx as f32));
             let target = [17 + dx, -40 + ideal_end, 3];
             let method = if classic { Method::Classic } else { Method::Dda };
             let mut it = CurveTrace::new(start, target, s, method);
@@ -249,6 +252,25 @@ mod tests {
             }
             prop_assert_eq!(p, target);
         }
+    }
+
+    #[test]
+    fn sine_amplitude_is_limited_to_2_pow_28_steps() {
+        assert_eq!(
+            Sine::new(268_435_456.0, 0.001, 0.0).err(),
+            Some(InterpError::TooLarge)
+        );
+        assert_eq!(
+            Sine::new(-268_435_456.0, 0.001, 0.0).err(),
+            Some(InterpError::TooLarge)
+        );
+        // Just below is accepted (rows up to 2^29 from the start fit the trace's
+        // i32); a gentle one, so the trace stays short.
+        let s = Sine::new(268_435_440.0, 1e-8, 1.0).unwrap();
+        let start = [0, 0, 0];
+        let target = [40, nearest(s.eval(40.0)), 0];
+        let pts = run(CurveTrace::new(start, target, s, Method::Dda), start);
+        assert_eq!(*pts.last().unwrap(), target);
     }
 
     #[test]

@@ -11,18 +11,21 @@
 //! |dx| + |dy| + |dz| ticks, within 1 step of the line (in 3D: less than one step on
 //! every axis from some point of the line).
 //!
-//! All counters are i64 so any pair of i32 positions works without overflow.
+//! Counters are u32: every travel of two i32 positions fits, and the DDA's doubled
+//! remainders fit as long as the travel is below 2^31 steps, which the planner
+//! guarantees ([`crate::motion::POS_LIMIT`]: every move starts and ends within
+//! +-2^30). Outside that range nothing panics; the ticks are then simply wrong.
 
 use super::{Interpolate, Tick};
 use crate::motion::{StepPos, AXES};
 
 /// Per-axis absolute travel and direction of a line.
-fn travel(start: StepPos, target: StepPos) -> ([i64; AXES], [i8; AXES]) {
-    let mut len = [0i64; AXES];
+fn travel(start: StepPos, target: StepPos) -> ([u32; AXES], [i8; AXES]) {
+    let mut len = [0u32; AXES];
     let mut dir = [0i8; AXES];
     for i in 0..AXES {
         let d = i64::from(target[i]) - i64::from(start[i]);
-        len[i] = d.abs();
+        len[i] = d.unsigned_abs() as u32;
         dir[i] = super::sgn(d);
     }
     (len, dir)
@@ -31,29 +34,34 @@ fn travel(start: StepPos, target: StepPos) -> ([i64; AXES], [i8; AXES]) {
 /// Bresenham / DDA line: axes may step together.
 #[derive(Clone, Debug)]
 pub struct DdaLine {
-    len: [i64; AXES],
+    /// Per axis: what a tick without a step adds to the remainder (2 |d_i|) and the
+    /// remainder from which the axis steps (2 D - 2 |d_i|, D the major travel).
+    inc: [u32; AXES],
+    thr: [u32; AXES],
     dir: [i8; AXES],
     /// Major-axis travel (number of ticks).
-    major: i64,
-    /// Per-axis error term: 2 k |d_i| - (2 m_i + 1) D.
-    err: [i64; AXES],
-    done: i64,
+    major: u32,
+    /// Per-axis remainder 2 k |d_i| - (2 m_i - 1) D, in [0, 2 D).
+    rem: [u32; AXES],
+    done: u32,
 }
 
 impl DdaLine {
     pub fn new(start: StepPos, target: StepPos) -> Self {
         let (len, dir) = travel(start, target);
         let major = len.iter().copied().max().unwrap_or(0);
+        // Shifts, not multiplications: no overflow check (the planner keeps 2 D < 2^32).
         DdaLine {
-            len,
+            inc: len.map(|l| l << 1),
+            thr: len.map(|l| (major << 1).wrapping_sub(l << 1)),
             dir,
             major,
-            err: [-major; AXES],
+            rem: [major; AXES],
             done: 0,
         }
     }
     /// Number of ticks the line takes.
-    pub fn ticks(&self) -> i64 {
+    pub fn ticks(&self) -> u32 {
         self.major
     }
 }
@@ -66,16 +74,19 @@ impl Interpolate for DdaLine {
         self.done += 1;
         let mut d = [0i8; AXES];
         let axes = self
-            .err
+            .rem
             .iter_mut()
-            .zip(&self.len)
-            .zip(&self.dir)
-            .zip(d.iter_mut());
-        for (((err, &len), &dir), delta) in axes {
-            *err += 2 * len;
-            if *err >= 0 {
-                *err -= 2 * self.major;
+            .zip(self.inc.iter().zip(&self.thr))
+            .zip(self.dir.iter().zip(d.iter_mut()));
+        for ((rem, (&inc, &thr)), (&dir, delta)) in axes {
+            // rem + inc >= 2 D: the axis steps and the remainder wraps by 2 D.
+            if *rem >= thr {
+                *rem -= thr;
                 *delta = dir;
+            } else {
+                // Wrapping: cannot wrap for travels below 2^31 (and must not panic
+                // for the meaningless longer ones).
+                *rem = rem.wrapping_add(inc);
             }
         }
         Some(Tick::from_deltas(d))
@@ -85,10 +96,10 @@ impl Interpolate for DdaLine {
 /// Point-by-point comparison line: one axis per tick.
 #[derive(Clone, Debug)]
 pub struct ClassicLine {
-    len: [i64; AXES],
+    len: [u32; AXES],
     dir: [i8; AXES],
     /// Steps taken per axis.
-    taken: [i64; AXES],
+    taken: [u32; AXES],
 }
 
 impl ClassicLine {
@@ -105,8 +116,7 @@ impl ClassicLine {
 impl Interpolate for ClassicLine {
     fn next_tick(&mut self) -> Option<Tick> {
         // Pick the unfinished axis with the smallest progress taken/len; compare
-        // fractions by cross-multiplication (u64: both factors are travels of two i32
-        // positions, below 2^32, so the product fits).
+        // fractions by cross-multiplication (u32 x u32 in u64: one multiply).
         let mut best: Option<usize> = None;
         for i in 0..AXES {
             if self.taken[i] >= self.len[i] {
@@ -115,8 +125,8 @@ impl Interpolate for ClassicLine {
             best = match best {
                 None => Some(i),
                 Some(b) => {
-                    let lhs = self.taken[i].unsigned_abs() * self.len[b].unsigned_abs();
-                    let rhs = self.taken[b].unsigned_abs() * self.len[i].unsigned_abs();
+                    let lhs = u64::from(self.taken[i]) * u64::from(self.len[b]);
+                    let rhs = u64::from(self.taken[b]) * u64::from(self.len[i]);
                     if lhs < rhs {
                         Some(i)
                     } else {
@@ -144,12 +154,13 @@ const FINE_LIMIT: i64 = 1 << 21;
 pub struct FineLine {
     /// Major axis index (0 = X, 1 = Y) and directions.
     major: usize,
-    dir_maj: i64,
-    /// Present integer position (major, minor) and the integer target.
-    pos: (i64, i64),
-    end: (i64, i64),
+    dir_maj: i32,
+    /// Present integer position (major, minor) and the integer target (i32: within
+    /// FINE_LIMIT).
+    pos: (i32, i32),
+    end: (i32, i32),
     /// Rounding state: desired minor `n`, remainder r in [0, 256 D), increment per step.
-    n: i64,
+    n: i32,
     r: i64,
     inc: i64,
     den: i64,
@@ -209,17 +220,17 @@ impl FineLine {
         let inc = 256 * d_min * s * dir_maj;
         Some(FineLine {
             major,
-            dir_maj,
-            pos: p0,
-            end: (i64::from(target[major]), i64::from(target[minor])),
-            n,
+            dir_maj: dir_maj as i32,
+            pos: (start[major], start[minor]),
+            end: (target[major], target[minor]),
+            n: n as i32,
             r,
             inc,
             den: q,
         })
     }
 
-    fn tick(&self, d_maj: i64, d_min: i64) -> Tick {
+    fn tick(&self, d_maj: i32, d_min: i32) -> Tick {
         let (d_maj, d_min) = (d_maj as i8, d_min as i8);
         if self.major == 0 {
             super::tick_xy(d_maj, d_min)
@@ -288,9 +299,9 @@ impl Line {
     /// classic). A fine line may add a catch-up step at either end.
     pub fn ticks(&self) -> u64 {
         match self {
-            Line::Dda(l) => l.major.unsigned_abs(),
-            Line::Classic(l) => l.len.iter().map(|v| v.unsigned_abs()).sum(),
-            Line::Fine(l) => (l.end.0 - l.pos.0).unsigned_abs(),
+            Line::Dda(l) => u64::from(l.major),
+            Line::Classic(l) => l.len.iter().map(|&v| u64::from(v)).sum(),
+            Line::Fine(l) => u64::from((l.end.0 - l.pos.0).unsigned_abs()),
         }
     }
 }
@@ -424,7 +435,61 @@ mod tests {
         assert_eq!(&got[1..], &expect[..]);
     }
 
+    /// The DDA line as it was with i64 error terms (2 k |d_i| - (2 m_i + 1) D in
+    /// [-2 D, 0)): the u32 remainders must give the same ticks.
+    fn i64_dda(start: StepPos, target: StepPos) -> impl Iterator<Item = Tick> {
+        let len: std::vec::Vec<i64> = (0..AXES)
+            .map(|i| (i64::from(target[i]) - i64::from(start[i])).abs())
+            .collect();
+        let dir: std::vec::Vec<i8> = (0..AXES)
+            .map(|i| crate::interp::sgn(i64::from(target[i]) - i64::from(start[i])))
+            .collect();
+        let major = len.iter().copied().max().unwrap_or(0);
+        let mut err = [-major; AXES];
+        (0..major).map(move |_| {
+            let mut d = [0i8; AXES];
+            for i in 0..AXES {
+                err[i] += 2 * len[i];
+                if err[i] >= 0 {
+                    err[i] -= 2 * major;
+                    d[i] = dir[i];
+                }
+            }
+            Tick::from_deltas(d)
+        })
+    }
+
+    #[test]
+    fn u32_dda_matches_the_i64_error_terms_at_the_range_limit() {
+        // Travels up to 2^31 - 2 (ends at +-(2^30 - 1)): the first ticks and a
+        // window after a long run agree.
+        let e = (1 << 30) - 1;
+        let cases = [
+            ([e, -e, 0], [-e, e, 17]),
+            ([-e, 0, 5], [e, 12345, -e]),
+            ([0, 0, 0], [e, e - 1, 1]),
+            ([-e, -e, -e], [e, 3, e - 7]),
+        ];
+        for (s, t) in cases {
+            let mut l = DdaLine::new(s, t);
+            assert_eq!(u64::from(l.ticks()), i64_dda(s, t).size_hint().0 as u64);
+            for (k, want) in i64_dda(s, t).take(200_000).enumerate() {
+                assert_eq!(l.next_tick(), Some(want), "{s:?} -> {t:?} tick {k}");
+            }
+        }
+    }
+
     proptest! {
+        #[test]
+        fn u32_dda_matches_the_i64_error_terms(s in prop::array::uniform3(-3000i32..3000), t in prop::array::uniform3(-3000i32..3000)) {
+            let got: std::vec::Vec<Tick> = {
+                let mut l = DdaLine::new(s, t);
+                std::iter::from_fn(|| l.next_tick()).collect()
+            };
+            let want: std::vec::Vec<Tick> = i64_dda(s, t).collect();
+            prop_assert_eq!(got, want);
+        }
+
         #[test]
         fn fine_lines_follow_the_unrounded_line(fx in -400_000i32..400_000, fy in -400_000i32..400_000,
                                                  tx in -400_000i32..400_000, ty in -400_000i32..400_000) {

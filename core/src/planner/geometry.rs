@@ -63,9 +63,10 @@ fn sp(cfg: &PlannerConfig, axis: usize) -> f32 {
 
 /// Geometry of `mv` starting at `start`.
 pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometry, GeometryError> {
-    let d: [f32; AXES] = core::array::from_fn(|i| {
-        (i64::from(mv.target[i]) - i64::from(start[i])) as f32 / sp(cfg, i)
-    });
+    // Travels below 2^31 (both ends within motion::POS_LIMIT, checked by the planner
+    // first): i32 differences, the same f32 as through i64.
+    let d: [f32; AXES] =
+        core::array::from_fn(|i| mv.target[i].wrapping_sub(start[i]) as f32 / sp(cfg, i));
     match mv.path {
         Path::Line | Path::LineFine { .. } => {
             let length = crate::fmath::sqrt(d.iter().map(|c| c * c).sum());
@@ -95,7 +96,7 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
             if d[X] == 0.0 || !(amp.is_finite() && omega.is_finite() && phase.is_finite()) {
                 return Err(GeometryError::Invalid);
             }
-            let dx = (i64::from(mv.target[X]) - i64::from(start[X])) as f32;
+            let dx = mv.target[X].wrapping_sub(start[X]) as f32;
             let dir = dx.signum();
             let periods = (omega.abs() * dx.abs() / TAU) as u32;
             let curv = (amp * omega * omega).abs();

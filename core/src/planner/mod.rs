@@ -21,7 +21,7 @@ pub mod geometry;
 pub mod profile;
 
 use crate::interp::Method;
-use crate::motion::{Feed, Move, StepPos, AXES};
+use crate::motion::{Feed, Move, StepPos, AXES, POS_LIMIT};
 use heapless::Deque;
 pub use profile::{Profile, Shape};
 
@@ -172,10 +172,15 @@ impl Planner {
         self.next_start
     }
 
-    /// Queues a move. Zero-length moves are accepted and dropped.
+    /// Queues a move. Zero-length moves are accepted and dropped; a move that starts
+    /// or ends outside +-[`POS_LIMIT`] steps is invalid.
     pub fn push(&mut self, mv: &Move) -> Result<(), PlanError> {
         if self.blocks.is_full() {
             return Err(PlanError::Full);
+        }
+        let ends = mv.target.iter().chain(self.next_start.iter());
+        if ends.into_iter().any(|v| v.unsigned_abs() >= POS_LIMIT) {
+            return Err(PlanError::Invalid);
         }
         let g = match geometry::of_move(&self.cfg, self.next_start, mv) {
             Ok(g) => g,
@@ -257,14 +262,14 @@ impl Planner {
         }
     }
 
-    /// Maximum speed of `b` with the overrides applied (mm/s).
+    /// Maximum speed of `b` with the overrides applied (mm/s). A rapid's nominal speed
+    /// is unbounded (as fast as the axes allow): its override scales the axis limit.
     pub fn max_speed(&self, b: &Block) -> f32 {
-        let ovr = if b.is_rapid() {
-            self.rapid_override
+        if b.is_rapid() {
+            b.limit * self.rapid_override
         } else {
-            self.feed_override
-        };
-        (b.nominal * ovr).min(b.limit)
+            (b.nominal * self.feed_override).min(b.limit)
+        }
     }
 
     /// Feed override in percent (Grbl: 10..200).
@@ -284,6 +289,15 @@ impl Planner {
     /// Effective (planning) acceleration of a block.
     pub fn plan_accel(&self, b: &Block) -> f32 {
         self.cfg.shape.effective_accel(b.accel)
+    }
+
+    /// New limits (settings change only at rest, with nothing queued): drops what is
+    /// queued and restarts from `position` like [`Planner::clear`], but keeps the feed
+    /// and rapid overrides, which the machine still reports. Configures in place: no
+    /// second planner on the stack.
+    pub fn reconfigure(&mut self, cfg: &PlannerConfig, position: StepPos) {
+        self.cfg = *cfg;
+        self.clear(position);
     }
 
     /// Drops every queued block (after a hold, for abort) and restarts from `position`.
@@ -434,6 +448,17 @@ mod tests {
         p.set_feed_override(10);
         assert!((p.max_speed(&b) - 5.0).abs() < 1e-4);
         assert_eq!(p.feed_override(), 10);
+        // A rapid runs at the axis limit (5000 mm/min); its override scales that.
+        let mut p = Planner::new(PlannerConfig::default(), [0; 3]);
+        p.push(&Move {
+            feed: Feed::Rapid,
+            ..line(8000, 0, 1.0)
+        })
+        .unwrap();
+        let b = *p.blocks.front().unwrap();
+        assert!((p.max_speed(&b) - 5000.0 / 60.0).abs() < 1e-3);
+        p.set_rapid_override(25);
+        assert!((p.max_speed(&b) - 1250.0 / 60.0).abs() < 1e-3);
     }
 
     #[test]
@@ -469,6 +494,20 @@ mod tests {
         assert_eq!(p.push(&bad), Err(PlanError::Invalid));
         assert_eq!(p.push(&line(10, 0, -5.0)), Err(PlanError::Invalid));
         assert_eq!(p.push(&line(0, 0, 100.0)), Ok(()));
+        assert!(p.is_empty());
+        // Endpoints must lie strictly inside +-2^30 steps (a line's travel then
+        // fits the interpolators' u32 counters).
+        let edge = (1 << 30) - 1;
+        assert_eq!(p.push(&line(1 << 30, 0, 100.0)), Err(PlanError::Invalid));
+        assert_eq!(p.push(&line(0, -(1 << 30), 100.0)), Err(PlanError::Invalid));
+        assert_eq!(p.push(&line(0, i32::MIN, 100.0)), Err(PlanError::Invalid));
+        assert!(p.is_empty());
+        assert_eq!(p.push(&line(edge, -edge, 100.0)), Ok(()));
+        assert_eq!(p.push(&line(-edge, edge, 100.0)), Ok(()));
+        assert_eq!(p.len(), 2);
+        // A start outside the range (a position set there) is refused as well.
+        let mut p = Planner::new(PlannerConfig::default(), [1 << 30, 0, 0]);
+        assert_eq!(p.push(&line(0, 0, 100.0)), Err(PlanError::Invalid));
         assert!(p.is_empty());
     }
 }

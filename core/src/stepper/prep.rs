@@ -427,8 +427,10 @@ fn curve_tick_len(len: TickLen, interp: &Interp, cfg: &PlannerConfig) -> u64 {
             // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
             // telescope, so a whole arc adds up to its length (to < 1e-9).
             // f32, not a u64 division (not in the chip's instruction set).
+            // The cross product of neighbours is below 2^31 (see Conic::last_tick_len):
+            // the same f32 through u32.
             let dot = c.last_dot().unsigned_abs().max(1) as f32;
-            (c.last_cross().unsigned_abs() as f32 * m / dot) as u64
+            (c.last_cross().unsigned_abs() as u32 as f32 * m / dot) as u64
         }
         (_, Interp::Conic(c)) => {
             to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
@@ -445,11 +447,12 @@ fn curve_tick_len(len: TickLen, interp: &Interp, cfg: &PlannerConfig) -> u64 {
     }
 }
 
-/// Length of a line, mm.
+/// Length of a line, mm (travels below 2^31: the planner keeps both ends within
+/// motion::POS_LIMIT, so i32 differences give the same f32 as i64 ones).
 fn line_length(cfg: &PlannerConfig, from: StepPos, to: StepPos) -> f32 {
     let mut len2 = 0.0f32;
     for ((&t, &f), ax) in to.iter().zip(from.iter()).zip(cfg.axes.iter()) {
-        let mm = (i64::from(t) - i64::from(f)) as f32 / ax.steps_per_mm.max(1e-6);
+        let mm = t.wrapping_sub(f) as f32 / ax.steps_per_mm.max(1e-6);
         len2 += mm * mm;
     }
     crate::fmath::sqrt(len2)
