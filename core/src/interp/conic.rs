@@ -164,7 +164,11 @@ impl Conic {
 
     /// Radius in steps if this is a circle.
     pub fn circle_radius(&self) -> Option<f32> {
-        (self.a == self.b).then(|| crate::fmath::sqrt(self.c as f32))
+        // A circle is built as x^2 + y^2 = R^2 (A = 1, C = R^2), an ellipse with equal
+        // semi-axes r as r^2 x^2 + r^2 y^2 = r^4 (A = r^2): R^2 is C for the one, A for
+        // the other (and both are 1 when r = 1). No 64-bit division.
+        let r2 = if self.a == 1 { self.c } else { self.a };
+        (self.a == self.b).then(|| crate::fmath::sqrt(r2 as f32))
     }
 
     /// The last tick is part of the straight tail to the target.
@@ -448,6 +452,17 @@ mod tests {
 
     fn dist_circle(x: f64, y: f64, r: f64) -> f64 {
         ((x * x + y * y).sqrt() - r).abs()
+    }
+
+    #[test]
+    fn an_ellipse_with_equal_axes_has_its_circle_radius() {
+        let start = [100, 0, 0];
+        let circle = Conic::circle(start, [-100, 0], start, true, 0, Method::Dda).unwrap();
+        let ellipse = Conic::ellipse(start, [-100, 0], 100, 100, start, true, Method::Dda).unwrap();
+        assert_eq!(circle.circle_radius(), Some(100.0));
+        assert_eq!(ellipse.circle_radius(), Some(100.0));
+        let flat = Conic::ellipse(start, [-100, 0], 100, 50, start, true, Method::Dda).unwrap();
+        assert_eq!(flat.circle_radius(), None);
     }
 
     #[test]
