@@ -30,9 +30,15 @@ use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
 use inkstep_core::link::StepSide;
 use inkstep_core::stepper::exec::Executor;
 
-/// USB byte queues. RX holds more than Grbl's 128-byte character-counting window.
-const USB_RX: usize = 256;
-const USB_TX: usize = 512;
+/// USB byte queues, relays between the USB interrupt and the protocol task, which
+/// trade up to one 64-byte packet each way every millisecond (64 KB/s, far above what
+/// Grbl's protocol needs). RX holds Grbl's whole 128-byte character-counting window
+/// (two packets); the window itself is the protocol's receive buffer (`Bf:`), and a
+/// full ring only NAKs the host (back-pressure, nothing is dropped). TX holds two
+/// packets; the responses wait in the protocol's 640-byte output buffer, which only
+/// hands out what this ring has room for.
+const USB_RX: usize = 128;
+const USB_TX: usize = 128;
 
 /// One direction of the USB byte stream: a FIFO between exactly one producing and one
 /// consuming context (the USB interrupt and the protocol task), handed out as one
