@@ -18,6 +18,8 @@ use crate::machine::{Command, MotionControl, RunState};
 use crate::motion::{X, Y, Z};
 use crate::protocol::Protocol;
 use crate::settings::{put_int, Settings, Sink};
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 use heapless::Vec;
 
 /// Jog moves run this far (mm) unless stopped; key release stops them.
@@ -52,13 +54,49 @@ pub fn hmi_config(s: &Settings) -> hmi::Config {
 
 impl Controller {
     pub fn new(settings: Settings, now_ms: u32) -> Controller {
-        let cfg = hmi_config(&settings);
-        Controller {
-            protocol: Protocol::new(settings),
-            keypad: Keypad::new(KeypadConfig::default()),
-            hmi: Hmi::new(cfg, now_ms),
-            outputs: Outputs::default(),
-            dir: [0, 0],
+        let mut slot = MaybeUninit::uninit();
+        Controller::init_in(&mut slot, &settings, now_ms);
+        // SAFETY: `init_in` initialised every field.
+        #[allow(unsafe_code)]
+        unsafe {
+            slot.assume_init()
+        }
+    }
+
+    /// [`Controller::new`] built in `slot`, the firmware's static cell: field by field,
+    /// so that no whole controller (2 KB), protocol or machine is built on init's stack
+    /// and copied.
+    #[allow(unsafe_code)]
+    pub fn init_in<'a>(
+        slot: &'a mut MaybeUninit<Controller>,
+        settings: &Settings,
+        now_ms: u32,
+    ) -> &'a mut Controller {
+        // Lists every field (no `..`): a new field fails to compile here until it is
+        // written below too.
+        const _: fn(&Controller) = |Controller {
+                                        protocol: _,
+                                        keypad: _,
+                                        hmi: _,
+                                        outputs: _,
+                                        dir: _,
+                                    }| {};
+        let p = slot.as_mut_ptr();
+        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
+        // is written once through a raw field pointer (the protocol through its own
+        // `init_in`, on its field viewed as `MaybeUninit`, which has the same layout)
+        // and the list below names every field, so the controller is initialised when
+        // `assume_init_mut` runs.
+        unsafe {
+            Protocol::init_in(
+                &mut *addr_of_mut!((*p).protocol).cast::<MaybeUninit<Protocol>>(),
+                settings,
+            );
+            addr_of_mut!((*p).keypad).write(Keypad::new(KeypadConfig::default()));
+            addr_of_mut!((*p).hmi).write(Hmi::new(hmi_config(settings), now_ms));
+            addr_of_mut!((*p).outputs).write(Outputs::default());
+            addr_of_mut!((*p).dir).write([0, 0]);
+            slot.assume_init_mut()
         }
     }
 
