@@ -13,7 +13,7 @@
 //! the planner or the HMI is made here, only their wiring.
 
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
-use crate::keypad::{Keypad, KeypadConfig};
+use crate::keypad::{KeyEvent, Keypad, KeypadConfig};
 use crate::machine::{Command, MotionControl, RunState};
 use crate::motion::{X, Y, Z};
 use crate::protocol::Protocol;
@@ -170,16 +170,32 @@ impl Controller {
     pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) {
         let events = self.keypad.feed(rows, now_ms);
         for ev in events {
-            let st = self.status(m);
-            let actions = self.hmi.key(ev, &st, now_ms);
-            self.apply(&actions, m, now_ms);
+            self.key_event(ev, m, now_ms);
         }
+    }
+
+    /// One key event through the HMI. Out of line, so that the HMI's working state and
+    /// its actions live in this frame only while a key is handled, not in the caller's
+    /// (the firmware's keypad task) beside everything else inlined there.
+    #[inline(never)]
+    fn key_event<M: MotionControl>(&mut self, ev: KeyEvent, m: &mut M, now_ms: u32) {
+        let st = self.status(m);
+        let actions = self.hmi.key(ev, &st, now_ms);
+        self.apply(&actions, m, now_ms);
     }
 
     /// Background work: the protocol's lines and messages, the HMI's timers, the
     /// completion of a keypad abort, the busy LED.
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         self.protocol.poll(m, now_ms);
+        self.hmi_tick(m, now_ms);
+    }
+
+    /// The HMI's timers. Out of line, so that its actions (a 440-byte list) are not
+    /// part of the caller's frame (the firmware's protocol task) while the protocol
+    /// runs, and the protocol's locals are gone while the actions are applied.
+    #[inline(never)]
+    fn hmi_tick<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         let st = self.status(m);
         let actions = self.hmi.tick(&st, now_ms);
         self.apply(&actions, m, now_ms);
