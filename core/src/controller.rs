@@ -197,8 +197,16 @@ impl Controller {
     #[inline(never)]
     fn hmi_tick<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         let st = self.status(m);
-        let actions = self.hmi.tick(&st, now_ms);
+        let actions = self.tick_actions(&st, now_ms);
         self.apply(&actions, m, now_ms);
+    }
+
+    /// The HMI's timer step alone, out of line too: its working state is gone before
+    /// the actions are applied (through the machine and the planner, the deeper
+    /// path).
+    #[inline(never)]
+    fn tick_actions(&mut self, st: &hmi::Status, now_ms: u32) -> hmi::Actions {
+        self.hmi.tick(st, now_ms)
     }
 
     fn apply<M: MotionControl>(&mut self, actions: &[Action], m: &mut M, now_ms: u32) {
