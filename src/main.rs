@@ -622,39 +622,45 @@ mod app {
         // Flash writes stall the CPU (instruction fetch waits), so only at rest.
         let saves = &mut *cx.local.saves;
         let store = &mut *cx.local.store;
-        cx.shared.core.lock(|c| {
-            let ctl = &mut *c.ctl;
-            saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
-            saves.startup |= ctl.protocol_mut().take_startup_dirty();
-            if busy {
-                return;
-            }
-            if core::mem::take(&mut saves.settings)
-                && store
-                    .save_settings(ctl.protocol().machine().settings())
-                    .is_err()
-            {
-                defmt::warn!("settings save failed");
-            }
-            if core::mem::take(&mut saves.coords)
-                && store
-                    .save_coords(ctl.protocol().machine().interp().coords())
-                    .is_err()
-            {
-                defmt::warn!("offsets save failed");
-            }
-            if core::mem::take(&mut saves.startup) {
-                for i in 0..STARTUP_LINES {
-                    let line = ctl.protocol().startup_line(i).unwrap_or("");
-                    if store.save_startup(i, line).is_err() {
-                        defmt::warn!("startup line save failed");
-                    }
-                }
-            }
-        });
+        cx.shared.core.lock(|c| persist(c.ctl, saves, store, busy));
         // A tick that came while this ran is dropped: the next run starts at the next
         // tick, so the tasks below always get a turn between two runs.
         cortex_m::peripheral::NVIC::unpend(Interrupt::SPI1);
+    }
+
+    /// What changed goes to flash, at rest. Out of line: the images it stages (the
+    /// settings' 184 bytes, the offsets', a startup line) would otherwise sit in the
+    /// protocol task's frame under its deepest path (a setting change reconfiguring
+    /// the planner).
+    #[inline(never)]
+    fn persist(ctl: &mut Controller, saves: &mut Saves, store: &mut Store, busy: bool) {
+        saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
+        saves.startup |= ctl.protocol_mut().take_startup_dirty();
+        if busy {
+            return;
+        }
+        if core::mem::take(&mut saves.settings)
+            && store
+                .save_settings(ctl.protocol().machine().settings())
+                .is_err()
+        {
+            defmt::warn!("settings save failed");
+        }
+        if core::mem::take(&mut saves.coords)
+            && store
+                .save_coords(ctl.protocol().machine().interp().coords())
+                .is_err()
+        {
+            defmt::warn!("offsets save failed");
+        }
+        if core::mem::take(&mut saves.startup) {
+            for i in 0..STARTUP_LINES {
+                let line = ctl.protocol().startup_line(i).unwrap_or("");
+                if store.save_startup(i, line).is_err() {
+                    defmt::warn!("startup line save failed");
+                }
+            }
+        }
     }
 
     /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.
