@@ -117,6 +117,99 @@ fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
     }
 }
 
+/// A `$` command, told apart before it runs (so that the line's text need not be
+/// held while `self` changes).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum SysCommand {
+    Help,
+    List(Listing),
+    Modal,
+    Info,
+    Check,
+    Unlock,
+    Home,
+    Reset(u8),
+    Jog,
+    Startup,
+    Setting,
+}
+
+impl SysCommand {
+    /// `cmd`: the line after the `$`.
+    fn of(cmd: &[u8]) -> SysCommand {
+        match cmd {
+            [] => SysCommand::Help,
+            [b'$'] => SysCommand::List(Listing::Settings(0)),
+            [b'#'] => SysCommand::List(Listing::Coords(0)),
+            [b'N'] => SysCommand::List(Listing::Startup(0)),
+            [b'G'] => SysCommand::Modal,
+            [b'I'] => SysCommand::Info,
+            [b'C'] => SysCommand::Check,
+            [b'X'] => SysCommand::Unlock,
+            [b'H'] => SysCommand::Home,
+            [b'R', b'S', b'T', b'=', what @ (b'$' | b'#' | b'*')] => SysCommand::Reset(*what),
+            [b'J', b'=', ..] => SysCommand::Jog,
+            [b'N', ..] => SysCommand::Startup,
+            _ => SysCommand::Setting,
+        }
+    }
+}
+
+/// `$n=v`.
+fn set_setting<M: MotionControl>(
+    machine: &mut Machine,
+    cmd: &[u8],
+    m: &mut M,
+) -> Result<(), Status> {
+    let eq = cmd
+        .iter()
+        .position(|&c| c == b'=')
+        .ok_or(Status::InvalidStatement)?;
+    let (num, val) = cmd.split_at(eq);
+    let val = val.get(1..).unwrap_or(&[]);
+    if num.is_empty() || !num.iter().all(u8::is_ascii_digit) || num.len() > 4 {
+        return Err(Status::InvalidStatement);
+    }
+    let n = num
+        .iter()
+        .fold(0u16, |acc, &d| acc * 10 + u16::from(d - b'0'));
+    let (v, used) = crate::gcode::parser::read_number(val)?;
+    if used != val.len() {
+        return Err(Status::BadNumberFormat);
+    }
+    machine.set_setting(n, v, m)
+}
+
+/// `$Nx=line`: check the line and store it in slot x.
+fn store_startup(
+    machine: &mut Machine,
+    startup: &mut [StartupLine; STARTUP_LINES],
+    rest: &[u8],
+) -> Result<(), Status> {
+    let (idx, line) = match rest {
+        [d @ b'0'..=b'9', b'=', line @ ..] => (usize::from(d - b'0'), line),
+        _ => return Err(Status::InvalidStatement),
+    };
+    let slot_exists = idx < STARTUP_LINES;
+    if !slot_exists {
+        return Err(Status::InvalidStatement);
+    }
+    machine.validate(line)?;
+    // Cleaned lines are ASCII (the cleaner drops bytes >= 0x7F); byte-wise copy
+    // keeps UTF-8 validation out of the image.
+    if !line.is_ascii() {
+        return Err(Status::InvalidStatement);
+    }
+    if let Some(slot) = startup.get_mut(idx) {
+        slot.clear();
+        for &b in line.iter().take(LINE_MAX) {
+            // Masked: the compiler then knows the char is one UTF-8 byte.
+            let _ = slot.push(char::from(b & 0x7F));
+        }
+    }
+    Ok(())
+}
+
 impl Protocol {
     /// Power-up: the welcome line is queued at once.
     pub fn new(settings: Settings) -> Protocol {
@@ -426,18 +519,19 @@ impl Protocol {
             self.finish_line(Err(Status::Overflow));
             return true;
         }
-        // Moved out while it runs (the `$` commands need `self`), back if it waits.
-        let line = core::mem::take(&mut self.line);
-        let r = match line.first() {
+        // The line stays where it is while it runs (and if it waits): the machine
+        // borrows it beside the fields it changes, so no copy of it sits on the stack
+        // under the G-code and reconfiguration paths.
+        let r = match self.line.first() {
             None => {
                 // Grbl answers blank lines (and lines of only a comment) with ok,
                 // but a bare CR LF pair is one line end, not two.
                 Some(Ok(()))
             }
-            Some(b'$') => self.system_command(line.get(1..).unwrap_or(&[]), m),
+            Some(b'$') => self.system_command(m),
             Some(_) => {
                 let line_no = self.lines_received.wrapping_add(1);
-                let r = self.machine.execute(&line, line_no, m, now_ms);
+                let r = self.machine.execute(&self.line, line_no, m, now_ms);
                 if r.is_some() {
                     self.lines_received = line_no;
                 }
@@ -445,7 +539,6 @@ impl Protocol {
             }
         };
         let Some(r) = r else {
-            self.line = line;
             return false;
         };
         self.flush_events();
@@ -472,40 +565,32 @@ impl Protocol {
         }
     }
 
-    /// `$` commands. `None` if the command must wait for planner room.
-    fn system_command<M: MotionControl>(
-        &mut self,
-        cmd: &[u8],
-        m: &mut M,
-    ) -> Option<Result<(), Status>> {
+    /// The `$` command in `line`. `None` if the command must wait for planner room.
+    fn system_command<M: MotionControl>(&mut self, m: &mut M) -> Option<Result<(), Status>> {
         let at_rest = matches!(
             self.machine.state(m),
             RunState::Idle | RunState::Alarm | RunState::Check
         );
+        let kind = SysCommand::of(self.line.get(1..).unwrap_or(&[]));
         // Everything but help, $G, $C (checks itself) and jogging needs the machine at
         // rest; refuse before doing anything.
-        let anytime = matches!(cmd, [] | [b'G'] | [b'C'] | [b'J', b'=', ..]);
+        let anytime = matches!(
+            kind,
+            SysCommand::Help | SysCommand::Modal | SysCommand::Check | SysCommand::Jog
+        );
         if !anytime && !at_rest {
             return Some(Err(Status::IdleError));
         }
-        Some(match cmd {
-            [] => {
+        Some(match kind {
+            SysCommand::Help => {
                 self.say(&[b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"]);
                 Ok(())
             }
-            [b'$'] => {
-                self.listing = Some(Listing::Settings(0));
+            SysCommand::List(l) => {
+                self.listing = Some(l);
                 Ok(())
             }
-            [b'#'] => {
-                self.listing = Some(Listing::Coords(0));
-                Ok(())
-            }
-            [b'N'] => {
-                self.listing = Some(Listing::Startup(0));
-                Ok(())
-            }
-            [b'G'] => {
+            SysCommand::Modal => {
                 let mut w = OutWriter {
                     out: &mut self.out,
                     truncated: &mut self.truncated,
@@ -515,7 +600,7 @@ impl Protocol {
                 w.put(b"]\r\n");
                 Ok(())
             }
-            [b'I'] => {
+            SysCommand::Info => {
                 self.say(&[
                     b"[VER:1.1h.inkstep-",
                     VERSION.as_bytes(),
@@ -530,7 +615,7 @@ impl Protocol {
                 w.put(b"]\r\n");
                 Ok(())
             }
-            [b'C'] => {
+            SysCommand::Check => {
                 let was = self.machine.check_mode();
                 let r = self.machine.toggle_check(m);
                 if was && r.is_ok() {
@@ -540,81 +625,42 @@ impl Protocol {
                 }
                 r
             }
-            [b'X'] => self.machine.unlock(),
-            [b'H'] => self.machine.start_homing(m),
+            SysCommand::Unlock => self.machine.unlock(),
+            SysCommand::Home => self.machine.start_homing(m),
             // $RST=$ settings, $RST=# coordinate data, $RST=* both.
-            [b'R', b'S', b'T', b'=', what @ (b'$' | b'#' | b'*')] => {
-                if *what != b'#' {
+            SysCommand::Reset(what) => {
+                if what != b'#' {
                     self.machine.replace_settings(Settings::default(), m);
                 }
-                if *what != b'$' {
+                if what != b'$' {
                     self.machine.clear_coords();
                 }
                 Ok(())
             }
-            _ => {
-                if let Some(body) = cmd.strip_prefix(b"J=") {
-                    if m.free() == 0 {
-                        return None;
-                    }
-                    self.machine.jog(body, m)
-                } else if let Some(rest) = cmd.strip_prefix(b"N") {
-                    self.store_startup(rest)
-                } else {
-                    self.set_setting(cmd, m)
+            // These read the line's text: borrowed in place, beside the fields they
+            // change.
+            SysCommand::Jog => {
+                if m.free() == 0 {
+                    return None;
                 }
+                self.machine.jog(self.line.get(3..).unwrap_or(&[]), m)
+            }
+            SysCommand::Startup => {
+                let rest = self.line.get(2..).unwrap_or(&[]);
+                let r = store_startup(&mut self.machine, &mut self.startup, rest);
+                if r.is_ok() {
+                    self.startup_dirty = true;
+                }
+                r
+            }
+            SysCommand::Setting => {
+                set_setting(&mut self.machine, self.line.get(1..).unwrap_or(&[]), m)
             }
         })
     }
 
     fn welcome_after_ok(&mut self) {
         self.pending_welcome = true;
-    }
-
-    fn set_setting<M: MotionControl>(&mut self, cmd: &[u8], m: &mut M) -> Result<(), Status> {
-        let eq = cmd
-            .iter()
-            .position(|&c| c == b'=')
-            .ok_or(Status::InvalidStatement)?;
-        let (num, val) = cmd.split_at(eq);
-        let val = val.get(1..).unwrap_or(&[]);
-        if num.is_empty() || !num.iter().all(u8::is_ascii_digit) || num.len() > 4 {
-            return Err(Status::InvalidStatement);
-        }
-        let n = num
-            .iter()
-            .fold(0u16, |acc, &d| acc * 10 + u16::from(d - b'0'));
-        let (v, used) = crate::gcode::parser::read_number(val)?;
-        if used != val.len() {
-            return Err(Status::BadNumberFormat);
-        }
-        self.machine.set_setting(n, v, m)
-    }
-
-    fn store_startup(&mut self, rest: &[u8]) -> Result<(), Status> {
-        let (idx, line) = match rest {
-            [d @ b'0'..=b'9', b'=', line @ ..] => (usize::from(d - b'0'), line),
-            _ => return Err(Status::InvalidStatement),
-        };
-        let slot_exists = idx < STARTUP_LINES;
-        if !slot_exists {
-            return Err(Status::InvalidStatement);
-        }
-        self.machine.validate(line)?;
-        // Cleaned lines are ASCII (the cleaner drops bytes >= 0x7F); byte-wise copy
-        // keeps UTF-8 validation out of the image.
-        if !line.is_ascii() {
-            return Err(Status::InvalidStatement);
-        }
-        if let Some(slot) = self.startup.get_mut(idx) {
-            slot.clear();
-            for &b in line.iter().take(LINE_MAX) {
-                // Masked: the compiler then knows the char is one UTF-8 byte.
-                let _ = slot.push(char::from(b & 0x7F));
-            }
-        }
-        self.startup_dirty = true;
-        Ok(())
     }
 
     /// Run stored startup line `i` (after reset, when not locked). False to wait.
