@@ -664,30 +664,17 @@ impl Protocol {
     }
 
     /// Run stored startup line `i` (after reset, when not locked). False to wait.
+    /// The line is borrowed where it is stored (the machine and the output are other
+    /// fields), not moved out: no copy of it sits on the stack under the G-code path.
     fn run_startup<M: MotionControl>(&mut self, i: usize, m: &mut M, now_ms: u32) -> bool {
         if self.machine.is_locked() {
             self.startup_next = None;
             return true;
         }
-        // Moved out while it runs (no copy), put back before returning.
-        let Some(text) = self.startup.get_mut(i).map(core::mem::take) else {
+        let Some(text) = self.startup.get(i) else {
             self.startup_next = None;
             return true;
         };
-        let done = self.startup_line_ran(i, &text, m, now_ms);
-        if let Some(slot) = self.startup.get_mut(i) {
-            *slot = text;
-        }
-        done
-    }
-
-    fn startup_line_ran<M: MotionControl>(
-        &mut self,
-        i: usize,
-        text: &str,
-        m: &mut M,
-        now_ms: u32,
-    ) -> bool {
         self.startup_next = Some(i + 1);
         if text.is_empty() {
             return true;
@@ -697,9 +684,13 @@ impl Protocol {
             return false;
         };
         self.flush_events();
-        let mut w = self.w();
+        let text = self.startup.get(i).map_or(&[][..], |t| t.as_bytes());
+        let mut w = OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
+        };
         w.put(b">");
-        w.put(text.as_bytes());
+        w.put(text);
         match r {
             Ok(()) => w.put(b":ok"),
             Err(e) => {
