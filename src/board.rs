@@ -574,7 +574,13 @@ pub fn lcd_init(spi: &mut LcdSpi) -> Result<(), stm32f1xx_hal::spi::Error> {
 }
 
 pub type Usb = UsbDevice<'static, UsbBusType>;
-pub type UsbSerial = usbd_serial::SerialPort<'static, UsbBusType>;
+/// The CDC serial port. Its receive store holds one 64-byte packet (the class default
+/// is 128): both images read it with a 64-byte buffer, which empties it, and it takes
+/// the next packet from the endpoint only once empty (until then the host is NAKed).
+/// The transmit store keeps the default 128 bytes: it holds output while the endpoint
+/// is busy, and bytes it refuses are dropped.
+pub type UsbSerial =
+    usbd_serial::SerialPort<'static, UsbBusType, [u8; 64], usbd_serial::DefaultBufferStore>;
 
 /// The 'static homes of the USB stack (an RTIC init local): the bus allocator the
 /// device and the class borrow, and the device and the serial port themselves, built
@@ -793,7 +799,11 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
         pin_dp: gpioa.pa12,
     };
     let bus: &'static UsbBusAllocator<UsbBusType> = usb.bus.write(UsbBus::new(usb_periph));
-    let serial = usb.serial.write(usbd_serial::SerialPort::new(bus));
+    let serial = usb.serial.write(usbd_serial::SerialPort::new_with_store(
+        bus,
+        [0; 64],
+        usbd_serial::DefaultBufferStore::default(),
+    ));
     let usb = usb.dev.write(
         UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
             .device_class(usbd_serial::USB_CLASS_CDC)

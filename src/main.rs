@@ -30,9 +30,15 @@ use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
 use inkstep_core::link::StepSide;
 use inkstep_core::stepper::exec::Executor;
 
-/// USB byte queues. RX holds more than Grbl's 128-byte character-counting window.
-const USB_RX: usize = 256;
-const USB_TX: usize = 512;
+/// USB byte queues, relays between the USB interrupt and the protocol task, which
+/// trade up to one 64-byte packet each way every millisecond (64 KB/s, far above what
+/// Grbl's protocol needs). RX holds Grbl's whole 128-byte character-counting window
+/// (two packets); the window itself is the protocol's receive buffer (`Bf:`), and a
+/// full ring only NAKs the host (back-pressure, nothing is dropped). TX holds two
+/// packets; the responses wait in the protocol's 640-byte output buffer, which only
+/// hands out what this ring has room for.
+const USB_RX: usize = 128;
+const USB_TX: usize = 128;
 
 /// One direction of the USB byte stream: a FIFO between exactly one producing and one
 /// consuming context (the USB interrupt and the protocol task), handed out as one
@@ -240,35 +246,20 @@ mod app {
         syst.enable_interrupt();
         syst.enable_counter();
 
-        // Settings from flash; a corrupt store falls back to defaults and says so.
+        // Settings from flash.
         let mut store = match SettingsStore::new(BlockingFlash(b.flash), STORE_RANGE) {
             Ok(s) => s,
             // STORE_RANGE is a constant that fits the chip; this cannot happen.
             Err(_) => defmt::panic!("settings flash range"),
         };
-        let (settings, load) = store.load_settings();
-        let (coords, _) = store.load_coords();
-        let ctl = cx.local.ctl_cell.write(Controller::new(settings, 0));
-        if let Some(msg) = load.message() {
-            defmt::warn!("settings: {}", msg);
-            ctl.protocol_mut().notify(msg);
-        }
-        ctl.protocol_mut().machine_mut().set_coords(coords);
-        for i in 0..2 {
-            let (line, _) = store.load_startup(i);
-            ctl.protocol_mut().set_startup_line(i, line.as_str());
-        }
-
         let (steps_tx, steps_rx) = cx.local.steps.split();
-        let prep = PrepConfig {
-            timer_hz: board::STEP_TIMER_HZ,
-            ..PrepConfig::default()
-        };
+        let (ctl, link) = boot_core(
+            &mut store,
+            cx.local.ctl_cell,
+            cx.local.link_cell,
+            BoardSide { tx: steps_tx },
+        );
         let settings = ctl.protocol().machine().settings();
-        let link = cx
-            .local
-            .link_cell
-            .write(Link::new(settings, prep, BoardSide { tx: steps_tx }));
         let (usb_rx_in, usb_rx_out) = cx.local.usb_rxq.split();
         let (usb_tx_in, usb_tx_out) = cx.local.usb_txq.split();
 
@@ -308,8 +299,8 @@ mod app {
                 // The LCD task's retained state: the screens and the 1 KB frame buffer
                 // (entirely dirty from the start: the first flush sends the whole
                 // screen), built here in .bss rather than on that task's stack.
-                screens: cx.local.screens_cell.write(Screens::new()),
-                fb: cx.local.fb_cell.write(FrameBuffer::new()),
+                screens: boot_screens(cx.local.screens_cell),
+                fb: boot_frame_buffer(cx.local.fb_cell),
                 watchdog: b.watchdog,
                 store,
                 usb_rx_in,
@@ -318,6 +309,54 @@ mod app {
                 usb_tx_out,
             },
         )
+    }
+
+    /// The settings, offsets and startup lines from flash, and the controller and the
+    /// link built in place in their static cells from them (inlined: out of line it
+    /// saves no stack and costs ~500 bytes of flash).
+    #[inline(always)]
+    fn boot_core(
+        store: &mut Store,
+        ctl_cell: &'static mut MaybeUninit<Controller>,
+        link_cell: &'static mut MaybeUninit<Link<BoardSide>>,
+        side: BoardSide,
+    ) -> (&'static mut Controller, &'static mut Link<BoardSide>) {
+        // A corrupt store falls back to defaults and says so.
+        let (settings, load) = store.load_settings();
+        let ctl = Controller::init_in(ctl_cell, &settings, 0);
+        if let Some(msg) = load.message() {
+            defmt::warn!("settings: {}", msg);
+            ctl.protocol_mut().notify(msg);
+        }
+        let (coords, _) = store.load_coords();
+        ctl.protocol_mut().machine_mut().set_coords(coords);
+        for i in 0..STARTUP_LINES {
+            let (line, _) = store.load_startup(i);
+            ctl.protocol_mut().set_startup_line(i, line.as_str());
+        }
+        let prep = PrepConfig {
+            timer_hz: board::STEP_TIMER_HZ,
+            ..PrepConfig::default()
+        };
+        let link = Link::init_in(link_cell, ctl.protocol().machine().settings(), prep, side);
+        (ctl, link)
+    }
+
+    // The LCD task's retained state, built out of line: their temporaries (the frame
+    // buffer's 1 KB) are then gone before the rest of init runs instead of adding to
+    // init's frame.
+
+    /// The LCD task's screens, in .bss rather than on that task's stack.
+    #[inline(never)]
+    fn boot_screens(cell: &'static mut MaybeUninit<Screens>) -> &'static mut Screens {
+        cell.write(Screens::new())
+    }
+
+    /// The 1 KB frame buffer, entirely dirty from the start: the first flush sends the
+    /// whole screen.
+    #[inline(never)]
+    fn boot_frame_buffer(cell: &'static mut MaybeUninit<FrameBuffer>) -> &'static mut FrameBuffer {
+        cell.write(FrameBuffer::new())
     }
 
     /// The controller and the motion link, one resource: every task that uses the
@@ -583,39 +622,45 @@ mod app {
         // Flash writes stall the CPU (instruction fetch waits), so only at rest.
         let saves = &mut *cx.local.saves;
         let store = &mut *cx.local.store;
-        cx.shared.core.lock(|c| {
-            let ctl = &mut *c.ctl;
-            saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
-            saves.startup |= ctl.protocol_mut().take_startup_dirty();
-            if busy {
-                return;
-            }
-            if core::mem::take(&mut saves.settings)
-                && store
-                    .save_settings(ctl.protocol().machine().settings())
-                    .is_err()
-            {
-                defmt::warn!("settings save failed");
-            }
-            if core::mem::take(&mut saves.coords)
-                && store
-                    .save_coords(ctl.protocol().machine().interp().coords())
-                    .is_err()
-            {
-                defmt::warn!("offsets save failed");
-            }
-            if core::mem::take(&mut saves.startup) {
-                for i in 0..STARTUP_LINES {
-                    let line = ctl.protocol().startup_line(i).unwrap_or("");
-                    if store.save_startup(i, line).is_err() {
-                        defmt::warn!("startup line save failed");
-                    }
-                }
-            }
-        });
+        cx.shared.core.lock(|c| persist(c.ctl, saves, store, busy));
         // A tick that came while this ran is dropped: the next run starts at the next
         // tick, so the tasks below always get a turn between two runs.
         cortex_m::peripheral::NVIC::unpend(Interrupt::SPI1);
+    }
+
+    /// What changed goes to flash, at rest. Out of line: the images it stages (the
+    /// settings' 184 bytes, the offsets', a startup line) would otherwise sit in the
+    /// protocol task's frame under its deepest path (a setting change reconfiguring
+    /// the planner).
+    #[inline(never)]
+    fn persist(ctl: &mut Controller, saves: &mut Saves, store: &mut Store, busy: bool) {
+        saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
+        saves.startup |= ctl.protocol_mut().take_startup_dirty();
+        if busy {
+            return;
+        }
+        if core::mem::take(&mut saves.settings)
+            && store
+                .save_settings(ctl.protocol().machine().settings())
+                .is_err()
+        {
+            defmt::warn!("settings save failed");
+        }
+        if core::mem::take(&mut saves.coords)
+            && store
+                .save_coords(ctl.protocol().machine().interp().coords())
+                .is_err()
+        {
+            defmt::warn!("offsets save failed");
+        }
+        if core::mem::take(&mut saves.startup) {
+            for i in 0..STARTUP_LINES {
+                let line = ctl.protocol().startup_line(i).unwrap_or("");
+                if store.save_startup(i, line).is_err() {
+                    defmt::warn!("startup line save failed");
+                }
+            }
+        }
     }
 
     /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.

@@ -13,11 +13,13 @@
 //! the planner or the HMI is made here, only their wiring.
 
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
-use crate::keypad::{Keypad, KeypadConfig};
+use crate::keypad::{KeyEvent, Keypad, KeypadConfig};
 use crate::machine::{Command, MotionControl, RunState};
 use crate::motion::{X, Y, Z};
 use crate::protocol::Protocol;
 use crate::settings::{put_int, Settings, Sink};
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 use heapless::Vec;
 
 /// Jog moves run this far (mm) unless stopped; key release stops them.
@@ -52,13 +54,49 @@ pub fn hmi_config(s: &Settings) -> hmi::Config {
 
 impl Controller {
     pub fn new(settings: Settings, now_ms: u32) -> Controller {
-        let cfg = hmi_config(&settings);
-        Controller {
-            protocol: Protocol::new(settings),
-            keypad: Keypad::new(KeypadConfig::default()),
-            hmi: Hmi::new(cfg, now_ms),
-            outputs: Outputs::default(),
-            dir: [0, 0],
+        let mut slot = MaybeUninit::uninit();
+        Controller::init_in(&mut slot, &settings, now_ms);
+        // SAFETY: `init_in` initialised every field.
+        #[allow(unsafe_code)]
+        unsafe {
+            slot.assume_init()
+        }
+    }
+
+    /// [`Controller::new`] built in `slot`, the firmware's static cell: field by field,
+    /// so that no whole controller (2 KB), protocol or machine is built on init's stack
+    /// and copied.
+    #[allow(unsafe_code)]
+    pub fn init_in<'a>(
+        slot: &'a mut MaybeUninit<Controller>,
+        settings: &Settings,
+        now_ms: u32,
+    ) -> &'a mut Controller {
+        // Lists every field (no `..`): a new field fails to compile here until it is
+        // written below too.
+        const _: fn(&Controller) = |Controller {
+                                        protocol: _,
+                                        keypad: _,
+                                        hmi: _,
+                                        outputs: _,
+                                        dir: _,
+                                    }| {};
+        let p = slot.as_mut_ptr();
+        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
+        // is written once through a raw field pointer (the protocol through its own
+        // `init_in`, on its field viewed as `MaybeUninit`, which has the same layout)
+        // and the list below names every field, so the controller is initialised when
+        // `assume_init_mut` runs.
+        unsafe {
+            Protocol::init_in(
+                &mut *addr_of_mut!((*p).protocol).cast::<MaybeUninit<Protocol>>(),
+                settings,
+            );
+            addr_of_mut!((*p).keypad).write(Keypad::new(KeypadConfig::default()));
+            addr_of_mut!((*p).hmi).write(Hmi::new(hmi_config(settings), now_ms));
+            addr_of_mut!((*p).outputs).write(Outputs::default());
+            addr_of_mut!((*p).dir).write([0, 0]);
+            slot.assume_init_mut()
         }
     }
 
@@ -132,19 +170,43 @@ impl Controller {
     pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) {
         let events = self.keypad.feed(rows, now_ms);
         for ev in events {
-            let st = self.status(m);
-            let actions = self.hmi.key(ev, &st, now_ms);
-            self.apply(&actions, m, now_ms);
+            self.key_event(ev, m, now_ms);
         }
+    }
+
+    /// One key event through the HMI. Out of line, so that the HMI's working state and
+    /// its actions live in this frame only while a key is handled, not in the caller's
+    /// (the firmware's keypad task) beside everything else inlined there.
+    #[inline(never)]
+    fn key_event<M: MotionControl>(&mut self, ev: KeyEvent, m: &mut M, now_ms: u32) {
+        let st = self.status(m);
+        let actions = self.hmi.key(ev, &st, now_ms);
+        self.apply(&actions, m, now_ms);
     }
 
     /// Background work: the protocol's lines and messages, the HMI's timers, the
     /// completion of a keypad abort, the busy LED.
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         self.protocol.poll(m, now_ms);
+        self.hmi_tick(m, now_ms);
+    }
+
+    /// The HMI's timers. Out of line, so that its actions (a 440-byte list) are not
+    /// part of the caller's frame (the firmware's protocol task) while the protocol
+    /// runs, and the protocol's locals are gone while the actions are applied.
+    #[inline(never)]
+    fn hmi_tick<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         let st = self.status(m);
-        let actions = self.hmi.tick(&st, now_ms);
+        let actions = self.tick_actions(&st, now_ms);
         self.apply(&actions, m, now_ms);
+    }
+
+    /// The HMI's timer step alone, out of line too: its working state is gone before
+    /// the actions are applied (through the machine and the planner, the deeper
+    /// path).
+    #[inline(never)]
+    fn tick_actions(&mut self, st: &hmi::Status, now_ms: u32) -> hmi::Actions {
+        self.hmi.tick(st, now_ms)
     }
 
     fn apply<M: MotionControl>(&mut self, actions: &[Action], m: &mut M, now_ms: u32) {

@@ -121,6 +121,56 @@ impl<S: StepSide> Link<S> {
         }
     }
 
+    /// [`Link::new`] built in `slot` (the firmware's static cell): field by field, so
+    /// that no whole link (3.6 KB: the planner's block buffer) is built on init's stack
+    /// and copied.
+    #[allow(unsafe_code)]
+    pub fn init_in<'a>(
+        slot: &'a mut core::mem::MaybeUninit<Self>,
+        s: &Settings,
+        prep: PrepConfig,
+        side: S,
+    ) -> &'a mut Self {
+        use core::ptr::addr_of_mut;
+        // Lists every field (no `..`): a new field fails to compile here until it is
+        // written below too.
+        let _: fn(&Self) = |Self {
+                                planner: _,
+                                prep: _,
+                                side: _,
+                                timer_hz: _,
+                                pending: _,
+                                wait_left: _,
+                                waiting: _,
+                                pen_down: _,
+                                pen_lift_ms: _,
+                                held: _,
+                            }| {};
+        let pos = side.position();
+        let p = slot.as_mut_ptr();
+        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
+        // is written once through a raw field pointer (no reference to the uninitialised
+        // link is made) and the list below names every field, as `new` does, so the
+        // link is initialised when `assume_init_mut` runs.
+        unsafe {
+            Planner::init_in(
+                &mut *addr_of_mut!((*p).planner).cast::<core::mem::MaybeUninit<Planner>>(),
+                planner_config(s),
+                pos,
+            );
+            addr_of_mut!((*p).prep).write(Prep::new(prep, pos));
+            addr_of_mut!((*p).side).write(side);
+            addr_of_mut!((*p).timer_hz).write(prep.timer_hz);
+            addr_of_mut!((*p).pending).write(Deque::new());
+            addr_of_mut!((*p).wait_left).write(0);
+            addr_of_mut!((*p).waiting).write(false);
+            addr_of_mut!((*p).pen_down).write(false);
+            addr_of_mut!((*p).pen_lift_ms).write(s.pen_lift_ms());
+            addr_of_mut!((*p).held).write(false);
+            slot.assume_init_mut()
+        }
+    }
+
     pub fn side(&self) -> &S {
         &self.side
     }

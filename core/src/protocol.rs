@@ -36,6 +36,8 @@ use crate::machine::state::Event;
 use crate::machine::{Inputs, Machine, MotionControl, RunState};
 use crate::motion::AXES;
 use crate::settings::{put_decimal, put_int, write_fixed3, Settings, Sink};
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
 use heapless::{Deque, String, Vec};
 
 /// Receive buffer size advertised to character-counting senders (`Bf:` and `$I`).
@@ -115,32 +117,173 @@ fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
     }
 }
 
+/// A `$` command, told apart before it runs (so that the line's text need not be
+/// held while `self` changes).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum SysCommand {
+    Help,
+    List(Listing),
+    Modal,
+    Info,
+    Check,
+    Unlock,
+    Home,
+    Reset(u8),
+    Jog,
+    Startup,
+    Setting,
+}
+
+impl SysCommand {
+    /// `cmd`: the line after the `$`.
+    fn of(cmd: &[u8]) -> SysCommand {
+        match cmd {
+            [] => SysCommand::Help,
+            [b'$'] => SysCommand::List(Listing::Settings(0)),
+            [b'#'] => SysCommand::List(Listing::Coords(0)),
+            [b'N'] => SysCommand::List(Listing::Startup(0)),
+            [b'G'] => SysCommand::Modal,
+            [b'I'] => SysCommand::Info,
+            [b'C'] => SysCommand::Check,
+            [b'X'] => SysCommand::Unlock,
+            [b'H'] => SysCommand::Home,
+            [b'R', b'S', b'T', b'=', what @ (b'$' | b'#' | b'*')] => SysCommand::Reset(*what),
+            [b'J', b'=', ..] => SysCommand::Jog,
+            [b'N', ..] => SysCommand::Startup,
+            _ => SysCommand::Setting,
+        }
+    }
+}
+
+/// `$n=v`.
+fn set_setting<M: MotionControl>(
+    machine: &mut Machine,
+    cmd: &[u8],
+    m: &mut M,
+) -> Result<(), Status> {
+    let eq = cmd
+        .iter()
+        .position(|&c| c == b'=')
+        .ok_or(Status::InvalidStatement)?;
+    let (num, val) = cmd.split_at(eq);
+    let val = val.get(1..).unwrap_or(&[]);
+    if num.is_empty() || !num.iter().all(u8::is_ascii_digit) || num.len() > 4 {
+        return Err(Status::InvalidStatement);
+    }
+    let n = num
+        .iter()
+        .fold(0u16, |acc, &d| acc * 10 + u16::from(d - b'0'));
+    let (v, used) = crate::gcode::parser::read_number(val)?;
+    if used != val.len() {
+        return Err(Status::BadNumberFormat);
+    }
+    machine.set_setting(n, v, m)
+}
+
+/// `$Nx=line`: check the line and store it in slot x.
+fn store_startup(
+    machine: &mut Machine,
+    startup: &mut [StartupLine; STARTUP_LINES],
+    rest: &[u8],
+) -> Result<(), Status> {
+    let (idx, line) = match rest {
+        [d @ b'0'..=b'9', b'=', line @ ..] => (usize::from(d - b'0'), line),
+        _ => return Err(Status::InvalidStatement),
+    };
+    let slot_exists = idx < STARTUP_LINES;
+    if !slot_exists {
+        return Err(Status::InvalidStatement);
+    }
+    machine.validate(line)?;
+    // Cleaned lines are ASCII (the cleaner drops bytes >= 0x7F); byte-wise copy
+    // keeps UTF-8 validation out of the image.
+    if !line.is_ascii() {
+        return Err(Status::InvalidStatement);
+    }
+    if let Some(slot) = startup.get_mut(idx) {
+        slot.clear();
+        for &b in line.iter().take(LINE_MAX) {
+            // Masked: the compiler then knows the char is one UTF-8 byte.
+            let _ = slot.push(char::from(b & 0x7F));
+        }
+    }
+    Ok(())
+}
+
 impl Protocol {
     /// Power-up: the welcome line is queued at once.
     pub fn new(settings: Settings) -> Protocol {
-        let mut p = Protocol {
-            machine: Machine::new(settings),
-            // Const templates: zeroed or copied, not built field by field.
-            rx: const { Deque::new() },
-            line: const { Vec::new() },
-            cleaner: LineCleaner::new(),
-            line_too_long: false,
-            line_ready: false,
-            after_cr: false,
-            out: const { Deque::new() },
-            status_requested: false,
-            listing: None,
-            lines_received: 0,
-            reports: 0,
-            startup: const { [String::new(), String::new()] },
-            startup_next: Some(0),
-            startup_dirty: false,
-            wco_shown: [f32::NAN; AXES],
-            truncated: 0,
-            pending_welcome: false,
+        let mut slot = MaybeUninit::uninit();
+        Protocol::init_in(&mut slot, &settings);
+        // SAFETY: `init_in` initialised every field.
+        #[allow(unsafe_code)]
+        unsafe {
+            slot.assume_init()
+        }
+    }
+
+    /// [`Protocol::new`] built in `slot` (the firmware's static cell, through
+    /// [`Controller::init_in`](crate::controller::Controller::init_in)): field by field,
+    /// so that no whole protocol (1.5 KB) is built on the stack and copied.
+    #[allow(unsafe_code)]
+    pub fn init_in<'a>(
+        slot: &'a mut MaybeUninit<Protocol>,
+        settings: &Settings,
+    ) -> &'a mut Protocol {
+        // Lists every field (no `..`): a new field fails to compile here until it is
+        // written below too.
+        const _: fn(&Protocol) = |Protocol {
+                                      machine: _,
+                                      rx: _,
+                                      line: _,
+                                      cleaner: _,
+                                      line_too_long: _,
+                                      line_ready: _,
+                                      after_cr: _,
+                                      out: _,
+                                      status_requested: _,
+                                      listing: _,
+                                      lines_received: _,
+                                      reports: _,
+                                      startup: _,
+                                      startup_next: _,
+                                      startup_dirty: _,
+                                      wco_shown: _,
+                                      truncated: _,
+                                      pending_welcome: _,
+                                  }| {};
+        let p = slot.as_mut_ptr();
+        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
+        // is written once through a raw field pointer (the machine through its own
+        // `init_in`, on its field viewed as `MaybeUninit`, which has the same layout)
+        // and the list below names every field, so the protocol is initialised when
+        // `assume_init_mut` runs.
+        let proto = unsafe {
+            Machine::init_in(
+                &mut *addr_of_mut!((*p).machine).cast::<MaybeUninit<Machine>>(),
+                settings,
+            );
+            addr_of_mut!((*p).rx).write(Deque::new());
+            addr_of_mut!((*p).line).write(Vec::new());
+            addr_of_mut!((*p).cleaner).write(LineCleaner::new());
+            addr_of_mut!((*p).line_too_long).write(false);
+            addr_of_mut!((*p).line_ready).write(false);
+            addr_of_mut!((*p).after_cr).write(false);
+            addr_of_mut!((*p).out).write(Deque::new());
+            addr_of_mut!((*p).status_requested).write(false);
+            addr_of_mut!((*p).listing).write(None);
+            addr_of_mut!((*p).lines_received).write(0);
+            addr_of_mut!((*p).reports).write(0);
+            addr_of_mut!((*p).startup).write([String::new(), String::new()]);
+            addr_of_mut!((*p).startup_next).write(Some(0));
+            addr_of_mut!((*p).startup_dirty).write(false);
+            addr_of_mut!((*p).wco_shown).write([f32::NAN; AXES]);
+            addr_of_mut!((*p).truncated).write(0);
+            addr_of_mut!((*p).pending_welcome).write(false);
+            slot.assume_init_mut()
         };
-        p.welcome();
-        p
+        proto.welcome();
+        proto
     }
 
     pub fn machine(&self) -> &Machine {
@@ -376,18 +519,19 @@ impl Protocol {
             self.finish_line(Err(Status::Overflow));
             return true;
         }
-        // Moved out while it runs (the `$` commands need `self`), back if it waits.
-        let line = core::mem::take(&mut self.line);
-        let r = match line.first() {
+        // The line stays where it is while it runs (and if it waits): the machine
+        // borrows it beside the fields it changes, so no copy of it sits on the stack
+        // under the G-code and reconfiguration paths.
+        let r = match self.line.first() {
             None => {
                 // Grbl answers blank lines (and lines of only a comment) with ok,
                 // but a bare CR LF pair is one line end, not two.
                 Some(Ok(()))
             }
-            Some(b'$') => self.system_command(line.get(1..).unwrap_or(&[]), m),
+            Some(b'$') => self.system_command(m),
             Some(_) => {
                 let line_no = self.lines_received.wrapping_add(1);
-                let r = self.machine.execute(&line, line_no, m, now_ms);
+                let r = self.machine.execute(&self.line, line_no, m, now_ms);
                 if r.is_some() {
                     self.lines_received = line_no;
                 }
@@ -395,7 +539,6 @@ impl Protocol {
             }
         };
         let Some(r) = r else {
-            self.line = line;
             return false;
         };
         self.flush_events();
@@ -422,40 +565,32 @@ impl Protocol {
         }
     }
 
-    /// `$` commands. `None` if the command must wait for planner room.
-    fn system_command<M: MotionControl>(
-        &mut self,
-        cmd: &[u8],
-        m: &mut M,
-    ) -> Option<Result<(), Status>> {
+    /// The `$` command in `line`. `None` if the command must wait for planner room.
+    fn system_command<M: MotionControl>(&mut self, m: &mut M) -> Option<Result<(), Status>> {
         let at_rest = matches!(
             self.machine.state(m),
             RunState::Idle | RunState::Alarm | RunState::Check
         );
+        let kind = SysCommand::of(self.line.get(1..).unwrap_or(&[]));
         // Everything but help, $G, $C (checks itself) and jogging needs the machine at
         // rest; refuse before doing anything.
-        let anytime = matches!(cmd, [] | [b'G'] | [b'C'] | [b'J', b'=', ..]);
+        let anytime = matches!(
+            kind,
+            SysCommand::Help | SysCommand::Modal | SysCommand::Check | SysCommand::Jog
+        );
         if !anytime && !at_rest {
             return Some(Err(Status::IdleError));
         }
-        Some(match cmd {
-            [] => {
+        Some(match kind {
+            SysCommand::Help => {
                 self.say(&[b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"]);
                 Ok(())
             }
-            [b'$'] => {
-                self.listing = Some(Listing::Settings(0));
+            SysCommand::List(l) => {
+                self.listing = Some(l);
                 Ok(())
             }
-            [b'#'] => {
-                self.listing = Some(Listing::Coords(0));
-                Ok(())
-            }
-            [b'N'] => {
-                self.listing = Some(Listing::Startup(0));
-                Ok(())
-            }
-            [b'G'] => {
+            SysCommand::Modal => {
                 let mut w = OutWriter {
                     out: &mut self.out,
                     truncated: &mut self.truncated,
@@ -465,7 +600,7 @@ impl Protocol {
                 w.put(b"]\r\n");
                 Ok(())
             }
-            [b'I'] => {
+            SysCommand::Info => {
                 self.say(&[
                     b"[VER:1.1h.inkstep-",
                     VERSION.as_bytes(),
@@ -480,7 +615,7 @@ impl Protocol {
                 w.put(b"]\r\n");
                 Ok(())
             }
-            [b'C'] => {
+            SysCommand::Check => {
                 let was = self.machine.check_mode();
                 let r = self.machine.toggle_check(m);
                 if was && r.is_ok() {
@@ -490,29 +625,36 @@ impl Protocol {
                 }
                 r
             }
-            [b'X'] => self.machine.unlock(),
-            [b'H'] => self.machine.start_homing(m),
+            SysCommand::Unlock => self.machine.unlock(),
+            SysCommand::Home => self.machine.start_homing(m),
             // $RST=$ settings, $RST=# coordinate data, $RST=* both.
-            [b'R', b'S', b'T', b'=', what @ (b'$' | b'#' | b'*')] => {
-                if *what != b'#' {
+            SysCommand::Reset(what) => {
+                if what != b'#' {
                     self.machine.replace_settings(Settings::default(), m);
                 }
-                if *what != b'$' {
+                if what != b'$' {
                     self.machine.clear_coords();
                 }
                 Ok(())
             }
-            _ => {
-                if let Some(body) = cmd.strip_prefix(b"J=") {
-                    if m.free() == 0 {
-                        return None;
-                    }
-                    self.machine.jog(body, m)
-                } else if let Some(rest) = cmd.strip_prefix(b"N") {
-                    self.store_startup(rest)
-                } else {
-                    self.set_setting(cmd, m)
+            // These read the line's text: borrowed in place, beside the fields they
+            // change.
+            SysCommand::Jog => {
+                if m.free() == 0 {
+                    return None;
                 }
+                self.machine.jog(self.line.get(3..).unwrap_or(&[]), m)
+            }
+            SysCommand::Startup => {
+                let rest = self.line.get(2..).unwrap_or(&[]);
+                let r = store_startup(&mut self.machine, &mut self.startup, rest);
+                if r.is_ok() {
+                    self.startup_dirty = true;
+                }
+                r
+            }
+            SysCommand::Setting => {
+                set_setting(&mut self.machine, self.line.get(1..).unwrap_or(&[]), m)
             }
         })
     }
@@ -521,77 +663,18 @@ impl Protocol {
         self.pending_welcome = true;
     }
 
-    fn set_setting<M: MotionControl>(&mut self, cmd: &[u8], m: &mut M) -> Result<(), Status> {
-        let eq = cmd
-            .iter()
-            .position(|&c| c == b'=')
-            .ok_or(Status::InvalidStatement)?;
-        let (num, val) = cmd.split_at(eq);
-        let val = val.get(1..).unwrap_or(&[]);
-        if num.is_empty() || !num.iter().all(u8::is_ascii_digit) || num.len() > 4 {
-            return Err(Status::InvalidStatement);
-        }
-        let n = num
-            .iter()
-            .fold(0u16, |acc, &d| acc * 10 + u16::from(d - b'0'));
-        let (v, used) = crate::gcode::parser::read_number(val)?;
-        if used != val.len() {
-            return Err(Status::BadNumberFormat);
-        }
-        self.machine.set_setting(n, v, m)
-    }
-
-    fn store_startup(&mut self, rest: &[u8]) -> Result<(), Status> {
-        let (idx, line) = match rest {
-            [d @ b'0'..=b'9', b'=', line @ ..] => (usize::from(d - b'0'), line),
-            _ => return Err(Status::InvalidStatement),
-        };
-        let slot_exists = idx < STARTUP_LINES;
-        if !slot_exists {
-            return Err(Status::InvalidStatement);
-        }
-        self.machine.validate(line)?;
-        // Cleaned lines are ASCII (the cleaner drops bytes >= 0x7F); byte-wise copy
-        // keeps UTF-8 validation out of the image.
-        if !line.is_ascii() {
-            return Err(Status::InvalidStatement);
-        }
-        if let Some(slot) = self.startup.get_mut(idx) {
-            slot.clear();
-            for &b in line.iter().take(LINE_MAX) {
-                // Masked: the compiler then knows the char is one UTF-8 byte.
-                let _ = slot.push(char::from(b & 0x7F));
-            }
-        }
-        self.startup_dirty = true;
-        Ok(())
-    }
-
     /// Run stored startup line `i` (after reset, when not locked). False to wait.
+    /// The line is borrowed where it is stored (the machine and the output are other
+    /// fields), not moved out: no copy of it sits on the stack under the G-code path.
     fn run_startup<M: MotionControl>(&mut self, i: usize, m: &mut M, now_ms: u32) -> bool {
         if self.machine.is_locked() {
             self.startup_next = None;
             return true;
         }
-        // Moved out while it runs (no copy), put back before returning.
-        let Some(text) = self.startup.get_mut(i).map(core::mem::take) else {
+        let Some(text) = self.startup.get(i) else {
             self.startup_next = None;
             return true;
         };
-        let done = self.startup_line_ran(i, &text, m, now_ms);
-        if let Some(slot) = self.startup.get_mut(i) {
-            *slot = text;
-        }
-        done
-    }
-
-    fn startup_line_ran<M: MotionControl>(
-        &mut self,
-        i: usize,
-        text: &str,
-        m: &mut M,
-        now_ms: u32,
-    ) -> bool {
         self.startup_next = Some(i + 1);
         if text.is_empty() {
             return true;
@@ -601,9 +684,13 @@ impl Protocol {
             return false;
         };
         self.flush_events();
-        let mut w = self.w();
+        let text = self.startup.get(i).map_or(&[][..], |t| t.as_bytes());
+        let mut w = OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
+        };
         w.put(b">");
-        w.put(text.as_bytes());
+        w.put(text);
         match r {
             Ok(()) => w.put(b":ok"),
             Err(e) => {

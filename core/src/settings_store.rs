@@ -56,6 +56,10 @@ const PAGE_HEAD: u32 = 8;
 const REC_HEAD: usize = 4;
 /// Largest record: header, 255 bytes of data, CRC, padding.
 const BUF_LEN: usize = rec_size(255) as usize;
+/// The working buffer of one load or save (reads, record staging): on the caller's
+/// stack for the duration of the call, not kept in the store (static RAM in the
+/// firmware) between the rare loads and saves.
+type Buf = [u8; BUF_LEN];
 
 const fn rec_size(len: usize) -> u32 {
     ((REC_HEAD + len + 4 + 3) & !3) as u32
@@ -127,7 +131,6 @@ pub struct SettingsStore<F> {
     flash: F,
     range: Range<u32>,
     page_size: u32,
-    buf: [u8; BUF_LEN],
 }
 
 impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
@@ -145,7 +148,6 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
             flash,
             range,
             page_size,
-            buf: [0; BUF_LEN],
         })
     }
 
@@ -154,17 +156,17 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         self.flash
     }
 
-    fn read(&mut self, addr: u32, len: usize) -> Result<&[u8], F::Error> {
-        let part = self.buf.get_mut(..len).unwrap_or(&mut []);
+    fn read<'b>(&mut self, buf: &'b mut Buf, addr: u32, len: usize) -> Result<&'b [u8], F::Error> {
+        let part = buf.get_mut(..len).unwrap_or(&mut []);
         self.flash.0.read(addr, part)?;
         Ok(part)
     }
 
     /// True if every byte of `from..to` reads as erased.
-    fn blank(&mut self, mut from: u32, to: u32) -> bool {
+    fn blank(&mut self, buf: &mut Buf, mut from: u32, to: u32) -> bool {
         while from < to {
             let n = ((to - from) as usize).min(BUF_LEN);
-            match self.read(from, n) {
+            match self.read(buf, from, n) {
                 Ok(b) if b.iter().all(|&x| x == 0xFF) => from += n as u32,
                 _ => return false,
             }
@@ -173,11 +175,11 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     }
 
     /// The current page: the valid header with the highest sequence number.
-    fn current(&mut self) -> Option<(u32, u32)> {
+    fn current(&mut self, buf: &mut Buf) -> Option<(u32, u32)> {
         let mut best: Option<(u32, u32)> = None;
         let mut page = self.range.start;
         while page < self.range.end {
-            if let Ok(h) = self.read(page, PAGE_HEAD as usize) {
+            if let Ok(h) = self.read(buf, page, PAGE_HEAD as usize) {
                 let seq = le32(h, 0);
                 if le32(h, 4) == crc32(&seq.to_le_bytes()) ^ PAGE_TAG
                     && best.is_none_or(|(_, s)| seq > s)
@@ -192,8 +194,8 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
 
     /// Walk the records of the current page into `s` (filled in place, not moved
     /// through an `Option`); false if no page is valid.
-    fn scan(&mut self, s: &mut Scan) -> bool {
-        let Some((page, seq)) = self.current() else {
+    fn scan(&mut self, buf: &mut Buf, s: &mut Scan) -> bool {
+        let Some((page, seq)) = self.current(buf) else {
             return false;
         };
         let end = page + self.page_size;
@@ -205,18 +207,18 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         };
         let mut at = page + PAGE_HEAD;
         while at < end {
-            let size = match self.read(at, REC_HEAD) {
+            let size = match self.read(buf, at, REC_HEAD) {
                 Ok(&[k, n, nk, nn]) if k == !nk && n == !nn => rec_size(usize::from(n)),
                 _ => 0,
             };
             if size == 0 || at + size > end {
                 // Erased (the free space) or a torn header: full unless blank.
-                if self.blank(at, end) {
+                if self.blank(buf, at, end) {
                     s.free = at;
                 }
                 break;
             }
-            if let Ok(r @ [k, n, ..]) = self.read(at, size as usize) {
+            if let Ok(r @ [k, n, ..]) = self.read(buf, at, size as usize) {
                 let (k, n) = (*k, *n);
                 let body = REC_HEAD + usize::from(n);
                 let ok = r.get(..body).map(crc32) == Some(le32(r, body));
@@ -230,9 +232,9 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     }
 
     /// Fetch the newest valid value of `key` into `out`.
-    fn fetch(&mut self, key: u8, out: &mut [u8]) -> (usize, LoadStatus) {
+    fn fetch(&mut self, buf: &mut Buf, key: u8, out: &mut [u8]) -> (usize, LoadStatus) {
         let mut s = Scan::EMPTY;
-        let latest = if self.scan(&mut s) {
+        let latest = if self.scan(buf, &mut s) {
             s.latest.get(usize::from(key)).copied().flatten()
         } else {
             None
@@ -253,22 +255,20 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     }
 
     /// Write the record for `key` (data in `buf[REC_HEAD..]`) at `at`.
-    fn write_record(&mut self, at: u32, key: u8, n: u8) -> Result<u32, F::Error> {
+    fn write_record(&mut self, buf: &mut Buf, at: u32, key: u8, n: u8) -> Result<u32, F::Error> {
         let body = REC_HEAD + usize::from(n);
         let size = rec_size(usize::from(n)) as usize;
-        if let Some(h) = self.buf.get_mut(..REC_HEAD) {
+        if let Some(h) = buf.get_mut(..REC_HEAD) {
             h.copy_from_slice(&[key, n, !key, !n]);
         }
-        let crc = crc32(self.buf.get(..body).unwrap_or(&[]));
-        if let Some(t) = self.buf.get_mut(body..size) {
+        let crc = crc32(buf.get(..body).unwrap_or(&[]));
+        if let Some(t) = buf.get_mut(body..size) {
             t.fill(0xFF);
             if let Some(c) = t.get_mut(..4) {
                 c.copy_from_slice(&crc.to_le_bytes());
             }
         }
-        self.flash
-            .0
-            .write(at, self.buf.get(..size).unwrap_or(&[]))?;
+        self.flash.0.write(at, buf.get(..size).unwrap_or(&[]))?;
         Ok(size as u32)
     }
 
@@ -277,21 +277,23 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     fn store_raw(&mut self, key: u8, bytes: &[u8]) -> Result<(), StoreError<F::Error>> {
         let n = u8::try_from(bytes.len()).map_err(|_| StoreError::Full)?;
         let size = rec_size(bytes.len());
+        let mut buf: Buf = [0; BUF_LEN];
+        let buf = &mut buf;
         let mut found = Scan::EMPTY;
-        let scan = if self.scan(&mut found) {
+        let scan = if self.scan(buf, &mut found) {
             Some(&found)
         } else {
             None
         };
-        let stage = |buf: &mut [u8; BUF_LEN]| {
+        let stage = |buf: &mut Buf| {
             if let Some(d) = buf.get_mut(REC_HEAD..REC_HEAD + bytes.len()) {
                 d.copy_from_slice(bytes);
             }
         };
         if let Some(s) = scan {
             if s.free + size <= s.page + self.page_size {
-                stage(&mut self.buf);
-                self.write_record(s.free, key, n)?;
+                stage(buf);
+                self.write_record(buf, s.free, key, n)?;
                 return Ok(());
             }
         }
@@ -303,17 +305,17 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         };
         let end = target + self.page_size;
         // Normally erased when it was vacated; not after a cut or on a dirty region.
-        if !self.blank(target, end) {
+        if !self.blank(buf, target, end) {
             self.flash.0.erase(target, end)?;
         }
         let mut at = target + PAGE_HEAD;
         for k in 0..KEYS as u8 {
             let old = scan.and_then(|s| s.latest.get(usize::from(k)).copied().flatten());
             let n = if k == key {
-                stage(&mut self.buf);
+                stage(buf);
                 n
             } else if let Some((from, n)) = old {
-                let data = self.buf.get_mut(REC_HEAD..REC_HEAD + usize::from(n));
+                let data = buf.get_mut(REC_HEAD..REC_HEAD + usize::from(n));
                 self.flash
                     .0
                     .read(from + REC_HEAD as u32, data.unwrap_or(&mut []))?;
@@ -324,7 +326,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
             if at + rec_size(usize::from(n)) > end {
                 return Err(StoreError::Full);
             }
-            at += self.write_record(at, k, n)?;
+            at += self.write_record(buf, at, k, n)?;
         }
         // The header last: only now does the new page take over.
         let seq = seq.wrapping_add(1);
@@ -343,9 +345,10 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     /// the firmware saves, so a region that is not blank but holds no settings is
     /// reported as corrupt rather than taken for a first boot.
     pub fn load_settings(&mut self) -> (Settings, LoadStatus) {
+        let mut buf: Buf = [0; BUF_LEN];
         let mut img = [0u8; IMAGE_LEN];
-        let status = match self.fetch(KEY_SETTINGS, &mut img) {
-            (_, LoadStatus::Empty) if !self.blank(self.range.start, self.range.end) => {
+        let status = match self.fetch(&mut buf, KEY_SETTINGS, &mut img) {
+            (_, LoadStatus::Empty) if !self.blank(&mut buf, self.range.start, self.range.end) => {
                 LoadStatus::Corrupt
             }
             (len, LoadStatus::Loaded) => {
@@ -366,8 +369,9 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
 
     /// Load G54-G59, G28 and G30 data.
     pub fn load_coords(&mut self) -> (Coords, LoadStatus) {
+        let mut buf: Buf = [0; BUF_LEN];
         let mut img = [0u8; COORDS_LEN];
-        let status = match self.fetch(KEY_COORDS, &mut img) {
+        let status = match self.fetch(&mut buf, KEY_COORDS, &mut img) {
             (COORDS_LEN, LoadStatus::Loaded) => match coords_from_image(&img) {
                 Some(c) => return (c, LoadStatus::Loaded),
                 None => LoadStatus::Corrupt,
@@ -388,8 +392,9 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         if i >= STARTUP_LINES {
             return (line, LoadStatus::Empty);
         }
+        let mut buf: Buf = [0; BUF_LEN];
         let mut raw = [0u8; LINE_MAX + 1];
-        let status = match self.fetch(KEY_STARTUP + i as u8, &mut raw) {
+        let status = match self.fetch(&mut buf, KEY_STARTUP + i as u8, &mut raw) {
             // Startup lines are ASCII (cleaned G-code), copied byte-wise.
             (len, LoadStatus::Loaded) => match raw.get(..len) {
                 Some(text) if len <= LINE_MAX && text.is_ascii() => {
