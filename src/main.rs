@@ -35,7 +35,7 @@ use inkstep_core::stepper::exec::Executor;
 /// Grbl's protocol needs). RX holds Grbl's whole 128-byte character-counting window
 /// (two packets); the window itself is the protocol's receive buffer (`Bf:`), and a
 /// full ring only NAKs the host (back-pressure, nothing is dropped). TX holds two
-/// packets; the responses wait in the protocol's 640-byte output buffer, which only
+/// packets; the responses wait in the protocol's output buffer (`OUT_CAP`), which only
 /// hands out what this ring has room for.
 const USB_RX: usize = 128;
 const USB_TX: usize = 128;

@@ -44,8 +44,10 @@ use heapless::{Deque, String, Vec};
 pub const RX_BUFFER_SIZE: usize = 128;
 /// Longest line after cleaning (Grbl's limit); longer lines get `error:11`.
 pub const LINE_MAX: usize = 80;
-/// Output buffer size.
-pub const OUT_CAP: usize = 640;
+/// Output buffer size: the reserve below plus room for a few replies. Replies wait here
+/// until the USB task takes them (64 bytes a millisecond); a long listing continues as
+/// room frees up.
+pub const OUT_CAP: usize = 384;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
 const OUT_RESERVE: usize = 256;

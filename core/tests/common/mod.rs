@@ -142,7 +142,7 @@ pub fn drain(p: &mut Protocol) -> String {
     }
 }
 
-/// Send text, poll until everything is consumed, return the output.
+/// Send text, poll until everything is consumed and answered, return the output.
 pub fn send(p: &mut Protocol, m: &mut FakePlanner, text: &str) -> String {
     let mut rest = text.as_bytes();
     let mut out = String::new();
@@ -156,7 +156,14 @@ pub fn send(p: &mut Protocol, m: &mut FakePlanner, text: &str) -> String {
         }
         m.step();
     }
-    p.poll(m, 0);
-    out.push_str(&drain(p));
-    out
+    // Then read until the protocol is done talking: a listing continues poll by poll
+    // as the output buffer empties, like the firmware's task every millisecond.
+    loop {
+        p.poll(m, 0);
+        let more = drain(p);
+        if more.is_empty() {
+            return out;
+        }
+        out.push_str(&more);
+    }
 }
