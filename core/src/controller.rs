@@ -180,8 +180,15 @@ impl Controller {
     #[inline(never)]
     fn key_event<M: MotionControl>(&mut self, ev: KeyEvent, m: &mut M, now_ms: u32) {
         let st = self.status(m);
-        let actions = self.hmi.key(ev, &st, now_ms);
+        let actions = self.key_actions(ev, &st, now_ms);
         self.apply(&actions, m, now_ms);
+    }
+
+    /// The HMI's handling of one key alone, out of line like `tick_actions`: its
+    /// working state is gone before the actions are applied.
+    #[inline(never)]
+    fn key_actions(&mut self, ev: KeyEvent, st: &hmi::Status, now_ms: u32) -> hmi::Actions {
+        self.hmi.key(ev, st, now_ms)
     }
 
     /// Background work: the protocol's lines and messages, the HMI's timers, the

@@ -526,8 +526,13 @@ impl Hmi {
         if ev.key == Key::Enter && form.is_last() {
             let job = form.job();
             let values = form.values();
-            // Planned once from the origin only to check it (the moves are dropped).
-            match job.plan([0; 3], &self.cfg, &mut Actions::new()) {
+            // Planned once from the origin only to check it: into `out` (empty here:
+            // nothing is pushed before a commit succeeds) and dropped again, so that
+            // no second 440-byte action list sits on the keypad task's stack.
+            let before = out.len();
+            let checked = job.plan([0; 3], &self.cfg, out);
+            out.truncate(before);
+            match checked {
                 Ok(_) => {
                     if let Some(slot) = self.params.get_mut(kind.index()) {
                         *slot = values;
