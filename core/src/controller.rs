@@ -262,13 +262,7 @@ impl Controller {
             }
             Action::Home => machine.start_homing(m).is_err(),
             Action::SetOrigin => {
-                if m.is_idle() {
-                    let p = m.position();
-                    m.set_position([0, 0, p[Z]]);
-                    // At rest a soft reset raises nothing; it re-reads the position
-                    // into the G-code interpreter so later lines start from here.
-                    machine.soft_reset(m);
-                }
+                machine.zero_xy_here(m);
                 false
             }
             Action::Unlock => {

@@ -107,3 +107,47 @@ fn settings_changes_reach_the_hmi() {
     c.settings_changed();
     assert_eq!(c.hmi().config().steps_per_mm[X], 40.0);
 }
+
+/// The keypad's "set origin" makes the current X/Y zero and nothing else: the G-code
+/// modal state (inch units, relative distances) and the feed override a sender set
+/// stay, no welcome line is sent, and the next relative move starts from zero.
+#[test]
+fn keypad_set_origin_keeps_modal_state_and_overrides() {
+    let mut m = FakePlanner::new(16);
+    let mut c = Controller::new(Settings::default(), 0);
+    scan(&mut c, &mut m, &[], 0, BOOT_MS + 100);
+    let setup = b"G1 X10 Y5 F600\nG91 G20\n\x91";
+    assert_eq!(c.usb_rx(setup, &mut m, BOOT_MS + 100), setup.len());
+    c.poll(&mut m, BOOT_MS + 101);
+    m.run_all();
+    c.poll(&mut m, BOOT_MS + 102);
+    assert_ne!(m.pos, [0, 0, 0]);
+    let overrides = m.overrides;
+    text(&mut c);
+    // Main menu '9': the machine submenu; its '2': set origin here.
+    let t = BOOT_MS + 200;
+    scan(&mut c, &mut m, &[Key::Digit(9)], t, t + 200);
+    scan(&mut c, &mut m, &[], t + 200, t + 400);
+    scan(&mut c, &mut m, &[Key::Digit(2)], t + 400, t + 600);
+    scan(&mut c, &mut m, &[], t + 600, t + 800);
+    assert_eq!(&m.pos[..2], &[0, 0]);
+    assert_eq!(m.overrides, overrides, "the feed override survives");
+    assert_eq!(c.usb_rx(b"$G\n", &mut m, t + 800), 3);
+    c.poll(&mut m, t + 801);
+    let out = text(&mut c);
+    assert!(!out.contains("Grbl 1.1h"), "no reset: {out}");
+    assert!(
+        out.contains("G20") && out.contains("G91"),
+        "modal state kept: {out}"
+    );
+    // 0.1 inch relative from the new zero.
+    assert_eq!(c.usb_rx(b"G1 X0.1 F20\n", &mut m, t + 900), 12);
+    c.poll(&mut m, t + 901);
+    let spmm = Settings::default().steps_per_mm(X);
+    let want = (2.54 * spmm).round() as i32;
+    assert!(
+        matches!(m.log.last(), Some(Command::Move(mv)) if mv.target[X] == want),
+        "{:?}",
+        m.log.last()
+    );
+}

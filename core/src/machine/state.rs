@@ -562,6 +562,18 @@ impl Machine {
         self.interp.sync_position(&m.position(), &self.settings);
     }
 
+    /// The keypad's "set origin": at rest, the current X/Y become zero and the G-code
+    /// interpreter continues from there. Modal state, offsets, overrides and alarms are
+    /// left as they are (a soft reset would reset the first and the third). Nothing
+    /// happens if the machine is not at rest.
+    pub fn zero_xy_here<M: MotionControl>(&mut self, m: &mut M) {
+        if m.is_idle() {
+            let p = m.position();
+            m.set_position([0, 0, p[2]]);
+            self.resync(m);
+        }
+    }
+
     /// 0x18: stop everything, keep position if it is known.
     pub fn soft_reset<M: MotionControl>(&mut self, m: &mut M) {
         // Position is lost if steps were cut off mid-move (a hold at rest keeps it).
