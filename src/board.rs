@@ -36,6 +36,7 @@
 //! | PC15     | busy output                     | high while moving, for syncing controllers     |
 
 use core::mem::MaybeUninit;
+use core::sync::atomic::{AtomicBool, Ordering};
 use stm32f1xx_hal::{
     flash::FlashExt,
     gpio::{self, ErasedPin, Input, Output, PushPull},
@@ -99,11 +100,27 @@ impl StepPort {
         }
     }
 
-    /// Enable or disable the stepper drivers. `active_low` is true for A4988-style /EN.
+    /// Enable or disable the stepper drivers. `active_low` is true for A4988-style /EN;
+    /// it is remembered for [`drivers_enabled`] and [`emergency_outputs_off`].
     pub fn set_drivers_enabled(&mut self, enabled: bool, active_low: bool) {
-        let high = enabled != active_low;
-        bsrr(pac::GPIOA::ptr(), pin_word(9, high));
+        set_enable_polarity(active_low);
+        drivers_enabled(enabled);
     }
+}
+
+/// The driver-enable polarity (`$4`): true while /EN is active low (the default).
+static ENABLE_ACTIVE_LOW: AtomicBool = AtomicBool::new(true);
+
+/// Set the driver-enable polarity; takes effect at the next write of the enable pin.
+pub fn set_enable_polarity(active_low: bool) {
+    ENABLE_ACTIVE_LOW.store(active_low, Ordering::Relaxed);
+}
+
+/// Drivers on or off with the configured polarity: one BSRR store, so any task may
+/// call it (the enable pin PA9 belongs to the step port; this touches nothing else).
+pub fn drivers_enabled(enabled: bool) {
+    let high = enabled != ENABLE_ACTIVE_LOW.load(Ordering::Relaxed);
+    bsrr(pac::GPIOA::ptr(), pin_word(9, high));
 }
 
 /// The motion output pins, configured as push-pull outputs (for the interrupt-cost
@@ -159,11 +176,14 @@ fn idr(port: *const GpioRegs) -> u32 {
 /// invert setting may be unknown in a panic, it also releases every coil (4-phase
 /// motors are then unpowered whatever the setting).
 pub fn emergency_outputs_off() {
+    // The enable pin's "off" level follows `$4`: high for active-low /EN, low for an
+    // active-high enable.
+    let off = pin_word(9, ENABLE_ACTIVE_LOW.load(Ordering::Relaxed));
     // SAFETY: a single store to GPIOA's write-only BSRR.
     unsafe {
         (*pac::GPIOA::ptr())
             .bsrr()
-            .write(|w| w.bits((1 << 9) | (MOTION_PINS << 16)));
+            .write(|w| w.bits(off | (MOTION_PINS << 16)));
     }
     // The step timer draws the step pulses in step/dir mode.
     stop_step_timer();

@@ -434,12 +434,21 @@ mod app {
             s.output_mode() == OutputMode::FourPhase,
         );
         HARD_LIMITS_ARMED.store(s.hard_limits(), Ordering::Relaxed);
+        // `$4` at once: the enable pin is rewritten with the new polarity unless an
+        // e-stop holds the drivers off (checked with interrupts off, so that an e-stop
+        // cannot fall between the check and the write).
+        board::set_enable_polarity(!s.invert_enable());
+        cortex_m::interrupt::free(|_| {
+            if !steps::is_halted() {
+                board::drivers_enabled(true);
+            }
+        });
         let ticks = u32::from(s.step_pulse_us()) * (board::STEP_TIMER_HZ / 1_000_000);
         PULSE_TICKS.store(ticks.min(0xFFFF), Ordering::Relaxed);
     }
 
-    /// Output polarity, mode, pulse width and driver enable from the settings.
-    /// The driver-enable polarity (`$4`) takes effect at boot.
+    /// Output polarity, mode, pulse width and driver enable from the settings (at boot;
+    /// later changes go through `publish_output_settings`).
     fn apply_output_settings(
         s: &Settings,
         port: &mut board::StepPort,
@@ -565,53 +574,68 @@ mod app {
         let carry = &mut *cx.local.carry;
         carry.fill(cx.local.usb_rx_out);
         let tx = &mut *cx.local.usb_tx_in;
-        let (busy, settings_changed, pen_down, pen_pulse, alarmed) = cx.shared.core.lock(|c| {
-            let (ctl, link) = c.parts();
-            let s = ctl.protocol().machine().settings();
-            let inputs = Inputs {
-                estop: pins.estop_open() != s.invert_inputs(),
-                limits: [
-                    pins.limit_x_open() != s.invert_limits(),
-                    pins.limit_y_open() != s.invert_limits(),
-                    false,
-                ],
-                feed_hold: pins.feed_hold_low(),
-                cycle_start: pins.cycle_start_low(),
-            };
-            ctl.protocol_mut().set_inputs(inputs, link, now);
-            let taken = ctl.usb_rx(carry.bytes(), link, now);
-            carry.consume(taken);
-            ctl.poll(link, now);
-            let mut out = [0u8; 64];
-            let room = tx.free().min(out.len());
-            let n = out.get_mut(..room).map_or(0, |b| ctl.usb_tx(b));
-            tx.push(out.get(..n).unwrap_or(&[]));
-            // The planner took new settings when they changed (at rest, before
-            // the next line); what is left is the HMI, the outputs and the save.
-            let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
-            if changed {
-                ctl.settings_changed();
-            }
-            let busy = ctl.take_outputs().busy_led;
-            let pen_down = link.pen_down();
-            // Only what the outputs need is read here; the settings stay in place.
-            let s = ctl.protocol().machine().settings();
-            if changed {
-                publish_output_settings(s);
-            }
-            let pen_pulse =
-                (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
-            let alarmed = ctl.protocol().machine().alarm().is_some();
-            (busy, changed, pen_down, pen_pulse, alarmed)
-        });
+        let (busy, settings_changed, pen_down, pen_pulse, alarmed, estop_inverted) =
+            cx.shared.core.lock(|c| {
+                let (ctl, link) = c.parts();
+                let s = ctl.protocol().machine().settings();
+                let inputs = Inputs {
+                    estop: pins.estop_open() != s.invert_inputs(),
+                    limits: [
+                        pins.limit_x_open() != s.invert_limits(),
+                        pins.limit_y_open() != s.invert_limits(),
+                        false,
+                    ],
+                    feed_hold: pins.feed_hold_low(),
+                    cycle_start: pins.cycle_start_low(),
+                };
+                ctl.protocol_mut().set_inputs(inputs, link, now);
+                let taken = ctl.usb_rx(carry.bytes(), link, now);
+                carry.consume(taken);
+                ctl.poll(link, now);
+                let mut out = [0u8; 64];
+                let room = tx.free().min(out.len());
+                let n = out.get_mut(..room).map_or(0, |b| ctl.usb_tx(b));
+                tx.push(out.get(..n).unwrap_or(&[]));
+                // The planner took new settings when they changed (at rest, before
+                // the next line); what is left is the HMI, the outputs and the save.
+                let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
+                if changed {
+                    ctl.settings_changed();
+                }
+                let busy = ctl.take_outputs().busy_led;
+                let pen_down = link.pen_down();
+                // Only what the outputs need is read here; the settings stay in place.
+                let s = ctl.protocol().machine().settings();
+                if changed {
+                    publish_output_settings(s);
+                }
+                let pen_pulse =
+                    (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
+                let alarmed = ctl.protocol().machine().alarm().is_some();
+                (
+                    busy,
+                    changed,
+                    pen_down,
+                    pen_pulse,
+                    alarmed,
+                    s.invert_inputs(),
+                )
+            });
         // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes the
         // USB task's own back-pressure mask (see `usb_lp`).
         unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
         rtic::pend(Interrupt::USB_LP_CAN_RX0);
-        // A reset from the alarm (soft reset / $X) clears the latched halt.
-        if steps::is_halted() && !alarmed {
-            steps::clear_halt();
-        }
+        // A reset from the alarm (soft reset / $X) clears the latched halt and turns the
+        // drivers back on (an e-stop turned them off). With interrupts off and only
+        // while the e-stop input is released now: an e-stop pressed after the alarm
+        // was read above must not be undone.
+        cortex_m::interrupt::free(|_| {
+            let estop_released = pins.estop_open() == estop_inverted;
+            if steps::is_halted() && !alarmed && estop_released {
+                steps::clear_halt();
+                board::drivers_enabled(true);
+            }
+        });
         if settings_changed {
             cx.local.saves.settings = true;
         }

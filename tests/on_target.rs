@@ -1,7 +1,8 @@
 //! On-target tests (defmt-test): run on a Blue Pill with `cargo test` through probe-rs.
 //!
 //! They check what only the real chip can show: the clock tree, the step timer's pulse
-//! count and width on the real pins, the keypad matrix at rest, and the settings flash.
+//! count and width on the real pins, the emergency path's enable level for both `$4`
+//! polarities, the keypad matrix at rest, and the settings flash.
 #![no_std]
 #![no_main]
 
@@ -106,6 +107,21 @@ mod tests {
             N,
             expected
         );
+    }
+
+    /// The panic and e-stop path turns the drivers off with either enable polarity
+    /// (`$4`): PA9 high for an active-low /EN, low for an active-high enable.
+    #[test]
+    fn emergency_off_follows_the_enable_polarity(b: &mut Board) {
+        // SAFETY: read-only register read.
+        let pa9 = || unsafe { (*pac::GPIOA::ptr()).odr().read().bits() } & (1 << 9) != 0;
+        for active_low in [true, false] {
+            b.step_port.set_drivers_enabled(true, active_low);
+            defmt::assert_eq!(pa9(), !active_low, "enabled");
+            board::emergency_outputs_off();
+            defmt::assert_eq!(pa9(), active_low, "off after the emergency path");
+        }
+        b.step_port.set_drivers_enabled(true, true);
     }
 
     #[test]
