@@ -22,133 +22,23 @@
 #![no_std]
 #![no_main]
 
-use core::cell::UnsafeCell;
-use core::sync::atomic::{compiler_fence, AtomicBool, AtomicU32, AtomicUsize, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use defmt_rtt as _;
 use inkstep::board;
 use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
 use inkstep_core::link::StepSide;
+use inkstep_core::ring::{ByteRing, ByteRx, ByteTx};
 use inkstep_core::stepper::exec::Executor;
 
-/// USB byte queues, relays between the USB interrupt and the protocol task, which
-/// trade up to one 64-byte packet each way every millisecond (64 KB/s, far above what
-/// Grbl's protocol needs). RX holds Grbl's whole 128-byte character-counting window
+/// USB byte queues (`inkstep_core::ring`), relays between the USB interrupt and the
+/// protocol task, which trade up to one 64-byte packet each way every millisecond
+/// (64 KB/s, far above what Grbl's protocol needs). RX holds Grbl's whole 128-byte character-counting window
 /// (two packets); the window itself is the protocol's receive buffer (`Bf:`), and a
 /// full ring only NAKs the host (back-pressure, nothing is dropped). TX holds two
 /// packets; the responses wait in the protocol's output buffer (`OUT_CAP`), which only
 /// hands out what this ring has room for.
 const USB_RX: usize = 128;
 const USB_TX: usize = 128;
-
-/// One direction of the USB byte stream: a FIFO between exactly one producing and one
-/// consuming context (the USB interrupt and the protocol task), handed out as one
-/// [`RingIn`] and one [`RingOut`]. Its size is a power of two: the indices run freely
-/// and are masked, where heapless' SPSC queue views wrap with a run-time `%` (a
-/// division and its panic path per byte) and fence with barrier instructions.
-struct ByteRing<const N: usize> {
-    ends: Ends,
-    buf: UnsafeCell<[u8; N]>,
-}
-
-// SAFETY: `split` hands out one producer and one consumer; each slot is written only by
-// the producer while it is free and read only by the consumer while it is filled. The
-// indices publish the slots: on this single core both ends run on the same CPU (one
-// preempting the other), which sees its own memory accesses in program order, so only
-// the compiler must keep the slot accesses on their side of an index update; the
-// compiler fences do that without a barrier instruction.
-unsafe impl<const N: usize> Sync for ByteRing<N> {}
-
-/// The ring's indices: bytes `head..tail` (wrapping) are filled.
-struct Ends {
-    /// Next byte to read; only the consumer moves it.
-    head: AtomicUsize,
-    /// Next byte to write; only the producer moves it.
-    tail: AtomicUsize,
-}
-
-impl Ends {
-    /// Free bytes, seen from the producer.
-    fn free(&self, size: usize) -> usize {
-        let head = self.head.load(Ordering::Relaxed);
-        compiler_fence(Ordering::Acquire);
-        size - self.tail.load(Ordering::Relaxed).wrapping_sub(head)
-    }
-
-    /// Producer: append as much of `data` as fits into the ring at `buf` (`size` bytes,
-    /// a power of two); returns how many bytes it took.
-    fn push(&self, buf: *mut u8, size: usize, data: &[u8]) -> usize {
-        let mut tail = self.tail.load(Ordering::Relaxed);
-        let n = data.len().min(self.free(size));
-        for &b in data.iter().take(n) {
-            // SAFETY: `tail & (size - 1)` is inside the buffer, and the slot is free
-            // (at most `free` bytes are written): the consumer does not read it.
-            unsafe { buf.add(tail & (size - 1)).write(b) };
-            tail = tail.wrapping_add(1);
-        }
-        compiler_fence(Ordering::Release);
-        self.tail.store(tail, Ordering::Relaxed);
-        n
-    }
-
-    /// Consumer: move up to `out.len()` bytes out of the ring; returns how many.
-    fn pop(&self, buf: *const u8, size: usize, out: &mut [u8]) -> usize {
-        let mut head = self.head.load(Ordering::Relaxed);
-        let tail = self.tail.load(Ordering::Relaxed);
-        compiler_fence(Ordering::Acquire);
-        let n = out.len().min(tail.wrapping_sub(head));
-        for slot in out.iter_mut().take(n) {
-            // SAFETY: inside the buffer, and filled (published by the producer's
-            // store of `tail`), so the producer does not write it.
-            *slot = unsafe { buf.add(head & (size - 1)).read() };
-            head = head.wrapping_add(1);
-        }
-        compiler_fence(Ordering::Release);
-        self.head.store(head, Ordering::Relaxed);
-        n
-    }
-}
-
-impl<const N: usize> ByteRing<N> {
-    const fn new() -> Self {
-        assert!(N.is_power_of_two());
-        Self {
-            ends: Ends {
-                head: AtomicUsize::new(0),
-                tail: AtomicUsize::new(0),
-            },
-            buf: UnsafeCell::new([0; N]),
-        }
-    }
-
-    /// The producer and the consumer (once: the ring is borrowed for good).
-    fn split(&'static mut self) -> (RingIn<N>, RingOut<N>) {
-        let ring: &'static Self = self;
-        (RingIn(ring), RingOut(ring))
-    }
-}
-
-/// The producing end of a [`ByteRing`].
-struct RingIn<const N: usize>(&'static ByteRing<N>);
-
-impl<const N: usize> RingIn<N> {
-    fn free(&self) -> usize {
-        self.0.ends.free(N)
-    }
-    /// Append as much of `data` as fits; returns how many bytes were taken.
-    fn push(&mut self, data: &[u8]) -> usize {
-        self.0.ends.push(self.0.buf.get().cast(), N, data)
-    }
-}
-
-/// The consuming end of a [`ByteRing`].
-struct RingOut<const N: usize>(&'static ByteRing<N>);
-
-impl<const N: usize> RingOut<N> {
-    /// Move up to `out.len()` bytes out; returns how many.
-    fn pop(&mut self, out: &mut [u8]) -> usize {
-        self.0.ends.pop(self.0.buf.get().cast(), N, out)
-    }
-}
 
 /// Hard limits stop stepping at once only when `$21` is on.
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
@@ -220,10 +110,10 @@ mod app {
         fb: &'static mut FrameBuffer,
         watchdog: board::Watchdog,
         store: Store,
-        usb_rx_in: RingIn<USB_RX>,
-        usb_rx_out: RingOut<USB_RX>,
-        usb_tx_in: RingIn<USB_TX>,
-        usb_tx_out: RingOut<USB_TX>,
+        usb_rx_in: ByteTx<'static, USB_RX>,
+        usb_rx_out: ByteRx<'static, USB_RX>,
+        usb_tx_in: ByteTx<'static, USB_TX>,
+        usb_tx_out: ByteRx<'static, USB_TX>,
     }
 
     #[init(local = [
@@ -406,7 +296,7 @@ mod app {
         }
 
         /// Top up from the USB receive queue.
-        fn fill(&mut self, rx: &mut RingOut<USB_RX>) {
+        fn fill(&mut self, rx: &mut ByteRx<'static, USB_RX>) {
             if let Some(free) = self.buf.get_mut(self.len..) {
                 self.len += rx.pop(free);
             }
@@ -435,14 +325,9 @@ mod app {
         );
         HARD_LIMITS_ARMED.store(s.hard_limits(), Ordering::Relaxed);
         // `$4` at once: the enable pin is rewritten with the new polarity unless an
-        // e-stop holds the drivers off (checked with interrupts off, so that an e-stop
-        // cannot fall between the check and the write).
+        // e-stop holds the drivers off.
         board::set_enable_polarity(!s.invert_enable());
-        cortex_m::interrupt::free(|_| {
-            if !steps::is_halted() {
-                board::drivers_enabled(true);
-            }
-        });
+        steps::drivers_on_unless_halted();
         let ticks = u32::from(s.step_pulse_us()) * (board::STEP_TIMER_HZ / 1_000_000);
         PULSE_TICKS.store(ticks.min(0xFFFF), Ordering::Relaxed);
     }
@@ -625,17 +510,10 @@ mod app {
         // USB task's own back-pressure mask (see `usb_lp`).
         unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
         rtic::pend(Interrupt::USB_LP_CAN_RX0);
-        // A reset from the alarm (soft reset / $X) clears the latched halt and turns the
-        // drivers back on (an e-stop turned them off). With interrupts off and only
-        // while the e-stop input is released now: an e-stop pressed after the alarm
-        // was read above must not be undone.
-        cortex_m::interrupt::free(|_| {
-            let estop_released = pins.estop_open() == estop_inverted;
-            if steps::is_halted() && !alarmed && estop_released {
-                steps::clear_halt();
-                board::drivers_enabled(true);
-            }
-        });
+        // A reset from the alarm (soft reset / $X) releases the latched halt, only while
+        // the e-stop input is released now: an e-stop pressed after the alarm was read
+        // above must not be undone.
+        steps::release_halt(|| !alarmed && pins.estop_open() == estop_inverted);
         if settings_changed {
             cx.local.saves.settings = true;
         }

@@ -39,7 +39,9 @@ const HALT_BIT: u32 = 1 << 31;
 
 /// The e-stop (and an armed hard limit): stop the step timer at once (no update event,
 /// so no further pulse), latch the halt and pend the step interrupt, which halts the
-/// executor and emits nothing until [`clear_halt`]. Any context.
+/// executor and emits nothing until [`release_halt`]. Any context. (The e-stop turns
+/// the drivers off too, through `board::emergency_outputs_off`; an armed hard limit
+/// leaves them on to hold the position.)
 pub fn halt() {
     board::stop_step_timer();
     STEP_STATE.fetch_or(HALT_BIT, Ordering::SeqCst);
@@ -51,9 +53,27 @@ pub fn is_halted() -> bool {
     STEP_STATE.load(Ordering::Relaxed) & HALT_BIT != 0
 }
 
-/// Release the halt latch (after a reset, with the queue flushed).
-pub fn clear_halt() {
-    STEP_STATE.fetch_and(!HALT_BIT, Ordering::SeqCst);
+/// After a reset (the queue flushed): release the halt latch if `may_release` still
+/// agrees, and turn the drivers back on (an e-stop turned them off). With interrupts
+/// off, so that an e-stop cannot fall between the check and the pin write and be
+/// undone.
+pub fn release_halt(may_release: impl FnOnce() -> bool) {
+    cortex_m::interrupt::free(|_| {
+        if is_halted() && may_release() {
+            STEP_STATE.fetch_and(!HALT_BIT, Ordering::SeqCst);
+            board::drivers_enabled(true);
+        }
+    });
+}
+
+/// The drivers on, unless a halt holds them off: after the enable polarity (`$4`)
+/// changed. Interrupts off, like [`release_halt`].
+pub fn drivers_on_unless_halted() {
+    cortex_m::interrupt::free(|_| {
+        if !is_halted() {
+            board::drivers_enabled(true);
+        }
+    });
 }
 
 /// Step commands the queue holds (4 bytes each): 256 is several milliseconds of

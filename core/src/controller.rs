@@ -54,13 +54,7 @@ pub fn hmi_config(s: &Settings) -> hmi::Config {
 
 impl Controller {
     pub fn new(settings: Settings, now_ms: u32) -> Controller {
-        let mut slot = MaybeUninit::uninit();
-        Controller::init_in(&mut slot, &settings, now_ms);
-        // SAFETY: `init_in` initialised every field.
-        #[allow(unsafe_code)]
-        unsafe {
-            slot.assume_init()
-        }
+        crate::in_place::build(|slot| Controller::init_in(slot, &settings, now_ms))
     }
 
     /// [`Controller::new`] built in `slot`, the firmware's static cell: field by field,

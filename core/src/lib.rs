@@ -6,6 +6,7 @@
 //! - exact interpolation in integer step space: [`interp`]
 //! - look-ahead planning, junctions and velocity profiles: [`planner`]
 //! - step generation (segment preparation, the step interrupt's work): [`stepper`]
+//! - task-to-interrupt rings (the USB byte stream; their shared index ordering): [`ring`]
 //! - measurement of step traces against an ideal path: [`analysis`]
 //! - the benchmark programs' G-code subset: [`refprog`]
 //! - libm-free f32 math (sine, cosine, arctangent, square root): [`fmath`]
@@ -17,12 +18,13 @@
 //!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
 //! - the wiring of protocol, keypad, HMI and planner shared by firmware and simulator:
 //!   [`controller`], and the planner behind the machine's motion trait: [`link`]
+//! - construction of those large structs in their final place: [`in_place`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
-// Denied, not forbidden: the in-place constructors (`Controller::init_in`,
-// `Protocol::init_in`, `Machine::init_in`) allow it locally to build the firmware's
-// static cells field by field instead of on init's stack.
+// Denied, not forbidden: the in-place constructors (`init_in` of the controller,
+// protocol, machine, link and planner, and `in_place::build`) allow it locally to
+// build the firmware's static cells field by field instead of on init's stack.
 #![deny(unsafe_code)]
 
 pub mod analysis;
@@ -30,6 +32,7 @@ pub mod controller;
 pub mod fmath;
 pub mod gcode;
 pub mod hmi;
+pub mod in_place;
 pub mod interp;
 pub mod keypad;
 pub mod link;
@@ -38,6 +41,7 @@ pub mod motion;
 pub mod planner;
 pub mod protocol;
 pub mod refprog;
+pub mod ring;
 pub mod screens;
 pub mod settings;
 pub mod settings_store;

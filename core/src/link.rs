@@ -106,19 +106,7 @@ pub struct Link<S: StepSide> {
 
 impl<S: StepSide> Link<S> {
     pub fn new(s: &Settings, prep: PrepConfig, side: S) -> Self {
-        let pos = side.position();
-        Link {
-            planner: Planner::new(planner_config(s), pos),
-            prep: Prep::new(prep, pos),
-            side,
-            timer_hz: prep.timer_hz,
-            pending: Deque::new(),
-            wait_left: 0,
-            waiting: false,
-            pen_down: false,
-            pen_lift_ms: s.pen_lift_ms(),
-            held: false,
-        }
+        crate::in_place::build(|slot| Link::init_in(slot, s, prep, side))
     }
 
     /// [`Link::new`] built in `slot` (the firmware's static cell): field by field, so
@@ -150,8 +138,8 @@ impl<S: StepSide> Link<S> {
         let p = slot.as_mut_ptr();
         // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
         // is written once through a raw field pointer (no reference to the uninitialised
-        // link is made) and the list below names every field, as `new` does, so the
-        // link is initialised when `assume_init_mut` runs.
+        // link is made) and the list below names every field, so the link is
+        // initialised when `assume_init_mut` runs.
         unsafe {
             Planner::init_in(
                 &mut *addr_of_mut!((*p).planner).cast::<core::mem::MaybeUninit<Planner>>(),

@@ -215,13 +215,7 @@ fn store_startup(
 impl Protocol {
     /// Power-up: the welcome line is queued at once.
     pub fn new(settings: Settings) -> Protocol {
-        let mut slot = MaybeUninit::uninit();
-        Protocol::init_in(&mut slot, &settings);
-        // SAFETY: `init_in` initialised every field.
-        #[allow(unsafe_code)]
-        unsafe {
-            slot.assume_init()
-        }
+        crate::in_place::build(|slot| Protocol::init_in(slot, &settings))
     }
 
     /// [`Protocol::new`] built in `slot` (the firmware's static cell, through

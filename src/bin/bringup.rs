@@ -200,9 +200,10 @@ mod app {
             cx.local.indicators.set_busy(moving);
             cx.local.indicators.set_buzzer(beep_ms > 0);
             beep_ms = beep_ms.saturating_sub(5);
-            if !cx.local.inputs.estop_open() && steps::is_halted() && !moving {
-                // E-stop released and no key held: re-arm.
-                steps::clear_halt();
+            if !moving {
+                // E-stop released and no key held: re-arm (the drivers come back on).
+                let inputs = &*cx.local.inputs;
+                steps::release_halt(|| !inputs.estop_open());
             }
             cx.local.watchdog.feed();
         }

@@ -140,13 +140,7 @@ impl Machine {
     /// Power-up state. With homing enabled, the machine starts locked in alarm until
     /// `$H` or `$X`, as Grbl does.
     pub fn new(settings: Settings) -> Machine {
-        let mut slot = MaybeUninit::uninit();
-        Machine::init_in(&mut slot, &settings);
-        // SAFETY: `init_in` initialised every field.
-        #[allow(unsafe_code)]
-        unsafe {
-            slot.assume_init()
-        }
+        crate::in_place::build(|slot| Machine::init_in(slot, &settings))
     }
 
     /// [`Machine::new`] built in `slot` (the firmware's static cell, through

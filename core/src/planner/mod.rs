@@ -133,16 +133,7 @@ pub struct Planner {
 
 impl Planner {
     pub fn new(cfg: PlannerConfig, position: StepPos) -> Self {
-        Planner {
-            cfg,
-            blocks: Deque::new(),
-            next_start: position,
-            prev: None,
-            feed_override: 1.0,
-            rapid_override: 1.0,
-            head_cap: cfg.start_speed,
-            generation: 0,
-        }
+        crate::in_place::build(|slot| Planner::init_in(slot, cfg, position))
     }
 
     /// [`Planner::new`] built in `slot` (the firmware's static link cell, through
@@ -170,7 +161,7 @@ impl Planner {
         let p = slot.as_mut_ptr();
         // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
         // is written once through a raw field pointer (no reference to the uninitialised
-        // planner is made), the same values as `new`, and every field is written (see
+        // planner is made), and every field is written (see
         // the pattern above), so the planner is initialised when `assume_init_mut` runs.
         unsafe {
             addr_of_mut!((*p).cfg).write(cfg);

@@ -309,15 +309,18 @@ mod tests {
     use crate::interp::Tick;
     use heapless::spsc::Queue;
 
+    /// A queue holding one command per `(axis deltas, wait)` pair, in order.
+    fn queue_of(cmds: &[([i8; 3], u32)]) -> Queue<StepCmd, 8> {
+        let mut q = Queue::new();
+        for &(d, w) in cmds {
+            q.enqueue(StepCmd::new(Tick::from_deltas(d), w)).unwrap();
+        }
+        q
+    }
+
     #[test]
     fn emits_steps_at_the_commanded_times_and_splits_long_waits() {
-        let mut q: Queue<StepCmd, 8> = Queue::new();
-        q.enqueue(StepCmd::new(Tick::from_deltas([1, 0, 0]), 100))
-            .unwrap();
-        q.enqueue(StepCmd::new(Tick::from_deltas([0, -1, 0]), 150_000))
-            .unwrap();
-        q.enqueue(StepCmd::new(Tick::from_deltas([1, 1, 0]), 10))
-            .unwrap();
+        let mut q = queue_of(&[([1, 0, 0], 100), ([0, -1, 0], 150_000), ([1, 1, 0], 10)]);
         let mut e = Executor::new([0; 3], 0xFFFF);
         let first = e.start(&mut q).unwrap();
         assert_eq!(first.reload, 100);
@@ -346,11 +349,7 @@ mod tests {
 
     #[test]
     fn direction_is_set_one_period_before_its_step() {
-        let mut q: Queue<StepCmd, 8> = Queue::new();
-        q.enqueue(StepCmd::new(Tick::from_deltas([1, 0, 0]), 50))
-            .unwrap();
-        q.enqueue(StepCmd::new(Tick::from_deltas([-1, 0, 0]), 50))
-            .unwrap();
+        let mut q = queue_of(&[([1, 0, 0], 50), ([-1, 0, 0], 50)]);
         let mut e = Executor::new([0; 3], 0xFFFF);
         assert_eq!(e.start(&mut q).unwrap().dir & 1, 0);
         // The +X step is emitted while the pins already show -X for the next one.
@@ -360,11 +359,12 @@ mod tests {
 
     #[test]
     fn a_reversal_turns_the_pin_only_after_the_guard_and_keeps_the_timing() {
-        let mut q: Queue<StepCmd, 8> = Queue::new();
-        for (d, w) in [(1, 1000), (1, 1000), (-1, 1000), (-1, 100)] {
-            q.enqueue(StepCmd::new(Tick::from_deltas([d, 1, 0]), w))
-                .unwrap();
-        }
+        let mut q = queue_of(&[
+            ([1, 1, 0], 1000),
+            ([1, 1, 0], 1000),
+            ([-1, 1, 0], 1000),
+            ([-1, 1, 0], 100),
+        ]);
         let mut e = Executor::new([0; 3], 0xFFFF);
         e.set_turn_guard(300);
         assert_eq!(e.start(&mut q).unwrap().reload, 1000);
@@ -393,11 +393,7 @@ mod tests {
 
     #[test]
     fn a_reversal_faster_than_the_guard_is_late_not_lost() {
-        let mut q: Queue<StepCmd, 8> = Queue::new();
-        q.enqueue(StepCmd::new(Tick::from_deltas([1, 0, 0]), 50))
-            .unwrap();
-        q.enqueue(StepCmd::new(Tick::from_deltas([-1, 0, 0]), 50))
-            .unwrap();
+        let mut q = queue_of(&[([1, 0, 0], 50), ([-1, 0, 0], 50)]);
         let mut e = Executor::new([0; 3], 0xFFFF);
         e.set_turn_guard(300);
         e.start(&mut q).unwrap();
@@ -413,9 +409,7 @@ mod tests {
     #[test]
     fn long_waits_split_into_reloads_of_at_least_two_and_arm_only_the_last() {
         for wait in [65_535, 65_536, 65_537, 65_538, 131_073, 200_000] {
-            let mut q: Queue<StepCmd, 8> = Queue::new();
-            q.enqueue(StepCmd::new(Tick::from_deltas([1, 0, 0]), wait))
-                .unwrap();
+            let mut q = queue_of(&[([1, 0, 0], wait)]);
             let mut e = Executor::new([0; 3], 0x1_0000);
             let first = e.start(&mut q).unwrap();
             let (mut total, mut parts) = (first.reload, std::vec![first]);
@@ -489,11 +483,7 @@ mod tests {
 
     #[test]
     fn halt_stops_every_further_step() {
-        let mut q: Queue<StepCmd, 8> = Queue::new();
-        for _ in 0..5 {
-            q.enqueue(StepCmd::new(Tick::from_deltas([1, 0, 0]), 10))
-                .unwrap();
-        }
+        let mut q = queue_of(&[([1, 0, 0], 10); 5]);
         let mut e = Executor::new([0; 3], 0xFFFF);
         e.start(&mut q).unwrap();
         assert_eq!(e.on_interrupt(&mut q).step, 1);

@@ -6,37 +6,12 @@
 //! barriers, a large share of a step interrupt that must stay under 100 instructions.
 //! This ring is specialised for the job: a power-of-two capacity (the index mask is
 //! one `and`, and the compiler drops the bounds check), free-running `u32` indices, and
-//! atomics everywhere (no `unsafe`). On the microcontroller (one core, producer and
-//! consumer are a task and an interrupt on the same CPU) program order is all the
-//! ordering needed, so index publication uses compiler fences and plain loads and
-//! stores; on other targets (the simulator and tests) it uses real acquire/release.
+//! atomics everywhere (no `unsafe`). Index publication is [`crate::ring`]'s: compiler
+//! fences on the single-core microcontroller, acquire/release elsewhere.
 
 use super::{CmdSink, CmdSource, StepCmd};
+use crate::ring::{load_acquire, store_release};
 use core::sync::atomic::{AtomicU32, Ordering};
-
-/// Producer and consumer run on one CPU core (thread + interrupt).
-const SINGLE_CORE: bool = cfg!(all(target_arch = "arm", target_os = "none"));
-
-#[inline(always)]
-fn load_acquire(a: &AtomicU32) -> u32 {
-    if SINGLE_CORE {
-        let v = a.load(Ordering::Relaxed);
-        core::sync::atomic::compiler_fence(Ordering::Acquire);
-        v
-    } else {
-        a.load(Ordering::Acquire)
-    }
-}
-
-#[inline(always)]
-fn store_release(a: &AtomicU32, v: u32) {
-    if SINGLE_CORE {
-        core::sync::atomic::compiler_fence(Ordering::Release);
-        a.store(v, Ordering::Relaxed);
-    } else {
-        a.store(v, Ordering::Release);
-    }
-}
 
 /// The ring. `N` must be a power of two (checked at compile time).
 pub struct StepQueue<const N: usize> {
