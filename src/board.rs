@@ -627,14 +627,32 @@ impl Default for UsbCells {
     }
 }
 
-/// The settings sector: the last four 1 KB pages of the 64 KB part (memory.x keeps the
-/// program below it).
-pub const SETTINGS_FLASH_START: u32 = 0x0800_F000;
-pub const SETTINGS_FLASH_SIZE: u32 = 4 * 1024;
+/// Flash pages are 1 KB on the medium-density STM32F103 (RM0008 3.3.3).
 pub const FLASH_PAGE_SIZE: u32 = 1024;
-/// The chip's flash size and the settings pages as chip flash offsets.
-pub const FLASH_SIZE: u32 = 64 * 1024;
-pub const SETTINGS_OFFSET: u32 = SETTINGS_FLASH_START - 0x0800_0000;
+/// The chip's flash: 128 KB on the STM32F103CB this firmware is built for.
+pub const FLASH_SIZE: u32 = 128 * 1024;
+
+/// The settings store's flash pages, as chip flash offsets (0 = 0x0800_0000, how the
+/// store addresses them). memory.x places them (`_settings_start`, `_settings_end`) and
+/// links the program below them; this reads the symbols, so their place is said once.
+pub fn settings_pages() -> core::ops::Range<u32> {
+    extern "C" {
+        static _settings_start: u8;
+        static _settings_end: u8;
+    }
+    // Only the symbols' addresses are taken, never their contents.
+    let start = core::ptr::addr_of!(_settings_start) as u32;
+    let end = core::ptr::addr_of!(_settings_end) as u32;
+    (start - FLASH_BASE)..(end - FLASH_BASE)
+}
+
+/// The flash size the chip reports (its F_SIZE register, RM0008 30.1), in KB: 128 on a
+/// CB, 64 on a C8.
+pub fn flash_size_kb() -> u32 {
+    const F_SIZE: *const u16 = 0x1FFF_F7E0 as *const u16;
+    // SAFETY: F_SIZE is a read-only factory register, always mapped.
+    u32::from(unsafe { core::ptr::read_volatile(F_SIZE) })
+}
 
 /// Pin configuration nibbles (RM0008 9.2: CNF[1:0] MODE[1:0]; outputs at 50 MHz, the
 /// same values as the HAL's pin modes). A pull-up input also needs its ODR bit set.
@@ -871,8 +889,8 @@ pub fn exti_take_pending(line: u8) -> bool {
 
 /// The internal flash as a NOR flash (embedded-storage traits) for the power-loss-safe
 /// settings store in the core. Offsets are chip flash offsets (0 = 0x0800_0000), the
-/// store's range (`settings_store::STORE_RANGE`) is the settings pages; reads may look
-/// anywhere in the 64 KB, writes and erases only inside the settings pages, so a store
+/// store's range ([`settings_pages`]) is the settings pages; reads may look
+/// anywhere in the 128 KB, writes and erases only inside the settings pages, so a store
 /// bug can never overwrite the program.
 ///
 /// Programming stalls instruction fetch from flash for the duration of a write (~50 µs
@@ -1022,7 +1040,7 @@ impl embedded_storage::nor_flash::ReadNorFlash for SettingsFlash {
         if !offset.is_multiple_of(2) {
             return Err(FlashError);
         }
-        // SAFETY: inside the 64 KB of flash (checked above), which is always mapped
+        // SAFETY: inside the 128 KB of flash (checked above), which is always mapped
         // and only changes through `&mut self`.
         let data =
             unsafe { core::slice::from_raw_parts((FLASH_BASE + offset) as *const u8, bytes.len()) };
@@ -1038,8 +1056,8 @@ impl embedded_storage::nor_flash::NorFlash for SettingsFlash {
     const WRITE_SIZE: usize = 2;
     const ERASE_SIZE: usize = FLASH_PAGE_SIZE as usize;
     fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
-        let end = SETTINGS_OFFSET + SETTINGS_FLASH_SIZE;
-        if from > to || !within(from, (to - from) as usize, SETTINGS_OFFSET, end) {
+        let pages = settings_pages();
+        if from > to || !within(from, (to - from) as usize, pages.start, pages.end) {
             return Err(FlashError);
         }
         // Half-word aligned, every page from `from` up to `to` (as the HAL did).
@@ -1054,8 +1072,8 @@ impl embedded_storage::nor_flash::NorFlash for SettingsFlash {
         Ok(())
     }
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
-        let end = SETTINGS_OFFSET + SETTINGS_FLASH_SIZE;
-        if !within(offset, bytes.len(), SETTINGS_OFFSET, end) {
+        let pages = settings_pages();
+        if !within(offset, bytes.len(), pages.start, pages.end) {
             return Err(FlashError);
         }
         if !offset.is_multiple_of(2) || !bytes.len().is_multiple_of(2) {

@@ -66,7 +66,7 @@ mod app {
     use inkstep_core::protocol::STARTUP_LINES;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
     use inkstep_core::settings::{OutputMode, PenMode, Settings};
-    use inkstep_core::settings_store::{BlockingFlash, SettingsStore, STORE_RANGE};
+    use inkstep_core::settings_store::{BlockingFlash, SettingsStore};
     use inkstep_core::stepper::prep::PrepConfig;
     use stm32f1xx_hal::pac::Interrupt;
 
@@ -136,10 +136,19 @@ mod app {
         syst.enable_interrupt();
         syst.enable_counter();
 
+        // This image uses 128 KB of flash: on a chip that promises less (a C8's 64 KB)
+        // it refuses to run rather than fault later; the panic leaves the drivers off.
+        let flash_kb = board::flash_size_kb();
+        if flash_kb < board::FLASH_SIZE / 1024 {
+            defmt::panic!(
+                "this image needs a 128 KB STM32F103CB; this chip has {} KB of flash",
+                flash_kb
+            );
+        }
         // Settings from flash.
-        let mut store = match SettingsStore::new(BlockingFlash(b.flash), STORE_RANGE) {
+        let mut store = match SettingsStore::new(BlockingFlash(b.flash), board::settings_pages()) {
             Ok(s) => s,
-            // STORE_RANGE is a constant that fits the chip; this cannot happen.
+            // memory.x places the pages inside the chip's flash; this cannot happen.
             Err(_) => defmt::panic!("settings flash range"),
         };
         let (steps_tx, steps_rx) = cx.local.steps.split();

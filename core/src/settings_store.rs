@@ -34,11 +34,6 @@ use core::pin::pin;
 use core::task::{Context, Poll, Waker};
 use embedded_storage::nor_flash::NorFlash;
 
-/// Flash range the firmware gives the store: the last four 1 KB pages of the 64 KB
-/// part (0x0800_F000..0x0801_0000), as offsets from the start of flash, which is how
-/// stm32f1xx-hal's flash writer addresses it.
-pub const STORE_RANGE: Range<u32> = 0xF000..0x1_0000;
-
 const KEY_SETTINGS: u8 = 0;
 const KEY_COORDS: u8 = 1;
 const KEY_STARTUP: u8 = 2; // 2 .. 2 + STARTUP_LINES
