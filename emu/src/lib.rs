@@ -10,3 +10,4 @@ pub mod nvic;
 pub mod periph;
 pub mod rtt;
 pub mod usb_host;
+pub mod session;
