@@ -11,3 +11,4 @@ pub mod periph;
 pub mod rtt;
 pub mod usb_host;
 pub mod session;
+pub mod port;

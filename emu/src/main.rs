@@ -40,6 +40,26 @@ enum Cmd {
         #[arg(long)]
         flash: Option<PathBuf>,
     },
+    /// Put the board's USB serial port on a pseudo-terminal any Grbl sender can open
+    /// (DTR rises when it is opened); runs until killed.
+    Serve {
+        #[arg(long)]
+        elf: Option<PathBuf>,
+        /// Make this path a symlink to the port.
+        #[arg(long)]
+        link: PathBuf,
+        /// Run virtual time this many times faster than real time.
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+        #[arg(long)]
+        trace: Option<PathBuf>,
+        #[arg(long)]
+        lcd: Option<PathBuf>,
+        #[arg(long)]
+        log: Option<PathBuf>,
+        #[arg(long)]
+        flash: Option<PathBuf>,
+    },
 }
 
 fn elf_or_build(elf: Option<PathBuf>) -> Result<PathBuf, String> {
@@ -116,16 +136,10 @@ fn cmd_run(
         save_lcd(&s, dir, "last")?;
     }
     write_log(&s, log)?;
-    let steps = &s.m.state().board.steps;
     if let Some(path) = trace {
-        let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let mut w = TraceWriter::new(std::io::BufWriter::new(f), 144_000_000).map_err(|e| e.to_string())?;
-        let t0 = steps.first().map_or(0, |st| st.t);
-        for st in steps {
-            w.row(st.t - t0, st.pos).map_err(|e| e.to_string())?;
-        }
-        w.finish().map_err(|e| e.to_string())?;
+        write_trace(&s, path)?;
     }
+    let steps = &s.m.state().board.steps;
     let job = match (steps.first(), steps.last()) {
         (Some(a), Some(b)) => (b.t - a.t) as f64 / T_PER_S as f64,
         _ => 0.0,
@@ -160,6 +174,90 @@ fn cmd_run(
     })
 }
 
+fn write_trace(s: &Session, path: &Path) -> Result<(), String> {
+    let steps = &s.m.state().board.steps;
+    let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut w = TraceWriter::new(std::io::BufWriter::new(f), 144_000_000).map_err(|e| e.to_string())?;
+    let t0 = steps.first().map_or(0, |st| st.t);
+    for st in steps {
+        w.row(st.t - t0, st.pos).map_err(|e| e.to_string())?;
+    }
+    w.finish().map(|_| ()).map_err(|e| e.to_string())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn cmd_serve(
+    elf: Option<PathBuf>,
+    link: &Path,
+    speed: f64,
+    trace: Option<&Path>,
+    lcd: Option<&Path>,
+    log: Option<&Path>,
+    flash: Option<&Path>,
+) -> Result<ExitCode, String> {
+    use inkstep_emu::port::OpenWatch;
+    use inkstep_sim::pty::Pty;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    if !(speed > 0.0 && speed.is_finite()) {
+        return Err("--speed must be a positive number".into());
+    }
+    let elf = elf_or_build(elf)?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
+        .map_err(|e| format!("installing the signal handler: {e}"))?;
+    let mut pty = Pty::open().map_err(|e| format!("pty: {e}"))?;
+    pty.link_at(link).map_err(|e| format!("{}: {e}", link.display()))?;
+    let mut watch = OpenWatch::new(pty.path()).map_err(|e| format!("inotify: {e}"))?;
+    let mut s = Session::new(&elf, flash)?;
+    s.m.state_mut().echo_log = log.is_none();
+    s.m.board().host.port_open = false;
+    eprintln!("emulated board on {} ({}), speed {speed}x; Ctrl-C ends", link.display(), pty.path().display());
+    let real0 = std::time::Instant::now();
+    let virt0 = s.now();
+    let mut lcd_writes = 0;
+    let mut frame = 0;
+    let mut buf = [0u8; 4096];
+    let result = (|| -> Result<(), String> {
+        while !stop.load(Ordering::Relaxed) {
+            let open = watch.is_open();
+            s.m.board().host.port_open = open;
+            let n = pty.read_available(&mut buf).map_err(|e| e.to_string())?;
+            if n > 0 {
+                s.send(&buf[..n]);
+            }
+            s.run_for(T_PER_MS)?;
+            let out = s.take_received();
+            if !out.is_empty() {
+                pty.send(out.as_bytes()).map_err(|e| e.to_string())?;
+            }
+            pty.flush_pending().map_err(|e| e.to_string())?;
+            if let Some(dir) = lcd {
+                let w = s.m.state().board.lcd.writes;
+                if w != lcd_writes {
+                    lcd_writes = w;
+                    save_lcd(&s, dir, &format!("{frame:05}"))?;
+                    save_lcd(&s, dir, "last")?;
+                    frame += 1;
+                }
+            }
+            // Pace virtual time against the wall clock.
+            let virt = (s.now() - virt0) as f64 / T_PER_S as f64;
+            let real = real0.elapsed().as_secs_f64() * speed;
+            if virt > real {
+                std::thread::sleep(std::time::Duration::from_secs_f64((virt - real) / speed));
+            }
+        }
+        Ok(())
+    })();
+    if let Some(p) = trace {
+        write_trace(&s, p)?;
+    }
+    write_log(&s, log)?;
+    result.map(|()| ExitCode::SUCCESS)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let r = match cli.cmd {
@@ -172,6 +270,15 @@ fn main() -> ExitCode {
             log,
             flash,
         } => cmd_run(&file, elf, trace.as_deref(), lcd.as_deref(), char_count, log.as_deref(), flash.as_deref()),
+        Cmd::Serve {
+            elf,
+            link,
+            speed,
+            trace,
+            lcd,
+            log,
+            flash,
+        } => cmd_serve(elf, &link, speed, trace.as_deref(), lcd.as_deref(), log.as_deref(), flash.as_deref()),
     };
     match r {
         Ok(c) => c,

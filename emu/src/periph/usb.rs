@@ -44,7 +44,6 @@ const STAT_TX: u32 = 3 << 4;
 
 const STALL: u32 = 1;
 const NAK: u32 = 2;
-const VALID: u32 = 3;
 
 impl Usb {
     pub fn new() -> Usb {
