@@ -114,11 +114,14 @@ fn cmd_run(
         while !sender.done() {
             let bytes = sender.to_send();
             s.send(&bytes);
-            s.run_for(T_PER_MS)?;
+            // The sender reacts within one host-controller slot (125 µs), as a program
+            // on the PC does; the USB timing model is in emu/README.md.
+            s.run_for(inkstep_emu::usb_host::SLOT_T)?;
             let got = s.take_received();
             sender.received(got.as_bytes());
             if let Some(dir) = lcd {
                 if s.now() >= next_lcd {
+                    let _ = T_PER_US;
                     save_lcd(&s, dir, &format!("{frame:04}"))?;
                     frame += 1;
                     next_lcd += T_PER_S;
