@@ -386,7 +386,11 @@ impl Board {
     }
 
     fn clock_on(&self, apb2: bool, bit: u32, name: &str) -> Result<(), BusError> {
-        let en = if apb2 { self.rcc.apb2enr } else { self.rcc.apb1enr };
+        let en = if apb2 {
+            self.rcc.apb2enr
+        } else {
+            self.rcc.apb1enr
+        };
         if en & (1 << bit) == 0 {
             return Err(BusError(format!("{name} accessed with its clock off")));
         }
@@ -423,7 +427,9 @@ impl Board {
             0x4001_0800 | 0x4001_0C00 | 0x4001_1000 => {
                 let p = ((addr - 0x4001_0800) / 0x400) as usize;
                 self.clock_on(true, 2 + p as u32, "GPIO")?;
-                let idr = (0..16).filter(|&n| self.pin(p, n)).fold(0, |v, n| v | 1 << n);
+                let idr = (0..16)
+                    .filter(|&n| self.pin(p, n))
+                    .fold(0, |v, n| v | 1 << n);
                 self.gpio[p].read(off, idr)?
             }
             0x4001_2C00 => {
@@ -524,11 +530,14 @@ impl Board {
 
     /// A read of the settings pages (served here so that programming is modelled).
     pub fn settings_read(&self, offset: u32, size: usize) -> u32 {
-        self.flash.read_array((self.settings.start + offset) as usize, size)
+        self.flash
+            .read_array((self.settings.start + offset) as usize, size)
     }
 
     pub fn settings_write(&mut self, offset: u32, size: usize, v: u32) -> Result<(), BusError> {
-        let op = self.flash.write_array((self.settings.start + offset) as usize, size, v)?;
+        let op = self
+            .flash
+            .write_array((self.settings.start + offset) as usize, size, v)?;
         self.flash_op(op);
         Ok(())
     }
@@ -538,7 +547,9 @@ impl Board {
         match (addr, size) {
             (0x1FFF_F7E0, 2) => Ok(u32::from(F_SIZE_KB)),
             (0x1FFF_F7E8..=0x1FFF_F7F7, _) => Ok(0x494E_4B53),
-            _ => Err(BusError(format!("system memory read at 0x{addr:08X} ({size} bytes)"))),
+            _ => Err(BusError(format!(
+                "system memory read at 0x{addr:08X} ({size} bytes)"
+            ))),
         }
     }
 }

@@ -14,7 +14,7 @@ pub const T_PER_S: u64 = 1000 * T_PER_MS;
 /// Units per cycle of a clock of `hz` (every clock of the board divides 144 MHz evenly:
 /// 72, 36, 8 MHz and the 40 kHz LSI; anything else is rounded up and flagged by RCC).
 pub const fn t_per_cycle(hz: u32) -> u64 {
-    (T_PER_S + hz as u64 - 1) / hz as u64
+    T_PER_S.div_ceil(hz as u64)
 }
 
 /// Microseconds, for reports.

@@ -13,7 +13,7 @@
 use crate::board::{Board, Halt, FLASH_BASE};
 use crate::clock::{t_per_cycle, us};
 use crate::elf::Image;
-use crate::nvic::{ENTRY_CYCLES, HARDFAULT, PENDSV, RETURN_CYCLES, SVCALL, TAIL_CHAIN_CYCLES};
+use crate::nvic::{ENTRY_CYCLES, HARDFAULT, RETURN_CYCLES, SVCALL, TAIL_CHAIN_CYCLES};
 use crate::periph::flash::{Flash, SIZE as FLASH_SIZE};
 use crate::rtt::{self, Log};
 use std::collections::HashMap;
@@ -47,7 +47,11 @@ impl std::fmt::Display for Stop {
             Stop::Bus { message, pc } => write!(f, "{message} (PC 0x{pc:08X})"),
             Stop::Exit(s) => write!(f, "semihosting exit with status {s}"),
             Stop::Breakpoint { pc, in_hardfault } => {
-                write!(f, "breakpoint at PC 0x{pc:08X}{}", if *in_hardfault { " in HardFault" } else { "" })
+                write!(
+                    f,
+                    "breakpoint at PC 0x{pc:08X}{}",
+                    if *in_hardfault { " in HardFault" } else { "" }
+                )
             }
             Stop::Lockup { pc } => write!(f, "lockup: a fault in HardFault (PC 0x{pc:08X})"),
             Stop::PowerCut => write!(f, "power cut at a flash operation"),
@@ -123,7 +127,10 @@ impl<'a> Machine<'a> {
             .map(|(a, d)| (*a, d.as_slice()))
             .collect();
         flash.load(&in_flash)?;
-        let settings = match (image.symbol("_settings_start"), image.symbol("_settings_end")) {
+        let settings = match (
+            image.symbol("_settings_start"),
+            image.symbol("_settings_end"),
+        ) {
             (Some(s), Some(e)) => (s - FLASH_BASE)..(e - FLASH_BASE),
             _ => (FLASH_SIZE as u32)..(FLASH_SIZE as u32),
         };
@@ -166,7 +173,8 @@ impl<'a> Machine<'a> {
         // Program flash below the settings pages: read and execute, written only
         // through the flash controller (copied in when it changes).
         let prog_end = u64::from(settings.start.min(FLASH_SIZE as u32));
-        uc.mem_map(u64::from(FLASH_BASE), prog_end, Prot::READ | Prot::EXEC).map_err(e)?;
+        uc.mem_map(u64::from(FLASH_BASE), prog_end, Prot::READ | Prot::EXEC)
+            .map_err(e)?;
         if settings.end > settings.start {
             uc.mmio_map(
                 u64::from(FLASH_BASE + settings.start),
@@ -175,7 +183,10 @@ impl<'a> Machine<'a> {
                     uc.get_data().board.settings_read(off as u32, size) as u64
                 }),
                 Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
-                    let r = uc.get_data_mut().board.settings_write(off as u32, size, v as u32);
+                    let r = uc
+                        .get_data_mut()
+                        .board
+                        .settings_write(off as u32, size, v as u32);
                     if let Err(err) = r {
                         // A flash write the controller refuses is a bus error on the chip.
                         let s = uc.get_data_mut();
@@ -190,7 +201,8 @@ impl<'a> Machine<'a> {
             )
             .map_err(e)?;
         }
-        uc.mem_map(u64::from(RAM_BASE), u64::from(RAM_SIZE), Prot::ALL).map_err(e)?;
+        uc.mem_map(u64::from(RAM_BASE), u64::from(RAM_SIZE), Prot::ALL)
+            .map_err(e)?;
         // Peripherals: APB1, APB2 and AHB up to the CRC unit.
         uc.mmio_map(
             0x4000_0000,
@@ -231,7 +243,7 @@ impl<'a> Machine<'a> {
             0x4200_0000,
             0x24000 * 32,
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize| {
-                let (addr, bit) = (0x4000_0000 + (off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let (addr, bit) = ((0x4000_0000 + off as u32 / 32) & !3, (off as u32 / 4) % 32);
                 let s = uc.get_data_mut();
                 match s.board.read(addr, 4) {
                     Ok(v) => u64::from((v >> bit) & 1),
@@ -243,10 +255,14 @@ impl<'a> Machine<'a> {
                 }
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, v: u64| {
-                let (addr, bit) = (0x4000_0000 + (off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let (addr, bit) = ((0x4000_0000 + off as u32 / 32) & !3, (off as u32 / 4) % 32);
                 let s = uc.get_data_mut();
                 let r = s.board.read(addr, 4).and_then(|w| {
-                    let w = if v & 1 != 0 { w | 1 << bit } else { w & !(1 << bit) };
+                    let w = if v & 1 != 0 {
+                        w | 1 << bit
+                    } else {
+                        w & !(1 << bit)
+                    };
                     s.board.write(addr, 4, w)
                 });
                 if let Err(err) = r {
@@ -262,17 +278,21 @@ impl<'a> Machine<'a> {
             0x2200_0000,
             u64::from(RAM_SIZE) * 32,
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize| {
-                let (addr, bit) = (RAM_BASE + (off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let (addr, bit) = ((RAM_BASE + off as u32 / 32) & !3, (off as u32 / 4) % 32);
                 let mut w = [0u8; 4];
                 let _ = uc.mem_read(u64::from(addr), &mut w);
                 u64::from((u32::from_le_bytes(w) >> bit) & 1)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, v: u64| {
-                let (addr, bit) = (RAM_BASE + (off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let (addr, bit) = ((RAM_BASE + off as u32 / 32) & !3, (off as u32 / 4) % 32);
                 let mut w = [0u8; 4];
                 let _ = uc.mem_read(u64::from(addr), &mut w);
                 let mut x = u32::from_le_bytes(w);
-                x = if v & 1 != 0 { x | 1 << bit } else { x & !(1 << bit) };
+                x = if v & 1 != 0 {
+                    x | 1 << bit
+                } else {
+                    x & !(1 << bit)
+                };
                 let _ = uc.mem_write(u64::from(addr), &x.to_le_bytes());
             }),
         )
@@ -295,7 +315,8 @@ impl<'a> Machine<'a> {
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, _v: u64| {
                 let addr = 0x1FFF_F000 + off as u32;
-                uc.get_data_mut().bus_stop("write to system memory".into(), addr);
+                uc.get_data_mut()
+                    .bus_stop("write to system memory".into(), addr);
                 let _ = uc.emu_stop();
             }),
         )
@@ -316,7 +337,10 @@ impl<'a> Machine<'a> {
                 match r {
                     Some(v) => v as u64,
                     None => {
-                        s.bus_stop(format!("system control space: no register ({size} bytes)"), SCS_BASE as u32 + off as u32);
+                        s.bus_stop(
+                            format!("system control space: no register ({size} bytes)"),
+                            SCS_BASE as u32 + off as u32,
+                        );
                         let _ = uc.emu_stop();
                         0
                     }
@@ -327,9 +351,15 @@ impl<'a> Machine<'a> {
                 let now = s.board.now;
                 let off = off + 0xE000;
                 let ok = (0xE000..0xF000).contains(&off)
-                    && s.board.nvic.write(off as u32 - 0xE000, size, v as u32, now).is_ok();
+                    && s.board
+                        .nvic
+                        .write(off as u32 - 0xE000, size, v as u32, now)
+                        .is_ok();
                 if !ok {
-                    s.bus_stop(format!("system control space: no register ({size} bytes)"), SCS_BASE as u32 + off as u32);
+                    s.bus_stop(
+                        format!("system control space: no register ({size} bytes)"),
+                        SCS_BASE as u32 + off as u32,
+                    );
                     let _ = uc.emu_stop();
                     return;
                 }
@@ -418,10 +448,12 @@ impl<'a> Machine<'a> {
         let _ = uc.reg_write(RegisterARM::FAULTMASK, 0);
         let _ = uc.reg_write(RegisterARM::CONTROL, 0);
         let _ = uc.reg_write(RegisterARM::LR, 0xFFFF_FFFF);
-        uc.reg_write(RegisterARM::SP, u64::from(sp)).map_err(|e| format!("{e:?}"))?;
+        uc.reg_write(RegisterARM::SP, u64::from(sp))
+            .map_err(|e| format!("{e:?}"))?;
         // Thumb state from bit 0 of the vector.
         let _ = uc.reg_write(RegisterARM::XPSR, 1 << 24);
-        uc.reg_write(RegisterARM::PC, u64::from(pc & !1)).map_err(|e| format!("{e:?}"))?;
+        uc.reg_write(RegisterARM::PC, u64::from(pc & !1))
+            .map_err(|e| format!("{e:?}"))?;
         // The vector table sits at flash (VTOR 0 aliases it; the firmware sets VTOR).
         self.uc.get_data_mut().board.nvic.vtor = FLASH_BASE;
         Ok(())
@@ -544,7 +576,10 @@ impl<'a> Machine<'a> {
                     uc.get_data_mut().stop = Some(stop);
                 } else {
                     let in_hf = uc.get_data().board.nvic.active[HARDFAULT];
-                    uc.get_data_mut().stop = Some(Stop::Breakpoint { pc: at, in_hardfault: in_hf });
+                    uc.get_data_mut().stop = Some(Stop::Breakpoint {
+                        pc: at,
+                        in_hardfault: in_hf,
+                    });
                 }
                 let _ = uc.reg_write(RegisterARM::PC, u64::from(at));
                 let _ = uc.emu_stop();
@@ -655,7 +690,10 @@ impl<'a> Machine<'a> {
             if at < self.uc.get_data().board.settings.start as usize {
                 let bytes = self.uc.get_data().board.flash.array[at..at + len].to_vec();
                 let _ = self.uc.mem_write(u64::from(FLASH_BASE) + at as u64, &bytes);
-                let _ = self.uc.ctl_remove_cache(u64::from(FLASH_BASE) + at as u64, u64::from(FLASH_BASE) + (at + len) as u64);
+                let _ = self.uc.ctl_remove_cache(
+                    u64::from(FLASH_BASE) + at as u64,
+                    u64::from(FLASH_BASE) + (at + len) as u64,
+                );
             }
         }
         let s = self.uc.get_data_mut();
@@ -674,12 +712,14 @@ impl<'a> Machine<'a> {
         if s.board.nvic.reset_requested {
             s.board.nvic.reset_requested = false;
             // RCC_CSR SFTRSTF.
-            self.system_reset(1 << 28).map_err(|m| Stop::Cpu { message: m, pc })?;
+            self.system_reset(1 << 28)
+                .map_err(|m| Stop::Cpu { message: m, pc })?;
         }
         if self.uc.get_data().watchdog_fired() {
             self.uc.get_data_mut().watchdog_resets += 1;
             // RCC_CSR IWDGRSTF.
-            self.system_reset(1 << 29).map_err(|m| Stop::Cpu { message: m, pc })?;
+            self.system_reset(1 << 29)
+                .map_err(|m| Stop::Cpu { message: m, pc })?;
         }
         if let Some(msg) = self.uc.get_data_mut().board.bus_fault.take() {
             // A bus error answer: BusFault, escalated to HardFault.
@@ -743,7 +783,11 @@ impl<'a> Machine<'a> {
             return self.stacking_fault(pc, e);
         }
         let _ = self.uc.reg_write(RegisterARM::SP, u64::from(sp));
-        let exc_return: u32 = if current == 0 { 0xFFFF_FFF9 } else { 0xFFFF_FFF1 };
+        let exc_return: u32 = if current == 0 {
+            0xFFFF_FFF9
+        } else {
+            0xFFFF_FFF1
+        };
         let _ = self.uc.reg_write(RegisterARM::LR, u64::from(exc_return));
         self.vector(e, vtor, pc)?;
         let s = self.uc.get_data_mut();
@@ -766,7 +810,10 @@ impl<'a> Machine<'a> {
         let mut v = [0u8; 4];
         self.uc
             .mem_read(u64::from(vtor + 4 * e as u32), &mut v)
-            .map_err(|_| Stop::Cpu { message: format!("vector {e} unreadable"), pc })?;
+            .map_err(|_| Stop::Cpu {
+                message: format!("vector {e} unreadable"),
+                pc,
+            })?;
         let handler = u32::from_le_bytes(v) & !1;
         let _ = self.uc.reg_write(RegisterARM::PC, u64::from(handler));
         // Thread-mode IT state does not carry into the handler.
@@ -787,7 +834,10 @@ impl<'a> Machine<'a> {
         }
         let s = self.uc.get_data_mut();
         if s.board.nvic.deactivate().is_none() {
-            return Err(Stop::Cpu { message: "exception return in thread mode".into(), pc });
+            return Err(Stop::Cpu {
+                message: "exception return in thread mode".into(),
+                pc,
+            });
         }
         let (primask, basepri, faultmask) = self.masks();
         let s = self.uc.get_data();
@@ -805,7 +855,10 @@ impl<'a> Machine<'a> {
         let mut f = [0u8; 32];
         self.uc
             .mem_read(u64::from(sp), &mut f)
-            .map_err(|_| Stop::Cpu { message: "unstacking outside RAM".into(), pc })?;
+            .map_err(|_| Stop::Cpu {
+                message: "unstacking outside RAM".into(),
+                pc,
+            })?;
         let w = |i: usize| u32::from_le_bytes([f[4 * i], f[4 * i + 1], f[4 * i + 2], f[4 * i + 3]]);
         let regs = [
             RegisterARM::R0,
@@ -837,7 +890,10 @@ impl<'a> Machine<'a> {
             return Err(Stop::Lockup { pc });
         }
         s.hardfaults += 1;
-        eprintln!("HardFault at PC 0x{pc:08X}, time {} us", s.board.now / 144);
+        eprintln!(
+            "emu: HardFault at PC 0x{pc:08X}, {:.3} ms",
+            us(s.board.now) / 1000.0
+        );
         s.board.nvic.hfsr |= 1 << 30;
         s.board.nvic.cfsr |= 1 << 8;
         s.board.nvic.set_pending(HARDFAULT);
@@ -865,8 +921,14 @@ impl<'a> Machine<'a> {
                 Ok(())
             }
             Err(uc_error::FETCH_UNMAPPED) if pc >= 0xFFFF_FFF0 => self.exception_return(pc | 1),
-            Err(err @ (uc_error::READ_UNMAPPED | uc_error::WRITE_UNMAPPED | uc_error::FETCH_UNMAPPED | uc_error::FETCH_PROT | uc_error::WRITE_PROT | uc_error::READ_PROT)) => {
-                eprintln!("fault {err:?} r1=0x{:x} r2=0x{:x}", self.reg(RegisterARM::R1), self.reg(RegisterARM::R2));
+            Err(
+                uc_error::READ_UNMAPPED
+                | uc_error::WRITE_UNMAPPED
+                | uc_error::FETCH_UNMAPPED
+                | uc_error::FETCH_PROT
+                | uc_error::WRITE_PROT
+                | uc_error::READ_PROT,
+            ) => {
                 if self.uc.get_data().stop.is_some() {
                     return Ok(());
                 }
@@ -877,7 +939,10 @@ impl<'a> Machine<'a> {
                 s.board.nvic.cfsr |= 1 << 16;
                 self.fault(pc)
             }
-            Err(e) => Err(Stop::Cpu { message: format!("unicorn: {e:?}"), pc }),
+            Err(e) => Err(Stop::Cpu {
+                message: format!("unicorn: {e:?}"),
+                pc,
+            }),
         }
     }
 
@@ -918,7 +983,10 @@ impl State {
     }
 
     fn watchdog_fired(&self) -> bool {
-        self.board.iwdg.deadline().is_some_and(|d| d <= self.board.now)
+        self.board
+            .iwdg
+            .deadline()
+            .is_some_and(|d| d <= self.board.now)
     }
 
     /// Peripheral events due now; request a stop when an exception can be taken.
@@ -957,9 +1025,6 @@ impl State {
         }
         self.profile.busy[e] += cost;
         self.profile_mark = self.board.now;
-        if e == PENDSV {
-            // (PendSV is not used by the firmware; accounted like any other.)
-        }
     }
 
     /// Charge the time since the last mark to the exception running now.

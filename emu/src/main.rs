@@ -2,7 +2,7 @@
 //! (emu/README.md has every command). Shaped like `cargo sim`.
 
 use clap::{Parser, Subcommand};
-use inkstep_emu::clock::{T_PER_MS, T_PER_S, T_PER_US};
+use inkstep_emu::clock::{T_PER_MS, T_PER_S};
 use inkstep_emu::session::{product_elf, Session};
 use inkstep_sim::sender::{Flow, Sender};
 use inkstep_sim::trace::TraceWriter;
@@ -10,7 +10,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "cargo emu", about = "inkstep's firmware image on an emulated STM32F103CB board")]
+#[command(
+    name = "cargo emu",
+    about = "inkstep's firmware image on an emulated STM32F103CB board"
+)]
 struct Cli {
     #[command(subcommand)]
     cmd: Cmd,
@@ -70,7 +73,12 @@ fn elf_or_build(elf: Option<PathBuf>) -> Result<PathBuf, String> {
 }
 
 fn write_log(s: &Session, log: Option<&Path>) -> Result<(), String> {
-    let lines = s.m.state().log.as_ref().map(|l| l.lines.join("\n")).unwrap_or_default();
+    let lines =
+        s.m.state()
+            .log
+            .as_ref()
+            .map(|l| l.lines.join("\n"))
+            .unwrap_or_default();
     match log {
         Some(p) => std::fs::write(p, lines + "\n").map_err(|e| format!("{}: {e}", p.display())),
         None => {
@@ -104,7 +112,11 @@ fn cmd_run(
     let mut s = Session::new(&elf, flash)?;
     s.boot()?;
     let banner = s.take_received();
-    let flow = if char_count { Flow::CharCount(128) } else { Flow::SendResponse };
+    let flow = if char_count {
+        Flow::CharCount(128)
+    } else {
+        Flow::SendResponse
+    };
     let mut sender = Sender::new(&text, flow);
     sender.received(banner.as_bytes());
     let start = s.now();
@@ -121,7 +133,6 @@ fn cmd_run(
             sender.received(got.as_bytes());
             if let Some(dir) = lcd {
                 if s.now() >= next_lcd {
-                    let _ = T_PER_US;
                     save_lcd(&s, dir, &format!("{frame:04}"))?;
                     frame += 1;
                     next_lcd += T_PER_S;
@@ -169,7 +180,6 @@ fn cmd_run(
         eprintln!("error: {e}");
         return Ok(ExitCode::FAILURE);
     }
-    let _ = T_PER_US;
     Ok(if sender.errors.is_empty() && sender.alarms.is_empty() {
         ExitCode::SUCCESS
     } else {
@@ -180,7 +190,8 @@ fn cmd_run(
 fn write_trace(s: &Session, path: &Path) -> Result<(), String> {
     let steps = &s.m.state().board.steps;
     let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut w = TraceWriter::new(std::io::BufWriter::new(f), 144_000_000).map_err(|e| e.to_string())?;
+    let mut w =
+        TraceWriter::new(std::io::BufWriter::new(f), 144_000_000).map_err(|e| e.to_string())?;
     let t0 = steps.first().map_or(0, |st| st.t);
     for st in steps {
         w.row(st.t - t0, st.pos).map_err(|e| e.to_string())?;
@@ -211,12 +222,17 @@ fn cmd_serve(
     ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed))
         .map_err(|e| format!("installing the signal handler: {e}"))?;
     let mut pty = Pty::open().map_err(|e| format!("pty: {e}"))?;
-    pty.link_at(link).map_err(|e| format!("{}: {e}", link.display()))?;
+    pty.link_at(link)
+        .map_err(|e| format!("{}: {e}", link.display()))?;
     let mut watch = OpenWatch::new(pty.path()).map_err(|e| format!("inotify: {e}"))?;
     let mut s = Session::new(&elf, flash)?;
     s.m.state_mut().echo_log = log.is_none();
     s.m.board().host.port_open = false;
-    eprintln!("emulated board on {} ({}), speed {speed}x; Ctrl-C ends", link.display(), pty.path().display());
+    eprintln!(
+        "emulated board on {} ({}), speed {speed}x; Ctrl-C ends",
+        link.display(),
+        pty.path().display()
+    );
     let real0 = std::time::Instant::now();
     let virt0 = s.now();
     let mut lcd_writes = 0;
@@ -272,7 +288,15 @@ fn main() -> ExitCode {
             char_count,
             log,
             flash,
-        } => cmd_run(&file, elf, trace.as_deref(), lcd.as_deref(), char_count, log.as_deref(), flash.as_deref()),
+        } => cmd_run(
+            &file,
+            elf,
+            trace.as_deref(),
+            lcd.as_deref(),
+            char_count,
+            log.as_deref(),
+            flash.as_deref(),
+        ),
         Cmd::Serve {
             elf,
             link,
@@ -281,7 +305,15 @@ fn main() -> ExitCode {
             lcd,
             log,
             flash,
-        } => cmd_serve(elf, &link, speed, trace.as_deref(), lcd.as_deref(), log.as_deref(), flash.as_deref()),
+        } => cmd_serve(
+            elf,
+            &link,
+            speed,
+            trace.as_deref(),
+            lcd.as_deref(),
+            log.as_deref(),
+            flash.as_deref(),
+        ),
     };
     match r {
         Ok(c) => c,

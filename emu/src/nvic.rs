@@ -178,11 +178,12 @@ impl Nvic {
         }
         let bits = |f: &dyn Fn(usize) -> bool, base: u32| -> u32 {
             let word = ((off - base) / 4) as usize;
-            (0..32).filter(|b| {
-                let irq = word * 32 + b;
-                irq < IRQS && f(16 + irq)
-            })
-            .fold(0, |v, b| v | 1 << b)
+            (0..32)
+                .filter(|b| {
+                    let irq = word * 32 + b;
+                    irq < IRQS && f(16 + irq)
+                })
+                .fold(0, |v, b| v | 1 << b)
         };
         Ok(match off {
             // ICTR: 64 interrupt lines implemented.
@@ -202,7 +203,13 @@ impl Nvic {
             0xD14 => self.ccr,
             0xD24 => {
                 let a = |e: usize, b: u32| if self.active[e] { 1 << b } else { 0 };
-                a(4, 0) | a(5, 1) | a(6, 3) | a(SVCALL, 7) | a(12, 8) | a(PENDSV, 10) | a(SYSTICK, 11)
+                a(4, 0)
+                    | a(5, 1)
+                    | a(6, 3)
+                    | a(SVCALL, 7)
+                    | a(12, 8)
+                    | a(PENDSV, 10)
+                    | a(SYSTICK, 11)
             }
             0xD28 => self.cfsr,
             0xD2C => self.hfsr,
@@ -402,7 +409,11 @@ impl SysTick {
 
     /// Bring the counter to `now`; true when it reached 0 with TICKINT set.
     fn advance(&mut self, now: u64, core_hz: u32) -> bool {
-        let hz = if self.ctrl & 4 != 0 { core_hz } else { core_hz / 8 };
+        let hz = if self.ctrl & 4 != 0 {
+            core_hz
+        } else {
+            core_hz / 8
+        };
         let zeros = self.sync(now);
         self.tick_t = t_per_cycle(hz.max(1));
         zeros > 0 && self.ctrl & 2 != 0

@@ -43,7 +43,11 @@ impl Log {
                         .level()
                         .map(|l| l.as_str().to_uppercase())
                         .unwrap_or_else(|| "PRINT".into());
-                    let line = format!("{:>12.3} ms {level:<5} {}", t_us / 1000.0, frame.display_message());
+                    let line = format!(
+                        "{:>12.3} ms {level:<5} {}",
+                        t_us / 1000.0,
+                        frame.display_message()
+                    );
                     if self.echo {
                         eprintln!("{line}");
                     }

@@ -71,7 +71,10 @@ impl<'a> Session<'a> {
 
     /// The message for a stop, with the last lines of the defmt log.
     pub fn stopped(&self, stop: Stop) -> String {
-        let mut msg = format!("the board stopped at {:.3} ms: {stop}", self.m.now() as f64 / T_PER_MS as f64);
+        let mut msg = format!(
+            "the board stopped at {:.3} ms: {stop}",
+            self.m.now() as f64 / T_PER_MS as f64
+        );
         if let Some(log) = &self.m.state().log {
             for l in log.lines.iter().rev().take(5).rev() {
                 msg.push_str("\n  log: ");
@@ -118,7 +121,10 @@ impl<'a> Session<'a> {
         loop {
             self.run_for(T_PER_MS)?;
             got.push_str(&self.take_received());
-            if got.lines().any(|l| l.trim() == "ok" || l.trim().starts_with("error:")) {
+            if got
+                .lines()
+                .any(|l| l.trim() == "ok" || l.trim().starts_with("error:"))
+            {
                 return Ok(got);
             }
             if self.now() >= limit {

@@ -180,7 +180,17 @@ impl Host {
         self.push(0x80, 6, 0x0100, 0, 64, Purpose::DeviceHead, 0);
     }
 
-    fn push(&mut self, bm: u8, req: u8, value: u16, index: u16, len: u16, purpose: Purpose, addr: u8) {
+    #[allow(clippy::too_many_arguments)] // the SETUP packet's five fields, plus who asks
+    fn push(
+        &mut self,
+        bm: u8,
+        req: u8,
+        value: u16,
+        index: u16,
+        len: u16,
+        purpose: Purpose,
+        addr: u8,
+    ) {
         self.push_out(setup(bm, req, value, index, len), Vec::new(), purpose, addr);
     }
 
@@ -228,7 +238,15 @@ impl Host {
             if self.dtr_sent != Some(self.port_open) && self.control.is_empty() {
                 let v = if self.port_open { 3 } else { 0 };
                 let iface = u16::from(self.comm_interface);
-                self.push(0x21, 0x22, v, iface, 0, Purpose::LineState(self.port_open), ADDRESS);
+                self.push(
+                    0x21,
+                    0x22,
+                    v,
+                    iface,
+                    0,
+                    Purpose::LineState(self.port_open),
+                    ADDRESS,
+                );
                 self.dtr_sent = Some(self.port_open);
             }
             self.bulk(t, dev);
@@ -245,7 +263,11 @@ impl Host {
                     self.tx.drain(..n);
                     self.out_toggle = !self.out_toggle;
                     if let Some(p) = &mut self.packets {
-                        p.push(Packet { t, out: true, data: chunk });
+                        p.push(Packet {
+                            t,
+                            out: true,
+                            data: chunk,
+                        });
                     }
                 }
             }
@@ -256,7 +278,11 @@ impl Host {
                     if toggle == self.in_toggle {
                         self.in_toggle = !self.in_toggle;
                         if let Some(p) = &mut self.packets {
-                            p.push(Packet { t, out: false, data: data.clone() });
+                            p.push(Packet {
+                                t,
+                                out: false,
+                                data: data.clone(),
+                            });
                         }
                         self.rx.extend_from_slice(&data);
                     }
@@ -307,7 +333,11 @@ impl Host {
                 let h = dev.out(c.addr, 0, c.toggle, &c.out[at..end]);
                 if h == Handshake::Ack {
                     c.toggle = !c.toggle;
-                    c.stage = if end >= c.out.len() { Stage::StatusIn } else { Stage::DataOut(end) };
+                    c.stage = if end >= c.out.len() {
+                        Stage::StatusIn
+                    } else {
+                        Stage::DataOut(end)
+                    };
                 }
                 h
             }
@@ -365,11 +395,22 @@ impl Host {
                 self.push(0x80, 6, 0x0200, 0, 9, Purpose::ConfigHead, ADDRESS);
                 self.push(0x80, 6, 0x0300, 0, 255, Purpose::Strings, ADDRESS);
                 if product != 0 {
-                    self.push(0x80, 6, 0x0300 | u16::from(product), 0x0409, 255, Purpose::Product(product), ADDRESS);
+                    self.push(
+                        0x80,
+                        6,
+                        0x0300 | u16::from(product),
+                        0x0409,
+                        255,
+                        Purpose::Product(product),
+                        ADDRESS,
+                    );
                 }
             }
             Purpose::ConfigHead => {
-                let total = u16::from_le_bytes([d.get(2).copied().unwrap_or(9), d.get(3).copied().unwrap_or(0)]);
+                let total = u16::from_le_bytes([
+                    d.get(2).copied().unwrap_or(9),
+                    d.get(3).copied().unwrap_or(0),
+                ]);
                 self.push(0x80, 6, 0x0200, 0, total, Purpose::Config, ADDRESS);
             }
             Purpose::Config => {
@@ -391,7 +432,12 @@ impl Host {
                 // 115200 baud, 1 stop bit, no parity, 8 data bits.
                 let coding = vec![0x00, 0xC2, 0x01, 0x00, 0, 0, 8];
                 let iface = u16::from(self.comm_interface);
-                self.push_out(setup(0x21, 0x20, 0, iface, 7), coding, Purpose::LineCoding, ADDRESS);
+                self.push_out(
+                    setup(0x21, 0x20, 0, iface, 7),
+                    coding,
+                    Purpose::LineCoding,
+                    ADDRESS,
+                );
             }
             Purpose::LineCoding => {
                 self.configured = true;

@@ -101,7 +101,9 @@ impl Flash {
             let at = addr.checked_sub(BASE).ok_or("below flash")? as usize;
             let end = at + bytes.len();
             if end > SIZE {
-                return Err(format!("segment at 0x{addr:08X} is outside the 128 KB flash"));
+                return Err(format!(
+                    "segment at 0x{addr:08X} is outside the 128 KB flash"
+                ));
             }
             ranges.push((at, end));
         }
@@ -237,7 +239,7 @@ impl Flash {
                 BASE as usize + offset
             )));
         }
-        if size != 2 || offset % 2 != 0 {
+        if size != 2 || !offset.is_multiple_of(2) {
             return Err(BusError(format!(
                 "flash programming takes half-words only ({size}-byte write at 0x{:08X})",
                 BASE as usize + offset

@@ -49,7 +49,9 @@ impl Iwdg {
             0x00 => 0,
             0x04 => self.pr,
             0x08 => self.rlr,
-            0x0C => u32::from(now < self.pr_busy_until) | (u32::from(now < self.rlr_busy_until) << 1),
+            0x0C => {
+                u32::from(now < self.pr_busy_until) | (u32::from(now < self.rlr_busy_until) << 1)
+            }
             _ => return Err(unknown("IWDG", off)),
         })
     }

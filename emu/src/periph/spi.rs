@@ -129,7 +129,10 @@ impl Spi {
                     return Err(BusError(format!("{}: CRC is not modelled", self.name)));
                 }
                 if v & (1 << 6) != 0 && v & (1 << 2) == 0 {
-                    return Err(BusError(format!("{}: slave mode is not modelled", self.name)));
+                    return Err(BusError(format!(
+                        "{}: slave mode is not modelled",
+                        self.name
+                    )));
                 }
                 self.cr1 = v & 0xFFFF;
                 self.load(now);

@@ -77,7 +77,11 @@ impl St7920 {
             return Ok(());
         }
         let rs = start & 2 != 0;
-        let exec_us = if rs { self.data(value)? } else { self.instruction(value) };
+        let exec_us = if rs {
+            self.data(value)?
+        } else {
+            self.instruction(value)
+        };
         self.busy_until = t + exec_us * T_PER_US;
         Ok(())
     }
@@ -121,7 +125,9 @@ impl St7920 {
 
     fn data(&mut self, d: u8) -> Result<u64, BusError> {
         if !self.extended {
-            return Err(BusError("ST7920: text (DDRAM) writes are not modelled".into()));
+            return Err(BusError(
+                "ST7920: text (DDRAM) writes are not modelled".into(),
+            ));
         }
         self.writes += 1;
         match self.high.take() {
@@ -139,7 +145,11 @@ impl St7920 {
         if !(self.graphics_on && self.display_on) || x >= 128 || y >= 64 {
             return false;
         }
-        let (row, word) = if y < 32 { (y, x / 16) } else { (y - 32, 8 + x / 16) };
+        let (row, word) = if y < 32 {
+            (y, x / 16)
+        } else {
+            (y - 32, 8 + x / 16)
+        };
         self.gdram[row][word] & (0x8000 >> (x % 16)) != 0
     }
 }

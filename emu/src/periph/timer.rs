@@ -119,7 +119,11 @@ impl Timer {
             return None;
         }
         let cnt = self.cnt;
-        let top = if cnt > self.arr_active { 0xFFFF } else { self.arr_active };
+        let top = if cnt > self.arr_active {
+            0xFFFF
+        } else {
+            self.arr_active
+        };
         let mut k = u64::from(top - cnt) + 1;
         for ch in 0..4 {
             let c = self.ccr_active[ch];
@@ -132,7 +136,8 @@ impl Timer {
 
     /// The time of the next event (flag, interrupt or output edge).
     pub fn next_event(&self) -> Option<u64> {
-        self.counts_to_next().map(|k| self.since + k * self.count_t())
+        self.counts_to_next()
+            .map(|k| self.since + k * self.count_t())
     }
 
     /// Process every event up to `now`, collecting output edges.
@@ -142,7 +147,11 @@ impl Timer {
             if t > now {
                 break;
             }
-            let top = if self.cnt > self.arr_active { 0xFFFF } else { self.arr_active };
+            let top = if self.cnt > self.arr_active {
+                0xFFFF
+            } else {
+                self.arr_active
+            };
             let next = u64::from(self.cnt) + k;
             self.since = t;
             if next > u64::from(top) {
@@ -283,13 +292,19 @@ impl Timer {
             0x04 => self.cr2 = v16,
             0x08 => {
                 if v & 7 != 0 {
-                    return Err(BusError(format!("{}: slave mode is not modelled", self.name)));
+                    return Err(BusError(format!(
+                        "{}: slave mode is not modelled",
+                        self.name
+                    )));
                 }
                 self.smcr = v16;
             }
             0x0C => {
                 if v & 0x7F00 != 0 {
-                    return Err(BusError(format!("{}: DMA requests are not modelled", self.name)));
+                    return Err(BusError(format!(
+                        "{}: DMA requests are not modelled",
+                        self.name
+                    )));
                 }
                 self.dier = v16;
             }
@@ -308,7 +323,10 @@ impl Timer {
             0x18 | 0x1C => {
                 let i = ((off - 0x18) / 4) as usize;
                 if v & 0x0303 != 0 {
-                    return Err(BusError(format!("{}: input capture is not modelled", self.name)));
+                    return Err(BusError(format!(
+                        "{}: input capture is not modelled",
+                        self.name
+                    )));
                 }
                 self.ccmr[i] = v16;
                 // Forced levels act at once.

@@ -216,7 +216,11 @@ impl Usb {
         let addr = self.pma_word(self.bt(i, 2)) as usize;
         let count = self.pma_word(self.bt(i, 3));
         let blocks = usize::from((count >> 10) & 0x1F);
-        let cap = if count & 0x8000 != 0 { 32 * (blocks + 1) } else { 2 * blocks };
+        let cap = if count & 0x8000 != 0 {
+            32 * (blocks + 1)
+        } else {
+            2 * blocks
+        };
         (addr, cap)
     }
 
@@ -291,7 +295,9 @@ impl Usb {
         }
         let addr_tx = self.pma_word(self.bt(i, 0)) as usize;
         let count = (self.pma_word(self.bt(i, 1)) & 0x3FF) as usize;
-        let data = (0..count).map(|k| self.pma[(addr_tx + k) % PMA_BYTES]).collect();
+        let data = (0..count)
+            .map(|k| self.pma[(addr_tx + k) % PMA_BYTES])
+            .collect();
         let toggle = r & DTOG_TX != 0;
         self.epr[i] = (((r | CTR_TX) ^ DTOG_TX) & !STAT_TX) | (NAK << 4);
         Ok((data, toggle))
