@@ -20,7 +20,7 @@
 use crate::board::{self, StepPort, StepTimer};
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicU32, Ordering};
-use inkstep_core::interp::Tick;
+use inkstep_core::interpolation::Tick;
 use inkstep_core::link::StepSide;
 use inkstep_core::motion::StepPos;
 use inkstep_core::stepper::exec::Executor;

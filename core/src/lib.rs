@@ -3,7 +3,7 @@
 //! `no_std` and allocation-free so that the firmware, the simulator and the host tests
 //! all run this one copy of the logic. Modules are grouped by responsibility:
 //! - the motion contract between move producers and the planner: [`motion`]
-//! - exact interpolation in integer step space: [`interp`]
+//! - exact interpolation in integer step space: [`interpolation`]
 //! - look-ahead planning, junctions and velocity profiles: [`planner`]
 //! - step generation (segment preparation, the step interrupt's work): [`stepper`]
 //! - task-to-interrupt rings (the USB byte stream; their shared index ordering): [`ring`]
@@ -33,7 +33,7 @@ pub mod fmath;
 pub mod gcode;
 pub mod hmi;
 pub mod in_place;
-pub mod interp;
+pub mod interpolation;
 pub mod keypad;
 pub mod link;
 pub mod machine;

@@ -11,7 +11,7 @@
 //! executor's count. Owned by the simulator's issue; the firmware's prep task uses it
 //! through the same [`StepSide`] trait.
 
-use crate::interp::Tick;
+use crate::interpolation::Tick;
 use crate::machine::{Command, MotionControl, QueueFull};
 use crate::motion::{Move, Path, StepPos};
 use crate::planner::{AxisConfig, PlanError, Planner, PlannerConfig, Shape, PLANNER_BLOCKS};
@@ -81,8 +81,8 @@ pub fn planner_config(s: &Settings) -> PlannerConfig {
             AccelProfile::SCurve => Shape::Cosine,
         },
         method: match s.interpolation() {
-            Interpolation::PointByPoint => crate::interp::Method::Classic,
-            Interpolation::Dda => crate::interp::Method::Dda,
+            Interpolation::PointByPoint => crate::interpolation::Method::Classic,
+            Interpolation::Dda => crate::interpolation::Method::Dda,
         },
     }
 }

@@ -20,7 +20,7 @@
 pub mod geometry;
 pub mod profile;
 
-use crate::interp::Method;
+use crate::interpolation::Method;
 use crate::motion::{Feed, Move, StepPos, AXES, POS_LIMIT};
 use heapless::Deque;
 pub use profile::{Profile, Shape};
