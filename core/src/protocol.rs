@@ -30,11 +30,11 @@
 //! The e-stop interrupt stops the step engine itself before the protocol task
 //! learns of it through `set_inputs`.
 
-use crate::gcode::interp::round_i32;
 use crate::gcode::{LineCleaner, Status};
 use crate::machine::state::Event;
 use crate::machine::{Inputs, Machine, MotionControl, RunState};
 use crate::motion::AXES;
+use crate::settings::round_i32;
 use crate::settings::{put_decimal, put_int, write_fixed3, Settings, Sink};
 use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;

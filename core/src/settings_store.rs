@@ -24,7 +24,7 @@
 //! saves while the machine is at rest. [`BlockingFlash`] wraps the blocking
 //! `embedded-storage` flash (the stm32f1xx-hal writer, the host mocks).
 
-use crate::gcode::interp::Coords;
+use crate::gcode::interpreter::Coords;
 use crate::motion::AXES;
 use crate::protocol::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::settings::{crc32, Settings, IMAGE_LEN};

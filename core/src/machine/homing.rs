@@ -7,7 +7,7 @@
 //! the planner, the alarms and the position it sets at the end.
 
 use super::{Command, MotionControl};
-use crate::gcode::interp::mm_to_steps;
+use crate::gcode::units::mm_to_steps;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::Settings;
 

@@ -9,9 +9,9 @@
 
 use super::homing::{Homing, HomingError, Progress};
 use super::{Command, MotionControl};
-use crate::gcode::interp::to_mm;
-use crate::gcode::interp::Room;
-use crate::gcode::{Interp, Outcome, Reject, Status, Stop};
+use crate::gcode::interpreter::Room;
+use crate::gcode::units::to_mm;
+use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
 use crate::motion::{Move, AXES};
 use crate::settings::Settings;
 use core::mem::MaybeUninit;
@@ -103,7 +103,7 @@ struct Job {
 /// The machine.
 pub struct Machine {
     settings: Settings,
-    interp: Interp,
+    interp: Interpreter,
     /// In the alarm state (G-code locked out until `$X`, `$H` or a cleared alarm).
     locked: bool,
     /// The alarm that caused the lock, if any (the power-up lock has none).
@@ -184,7 +184,7 @@ impl Machine {
         let m = unsafe {
             addr_of_mut!((*p).settings).write(settings.clone());
             // A const template (copied from flash) instead of field-by-field stores.
-            addr_of_mut!((*p).interp).write(const { Interp::new() });
+            addr_of_mut!((*p).interp).write(const { Interpreter::new() });
             addr_of_mut!((*p).locked).write(false);
             addr_of_mut!((*p).alarm).write(None);
             addr_of_mut!((*p).needs_reset).write(false);
@@ -236,11 +236,11 @@ impl Machine {
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
-    pub fn interp(&self) -> &Interp {
+    pub fn interp(&self) -> &Interpreter {
         &self.interp
     }
     /// Replace the coordinate data (loaded from flash at boot).
-    pub fn set_coords(&mut self, c: crate::gcode::interp::Coords) {
+    pub fn set_coords(&mut self, c: crate::gcode::interpreter::Coords) {
         self.interp.set_coords(c);
     }
     /// The alarm that locked the machine, while locked.
@@ -337,7 +337,7 @@ impl Machine {
     /// `$RST=#`: zero the work offsets and stored positions.
     pub fn clear_coords(&mut self) {
         self.interp
-            .set_coords(crate::gcode::interp::Coords::default());
+            .set_coords(crate::gcode::interpreter::Coords::default());
         self.coords_dirty = true;
     }
 
@@ -658,7 +658,7 @@ impl Machine {
     /// Queue a command made outside G-code (the keypad's drawing modes). Refused in
     /// alarm, homing, jogging or check mode; a line target outside travel with soft
     /// limits on is refused with `error:15` semantics ([`Status::TravelExceeded`]);
-    /// shapes check their own extent with [`crate::gcode::interp::within_travel`].
+    /// shapes check their own extent with [`crate::gcode::units::within_travel`].
     /// The interpreter continues from the command's end point.
     pub fn queue<M: MotionControl>(
         &mut self,
@@ -675,7 +675,7 @@ impl Machine {
         if let Command::Move(mv) = &cmd {
             let end = to_mm(&mv.target, &self.settings);
             if self.settings.soft_limits()
-                && !crate::gcode::interp::within_travel(&end, &self.settings)
+                && !crate::gcode::units::within_travel(&end, &self.settings)
             {
                 return Err(Status::TravelExceeded);
             }
