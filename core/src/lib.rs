@@ -17,13 +17,13 @@
 //! - standalone use: [`keypad`] (scan and debounce), [`hmi`] (menus and drawing modes),
 //!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
 //! - the wiring of protocol, keypad, HMI and planner shared by firmware and simulator:
-//!   [`controller`], and the planner behind the machine's motion trait: [`link`]
+//!   [`controller`], and the motion pipeline behind the machine's motion trait: [`pipeline`]
 //! - construction of those large structs in their final place: [`in_place`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
 // Denied, not forbidden: the in-place constructors (`init_in` of the controller,
-// protocol, machine, link and planner, and `in_place::build`) allow it locally to
+// protocol, machine, pipeline and planner, and `in_place::build`) allow it locally to
 // build the firmware's static cells field by field instead of on init's stack.
 #![deny(unsafe_code)]
 
@@ -35,9 +35,9 @@ pub mod hmi;
 pub mod in_place;
 pub mod interpolation;
 pub mod keypad;
-pub mod link;
 pub mod machine;
 pub mod motion;
+pub mod pipeline;
 pub mod planner;
 pub mod protocol;
 pub mod refprog;

@@ -149,7 +149,7 @@ pub fn run_on_with(
         alarms: sender.alarms,
         messages: sender.messages,
         lines,
-        final_pos: board.link.side().exec.position(),
+        final_pos: board.pipeline.side().exec.position(),
         end: board.now(),
         timed_out,
         settings: board.ctl.protocol().machine().settings().clone(),
