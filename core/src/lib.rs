@@ -10,14 +10,17 @@
 //! - measurement of step traces against an ideal path: [`analysis`]
 //! - the benchmark programs' G-code subset: [`refprog`]
 //! - libm-free f32 math (sine, cosine, arctangent, square root): [`fmath`]
-//! - machine settings and their flash store: [`settings`], [`settings_store`]
+//! - decimal text without `core::fmt` (replies, listings): [`decimal`]; the stores'
+//!   checksum: [`crc`]
+//! - machine settings (the `$n` table, checks, byte image) and their flash store: [`settings`], [`settings_store`]
 //! - G-code parsing and interpretation: [`gcode`]
 //! - machine state, safety and the planner interface: [`machine`]
 //! - the Grbl 1.1 serial protocol: [`protocol`]
 //! - standalone use: [`keypad`] (scan and debounce), [`hmi`] (menus and drawing modes),
 //!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
 //! - the wiring of protocol, keypad, HMI and planner shared by firmware and simulator:
-//!   [`controller`], and the motion pipeline behind the machine's motion trait: [`pipeline`]
+//!   [`controller`], and the motion pipeline behind the machine's motion trait:
+//!   [`pipeline`]
 //! - construction of those large structs in their final place: [`in_place`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
@@ -29,6 +32,8 @@
 
 pub mod analysis;
 pub mod controller;
+pub mod crc;
+pub mod decimal;
 pub mod fmath;
 pub mod gcode;
 pub mod hmi;

@@ -17,10 +17,11 @@ use super::modal::{
 use super::parser::Block;
 use super::units::{in_step_range, mm_to_steps, to_mm, to_steps, within_travel, Reach};
 use super::Status;
+use crate::decimal::{put_int, round_i32, to_u32, Sink};
 use crate::fmath;
 use crate::machine::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
-use crate::settings::{put_int, round_i32, to_u32, PenMode, Settings, Sink};
+use crate::settings::{PenMode, Settings};
 use heapless::Vec;
 
 /// Most commands one block can queue (pen, G28 intermediate, G28 target, pen at M2).

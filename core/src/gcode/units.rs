@@ -2,9 +2,10 @@
 //! rounding never accumulates), the step range a target must stay in, and the travel
 //! limits that soft limits check.
 
+use crate::decimal::round_i32;
 use crate::fmath;
 use crate::motion::{StepPos, AXES};
-use crate::settings::{round_i32, Settings};
+use crate::settings::Settings;
 
 /// mm to steps for one axis, rounding half away from zero (saturating).
 #[inline(never)]

@@ -4,9 +4,10 @@
 
 use super::report::axis_triplet;
 use super::{OutWriter, Protocol, StartupLine, LINE_MAX, RX_BUFFER_SIZE, STARTUP_LINES, VERSION};
+use crate::decimal::{put_int, Sink};
 use crate::gcode::Status;
 use crate::machine::{Machine, MotionControl, RunState};
-use crate::settings::{put_int, Settings, Sink};
+use crate::settings::Settings;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Listing {

@@ -34,10 +34,11 @@ mod commands;
 mod report;
 mod stream;
 
+use crate::decimal::{put_int, Sink};
 use crate::gcode::{LineCleaner, Status};
 use crate::machine::{Inputs, Machine, MotionControl};
 use crate::motion::AXES;
-use crate::settings::{put_int, Settings, Sink};
+use crate::settings::Settings;
 use commands::Listing;
 use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;

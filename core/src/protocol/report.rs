@@ -3,11 +3,11 @@
 //! (`<Idle|MPos:...|FS:...>`).
 
 use super::{OutWriter, Protocol, REFRESH_EVERY, RX_BUFFER_SIZE, WELCOME};
+use crate::decimal::{put_decimal, put_int, round_i32, write_fixed3, Sink};
 use crate::gcode::Status;
 use crate::machine::state::Event;
 use crate::machine::{MotionControl, RunState};
 use crate::motion::AXES;
-use crate::settings::{put_decimal, put_int, round_i32, write_fixed3, Sink};
 
 pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
     for (i, x) in v.iter().enumerate() {
