@@ -1,6 +1,7 @@
 //! Machine control: the [`MotionControl`] trait that the planner implements, the
-//! commands queued through it, and the machine state ([`state`]): alarms, hold, jog,
-//! homing, check mode and the safety inputs.
+//! commands queued through it, the machine state ([`state`]: idle, run, hold, jog,
+//! homing, alarm, check mode and their rules), its alarms and safety inputs
+//! ([`safety`]), and the homing cycle ([`homing`]).
 //!
 //! The trait is deliberately small so that the G-code interpreter, the protocol and the
 //! keypad modes all drive the same planner the same way, and so that tests can use a
@@ -8,11 +9,13 @@
 //! [`Command`].
 
 pub mod homing;
+pub mod safety;
 pub mod state;
 
 use crate::motion::{Move, StepPos};
 
-pub use state::{Alarm, Inputs, Machine, RunState};
+pub use safety::{Alarm, Inputs};
+pub use state::{Machine, RunState};
 
 /// One entry of the planner queue.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -8,6 +8,7 @@
 //! Time comes in as milliseconds from the caller (`now_ms`), so tests run in virtual time.
 
 use super::homing::{Homing, HomingError, Progress};
+use super::safety::{Alarm, Inputs};
 use super::{Command, MotionControl};
 use crate::gcode::interpreter::Room;
 use crate::gcode::units::to_mm;
@@ -17,31 +18,6 @@ use crate::settings::Settings;
 use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 use heapless::Deque;
-
-/// Alarms, with Grbl's numbers (10 is inkstep's e-stop, as grblHAL numbers it).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[repr(u8)]
-pub enum Alarm {
-    HardLimit = 1,
-    SoftLimit = 2,
-    AbortCycle = 3,
-    HomingFailReset = 6,
-    HomingFailDoor = 7,
-    HomingFailPullOff = 8,
-    HomingFailApproach = 9,
-    EStop = 10,
-}
-
-impl Alarm {
-    pub fn code(self) -> u8 {
-        self as u8
-    }
-    /// Critical alarms need a soft reset before `$X`/`$H` (position may be lost).
-    fn critical(self) -> bool {
-        matches!(self, Alarm::HardLimit | Alarm::EStop)
-    }
-}
 
 /// The state shown in status reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,17 +39,6 @@ pub enum RunState {
     Alarm,
     Home,
     Check,
-}
-
-/// Input levels, already corrected for inversion (true = active).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Inputs {
-    pub estop: bool,
-    /// Limit/home switch per axis.
-    pub limits: [bool; AXES],
-    /// The SYNC / feed-hold input: pause while active.
-    pub feed_hold: bool,
-    pub cycle_start: bool,
 }
 
 /// Something the protocol should tell the host.
