@@ -60,10 +60,10 @@ mod app {
     use core::mem::MaybeUninit;
     use cortex_m::peripheral::syst::SystClkSource;
     use inkstep_core::controller::Controller;
+    use inkstep_core::gcode::STARTUP_LINES;
     use inkstep_core::hmi::buzzer::Buzzer;
     use inkstep_core::machine::Inputs;
     use inkstep_core::pipeline::Pipeline;
-    use inkstep_core::protocol::STARTUP_LINES;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
     use inkstep_core::settings::{OutputMode, PenMode, Settings};
     use inkstep_core::settings_store::{BlockingFlash, SettingsStore};

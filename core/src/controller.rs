@@ -15,7 +15,8 @@
 use crate::decimal::{put_int, Sink};
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
 use crate::keypad::{KeyEvent, Keypad, KeypadConfig};
-use crate::machine::{Command, MotionControl, RunState};
+use crate::machine::{MotionControl, RunState};
+use crate::motion::Command;
 use crate::motion::{X, Y, Z};
 use crate::protocol::Protocol;
 use crate::settings::Settings;

@@ -12,7 +12,8 @@
 //! through the same [`StepSide`] trait.
 
 use crate::interpolation::Tick;
-use crate::machine::{Command, MotionControl, QueueFull};
+use crate::machine::{MotionControl, QueueFull};
+use crate::motion::Command;
 use crate::motion::{Move, Path, StepPos};
 use crate::planner::{AxisConfig, PlanError, Planner, PlannerConfig, Shape, PLANNER_BLOCKS};
 use crate::settings::{AccelProfile, Interpolation, Settings};

@@ -26,8 +26,8 @@
 
 use crate::crc::crc32;
 use crate::gcode::interpreter::Coords;
+use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::motion::AXES;
-use crate::protocol::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::settings::{Settings, IMAGE_LEN};
 use core::future::Future;
 use core::ops::Range;

@@ -4,7 +4,8 @@
 mod common;
 
 use common::{drain, send, FakePlanner};
-use inkstep_core::machine::{Command, Inputs, MotionControl, RunState};
+use inkstep_core::machine::{Inputs, MotionControl, RunState};
+use inkstep_core::motion::Command;
 use inkstep_core::motion::{Feed, Move, Path};
 use inkstep_core::protocol::{Protocol, RX_BUFFER_SIZE, WELCOME};
 use inkstep_core::settings::Settings;

@@ -19,7 +19,7 @@ use super::units::{in_step_range, mm_to_steps, to_mm, to_steps, within_travel, R
 use super::Status;
 use crate::decimal::{put_int, round_i32, to_u32, Sink};
 use crate::fmath;
-use crate::machine::Command;
+use crate::motion::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::{PenMode, Settings};
 use heapless::Vec;

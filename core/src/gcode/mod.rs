@@ -15,6 +15,13 @@ pub mod units;
 pub use interpreter::{Interpreter, Outcome, Reject, Stop};
 pub use parser::{Block, LineCleaner};
 
+/// Longest line after cleaning (Grbl's limit); longer lines get `error:11`.
+pub const LINE_MAX: usize = 80;
+/// Number of `$N` startup lines: G-code lines kept in flash and run after each reset.
+pub const STARTUP_LINES: usize = 2;
+/// A startup line as stored.
+pub type StartupLine = heapless::String<LINE_MAX>;
+
 /// Grbl 1.1 status codes, sent as `error:N`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

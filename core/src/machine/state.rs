@@ -9,10 +9,11 @@
 
 use super::homing::{Homing, HomingError, Progress};
 use super::safety::{Alarm, Inputs};
-use super::{Command, MotionControl};
+use super::MotionControl;
 use crate::gcode::interpreter::Room;
 use crate::gcode::units::to_mm;
 use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
+use crate::motion::Command;
 use crate::motion::{Move, AXES};
 use crate::settings::Settings;
 use core::mem::MaybeUninit;

@@ -3,9 +3,10 @@
 //! `$n=v`, and the startup lines run after a reset.
 
 use super::report::axis_triplet;
-use super::{OutWriter, Protocol, StartupLine, LINE_MAX, RX_BUFFER_SIZE, STARTUP_LINES, VERSION};
+use super::{OutWriter, Protocol, RX_BUFFER_SIZE, VERSION};
 use crate::decimal::{put_int, Sink};
 use crate::gcode::Status;
+use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::machine::{Machine, MotionControl, RunState};
 use crate::settings::Settings;
 

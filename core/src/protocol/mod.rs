@@ -35,7 +35,7 @@ mod report;
 mod stream;
 
 use crate::decimal::{put_int, Sink};
-use crate::gcode::{LineCleaner, Status};
+use crate::gcode::{LineCleaner, StartupLine, Status, LINE_MAX, STARTUP_LINES};
 use crate::machine::{Inputs, Machine, MotionControl};
 use crate::motion::AXES;
 use crate::settings::Settings;
@@ -46,8 +46,6 @@ use heapless::{Deque, String, Vec};
 
 /// Receive buffer size advertised to character-counting senders (`Bf:` and `$I`).
 pub const RX_BUFFER_SIZE: usize = 128;
-/// Longest line after cleaning (Grbl's limit); longer lines get `error:11`.
-pub const LINE_MAX: usize = 80;
 /// Output buffer size: the reserve below plus room for a few replies. Replies wait here
 /// until the USB task takes them (64 bytes a millisecond); a long listing continues as
 /// room frees up.
@@ -55,17 +53,12 @@ pub const OUT_CAP: usize = 384;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
 const OUT_RESERVE: usize = 256;
-/// Number of `$N` startup lines.
-pub const STARTUP_LINES: usize = 2;
 /// Status reports between repeated `WCO:` / `Ov:` fields.
 const REFRESH_EVERY: u8 = 10;
 
 /// The welcome line that senders look for.
 pub const WELCOME: &str = "Grbl 1.1h ['$' for help]";
 const VERSION: &str = env!("CARGO_PKG_VERSION");
-
-/// A startup line as stored.
-pub type StartupLine = String<LINE_MAX>;
 
 /// The protocol handler.
 pub struct Protocol {
