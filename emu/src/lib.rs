@@ -8,7 +8,6 @@ pub mod elf;
 pub mod machine;
 pub mod nvic;
 pub mod periph;
-pub mod port;
 pub mod rtt;
 pub mod session;
 pub mod usb_host;

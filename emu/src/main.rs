@@ -4,7 +4,8 @@
 use clap::{Parser, Subcommand};
 use inkstep_emu::clock::{T_PER_MS, T_PER_S};
 use inkstep_emu::session::{product_elf, Session};
-use inkstep_sim::sender::{Flow, Sender};
+use inkstep_serial::grbl::Reply;
+use inkstep_serial::sender::{Answer, Event, Flow, Sender};
 use inkstep_sim::trace::TraceWriter;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -117,8 +118,26 @@ fn cmd_run(
     } else {
         Flow::SendResponse
     };
-    let mut sender = Sender::new(&text, flow);
-    sender.received(banner.as_bytes());
+    let mut sender = Sender::new(flow);
+    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
+    for (i, l) in lines.iter().enumerate() {
+        sender.push(i + 1, *l);
+    }
+    let mut errors: Vec<String> = Vec::new();
+    let mut alarms: Vec<String> = Vec::new();
+    let mut note =
+        |events: Vec<Event<usize>>, errors: &mut Vec<String>, alarms: &mut Vec<String>| {
+            for e in events {
+                match e {
+                    Event::Answered(n, Answer::Error(code)) => {
+                        errors.push(format!("line {n}: {} -> error:{code}", lines[n - 1]))
+                    }
+                    Event::Reply(Reply::Alarm(code)) => alarms.push(format!("ALARM:{code}")),
+                    _ => {}
+                }
+            }
+        };
+    note(sender.received(banner.as_bytes()), &mut errors, &mut alarms);
     let start = s.now();
     let mut next_lcd = s.now();
     let mut frame = 0;
@@ -130,7 +149,7 @@ fn cmd_run(
             // on the PC does; the USB timing model is in emu/README.md.
             s.run_for(inkstep_emu::usb_host::SLOT_T)?;
             let got = s.take_received();
-            sender.received(got.as_bytes());
+            note(sender.received(got.as_bytes()), &mut errors, &mut alarms);
             if let Some(dir) = lcd {
                 if s.now() >= next_lcd {
                     save_lcd(&s, dir, &format!("{frame:04}"))?;
@@ -161,26 +180,23 @@ fn cmd_run(
     let pos = s.m.state().board.pos;
     println!(
         "{} lines, {} errors, {} alarms; {} step events, job time {job:.4} s, final position {},{},{}; {:.1} ms virtual",
-        sender.total_lines(),
-        sender.errors.len(),
-        sender.alarms.len(),
+        lines.len(),
+        errors.len(),
+        alarms.len(),
         steps.len(),
         pos[0],
         pos[1],
         pos[2],
         s.now() as f64 / T_PER_MS as f64,
     );
-    for e in &sender.errors {
-        println!("line {}: {} -> {}", e.line_no, e.text, e.response);
-    }
-    for a in &sender.alarms {
-        println!("{a}");
+    for e in errors.iter().chain(&alarms) {
+        println!("{e}");
     }
     if let Err(e) = result {
         eprintln!("error: {e}");
         return Ok(ExitCode::FAILURE);
     }
-    Ok(if sender.errors.is_empty() && sender.alarms.is_empty() {
+    Ok(if errors.is_empty() && alarms.is_empty() {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
@@ -209,8 +225,7 @@ fn cmd_serve(
     log: Option<&Path>,
     flash: Option<&Path>,
 ) -> Result<ExitCode, String> {
-    use inkstep_emu::port::OpenWatch;
-    use inkstep_sim::pty::Pty;
+    use inkstep_serial::pty::Pty;
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
     if !(speed > 0.0 && speed.is_finite()) {
@@ -224,7 +239,6 @@ fn cmd_serve(
     let mut pty = Pty::open().map_err(|e| format!("pty: {e}"))?;
     pty.link_at(link)
         .map_err(|e| format!("{}: {e}", link.display()))?;
-    let mut watch = OpenWatch::new(pty.path()).map_err(|e| format!("inotify: {e}"))?;
     let mut s = Session::new(&elf, flash)?;
     s.m.state_mut().echo_log = log.is_none();
     s.m.board().host.port_open = false;
@@ -240,8 +254,9 @@ fn cmd_serve(
     let mut buf = [0u8; 4096];
     let result = (|| -> Result<(), String> {
         while !stop.load(Ordering::Relaxed) {
-            let open = watch.is_open();
-            s.m.board().host.port_open = open;
+            // DTR is up while a program has the port open.
+            pty.client_events().map_err(|e| format!("pty: {e}"))?;
+            s.m.board().host.port_open = pty.clients() > 0;
             let n = pty.read_available(&mut buf).map_err(|e| e.to_string())?;
             if n > 0 {
                 s.send(&buf[..n]);
