@@ -125,18 +125,17 @@ fn cmd_run(
     }
     let mut errors: Vec<String> = Vec::new();
     let mut alarms: Vec<String> = Vec::new();
-    let mut note =
-        |events: Vec<Event<usize>>, errors: &mut Vec<String>, alarms: &mut Vec<String>| {
-            for e in events {
-                match e {
-                    Event::Answered(n, Answer::Error(code)) => {
-                        errors.push(format!("line {n}: {} -> error:{code}", lines[n - 1]))
-                    }
-                    Event::Reply(Reply::Alarm(code)) => alarms.push(format!("ALARM:{code}")),
-                    _ => {}
+    let note = |events: Vec<Event<usize>>, errors: &mut Vec<String>, alarms: &mut Vec<String>| {
+        for e in events {
+            match e {
+                Event::Answered(n, Answer::Error(code)) => {
+                    errors.push(format!("line {n}: {} -> error:{code}", lines[n - 1]))
                 }
+                Event::Reply(Reply::Alarm(code)) => alarms.push(format!("ALARM:{code}")),
+                _ => {}
             }
-        };
+        }
+    };
     note(sender.received(banner.as_bytes()), &mut errors, &mut alarms);
     let start = s.now();
     let mut next_lcd = s.now();
