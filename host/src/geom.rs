@@ -5,7 +5,7 @@
 //! so the planner, the font loaders and the readers all speak the same types.
 
 /// A point in the drawing plane.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Pt {
     pub x: f64,
     pub y: f64,

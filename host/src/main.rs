@@ -5,7 +5,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use inkstep_host::gcode_out::{to_gcode, GcodeOptions, Pen};
 use inkstep_host::geom::{pen_up_travel, Pt, Route, Stroke};
 use inkstep_host::plan::{plan, PlanOptions};
-use inkstep_host::{bench, preview, stream, svg_in, text, toolpath};
+use inkstep_host::{bench, preview, stream, svg_in, text, toolpath, web};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -35,6 +35,20 @@ enum Cmd {
     },
     /// List serial ports.
     Ports,
+    /// A web page for the machine (PC or phone): the drawing live, state,
+    /// controls, settings, and jobs from G-code, SVG or text.
+    Serve {
+        /// Serial port, e.g. /dev/ttyACM0 or the simulator's pty.
+        #[arg(long)]
+        port: String,
+        /// Address to listen on. On a loopback address the page is open; on
+        /// any other, controlling needs the token printed at start.
+        #[arg(long, default_value = "127.0.0.1:8080")]
+        listen: std::net::SocketAddr,
+        /// Without the token, show nothing (instead of a page to watch).
+        #[arg(long)]
+        private: bool,
+    },
     /// Text to G-code: Latin in a Hershey font, Chinese from stroke medians.
     Text {
         text: String,
@@ -201,6 +215,11 @@ fn main() -> Result<()> {
             status_hz,
         } => stream::send::run(&file, &port, baud, status_hz),
         Cmd::Ports => stream::send::list_ports(),
+        Cmd::Serve {
+            port,
+            listen,
+            private,
+        } => web::run(port, listen, private),
         Cmd::Text {
             text,
             size,

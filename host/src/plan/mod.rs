@@ -149,7 +149,11 @@ mod tests {
         // The direction of drawing is kept: (1,1) -> (0,1) as in the original.
         assert_eq!(s[0][1], Pt::new(0.0, 1.0));
         let route = Route::open(Pt::new(2.0, 2.0));
-        let planned = plan(std::slice::from_ref(&square), route, &PlanOptions::default());
+        let planned = plan(
+            std::slice::from_ref(&square),
+            route,
+            &PlanOptions::default(),
+        );
         assert!((pen_up_travel(&planned, route) - 2f64.sqrt()).abs() < 1e-12);
         // With a park, the loop starts (and ends) at the corner that minimises
         // the way in plus the way out: (0,1), sqrt(5) + 1 (not (1,1), sqrt(2) + 2).
