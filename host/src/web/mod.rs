@@ -120,6 +120,7 @@ fn announce(addr: SocketAddr, access: &Access, private: bool) {
         "without it, a browser may only watch"
     };
     println!("inkstep web view on {addr}: controlling needs the token ({watch})");
+    println!("  token: {token}");
     for h in &hosts {
         println!("  http://{h}/?token={token}");
     }
