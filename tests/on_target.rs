@@ -136,7 +136,7 @@ mod tests {
     #[test]
     fn settings_flash_round_trip(b: &mut Board) {
         use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
-        let page = board::SETTINGS_OFFSET + board::SETTINGS_FLASH_SIZE - board::FLASH_PAGE_SIZE;
+        let page = board::settings_pages().end - board::FLASH_PAGE_SIZE;
         defmt::unwrap!(b.flash.erase(page, page + board::FLASH_PAGE_SIZE));
         let mut buf = [0u8; 16];
         defmt::unwrap!(b.flash.read(page, &mut buf));
@@ -153,17 +153,23 @@ mod tests {
     #[test]
     fn settings_store_round_trip(b: &mut Board) {
         use inkstep_core::settings::Settings;
-        use inkstep_core::settings_store::{BlockingFlash, LoadStatus, SettingsStore, STORE_RANGE};
+        use inkstep_core::settings_store::{BlockingFlash, LoadStatus, SettingsStore};
         {
-            let mut store =
-                defmt::unwrap!(SettingsStore::new(BlockingFlash(&mut b.flash), STORE_RANGE).ok());
+            let mut store = defmt::unwrap!(SettingsStore::new(
+                BlockingFlash(&mut b.flash),
+                board::settings_pages()
+            )
+            .ok());
             let mut s = Settings::default();
             defmt::unwrap!(s.set(110, 4321.0).ok());
             defmt::unwrap!(store.save_settings(&s).ok());
         }
         // A fresh store over the same pages (as after a reset) loads what was saved.
-        let mut store =
-            defmt::unwrap!(SettingsStore::new(BlockingFlash(&mut b.flash), STORE_RANGE).ok());
+        let mut store = defmt::unwrap!(SettingsStore::new(
+            BlockingFlash(&mut b.flash),
+            board::settings_pages()
+        )
+        .ok());
         let (loaded, status) = store.load_settings();
         defmt::assert!(status == LoadStatus::Loaded);
         defmt::assert!(loaded.max_rate(0) == 4321.0);

@@ -2,7 +2,7 @@
 //!
 //! The Cortex-M3 has no FPU, so every f32 operation is a soft-float call, and libm's
 //! f32 functions lean on f64 kernels and Payne-Hanek reduction tables that drag the
-//! whole double-precision library (several KB) into a 48 KB image. These are the few
+//! whole double-precision library (several KB) into the image. These are the few
 //! functions the core needs, written to be small:
 //! - `sqrt`, `trunc`, `floor`, `ceil`, `round`, `abs` are exact (bit-identical to libm);
 //! - `hypot` is `sqrt(x² + y²)` in f32, within 1 ulp for the machine's ranges

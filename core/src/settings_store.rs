@@ -24,20 +24,16 @@
 //! saves while the machine is at rest. [`BlockingFlash`] wraps the blocking
 //! `embedded-storage` flash (the stm32f1xx-hal writer, the host mocks).
 
-use crate::gcode::interp::Coords;
+use crate::crc::crc32;
+use crate::gcode::interpreter::Coords;
+use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::motion::AXES;
-use crate::protocol::{StartupLine, LINE_MAX, STARTUP_LINES};
-use crate::settings::{crc32, Settings, IMAGE_LEN};
+use crate::settings::{Settings, IMAGE_LEN};
 use core::future::Future;
 use core::ops::Range;
 use core::pin::pin;
 use core::task::{Context, Poll, Waker};
 use embedded_storage::nor_flash::NorFlash;
-
-/// Flash range the firmware gives the store: the last four 1 KB pages of the 64 KB
-/// part (0x0800_F000..0x0801_0000), as offsets from the start of flash, which is how
-/// stm32f1xx-hal's flash writer addresses it.
-pub const STORE_RANGE: Range<u32> = 0xF000..0x1_0000;
 
 const KEY_SETTINGS: u8 = 0;
 const KEY_COORDS: u8 = 1;

@@ -5,10 +5,14 @@
 use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
-use inkstep_core::gcode::interp::Coords;
+use inkstep_core::gcode::interpreter::Coords;
 use inkstep_core::settings::Settings;
-use inkstep_core::settings_store::{BlockingFlash, LoadStatus, SettingsStore, STORE_RANGE};
+use inkstep_core::settings_store::{BlockingFlash, LoadStatus, SettingsStore};
+use std::ops::Range;
 
+/// The pages memory.x gives the store on the STM32F103CB (0x0801_F000..0x0802_0000), as
+/// flash offsets.
+const STORE_RANGE: Range<u32> = 0x1_F000..0x2_0000;
 const PAGE: usize = 1024;
 const BASE: u32 = STORE_RANGE.start;
 const SIZE: usize = (STORE_RANGE.end - STORE_RANGE.start) as usize;

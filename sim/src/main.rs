@@ -281,7 +281,7 @@ fn cmd_demo(out: &Path, keys: Option<&str>) -> Result<ExitCode, String> {
             (b - a) as f64 / TICK_HZ as f64
         );
     }
-    let pos = s.board.link.side().exec.position();
+    let pos = s.board.pipeline.side().exec.position();
     say!(
         "  virtual time {:.1} s, final position {},{},{} steps; ran in {:.2} s",
         s.board.now() as f64 / TICK_HZ as f64,

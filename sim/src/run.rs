@@ -183,7 +183,7 @@ pub fn run_on_with(
         alarms,
         messages,
         lines: lines.len(),
-        final_pos: board.link.side().exec.position(),
+        final_pos: board.pipeline.side().exec.position(),
         end: board.now(),
         timed_out,
         settings: board.ctl.protocol().machine().settings().clone(),
