@@ -276,8 +276,6 @@ impl Link {
                     // Read into the table, which every browser is sent.
                     self.sender.push(Origin::Listing, text);
                     self.answer(id, Ok(()));
-                } else if self.running.is_some() {
-                    self.answer(id, Err("a job is running".into()));
                 } else {
                     let setting = text.starts_with('$')
                         && text[1..].starts_with(|c: char| c.is_ascii_digit());
