@@ -10,6 +10,7 @@
 //! which is always a firmware bug.
 
 use crate::clock::t_per_cycle;
+use crate::debug::Debug;
 use crate::nvic::Nvic;
 use crate::periph::flash::{self, Flash, Op};
 use crate::periph::gpio::{exti_irq, Afio, Exti, Port};
@@ -63,6 +64,7 @@ pub struct Step {
 pub struct Board {
     pub now: u64,
     pub nvic: Nvic,
+    pub debug: Debug,
     pub rcc: Rcc,
     pub flash: Flash,
     pub gpio: [Port; 3],
@@ -108,6 +110,7 @@ impl Board {
         let mut b = Board {
             now: 0,
             nvic: Nvic::new(),
+            debug: Debug::default(),
             rcc: Rcc::new(),
             flash,
             gpio: [Port::new(), Port::new(), Port::new()],
@@ -542,6 +545,36 @@ impl Board {
         Ok(())
     }
 
+    /// The private peripheral bus at offset `off` from 0xE000_0000: the DWT, and the
+    /// system control space (NVIC, SCB, SysTick, DEMCR).
+    pub fn ppb_read(&mut self, off: u32, size: usize) -> Result<u32, BusError> {
+        let now = self.now;
+        let v = match off {
+            0xEDFC if size == 4 => Some(self.debug.read_demcr()),
+            0x1000..=0x1FFF if size == 4 => self.debug.read_dwt(off - 0x1000, now),
+            0xE000..=0xEFFF => self.nvic.read(off - 0xE000, size, now).ok(),
+            _ => None,
+        };
+        v.ok_or_else(|| ppb_unknown(off, size))
+    }
+
+    pub fn ppb_write(&mut self, off: u32, size: usize, v: u32) -> Result<(), BusError> {
+        let now = self.now;
+        let hz = self.rcc.hclk_hz();
+        let ok = match off {
+            0xEDFC if size == 4 => {
+                self.debug.write_demcr(v, now, hz);
+                Some(())
+            }
+            0x1000..=0x1FFF if size == 4 => self.debug.write_dwt(off - 0x1000, v, now, hz),
+            0xE000..=0xEFFF => self.nvic.write(off - 0xE000, size, v, now).ok(),
+            _ => None,
+        };
+        ok.ok_or_else(|| ppb_unknown(off, size))?;
+        self.update_irqs();
+        Ok(())
+    }
+
     /// System memory (0x1FFF_F000 page): the flash size register and the unique ID.
     pub fn system_read(&self, addr: u32, size: usize) -> Result<u32, BusError> {
         match (addr, size) {
@@ -552,6 +585,13 @@ impl Board {
             ))),
         }
     }
+}
+
+fn ppb_unknown(off: u32, size: usize) -> BusError {
+    BusError(format!(
+        "private peripheral bus: no register at 0x{:08X} ({size} bytes)",
+        0xE000_0000 + off
+    ))
 }
 
 /// The error for a peripheral-space address: a real peripheral the board does not

@@ -4,6 +4,7 @@
 
 pub mod board;
 pub mod clock;
+pub mod debug;
 pub mod elf;
 pub mod machine;
 pub mod nvic;

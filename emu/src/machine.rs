@@ -15,9 +15,10 @@ use crate::clock::{t_per_cycle, us};
 use crate::elf::Image;
 use crate::nvic::{ENTRY_CYCLES, HARDFAULT, RETURN_CYCLES, SVCALL, TAIL_CHAIN_CYCLES};
 use crate::periph::flash::{Flash, SIZE as FLASH_SIZE};
+use crate::periph::BusError;
 use crate::rtt::{self, Log};
 use std::collections::HashMap;
-use unicorn_engine::unicorn_const::{uc_error, Arch, Mode, Prot};
+use unicorn_engine::unicorn_const::{uc_error, Arch, HookType, Mode, Prot};
 use unicorn_engine::{ArmCpuModel, RegisterARM, Unicorn};
 
 pub const RAM_BASE: u32 = 0x2000_0000;
@@ -83,8 +84,18 @@ pub struct State {
     until: u64,
     next_event: u64,
     pub stop: Option<Stop>,
-    /// The last block's address (the PC reported with a bus error).
-    last_block: u32,
+    /// The block executing now: its address, its instruction count, and the time it
+    /// started. Its time is charged when it has run (at the next block, or when the
+    /// run stops), so a block the run stops in front of is never charged.
+    block: Block,
+    /// How late interrupts were taken (see [`Lateness`]).
+    pub lateness: Lateness,
+    /// When the exception the run stopped for became due.
+    due_at: Option<u64>,
+    /// An exception is pending but masked by PRIMASK, BASEPRI or FAULTMASK.
+    masked_pending: bool,
+    /// The PC of the last bus access (reported with a bus error).
+    access_pc: u32,
     pub log: Option<Log>,
     rtt: Option<u32>,
     pub profile: Profile,
@@ -105,6 +116,40 @@ pub struct State {
 
 pub struct Machine<'a> {
     pub uc: Unicorn<'a, State>,
+}
+
+/// The block the CPU is running (see `State::block`).
+#[derive(Clone, Copy, Debug, Default)]
+struct Block {
+    addr: u32,
+    /// Instructions not yet charged (0 once charged).
+    n: u32,
+    start: u64,
+}
+
+/// Interrupts are taken at block boundaries, so one that becomes due inside a block
+/// waits for the block's end: this is how long, measured on every event that asked
+/// for an exception (emu/README.md, cycle model).
+#[derive(Clone, Debug, Default)]
+pub struct Lateness {
+    /// Events that made an exception preempt.
+    pub count: u64,
+    /// Sum and maximum of (boundary time - event time), in time units.
+    pub total: u64,
+    pub max: u64,
+    /// The longest block executed, in instructions.
+    pub longest_block: u32,
+}
+
+/// Instructions in `code` (Thumb-2: 16- and 32-bit encodings).
+fn count_instructions(code: &[u8]) -> u32 {
+    let mut n = 0;
+    let mut i = 0;
+    while i + 1 < code.len() {
+        i += instr_len(u16::from_le_bytes([code[i], code[i + 1]])) as usize;
+        n += 1;
+    }
+    n
 }
 
 fn instr_len(halfword: u16) -> u32 {
@@ -148,7 +193,11 @@ impl<'a> Machine<'a> {
             until: 0,
             next_event: 0,
             stop: None,
-            last_block: 0,
+            block: Block::default(),
+            lateness: Lateness::default(),
+            due_at: None,
+            masked_pending: false,
+            access_pc: 0,
             log,
             rtt: image.symbol("_SEGGER_RTT"),
             profile: Profile {
@@ -180,23 +229,18 @@ impl<'a> Machine<'a> {
                 u64::from(FLASH_BASE + settings.start),
                 u64::from(settings.end - settings.start),
                 Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
+                    Machine::mmio_time(uc);
                     uc.get_data().board.settings_read(off as u32, size) as u64
                 }),
                 Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
-                    let r = uc
-                        .get_data_mut()
-                        .board
-                        .settings_write(off as u32, size, v as u32);
-                    if let Err(err) = r {
+                    Machine::mmio_time(uc);
+                    let s = uc.get_data_mut();
+                    if let Err(err) = s.board.settings_write(off as u32, size, v as u32) {
                         // A flash write the controller refuses is a bus error on the chip.
-                        let s = uc.get_data_mut();
                         s.board.bus_fault = Some(err.0);
                         s.stop_requested = true;
                     }
-                    if uc.get_data().board.halt.is_some() || uc.get_data().board.stall_until > 0 {
-                        uc.get_data_mut().stop_requested = true;
-                        let _ = uc.emu_stop();
-                    }
+                    Machine::mmio_done(uc, Ok(0), 0);
                 }),
             )
             .map_err(e)?;
@@ -208,31 +252,16 @@ impl<'a> Machine<'a> {
             0x4000_0000,
             0x2_4000,
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
+                Machine::mmio_time(uc);
                 let addr = 0x4000_0000 + off as u32;
-                let s = uc.get_data_mut();
-                match s.board.read(addr, size) {
-                    Ok(v) => v as u64,
-                    Err(err) => {
-                        s.bus_stop(err.0, addr);
-                        let _ = uc.emu_stop();
-                        0
-                    }
-                }
+                let r = uc.get_data_mut().board.read(addr, size);
+                Machine::mmio_done(uc, r.map(u64::from), addr)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
+                Machine::mmio_time(uc);
                 let addr = 0x4000_0000 + off as u32;
-                let pc = uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
-                let s = uc.get_data_mut();
-                if let Err(err) = s.board.write(addr, size, v as u32) {
-                    s.last_block = pc;
-                    s.bus_stop(err.0, addr);
-                }
-                if s.board.halt.is_some() || s.stop_requested {
-                    let _ = uc.emu_stop();
-                } else {
-                    // A write may have raised an interrupt: look at the next boundary.
-                    s.stop_requested |= s.irq_may_preempt_soon();
-                }
+                let r = uc.get_data_mut().board.write(addr, size, v as u32);
+                Machine::mmio_done(uc, r.map(|()| 0), addr);
             }),
         )
         .map_err(e)?;
@@ -243,34 +272,24 @@ impl<'a> Machine<'a> {
             0x4200_0000,
             0x24000 * 32,
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize| {
+                Machine::mmio_time(uc);
                 let (addr, bit) = ((0x4000_0000 + off as u32 / 32) & !3, (off as u32 / 4) % 32);
-                let s = uc.get_data_mut();
-                match s.board.read(addr, 4) {
-                    Ok(v) => u64::from((v >> bit) & 1),
-                    Err(err) => {
-                        s.bus_stop(err.0, addr);
-                        let _ = uc.emu_stop();
-                        0
-                    }
-                }
+                let r = uc.get_data_mut().board.read(addr, 4);
+                Machine::mmio_done(uc, r.map(|v| u64::from((v >> bit) & 1)), addr)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, v: u64| {
+                Machine::mmio_time(uc);
                 let (addr, bit) = ((0x4000_0000 + off as u32 / 32) & !3, (off as u32 / 4) % 32);
-                let s = uc.get_data_mut();
-                let r = s.board.read(addr, 4).and_then(|w| {
+                let b = &mut uc.get_data_mut().board;
+                let r = b.read(addr, 4).and_then(|w| {
                     let w = if v & 1 != 0 {
                         w | 1 << bit
                     } else {
                         w & !(1 << bit)
                     };
-                    s.board.write(addr, 4, w)
+                    b.write(addr, 4, w)
                 });
-                if let Err(err) = r {
-                    s.bus_stop(err.0, addr);
-                    let _ = uc.emu_stop();
-                } else {
-                    s.stop_requested |= s.irq_may_preempt_soon();
-                }
+                Machine::mmio_done(uc, r.map(|()| 0), addr);
             }),
         )
         .map_err(e)?;
@@ -302,72 +321,64 @@ impl<'a> Machine<'a> {
             0x1FFF_F000,
             0x1000,
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
+                Machine::mmio_time(uc);
                 let addr = 0x1FFF_F000 + off as u32;
-                let s = uc.get_data_mut();
-                match s.board.system_read(addr, size) {
-                    Ok(v) => v as u64,
-                    Err(err) => {
-                        s.bus_stop(err.0, addr);
-                        let _ = uc.emu_stop();
-                        0
-                    }
-                }
+                let r = uc.get_data().board.system_read(addr, size);
+                Machine::mmio_done(uc, r.map(u64::from), addr)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, _v: u64| {
+                Machine::mmio_time(uc);
                 let addr = 0x1FFF_F000 + off as u32;
-                uc.get_data_mut()
-                    .bus_stop("write to system memory".into(), addr);
-                let _ = uc.emu_stop();
+                let r = Err(BusError("write to system memory".into()));
+                Machine::mmio_done(uc, r, addr);
             }),
         )
         .map_err(e)?;
-        // The private peripheral bus: the system control space (NVIC, SCB, SysTick).
+        // The private peripheral bus: the DWT (cycle counter) and the system control
+        // space (NVIC, SCB, SysTick, DEMCR).
         uc.mmio_map(
-            SCS_BASE + 0xE000,
-            0x1000,
+            SCS_BASE,
+            0xF000,
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
+                Machine::mmio_time(uc);
                 let s = uc.get_data_mut();
-                let now = s.board.now;
-                let off = off + 0xE000;
-                let r = if (0xE000..0xF000).contains(&off) {
-                    s.board.nvic.read(off as u32 - 0xE000, size, now).ok()
-                } else {
-                    None
-                };
-                match r {
-                    Some(v) => v as u64,
-                    None => {
-                        s.bus_stop(
-                            format!("system control space: no register ({size} bytes)"),
-                            SCS_BASE as u32 + off as u32,
-                        );
-                        let _ = uc.emu_stop();
-                        0
-                    }
-                }
+                let r = s.board.ppb_read(off as u32, size);
+                Machine::mmio_done(uc, r.map(u64::from), SCS_BASE as u32 + off as u32)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
+                Machine::mmio_time(uc);
                 let s = uc.get_data_mut();
-                let now = s.board.now;
-                let off = off + 0xE000;
-                let ok = (0xE000..0xF000).contains(&off)
-                    && s.board
-                        .nvic
-                        .write(off as u32 - 0xE000, size, v as u32, now)
-                        .is_ok();
-                if !ok {
-                    s.bus_stop(
-                        format!("system control space: no register ({size} bytes)"),
-                        SCS_BASE as u32 + off as u32,
-                    );
-                    let _ = uc.emu_stop();
-                    return;
-                }
-                s.next_event = s.next_event.min(s.board.next_event());
-                s.stop_requested |= s.irq_may_preempt_soon() || s.board.nvic.reset_requested;
+                let r = s.board.ppb_write(off as u32, size, v as u32);
+                Machine::mmio_done(uc, r.map(|()| 0), SCS_BASE as u32 + off as u32);
             }),
         )
         .map_err(e)?;
+        // With a memory hook on the buses the CPU keeps its PC exact at every access,
+        // which `mmio_time` needs (unicorn otherwise only updates it per block).
+        for (lo, hi) in [
+            (0x1FFF_F000u64, 0x1FFF_FFFFu64),
+            (0x4000_0000, 0x43FF_FFFF),
+            (SCS_BASE, SCS_BASE + 0xEFFF),
+        ] {
+            uc.add_mem_hook(
+                HookType::MEM_READ | HookType::MEM_WRITE,
+                lo,
+                hi,
+                |_: &mut Unicorn<State>, _, _, _, _| true,
+            )
+            .map_err(|e| format!("unicorn hook: {e:?}"))?;
+        }
+        if settings.end > settings.start {
+            let lo = u64::from(FLASH_BASE + settings.start);
+            let hi = u64::from(FLASH_BASE + settings.end) - 1;
+            uc.add_mem_hook(
+                HookType::MEM_READ | HookType::MEM_WRITE,
+                lo,
+                hi,
+                |_: &mut Unicorn<State>, _, _, _, _| true,
+            )
+            .map_err(|e| format!("unicorn hook: {e:?}"))?;
+        }
 
         uc.add_block_hook(1, 0, |uc: &mut Unicorn<State>, addr: u64, size: u32| {
             Machine::on_block(uc, addr, size);
@@ -467,28 +478,54 @@ impl<'a> Machine<'a> {
         self.reset_cpu()
     }
 
+    /// A block is about to run: charge the one before it (it ran to its end), bring
+    /// the board to now, and stop in front of this block when something is due (the
+    /// run loop then takes the exception before the block runs).
     fn on_block(uc: &mut Unicorn<State>, addr: u64, size: u32) {
         let n = match uc.get_data().blocks.get(&(addr, size)) {
             Some(&n) => n,
             None => {
                 let mut code = vec![0u8; size as usize];
                 let _ = uc.mem_read(addr, &mut code);
-                let mut n = 0;
-                let mut i = 0;
-                while i + 1 < code.len() {
-                    i += instr_len(u16::from_le_bytes([code[i], code[i + 1]])) as usize;
-                    n += 1;
-                }
+                let n = count_instructions(&code);
                 uc.get_data_mut().blocks.insert((addr, size), n);
                 n
             }
         };
+        let s = uc.get_data_mut();
+        s.charge_block(None);
+        if s.board.now >= s.next_event {
+            let due = s.next_event;
+            s.events();
+            if s.stop_requested {
+                s.due_at = Some(s.due_at.map_or(due, |d| d.min(due)));
+            }
+        }
+        if s.masked_pending && !s.stop_requested {
+            // An interrupt waits behind BASEPRI or PRIMASK: an `msr` that lowers them
+            // touches no bus, so the masks are looked at before every block.
+            let (primask, basepri, faultmask) = Machine::masks_of(uc);
+            let s = uc.get_data_mut();
+            if s.board
+                .nvic
+                .preempting(primask, basepri, faultmask)
+                .is_some()
+            {
+                s.stop_requested = true;
+            }
+        }
+        let s = uc.get_data_mut();
+        if s.stop_requested || s.board.now >= s.until || s.board.halt.is_some() {
+            // The block does not run: unicorn stops in front of it.
+            let _ = uc.emu_stop();
+            return;
+        }
         // A busy-wait delay loop (`subs rN, #1; bne .-2`, cortex_m::asm::delay): its
         // remaining iterations are skipped at their exact cycle cost.
         if size == 4 && n == 2 {
             if let Some(skipped) = Machine::skip_delay_loop(uc, addr) {
-                uc.get_data_mut().delay_loops_skipped += skipped;
                 let s = uc.get_data_mut();
+                s.delay_loops_skipped += skipped;
                 let cpi = s.instr_t();
                 s.board.now += skipped * 2 * cpi;
                 s.instructions += skipped * 2;
@@ -499,15 +536,61 @@ impl<'a> Machine<'a> {
             Machine::drain_rtt(uc);
         }
         let s = uc.get_data_mut();
-        s.last_block = addr as u32;
-        s.instructions += u64::from(n);
-        s.board.now += u64::from(n) * s.instr_t();
-        if s.board.now >= s.next_event {
-            s.events();
+        s.block = Block {
+            addr: addr as u32,
+            n,
+            start: s.board.now,
+        };
+    }
+
+    /// A bus access by the instruction at the PC (exact: the memory hooks keep it):
+    /// the board is brought to the time that instruction completes.
+    fn mmio_time(uc: &mut Unicorn<State>) {
+        let pc = uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
+        let b = uc.get_data().block;
+        let done = if b.n > 0 && pc >= b.addr && pc - b.addr < 4 * b.n {
+            let mut code = vec![0u8; (pc - b.addr) as usize + 2];
+            let _ = uc.mem_read(u64::from(b.addr), &mut code);
+            count_instructions(&code).min(b.n)
+        } else {
+            0
+        };
+        let s = uc.get_data_mut();
+        s.access_pc = pc;
+        let t = b.start + u64::from(done) * s.instr_t();
+        if t > s.board.now {
+            s.board.now = t;
+            if t >= s.next_event {
+                s.events();
+            }
         }
-        if s.stop_requested || s.board.now >= s.until || s.board.halt.is_some() {
-            let _ = uc.emu_stop();
+    }
+
+    /// After a bus access: a refused one stops the run; one that raised an exception
+    /// or changed the board's next event is noted for the next boundary.
+    fn mmio_done(uc: &mut Unicorn<State>, r: Result<u64, BusError>, addr: u32) -> u64 {
+        let s = uc.get_data_mut();
+        let v = match r {
+            Ok(v) => v,
+            Err(err) => {
+                s.bus_stop(err.0, addr);
+                let _ = uc.emu_stop();
+                return 0;
+            }
+        };
+        // The run stops in front of the next block, never here: with the exact PC a
+        // stop inside an instruction's access would run that instruction again.
+        s.next_event = s.board.next_event();
+        if s.board.halt.is_some() || s.board.stall_until > 0 || s.board.nvic.reset_requested {
+            s.stop_requested = true;
         }
+        if s.irq_may_preempt_soon() && !s.masked_pending {
+            if !s.stop_requested {
+                s.due_at = Some(s.board.now);
+            }
+            s.stop_requested = true;
+        }
+        v
     }
 
     /// If the block at `addr` is `subs rN, #1; bne addr`, set rN to 1 (the last
@@ -674,6 +757,7 @@ impl<'a> Machine<'a> {
             s.next_event = s.board.next_event();
             let pc = self.uc.reg_read(RegisterARM::PC).unwrap_or(0);
             let r = self.uc.emu_start(pc | 1, 0, 0, 0);
+            self.charge_stopped_block(&r);
             if let Err(stop) = self.after_run(r) {
                 Machine::drain_rtt(&mut self.uc);
                 return Some(stop);
@@ -732,15 +816,31 @@ impl<'a> Machine<'a> {
     /// Take the most urgent pending exception if it preempts.
     fn take_pending(&mut self) -> Result<(), Stop> {
         let (primask, basepri, faultmask) = self.masks();
-        let s = self.uc.get_data();
-        if let Some(e) = s.board.nvic.preempting(primask, basepri, faultmask) {
+        let s = self.uc.get_data_mut();
+        let due = s.due_at.take();
+        let taken = s.board.nvic.preempting(primask, basepri, faultmask);
+        // Pending and enabled, but held back by a mask: watched at every block.
+        s.masked_pending = taken.is_none() && s.irq_may_preempt_soon();
+        if let Some(e) = taken {
+            if let Some(due) = due {
+                let late = s.board.now.saturating_sub(due);
+                let l = &mut s.lateness;
+                l.count += 1;
+                l.total += late;
+                l.max = l.max.max(late);
+            }
             self.enter(e)?;
         }
         Ok(())
     }
 
     fn masks(&self) -> (bool, u32, bool) {
-        let r = |reg| self.uc.reg_read(reg).unwrap_or(0);
+        Machine::masks_of(&self.uc)
+    }
+
+    /// PRIMASK, BASEPRI and FAULTMASK.
+    fn masks_of(uc: &Unicorn<State>) -> (bool, u32, bool) {
+        let r = |reg| uc.reg_read(reg).unwrap_or(0);
         (
             r(RegisterARM::PRIMASK) & 1 != 0,
             r(RegisterARM::BASEPRI) as u32,
@@ -900,6 +1000,31 @@ impl<'a> Machine<'a> {
         self.enter(HARDFAULT)
     }
 
+    /// The run stopped: the block it stopped in ran to its end, unless an instruction
+    /// faulted (then the instructions before it ran) or trapped (BKPT, SVC, UDF: up to
+    /// and including it).
+    fn charge_stopped_block(&mut self, r: &Result<(), uc_error>) {
+        let pc = self.reg(RegisterARM::PC);
+        let b = self.uc.get_data().block;
+        let inside = b.n > 0 && pc >= b.addr && pc - b.addr < 4 * b.n;
+        let partial = match r {
+            Err(
+                uc_error::READ_UNMAPPED
+                | uc_error::WRITE_UNMAPPED
+                | uc_error::FETCH_PROT
+                | uc_error::WRITE_PROT
+                | uc_error::READ_PROT
+                | uc_error::INSN_INVALID,
+            ) if inside => {
+                let mut code = vec![0u8; (pc - b.addr) as usize];
+                let _ = self.uc.mem_read(u64::from(b.addr), &mut code);
+                Some(count_instructions(&code) + u32::from(*r == Err(uc_error::INSN_INVALID)))
+            }
+            _ => None,
+        };
+        self.uc.get_data_mut().charge_block(partial);
+    }
+
     /// After `emu_start` returned: exception returns, faults, WFI.
     fn after_run(&mut self, r: Result<(), uc_error>) -> Result<(), Stop> {
         let pc = self.reg(RegisterARM::PC);
@@ -969,6 +1094,18 @@ impl<'a> Machine<'a> {
 }
 
 impl State {
+    /// Charge the block that ran: all its instructions, or the first `partial`.
+    fn charge_block(&mut self, partial: Option<u32>) {
+        let b = std::mem::take(&mut self.block);
+        if b.n == 0 {
+            return;
+        }
+        let n = partial.unwrap_or(b.n).min(b.n);
+        self.instructions += u64::from(n);
+        self.lateness.longest_block = self.lateness.longest_block.max(n);
+        self.board.now = self.board.now.max(b.start + u64::from(n) * self.instr_t());
+    }
+
     /// Time units per instruction: 1.5 cycles of the current CPU clock.
     fn instr_t(&self) -> u64 {
         t_per_cycle(self.board.sysclk_hz()) * 3 / 2
@@ -977,7 +1114,7 @@ impl State {
     fn bus_stop(&mut self, message: String, addr: u32) {
         self.stop = Some(Stop::Bus {
             message: format!("{message} [address 0x{addr:08X}]"),
-            pc: self.last_block,
+            pc: self.access_pc,
         });
         self.stop_requested = true;
     }
@@ -993,7 +1130,8 @@ impl State {
     fn events(&mut self) {
         let now = self.board.now;
         self.events_at(now);
-        if self.irq_may_preempt_soon() || self.watchdog_fired() || self.board.halt.is_some() {
+        let irq = self.irq_may_preempt_soon() && !self.masked_pending;
+        if irq || self.watchdog_fired() || self.board.halt.is_some() {
             self.stop_requested = true;
         }
     }

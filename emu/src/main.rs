@@ -111,6 +111,7 @@ fn cmd_run(
     let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
     let elf = elf_or_build(elf)?;
     let mut s = Session::new(&elf, flash)?;
+    s.m.state_mut().echo_log = log.is_none();
     s.boot()?;
     let banner = s.take_received();
     let flow = if char_count {

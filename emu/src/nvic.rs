@@ -214,8 +214,6 @@ impl Nvic {
             0xD28 => self.cfsr,
             0xD2C => self.hfsr,
             0xD30 | 0xD34 | 0xD38 | 0xD3C => 0,
-            // DEMCR (debug): reads as reset.
-            0xDFC => 0,
             _ => return Err(Unknown),
         })
     }
@@ -303,7 +301,6 @@ impl Nvic {
             0xD24 => {}
             0xD28 => self.cfsr &= !v,
             0xD2C => self.hfsr &= !v,
-            0xDFC => {}
             // STIR: software trigger.
             0xF00 => {
                 let irq = (v & 0x1FF) as usize;
