@@ -171,6 +171,7 @@ impl Board {
     }
 
     fn clocks_changed(&mut self) {
+        self.debug.sync(self.now, self.rcc.hclk_hz());
         let tim1 = t_per_cycle(self.rcc.tim_apb2_hz());
         let tim2 = t_per_cycle(self.rcc.tim_apb1_hz());
         self.tim1.tick_t = tim1;

@@ -36,8 +36,9 @@ impl Debug {
         self.cyccnt.wrapping_add(n as u32)
     }
 
-    /// Freeze the count at `now` before a change of what it depends on.
-    fn sync(&mut self, now: u64, core_hz: u32) {
+    /// Freeze the count at `now` before a change of what it depends on (the
+    /// registers, or the core clock: the board calls this when the clocks change).
+    pub fn sync(&mut self, now: u64, core_hz: u32) {
         self.cyccnt = self.cycles_at(now);
         self.since = now;
         self.cycle_t = t_per_cycle(core_hz);

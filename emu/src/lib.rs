@@ -11,4 +11,5 @@ pub mod nvic;
 pub mod periph;
 pub mod rtt;
 pub mod session;
+pub mod target_tests;
 pub mod usb_host;

@@ -38,6 +38,9 @@ pub enum Stop {
     Lockup { pc: u32 },
     /// The power was cut at a flash operation.
     PowerCut,
+    /// HardFault was entered with the vector catch on (`State::catch_hardfault`), as
+    /// a debug probe halts there; the PC is where the fault happened.
+    HardFault { pc: u32 },
     /// The CPU failed in a way the model does not cover.
     Cpu { message: String, pc: u32 },
 }
@@ -56,6 +59,7 @@ impl std::fmt::Display for Stop {
             }
             Stop::Lockup { pc } => write!(f, "lockup: a fault in HardFault (PC 0x{pc:08X})"),
             Stop::PowerCut => write!(f, "power cut at a flash operation"),
+            Stop::HardFault { pc } => write!(f, "HardFault (caught) at PC 0x{pc:08X}"),
             Stop::Cpu { message, pc } => write!(f, "{message} (PC 0x{pc:08X})"),
         }
     }
@@ -106,6 +110,8 @@ pub struct State {
     pub hardfaults: u32,
     /// The log is echoed to stderr as it is decoded.
     pub echo_log: bool,
+    /// Halt at HardFault entry (DEMCR.VC_HARDERR, what probe-rs sets for tests).
+    pub catch_hardfault: bool,
     /// Delay-loop iterations skipped at their cycle cost.
     pub delay_loops_skipped: u64,
     /// The CPU branched to this EXC_RETURN value.
@@ -210,6 +216,7 @@ impl<'a> Machine<'a> {
             watchdog_resets: 0,
             hardfaults: 0,
             echo_log: false,
+            catch_hardfault: false,
             delay_loops_skipped: 0,
             exc_return: None,
             drain_at: None,
@@ -856,6 +863,9 @@ impl<'a> Machine<'a> {
     /// to 8 bytes when CCR.STKALIGN is set), EXC_RETURN in LR, the vector in PC.
     fn enter(&mut self, e: usize) -> Result<(), Stop> {
         let pc = self.reg(RegisterARM::PC);
+        if e == HARDFAULT && self.uc.get_data().catch_hardfault {
+            return Err(Stop::HardFault { pc });
+        }
         let s = self.uc.get_data();
         let current = s.board.nvic.current() as u32;
         let stkalign = s.board.nvic.ccr & (1 << 9) != 0;

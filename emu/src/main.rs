@@ -64,6 +64,15 @@ enum Cmd {
         #[arg(long)]
         flash: Option<PathBuf>,
     },
+    /// Run the on-target tests (tests/on_target.rs, defmt-test) on the emulated board;
+    /// exits with the tests' status.
+    Test {
+        /// The test image (default: built with `cargo test --release --no-run`).
+        #[arg(long)]
+        elf: Option<PathBuf>,
+        #[arg(long)]
+        log: Option<PathBuf>,
+    },
 }
 
 fn elf_or_build(elf: Option<PathBuf>) -> Result<PathBuf, String> {
@@ -292,6 +301,30 @@ fn cmd_serve(
     result.map(|()| ExitCode::SUCCESS)
 }
 
+fn cmd_test(elf: Option<PathBuf>, log: Option<&Path>) -> Result<ExitCode, String> {
+    use inkstep_emu::target_tests;
+    let elf = match elf {
+        Some(e) => e,
+        None => target_tests::build()?,
+    };
+    let out = target_tests::run(&elf, log.is_none(), target_tests::LIMIT)?;
+    if let Some(p) = log {
+        std::fs::write(p, out.log.join("\n") + "\n")
+            .map_err(|e| format!("{}: {e}", p.display()))?;
+    }
+    println!(
+        "{}: {} after {:.1} ms of virtual time",
+        if out.passed() { "passed" } else { "FAILED" },
+        out.end,
+        out.t as f64 / T_PER_MS as f64
+    );
+    Ok(if out.passed() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let r = match cli.cmd {
@@ -329,6 +362,7 @@ fn main() -> ExitCode {
             log.as_deref(),
             flash.as_deref(),
         ),
+        Cmd::Test { elf, log } => cmd_test(elf, log.as_deref()),
     };
     match r {
         Ok(c) => c,
