@@ -5,6 +5,7 @@
 pub mod board;
 pub mod clock;
 pub mod debug;
+pub mod demo;
 pub mod elf;
 pub mod machine;
 pub mod nvic;

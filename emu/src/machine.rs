@@ -147,6 +147,9 @@ pub struct Lateness {
     pub longest_block: u32,
 }
 
+/// The IT (If-Then) execution state bits of xPSR (ARMv7-M B1.4.2: ICI/IT).
+const IT_BITS: u64 = 0x0600_FC00;
+
 /// Instructions in `code` (Thumb-2: 16- and 32-bit encodings).
 fn count_instructions(code: &[u8]) -> u32 {
     let mut n = 0;
@@ -554,6 +557,14 @@ impl<'a> Machine<'a> {
     /// the board is brought to the time that instruction completes.
     fn mmio_time(uc: &mut Unicorn<State>) {
         let pc = uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
+        // Bringing the PC up to date also brought back the IT state of the accessing
+        // instruction, and unicorn leaves it there: the next block would then run as
+        // if inside that IT block (its instructions skipped). The translated block
+        // tracks IT itself, and writes the state out if it ends inside an IT block.
+        let xpsr = uc.reg_read(RegisterARM::XPSR).unwrap_or(0);
+        if xpsr & IT_BITS != 0 {
+            let _ = uc.reg_write(RegisterARM::XPSR, xpsr & !IT_BITS);
+        }
         let b = uc.get_data().block;
         let done = if b.n > 0 && pc >= b.addr && pc - b.addr < 4 * b.n {
             let mut code = vec![0u8; (pc - b.addr) as usize + 2];
@@ -926,9 +937,12 @@ impl<'a> Machine<'a> {
             })?;
         let handler = u32::from_le_bytes(v) & !1;
         let _ = self.uc.reg_write(RegisterARM::PC, u64::from(handler));
-        // Thread-mode IT state does not carry into the handler.
-        let x = self.reg(RegisterARM::XPSR) & !0x0600_FC00;
-        let _ = self.uc.reg_write(RegisterARM::XPSR, u64::from(x | 1 << 24));
+        // The handler starts outside any IT block, in Thumb state, with IPSR = its
+        // exception number (B1.5.6).
+        let x = self.reg(RegisterARM::XPSR) & !(IT_BITS as u32) & !0x1FF;
+        let _ = self
+            .uc
+            .reg_write(RegisterARM::XPSR, u64::from(x | 1 << 24 | e as u32));
         Ok(())
     }
 
@@ -1167,8 +1181,6 @@ impl State {
         self.board.now += cost;
         if e != 0 && !self.board.nvic.active[e] {
             self.board.nvic.activate(e);
-        }
-        if e != 0 {
             self.profile.entries[e] += 1;
         }
         self.profile.busy[e] += cost;

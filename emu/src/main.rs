@@ -4,8 +4,7 @@
 use clap::{Parser, Subcommand};
 use inkstep_emu::clock::{T_PER_MS, T_PER_S};
 use inkstep_emu::session::{product_elf, Session};
-use inkstep_serial::grbl::Reply;
-use inkstep_serial::sender::{Answer, Event, Flow, Sender};
+use inkstep_serial::sender::Flow;
 use inkstep_sim::trace::TraceWriter;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -59,6 +58,21 @@ enum Cmd {
         trace: Option<PathBuf>,
         #[arg(long)]
         lcd: Option<PathBuf>,
+        #[arg(long)]
+        log: Option<PathBuf>,
+        #[arg(long)]
+        flash: Option<PathBuf>,
+    },
+    /// The simulator's demo on the emulated board: its keypad script pressed on the
+    /// key matrix, its G-code streamed over USB, the LCD written as PNGs.
+    Demo {
+        #[arg(long, default_value = "out/emu-demo")]
+        out: PathBuf,
+        /// Play this keypad script instead (the simulator's `--keys` language).
+        #[arg(long)]
+        keys: Option<String>,
+        #[arg(long)]
+        elf: Option<PathBuf>,
         #[arg(long)]
         log: Option<PathBuf>,
         #[arg(long)]
@@ -122,62 +136,29 @@ fn cmd_run(
     let mut s = Session::new(&elf, flash)?;
     s.m.state_mut().echo_log = log.is_none();
     s.boot()?;
-    let banner = s.take_received();
     let flow = if char_count {
         Flow::CharCount(128)
     } else {
         Flow::SendResponse
     };
-    let mut sender = Sender::new(flow);
-    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
-    for (i, l) in lines.iter().enumerate() {
-        sender.push(i + 1, *l);
-    }
-    let mut errors: Vec<String> = Vec::new();
-    let mut alarms: Vec<String> = Vec::new();
-    let note = |events: Vec<Event<usize>>, errors: &mut Vec<String>, alarms: &mut Vec<String>| {
-        for e in events {
-            match e {
-                Event::Answered(n, Answer::Error(code)) => {
-                    errors.push(format!("line {n}: {} -> error:{code}", lines[n - 1]))
-                }
-                Event::Reply(Reply::Alarm(code)) => alarms.push(format!("ALARM:{code}")),
-                _ => {}
-            }
-        }
-    };
-    note(sender.received(banner.as_bytes()), &mut errors, &mut alarms);
-    let start = s.now();
     let mut next_lcd = s.now();
     let mut frame = 0;
-    let result = (|| -> Result<(), String> {
-        while !sender.done() {
-            let bytes = sender.to_send();
-            s.send(&bytes);
-            // The sender reacts within one host-controller slot (125 µs), as a program
-            // on the PC does; the USB timing model is in emu/README.md.
-            s.run_for(inkstep_emu::usb_host::SLOT_T)?;
-            let got = s.take_received();
-            note(sender.received(got.as_bytes()), &mut errors, &mut alarms);
-            if let Some(dir) = lcd {
-                if s.now() >= next_lcd {
-                    save_lcd(&s, dir, &format!("{frame:04}"))?;
-                    frame += 1;
-                    next_lcd += T_PER_S;
-                }
-            }
-            if s.now() - start > RUN_LIMIT {
-                return Err("the job did not finish within an hour of virtual time".into());
+    let result = s.stream(&text, flow, RUN_LIMIT, |s| {
+        if let Some(dir) = lcd {
+            if s.now() >= next_lcd {
+                save_lcd(s, dir, &format!("{frame:04}"))?;
+                frame += 1;
+                next_lcd += T_PER_S;
             }
         }
-        let report = s.wait_idle(RUN_LIMIT)?;
-        println!("{report}");
         Ok(())
-    })();
+    });
     if let Some(dir) = lcd {
         save_lcd(&s, dir, "last")?;
     }
-    write_log(&s, log)?;
+    if log.is_some() {
+        write_log(&s, log)?;
+    }
     if let Some(path) = trace {
         write_trace(&s, path)?;
     }
@@ -187,25 +168,29 @@ fn cmd_run(
         _ => 0.0,
     };
     let pos = s.m.state().board.pos;
+    let done = match &result {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return Ok(ExitCode::FAILURE);
+        }
+    };
+    println!("{}", done.report);
     println!(
         "{} lines, {} errors, {} alarms; {} step events, job time {job:.4} s, final position {},{},{}; {:.1} ms virtual",
-        lines.len(),
-        errors.len(),
-        alarms.len(),
+        done.lines,
+        done.errors.len(),
+        done.alarms.len(),
         steps.len(),
         pos[0],
         pos[1],
         pos[2],
         s.now() as f64 / T_PER_MS as f64,
     );
-    for e in errors.iter().chain(&alarms) {
+    for e in done.errors.iter().chain(&done.alarms) {
         println!("{e}");
     }
-    if let Err(e) = result {
-        eprintln!("error: {e}");
-        return Ok(ExitCode::FAILURE);
-    }
-    Ok(if errors.is_empty() && alarms.is_empty() {
+    Ok(if done.errors.is_empty() && done.alarms.is_empty() {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
@@ -301,6 +286,33 @@ fn cmd_serve(
     result.map(|()| ExitCode::SUCCESS)
 }
 
+fn cmd_demo(
+    out: &Path,
+    keys: Option<&str>,
+    elf: Option<PathBuf>,
+    log: Option<&Path>,
+    flash: Option<&Path>,
+) -> Result<ExitCode, String> {
+    let elf = elf_or_build(elf)?;
+    let mut s = Session::new(&elf, flash)?;
+    s.m.state_mut().echo_log = log.is_none();
+    let shots = match keys {
+        Some(script) => inkstep_emu::demo::play(&mut s, script, out),
+        None => inkstep_emu::demo::demo(&mut s, out),
+    };
+    if log.is_some() {
+        write_log(&s, log)?;
+    }
+    let shots = shots?;
+    println!(
+        "{} LCD pictures in {} ({:.1} s of virtual time)",
+        shots.len(),
+        out.display(),
+        s.now() as f64 / T_PER_S as f64
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
 fn cmd_test(elf: Option<PathBuf>, log: Option<&Path>) -> Result<ExitCode, String> {
     use inkstep_emu::target_tests;
     let elf = match elf {
@@ -362,6 +374,13 @@ fn main() -> ExitCode {
             log.as_deref(),
             flash.as_deref(),
         ),
+        Cmd::Demo {
+            out,
+            keys,
+            elf,
+            log,
+            flash,
+        } => cmd_demo(&out, keys.as_deref(), elf, log.as_deref(), flash.as_deref()),
         Cmd::Test { elf, log } => cmd_test(elf, log.as_deref()),
     };
     match r {

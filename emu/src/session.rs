@@ -8,6 +8,8 @@ use crate::clock::{T_PER_MS, T_PER_S};
 use crate::elf::Image;
 use crate::machine::{Machine, Stop};
 use crate::periph::flash::Flash;
+use inkstep_serial::grbl::Reply;
+use inkstep_serial::sender::{Answer, Event, Flow, Sender};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -155,4 +157,65 @@ impl<'a> Session<'a> {
     pub fn set_outside(&mut self, o: Outside) {
         self.m.board().set_outside(o);
     }
+
+    /// Stream G-code `text` through the USB port with the project's sender (`flow`:
+    /// send-response or character counting), calling `each` after every step of the
+    /// sender (one host-controller slot, 125 µs, the time a program on the PC takes to
+    /// react), until every line is answered; then wait for `Idle`. `error:` answers and
+    /// alarms are collected, not fatal.
+    pub fn stream(
+        &mut self,
+        text: &str,
+        flow: Flow,
+        limit: u64,
+        mut each: impl FnMut(&mut Session) -> Result<(), String>,
+    ) -> Result<Streamed, String> {
+        let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
+        let mut sender = Sender::new(flow);
+        for (i, l) in lines.iter().enumerate() {
+            sender.push(i + 1, *l);
+        }
+        let mut out = Streamed {
+            lines: lines.len(),
+            ..Streamed::default()
+        };
+        let note = |events: Vec<Event<usize>>, out: &mut Streamed| {
+            for e in events {
+                match e {
+                    Event::Answered(n, Answer::Error(code)) => out
+                        .errors
+                        .push(format!("line {n}: {} -> error:{code}", lines[n - 1])),
+                    Event::Reply(Reply::Alarm(code)) => out.alarms.push(format!("ALARM:{code}")),
+                    _ => {}
+                }
+            }
+        };
+        let start = self.now();
+        let got = self.take_received();
+        note(sender.received(got.as_bytes()), &mut out);
+        while !sender.done() {
+            let bytes = sender.to_send();
+            self.send(&bytes);
+            self.run_for(crate::usb_host::SLOT_T)?;
+            let got = self.take_received();
+            note(sender.received(got.as_bytes()), &mut out);
+            each(self)?;
+            if self.now() - start > limit {
+                return Err("the job did not finish in time".into());
+            }
+        }
+        out.report = self.wait_idle(limit)?;
+        Ok(out)
+    }
+}
+
+/// What a streamed job got back.
+#[derive(Debug, Default)]
+pub struct Streamed {
+    pub lines: usize,
+    /// `line N: TEXT -> error:C` for every refused line.
+    pub errors: Vec<String>,
+    pub alarms: Vec<String>,
+    /// The `Idle` status report at the end.
+    pub report: String,
 }

@@ -30,6 +30,8 @@ pub struct St7920 {
     pub lost: u64,
     /// Every data byte written to GDRAM (a changed picture is a new frame).
     pub writes: u64,
+    /// When the last serial byte arrived (a picture being sent is not finished).
+    pub last_byte_t: u64,
 }
 
 impl St7920 {
@@ -47,6 +49,7 @@ impl St7920 {
             busy_until: 0,
             lost: 0,
             writes: 0,
+            last_byte_t: 0,
         }
     }
 
@@ -57,6 +60,7 @@ impl St7920 {
 
     /// A byte arrived on the serial input at time `t` with chip select high.
     pub fn byte(&mut self, t: u64, b: u8) -> Result<(), BusError> {
+        self.last_byte_t = t;
         if self.frame.is_empty() && b & 0xF8 != 0xF8 {
             // Not a start byte: ignored until one comes.
             return Ok(());
@@ -138,6 +142,11 @@ impl St7920 {
             }
         }
         Ok(72)
+    }
+
+    /// The graphic display is on and something was drawn.
+    pub fn showing(&self) -> bool {
+        self.graphics_on && self.display_on && self.writes > 0
     }
 
     /// Pixel (x, y) of the 128x64 screen as shown (dark when the display is off).
