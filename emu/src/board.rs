@@ -103,6 +103,10 @@ pub struct Board {
     /// Pin levels changed since the last look at EXTI and the USB pull-up.
     pins_dirty: bool,
     pub last_irq_lines: u64,
+    /// Output pins whose changes by the software are logged (a mask per port).
+    pub watch: [u32; 3],
+    /// (time, port, pin, new level) of each change of a watched pin.
+    pub pin_changes: Vec<(u64, usize, usize, bool)>,
 }
 
 impl Board {
@@ -140,6 +144,8 @@ impl Board {
             lcd_cs: false,
             pins_dirty: true,
             last_irq_lines: 0,
+            watch: [0; 3],
+            pin_changes: Vec::new(),
         };
         b.clocks_changed();
         b
@@ -257,6 +263,29 @@ impl Board {
     pub fn pin(&self, p: usize, n: usize) -> bool {
         let af = p == 0 && self.af_a & (1 << n) != 0;
         self.gpio[p].level(n, self.outside_level(p, n), af)
+    }
+
+    fn watched_levels(&self, p: usize) -> u32 {
+        let mut v = 0;
+        let mut w = self.watch[p];
+        while w != 0 {
+            let n = w.trailing_zeros() as usize;
+            w &= w - 1;
+            if self.pin(p, n) {
+                v |= 1 << n;
+            }
+        }
+        v
+    }
+
+    fn log_pin_changes(&mut self, p: usize, before: u32) {
+        let mut changed = (before ^ self.watched_levels(p)) & self.watch[p];
+        while changed != 0 {
+            let n = changed.trailing_zeros() as usize;
+            changed &= changed - 1;
+            self.pin_changes
+                .push((self.now, p, n, before & (1 << n) == 0));
+        }
     }
 
     /// What the outside drives onto pin `n` of port `p` (None: nothing, so a pull
@@ -495,8 +524,10 @@ impl Board {
             0x4001_0800 | 0x4001_0C00 | 0x4001_1000 => {
                 let p = ((addr - 0x4001_0800) / 0x400) as usize;
                 self.clock_on(true, 2 + p as u32, "GPIO")?;
+                let before = self.watched_levels(p);
                 self.gpio[p].write(off, v)?;
                 self.pins_dirty = true;
+                self.log_pin_changes(p, before);
             }
             0x4001_2C00 => {
                 self.clock_on(true, 11, "TIM1")?;

@@ -106,6 +106,7 @@ pub fn demo(s: &mut Session, out: &Path) -> Result<Vec<PathBuf>, String> {
             Ok(())
         },
     )?;
+    s.wait_idle(LIMIT_MS * T_PER_MS)?;
     shots.extend(shot);
     if !streamed.errors.is_empty() || !streamed.alarms.is_empty() {
         return Err(format!(

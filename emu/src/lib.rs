@@ -12,5 +12,6 @@ pub mod nvic;
 pub mod periph;
 pub mod rtt;
 pub mod session;
+pub mod soak;
 pub mod target_tests;
 pub mod usb_host;

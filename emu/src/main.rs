@@ -78,6 +78,16 @@ enum Cmd {
         #[arg(long)]
         flash: Option<PathBuf>,
     },
+    /// Stream the reference programs over USB for minutes of virtual time with the LCD
+    /// running, asking `?` every 100 ms; fails if the watchdog ever fires.
+    Soak {
+        #[arg(long, default_value_t = 10.0)]
+        minutes: f64,
+        #[arg(long)]
+        elf: Option<PathBuf>,
+        #[arg(long)]
+        log: Option<PathBuf>,
+    },
     /// Run the on-target tests (tests/on_target.rs, defmt-test) on the emulated board;
     /// exits with the tests' status.
     Test {
@@ -143,7 +153,7 @@ fn cmd_run(
     };
     let mut next_lcd = s.now();
     let mut frame = 0;
-    let result = s.stream(&text, flow, RUN_LIMIT, |s| {
+    let streamed = s.stream(&text, flow, RUN_LIMIT, |s| {
         if let Some(dir) = lcd {
             if s.now() >= next_lcd {
                 save_lcd(s, dir, &format!("{frame:04}"))?;
@@ -153,6 +163,7 @@ fn cmd_run(
         }
         Ok(())
     });
+    let result = streamed.and_then(|r| Ok((r, s.wait_idle(RUN_LIMIT)?)));
     if let Some(dir) = lcd {
         save_lcd(&s, dir, "last")?;
     }
@@ -168,14 +179,14 @@ fn cmd_run(
         _ => 0.0,
     };
     let pos = s.m.state().board.pos;
-    let done = match &result {
-        Ok(r) => r,
+    let (done, report) = match &result {
+        Ok((r, report)) => (r, report),
         Err(e) => {
             eprintln!("error: {e}");
             return Ok(ExitCode::FAILURE);
         }
     };
-    println!("{}", done.report);
+    println!("{report}");
     println!(
         "{} lines, {} errors, {} alarms; {} step events, job time {job:.4} s, final position {},{},{}; {:.1} ms virtual",
         done.lines,
@@ -313,6 +324,26 @@ fn cmd_demo(
     Ok(ExitCode::SUCCESS)
 }
 
+fn cmd_soak(minutes: f64, elf: Option<PathBuf>, log: Option<&Path>) -> Result<ExitCode, String> {
+    let elf = elf_or_build(elf)?;
+    let mut s = Session::new(&elf, None)?;
+    s.m.state_mut().echo_log = log.is_none();
+    let r = inkstep_emu::soak::soak(&mut s, minutes * 60.0);
+    if log.is_some() {
+        write_log(&s, log)?;
+    }
+    let r = r?;
+    println!("{r}");
+    for c in &r.complaints {
+        println!("{c}");
+    }
+    Ok(if r.passed() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
 fn cmd_test(elf: Option<PathBuf>, log: Option<&Path>) -> Result<ExitCode, String> {
     use inkstep_emu::target_tests;
     let elf = match elf {
@@ -381,6 +412,7 @@ fn main() -> ExitCode {
             log,
             flash,
         } => cmd_demo(&out, keys.as_deref(), elf, log.as_deref(), flash.as_deref()),
+        Cmd::Soak { minutes, elf, log } => cmd_soak(minutes, elf, log.as_deref()),
         Cmd::Test { elf, log } => cmd_test(elf, log.as_deref()),
     };
     match r {

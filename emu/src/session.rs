@@ -135,6 +135,29 @@ impl<'a> Session<'a> {
         }
     }
 
+    /// Ask `?` and return the status report (waits up to 50 ms for it); what else
+    /// arrived meanwhile stays in `received`.
+    pub fn status(&mut self) -> Result<inkstep_serial::grbl::Status, String> {
+        self.send(b"?");
+        let mut got = String::new();
+        for _ in 0..50 {
+            self.run_for(T_PER_MS)?;
+            got.push_str(&self.take_received());
+            if let Some(i) = got.find('<') {
+                if let Some(j) = got[i..].find('>') {
+                    let report = got[i..i + j + 1].to_string();
+                    self.received = format!("{}{}", &got[..i], &got[i + j + 1..]);
+                    if let Reply::Status(st) = inkstep_serial::grbl::parse_reply(&report) {
+                        return Ok(st);
+                    }
+                    return Err(format!("unreadable status report {report:?}"));
+                }
+            }
+        }
+        self.received = got;
+        Err("no status report within 50 ms".into())
+    }
+
     /// Ask `?` until the status report says `Idle` (or the limit).
     pub fn wait_idle(&mut self, limit: u64) -> Result<String, String> {
         let end = self.now() + limit;
@@ -161,8 +184,8 @@ impl<'a> Session<'a> {
     /// Stream G-code `text` through the USB port with the project's sender (`flow`:
     /// send-response or character counting), calling `each` after every step of the
     /// sender (one host-controller slot, 125 µs, the time a program on the PC takes to
-    /// react), until every line is answered; then wait for `Idle`. `error:` answers and
-    /// alarms are collected, not fatal.
+    /// react), until every line is answered (the machine may still be moving: see
+    /// `wait_idle`). `error:` answers and alarms are collected, not fatal.
     pub fn stream(
         &mut self,
         text: &str,
@@ -201,10 +224,9 @@ impl<'a> Session<'a> {
             note(sender.received(got.as_bytes()), &mut out);
             each(self)?;
             if self.now() - start > limit {
-                return Err("the job did not finish in time".into());
+                return Err("the job was not answered in time".into());
             }
         }
-        out.report = self.wait_idle(limit)?;
         Ok(out)
     }
 }
@@ -216,6 +238,4 @@ pub struct Streamed {
     /// `line N: TEXT -> error:C` for every refused line.
     pub errors: Vec<String>,
     pub alarms: Vec<String>,
-    /// The `Idle` status report at the end.
-    pub report: String,
 }

@@ -50,6 +50,8 @@ pub struct Flash {
     key_locked_out: bool,
     /// Program and erase operations so far (the power-cut counter).
     pub ops: usize,
+    /// Erase operations so far.
+    pub erases: usize,
     /// Cut the power at this operation (0-based).
     pub cut_at: Option<usize>,
 }
@@ -88,6 +90,7 @@ impl Flash {
             key_state: 0,
             key_locked_out: false,
             ops: 0,
+            erases: 0,
             cut_at: None,
         })
     }
@@ -215,6 +218,7 @@ impl Flash {
         }
         self.array[at..at + len].fill(0xFF);
         self.persist(at, len);
+        self.erases += 1;
         self.sr |= 1 << 5;
         Op::Changed {
             at,
