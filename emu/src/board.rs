@@ -178,6 +178,7 @@ impl Board {
 
     fn clocks_changed(&mut self) {
         self.debug.sync(self.now, self.rcc.hclk_hz());
+        self.nvic.advance(self.now, self.rcc.hclk_hz());
         let tim1 = t_per_cycle(self.rcc.tim_apb2_hz());
         let tim2 = t_per_cycle(self.rcc.tim_apb1_hz());
         self.tim1.tick_t = tim1;
@@ -599,7 +600,7 @@ impl Board {
                 Some(())
             }
             0x1000..=0x1FFF if size == 4 => self.debug.write_dwt(off - 0x1000, v, now, hz),
-            0xE000..=0xEFFF => self.nvic.write(off - 0xE000, size, v, now).ok(),
+            0xE000..=0xEFFF => self.nvic.write(off - 0xE000, size, v, now, hz).ok(),
             _ => None,
         };
         ok.ok_or_else(|| ppb_unknown(off, size))?;

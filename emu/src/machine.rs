@@ -910,11 +910,25 @@ impl<'a> Machine<'a> {
             0xFFFF_FFF1
         };
         let _ = self.uc.reg_write(RegisterARM::LR, u64::from(exc_return));
-        self.vector(e, vtor, pc)?;
+        // Stacking takes the entry time; the board goes on meanwhile. Late arrival
+        // (ARMv7-M B1.5.4, Cortex-M3 TRM 5.5.2): an exception more urgent than `e`
+        // that becomes pending before the vector is fetched is taken instead, on the
+        // same frame; `e` stays pending and follows by tail-chaining.
         let s = self.uc.get_data_mut();
         let cost = ENTRY_CYCLES * t_per_cycle(s.board.sysclk_hz());
-        s.switch_to(e, cost);
-        Ok(())
+        let start = s.board.now;
+        s.account(start);
+        s.events_at(start + cost);
+        let nvic = &s.board.nvic;
+        let e = match nvic.highest_pending() {
+            Some((late, g)) if g < nvic.group_priority(e) => late,
+            _ => e,
+        };
+        s.board.nvic.activate(e);
+        s.profile.entries[e] += 1;
+        s.profile.busy[e] += s.board.now - start;
+        s.profile_mark = s.board.now;
+        self.vector(e, vtor, pc)
     }
 
     fn stacking_fault(&mut self, pc: u32, e: usize) -> Result<(), Stop> {

@@ -78,6 +78,11 @@ impl Nvic {
         }
     }
 
+    /// The group priority of exception `e` (what preemption compares).
+    pub fn group_priority(&self, e: usize) -> i32 {
+        self.group(self.priority(e))
+    }
+
     /// The group priority: the bits above the PRIGROUP split (B1.5.4).
     fn group(&self, prio: i32) -> i32 {
         if prio < 0 {
@@ -232,7 +237,14 @@ impl Nvic {
     }
 
     /// Write a system control space register.
-    pub fn write(&mut self, off: u32, size: usize, v: u32, now: u64) -> Result<(), Unknown> {
+    pub fn write(
+        &mut self,
+        off: u32,
+        size: usize,
+        v: u32,
+        now: u64,
+        core_hz: u32,
+    ) -> Result<(), Unknown> {
         if (0x400..0x400 + IRQS as u32).contains(&off) {
             for i in 0..size as u32 {
                 let irq = (off - 0x400 + i) as usize;
@@ -264,7 +276,7 @@ impl Nvic {
             }
         };
         match off {
-            0x010..=0x01C => self.systick.write(off, v, now),
+            0x010..=0x01C => self.systick.write(off, v, now, core_hz),
             0x100..=0x104 => each(0x100, &mut |n, e| n.enabled[e] = true),
             0x180..=0x184 => each(0x180, &mut |n, e| n.enabled[e] = false),
             0x200..=0x204 => each(0x200, &mut |n, e| n.pending[e] = true),
@@ -406,14 +418,20 @@ impl SysTick {
 
     /// Bring the counter to `now`; true when it reached 0 with TICKINT set.
     fn advance(&mut self, now: u64, core_hz: u32) -> bool {
+        let zeros = self.sync(now);
+        self.set_clock(core_hz);
+        zeros > 0 && self.ctrl & 2 != 0
+    }
+
+    /// The tick from CLKSOURCE: the core clock, or the external reference (the STM32's
+    /// HCLK / 8). Call after bringing the counter to now with the old tick.
+    fn set_clock(&mut self, core_hz: u32) {
         let hz = if self.ctrl & 4 != 0 {
             core_hz
         } else {
             core_hz / 8
         };
-        let zeros = self.sync(now);
         self.tick_t = t_per_cycle(hz.max(1));
-        zeros > 0 && self.ctrl & 2 != 0
     }
 
     fn read(&mut self, off: u32, now: u64) -> u32 {
@@ -431,7 +449,7 @@ impl SysTick {
         }
     }
 
-    fn write(&mut self, off: u32, v: u32, now: u64) {
+    fn write(&mut self, off: u32, v: u32, now: u64, core_hz: u32) {
         self.sync(now);
         match off {
             0x10 => {
@@ -439,6 +457,7 @@ impl SysTick {
                     self.since = now;
                 }
                 self.ctrl = (self.ctrl & (1 << 16)) | (v & 7);
+                self.set_clock(core_hz);
             }
             0x14 => self.load = v & 0x00FF_FFFF,
             0x18 => {

@@ -286,3 +286,159 @@ impl Flash {
         self.key_locked_out = false;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! The flash programming manual (PM0075) and RM0008 3.3.3: keys, PG, PER, MER,
+    //! STRT, EOP, PGERR, LOCK.
+    use super::*;
+
+    const KEYR: u32 = 0x04;
+    const SR: u32 = 0x0C;
+    const CR: u32 = 0x10;
+    const AR: u32 = 0x14;
+    const PG: u32 = 1;
+    const PER: u32 = 2;
+    const MER: u32 = 4;
+    const STRT: u32 = 1 << 6;
+    const LOCK: u32 = 1 << 7;
+    const PGERR: u32 = 1 << 2;
+    const EOP: u32 = 1 << 5;
+
+    fn unlocked() -> Flash {
+        let mut f = Flash::new(None).unwrap();
+        assert_eq!(f.read_reg(CR).unwrap() & LOCK, LOCK, "locked after reset");
+        f.write_reg(KEYR, KEY1).unwrap();
+        f.write_reg(KEYR, KEY2).unwrap();
+        assert_eq!(f.read_reg(CR).unwrap() & LOCK, 0);
+        f
+    }
+
+    #[test]
+    fn a_half_word_is_programmed_with_pg_and_ends_with_eop() {
+        let mut f = unlocked();
+        f.write_reg(CR, PG).unwrap();
+        assert!(matches!(
+            f.write_array(0x1F000, 2, 0x1234).unwrap(),
+            Op::Changed {
+                at: 0x1F000,
+                len: 2,
+                stall_t: PROGRAM_T
+            }
+        ));
+        assert_eq!(f.read_array(0x1F000, 2), 0x1234);
+        assert_eq!(f.read_reg(SR).unwrap(), EOP, "EOP, BSY clear");
+        f.write_reg(SR, EOP).unwrap();
+        assert_eq!(f.read_reg(SR).unwrap(), 0, "EOP is cleared by writing 1");
+    }
+
+    #[test]
+    fn programming_a_half_word_that_is_not_erased_sets_pgerr_and_changes_nothing() {
+        let mut f = unlocked();
+        f.write_reg(CR, PG).unwrap();
+        f.write_array(0x1F000, 2, 0x1234).unwrap();
+        f.write_reg(SR, EOP).unwrap();
+        assert!(matches!(
+            f.write_array(0x1F000, 2, 0x5678).unwrap(),
+            Op::None
+        ));
+        assert_eq!(f.read_reg(SR).unwrap() & PGERR, PGERR);
+        assert_eq!(f.read_array(0x1F000, 2), 0x1234);
+        // Writing 0x0000 over anything is allowed (PM0075 2.3.3).
+        f.write_reg(SR, PGERR).unwrap();
+        f.write_array(0x1F000, 2, 0).unwrap();
+        assert_eq!(f.read_array(0x1F000, 2), 0);
+        assert_eq!(f.read_reg(SR).unwrap() & PGERR, 0);
+    }
+
+    #[test]
+    fn page_erase_clears_the_addressed_page_only() {
+        let mut f = unlocked();
+        f.write_reg(CR, PG).unwrap();
+        f.write_array(0x1F3FE, 2, 0x1111).unwrap();
+        f.write_array(0x1F400, 2, 0x2222).unwrap();
+        f.write_reg(CR, PER).unwrap();
+        f.write_reg(AR, BASE + 0x1F200).unwrap();
+        let op = f.write_reg(CR, PER | STRT).unwrap();
+        assert!(matches!(
+            op,
+            Op::Changed {
+                at: 0x1F000,
+                len: PAGE,
+                stall_t: ERASE_T
+            }
+        ));
+        assert_eq!(f.read_array(0x1F3FE, 2), 0xFFFF);
+        assert_eq!(f.read_array(0x1F400, 2), 0x2222);
+        assert_eq!(f.read_reg(CR).unwrap() & STRT, 0, "STRT clears itself");
+        assert_eq!(f.read_reg(SR).unwrap() & EOP, EOP);
+        assert_eq!(f.erases, 1);
+    }
+
+    #[test]
+    fn mass_erase_clears_everything() {
+        let mut f = unlocked();
+        f.load(&[(BASE, &[0u8; 64])]).unwrap();
+        f.write_reg(CR, MER).unwrap();
+        f.write_reg(CR, MER | STRT).unwrap();
+        assert!(f.array.iter().all(|&b| b == 0xFF));
+    }
+
+    #[test]
+    fn a_locked_controller_refuses_programming_and_a_wrong_key_locks_it_until_reset() {
+        let mut f = Flash::new(None).unwrap();
+        f.write_reg(CR, PG).unwrap();
+        assert_eq!(
+            f.read_reg(CR).unwrap(),
+            LOCK,
+            "CR is not writable while locked"
+        );
+        assert!(f.write_array(0x1F000, 2, 0).is_err(), "a bus error");
+        f.write_reg(KEYR, KEY1).unwrap();
+        assert!(
+            f.write_reg(KEYR, 0x1234_5678).is_err(),
+            "a wrong second key"
+        );
+        f.write_reg(KEYR, KEY1).unwrap();
+        f.write_reg(KEYR, KEY2).unwrap();
+        assert_eq!(
+            f.read_reg(CR).unwrap() & LOCK,
+            LOCK,
+            "locked until the next reset"
+        );
+        f.reset();
+        f.write_reg(KEYR, KEY1).unwrap();
+        f.write_reg(KEYR, KEY2).unwrap();
+        assert_eq!(f.read_reg(CR).unwrap() & LOCK, 0);
+        // Setting LOCK locks again.
+        f.write_reg(CR, LOCK).unwrap();
+        assert_eq!(f.read_reg(CR).unwrap() & LOCK, LOCK);
+    }
+
+    #[test]
+    fn programming_takes_half_words_only() {
+        let mut f = unlocked();
+        f.write_reg(CR, PG).unwrap();
+        assert!(f.write_array(0x1F000, 4, 0).is_err());
+        assert!(f.write_array(0x1F001, 2, 0).is_err());
+    }
+
+    #[test]
+    fn a_cut_operation_never_happens_and_the_file_keeps_the_array() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("flash.bin");
+        let mut f = Flash::new(Some(&path)).unwrap();
+        f.write_reg(KEYR, KEY1).unwrap();
+        f.write_reg(KEYR, KEY2).unwrap();
+        f.write_reg(CR, PG).unwrap();
+        f.cut_at = Some(1);
+        f.write_array(0x1F000, 2, 0xAAAA).unwrap();
+        assert!(matches!(
+            f.write_array(0x1F002, 2, 0xBBBB).unwrap(),
+            Op::PowerCut
+        ));
+        let g = Flash::new(Some(&path)).unwrap();
+        assert_eq!(g.read_array(0x1F000, 2), 0xAAAA);
+        assert_eq!(g.read_array(0x1F002, 2), 0xFFFF);
+    }
+}

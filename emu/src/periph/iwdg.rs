@@ -97,3 +97,51 @@ impl Default for Iwdg {
         Self::new()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! RM0008 19.3-19.4: key register, write access to PR/RLR, the countdown.
+    use super::*;
+
+    #[test]
+    fn counts_reload_plus_one_prescaled_lsi_periods_from_start_or_reload() {
+        let mut w = Iwdg::new();
+        assert_eq!(w.deadline(), None, "stopped after reset");
+        w.write(0x00, 0x5555, 0).unwrap();
+        w.write(0x04, 1, 0).unwrap(); // /8
+        w.write(0x08, 2500, 0).unwrap();
+        assert_eq!(w.read(0x0C, 0).unwrap(), 3, "PVU and RVU while updating");
+        assert_eq!(
+            w.read(0x0C, 5 * LSI_T).unwrap(),
+            0,
+            "five LSI periods later"
+        );
+        w.write(0x00, 0xCCCC, 1000).unwrap();
+        // 2501 x 8 periods of 25 us: 500.2 ms.
+        assert_eq!(w.deadline(), Some(1000 + 2501 * 8 * LSI_T));
+        w.write(0x00, 0xAAAA, 2000).unwrap();
+        assert_eq!(w.deadline(), Some(2000 + 2501 * 8 * LSI_T));
+        assert_eq!(w.feeds, 1);
+    }
+
+    #[test]
+    fn pr_and_rlr_are_write_protected_without_the_0x5555_key() {
+        let mut w = Iwdg::new();
+        w.write(0x08, 10, 0).unwrap();
+        assert_eq!(w.read(0x08, 0).unwrap(), 0xFFF, "reset value kept");
+        w.write(0x00, 0x5555, 0).unwrap();
+        w.write(0x00, 0xAAAA, 0).unwrap(); // a reload closes the access again
+        w.write(0x04, 3, 0).unwrap();
+        assert_eq!(w.read(0x04, 0).unwrap(), 0);
+    }
+
+    #[test]
+    fn it_cannot_be_stopped_once_started() {
+        let mut w = Iwdg::new();
+        w.write(0x00, 0xCCCC, 0).unwrap();
+        w.write(0x00, 0x0000, 10).unwrap();
+        w.write(0x00, 0x5555, 10).unwrap();
+        // Reset values: /4, 0xFFF: 4096 x 4 periods.
+        assert_eq!(w.deadline(), Some(4096 * 4 * LSI_T));
+    }
+}

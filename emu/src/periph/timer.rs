@@ -353,6 +353,7 @@ impl Timer {
                 self.ccr[ch] = v16;
                 if !self.ccr_preload(ch) {
                     self.ccr_active[ch] = v16;
+                    self.compare_levels_now(now, edges);
                 }
             }
             0x44 if self.advanced => {
@@ -365,15 +366,123 @@ impl Timer {
         Ok(())
     }
 
-    /// Forced modes take effect on the write, not at the next match.
+    /// Forced modes take effect on the write, and the PWM modes compare the counter
+    /// with the compare register continuously (RM0008 15.3.9), not only at a match.
     fn compare_levels_now(&mut self, now: u64, edges: &mut Vec<Edge>) {
+        let cnt = self.counter_at(now);
         for ch in 0..4 {
+            let c = self.ccr_active[ch];
             match self.oc_mode(ch) {
                 4 => self.oc_ref[ch] = false,
                 5 => self.oc_ref[ch] = true,
+                6 => self.oc_ref[ch] = cnt < c,
+                7 => self.oc_ref[ch] = cnt >= c,
                 _ => {}
             }
         }
         self.update_outputs(now, edges);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! RM0008 15.3 (TIM2): the counter, update events and the compare outputs.
+    use super::*;
+
+    /// TIM2 at one time unit per timer clock.
+    fn tim2() -> Timer {
+        let mut t = Timer::new("TIM2", false);
+        t.tick_t = 1;
+        t
+    }
+
+    fn w(t: &mut Timer, off: u32, v: u32, now: u64, edges: &mut Vec<Edge>) {
+        t.write(off, v, now, edges).unwrap();
+    }
+
+    #[test]
+    fn pwm_mode_1_rises_at_the_period_start_and_falls_at_the_compare_tick() {
+        let (mut t, mut e) = (tim2(), Vec::new());
+        // CH1 PWM mode 1 (OC1M = 110) with CCR preload, output enabled, ARR 99, CCR 30.
+        w(&mut t, 0x18, 0x68, 0, &mut e);
+        w(&mut t, 0x2C, 99, 0, &mut e);
+        w(&mut t, 0x34, 30, 0, &mut e);
+        w(&mut t, 0x20, 1, 0, &mut e);
+        w(&mut t, 0x14, 1, 0, &mut e); // UG: preloads in, counter 0: OC1REF high
+        assert_eq!(
+            e,
+            [Edge {
+                t: 0,
+                channel: 0,
+                level: true
+            }]
+        );
+        e.clear();
+        w(&mut t, 0x10, 0, 0, &mut e); // clear UIF from UG
+        w(&mut t, 0x00, 1, 10, &mut e); // CEN at t = 10
+        t.advance(250, &mut e);
+        // Low from CNT = CCR (10 + 30), high again at each update (CNT 0 after 99).
+        let want = [
+            (40, false),
+            (110, true),
+            (140, false),
+            (210, true),
+            (240, false),
+        ];
+        let got: Vec<(u64, bool)> = e.iter().map(|x| (x.t, x.level)).collect();
+        assert_eq!(got, want);
+        assert_eq!(t.sr & 1, 1, "UIF set by the overflows");
+        assert_eq!(t.sr & 2, 2, "CC1IF set by the matches");
+    }
+
+    #[test]
+    fn polarity_inverts_and_a_disabled_channel_stays_low() {
+        let (mut t, mut e) = (tim2(), Vec::new());
+        w(&mut t, 0x18, 0x60 | 0x6000, 0, &mut e); // CH1 and CH2 PWM mode 1
+        w(&mut t, 0x2C, 9, 0, &mut e);
+        w(&mut t, 0x34, 5, 0, &mut e);
+        w(&mut t, 0x38, 5, 0, &mut e);
+        w(&mut t, 0x20, 0x3, 0, &mut e); // CC1E with CC1P (active low); CH2 off
+        w(&mut t, 0x00, 1, 0, &mut e);
+        t.advance(20, &mut e);
+        assert!(e.iter().all(|x| x.channel == 0), "{e:?}");
+        let got: Vec<(u64, bool)> = e.iter().map(|x| (x.t, x.level)).collect();
+        // REF is high at CNT 0 .. 4 (output low), low from 5 (output high).
+        assert_eq!(got, [(5, true), (10, false), (15, true), (20, false)]);
+    }
+
+    #[test]
+    fn one_pulse_mode_stops_the_counter_at_the_update_event() {
+        let (mut t, mut e) = (tim2(), Vec::new());
+        w(&mut t, 0x2C, 49, 0, &mut e);
+        w(&mut t, 0x00, 0x9, 0, &mut e); // OPM + CEN
+        t.advance(200, &mut e);
+        assert_eq!(t.read(0x00, 200).unwrap() & 1, 0, "CEN cleared");
+        assert_eq!(t.read(0x24, 200).unwrap(), 0);
+        assert_eq!(t.sr & 1, 1);
+        assert_eq!(t.next_event(), None);
+    }
+
+    #[test]
+    fn arr_preload_takes_effect_at_the_update_and_urs_keeps_ug_quiet() {
+        let (mut t, mut e) = (tim2(), Vec::new());
+        w(&mut t, 0x2C, 9, 0, &mut e);
+        w(&mut t, 0x00, 0x80 | 0x4 | 1, 0, &mut e); // ARPE, URS, CEN
+        w(&mut t, 0x14, 1, 0, &mut e); // UG: no UIF with URS
+        assert_eq!(t.sr & 1, 0);
+        w(&mut t, 0x2C, 19, 3, &mut e); // preloaded: the period in progress stays 10
+        assert_eq!(t.next_event(), Some(10));
+        t.advance(10, &mut e);
+        assert_eq!(t.sr & 1, 1, "overflow sets UIF even with URS");
+        assert_eq!(t.next_event(), Some(30), "the new period of 20");
+    }
+
+    #[test]
+    fn the_counter_reads_from_the_time_and_the_prescaler() {
+        let (mut t, mut e) = (tim2(), Vec::new());
+        w(&mut t, 0x28, 3, 0, &mut e); // PSC 3: /4, taken at the update
+        w(&mut t, 0x14, 1, 0, &mut e);
+        w(&mut t, 0x00, 1, 100, &mut e);
+        assert_eq!(t.read(0x24, 100 + 4 * 7 + 3).unwrap(), 7);
     }
 }

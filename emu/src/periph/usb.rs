@@ -309,3 +309,139 @@ impl Default for Usb {
         Self::new()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! RM0008 23.5.2 (USB_EPnR): CTR_RX/CTR_TX are rc_w0 (0 clears, 1 leaves them),
+    //! DTOG_RX/TX and STAT_RX/TX are toggled by writing 1 (0 leaves them), SETUP is
+    //! read-only, EP_TYPE/EP_KIND/EA are plain read/write; and the transactions'
+    //! effect on them (23.4.2).
+    use super::*;
+
+    /// A device at address 0, EP0 control with 8-byte buffers.
+    fn device() -> Usb {
+        let mut u = Usb::new();
+        u.write(0x40, 0).unwrap(); // CNTR: out of power-down and reset
+        u.write(0x4C, 0x80).unwrap(); // DADDR: EF, address 0
+                                      // BTABLE 0: EP0 TX at 0x40, RX at 0x80 with BL_SIZE 0, NUM_BLOCK 4 (8 bytes).
+        for (i, v) in [0x40u16, 0, 0x80, 4 << 10].into_iter().enumerate() {
+            u.pma_write(4 * i as u32, 2, u32::from(v));
+        }
+        u
+    }
+
+    #[test]
+    fn toggle_bits_flip_on_1_and_ctr_bits_clear_on_0() {
+        let mut u = device();
+        // EP_TYPE control (01), EA 0; STAT_RX := VALID (11) and STAT_TX := NAK (10) by
+        // toggling from DISABLED (00).
+        u.write(0x00, (1 << 9) | (3 << 12) | (2 << 4)).unwrap();
+        assert_eq!(u.epr[0], (1 << 9) | (3 << 12) | (2 << 4));
+        // Writing the value read back toggles the same bits again: DISABLED.
+        let v = u.read(0x00).unwrap();
+        u.write(0x00, v).unwrap();
+        assert_eq!(u.epr[0] & (STAT_RX | STAT_TX), 0);
+        // DTOG: 1 toggles, 0 leaves.
+        u.write(0x00, (1 << 9) | DTOG_RX).unwrap();
+        assert_eq!(u.epr[0] & DTOG_RX, DTOG_RX);
+        u.write(0x00, 1 << 9).unwrap();
+        assert_eq!(u.epr[0] & DTOG_RX, DTOG_RX, "0 leaves it");
+        // CTR: set by hardware; writing 1 leaves it, 0 clears it.
+        u.epr[0] |= CTR_RX | CTR_TX;
+        u.write(0x00, (1 << 9) | CTR_RX | CTR_TX).unwrap();
+        assert_eq!(u.epr[0] & (CTR_RX | CTR_TX), CTR_RX | CTR_TX);
+        u.write(0x00, (1 << 9) | CTR_TX).unwrap();
+        assert_eq!(
+            u.epr[0] & (CTR_RX | CTR_TX),
+            CTR_TX,
+            "CTR_RX cleared by its 0"
+        );
+        // Writing 1 to a CTR bit that is 0 does not set it.
+        u.write(0x00, (1 << 9) | CTR_RX).unwrap();
+        assert_eq!(u.epr[0] & CTR_RX, 0);
+    }
+
+    #[test]
+    fn setup_is_read_only_and_set_by_a_setup_transaction() {
+        let mut u = device();
+        u.write(0x00, (1 << 9) | (3 << 12) | (2 << 4)).unwrap();
+        u.write(0x00, (1 << 9) | SETUP).unwrap();
+        assert_eq!(u.epr[0] & SETUP, 0, "software cannot set SETUP");
+        assert_eq!(u.setup(0, 0, &[0x80, 6, 0, 1, 0, 0, 18, 0]), Handshake::Ack);
+        let r = u.epr[0];
+        assert_eq!(r & (CTR_RX | SETUP), CTR_RX | SETUP);
+        // Both directions NAK until the software looks; both toggles DATA1.
+        assert_eq!((r & STAT_RX) >> 12, NAK);
+        assert_eq!((r & STAT_TX) >> 4, NAK);
+        assert_eq!(r & (DTOG_RX | DTOG_TX), DTOG_RX | DTOG_TX);
+        // The 8 bytes are in the RX buffer with their count.
+        assert_eq!(u.pma_read(0x80 * 2, 2), 0x0680);
+        assert_eq!(u.pma_read(12, 2) & 0x3FF, 8);
+        // ISTR shows CTR, EP 0, DIR (an OUT/SETUP).
+        assert_eq!(u.read(0x44).unwrap() & 0x801F, 0x8010);
+    }
+
+    #[test]
+    fn out_packets_follow_the_data_toggle_and_nak_when_not_valid() {
+        let mut u = device();
+        // EP0 as a plain bulk endpoint (00) for this test, RX VALID, DTOG_RX 0.
+        u.write(0x00, 3 << 12).unwrap();
+        assert_eq!(u.out(0, 0, false, &[1, 2, 3]), Handshake::Ack);
+        assert_eq!(u.epr[0] & DTOG_RX, DTOG_RX, "toggled for the next packet");
+        assert_eq!((u.epr[0] & STAT_RX) >> 12, NAK, "NAK until re-armed");
+        assert_eq!(u.out(0, 0, true, &[4]), Handshake::Nak);
+        // Re-armed as firmware does it (CTR_RX cleared by its 0, STAT_RX NAK -> VALID by
+        // toggling bit 12), a repeat of DATA0 is acknowledged and dropped; DATA1 is
+        // taken.
+        u.write(0x00, 1 << 12).unwrap();
+        assert_eq!(u.epr[0] & CTR_RX, 0);
+        assert_eq!((u.epr[0] & STAT_RX) >> 12, 3);
+        assert_eq!(u.out(0, 0, false, &[9]), Handshake::Ack);
+        assert_eq!((u.epr[0] & STAT_RX) >> 12, 3, "the repeat changed nothing");
+        assert_eq!(u.out(0, 0, true, &[4, 5]), Handshake::Ack);
+        assert_eq!(u.pma_read(12, 2) & 0x3FF, 2);
+        // Too long for the 8-byte buffer: no handshake.
+        u.write(0x00, (1 << 12) | CTR_RX).unwrap();
+        assert_eq!(u.out(0, 0, false, &[0; 9]), Handshake::Timeout);
+    }
+
+    #[test]
+    fn in_tokens_send_the_tx_buffer_with_its_toggle_or_stall() {
+        let mut u = device();
+        for (k, b) in [0xAAu8, 0xBB, 0xCC].iter().enumerate() {
+            u.pma[0x40 + k] = *b;
+        }
+        u.pma_write(4, 2, 3); // COUNT_TX
+        u.write(0x00, 3 << 4).unwrap(); // STAT_TX VALID
+        assert_eq!(u.in_token(0, 0), Ok((vec![0xAA, 0xBB, 0xCC], false)));
+        assert_eq!(u.epr[0] & (CTR_TX | DTOG_TX), CTR_TX | DTOG_TX);
+        assert_eq!(u.in_token(0, 0), Err(Handshake::Nak));
+        // STALL: NAK (10) -> STALL (01) by toggling 11.
+        u.write(0x00, 3 << 4).unwrap();
+        assert_eq!(u.in_token(0, 0), Err(Handshake::Stall));
+    }
+
+    #[test]
+    fn the_packet_memory_is_16_bit_words_at_32_bit_strides() {
+        let mut u = Usb::new();
+        u.pma_write(0, 4, 0xDEAD_1234);
+        u.pma_write(4, 2, 0x5678);
+        assert_eq!(&u.pma[0..4], &[0x34, 0x12, 0x78, 0x56]);
+        assert_eq!(u.pma_read(0, 4), 0x1234, "the upper half is not backed");
+        assert_eq!(u.pma_read(1, 1), 0x12);
+        assert_eq!(u.pma_read(2, 2), 0);
+    }
+
+    #[test]
+    fn a_bus_reset_clears_the_address_and_the_endpoints() {
+        let mut u = device();
+        u.write(0x00, (1 << 9) | (3 << 12)).unwrap();
+        u.write(0x4C, 0x85).unwrap();
+        u.bus_reset();
+        assert_eq!(u.epr[0], 0);
+        assert_eq!(u.daddr, 0);
+        assert_eq!(u.read(0x44).unwrap() & (1 << 10), 1 << 10, "ISTR.RESET");
+        u.write(0x44, !(1 << 10)).unwrap();
+        assert_eq!(u.read(0x44).unwrap() & (1 << 10), 0, "rc_w0");
+    }
+}
