@@ -2,6 +2,7 @@
 //! (emu/README.md). The CPU is unicorn's Cortex-M3; everything around it (exceptions,
 //! peripherals, the USB host, the outside of the board) is modelled here.
 
+pub mod bench;
 pub mod board;
 pub mod clock;
 pub mod debug;

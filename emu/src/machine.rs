@@ -971,6 +971,9 @@ impl<'a> Machine<'a> {
             });
         }
         let s = self.uc.get_data_mut();
+        // The handler's time up to here is its own (charged before it stops being the
+        // active exception).
+        s.account(s.board.now);
         if s.board.nvic.deactivate().is_none() {
             return Err(Stop::Cpu {
                 message: "exception return in thread mode".into(),

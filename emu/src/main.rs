@@ -88,6 +88,12 @@ enum Cmd {
         #[arg(long)]
         log: Option<PathBuf>,
     },
+    /// Figures from the real image: CPU load per task (idle, drawing star.nc), the `?`
+    /// answer time, the highest sustained step-event rate, e-stop latency.
+    Bench {
+        #[arg(long)]
+        elf: Option<PathBuf>,
+    },
     /// Run the on-target tests (tests/on_target.rs, defmt-test) on the emulated board;
     /// exits with the tests' status.
     Test {
@@ -344,6 +350,12 @@ fn cmd_soak(minutes: f64, elf: Option<PathBuf>, log: Option<&Path>) -> Result<Ex
     })
 }
 
+fn cmd_bench(elf: Option<PathBuf>) -> Result<ExitCode, String> {
+    let elf = elf_or_build(elf)?;
+    print!("{}", inkstep_emu::bench::run(&elf)?);
+    Ok(ExitCode::SUCCESS)
+}
+
 fn cmd_test(elf: Option<PathBuf>, log: Option<&Path>) -> Result<ExitCode, String> {
     use inkstep_emu::target_tests;
     let elf = match elf {
@@ -413,6 +425,7 @@ fn main() -> ExitCode {
             flash,
         } => cmd_demo(&out, keys.as_deref(), elf, log.as_deref(), flash.as_deref()),
         Cmd::Soak { minutes, elf, log } => cmd_soak(minutes, elf, log.as_deref()),
+        Cmd::Bench { elf } => cmd_bench(elf),
         Cmd::Test { elf, log } => cmd_test(elf, log.as_deref()),
     };
     match r {

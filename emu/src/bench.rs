@@ -1,0 +1,382 @@
+//! `cargo emu bench`: figures measured on the real product image in the emulator (the
+//! cycle model of emu/README.md), printed as the README's table:
+//! - CPU load per task (each RTIC task is an exception) at idle and while drawing
+//!   bench/star.nc streamed over USB;
+//! - the `?` answer time: from the bulk OUT packet that carries the `?` to the first
+//!   bulk IN packet that carries the report;
+//! - the highest step-event rate the firmware sustains while a job streams over USB
+//!   with `?` polling and the LCD running: straight moves split into 2 mm segments at
+//!   rising feeds; sustained = the cruise runs at the requested rate with no gap (a
+//!   step interval over 1.5 times the median, the step queue running dry);
+//! - e-stop latency: from the e-stop pin's edge to the drivers' enable pin turning off,
+//!   and to the last step edge.
+
+use crate::clock::{T_PER_MS, T_PER_S, T_PER_US};
+use crate::session::{repo_root, Session};
+use crate::soak::PROGRAMS;
+use inkstep_serial::sender::Flow;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Interrupt names of the medium-density STM32F103 that the firmware binds (RM0008
+/// table 63), by IRQ number.
+const IRQ_NAMES: [(usize, &str); 12] = [
+    (6, "EXTI0"),
+    (7, "EXTI1"),
+    (9, "EXTI3"),
+    (10, "EXTI4"),
+    (20, "USB_LP_CAN_RX0"),
+    (23, "EXTI9_5"),
+    (28, "TIM2"),
+    (31, "I2C1_EV"),
+    (35, "SPI1"),
+    (38, "USART2"),
+    (39, "USART3"),
+    (40, "EXTI15_10"),
+];
+
+/// The name of exception `e`: its vector, and the RTIC task bound to it in
+/// src/main.rs when there is one (`#[task(binds = X, ..)] fn name`).
+fn task_name(e: usize, tasks: &[(String, String)]) -> String {
+    let vector = match e {
+        0 => return "thread mode (init, idle)".into(),
+        15 => "SysTick".to_string(),
+        3 => "HardFault".to_string(),
+        e if e >= 16 => IRQ_NAMES
+            .iter()
+            .find(|(n, _)| *n == e - 16)
+            .map_or(format!("IRQ{}", e - 16), |(_, s)| s.to_string()),
+        e => format!("exception {e}"),
+    };
+    match tasks.iter().find(|(b, _)| *b == vector) {
+        Some((_, task)) => format!("{task} ({vector})"),
+        None => vector,
+    }
+}
+
+/// (vector, task) pairs from the product's source.
+fn rtic_tasks() -> Vec<(String, String)> {
+    let src = std::fs::read_to_string(repo_root().join("src/main.rs")).unwrap_or_default();
+    let mut out = Vec::new();
+    let mut binds: Option<String> = None;
+    for line in src.lines() {
+        let l = line.trim();
+        if let Some(rest) = l.strip_prefix("#[task(binds = ") {
+            binds = rest.split([',', ')']).next().map(|s| s.trim().to_string());
+        } else if let (Some(b), Some(rest)) = (&binds, l.strip_prefix("fn ")) {
+            if let Some(name) = rest.split('(').next() {
+                out.push((b.clone(), name.to_string()));
+            }
+            binds = None;
+        }
+    }
+    out
+}
+
+/// Busy time per exception (and asleep) over a window.
+#[derive(Clone, Debug)]
+pub struct Load {
+    pub span: u64,
+    /// (exception, busy time, entries), busiest first.
+    pub tasks: Vec<(usize, u64, u64)>,
+    pub sleep: u64,
+}
+
+fn snapshot(s: &mut Session) -> (Vec<u64>, Vec<u64>, u64, u64) {
+    let now = s.now();
+    let p = s.m.state_mut().profile_now();
+    (p.busy.clone(), p.entries.clone(), p.sleep, now)
+}
+
+fn load_between(a: &(Vec<u64>, Vec<u64>, u64, u64), b: &(Vec<u64>, Vec<u64>, u64, u64)) -> Load {
+    let mut tasks: Vec<(usize, u64, u64)> = (0..a.0.len())
+        .map(|e| (e, b.0[e] - a.0[e], b.1[e] - a.1[e]))
+        .filter(|&(_, t, n)| t > 0 || n > 0)
+        .collect();
+    tasks.sort_by_key(|t| std::cmp::Reverse(t.1));
+    Load {
+        span: b.3 - a.3,
+        tasks,
+        sleep: b.2 - a.2,
+    }
+}
+
+/// Load at idle: `seconds` with nothing to do after the LCD is up.
+pub fn idle_load(elf: &Path, seconds: u64) -> Result<Load, String> {
+    let mut s = Session::new(elf, None)?;
+    s.boot()?;
+    s.run_for(2 * T_PER_S)?;
+    let a = snapshot(&mut s);
+    s.run_for(seconds * T_PER_S)?;
+    Ok(load_between(&a, &snapshot(&mut s)))
+}
+
+/// What drawing star.nc showed: the load from its first to its last step, the `?`
+/// answer times, the interrupt lateness of the cycle model.
+pub struct Drawing {
+    pub load: Load,
+    /// `?` answer times (OUT packet to IN packet), in time units.
+    pub answers: Vec<u64>,
+    pub lateness: crate::machine::Lateness,
+}
+
+/// Stream star.nc (send-response, as the equivalence check does) with `?` every
+/// 50 ms plus a little (so the questions fall at every phase of the 1 ms schedule).
+pub fn drawing(elf: &Path) -> Result<Drawing, String> {
+    let mut s = Session::new(elf, None)?;
+    s.boot()?;
+    s.m.board().host.packets = Some(Vec::new());
+    s.m.state_mut().lateness = Default::default();
+    let mut marks: Vec<(Vec<u64>, Vec<u64>, u64, u64)> = Vec::new();
+    let mut next_q = s.now();
+    let mut steps_seen = 0;
+    let (_, star) = PROGRAMS[0];
+    let mut watch = |s: &mut Session| {
+        if s.now() >= next_q {
+            s.send(b"?");
+            next_q = s.now() + 50 * T_PER_MS + 37 * T_PER_US;
+        }
+        // The load window: from the first step to the last.
+        let n = s.m.state().board.steps.len();
+        if n > 0 && steps_seen == 0 {
+            marks.push(snapshot(s));
+        }
+        if n > steps_seen {
+            steps_seen = n;
+            let snap = snapshot(s);
+            if marks.len() < 2 {
+                marks.push(snap);
+            } else {
+                marks[1] = snap;
+            }
+        }
+        Ok(())
+    };
+    s.stream(star, Flow::SendResponse, 600 * T_PER_S, &mut watch)?;
+    let end = s.now() + 600 * T_PER_S;
+    loop {
+        s.run_for(crate::usb_host::SLOT_T)?;
+        watch(&mut s)?;
+        let last = s.m.state().board.steps.last().map_or(0, |st| st.t);
+        if s.now() > last + 500 * T_PER_MS || s.now() > end {
+            break;
+        }
+    }
+    if marks.len() < 2 {
+        return Err("star.nc drew nothing".into());
+    }
+    let load = load_between(&marks[0], &marks[1]);
+    let packets = s.m.board().host.packets.take().unwrap_or_default();
+    let mut answers = Vec::new();
+    for (i, p) in packets.iter().enumerate() {
+        if p.out && p.data.contains(&b'?') {
+            if let Some(r) = packets[i + 1..]
+                .iter()
+                .find(|r| !r.out && r.data.contains(&b'<'))
+            {
+                answers.push(r.t - p.t);
+            }
+        }
+    }
+    Ok(Drawing {
+        load,
+        answers,
+        lateness: s.m.state().lateness.clone(),
+    })
+}
+
+/// One rate trial: requested step events per second, and what the cruise did.
+pub struct RateTrial {
+    pub requested: f64,
+    /// Step events per second at cruise (the median interval).
+    pub achieved: f64,
+    /// The longest step interval at cruise over the median.
+    pub worst_gap: f64,
+    pub complaints: usize,
+}
+
+impl RateTrial {
+    pub fn sustained(&self) -> bool {
+        self.complaints == 0 && self.worst_gap <= 1.5 && self.achieved >= 0.99 * self.requested
+    }
+}
+
+/// Steps per mm of X for the rate trials: at the settings' limit of 100 kHz per axis
+/// ($110 x $100 / 60) the feed is 7500 mm/min.
+const RATE_STEPS_PER_MM: f64 = 800.0;
+
+/// X moves in 2 mm segments at `rate` step events per second for about a second,
+/// streamed with character counting, `?` every 100 ms, the LCD running.
+pub fn rate_trial(elf: &Path, rate: f64) -> Result<RateTrial, String> {
+    let mut s = Session::new(elf, None)?;
+    s.boot()?;
+    for c in ["$100=800", "$110=7500", "$120=20000"] {
+        let got = s.command(c, T_PER_S)?;
+        if got.contains("error") {
+            return Err(format!("{c}: {got}"));
+        }
+    }
+    let feed = rate / RATE_STEPS_PER_MM * 60.0;
+    let segments = ((rate / (2.0 * RATE_STEPS_PER_MM)).ceil() as usize).max(20);
+    let mut job = format!("G21 G91\nG1 F{feed:.1}\n");
+    for _ in 0..segments {
+        job.push_str("X2\n");
+    }
+    let first_step = s.m.state().board.steps.len();
+    let mut next_q = s.now();
+    let r = s.stream(&job, Flow::CharCount(128), 600 * T_PER_S, |s| {
+        if s.now() >= next_q {
+            s.send(b"?");
+            next_q = s.now() + 100 * T_PER_MS;
+        }
+        Ok(())
+    })?;
+    s.wait_idle(600 * T_PER_S)?;
+    let steps = &s.m.state().board.steps[first_step..];
+    // Cruise: the middle 60 % of the steps.
+    let (a, b) = (steps.len() / 5, steps.len() * 4 / 5);
+    let mut iv: Vec<u64> = steps[a..b].windows(2).map(|w| w[1].t - w[0].t).collect();
+    if iv.is_empty() {
+        return Err("no steps".into());
+    }
+    let worst = *iv.iter().max().unwrap_or(&0);
+    iv.sort_unstable();
+    let median = iv[iv.len() / 2].max(1);
+    Ok(RateTrial {
+        requested: rate,
+        achieved: T_PER_S as f64 / median as f64,
+        worst_gap: worst as f64 / median as f64,
+        complaints: r.errors.len() + r.alarms.len(),
+    })
+}
+
+/// E-stop latency at `n` moments of a move at cruise: the worst time from the pin
+/// edge to /EN off, and the step edges that came after the pin edge in all.
+pub fn estop_latency(elf: &Path, n: usize) -> Result<(u64, usize), String> {
+    let mut worst = (0, 0);
+    for k in 0..n {
+        let mut s = Session::new(elf, None)?;
+        s.boot()?;
+        s.send(b"G21 G90\nG1 X150 Y40 F3000\n");
+        // At cruise, then at a different phase of the step period each time.
+        s.run_for(800 * T_PER_MS + k as u64 * 37 * T_PER_US)?;
+        s.m.board().watch[0] |= 1 << 9;
+        let edge = s.now();
+        let mut o = s.m.state().board.outside.clone();
+        o.estop_open = true;
+        s.set_outside(o);
+        s.run_for(20 * T_PER_MS)?;
+        let b = &s.m.state().board;
+        let off = b
+            .pin_changes
+            .iter()
+            .find(|&&(t, p, pin, level)| t >= edge && p == 0 && pin == 9 && level)
+            .map(|c| c.0 - edge)
+            .ok_or("the drivers were not turned off")?;
+        let after = b.steps.iter().filter(|st| st.t > edge).count();
+        worst = (worst.0.max(off), worst.1 + after);
+    }
+    Ok(worst)
+}
+
+fn us(t: u64) -> f64 {
+    t as f64 / T_PER_US as f64
+}
+
+fn load_table(out: &mut String, title: &str, l: &Load, tasks: &[(String, String)]) {
+    let pct = |t: u64| 100.0 * t as f64 / l.span as f64;
+    let _ = writeln!(
+        out,
+        "\n{title} ({:.2} s of virtual time)\n\n| task (vector) | CPU | entries/s |\n|---|---:|---:|",
+        l.span as f64 / T_PER_S as f64
+    );
+    let secs = l.span as f64 / T_PER_S as f64;
+    for &(e, t, n) in &l.tasks {
+        let _ = writeln!(
+            out,
+            "| {} | {:.2} % | {:.0} |",
+            task_name(e, tasks),
+            pct(t),
+            n as f64 / secs
+        );
+    }
+    let busy: u64 = l.tasks.iter().map(|t| t.1).sum();
+    let _ = writeln!(
+        out,
+        "| **all (asleep in WFI: {:.1} %)** | **{:.2} %** | |",
+        pct(l.sleep),
+        pct(busy)
+    );
+}
+
+/// The whole bench, as the README's markdown.
+pub fn run(elf: &Path) -> Result<String, String> {
+    let tasks = rtic_tasks();
+    let mut out = String::new();
+    let idle = idle_load(elf, 3)?;
+    let draw = drawing(elf)?;
+    load_table(
+        &mut out,
+        "CPU load at idle (menu on the LCD)",
+        &idle,
+        &tasks,
+    );
+    load_table(
+        &mut out,
+        "CPU load drawing bench/star.nc (streamed over USB, `?` every 50 ms, first to last step)",
+        &draw.load,
+        &tasks,
+    );
+    let a = &draw.answers;
+    if a.is_empty() {
+        return Err("no ? was answered".into());
+    }
+    let mean = a.iter().sum::<u64>() as f64 / a.len() as f64;
+    let _ = writeln!(
+        out,
+        "\n| figure | value |\n|---|---|\n| `?` answer, OUT packet to IN packet ({} questions while drawing star.nc) | min {:.0} µs, mean {:.0} µs, max {:.0} µs |",
+        a.len(),
+        us(*a.iter().min().unwrap_or(&0)),
+        mean / T_PER_US as f64,
+        us(*a.iter().max().unwrap_or(&0)),
+    );
+    let (off, after) = estop_latency(elf, 8)?;
+    let _ = writeln!(
+        out,
+        "| e-stop latency, pin edge to drivers off (/EN), worst of 8 at cruise (F3000) | {:.2} µs |\n| step edges after the e-stop pin edge, in those 8 | {after} |",
+        us(off),
+    );
+    let l = &draw.lateness;
+    let _ = writeln!(
+        out,
+        "| cycle model: interrupts taken after their event (block boundaries), while drawing | {} interrupts, mean {:.3} µs, max {:.3} µs late; longest block {} instructions |",
+        l.count,
+        if l.count > 0 { us(l.total) / l.count as f64 } else { 0.0 },
+        us(l.max),
+        l.longest_block
+    );
+    let _ = writeln!(
+        out,
+        "\nSustained step-event rate (X moves in 2 mm segments streamed with character counting, `?` every 100 ms, LCD running):\n\n| requested events/s | at cruise | worst interval / median | sustained |\n|---:|---:|---:|---|"
+    );
+    let mut best = 0.0;
+    for k in 1..=10 {
+        let t = rate_trial(elf, 10_000.0 * k as f64)?;
+        let _ = writeln!(
+            out,
+            "| {:.0} | {:.0} | {:.2} | {} |",
+            t.requested,
+            t.achieved,
+            t.worst_gap,
+            if t.sustained() { "yes" } else { "no" }
+        );
+        if t.sustained() {
+            best = t.requested;
+        }
+    }
+    let _ = writeln!(
+        out,
+        "\nHighest sustained: {best:.0} step events/s (the settings allow at most 100 kHz per axis)."
+    );
+    Ok(out)
+}
