@@ -7,10 +7,14 @@ use inkstep_emu::session::{product_elf, Session};
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-/// The release product image, built once per test process.
+/// The release product image, built once per test process (or the image named by
+/// INKSTEP_EMU_ELF, to try the tests on another build).
 pub fn elf() -> &'static Path {
     static ELF: OnceLock<PathBuf> = OnceLock::new();
-    ELF.get_or_init(|| product_elf().expect("cargo build --release"))
+    ELF.get_or_init(|| match std::env::var_os("INKSTEP_EMU_ELF") {
+        Some(p) => PathBuf::from(p),
+        None => product_elf().expect("cargo build --release"),
+    })
 }
 
 /// A board with the product image, a blank flash (or `flash`), the USB port
