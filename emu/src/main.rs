@@ -42,6 +42,11 @@ enum Cmd {
         /// Keep the flash array in this file (settings survive between runs).
         #[arg(long)]
         flash: Option<PathBuf>,
+        /// Press this keypad script (the simulator's `--keys` language) on the key
+        /// matrix before the file is streamed; its `lcd:NAME` pictures go to --lcd
+        /// (or the current directory).
+        #[arg(long)]
+        keys: Option<String>,
     },
     /// Put the board's USB serial port on a pseudo-terminal any Grbl sender can open
     /// (DTR rises when it is opened); runs until killed.
@@ -146,12 +151,16 @@ fn cmd_run(
     char_count: bool,
     log: Option<&Path>,
     flash: Option<&Path>,
+    keys: Option<&str>,
 ) -> Result<ExitCode, String> {
     let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
     let elf = elf_or_build(elf)?;
     let mut s = Session::new(&elf, flash)?;
     s.m.state_mut().echo_log = log.is_none();
     s.boot()?;
+    if let Some(script) = keys {
+        inkstep_emu::demo::play(&mut s, script, lcd.unwrap_or(Path::new(".")))?;
+    }
     let flow = if char_count {
         Flow::CharCount(128)
     } else {
@@ -391,6 +400,7 @@ fn main() -> ExitCode {
             char_count,
             log,
             flash,
+            keys,
         } => cmd_run(
             &file,
             elf,
@@ -399,6 +409,7 @@ fn main() -> ExitCode {
             char_count,
             log.as_deref(),
             flash.as_deref(),
+            keys.as_deref(),
         ),
         Cmd::Serve {
             elf,
