@@ -5,8 +5,8 @@
 //! core's `analysis`) and the reading of Grbl's own figures from the bench README, so
 //! that no expected number is written into the code.
 
+use crate::run::Flow;
 use crate::run::{run_gcode, RunResult};
-use crate::sender::Flow;
 use crate::trace::Trace;
 use inkstep_core::analysis::{self, Analyzer};
 use serde::Deserialize;

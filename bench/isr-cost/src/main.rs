@@ -1,7 +1,7 @@
 //! Interrupt-cost bench: runs the firmware's real step path on a Cortex-M3 (in the
 //! unicorn emulator, see measure.py) over the reference programs in bench/*.nc.
 //!
-//! The programs go through the core's protocol and G-code interpreter into the link
+//! The programs go through the core's protocol and G-code interpreter into the pipeline
 //! (planner + segment preparation), whose step commands cross the same SPSC queue to
 //! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
 //! interrupt body with its register accesses. The emulator has no timer, so before each
@@ -16,7 +16,7 @@ use defmt_rtt as _;
 use inkstep::board::{self, StepPins};
 use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput};
 use inkstep_core::controller::Controller;
-use inkstep_core::link::{Link, StepSide};
+use inkstep_core::pipeline::{Pipeline, StepSide};
 use inkstep_core::settings::Settings;
 use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::prep::PrepConfig;
@@ -87,8 +87,8 @@ pub extern "C" fn bench_kick(out: &mut StepOutput) {
 /// One run of segment preparation, as the firmware's prepare task does it.
 #[inline(never)]
 #[no_mangle]
-pub extern "C" fn bench_prepare(link: &mut Link<BoardSide>) {
-    link.fill();
+pub extern "C" fn bench_prepare(pipeline: &mut Pipeline<BoardSide>) {
+    pipeline.fill();
 }
 
 fn raise(flags: u32) {
@@ -140,7 +140,7 @@ fn main() -> ! {
             break;
         };
         let mut out = steps::install(Executor::new([0; 3], 0x1_0000), rx, pins, tim);
-        let mut link = Link::new(&settings, prep, BoardSide { tx });
+        let mut pipeline = Pipeline::new(&settings, prep, BoardSide { tx });
         let mut ctl = Controller::new(settings.clone(), 0);
         let (mut sent, mut ticks, mut events, mut irqs) = (0usize, 0u64, 0u32, 0u32);
         let mut axis_steps = 0u32;
@@ -148,7 +148,7 @@ fn main() -> ! {
         loop {
             let now = (ticks / 72_000) as u32;
             if sent < prog.len() {
-                sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut link, now);
+                sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut pipeline, now);
             }
             loop {
                 let n = ctl.usb_tx(&mut sink);
@@ -157,8 +157,8 @@ fn main() -> ! {
                 }
                 log(sink.get(..n).unwrap_or(&[]));
             }
-            ctl.poll(&mut link, now);
-            bench_prepare(&mut link);
+            ctl.poll(&mut pipeline, now);
+            bench_prepare(&mut pipeline);
             // Start the timer as the firmware's kick does (a pend with no flags).
             bench_kick(&mut out);
             // Run interrupts until the prepared commands are used up.
@@ -172,7 +172,7 @@ fn main() -> ! {
                     axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
                 }
                 ticks += 2000;
-                if link.side().queued() < 32 {
+                if pipeline.side().queued() < 32 {
                     break;
                 }
             }
@@ -182,8 +182,8 @@ fn main() -> ! {
             let done = sent >= prog.len()
                 && drained
                 && !out.timer.is_running()
-                && link.side().queued() == 0;
-            if done && inkstep_core::machine::MotionControl::is_idle(&link) {
+                && pipeline.side().queued() == 0;
+            if done && inkstep_core::machine::MotionControl::is_idle(&pipeline) {
                 break;
             }
         }

@@ -18,7 +18,7 @@
 //! several blocks) and resume. Hold keeps the next tick pending, so no step is lost.
 
 use super::{CmdSink, StepCmd, MAX_WAIT};
-use crate::interp::{Interp, Interpolate, Tick};
+use crate::interpolation::{Interpolate, Interpolator, Tick};
 use crate::motion::{StepPos, X, Y};
 use crate::planner::{Block, Planner, PlannerConfig, Profile};
 
@@ -86,7 +86,7 @@ struct Window {
 #[derive(Clone, Debug)]
 struct Active {
     block: Block,
-    interp: Interp,
+    interp: Interpolator,
     len: TickLen,
     /// Path length covered by queued ticks, Q units from the block start.
     s: u64,
@@ -291,15 +291,15 @@ impl Prep {
                 return false;
             };
             let cfg = planner.config();
-            match Interp::new(self.pos, &block.mv, cfg.method) {
+            match Interpolator::new(self.pos, &block.mv, cfg.method) {
                 Ok(interp) => {
                     let (len_q, ticks_left, len) = match &interp {
-                        Interp::Line(l) => {
+                        Interpolator::Line(l) => {
                             let line_len = line_length(cfg, self.pos, block.mv.target);
                             let per = to_q(line_len / l.ticks().max(1) as f32);
                             (to_q(line_len), Some(l.ticks()), TickLen::Const(per))
                         }
-                        Interp::Conic(c) => {
+                        Interpolator::Conic(c) => {
                             let len = match c.circle_radius() {
                                 Some(r) if cfg.axes[X].steps_per_mm == cfg.axes[Y].steps_per_mm => {
                                     let sp = cfg.axes[X].steps_per_mm.max(1e-6);
@@ -309,7 +309,7 @@ impl Prep {
                             };
                             (to_q(block.length), None, len)
                         }
-                        Interp::Sine(_) => (to_q(block.length), None, TickLen::Curve),
+                        Interpolator::Sine(_) => (to_q(block.length), None, TickLen::Curve),
                     };
                     let ae = planner.plan_accel(&block);
                     self.active = Some(Active {
@@ -420,10 +420,10 @@ fn advance_window(a: &mut Active, cfg: &PrepConfig) {
 /// Length of the last tick along a curve, Q units (lines take the constant branch in
 /// the loop; this is out of line so the loop keeps fewer values live).
 #[inline(never)]
-fn curve_tick_len(len: TickLen, interp: &Interp, cfg: &PlannerConfig) -> u64 {
+fn curve_tick_len(len: TickLen, interp: &Interpolator, cfg: &PlannerConfig) -> u64 {
     match (len, interp) {
         (TickLen::Const(q), _) => q,
-        (TickLen::Circle(m), Interp::Conic(c)) if !c.in_tail() => {
+        (TickLen::Circle(m), Interpolator::Conic(c)) if !c.in_tail() => {
             // R * angle with angle = atan(cross / dot) ~ cross / dot: the angles
             // telescope, so a whole arc adds up to its length (to < 1e-9).
             // f32, not a u64 division (not in the chip's instruction set).
@@ -432,14 +432,14 @@ fn curve_tick_len(len: TickLen, interp: &Interp, cfg: &PlannerConfig) -> u64 {
             let dot = c.last_dot().unsigned_abs().max(1) as f32;
             (c.last_cross().unsigned_abs() as u32 as f32 * m / dot) as u64
         }
-        (_, Interp::Conic(c)) => {
+        (_, Interpolator::Conic(c)) => {
             to_q(c.last_tick_len(cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm))
         }
         (_, interp) => {
             // Only a sine gets here (conics are above): the conic's tangent is not
             // compiled in.
             let dir = match interp {
-                Interp::Sine(c) => c.direction(),
+                Interpolator::Sine(c) => c.direction(),
                 _ => [1.0, 0.0],
             };
             to_q(curve_ds(cfg, dir))
@@ -465,8 +465,8 @@ fn curve_ds(cfg: &PlannerConfig, t: [f32; 2]) -> f32 {
     let my = ty / cfg.axes[Y].steps_per_mm.max(1e-6);
     let mm = crate::fmath::sqrt(mx * mx + my * my);
     let per = match cfg.method {
-        crate::interp::Method::Dda => tx.max(ty),
-        crate::interp::Method::Classic => tx + ty,
+        crate::interpolation::Method::Dda => tx.max(ty),
+        crate::interpolation::Method::Classic => tx + ty,
     };
     if per > 0.0 {
         mm / per

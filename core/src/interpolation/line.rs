@@ -319,7 +319,7 @@ impl Interpolate for Line {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interp::Interpolate;
+    use crate::interpolation::Interpolate;
     use proptest::prelude::*;
 
     fn run(mut it: impl Interpolate, start: StepPos) -> std::vec::Vec<StepPos> {
@@ -442,7 +442,7 @@ mod tests {
             .map(|i| (i64::from(target[i]) - i64::from(start[i])).abs())
             .collect();
         let dir: std::vec::Vec<i8> = (0..AXES)
-            .map(|i| crate::interp::sgn(i64::from(target[i]) - i64::from(start[i])))
+            .map(|i| crate::interpolation::sgn(i64::from(target[i]) - i64::from(start[i])))
             .collect();
         let major = len.iter().copied().max().unwrap_or(0);
         let mut err = [-major; AXES];

@@ -95,13 +95,13 @@ pub trait Interpolate {
 
 /// Any interpolator for a [`Move`], chosen from its [`Path`].
 #[derive(Clone, Debug)]
-pub enum Interp {
+pub enum Interpolator {
     Line(line::Line),
     Conic(conic::Conic),
     Sine(curve::CurveTrace<curve::Sine>),
 }
 
-impl Interp {
+impl Interpolator {
     /// Interpolator for `mv`, starting from `start`.
     pub fn new(start: StepPos, mv: &Move, method: Method) -> Result<Self, InterpError> {
         // Everything but a plain line is planar (XY): one check for all of them.
@@ -109,8 +109,10 @@ impl Interp {
             planar(start, mv.target)?;
         }
         match mv.path {
-            Path::Line => Ok(Interp::Line(line::Line::new(start, mv.target, method))),
-            Path::LineFine { from, to } => Ok(Interp::Line(
+            Path::Line => Ok(Interpolator::Line(line::Line::new(
+                start, mv.target, method,
+            ))),
+            Path::LineFine { from, to } => Ok(Interpolator::Line(
                 match (method, line::FineLine::new(start, mv.target, from, to)) {
                     (Method::Dda, Some(l)) => line::Line::Fine(l),
                     _ => line::Line::new(start, mv.target, method),
@@ -118,15 +120,15 @@ impl Interp {
             )),
             Path::Arc { center, ccw, turns } => {
                 conic::Conic::circle(start, center, mv.target, ccw, turns, method)
-                    .map(Interp::Conic)
+                    .map(Interpolator::Conic)
             }
             Path::Ellipse { center, a, b, ccw } => {
                 conic::Conic::ellipse(start, center, a, b, mv.target, ccw, method)
-                    .map(Interp::Conic)
+                    .map(Interpolator::Conic)
             }
             Path::Sine { amp, omega, phase } => {
                 let c = curve::Sine::new(amp, omega, phase)?;
-                Ok(Interp::Sine(curve::CurveTrace::new(
+                Ok(Interpolator::Sine(curve::CurveTrace::new(
                     start, mv.target, c, method,
                 )))
             }
@@ -134,24 +136,24 @@ impl Interp {
     }
 }
 
-impl Interp {
+impl Interpolator {
     /// Feed direction (step space, XY) for curves; `None` for straight lines, whose
     /// direction never changes.
     pub fn direction(&self) -> Option<[f32; 2]> {
         match self {
-            Interp::Line(_) => None,
-            Interp::Conic(c) => Some(c.direction()),
-            Interp::Sine(c) => Some(c.direction()),
+            Interpolator::Line(_) => None,
+            Interpolator::Conic(c) => Some(c.direction()),
+            Interpolator::Sine(c) => Some(c.direction()),
         }
     }
 }
 
-impl Interpolate for Interp {
+impl Interpolate for Interpolator {
     fn next_tick(&mut self) -> Option<Tick> {
         match self {
-            Interp::Line(i) => i.next_tick(),
-            Interp::Conic(i) => i.next_tick(),
-            Interp::Sine(i) => i.next_tick(),
+            Interpolator::Line(i) => i.next_tick(),
+            Interpolator::Conic(i) => i.next_tick(),
+            Interpolator::Sine(i) => i.next_tick(),
         }
     }
 }

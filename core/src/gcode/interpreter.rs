@@ -9,60 +9,26 @@
 //! here, on every target of the block (for arcs, on their extent), before any command
 //! leaves.
 
-use super::parser::{Block, Code};
+use super::arcs::{arc_extremes, arc_geometry, arc_path};
+use super::modal::{
+    group_codes, Modal, MotionMode, NonModal, GROUPS, G_CODES, MOTION_MODES, M_CODES, NONE,
+    NON_MODAL,
+};
+use super::parser::Block;
+use super::units::{in_step_range, mm_to_steps, to_mm, to_steps, within_travel, Reach};
 use super::Status;
+use crate::decimal::{put_int, round_i32, to_u32, Sink};
 use crate::fmath;
-use crate::machine::Command;
+use crate::motion::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
-use crate::settings::{put_int, PenMode, Settings, Sink};
-pub use crate::settings::{round_i32, to_u32};
-use core::f32::consts::{FRAC_PI_2, TAU};
+use crate::settings::{PenMode, Settings};
 use heapless::Vec;
 
 /// Most commands one block can queue (pen, G28 intermediate, G28 target, pen at M2).
 pub const MAX_COMMANDS: usize = 4;
-const MM_PER_INCH: f32 = 25.4;
-/// Grbl's tolerance for arc end points that CAM rounding moved off the circle.
-const ARC_ABS_TOL: f32 = 0.005;
-const ARC_MAX_ERR: f32 = 0.5;
-const ARC_REL_TOL: f32 = 0.001;
+pub(super) const MM_PER_INCH: f32 = 25.4;
 /// Largest line number Grbl accepts.
 pub const MAX_LINE_NUMBER: f32 = 9_999_999.0;
-
-/// Motion mode (modal group 1).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MotionMode {
-    Rapid,
-    Linear,
-    ArcCw,
-    ArcCcw,
-    Cancel,
-}
-
-/// The modal state reported by `$G`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Modal {
-    pub motion: MotionMode,
-    pub inches: bool,
-    pub incremental: bool,
-    pub inverse_time: bool,
-    /// Active work coordinate system, 0 = G54 .. 5 = G59.
-    pub wcs: u8,
-    pub pen_down: bool,
-}
-
-impl Default for Modal {
-    fn default() -> Self {
-        Modal {
-            motion: MotionMode::Rapid,
-            inches: false,
-            incremental: false,
-            inverse_time: false,
-            wcs: 0,
-            pen_down: false,
-        }
-    }
-}
 
 /// Coordinate data that Grbl keeps across resets (and inkstep in flash).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
@@ -92,7 +58,7 @@ pub struct Outcome {
     pub coords_changed: bool,
 }
 
-/// What the caller of [`Interp::execute_into`] can take now.
+/// What the caller of [`Interpreter::execute_into`] can take now.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Room {
     /// Commands that fit the planner queue.
@@ -116,126 +82,9 @@ impl From<Status> for Reject {
     }
 }
 
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum NonModal {
-    Dwell,
-    SetCoord,
-    Home28,
-    Set28,
-    Home30,
-    Set30,
-    Absolute,
-    SetG92,
-    ResetG92,
-}
-
-const MOTION_MODES: [MotionMode; 5] = [
-    MotionMode::Rapid,
-    MotionMode::Linear,
-    MotionMode::ArcCw,
-    MotionMode::ArcCcw,
-    MotionMode::Cancel,
-];
-const NON_MODAL: [NonModal; 9] = [
-    NonModal::Dwell,
-    NonModal::SetCoord,
-    NonModal::Home28,
-    NonModal::Set28,
-    NonModal::Home30,
-    NonModal::Set30,
-    NonModal::Absolute,
-    NonModal::SetG92,
-    NonModal::ResetG92,
-];
-// Modal groups of the G codes; the plane, arc distance, cutter compensation, tool
-// length offset and path mode groups are accepted (only their default exists) and
-// checked for repeats.
-// Groups 0-10 are the G groups (motion, non-modal, units, distance, feed mode,
-// coordinate system, then the accepted defaults); 11-14 the M groups (stop, M1, pen,
-// coolant). A group not named in the block holds NONE.
-const GROUPS: usize = 15;
-const NONE: u8 = u8::MAX;
-/// G code (x10), its group and its value in the group (an index into MOTION_MODES
-/// or NON_MODAL; 1 = inches / incremental / inverse time; the coordinate system).
-const G_CODES: [(u16, u8, u8); 31] = [
-    (0, 0, 0),
-    (10, 0, 1),
-    (20, 0, 2),
-    (30, 0, 3),
-    (800, 0, 4),
-    (40, 1, 0),
-    (100, 1, 1),
-    (280, 1, 2),
-    (281, 1, 3),
-    (300, 1, 4),
-    (301, 1, 5),
-    (530, 1, 6),
-    (920, 1, 7),
-    (921, 1, 8),
-    (200, 2, 1),
-    (210, 2, 0),
-    (900, 3, 0),
-    (910, 3, 1),
-    (930, 4, 1),
-    (940, 4, 0),
-    (540, 5, 0),
-    (550, 5, 1),
-    (560, 5, 2),
-    (570, 5, 3),
-    (580, 5, 4),
-    (590, 5, 5),
-    (170, 6, 0),
-    (911, 7, 0),
-    (400, 8, 0),
-    (490, 9, 0),
-    (610, 10, 0),
-];
-/// M codes in the same form: stop 0 = M0, 1 = M2/M30; M1; pen 1 = down (M3/M4),
-/// 0 = up (M5); coolant (accepted, nothing to switch).
-const M_CODES: [(u16, u8, u8); 10] = [
-    (0, 11, 0),
-    (20, 11, 1),
-    (300, 11, 1),
-    (10, 12, 0),
-    (30, 13, 1),
-    (40, 13, 1),
-    (50, 13, 0),
-    (70, 14, 0),
-    (80, 14, 0),
-    (90, 14, 0),
-];
-
-/// Put each code's value into its group; a group named twice is error 21, an unknown
-/// code the error Grbl gives for it.
-fn group_codes(
-    codes: &[Code],
-    table: &[(u16, u8, u8)],
-    groups: &mut [u8; GROUPS],
-    g: bool,
-) -> Result<(), Status> {
-    for &code in codes {
-        let Some(&(_, group, value)) = table.iter().find(|e| e.0 == code) else {
-            return Err(if g && (591..=599).contains(&code) {
-                Status::UnsupportedCoordSys
-            } else if code % 10 != 0 && !(g && matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61)) {
-                Status::CommandValueNotInteger
-            } else {
-                Status::UnsupportedCommand
-            });
-        };
-        if let Some(slot) = groups.get_mut(usize::from(group)) {
-            if *slot != NONE {
-                return Err(Status::ModalGroupViolation);
-            }
-            *slot = value;
-        }
-    }
-    Ok(())
-}
-
 /// The interpreter.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Interp {
+pub struct Interpreter {
     modal: Modal,
     /// Programmed feed in mm/min (G94) or per-block inverse time; 0 = undefined.
     feed: f32,
@@ -246,87 +95,15 @@ pub struct Interp {
     g92: [f32; AXES],
 }
 
-impl Default for Interp {
+impl Default for Interpreter {
     fn default() -> Self {
         Self::new()
     }
 }
 
-/// mm to steps for one axis, rounding half away from zero (saturating).
-#[inline(never)]
-pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
-    round_i32(mm * steps_per_mm)
-}
-
-/// Machine mm to a step position.
-pub fn to_steps(mm: &[f32; AXES], s: &Settings) -> StepPos {
-    let mut out = [0; AXES];
-    for (axis, o) in out.iter_mut().enumerate() {
-        *o = mm_to_steps(mm.get(axis).copied().unwrap_or(0.0), s.steps_per_mm(axis));
-    }
-    out
-}
-
-/// Step position to machine mm.
-pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
-    let mut out = [0.0; AXES];
-    for (axis, o) in out.iter_mut().enumerate() {
-        *o = steps.get(axis).copied().unwrap_or(0) as f32 / s.steps_per_mm(axis);
-    }
-    out
-}
-
-/// Largest step coordinate accepted (2^30): leaves headroom for the planner's
-/// differences and sums in `i32`.
-pub const MAX_STEPS: f32 = 1_073_741_824.0;
-
-/// True if `p` (machine mm) converts to steps without leaving the safe range.
-pub fn in_step_range(p: &[f32; AXES], s: &Settings) -> bool {
-    p.iter()
-        .enumerate()
-        .all(|(axis, &v)| fmath::abs(v * s.steps_per_mm(axis)) < MAX_STEPS)
-}
-
-/// Allowed machine range of `axis` with soft limits, or `None` if unchecked.
-/// Axes homed toward - live in [0, travel], axes homed toward + in [-travel, 0]
-/// (Grbl's convention); axes without a switch ($214) are not checked.
-pub fn travel_range(axis: usize, s: &Settings) -> Option<(f32, f32)> {
-    let bit = 1u8 << axis;
-    if s.switch_mask() & bit == 0 {
-        return None;
-    }
-    let t = s.max_travel(axis);
-    Some(if s.homing_dir_mask() & bit != 0 {
-        (0.0, t)
-    } else {
-        (-t, 0.0)
-    })
-}
-
-/// True if `p` (machine mm) lies within travel on every checked axis.
-pub fn within_travel(p: &[f32; AXES], s: &Settings) -> bool {
-    const EPS: f32 = 1e-4;
-    let (switches, toward_minus) = (s.switch_mask(), s.homing_dir_mask());
-    p.iter().enumerate().all(|(axis, &v)| {
-        let bit = 1u8 << axis;
-        // Mirrored onto [0, travel] (negation is exact, so the bounds are the same).
-        let v = if toward_minus & bit != 0 { v } else { -v };
-        switches & bit == 0 || (v >= -EPS && v <= s.max_travel(axis) + EPS)
-    })
-}
-
-struct ArcGeom {
-    /// Centre, absolute machine mm (X, Y).
-    center: [f32; 2],
-    radius: f32,
-    start_angle: f32,
-    /// Swept angle, > 0, in the arc's direction.
-    sweep: f32,
-}
-
-impl Interp {
+impl Interpreter {
     pub const fn new() -> Self {
-        Interp {
+        Interpreter {
             modal: Modal {
                 motion: MotionMode::Rapid,
                 inches: false,
@@ -439,7 +216,7 @@ impl Interp {
         Ok(out)
     }
 
-    /// [`Interp::execute`] into `out` (which must be empty), committing the block only
+    /// [`Interpreter::execute`] into `out` (which must be empty), committing the block only
     /// if the caller has `room` for it: `Ok(false)` leaves the interpreter unchanged
     /// (the outcome is still filled in), and `room: None` only checks the block. The
     /// machine needs no trial copy of the interpreter that way.
@@ -676,7 +453,7 @@ impl Interp {
                     }
                     let g = arc_geometry(&mut b, &pos, &target, ccw, scale)?;
                     arc_extremes(&g, &pos, &target, ccw, &mut planned, s);
-                    let arc_len = hypot(g.radius * g.sweep, target[2] - pos[2]);
+                    let arc_len = fmath::hypot(g.radius * g.sweep, target[2] - pos[2]);
                     (arc_len, arc_path(&g, &pos, ccw, s))
                 } else {
                     planned.add(&target, s);
@@ -915,12 +692,6 @@ fn set_axes(
     }
 }
 
-/// sqrt(a^2 + b^2) in f32: libm's hypotf works in f64, which would pull the
-/// double-precision soft-float routines into the image for nothing here.
-fn hypot(a: f32, b: f32) -> f32 {
-    fmath::sqrt(a * a + b * b)
-}
-
 fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
     let mut sum = 0.0;
     for (x, y) in a.iter().zip(b.iter()) {
@@ -928,171 +699,12 @@ fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
     }
     fmath::sqrt(sum)
 }
-
-/// Normalise an angle difference into (0, 2*pi].
-fn positive_sweep(mut a: f32) -> f32 {
-    while a <= 0.0 {
-        a += TAU;
-    }
-    while a > TAU {
-        a -= TAU;
-    }
-    a
-}
-
-/// Centre and sweep of a G2/G3 block from its I/J or R words (in block units).
-fn arc_geometry(
-    b: &mut Block,
-    start: &[f32; AXES],
-    target: &[f32; AXES],
-    ccw: bool,
-    scale: f32,
-) -> Result<ArcGeom, Status> {
-    let dx = target[0] - start[0];
-    let dy = target[1] - start[1];
-    let (ci, cj) = if let Some(r) = b.take(b'R') {
-        let r = r * scale;
-        if dx == 0.0 && dy == 0.0 {
-            return Err(Status::InvalidTarget);
-        }
-        let mut disc = 4.0 * r * r - dx * dx - dy * dy;
-        if disc < 0.0 {
-            // A half circle with a rounded radius: accept within the tolerance.
-            let chord = hypot(dx, dy);
-            if chord / 2.0 - fmath::abs(r) > ARC_ABS_TOL {
-                return Err(Status::ArcRadiusError);
-            }
-            disc = 0.0;
-        }
-        // Offset of the centre from the chord midpoint, as a multiple of the chord
-        // turned by 90 degrees; its sign picks the side (G2 with positive R: right).
-        let mut h = -fmath::sqrt(disc) / hypot(dx, dy);
-        if ccw {
-            h = -h;
-        }
-        if r < 0.0 {
-            h = -h;
-        }
-        (0.5 * (dx - dy * h), 0.5 * (dy + dx * h))
-    } else {
-        let i = b.take(b'I').map(|v| v * scale);
-        let j = b.take(b'J').map(|v| v * scale);
-        if i.is_none() && j.is_none() {
-            return Err(Status::NoOffsetsInPlane);
-        }
-        (i.unwrap_or(0.0), j.unwrap_or(0.0))
-    };
-    if b.get(b'K').is_some() {
-        return Err(Status::UnusedWords);
-    }
-    let center = [start[0] + ci, start[1] + cj];
-    let r_start = hypot(ci, cj);
-    let r_end = hypot(target[0] - center[0], target[1] - center[1]);
-    let dr = fmath::abs(r_end - r_start);
-    if !r_start.is_finite()
-        || !r_end.is_finite()
-        || r_start <= 0.0
-        || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start))
-    {
-        return Err(Status::InvalidTarget);
-    }
-    let a0 = fmath::atan2(-cj, -ci);
-    let a1 = fmath::atan2(target[1] - center[1], target[0] - center[0]);
-    let same_point = dx == 0.0 && dy == 0.0;
-    let sweep = if same_point {
-        TAU
-    } else if ccw {
-        positive_sweep(a1 - a0)
-    } else {
-        positive_sweep(a0 - a1)
-    };
-    Ok(ArcGeom {
-        center,
-        radius: r_start,
-        start_angle: a0,
-        sweep,
-    })
-}
-
-/// The arc in step space: a circle if X and Y have the same resolution, else the
-/// ellipse the circle becomes.
-fn arc_path(g: &ArcGeom, start: &[f32; AXES], ccw: bool, s: &Settings) -> Path {
-    let sx = s.steps_per_mm(0);
-    let sy = s.steps_per_mm(1);
-    let start_steps = [mm_to_steps(start[0], sx), mm_to_steps(start[1], sy)];
-    let center = [
-        mm_to_steps(g.center[0], sx).saturating_sub(start_steps[0]),
-        mm_to_steps(g.center[1], sy).saturating_sub(start_steps[1]),
-    ];
-    if sx == sy {
-        Path::Arc {
-            center,
-            ccw,
-            turns: 0,
-        }
-    } else {
-        let a = mm_to_steps(g.radius, sx);
-        let b = mm_to_steps(g.radius, sy);
-        Path::Ellipse { center, a, b, ccw }
-    }
-}
-
-/// Every point a block moves to, checked as it is planned; the verdicts are reported
-/// after the block's word checks, in Grbl's order.
-struct Reach {
-    /// All points convert to steps ([`in_step_range`]).
-    in_range: bool,
-    /// All points lie within travel ([`within_travel`]).
-    in_travel: bool,
-}
-
-impl Reach {
-    fn add(&mut self, p: &[f32; AXES], s: &Settings) {
-        self.in_range &= in_step_range(p, s);
-        self.in_travel &= within_travel(p, s);
-    }
-}
-
-/// Check the points that bound the arc: its end and every axis extreme it passes.
-fn arc_extremes(
-    g: &ArcGeom,
-    start: &[f32; AXES],
-    target: &[f32; AXES],
-    ccw: bool,
-    pts: &mut Reach,
-    s: &Settings,
-) {
-    pts.add(target, s);
-    // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
-    let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
-    for (k, &(cs, sn)) in axes_dirs.iter().enumerate() {
-        let angle = k as f32 * FRAC_PI_2;
-        let from_start = if ccw {
-            positive_sweep(angle - g.start_angle)
-        } else {
-            positive_sweep(g.start_angle - angle)
-        };
-        if from_start <= g.sweep || g.sweep >= TAU - 1e-6 {
-            let frac = if g.sweep > 0.0 {
-                (from_start / g.sweep).min(1.0)
-            } else {
-                0.0
-            };
-            let z = start[2] + (target[2] - start[2]) * frac;
-            pts.add(
-                &[g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z],
-                s,
-            );
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::gcode::parser::clean_line;
 
-    fn run(it: &mut Interp, s: &Settings, line: &str) -> Result<Outcome, Reject> {
+    fn run(it: &mut Interpreter, s: &Settings, line: &str) -> Result<Outcome, Reject> {
         let mut buf: heapless::Vec<u8, 128> = heapless::Vec::new();
         clean_line(line.as_bytes(), &mut buf).map_err(Reject::Error)?;
         it.execute(&buf, s, 7)
@@ -1115,7 +727,7 @@ mod tests {
     #[test]
     fn lines_round_to_steps_and_carry_feed_and_line_numbers() {
         let s = Settings::default(); // 80 step/mm on X and Y
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         let o = run(&mut it, &s, "G1 X10.0031 Y-0.00624 F600").unwrap();
         // The rounded target, and the exact ends in 1/256 step for the interpolator:
         // 10.0031 mm = 800.248 steps, -0.00624 mm = -0.4992 steps.
@@ -1146,7 +758,7 @@ mod tests {
     #[test]
     fn grbl_error_numbers_for_bad_blocks() {
         let s = Settings::default();
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         assert_eq!(run(&mut it, &s, "G1 X1"), err(Status::UndefinedFeedRate));
         assert_eq!(
             run(&mut it, &s, "G0 G1 X1"),
@@ -1196,7 +808,7 @@ mod tests {
         );
         assert_eq!(run(&mut it, &s, "T300"), err(Status::MaxValueExceeded));
         // A rejected block changes nothing.
-        assert_eq!(it, Interp::new());
+        assert_eq!(it, Interpreter::new());
     }
 
     #[test]
@@ -1238,7 +850,7 @@ mod tests {
         ];
         for (a, ga) in codes {
             for (b, gb) in codes {
-                let r = run(&mut Interp::new(), &s, &std::format!("{a} {b}"));
+                let r = run(&mut Interpreter::new(), &s, &std::format!("{a} {b}"));
                 let violation = r == err(Status::ModalGroupViolation);
                 if a == "G43.1" || b == "G43.1" {
                     // Dynamic tool length offset is not supported.
@@ -1249,7 +861,7 @@ mod tests {
             }
         }
         let modal = |line: &str| {
-            let mut it = Interp::new();
+            let mut it = Interpreter::new();
             run(&mut it, &s, line).unwrap();
             *it.modal()
         };
@@ -1273,7 +885,7 @@ mod tests {
     #[test]
     fn arcs_in_ij_and_r_form_with_cam_tolerance() {
         let s = Settings::default();
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         let o = run(&mut it, &s, "G2 X10 Y0 I5 J0 F300").unwrap();
         let m = moves(&o)[0];
         assert_eq!(m.target, [800, 0, 0]);
@@ -1286,9 +898,9 @@ mod tests {
             }
         );
         // Negative R: the long way round (centre on the other side).
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         let short = moves(&run(&mut it, &s, "G2 X10 Y0 R7.0710678 F300").unwrap())[0];
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         let long = moves(&run(&mut it, &s, "G2 X10 Y0 R-7.0710678 F300").unwrap())[0];
         assert_eq!(
             short.path,
@@ -1307,15 +919,15 @@ mod tests {
             }
         );
         // End point 0.004 mm off the circle (CAM rounding) is accepted, 0.1 mm is not.
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         assert!(run(&mut it, &s, "G3 X10.004 Y0 I5 F300").is_ok());
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         assert_eq!(
             run(&mut it, &s, "G3 X10.1 Y0 I5 F300"),
             err(Status::InvalidTarget)
         );
         // Full circle with I/J: target equals start.
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         let full = moves(&run(&mut it, &s, "G3 X0 Y0 I5 F300").unwrap())[0];
         assert_eq!(full.target, [0, 0, 0]);
         assert_eq!(
@@ -1332,7 +944,7 @@ mod tests {
     fn arcs_with_unequal_resolution_become_ellipses_in_step_space() {
         let mut s = Settings::default();
         s.set(101, 40.0).unwrap();
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         let m = moves(&run(&mut it, &s, "G3 X10 Y0 I5 F300").unwrap())[0];
         assert_eq!(m.target, [800, 0, 0]);
         assert_eq!(
@@ -1359,7 +971,7 @@ mod tests {
             proptest::prop_assume!(chord > 0.5);
             let r = chord / 2.0 + extra + 0.01;
             let s = Settings::default();
-            let mut it = Interp::new();
+            let mut it = Interpreter::new();
             run(&mut it, &s, &std::format!("G0 X{x0:.4} Y{y0:.4}")).unwrap();
             let start = *it.position();
             let line = std::format!("G{} X{:.4} Y{:.4} R{}{:.4} F100", if ccw { 3 } else { 2 }, x0 + dx, y0 + dy, if neg { "-" } else { "" }, r);
@@ -1392,7 +1004,7 @@ mod tests {
     #[test]
     fn r_form_near_semicircle_centre_is_the_nearest_grid_point() {
         let s = Settings::default();
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         run(&mut it, &s, "G0 X40.4444 Y-47.9680").unwrap();
         let o = run(&mut it, &s, "G2 X84.4295 Y-30.6952 R24.8752 F100").unwrap();
         let Path::Arc { center, .. } = moves(&o)[0].path else {
@@ -1406,16 +1018,16 @@ mod tests {
     #[test]
     fn targets_beyond_the_step_range_are_refused() {
         let s = Settings::default();
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         assert_eq!(run(&mut it, &s, "G0 X99999999"), err(Status::InvalidTarget));
         assert_eq!(it.jog(b"X99999999F10", &s), Err(Status::InvalidTarget));
-        assert_eq!(it, Interp::new());
+        assert_eq!(it, Interpreter::new());
     }
 
     #[test]
     fn work_offsets_g92_g10_g28_g53() {
         let s = Settings::default();
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         run(&mut it, &s, "G10 L2 P2 X10 Y20").unwrap();
         run(&mut it, &s, "G55 G0 X1 Y1").unwrap();
         assert_eq!(it.position(), &[11.0, 21.0, 0.0]);
@@ -1441,7 +1053,7 @@ mod tests {
     #[test]
     fn pen_dwell_and_program_end() {
         let mut s = Settings::default();
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         let o = run(&mut it, &s, "M3 G1 X1 F100").unwrap();
         assert_eq!(moves(&o)[0].target, [0, 0, -800], "Z pen drops first");
         assert_eq!(moves(&o)[1].target, [80, 0, -800]);
@@ -1462,12 +1074,12 @@ mod tests {
     #[test]
     fn modal_report_names_every_changed_mode() {
         let s = Settings::default();
-        let report = |it: &Interp| {
+        let report = |it: &Interpreter| {
             let mut v: heapless::Vec<u8, 64> = heapless::Vec::new();
             it.write_modal(&mut v);
             std::string::String::from_utf8(v.to_vec()).unwrap()
         };
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         assert_eq!(report(&it), "GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0");
         run(&mut it, &s, "G20 G91 G93 G59 M3 G1 X1 F1 S12").unwrap();
         assert_eq!(report(&it), "GC:G1 G59 G17 G20 G91 G93 M3 M9 T0 F0 S12");
@@ -1478,7 +1090,7 @@ mod tests {
     #[test]
     fn inverse_time_feed_needs_f_every_block() {
         let s = Settings::default();
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         let o = run(&mut it, &s, "G93 G1 X10 F2").unwrap();
         assert_eq!(moves(&o)[0].feed, Feed::MmPerMin(20.0));
         assert_eq!(run(&mut it, &s, "G1 X20"), err(Status::UndefinedFeedRate));
@@ -1491,7 +1103,7 @@ mod tests {
         let mut s = Settings::default();
         s.set(22, 1.0).unwrap();
         s.set(20, 1.0).unwrap(); // X, Y in [0, 300] x [0, 200]
-        let mut it = Interp::new();
+        let mut it = Interpreter::new();
         assert!(run(&mut it, &s, "G0 X100 Y100").is_ok());
         assert_eq!(run(&mut it, &s, "G0 X301"), Err(Reject::SoftLimit));
         assert_eq!(run(&mut it, &s, "G0 Y-0.1"), Err(Reject::SoftLimit));

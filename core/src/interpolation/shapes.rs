@@ -29,7 +29,7 @@ pub fn star(center: [i32; 2], r: i32, z: i32) -> [StepPos; 6] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interp::{line::DdaLine, Interpolate};
+    use crate::interpolation::{line::DdaLine, Interpolate};
 
     #[test]
     fn star_is_closed_and_every_edge_interpolates_to_its_vertex() {

@@ -1,6 +1,6 @@
-//! The motion link: implements the machine's [`MotionControl`] over the look-ahead
-//! [`Planner`], the segment preparation ([`Prep`]) and whatever executes the prepared
-//! step commands (the step-timer interrupt on the board, a virtual timer in the
+//! The motion pipeline (planner -> segment preparation -> step queue): implements the
+//! machine's [`MotionControl`] over the look-ahead [`Planner`], the segment preparation
+//! ([`Prep`]) and whatever executes the prepared step commands (the step-timer interrupt on the board, a virtual timer in the
 //! simulator), so that the G-code interpreter, the protocol and the keypad modes drive
 //! the real planner the same way everywhere.
 //!
@@ -11,8 +11,9 @@
 //! executor's count. Owned by the simulator's issue; the firmware's prep task uses it
 //! through the same [`StepSide`] trait.
 
-use crate::interp::Tick;
-use crate::machine::{Command, MotionControl, QueueFull};
+use crate::interpolation::Tick;
+use crate::machine::{MotionControl, QueueFull};
+use crate::motion::Command;
 use crate::motion::{Move, Path, StepPos};
 use crate::planner::{AxisConfig, PlanError, Planner, PlannerConfig, Shape, PLANNER_BLOCKS};
 use crate::settings::{AccelProfile, Interpolation, Settings};
@@ -20,7 +21,7 @@ use crate::stepper::prep::{HoldState, Prep, PrepConfig};
 use crate::stepper::{CmdSink, StepCmd, MAX_WAIT};
 use heapless::Deque;
 
-/// The interrupt side, as the link sees it.
+/// The interrupt side, as the pipeline sees it.
 pub trait StepSide {
     type Sink: CmdSink;
     /// Where prepared step commands go (the SPSC producer on the board).
@@ -81,13 +82,13 @@ pub fn planner_config(s: &Settings) -> PlannerConfig {
             AccelProfile::SCurve => Shape::Cosine,
         },
         method: match s.interpolation() {
-            Interpolation::PointByPoint => crate::interp::Method::Classic,
-            Interpolation::Dda => crate::interp::Method::Dda,
+            Interpolation::PointByPoint => crate::interpolation::Method::Classic,
+            Interpolation::Dda => crate::interpolation::Method::Dda,
         },
     }
 }
 
-pub struct Link<S: StepSide> {
+pub struct Pipeline<S: StepSide> {
     planner: Planner,
     prep: Prep,
     side: S,
@@ -104,13 +105,13 @@ pub struct Link<S: StepSide> {
     held: bool,
 }
 
-impl<S: StepSide> Link<S> {
+impl<S: StepSide> Pipeline<S> {
     pub fn new(s: &Settings, prep: PrepConfig, side: S) -> Self {
-        crate::in_place::build(|slot| Link::init_in(slot, s, prep, side))
+        crate::in_place::build(|slot| Pipeline::init_in(slot, s, prep, side))
     }
 
-    /// [`Link::new`] built in `slot` (the firmware's static cell): field by field, so
-    /// that no whole link (3.6 KB: the planner's block buffer) is built on init's stack
+    /// [`Pipeline::new`] built in `slot` (the firmware's static cell): field by field, so
+    /// that no whole pipeline (3.6 KB: the planner's block buffer) is built on init's stack
     /// and copied.
     #[allow(unsafe_code)]
     pub fn init_in<'a>(
@@ -138,7 +139,7 @@ impl<S: StepSide> Link<S> {
         let p = slot.as_mut_ptr();
         // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
         // is written once through a raw field pointer (no reference to the uninitialised
-        // link is made) and the list below names every field, so the link is
+        // pipeline is made) and the list below names every field, so the pipeline is
         // initialised when `assume_init_mut` runs.
         unsafe {
             Planner::init_in(
@@ -290,7 +291,7 @@ impl<S: StepSide> Link<S> {
     }
 }
 
-impl<S: StepSide> MotionControl for Link<S> {
+impl<S: StepSide> MotionControl for Pipeline<S> {
     fn push(&mut self, cmd: Command) -> Result<(), QueueFull> {
         if let (Command::Move(mv), true) = (
             cmd,
@@ -417,11 +418,11 @@ mod tests {
 
     /// Runs everything queued; returns the shortest wait between two steps of `axis`
     /// (timer ticks), i.e. the cruise speed.
-    fn run(link: &mut Link<TestSide>, axis: usize) -> u32 {
+    fn run(pipeline: &mut Pipeline<TestSide>, axis: usize) -> u32 {
         let mut fastest = u32::MAX;
         for _ in 0..1_000_000 {
-            link.fill();
-            let side = link.side_mut();
+            pipeline.fill();
+            let side = pipeline.side_mut();
             if side.queue.is_empty() {
                 break;
             }
@@ -447,7 +448,7 @@ mod tests {
     #[test]
     fn overrides_survive_a_setting_change() {
         let mut s = Settings::default();
-        let mut link = Link::new(
+        let mut pipeline = Pipeline::new(
             &s,
             PrepConfig::default(),
             TestSide {
@@ -455,27 +456,29 @@ mod tests {
                 pos: [0; 3],
             },
         );
-        link.set_overrides(150, 50);
+        pipeline.set_overrides(150, 50);
         // A setting changes at rest (the machine still reports Ov:150,50).
         s.set(120, 300.0).unwrap();
-        link.configure(&s);
-        assert_eq!(link.planner().feed_override(), 150);
-        assert_eq!(link.planner().config().axes[X].accel, 300.0);
+        pipeline.configure(&s);
+        assert_eq!(pipeline.planner().feed_override(), 150);
+        assert_eq!(pipeline.planner().config().axes[X].accel, 300.0);
 
         // 100 mm at F1000 with 150 %: 25 mm/s = 2000 steps/s = 36,000 timer ticks.
-        link.push(mv([8000, 0, 0], Feed::MmPerMin(1000.0))).unwrap();
-        let wait = run(&mut link, X);
+        pipeline
+            .push(mv([8000, 0, 0], Feed::MmPerMin(1000.0)))
+            .unwrap();
+        let wait = run(&mut pipeline, X);
         assert!(
             (35_900..=36_100).contains(&wait),
             "feed: {wait} ticks per step"
         );
         // Rapid at 50 % of 3000 mm/min: 25 mm/s again.
-        link.push(mv([8000, 8000, 0], Feed::Rapid)).unwrap();
-        let wait = run(&mut link, Y);
+        pipeline.push(mv([8000, 8000, 0], Feed::Rapid)).unwrap();
+        let wait = run(&mut pipeline, Y);
         assert!(
             (35_900..=36_100).contains(&wait),
             "rapid: {wait} ticks per step"
         );
-        assert_eq!(link.position(), [8000, 8000, 0]);
+        assert_eq!(pipeline.position(), [8000, 8000, 0]);
     }
 }
