@@ -418,7 +418,10 @@ fn offsets_listing_names_every_slot() {
         &mut m,
         "G10 L2 P1 X5\nG10 L2 P6 Y-2.5\nG28.1\nG0 X1\nG30.1\nG92 X0\n",
     );
+    // G30.1 is a sync point: it (and the lines after it) run once G0 X1 has finished.
     m.run_all();
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "ok\r\nok\r\n");
     let out = send(&mut p, &mut m, "$#\n");
     let zero = "0.000,0.000,0.000";
     assert_eq!(
@@ -458,15 +461,26 @@ fn info_modal_state_offsets_and_startup_lines() {
 fn job_messages_pause_and_overrides() {
     let (mut p, mut m) = boot();
     let out = send(&mut p, &mut m, "G1 X1 F100\nM0\nG1 X2\n");
-    assert_eq!(out, "[MSG:Job started]\r\nok\r\nok\r\n");
+    assert_eq!(
+        out, "[MSG:Job started]\r\nok\r\n",
+        "M0 waits for the motion before it"
+    );
     m.run_all();
     p.poll(&mut m, 10);
+    assert_eq!(
+        drain(&mut p),
+        "ok\r\nok\r\n",
+        "M0 ran, the line after it queued"
+    );
     assert!(
         send(&mut p, &mut m, "?").starts_with("<Hold:0|"),
-        "M0 pauses once drained"
+        "M0 holds at rest"
     );
-    assert_eq!(moves(&m).len(), 1, "the line after M0 waits");
-    assert_eq!(send(&mut p, &mut m, "~"), "ok\r\n", "the waiting line runs");
+    assert_eq!(moves(&m).len(), 2);
+    m.run_all();
+    assert_eq!(m.pos[0], 80, "the queued line waits for cycle start");
+    assert_eq!(send(&mut p, &mut m, "~"), "");
+    assert!(send(&mut p, &mut m, "?").starts_with("<Run|"));
     p.receive(b"M2\n", &mut m, 0);
     p.poll(&mut m, 0);
     assert_eq!(drain(&mut p), "", "M2 waits for the motion before it");
@@ -594,8 +608,11 @@ fn keypad_moves_and_abort_keep_the_interpreter_in_step() {
     assert_eq!(m.queue.len(), 1);
     m.step();
     p.poll(&mut m, 0);
-    assert_eq!(drain(&mut p), "ok\r\n");
+    assert_eq!(drain(&mut p), "", "G4 runs: its ok waits for the dwell");
     assert_eq!(m.queue.len(), 1, "only the dwell is queued");
+    m.step();
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "ok\r\n");
     m.run_all();
     assert_eq!(m.pos, [16, 16, 0], "one step of deceleration");
     assert_eq!(p.machine().state(&m), RunState::Idle);
@@ -762,4 +779,75 @@ fn dollar_commands_while_running_are_refused_without_effect() {
         "$N0=\r\n$N1=\r\nok\r\n",
         "nothing was stored"
     );
+}
+
+#[test]
+fn g4_answers_after_the_motion_before_it_and_its_dwell() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "G1 X20 F600\n");
+    p.receive(b"G4 P0.5\nG0 Y[posx]\nG0 Y1\n", &mut m, 0);
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "", "G4 waits while the move runs");
+    assert_eq!(m.queue.len(), 1, "nothing after G4 is queued either");
+    m.step();
+    p.poll(&mut m, 0);
+    assert_eq!(
+        drain(&mut p),
+        "",
+        "the move ended: the dwell runs, no ok yet"
+    );
+    assert_eq!(m.queue.front(), Some(&Command::Dwell { ms: 500 }));
+    assert!(send(&mut p, &mut m, "?").starts_with("<Run|MPos:20.000,"));
+    m.step();
+    p.poll(&mut m, 0);
+    assert_eq!(
+        drain(&mut p),
+        "ok\r\nerror:2\r\nok\r\n",
+        "the dwell ended: ok, then the lines after it"
+    );
+}
+
+#[test]
+fn sync_points_wait_for_the_motion_before_them() {
+    // Grbl's documented sync points: dwell, program pause and end, and every command
+    // that writes stored data or changes the work coordinate offset.
+    let sync = [
+        "G4 P0",
+        "M0",
+        "M2",
+        "M30",
+        "G10 L2 P1 X1",
+        "G10 L20 P0 X0",
+        "G28.1",
+        "G30.1",
+        "G92 X0",
+        "G92.1",
+        "G55",
+    ];
+    for line in sync {
+        let (mut p, mut m) = boot();
+        send(&mut p, &mut m, "G1 X1 F100\n");
+        p.receive(format!("{line}\n").as_bytes(), &mut m, 0);
+        p.poll(&mut m, 0);
+        assert_eq!(drain(&mut p), "", "{line} waits for the move");
+        m.run_all();
+        p.poll(&mut m, 0);
+        m.step(); // a dwell
+        p.poll(&mut m, 0);
+        assert!(drain(&mut p).contains("ok\r\n"), "{line} runs after it");
+    }
+    // Queued like moves: G28/G30 (they move), the pen (M3/M5, the one deliberate
+    // difference: it is a motion in the queue), modes that change no offset.
+    let queued = [
+        "G28", "G30", "M3", "M5", "G54", "G20", "G91", "G17", "M8", "S100",
+    ];
+    for line in queued {
+        let (mut p, mut m) = boot();
+        send(&mut p, &mut m, "G1 X1 F100\n");
+        assert_eq!(
+            send(&mut p, &mut m, &format!("{line}\n")),
+            "ok\r\n",
+            "{line} is answered at once"
+        );
+    }
 }

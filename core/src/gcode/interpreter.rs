@@ -43,7 +43,7 @@ pub struct Coords {
 /// Program flow requested by a block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stop {
-    /// M0: pause when the queue has run empty, until cycle start.
+    /// M0: pause (the motion before it has finished: a sync point) until cycle start.
     Pause,
     /// M2 / M30: end of program (modal state already reset).
     End,
@@ -56,6 +56,18 @@ pub struct Outcome {
     pub stop: Option<Stop>,
     /// G10, G28.1 or G30.1 changed the coordinate data (worth saving).
     pub coords_changed: bool,
+    /// The block is a sync point, as in Grbl: it runs only once every earlier motion
+    /// has finished (G4, M0, M2/M30, and whatever writes stored data or changes the
+    /// work coordinate offset: G10, G28.1, G30.1, G92, G92.1, G43.1, G49 and a new
+    /// G54-G59). A G4's answer also waits for its dwell ([`Outcome::has_dwell`]).
+    pub sync: bool,
+}
+
+impl Outcome {
+    /// The block queued a dwell (G4): its `ok` waits until the dwell has elapsed.
+    pub fn has_dwell(&self) -> bool {
+        self.cmds.iter().any(|c| matches!(c, Command::Dwell { .. }))
+    }
 }
 
 /// What the caller of [`Interpreter::execute_into`] can take now.
@@ -63,7 +75,7 @@ pub struct Outcome {
 pub struct Room {
     /// Commands that fit the planner queue.
     pub cmds: usize,
-    /// The queue has run empty (a program end may run).
+    /// The queue has run empty and the machine is at rest (a sync point may run).
     pub idle: bool,
 }
 
@@ -510,10 +522,21 @@ impl Interpreter {
         }
 
         out.stop = stop;
-        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
-        // motion before it has finished, so its `ok` means "program done".
-        let fits =
-            room.is_some_and(|r| out.cmds.len() <= r.cmds && (r.idle || stop != Some(Stop::End)));
+        let wcs_changed = modal.wcs != self.modal.wcs;
+        out.sync = stop.is_some()
+            || wcs_changed
+            || matches!(
+                non_modal,
+                Some(
+                    NonModal::Dwell
+                        | NonModal::SetCoord
+                        | NonModal::Set28
+                        | NonModal::Set30
+                        | NonModal::SetG92
+                        | NonModal::ResetG92
+                )
+            );
+        let fits = room.is_some_and(|r| out.cmds.len() <= r.cmds && (r.idle || !out.sync));
         if !fits {
             return Ok(false);
         }

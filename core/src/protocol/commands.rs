@@ -246,7 +246,8 @@ impl Protocol {
         w.put(b">");
         w.put(text);
         match r {
-            Ok(()) => w.put(b":ok"),
+            // A startup line's dwell is not waited for: nothing is counted against it.
+            Ok(_) => w.put(b":ok"),
             Err(e) => {
                 w.put(b":error:");
                 put_int(&mut w, i32::from(e.code()));

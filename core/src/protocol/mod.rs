@@ -36,7 +36,7 @@ mod stream;
 
 use crate::decimal::{put_int, Sink};
 use crate::gcode::{LineCleaner, StartupLine, Status, LINE_MAX, STARTUP_LINES};
-use crate::machine::{Inputs, Machine, MotionControl};
+use crate::machine::{Inputs, Machine, MotionControl, Taken};
 use crate::motion::AXES;
 use crate::settings::Settings;
 use commands::Listing;
@@ -83,6 +83,9 @@ pub struct Protocol {
     truncated: u32,
     /// Leaving check mode resets; the welcome line follows the `ok`.
     pending_welcome: bool,
+    /// The last line's `ok` goes out once the queue has run empty (a G4 after its
+    /// dwell); no other line runs before it.
+    ok_when_idle: bool,
 }
 
 struct OutWriter<'a> {
@@ -135,6 +138,7 @@ impl Protocol {
                                       wco_shown: _,
                                       truncated: _,
                                       pending_welcome: _,
+                                      ok_when_idle: _,
                                   }| {};
         let p = slot.as_mut_ptr();
         // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
@@ -164,6 +168,7 @@ impl Protocol {
             addr_of_mut!((*p).wco_shown).write([f32::NAN; AXES]);
             addr_of_mut!((*p).truncated).write(0);
             addr_of_mut!((*p).pending_welcome).write(false);
+            addr_of_mut!((*p).ok_when_idle).write(false);
             slot.assume_init_mut()
         };
         proto.welcome();
@@ -279,6 +284,14 @@ impl Protocol {
                 }
                 continue;
             }
+            if self.ok_when_idle {
+                if !m.is_idle() {
+                    return;
+                }
+                self.ok_when_idle = false;
+                self.respond(Ok(()));
+                continue;
+            }
             if !self.line_ready && !self.frame_line() {
                 return;
             }
@@ -310,7 +323,13 @@ impl Protocol {
                 if r.is_some() {
                     self.lines_received = line_no;
                 }
-                r
+                if r == Some(Ok(Taken::WhenIdle)) {
+                    self.flush_events();
+                    self.finish_frame();
+                    self.ok_when_idle = true;
+                    return true;
+                }
+                r.map(|r| r.map(|_| ()))
             }
         };
         let Some(r) = r else {

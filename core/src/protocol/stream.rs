@@ -57,6 +57,7 @@ impl Protocol {
         self.cleaner.reset();
         self.line_too_long = false;
         self.line_ready = false;
+        self.ok_when_idle = false;
         self.after_cr = false;
         self.listing = None;
         self.lines_received = 0;
