@@ -851,3 +851,50 @@ fn sync_points_wait_for_the_motion_before_them() {
         );
     }
 }
+
+#[test]
+fn dynamic_tool_length_offset_g43_1_and_g49() {
+    let (mut p, mut m) = boot();
+    assert_eq!(send(&mut p, &mut m, "G43.1 Z2\n"), "ok\r\n");
+    let gc = send(&mut p, &mut m, "$G\n");
+    assert_eq!(
+        gc,
+        "[GC:G0 G54 G17 G21 G90 G94 G43.1 M5 M9 T0 F0 S0]\r\nok\r\n"
+    );
+    let params = send(&mut p, &mut m, "$#\n");
+    assert!(params.contains("[TLO:2.000]\r\n"), "{params}");
+    assert!(send(&mut p, &mut m, "?").contains("|WCO:0.000,0.000,2.000"));
+    // Z in work coordinates moves past the offset: Z0 is machine Z 2 (400 steps/mm).
+    send(&mut p, &mut m, "G1 Z0 F100\n");
+    assert_eq!(moves(&m).last().unwrap().target, [0, 0, 800]);
+    m.run_all();
+    // G92 and G10 L20 account for it: the current Z reads as the word.
+    send(&mut p, &mut m, "G92 Z1\n");
+    assert!(send(&mut p, &mut m, "?").contains("|WCO:0.000,0.000,1.000"));
+    send(&mut p, &mut m, "G92.1\nG10 L20 P1 Z0\n");
+    assert!(send(&mut p, &mut m, "?").contains("|WCO:0.000,0.000,2.000"));
+    send(&mut p, &mut m, "G10 L2 P1 Z0\n");
+    // Only Z, and not beside motion or another axis command (Grbl's errors 37, 24).
+    assert_eq!(
+        send(&mut p, &mut m, "G43.1 X1\nG1 G43.1 Z1\nG92 G43.1 Z1\n"),
+        "error:37\r\nerror:24\r\nerror:24\r\n"
+    );
+    // A bare G43.1 keeps the offset (bCNC replays the $G words, then sends G43.1 Z).
+    assert_eq!(
+        send(
+            &mut p,
+            &mut m,
+            "G0 G54 G17 G21 G90 G94 G43.1\nG43.1Z0.000\n"
+        ),
+        "ok\r\nok\r\n"
+    );
+    assert!(send(&mut p, &mut m, "$#\n").contains("[TLO:0.000]"));
+    send(&mut p, &mut m, "G43.1 Z3\n");
+    assert_eq!(send(&mut p, &mut m, "G49\n"), "ok\r\n");
+    assert!(send(&mut p, &mut m, "$#\n").contains("[TLO:0.000]"));
+    assert!(!send(&mut p, &mut m, "$G\n").contains("G43.1"));
+    // A soft reset clears it, as Grbl's non-persistent offsets.
+    send(&mut p, &mut m, "G43.1 Z3\n\x18");
+    assert!(send(&mut p, &mut m, "$#\n").contains("[TLO:0.000]"));
+    assert!(!send(&mut p, &mut m, "$G\n").contains("G43.1"));
+}

@@ -105,6 +105,8 @@ pub struct Interpreter {
     pos: [f32; AXES],
     coords: Coords,
     g92: [f32; AXES],
+    /// Dynamic tool length offset (G43.1 Z), mm; 0 under G49.
+    tlo: f32,
 }
 
 impl Default for Interpreter {
@@ -123,6 +125,7 @@ impl Interpreter {
                 inverse_time: false,
                 wcs: 0,
                 pen_down: false,
+                tool_length: false,
             },
             feed: 0.0,
             spindle: 0.0,
@@ -133,6 +136,7 @@ impl Interpreter {
                 g30: [0.0; AXES],
             },
             g92: [0.0; AXES],
+            tlo: 0.0,
         }
     }
 
@@ -149,6 +153,10 @@ impl Interpreter {
     pub fn g92(&self) -> &[f32; AXES] {
         &self.g92
     }
+    /// The tool length offset (G43.1), mm: `[TLO:]` in `$#`.
+    pub fn tool_length_offset(&self) -> f32 {
+        self.tlo
+    }
     /// Position at the end of the queued program, machine mm.
     pub fn position(&self) -> &[f32; AXES] {
         &self.pos
@@ -161,14 +169,16 @@ impl Interpreter {
     pub fn feed(&self) -> f32 {
         self.feed
     }
-    /// The work coordinate offset (active system + G92), mm.
+    /// The work coordinate offset (active system + G92 + tool length offset), mm.
     pub fn work_offset(&self) -> [f32; AXES] {
         self.offset_of(self.modal.wcs)
     }
 
-    /// Offset of coordinate system `wcs` (0 = G54) plus G92, mm.
+    /// Offset of coordinate system `wcs` (0 = G54) plus G92 and the tool length
+    /// offset on Z, mm.
     fn offset_of(&self, wcs: u8) -> [f32; AXES] {
         let mut o = self.g92;
+        o[2] += self.tlo;
         if let Some(w) = self.coords.wcs.get(usize::from(wcs)) {
             for (o, w) in o.iter_mut().zip(w.iter()) {
                 *o += w; // f32 addition commutes exactly: same as w + g92
@@ -182,14 +192,15 @@ impl Interpreter {
         self.pos = to_mm(steps, s);
     }
 
-    /// Soft reset: modal state back to defaults (G0 G54 G17 G21 G90 G94 M5, F0) and
-    /// the G92 offset cleared, as Grbl re-initialises its parser; the position and
-    /// the stored coordinate data stay.
+    /// Soft reset: modal state back to defaults (G0 G54 G17 G21 G90 G94 G49 M5, F0)
+    /// and the G92 and tool length offsets cleared, as Grbl re-initialises its
+    /// parser; the position and the stored coordinate data stay.
     pub fn reset_modal(&mut self) {
         self.modal = Modal::default();
         self.feed = 0.0;
         self.spindle = 0.0;
         self.g92 = [0.0; AXES];
+        self.tlo = 0.0;
     }
 
     /// `[GC:...]` body for `$G` (without brackets).
@@ -203,12 +214,20 @@ impl Interpreter {
             MotionMode::Cancel => b"GC:G80",
         });
         // The defaults, with the digits that the modal state changes patched in.
-        let mut tail = *b" G54 G17 G21 G90 G94 M5 M9 T0 F";
-        tail[3] = b'4' + m.wcs.min(5); // G54..G59
-        tail[11] -= u8::from(m.inches); // G20
-        tail[15] += u8::from(m.incremental); // G91
-        tail[19] -= u8::from(m.inverse_time); // G93
-        tail[22] -= 2 * u8::from(m.pen_down); // M3
+        let mut modes = *b" G54 G17 G21 G90 G94";
+        modes[3] = b'4' + m.wcs.min(5); // G54..G59
+        modes[11] -= u8::from(m.inches); // G20
+        modes[15] += u8::from(m.incremental); // G91
+        modes[19] -= u8::from(m.inverse_time); // G93
+        w.put(&modes);
+        // The tool length offset group only while G43.1 is in effect: the default
+        // (G49) is left out like Grbl's other unprinted defaults, so that a sender
+        // replaying these words after a reset never sends a G43.1 without its Z.
+        if m.tool_length {
+            w.put(b" G43.1");
+        }
+        let mut tail = *b" M5 M9 T0 F";
+        tail[2] -= 2 * u8::from(m.pen_down); // M3
         w.put(&tail);
         let scale = if m.inches { MM_PER_INCH } else { 1.0 };
         put_int(w, round_i32(self.feed / scale));
@@ -247,7 +266,7 @@ impl Interpreter {
         let mut groups = [NONE; GROUPS];
         group_codes(&b.g, &G_CODES, &mut groups, true)?;
         group_codes(&b.m, &M_CODES, &mut groups, false)?;
-        let [motion, non_modal, units, distance, feed_mode, wcs, _, _, _, _, _, stop, m1, pen, _] =
+        let [motion, non_modal, units, distance, feed_mode, wcs, _, _, _, tool_length, _, stop, m1, pen, _] =
             groups;
         let motion = MOTION_MODES.get(usize::from(motion)).copied();
         let non_modal = NON_MODAL.get(usize::from(non_modal)).copied();
@@ -316,16 +335,36 @@ impl Interpreter {
         }
         let has_axis = axes != 0;
 
-        // Which command uses the axis words.
-        let nm_uses_axes = matches!(
+        // Which command uses the axis words: a non-modal one, G43.1 (its Z word is the
+        // offset, and Z is the only axis it may name: error 37), or else motion.
+        let dynamic_tlo = tool_length == 1;
+        if dynamic_tlo && axes & !(1 << 2) != 0 {
+            return Err(Status::G43DynamicAxisError.into());
+        }
+        let non_modal_axes = matches!(
             non_modal,
             Some(NonModal::SetCoord | NonModal::Home28 | NonModal::Home30 | NonModal::SetG92)
         );
-        if nm_uses_axes && motion.is_some_and(|m| m != MotionMode::Cancel) {
+        let nm_uses_axes = non_modal_axes || dynamic_tlo;
+        // A motion mode beside G43.1 only conflicts if there are axis words to fight
+        // over: a bare `G0 ... G43.1` (bCNC replaying the `$G` words) just sets modes.
+        let motion_conflict =
+            motion.is_some_and(|m| m != MotionMode::Cancel) && (non_modal_axes || has_axis);
+        if (nm_uses_axes && motion_conflict) || (non_modal_axes && dynamic_tlo) {
             return Err(Status::AxisCommandConflict.into());
         }
         if let Some(m) = motion {
             modal.motion = m;
+        }
+        // G43.1 Z sets the offset (a bare G43.1 keeps the one in effect); G49 clears it.
+        let mut tlo = self.tlo;
+        if tool_length != NONE {
+            modal.tool_length = dynamic_tlo;
+            tlo = match (dynamic_tlo, axes & 1 << 2 != 0) {
+                (true, true) => words[2],
+                (true, false) => tlo,
+                (false, _) => 0.0,
+            };
         }
         // Motion runs if it was named in the block, or implicitly for axis words.
         let motion_cmd = !nm_uses_axes && (motion.is_some() || has_axis);
@@ -408,9 +447,12 @@ impl Interpreter {
                 } else {
                     to_u32(p) as usize - 1
                 };
+                // L20: the offset that makes the current position read as the words,
+                // past G92 and the tool length offset.
+                let others = [g92[0], g92[1], g92[2] + tlo];
                 let from = match to_u32(l) {
                     2 => None,
-                    20 => Some(&g92),
+                    20 => Some(&others),
                     _ => return Err(Status::UnsupportedCommand.into()),
                 };
                 if let Some(sys) = coords.wcs.get_mut(idx) {
@@ -446,7 +488,8 @@ impl Interpreter {
                     .wcs
                     .get(usize::from(modal.wcs))
                     .unwrap_or(&[0.0; AXES]);
-                set_axes(&mut g92, axes, &words, &pos, Some(w));
+                let others = [w[0], w[1], w[2] + tlo];
+                set_axes(&mut g92, axes, &words, &pos, Some(&others));
             }
             Some(NonModal::ResetG92) => g92 = [0.0; AXES],
             Some(NonModal::Absolute) | None => {}
@@ -516,6 +559,7 @@ impl Interpreter {
             }
             modal = Modal {
                 inches: modal.inches,
+                tool_length: modal.tool_length,
                 motion: MotionMode::Linear,
                 ..Modal::default()
             };
@@ -525,6 +569,7 @@ impl Interpreter {
         let wcs_changed = modal.wcs != self.modal.wcs;
         out.sync = stop.is_some()
             || wcs_changed
+            || tool_length != NONE
             || matches!(
                 non_modal,
                 Some(
@@ -550,6 +595,7 @@ impl Interpreter {
         self.pos = pos;
         self.coords = coords;
         self.g92 = g92;
+        self.tlo = tlo;
         Ok(true)
     }
 

@@ -4,7 +4,7 @@
 
 use super::report::axis_triplet;
 use super::{OutWriter, Protocol, RX_BUFFER_SIZE, VERSION};
-use crate::decimal::{put_int, Sink};
+use crate::decimal::{put_int, write_fixed3, Sink};
 use crate::gcode::Status;
 use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::machine::{Machine, MotionControl, RunState};
@@ -286,7 +286,11 @@ impl Protocol {
                     7 => Some(&c.g30),
                     8 => Some(interp.g92()),
                     9 => {
-                        w.put(b"[TLO:0.000]");
+                        w.put(b"[TLO:");
+                        let inches = machine.settings().report_inches();
+                        let tlo = interp.tool_length_offset();
+                        write_fixed3(&mut w, if inches { tlo / 25.4 } else { tlo });
+                        w.put(b"]");
                         None
                     }
                     10 => {
