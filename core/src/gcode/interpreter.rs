@@ -921,12 +921,7 @@ mod tests {
             for (b, gb) in codes {
                 let r = run(&mut Interpreter::new(), &s, &std::format!("{a} {b}"));
                 let violation = r == err(Status::ModalGroupViolation);
-                if a == "G43.1" || b == "G43.1" {
-                    // Dynamic tool length offset is not supported.
-                    assert!(r.is_err(), "{a} {b}");
-                } else {
-                    assert_eq!(violation, ga == gb, "{a} {b}: {r:?}");
-                }
+                assert_eq!(violation, ga == gb, "{a} {b}: {r:?}");
             }
         }
         let modal = |line: &str| {
