@@ -212,7 +212,11 @@ fn soft_reset_while_moving_raises_alarm_3_and_unlock_clears_it() {
     send(&mut p, &mut m, "G1 X10 F600\nG1 X20\n");
     m.step();
     let out = send(&mut p, &mut m, "\x18");
-    assert_eq!(out, format!("ALARM:3\r\n\r\n{WELCOME}\r\n"));
+    assert_eq!(
+        out,
+        format!("ALARM:3\r\n\r\n{WELCOME}\r\n[MSG:'$H'|'$X' to unlock]\r\n"),
+        "the welcome line in alarm says how to unlock, as Grbl's"
+    );
     assert!(m.queue.is_empty());
     assert_eq!(send(&mut p, &mut m, "G0 X1\n"), "error:9\r\n");
     assert_eq!(
@@ -242,7 +246,12 @@ fn estop_stops_at_once_and_needs_release_reset_and_unlock() {
     let out = drain(&mut p);
     assert_eq!(out, "ALARM:10\r\n[MSG:Reset to continue]\r\n");
     assert!(send(&mut p, &mut m, "$X\n").ends_with("error:9\r\n"));
-    assert!(send(&mut p, &mut m, "\x18").contains(WELCOME));
+    let out = send(&mut p, &mut m, "\x18");
+    assert!(out.contains(WELCOME));
+    assert!(
+        !out.contains("to unlock"),
+        "$X cannot unlock it while pressed"
+    );
     assert!(
         send(&mut p, &mut m, "$X\n").ends_with("error:9\r\n"),
         "still pressed"
@@ -252,7 +261,7 @@ fn estop_stops_at_once_and_needs_release_reset_and_unlock() {
         send(&mut p, &mut m, "$X\n").ends_with("error:9\r\n"),
         "reset still needed"
     );
-    send(&mut p, &mut m, "\x18");
+    assert!(send(&mut p, &mut m, "\x18").ends_with("[MSG:'$H'|'$X' to unlock]\r\n"));
     assert_eq!(
         send(&mut p, &mut m, "$X\n"),
         "[MSG:Caution: Unlocked]\r\nok\r\n"
@@ -897,4 +906,18 @@ fn dynamic_tool_length_offset_g43_1_and_g49() {
     send(&mut p, &mut m, "G43.1 Z3\n\x18");
     assert!(send(&mut p, &mut m, "$#\n").contains("[TLO:0.000]"));
     assert!(!send(&mut p, &mut m, "$G\n").contains("G43.1"));
+}
+
+#[test]
+fn a_start_or_reset_in_alarm_says_how_to_unlock() {
+    let mut settings = Settings::default();
+    settings.set(22, 1.0).unwrap(); // homing enabled: starts locked until $H or $X
+    let mut p = Protocol::new(settings);
+    let mut m = FakePlanner::new(16);
+    let unlock = format!("\r\n{WELCOME}\r\n[MSG:'$H'|'$X' to unlock]\r\n");
+    assert_eq!(drain(&mut p), unlock, "at power-up");
+    assert_eq!(send(&mut p, &mut m, "\x18"), unlock, "after a reset");
+    assert!(send(&mut p, &mut m, "$X\n").ends_with("ok\r\n"));
+    // Unlocked but not homed: a reset locks it again, and says so.
+    assert_eq!(send(&mut p, &mut m, "\x18"), unlock);
 }

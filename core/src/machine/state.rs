@@ -186,11 +186,17 @@ impl Machine {
         m
     }
 
+    /// With homing enabled the machine starts (and resets) locked until `$H` or `$X`.
     fn lock_if_unhomed(&mut self) {
-        if self.settings.homing_enabled() && !self.homed && !self.locked {
+        if self.settings.homing_enabled() && !self.homed {
             self.locked = true;
-            self.event(Event::Msg("'$H'|'$X' to unlock"));
         }
+    }
+
+    /// In alarm and `$H` or `$X` would unlock it (not while an e-stop is held): the
+    /// welcome line is then followed by Grbl's `[MSG:'$H'|'$X' to unlock]`.
+    pub fn needs_unlock(&self) -> bool {
+        self.locked && !self.needs_reset
     }
 
     fn event(&mut self, e: Event) {

@@ -19,8 +19,13 @@ pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
 }
 
 impl Protocol {
+    /// The welcome line (power-up, reset, leaving check mode), followed, as in Grbl,
+    /// by how to unlock whenever the machine starts in alarm.
     pub(super) fn welcome(&mut self) {
         self.say(&[b"\r\n", WELCOME.as_bytes()]);
+        if self.machine.needs_unlock() {
+            self.say(&[b"[MSG:'$H'|'$X' to unlock]"]);
+        }
     }
 
     pub(super) fn respond(&mut self, r: Result<(), Status>) {
