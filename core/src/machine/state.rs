@@ -11,7 +11,7 @@ use super::homing::{Homing, HomingError, Progress};
 use super::safety::{Alarm, Inputs};
 use super::MotionControl;
 use crate::gcode::interpreter::Room;
-use crate::gcode::units::to_mm;
+use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
 use crate::motion::Command;
 use crate::motion::{Move, AXES};
@@ -662,7 +662,7 @@ impl Machine {
             return Err(Status::IdleError);
         }
         if let Command::Move(mv) = &cmd {
-            let end = to_mm(&mv.target, &self.settings);
+            let end = to_nm(&mv.target, &self.settings);
             if self.settings.soft_limits()
                 && !crate::gcode::units::within_travel(&end, &self.settings)
             {

@@ -35,6 +35,7 @@ mod report;
 mod stream;
 
 use crate::decimal::{put_int, Sink};
+use crate::gcode::units::{Nm, NmPos};
 use crate::gcode::{LineCleaner, StartupLine, Status, LINE_MAX, STARTUP_LINES};
 use crate::machine::{Inputs, Machine, MotionControl, Taken};
 use crate::motion::AXES;
@@ -79,7 +80,8 @@ pub struct Protocol {
     startup: [StartupLine; STARTUP_LINES],
     startup_next: Option<usize>,
     startup_dirty: bool,
-    wco_shown: [f32; AXES],
+    /// The work offset last shown (`WCO:` repeats when it changes).
+    wco_shown: NmPos,
     truncated: u32,
     /// Leaving check mode resets; the welcome line follows the `ok`.
     pending_welcome: bool,
@@ -165,7 +167,7 @@ impl Protocol {
             addr_of_mut!((*p).startup).write([String::new(), String::new()]);
             addr_of_mut!((*p).startup_next).write(Some(0));
             addr_of_mut!((*p).startup_dirty).write(false);
-            addr_of_mut!((*p).wco_shown).write([f32::NAN; AXES]);
+            addr_of_mut!((*p).wco_shown).write([Nm::MIN; AXES]);
             addr_of_mut!((*p).truncated).write(0);
             addr_of_mut!((*p).pending_welcome).write(false);
             addr_of_mut!((*p).ok_when_idle).write(false);

@@ -4,6 +4,7 @@
 
 use super::{OutWriter, Protocol, REFRESH_EVERY, RX_BUFFER_SIZE, WELCOME};
 use crate::decimal::{put_decimal, put_int, round_i32, write_fixed3, Sink};
+use crate::gcode::units::nm_to_mm;
 use crate::gcode::Status;
 use crate::machine::state::Event;
 use crate::machine::{MotionControl, RunState};
@@ -83,7 +84,8 @@ impl Protocol {
         let scale = if settings.report_inches() { 25.4 } else { 1.0 };
         let mask = settings.status_mask();
         let mut pos = machine.machine_position(m);
-        let wco = machine.interp().work_offset();
+        let wco_nm = machine.interp().work_offset();
+        let wco = wco_nm.map(nm_to_mm);
         if mask & 1 != 0 {
             w.put(b"|MPos:");
         } else {
@@ -129,10 +131,10 @@ impl Protocol {
                 }
             }
         }
-        if reports % REFRESH_EVERY == 1 || wco != self.wco_shown {
+        if reports % REFRESH_EVERY == 1 || wco_nm != self.wco_shown {
             w.put(b"|WCO:");
             axis_triplet(&mut w, &wco, scale);
-            self.wco_shown = wco;
+            self.wco_shown = wco_nm;
         }
         if machine.take_overrides_changed() || reports % REFRESH_EVERY == 6 {
             let (fo, ro) = machine.overrides();
