@@ -921,3 +921,20 @@ fn a_start_or_reset_in_alarm_says_how_to_unlock() {
     // Unlocked but not homed: a reset locks it again, and says so.
     assert_eq!(send(&mut p, &mut m, "\x18"), unlock);
 }
+
+#[test]
+fn every_query_gets_its_own_report_even_while_the_output_is_busy() {
+    let (mut p, mut m) = boot();
+    // A `$$` listing fills the output buffer as fast as it drains; three `?` arrive
+    // together meanwhile (a sender whose reads were held up).
+    p.receive(b"$$\n", &mut m, 0);
+    p.poll(&mut m, 0);
+    assert_eq!(p.receive(b"???", &mut m, 0), 3);
+    let mut out = String::new();
+    for _ in 0..200 {
+        p.poll(&mut m, 0);
+        out.push_str(&drain(&mut p));
+    }
+    assert_eq!(out.matches("<Idle|").count(), 3, "{out}");
+    assert!(out.ends_with("ok\r\n") || out.contains("$215="), "{out}");
+}

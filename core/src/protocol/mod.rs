@@ -54,6 +54,9 @@ pub const OUT_CAP: usize = 384;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
 const OUT_RESERVE: usize = 256;
+/// Most `?`s remembered while the output buffer is too full for their reports (a
+/// sender waits for each answer; this only bounds a flood).
+const STATUS_PENDING_MAX: u8 = 8;
 /// Status reports between repeated `WCO:` / `Ov:` fields.
 const REFRESH_EVERY: u8 = 10;
 
@@ -73,7 +76,8 @@ pub struct Protocol {
     /// The last line ended with CR: a following LF belongs to it.
     after_cr: bool,
     out: Deque<u8, OUT_CAP>,
-    status_requested: bool,
+    /// `?`s waiting for room in the output buffer (each gets its own report).
+    status_requested: u8,
     listing: Option<Listing>,
     lines_received: u32,
     reports: u8,
@@ -160,7 +164,7 @@ impl Protocol {
             addr_of_mut!((*p).line_ready).write(false);
             addr_of_mut!((*p).after_cr).write(false);
             addr_of_mut!((*p).out).write(Deque::new());
-            addr_of_mut!((*p).status_requested).write(false);
+            addr_of_mut!((*p).status_requested).write(0);
             addr_of_mut!((*p).listing).write(None);
             addr_of_mut!((*p).lines_received).write(0);
             addr_of_mut!((*p).reports).write(0);
@@ -272,7 +276,7 @@ impl Protocol {
                 return;
             }
             self.flush_events();
-            if self.status_requested {
+            if self.status_requested > 0 {
                 self.status_report(m);
                 continue;
             }

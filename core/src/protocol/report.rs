@@ -58,7 +58,7 @@ impl Protocol {
 
     /// `<State|MPos:...|FS:...|Bf:...|...>`.
     pub(super) fn status_report<M: MotionControl>(&mut self, m: &M) {
-        self.status_requested = false;
+        self.status_requested = self.status_requested.saturating_sub(1);
         self.reports = self.reports.wrapping_add(1);
         let reports = self.reports;
         // Each value is fetched where it is written: fewer live values to spill. The
