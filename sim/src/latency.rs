@@ -155,7 +155,33 @@ pub fn measure(port: &Path, lines: &[String], interval: Duration) -> Result<Late
     }
     out.seconds = start.elapsed().as_secs_f64();
     out.answers.sort_by(f64::total_cmp);
-    Ok(out)
+    // The moves still queued run out before the next stream (whose reset would
+    // otherwise cut them: alarm 3).
+    let deadline = Instant::now() + Duration::from_secs(600);
+    loop {
+        if Instant::now() > deadline {
+            return Err(format!("{path}: not idle 10 minutes after the stream"));
+        }
+        port.send(b"?").map_err(io)?;
+        std::thread::sleep(Duration::from_millis(20));
+        let n = port.recv(&mut buf).map_err(io)?;
+        let idle = sender
+            .received(&buf[..n])
+            .iter()
+            .any(|e| matches!(e, Event::Reply(Reply::Status(st)) if st.state == "Idle"));
+        if idle {
+            return Ok(out);
+        }
+    }
+}
+
+/// The host's load average over the last 5 minutes (wall-clock answer times include
+/// the host's scheduling: on a busy machine a process waits for a core).
+fn host_load() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|l| l.split_whitespace().nth(1).map(str::to_string))
+        .unwrap_or_else(|| "?".into())
 }
 
 /// A simulator serving a pty at a temporary path, killed when dropped.
@@ -213,8 +239,10 @@ pub fn run(
          {} ms after the last answer, wall clock at the sender",
         interval.as_millis()
     );
-    println!("| program | board | `?` | median ms | p99 ms | max ms | lost | errors | stream s |");
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!(
+        "| program | board | `?` | median ms | p99 ms | max ms | lost | errors | stream s | host load |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     let boards: Vec<(String, Option<f64>)> = match port {
         Some(p) => vec![(p.display().to_string(), None)],
         None => speeds
@@ -234,7 +262,7 @@ pub fn run(
             let r = measure(&path, &text, interval)?;
             failed |= r.lost > 0 || r.errors > 0 || r.lines != text.len();
             println!(
-                "| {} | {board} | {} | {:.2} | {:.2} | {:.2} | {} | {} | {:.1} |",
+                "| {} | {board} | {} | {:.2} | {:.2} | {:.2} | {} | {} | {:.1} | {} |",
                 program.name(),
                 r.answers.len(),
                 r.quantile_ms(0.5),
@@ -242,7 +270,8 @@ pub fn run(
                 r.quantile_ms(1.0),
                 r.lost,
                 r.errors,
-                r.seconds
+                r.seconds,
+                host_load()
             );
         }
     }
