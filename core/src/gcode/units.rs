@@ -18,9 +18,8 @@ pub type Nm = i64;
 /// A point in machine nanometres.
 pub type NmPos = [Nm; AXES];
 
-/// Nanometres per mm, per inch.
+/// Nanometres per mm.
 pub const NM_PER_MM: Nm = 1_000_000;
-pub const NM_PER_INCH: Nm = 25_400_000;
 
 /// Largest step coordinate accepted (2^30): leaves headroom for the planner's
 /// differences and sums in `i32`.
