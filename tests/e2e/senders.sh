@@ -6,7 +6,9 @@
 # Usage: tests/e2e/senders.sh [--fast ARGS] [BOARD_CMD...]
 #   BOARD_CMD  a command that serves the board's port at `--link PATH` (appended);
 #              default: the simulator, `inkstep-sim serve` (built here).
-#              For the emulator: tests/e2e/senders.sh cargo emu serve
+#              For the emulator: tests/e2e/senders.sh --fast "" \
+#                target/x86_64-unknown-linux-gnu/host/inkstep-emu serve
+#              (the binary itself: stopping `cargo run` would leave its child running)
 #   --fast     extra arguments for the runs whose outcome does not depend on real time
 #              (streams); default `--speed 20` for the simulator, none otherwise.
 # The %wait and pause/resume/stop checks run on BOARD_CMD as given (the simulator's
