@@ -9,6 +9,7 @@ pub mod board;
 pub mod demo;
 pub mod keys;
 pub mod kinematics;
+pub mod latency;
 pub mod lcd;
 pub mod paths;
 pub mod plot;

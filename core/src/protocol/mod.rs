@@ -35,8 +35,9 @@ mod report;
 mod stream;
 
 use crate::decimal::{put_int, Sink};
+use crate::gcode::units::{Nm, NmPos};
 use crate::gcode::{LineCleaner, StartupLine, Status, LINE_MAX, STARTUP_LINES};
-use crate::machine::{Inputs, Machine, MotionControl};
+use crate::machine::{Inputs, Machine, MotionControl, Taken};
 use crate::motion::AXES;
 use crate::settings::Settings;
 use commands::Listing;
@@ -53,6 +54,9 @@ pub const OUT_CAP: usize = 384;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
 const OUT_RESERVE: usize = 256;
+/// Most `?`s remembered while the output buffer is too full for their reports (a
+/// sender waits for each answer; this only bounds a flood).
+const STATUS_PENDING_MAX: u8 = 8;
 /// Status reports between repeated `WCO:` / `Ov:` fields.
 const REFRESH_EVERY: u8 = 10;
 
@@ -72,17 +76,22 @@ pub struct Protocol {
     /// The last line ended with CR: a following LF belongs to it.
     after_cr: bool,
     out: Deque<u8, OUT_CAP>,
-    status_requested: bool,
+    /// `?`s waiting for room in the output buffer (each gets its own report).
+    status_requested: u8,
     listing: Option<Listing>,
     lines_received: u32,
     reports: u8,
     startup: [StartupLine; STARTUP_LINES],
     startup_next: Option<usize>,
     startup_dirty: bool,
-    wco_shown: [f32; AXES],
+    /// The work offset last shown (`WCO:` repeats when it changes).
+    wco_shown: NmPos,
     truncated: u32,
     /// Leaving check mode resets; the welcome line follows the `ok`.
     pending_welcome: bool,
+    /// The last line's `ok` goes out once the queue has run empty (a G4 after its
+    /// dwell); no other line runs before it.
+    ok_when_idle: bool,
 }
 
 struct OutWriter<'a> {
@@ -135,6 +144,7 @@ impl Protocol {
                                       wco_shown: _,
                                       truncated: _,
                                       pending_welcome: _,
+                                      ok_when_idle: _,
                                   }| {};
         let p = slot.as_mut_ptr();
         // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
@@ -154,16 +164,17 @@ impl Protocol {
             addr_of_mut!((*p).line_ready).write(false);
             addr_of_mut!((*p).after_cr).write(false);
             addr_of_mut!((*p).out).write(Deque::new());
-            addr_of_mut!((*p).status_requested).write(false);
+            addr_of_mut!((*p).status_requested).write(0);
             addr_of_mut!((*p).listing).write(None);
             addr_of_mut!((*p).lines_received).write(0);
             addr_of_mut!((*p).reports).write(0);
             addr_of_mut!((*p).startup).write([String::new(), String::new()]);
             addr_of_mut!((*p).startup_next).write(Some(0));
             addr_of_mut!((*p).startup_dirty).write(false);
-            addr_of_mut!((*p).wco_shown).write([f32::NAN; AXES]);
+            addr_of_mut!((*p).wco_shown).write([Nm::MIN; AXES]);
             addr_of_mut!((*p).truncated).write(0);
             addr_of_mut!((*p).pending_welcome).write(false);
+            addr_of_mut!((*p).ok_when_idle).write(false);
             slot.assume_init_mut()
         };
         proto.welcome();
@@ -265,7 +276,7 @@ impl Protocol {
                 return;
             }
             self.flush_events();
-            if self.status_requested {
+            if self.status_requested > 0 {
                 self.status_report(m);
                 continue;
             }
@@ -277,6 +288,14 @@ impl Protocol {
                 if !self.run_startup(i, m, now_ms) {
                     return;
                 }
+                continue;
+            }
+            if self.ok_when_idle {
+                if !m.is_idle() {
+                    return;
+                }
+                self.ok_when_idle = false;
+                self.respond(Ok(()));
                 continue;
             }
             if !self.line_ready && !self.frame_line() {
@@ -310,7 +329,13 @@ impl Protocol {
                 if r.is_some() {
                     self.lines_received = line_no;
                 }
-                r
+                if r == Some(Ok(Taken::WhenIdle)) {
+                    self.flush_events();
+                    self.finish_frame();
+                    self.ok_when_idle = true;
+                    return true;
+                }
+                r.map(|r| r.map(|_| ()))
             }
         };
         let Some(r) = r else {
