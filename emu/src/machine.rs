@@ -365,22 +365,16 @@ impl<'a> Machine<'a> {
         .map_err(e)?;
         // With a memory hook on the buses the CPU keeps its PC exact at every access,
         // which `mmio_time` needs (unicorn otherwise only updates it per block).
-        for (lo, hi) in [
+        let mut buses = vec![
             (0x1FFF_F000u64, 0x1FFF_FFFFu64),
             (0x4000_0000, 0x43FF_FFFF),
             (SCS_BASE, SCS_BASE + 0xEFFF),
-        ] {
-            uc.add_mem_hook(
-                HookType::MEM_READ | HookType::MEM_WRITE,
-                lo,
-                hi,
-                |_: &mut Unicorn<State>, _, _, _, _| true,
-            )
-            .map_err(|e| format!("unicorn hook: {e:?}"))?;
-        }
+        ];
         if settings.end > settings.start {
             let lo = u64::from(FLASH_BASE + settings.start);
-            let hi = u64::from(FLASH_BASE + settings.end) - 1;
+            buses.push((lo, u64::from(FLASH_BASE + settings.end) - 1));
+        }
+        for (lo, hi) in buses {
             uc.add_mem_hook(
                 HookType::MEM_READ | HookType::MEM_WRITE,
                 lo,

@@ -133,10 +133,9 @@ fn write_log(s: &Session, log: Option<&Path>) -> Result<(), String> {
     }
 }
 
+/// Write the LCD as `dir/NAME.png`.
 fn save_lcd(s: &Session, dir: &Path, name: &str) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let lcd = &s.m.state().board.lcd;
-    inkstep_sim::lcd::save_png(|x, y| lcd.pixel(x, y), &dir.join(format!("{name}.png")))
+    inkstep_emu::demo::save_lcd(s, dir, name).map(|_| ())
 }
 
 /// Virtual time after which a run is abandoned.
