@@ -7,8 +7,6 @@
 //! - look-ahead planning, junctions and velocity profiles: [`planner`]
 //! - step generation (segment preparation, the step interrupt's work): [`stepper`]
 //! - task-to-interrupt rings (the USB byte stream; their shared index ordering): [`ring`]
-//! - measurement of step traces against an ideal path: [`analysis`]
-//! - the benchmark programs' G-code subset: [`refprog`]
 //! - libm-free f32 math (sine, cosine, arctangent, square root): [`fmath`]
 //! - decimal text without `core::fmt` (replies, listings): [`decimal`]; the stores'
 //!   checksum: [`crc`]
@@ -30,7 +28,6 @@
 // build the firmware's static cells field by field instead of on init's stack.
 #![deny(unsafe_code)]
 
-pub mod analysis;
 pub mod controller;
 pub mod crc;
 pub mod decimal;
@@ -45,7 +42,6 @@ pub mod motion;
 pub mod pipeline;
 pub mod planner;
 pub mod protocol;
-pub mod refprog;
 pub mod ring;
 pub mod screens;
 pub mod settings;

@@ -2,13 +2,13 @@
 //!
 //! Owns the ideal-path JSON format of `shared/bench/*.json`, the figures we compare with
 //! Grbl (job time, max/rms deviation, steps per axis, final position; measured with the
-//! core's `analysis`) and the reading of Grbl's own figures from the bench README, so
+//! simulator's `analysis`) and the reading of Grbl's own figures from the bench README, so
 //! that no expected number is written into the code.
 
+use crate::analysis::{self, Analyzer};
 use crate::run::{run_gcode, RunResult};
 use crate::sender::Flow;
 use crate::trace::Trace;
-use inkstep_core::analysis::{self, Analyzer};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -198,10 +198,19 @@ pub struct BenchRun {
 /// Runs the program `grbl.program` of `bench_dir` and measures it against its ideal
 /// path. The programs set 80 steps/mm on X and Y at their head.
 pub fn run_program(bench_dir: &Path, grbl: &GrblRow) -> Result<BenchRun, String> {
+    run_program_after(bench_dir, grbl, "")
+}
+
+/// [`run_program`] with `setup` lines (e.g. settings) sent before the program.
+pub fn run_program_after(
+    bench_dir: &Path,
+    grbl: &GrblRow,
+    setup: &str,
+) -> Result<BenchRun, String> {
     let nc = bench_dir.join(&grbl.program);
     let text = std::fs::read_to_string(&nc).map_err(|e| format!("{}: {e}", nc.display()))?;
     let ideal = Ideal::read_file(&nc.with_extension("json"))?;
-    let run = run_gcode(&text, Flow::SendResponse);
+    let run = run_gcode(&format!("{setup}{text}"), Flow::SendResponse);
     let spmm = f64::from(run.settings.steps_per_mm(0));
     let ours = analyse(&run.trace(), &ideal, spmm);
     Ok(BenchRun {

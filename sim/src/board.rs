@@ -15,9 +15,9 @@ use inkstep_core::pipeline::{Pipeline, StepSide};
 use inkstep_core::screens::framebuffer::FrameBuffer;
 use inkstep_core::screens::Screens;
 use inkstep_core::settings::Settings;
-use inkstep_core::stepper::drive::STEP_QUEUE;
 use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::prep::PrepConfig;
+use inkstep_core::stepper::queue::STEP_QUEUE_LEN as STEP_QUEUE;
 use inkstep_core::stepper::StepCmd;
 
 /// The step timer's clock (the firmware's timer runs at the 72 MHz core clock).

@@ -4,6 +4,7 @@
 //! `inkstep-core` code the firmware runs, and records what comes out (responses, step
 //! events, LCD frames). Everything that decides anything lives in the core.
 
+pub mod analysis;
 pub mod bench;
 pub mod board;
 pub mod demo;

@@ -5,9 +5,8 @@
 //! Owns the command format shared by both sides and the queue traits that let the
 //! same code run on the firmware's lock-free `heapless::spsc` halves and on a plain
 //! queue in the simulator and tests; [`queue`] is the lean ring the firmware uses. [`phase4`] maps steps to the 28BYJ-48 half-step
-//! sequence; [`drive`] runs the whole chain in virtual time.
+//! sequence.
 
-pub mod drive;
 pub mod exec;
 pub mod phase4;
 pub mod prep;

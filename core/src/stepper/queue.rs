@@ -13,6 +13,11 @@ use super::{CmdSink, CmdSource, StepCmd};
 use crate::ring::{load_acquire, store_release};
 use core::sync::atomic::{AtomicU32, Ordering};
 
+/// Step commands the queue holds (4 bytes each): 256 is several milliseconds of
+/// stepping at the highest rates, enough to ride out the lower-priority tasks. The
+/// firmware and the simulator both use this length.
+pub const STEP_QUEUE_LEN: usize = 256;
+
 /// The ring. `N` must be a power of two (checked at compile time).
 pub struct StepQueue<const N: usize> {
     slots: [AtomicU32; N],
