@@ -179,10 +179,6 @@ impl<S: StepSide> Pipeline<S> {
         self.planner.reconfigure(&planner_config(s), pos);
         self.pen_lift_ms = s.pen_lift_ms();
     }
-    /// The servo pen's commanded state.
-    pub fn pen_down(&self) -> bool {
-        self.pen_down
-    }
     /// Source line of the block in execution.
     pub fn line(&self) -> Option<u32> {
         self.prep.line()
@@ -380,22 +376,26 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     fn configure(&mut self, s: &Settings) {
         self.reconfigure(s);
     }
+    fn pen_down(&self) -> bool {
+        self.pen_down
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::motion::{Feed, X, Y};
-    use heapless::spsc::Queue;
+    use crate::stepper::queue::StepQueue;
+    use crate::stepper::CmdSource;
 
     /// A side whose "interrupt" is the test: it drains the queue by hand.
     struct TestSide {
-        queue: Queue<StepCmd, 256>,
+        queue: StepQueue<256>,
         pos: StepPos,
     }
 
     impl StepSide for TestSide {
-        type Sink = Queue<StepCmd, 256>;
+        type Sink = StepQueue<256>;
         fn sink(&mut self) -> &mut Self::Sink {
             &mut self.queue
         }
@@ -403,13 +403,13 @@ mod tests {
             self.pos
         }
         fn is_running(&self) -> bool {
-            !self.queue.is_empty()
+            self.queue.queued() > 0
         }
         fn queued(&self) -> usize {
-            self.queue.len()
+            self.queue.queued()
         }
         fn flush(&mut self) {
-            while self.queue.dequeue().is_some() {}
+            self.queue.clear();
         }
         fn set_position(&mut self, p: StepPos) {
             self.pos = p;
@@ -423,10 +423,10 @@ mod tests {
         for _ in 0..1_000_000 {
             pipeline.fill();
             let side = pipeline.side_mut();
-            if side.queue.is_empty() {
+            if side.queue.queued() == 0 {
                 break;
             }
-            while let Some(c) = side.queue.dequeue() {
+            while let Some(c) = side.queue.pop() {
                 c.tick().apply(&mut side.pos);
                 if c.tick().steps() & (1 << axis) != 0 {
                     fastest = fastest.min(c.wait());
@@ -452,7 +452,7 @@ mod tests {
             &s,
             PrepConfig::default(),
             TestSide {
-                queue: Queue::new(),
+                queue: StepQueue::new(),
                 pos: [0; 3],
             },
         );

@@ -212,7 +212,10 @@ fn soft_reset_while_moving_raises_alarm_3_and_unlock_clears_it() {
     send(&mut p, &mut m, "G1 X10 F600\nG1 X20\n");
     m.step();
     let out = send(&mut p, &mut m, "\x18");
-    assert_eq!(out, format!("ALARM:3\r\n\r\n{WELCOME}\r\n"));
+    assert_eq!(
+        out,
+        format!("ALARM:3\r\n\r\n{WELCOME}\r\n[MSG:'$H'|'$X' to unlock]\r\n")
+    );
     assert!(m.queue.is_empty());
     assert_eq!(send(&mut p, &mut m, "G0 X1\n"), "error:9\r\n");
     assert_eq!(

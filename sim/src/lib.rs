@@ -8,6 +8,7 @@ pub mod analysis;
 pub mod bench;
 pub mod board;
 pub mod demo;
+pub mod flash;
 pub mod keys;
 pub mod kinematics;
 pub mod lcd;

@@ -55,7 +55,7 @@ pub use flash::{
     flash_size_kb, settings_pages, FlashError, SettingsFlash, FLASH_PAGE_SIZE, FLASH_SIZE,
 };
 pub use indicators::Indicators;
-pub use inputs::{exti_take_pending, InputLevels, Inputs};
+pub use inputs::{exti_take_pending, Inputs};
 pub use keypad::KeypadMatrix;
 pub use lcd::{lcd_init, LcdSpi, LCD_SPI_HZ};
 pub use servo::PenServo;
@@ -83,7 +83,8 @@ use usb_device::{bus::UsbBusAllocator, prelude::*};
 pub const SYSCLK_HZ: u32 = 72_000_000;
 /// The step timer (TIM2) counts at the full timer clock (APB1 x2 = 72 MHz, prescaler 1):
 /// waits are exact to 14 ns; longer waits than 16 bits are split by the core's executor.
-pub const STEP_TIMER_HZ: u32 = 72_000_000;
+/// The core's step timing (and the simulator's) is computed for this clock.
+pub const STEP_TIMER_HZ: u32 = inkstep_core::stepper::TIMER_HZ;
 
 /// Everything `init` hands to the RTIC app.
 pub struct Board {

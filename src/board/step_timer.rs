@@ -2,6 +2,7 @@
 //! CH1-CH3, armed one period ahead) and raises one interrupt per step event.
 
 use super::{STEP_TIMER_HZ, SYSCLK_HZ};
+use inkstep_core::stepper::MAX_RELOAD;
 use stm32f1xx_hal::pac;
 
 /// The update event flag (UIF): a period has ended.
@@ -134,7 +135,7 @@ impl StepTimer {
     /// core's executor guarantees (so no clamp costs the interrupt time here).
     #[inline(always)]
     pub fn set_period(&mut self, ticks: u32) {
-        debug_assert!((2..=0x1_0000).contains(&ticks));
+        debug_assert!((2..=MAX_RELOAD).contains(&ticks));
         let arr = ticks.wrapping_sub(1);
         self.tim.arr().write(|w| unsafe { w.bits(arr) });
         // Interrupt latency already counted past the new end: end the period now

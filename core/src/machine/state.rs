@@ -179,10 +179,11 @@ impl Machine {
         m
     }
 
+    /// With homing enabled and the position unknown, lock until `$H` or `$X` (the
+    /// protocol's welcome line says how to unlock).
     fn lock_if_unhomed(&mut self) {
         if self.settings.homing_enabled() && !self.homed && !self.locked {
             self.locked = true;
-            self.event(Event::Msg("'$H'|'$X' to unlock"));
         }
     }
 

@@ -249,6 +249,19 @@ impl Protocol {
         self.say(&[b"[MSG:", text.as_bytes(), b"]"]);
     }
 
+    /// The host opened the port: what was said while nobody listened is dropped, and
+    /// the session starts with the welcome line (and how to unlock, in alarm), as a
+    /// Grbl board that the opening of its port resets.
+    pub fn start_session(&mut self) {
+        self.out.clear();
+        self.welcome();
+    }
+
+    /// Drop the waiting output (the port is closed: nobody reads it).
+    pub fn discard_output(&mut self) {
+        self.out.clear();
+    }
+
     /// Update the input levels (e-stop, limits, feed hold, cycle start).
     pub fn set_inputs<M: MotionControl>(&mut self, inputs: Inputs, m: &mut M, now_ms: u32) {
         self.machine.set_inputs(inputs, m, now_ms);

@@ -19,8 +19,13 @@ pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
 }
 
 impl Protocol {
+    /// The welcome line, and how to unlock when the machine starts in alarm (after a
+    /// reset, at power-up with homing enabled, when the host opens the port).
     pub(super) fn welcome(&mut self) {
         self.say(&[b"\r\n", WELCOME.as_bytes()]);
+        if self.machine.is_locked() {
+            self.say(&[b"[MSG:'$H'|'$X' to unlock]"]);
+        }
     }
 
     pub(super) fn respond(&mut self, r: Result<(), Status>) {
