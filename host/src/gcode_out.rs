@@ -101,7 +101,7 @@ pub fn to_gcode(strokes: &[Stroke], o: &GcodeOptions) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gcode_in::{check_grbl, parse, MoveKind};
+    use crate::toolpath::{check_grbl, parse, MoveKind};
 
     #[test]
     fn numbers_are_short() {

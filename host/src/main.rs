@@ -5,7 +5,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use inkstep_host::gcode_out::{to_gcode, GcodeOptions, Pen};
 use inkstep_host::geom::{pen_up_travel, Pt, Stroke};
 use inkstep_host::plan::{plan, PlanOptions};
-use inkstep_host::{bench, gcode_in, preview, stream, svg_in, text};
+use inkstep_host::{bench, preview, stream, svg_in, text, toolpath};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -207,7 +207,7 @@ fn main() -> Result<()> {
         } => {
             let src = std::fs::read_to_string(&file)
                 .with_context(|| format!("reading {}", file.display()))?;
-            let moves = gcode_in::parse(&src)?;
+            let moves = toolpath::parse(&src)?;
             let (pm, st) = preview::render(&moves, width)?;
             pm.save_png(&output)
                 .with_context(|| format!("writing {}", output.display()))?;

@@ -3,11 +3,11 @@
 //! result is never worse than the natural order, and Euler joining leaves
 //! exactly the minimum number of trails on drawings with junctions.
 
-use inkstep_host::gcode_in::{check_grbl, parse, MoveKind};
 use inkstep_host::gcode_out::{to_gcode, GcodeOptions, Pen};
 use inkstep_host::geom::{pen_up_travel, Pt, Stroke};
 use inkstep_host::plan::{euler, plan, Effort, PlanOptions};
 use inkstep_host::text::layout;
+use inkstep_host::toolpath::{check_grbl, parse, MoveKind};
 use proptest::prelude::*;
 use std::collections::HashMap;
 use std::time::Duration;

@@ -9,7 +9,7 @@ use inkstep_host::plan::{plan, PlanOptions};
 use inkstep_host::svg_in::strokes_from_svg;
 use inkstep_host::text::layout;
 use inkstep_sim::run::run_gcode;
-use inkstep_sim::sender::Flow;
+use inkstep_sim::run::Flow;
 
 fn run_clean(gcode: &str, what: &str) {
     let r = run_gcode(gcode, Flow::CharCount(128));

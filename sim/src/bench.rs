@@ -6,8 +6,8 @@
 //! that no expected number is written into the code.
 
 use crate::analysis::{self, Analyzer};
+use crate::run::Flow;
 use crate::run::{run_gcode, RunResult};
-use crate::sender::Flow;
 use crate::trace::Trace;
 use serde::Deserialize;
 use std::path::Path;

@@ -171,8 +171,9 @@ impl Board {
         self
     }
 
-    /// The host opens or closes the serial port (DTR). The simulator's pty cannot
-    /// tell, so a board starts with the port open.
+    /// The host opens or closes the serial port (DTR on the board; `cargo sim serve`
+    /// follows the pty's clients). A board starts with the port open, as a run
+    /// without a pty has a host listening all along.
     pub fn set_port_open(&mut self, open: bool) {
         self.port_open = open;
     }

@@ -11,7 +11,7 @@ use crate::keys::{parse, Step, TAP_MS};
 use crate::lcd;
 use crate::render::Drawing;
 use crate::run::run_on_with;
-use crate::sender::Flow;
+use crate::run::Flow;
 use crate::trace::{Row, Trace};
 use inkstep_core::settings::Settings;
 use std::path::{Path, PathBuf};

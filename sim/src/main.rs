@@ -4,7 +4,7 @@
 use clap::{Parser, Subcommand};
 use inkstep_core::settings::Settings;
 use inkstep_sim::board::{Board, TICK_HZ};
-use inkstep_sim::sender::Flow;
+use inkstep_sim::run::Flow;
 use inkstep_sim::trace::{Trace, TraceWriter};
 use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
 use std::path::{Path, PathBuf};

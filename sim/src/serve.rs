@@ -3,11 +3,13 @@
 //!
 //! Owns the real-time pacing only: virtual time follows the wall clock (times `speed`),
 //! bytes cross between the pty and the board's USB entry points every millisecond, so
-//! a `?` is answered within about a millisecond of real time.
+//! a `?` is answered within about a millisecond of real time. The pty is the shared one
+//! of inkstep-serial; clients opening and closing it are logged and are the board's
+//! port open/close (USB CDC's DTR on the board): opening it brings the welcome line.
 
 use crate::board::{Board, TICK_HZ};
-use crate::pty::Pty;
 use inkstep_core::settings::Settings;
+use inkstep_serial::pty::{ClientEvent, Pty};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -33,6 +35,10 @@ pub fn serve(
     use std::io::Write;
     let _ = std::io::stdout().flush();
     let mut board = Board::new(Settings::default());
+    // Where the pty cannot tell, the port counts as open all along.
+    if pty.notices_clients() {
+        board.set_port_open(false);
+    }
     let start = Instant::now();
     let mut inbox: Vec<u8> = Vec::new();
     let mut buf = [0u8; 1024];
@@ -48,6 +54,14 @@ pub fn serve(
             pty.send(&out).map_err(|e| e.to_string())?;
         }
         pty.flush_pending().map_err(|e| e.to_string())?;
+        for e in pty.client_events().map_err(|e| e.to_string())? {
+            match e {
+                ClientEvent::Opened => println!("a client opened the port"),
+                ClientEvent::Closed => println!("a client closed the port"),
+            }
+            let _ = std::io::stdout().flush();
+            board.set_port_open(pty.clients() > 0);
+        }
         let target = (start.elapsed().as_secs_f64() * speed * TICK_HZ as f64) as u64;
         if target > board.now() {
             board.run_until(target, &mut |_| {});

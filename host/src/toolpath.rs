@@ -1,15 +1,20 @@
-//! Reading G-code back: a small parser for the dialect the tool writes and
-//! for sender files (G0-G3 with I/J or R arcs flattened, G20/G21, G90/G91,
-//! M3/M5 or a Z pen), used by the preview and by the Grbl-compatibility check. It is not the
-//! firmware's interpreter (that lives in inkstep-core); it only needs the
-//! XY path and whether the pen is down.
+//! What a G-code program draws: its XY moves, each marked pen-down or travel, read
+//! with the firmware's own G-code parser (inkstep-core: the line cleaner and the word
+//! parser, so a file reads here exactly as the board will read it, with Grbl's error
+//! numbers). The host keeps only what the core does not do for it: the modal state a
+//! path needs (G0-G3, G20/G21, G90/G91, M3/M5 or a Z pen) and arcs flattened in f64.
+//! Used by the preview, the planning benchmark, the web view and the
+//! Grbl-compatibility check of what the tool writes.
 
 use crate::geom::Pt;
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
+use inkstep_core::gcode::parser::Block;
+use inkstep_core::gcode::LineCleaner;
+use inkstep_serial::grbl::error_text;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum MoveKind {
-    /// Pen down, G1 (or G2/G3 chords are not produced by this tool).
+    /// Pen down and a feed move (G1-G3).
     Draw,
     /// Pen up or rapid.
     Travel,
@@ -22,77 +27,47 @@ pub struct Move {
     pub kind: MoveKind,
     /// 1-based line in the file.
     pub line: usize,
+    /// Feed in mm/min for feed moves (as the modal F stood), None for rapids.
+    pub feed: Option<f64>,
 }
 
-/// Removes `( ... )` and `;` comments and surrounding space.
-pub fn strip_comment(line: &str) -> String {
-    let mut out = String::new();
-    let mut depth = 0;
-    for c in line.chars() {
-        match c {
-            ';' if depth == 0 => break,
-            '(' => depth += 1,
-            ')' if depth > 0 => depth -= 1,
-            _ if depth == 0 => out.push(c),
-            _ => {}
-        }
+/// A line cleaned as Grbl cleans it (comments, spaces gone, upper case) and parsed
+/// into its block; None for lines that move nothing (empty, `$` commands, `%`).
+pub fn block(line: &str) -> Result<Option<Block>, u8> {
+    let mut c = LineCleaner::new();
+    let clean: Vec<u8> = line.bytes().filter_map(|b| c.push(b)).collect();
+    if clean.is_empty() || clean[0] == b'$' || clean[0] == b'%' {
+        return Ok(None);
     }
-    out.trim().to_string()
+    Block::parse(&clean).map(Some).map_err(|s| s.code())
 }
 
-/// Words of a line as (letter, value), upper-cased.
-pub fn words(line: &str) -> Result<Vec<(char, f64)>> {
-    let s: String = strip_comment(line)
-        .chars()
-        .filter(|c| !c.is_whitespace())
-        .collect();
-    let mut out = Vec::new();
-    let b = s.as_bytes();
-    let mut i = 0;
-    while i < b.len() {
-        let letter = (b[i] as char).to_ascii_uppercase();
-        if !letter.is_ascii_alphabetic() {
-            bail!("expected a letter at {:?}", &s[i..]);
-        }
-        let j = i
-            + 1
-            + s[i + 1..]
-                .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == '+'))
-                .unwrap_or(s.len() - i - 1);
-        let v: f64 = s[i + 1..j]
-            .parse()
-            .map_err(|_| anyhow::anyhow!("bad number after {letter}"))?;
-        out.push((letter, v));
-        i = j;
-    }
-    Ok(out)
+fn blocks(text: &str) -> Result<Vec<Option<Block>>> {
+    text.lines()
+        .enumerate()
+        .map(|(k, l)| {
+            block(l).map_err(|n| anyhow!("line {}: error:{n} ({})", k + 1, error_text(n.into())))
+        })
+        .collect()
+}
+
+fn value(b: &Block, letter: u8) -> Option<f64> {
+    b.get(letter).map(f64::from)
 }
 
 /// The XY moves of a program, with pen state. With no M3 in the file the
 /// pen is taken to be Z: down below the middle of the Z values used; with
 /// neither, every feed move (G1-G3) draws.
 pub fn parse(text: &str) -> Result<Vec<Move>> {
-    let lines: Vec<Vec<(char, f64)>> = text
-        .lines()
-        .enumerate()
-        .map(|(k, l)| {
-            // Grbl system commands ($...) and tape marks (%) move nothing.
-            let t = strip_comment(l);
-            if t.starts_with('$') || t.starts_with('%') {
-                return Ok(Vec::new());
-            }
-            words(l).map_err(|e| anyhow::anyhow!("line {}: {e}", k + 1))
-        })
-        .collect::<Result<_>>()?;
+    let lines = blocks(text)?;
     let uses_m3 = lines
         .iter()
         .flatten()
-        .any(|&(c, v)| c == 'M' && (v == 3.0 || v == 4.0));
+        .any(|b| b.m.iter().any(|&m| m == 30 || m == 40));
     let zs: Vec<f64> = lines
         .iter()
         .flatten()
-        .filter(|w| w.0 == 'Z')
-        .map(|w| w.1)
+        .filter_map(|b| value(b, b'Z'))
         .collect();
     let zmid = if zs.is_empty() {
         f64::NEG_INFINITY
@@ -103,29 +78,36 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
     };
     let (mut pos, mut z) = (Pt::new(0.0, 0.0), 0.0);
     let (mut motion, mut absolute, mut scale, mut m3) = (0, true, 1.0, false);
+    let mut feed = None;
     let mut out = Vec::new();
-    for (k, ws) in lines.iter().enumerate() {
-        let (mut x, mut y, mut nz) = (None, None, None);
-        let (mut i, mut j, mut r) = (0.0, 0.0, None);
-        for &(c, v) in ws {
-            match (c, v) {
-                ('G', g) if g == 0.0 || g == 1.0 || g == 2.0 || g == 3.0 => motion = g as u8,
-                ('G', 20.0) => scale = 25.4,
-                ('G', 21.0) => scale = 1.0,
-                ('G', 90.0) => absolute = true,
-                ('G', 91.0) => absolute = false,
-                ('M', m) if m == 3.0 || m == 4.0 => m3 = true,
-                ('M', m) if m == 5.0 || m == 2.0 || m == 30.0 => m3 = false,
-                ('X', v) => x = Some(v * scale),
-                ('Y', v) => y = Some(v * scale),
-                ('Z', v) => nz = Some(v * scale),
-                ('I', v) => i = v * scale,
-                ('J', v) => j = v * scale,
-                ('R', v) => r = Some(v * scale),
+    for (k, b) in lines.iter().enumerate() {
+        let Some(b) = b else { continue };
+        for &g in &b.g {
+            match g {
+                0 | 10 | 20 | 30 => motion = g / 10,
+                200 => scale = 25.4,
+                210 => scale = 1.0,
+                900 => absolute = true,
+                910 => absolute = false,
                 _ => {}
             }
         }
-        if let Some(v) = nz {
+        for &m in &b.m {
+            match m {
+                30 | 40 => m3 = true,
+                20 | 50 | 300 => m3 = false,
+                _ => {}
+            }
+        }
+        if let Some(f) = value(b, b'F') {
+            feed = Some(f * scale);
+        }
+        let (x, y) = (
+            value(b, b'X').map(|v| v * scale),
+            value(b, b'Y').map(|v| v * scale),
+        );
+        if let Some(v) = value(b, b'Z') {
+            let v = v * scale;
             z = if absolute { v } else { z + v };
         }
         if x.is_none() && y.is_none() {
@@ -147,9 +129,15 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
         } else {
             MoveKind::Travel
         };
+        let feed = (motion != 0).then_some(feed).flatten();
         if motion == 2 || motion == 3 {
+            let (i, j) = (
+                value(b, b'I').unwrap_or(0.0) * scale,
+                value(b, b'J').unwrap_or(0.0) * scale,
+            );
+            let r = value(b, b'R').map(|r| r * scale);
             let pts = arc_points(pos, to, i, j, r, motion == 2, 0.01)
-                .map_err(|e| anyhow::anyhow!("line {}: {e}", k + 1))?;
+                .map_err(|e| anyhow!("line {}: {e}", k + 1))?;
             let mut from = pos;
             for p in pts {
                 out.push(Move {
@@ -157,6 +145,7 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
                     to: p,
                     kind,
                     line: k + 1,
+                    feed,
                 });
                 from = p;
             }
@@ -168,10 +157,20 @@ pub fn parse(text: &str) -> Result<Vec<Move>> {
             to,
             kind,
             line: k + 1,
+            feed,
         });
         pos = to;
     }
     Ok(out)
+}
+
+/// Pen-up travel of a program: the length of every move that does not draw.
+pub fn travel(moves: &[Move]) -> f64 {
+    moves
+        .iter()
+        .filter(|m| m.kind == MoveKind::Travel)
+        .map(|m| m.from.dist(m.to))
+        .sum()
 }
 
 /// Points after `from` along a G2 (`cw`) or G3 arc in the XY plane to `to`,
@@ -265,16 +264,20 @@ pub fn check_grbl(text: &str) -> Result<()> {
         if !line.is_ascii() {
             bail!("line {n}: not ASCII");
         }
-        for (c, v) in words(line).map_err(|e| anyhow::anyhow!("line {n}: {e}"))? {
-            let ok = match c {
-                'G' => [0.0, 1.0, 4.0, 20.0, 21.0, 90.0, 91.0, 94.0].contains(&v),
-                'M' => [2.0, 3.0, 5.0, 30.0].contains(&v),
-                'X' | 'Y' | 'Z' | 'F' | 'P' | 'S' => v.is_finite(),
-                _ => false,
-            };
-            if !ok {
-                bail!("line {n}: unsupported word {c}{v}");
-            }
+        let Some(b) = block(line).map_err(|e| anyhow!("line {n}: error:{e}"))? else {
+            continue;
+        };
+        if let Some(g) =
+            b.g.iter()
+                .find(|g| ![0, 10, 40, 200, 210, 900, 910, 940].contains(*g))
+        {
+            bail!("line {n}: unsupported G{}", f64::from(*g) / 10.0);
+        }
+        if let Some(m) = b.m.iter().find(|m| ![20, 30, 50, 300].contains(*m)) {
+            bail!("line {n}: unsupported M{}", f64::from(*m) / 10.0);
+        }
+        if let Some(l) = (b'A'..=b'Z').find(|&l| b.get(l).is_some() && !b"XYZFPS".contains(&l)) {
+            bail!("line {n}: unsupported word {}", char::from(l));
         }
     }
     Ok(())
@@ -286,12 +289,11 @@ mod tests {
 
     #[test]
     fn words_and_comments() {
-        assert_eq!(
-            words("g1x1.5 Y-2 (c) ; rest").unwrap(),
-            vec![('G', 1.0), ('X', 1.5), ('Y', -2.0)]
-        );
-        assert!(words("G1 X").is_err());
-        assert!(words("#1=2").is_err());
+        let m = parse("g1x1.5 Y-2 F600 (c) ; rest").unwrap();
+        assert_eq!(m[0].to, Pt::new(1.5, -2.0));
+        assert_eq!(m[0].feed, Some(600.0));
+        assert!(parse("G1 X").is_err());
+        assert!(parse("#1=2").unwrap_err().to_string().contains("error:1"));
     }
 
     #[test]

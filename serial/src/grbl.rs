@@ -1,7 +1,7 @@
 //! What the Grbl 1.1 protocol says back, parsed: `ok`, `error:N`,
-//! `ALARM:N`, status reports `<State|MPos:x,y,z|...>`, feedback `[...]` and
-//! the welcome line; plus the meaning of Grbl's error and alarm numbers so a
-//! failed job can say what went wrong. No I/O here.
+//! `ALARM:N`, status reports `<State|MPos:x,y,z|...>`, feedback `[...]`,
+//! settings lines `$N=V` and the welcome line; plus the meaning of Grbl's error
+//! and alarm numbers so a failed job can say what went wrong. No I/O here.
 
 /// One line received from the controller.
 #[derive(Clone, Debug, PartialEq)]
@@ -14,6 +14,8 @@ pub enum Reply {
     Feedback(String),
     /// `Grbl 1.1h ['$' for help]`: the controller (re)started.
     Welcome(String),
+    /// `$N=V`, a line of the `$$` listing.
+    Setting(u16, String),
     Other(String),
 }
 
@@ -27,6 +29,27 @@ pub struct Status {
     pub work: bool,
     /// Planner blocks and receive-buffer bytes free, from `Bf:`.
     pub buffer: Option<(u32, u32)>,
+    /// Feed (mm/min) and spindle value from `FS:` (or `F:`); inkstep reports the
+    /// spindle value while the pen is down.
+    pub feed: Option<(f64, f64)>,
+    /// Feed, rapid and spindle overrides in percent, from `Ov:` (sent now and then).
+    pub overrides: Option<[u32; 3]>,
+    /// Work coordinate offset, from `WCO:` (sent now and then).
+    pub wco: Option<[f64; 3]>,
+    /// Input pins that are active, from `Pn:`.
+    pub pins: String,
+}
+
+impl Status {
+    /// The machine position, from a work position and the last known offset.
+    pub fn machine_pos(&self, wco: [f64; 3]) -> Option<[f64; 3]> {
+        let p = self.pos?;
+        Some(if self.work {
+            [p[0] + wco[0], p[1] + wco[1], p[2] + wco[2]]
+        } else {
+            p
+        })
+    }
 }
 
 /// Parses one received line (without its line end).
@@ -47,10 +70,25 @@ pub fn parse_reply(line: &str) -> Reply {
     if l.starts_with('[') && l.ends_with(']') {
         return Reply::Feedback(l[1..l.len() - 1].to_string());
     }
+    if let Some((n, v)) = l.strip_prefix('$').and_then(|r| r.split_once('=')) {
+        if let Ok(n) = n.parse() {
+            return Reply::Setting(n, v.to_string());
+        }
+    }
     if l.starts_with("Grbl ") {
         return Reply::Welcome(l.to_string());
     }
     Reply::Other(l.to_string())
+}
+
+fn numbers<T: std::str::FromStr>(val: &str) -> Vec<T> {
+    val.split(',')
+        .filter_map(|x| x.trim().parse().ok())
+        .collect()
+}
+
+fn triplet(v: &[f64]) -> Option<[f64; 3]> {
+    (v.len() >= 2).then(|| [v[0], v[1], v.get(2).copied().unwrap_or(0.0)])
 }
 
 fn parse_status(body: &str) -> Status {
@@ -63,18 +101,25 @@ fn parse_status(body: &str) -> Status {
         let (key, val) = p.split_once(':').unwrap_or((p, ""));
         match key {
             "MPos" | "WPos" => {
-                let v: Vec<f64> = val.split(',').filter_map(|x| x.parse().ok()).collect();
-                if v.len() >= 2 {
-                    st.pos = Some([v[0], v[1], v.get(2).copied().unwrap_or(0.0)]);
-                    st.work = key == "WPos";
-                }
+                st.pos = triplet(&numbers(val));
+                st.work = key == "WPos";
             }
             "Bf" => {
-                let v: Vec<u32> = val.split(',').filter_map(|x| x.parse().ok()).collect();
-                if v.len() == 2 {
-                    st.buffer = Some((v[0], v[1]));
+                if let [a, b] = numbers::<u32>(val)[..] {
+                    st.buffer = Some((a, b));
                 }
             }
+            "FS" | "F" => {
+                let v = numbers::<f64>(val);
+                st.feed = v.first().map(|&f| (f, v.get(1).copied().unwrap_or(0.0)));
+            }
+            "Ov" => {
+                if let [f, r, s] = numbers::<u32>(val)[..] {
+                    st.overrides = Some([f, r, s]);
+                }
+            }
+            "WCO" => st.wco = triplet(&numbers(val)),
+            "Pn" => st.pins = val.to_string(),
             _ => {}
         }
     }
@@ -166,10 +211,20 @@ mod tests {
         assert_eq!(s.pos, Some([1.5, -2.0, 0.0]));
         assert!(!s.work);
         assert_eq!(s.buffer, Some((15, 128)));
-        let Reply::Status(s) = parse_reply("<Hold:0|WPos:0,0,1>") else {
+        assert_eq!(s.feed, Some((500.0, 0.0)));
+        let Reply::Status(s) = parse_reply("<Hold:0|WPos:0,0,1|WCO:1,2,0|Ov:120,50,100|Pn:XH>")
+        else {
             panic!()
         };
         assert_eq!((s.state.as_str(), s.work), ("Hold:0", true));
+        assert_eq!(s.wco, Some([1.0, 2.0, 0.0]));
+        assert_eq!(s.overrides, Some([120, 50, 100]));
+        assert_eq!(s.pins, "XH");
+        assert_eq!(s.machine_pos([1.0, 2.0, 0.0]), Some([1.0, 2.0, 1.0]));
+        assert_eq!(
+            parse_reply("$110=3000.000"),
+            Reply::Setting(110, "3000.000".into())
+        );
         assert!(error_text(20).contains("unsupported"));
         assert!(alarm_text(1).contains("hard limit"));
     }

@@ -1,26 +1,19 @@
-//! Streaming a program with Grbl's character-counting flow control.
-//!
-//! Grbl has a 128-byte receive buffer. The sender keeps the byte count of
-//! every line sent but not yet answered (`ok` or `error:N`) and sends the
-//! next line only if it still fits, so the buffer never overflows and the
-//! planner never starves. Real-time bytes (`?`, `!`, 0x18) bypass the buffer
-//! and are not counted. This module is the protocol logic only, over a
-//! `Transport` trait, so the tests drive it against an in-process fake Grbl
-//! that checks the 128-byte rule; send.rs puts a serial port and a terminal
-//! UI around it.
+//! Streaming a whole program to a controller in wall-clock time (`cargo host
+//! send`): a hello (`?` must be answered, and not in alarm), every line through the
+//! one [`Sender`] with character counting against the receive buffer the controller
+//! advertises (`Bf:` at rest), status polls, and a clean end: the last `ok` and then
+//! an Idle report asked for after it. An `error:N` or a stop request holds the
+//! machine, waits for it to come to rest and soft-resets it; an alarm, a restart or
+//! a broken link ends the stream naming the oldest unanswered line. Observer
+//! callbacks carry progress, status and messages to whatever shows them.
 
-use super::grbl::{parse_reply, Reply, Status};
-use std::collections::VecDeque;
+use crate::grbl::{Reply, Status};
+use crate::port::Transport;
+use crate::sender::{Answer, Event, Flow, Sender};
+use inkstep_core::gcode::LineCleaner;
 use std::io;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-/// A byte pipe to the controller.
-pub trait Transport {
-    fn send(&mut self, bytes: &[u8]) -> io::Result<()>;
-    /// Receives what has arrived, waiting only briefly; 0 when nothing did.
-    fn recv(&mut self, buf: &mut [u8]) -> io::Result<usize>;
-}
 
 /// Told what happens while streaming (progress bar, status line).
 pub trait Observer {
@@ -87,16 +80,22 @@ pub enum Outcome {
     },
 }
 
-/// Lines worth sending: comments and spaces removed (Grbl ignores spaces,
-/// and every byte saved is buffer room), empty lines dropped. Fails on a
-/// line that cannot fit the receive buffer.
+/// A line as Grbl keeps it: comments, spaces and control characters removed and
+/// letters upper-cased, by the firmware's own line cleaner.
+pub fn clean(raw: &str) -> String {
+    let mut c = LineCleaner::new();
+    raw.bytes()
+        .filter_map(|b| c.push(b))
+        .map(char::from)
+        .collect()
+}
+
+/// Lines worth sending: cleaned as Grbl cleans them (every byte saved is buffer
+/// room), empty lines dropped. Fails on a line that cannot fit the receive buffer.
 pub fn prepare(program: &str, rx_size: usize) -> Result<Vec<Line>, String> {
     let mut out = Vec::new();
     for (k, raw) in program.lines().enumerate() {
-        let text: String = crate::gcode_in::strip_comment(raw)
-            .chars()
-            .filter(|c| !c.is_whitespace())
-            .collect();
+        let text = clean(raw);
         if text.is_empty() {
             continue;
         }
@@ -115,26 +114,11 @@ pub fn prepare(program: &str, rx_size: usize) -> Result<Vec<Line>, String> {
     Ok(out)
 }
 
-/// Receives whole lines from the transport.
-struct Rx {
-    acc: Vec<u8>,
-}
-
-impl Rx {
-    fn poll<T: Transport>(&mut self, t: &mut T) -> io::Result<Vec<Reply>> {
-        let mut buf = [0u8; 512];
-        let n = t.recv(&mut buf)?;
-        self.acc.extend_from_slice(&buf[..n]);
-        let mut out = Vec::new();
-        while let Some(i) = self.acc.iter().position(|&b| b == b'\n') {
-            let line: Vec<u8> = self.acc.drain(..=i).collect();
-            let s = String::from_utf8_lossy(&line);
-            if !s.trim().is_empty() {
-                out.push(parse_reply(&s));
-            }
-        }
-        Ok(out)
-    }
+/// Receives from the transport and parses what arrived.
+fn poll<T: Transport>(t: &mut T, sender: &mut Sender<usize>) -> io::Result<Vec<Event<usize>>> {
+    let mut buf = [0u8; 512];
+    let n = t.recv(&mut buf)?;
+    Ok(sender.received(&buf[..n]))
 }
 
 /// Streams `lines`; `stop` set (by Ctrl-C) ends it with hold and reset.
@@ -166,16 +150,15 @@ fn stream_inner<T: Transport>(
     obs: &mut dyn Observer,
     at: &mut Option<Option<usize>>,
 ) -> io::Result<Outcome> {
-    let mut rx = Rx { acc: Vec::new() };
-    let mut rx_size = cfg.rx_size;
+    let mut sender: Sender<usize> = Sender::new(Flow::CharCount(cfg.rx_size));
     // Hello: the controller must answer a status request, and not be in alarm.
     t.send(b"?")?;
     let t0 = Instant::now();
     let mut last_poll = Instant::now();
     'hello: loop {
-        for r in rx.poll(t)? {
-            match r {
-                Reply::Status(s) => {
+        for e in poll(t, &mut sender)? {
+            match e {
+                Event::Reply(Reply::Status(s)) => {
                     obs.status(&s);
                     if s.state.starts_with("Alarm") {
                         return Ok(Outcome::Locked { state: s.state });
@@ -185,14 +168,14 @@ fn stream_inner<T: Transport>(
                     let longest = lines.iter().map(|l| l.text.len() + 1).max().unwrap_or(0);
                     if let (true, Some((_, free))) = (s.state == "Idle", s.buffer) {
                         let free = free as usize;
-                        if free >= 16 && free >= longest && free != rx_size {
+                        if free >= 16 && free >= longest && free != cfg.rx_size {
                             obs.message(&format!("receive buffer {free} bytes (from Bf:)"));
-                            rx_size = free;
+                            sender.set_flow(Flow::CharCount(free));
                         }
                     }
                     break 'hello;
                 }
-                Reply::Feedback(m) | Reply::Welcome(m) => obs.message(&m),
+                Event::Reply(Reply::Feedback(m) | Reply::Welcome(m)) => obs.message(&m),
                 _ => {}
             }
         }
@@ -211,62 +194,53 @@ fn stream_inner<T: Transport>(
         }
     }
 
-    let mut in_flight: VecDeque<(usize, usize)> = VecDeque::new(); // (index, bytes)
-    let mut used = 0usize;
-    let (mut next, mut acked) = (0usize, 0usize);
+    for (i, l) in lines.iter().enumerate() {
+        sender.push(i, l.text.as_str());
+    }
+    let oldest = |s: &Sender<usize>| s.oldest_in_flight().map(|&i| lines[i].file_line);
+    let mut acked = 0usize;
     // Status requests sent and not yet answered, and how many of those were
     // asked before the last ok (their answers cannot prove the end).
     let mut polls = 0usize;
     let mut stale: Option<usize> = None;
     obs.progress(0, lines.len());
     loop {
-        *at = Some(in_flight.front().map(|f| lines[f.0].file_line));
+        *at = Some(oldest(&sender));
         if stop.load(Ordering::Relaxed) {
-            let at = in_flight.front().map(|f| lines[f.0].file_line);
-            hold_and_reset(t, &mut rx, cfg, obs)?;
+            let at = oldest(&sender);
+            hold_and_reset(t, &mut sender, cfg, obs)?;
             return Ok(Outcome::Interrupted { file_line: at });
         }
-        // A line costs its bytes plus the newline.
-        while next < lines.len() && used + (lines[next].text.len() + 1) <= rx_size {
-            let l = &lines[next];
-            let mut bytes = Vec::with_capacity(l.text.len() + 1);
-            bytes.extend_from_slice(l.text.as_bytes());
-            bytes.push(b'\n');
+        let bytes = sender.to_send();
+        if !bytes.is_empty() {
             t.send(&bytes)?;
-            used += bytes.len();
-            in_flight.push_back((next, bytes.len()));
-            next += 1;
         }
         if last_poll.elapsed() >= cfg.status_interval {
             t.send(b"?")?;
             polls += 1;
             last_poll = Instant::now();
         }
-        for r in rx.poll(t)? {
-            match r {
-                Reply::Ok => {
-                    if let Some((_, n)) = in_flight.pop_front() {
-                        used -= n;
-                        acked += 1;
-                        obs.progress(acked, lines.len());
-                    }
+        for e in poll(t, &mut sender)? {
+            match e {
+                Event::Answered(_, Answer::Ok) => {
+                    acked += 1;
+                    obs.progress(acked, lines.len());
                 }
-                Reply::Error(code) => {
-                    let (i, _) = in_flight.pop_front().unwrap_or((next.saturating_sub(1), 0));
-                    hold_and_reset(t, &mut rx, cfg, obs)?;
+                Event::Answered(i, Answer::Error(code)) => {
+                    hold_and_reset(t, &mut sender, cfg, obs)?;
                     return Ok(Outcome::Error {
                         file_line: lines[i].file_line,
                         text: lines[i].text.clone(),
                         code,
                     });
                 }
-                Reply::Alarm(code) => {
+                Event::Reply(Reply::Alarm(code)) => {
                     return Ok(Outcome::Alarm {
-                        file_line: in_flight.front().map(|f| lines[f.0].file_line),
+                        file_line: oldest(&sender),
                         code,
                     })
                 }
-                Reply::Status(s) => {
+                Event::Reply(Reply::Status(s)) => {
                     obs.status(&s);
                     polls = polls.saturating_sub(1);
                     match &mut stale {
@@ -277,20 +251,20 @@ fn stream_inner<T: Transport>(
                         None => {}
                     }
                 }
-                Reply::Feedback(m) => obs.message(&m),
-                Reply::Welcome(m) => {
+                Event::Reply(Reply::Feedback(m)) => obs.message(&m),
+                Event::Reply(Reply::Welcome(m)) => {
                     obs.message(&format!("controller restarted: {m}"));
-                    if next > 0 {
+                    if acked > 0 || sender.in_flight() > 0 {
                         return Ok(Outcome::Alarm {
                             file_line: None,
                             code: 0,
                         });
                     }
                 }
-                Reply::Other(_) => {}
+                Event::Reply(_) => {}
             }
         }
-        if next == lines.len() && in_flight.is_empty() {
+        if sender.done() {
             if !cfg.wait_idle {
                 return Ok(Outcome::Done { lines: lines.len() });
             }
@@ -309,7 +283,7 @@ fn stream_inner<T: Transport>(
 /// Idle), then soft reset so the queue is flushed without losing position.
 fn hold_and_reset<T: Transport>(
     t: &mut T,
-    rx: &mut Rx,
+    sender: &mut Sender<usize>,
     cfg: &Config,
     obs: &mut dyn Observer,
 ) -> io::Result<()> {
@@ -321,8 +295,8 @@ fn hold_and_reset<T: Transport>(
             t.send(b"?")?;
             last_poll = Instant::now();
         }
-        for r in rx.poll(t)? {
-            if let Reply::Status(s) = r {
+        for e in poll(t, sender)? {
+            if let Event::Reply(Reply::Status(s)) = e {
                 obs.status(&s);
                 if s.state == "Hold:0" || s.state == "Idle" || s.state.starts_with("Alarm") {
                     break 'wait;
@@ -331,11 +305,12 @@ fn hold_and_reset<T: Transport>(
         }
     }
     t.send(&[0x18])?;
+    sender.clear();
     // Let the reset's welcome line arrive and be shown.
     let t0 = Instant::now();
     while t0.elapsed() < Duration::from_millis(300) {
-        for r in rx.poll(t)? {
-            if let Reply::Welcome(m) | Reply::Feedback(m) = r {
+        for e in poll(t, sender)? {
+            if let Event::Reply(Reply::Welcome(m) | Reply::Feedback(m)) = e {
                 obs.message(&m);
             }
         }
