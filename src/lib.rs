@@ -4,5 +4,4 @@
 
 pub mod board;
 pub mod fault;
-pub mod mem;
 pub mod steps;
