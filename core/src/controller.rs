@@ -18,7 +18,7 @@
 use crate::decimal::{put_int, Sink};
 use crate::gcode::STARTUP_LINES;
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
-use crate::keypad::{KeyEvent, Keypad, KeypadConfig};
+use crate::keypad::{Keypad, KeypadConfig};
 use crate::machine::{InputPolarity, MotionControl, PinLevels, RunState};
 use crate::motion::{Command, StepPos, X, Y, Z};
 use crate::protocol::Protocol;
@@ -370,54 +370,23 @@ impl Controller {
         }
     }
 
-    /// One keypad column scan: `rows` read while [`Keypad::column`] was driven.
+    /// One keypad column scan: `rows` read while [`Keypad::column`] was driven; each
+    /// key event goes through the HMI and its actions through the machine.
     pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) {
-        let events = self.keypad.feed(rows, now_ms);
-        for ev in events {
-            self.key_event(ev, m, now_ms);
+        for ev in self.keypad.feed(rows, now_ms) {
+            let st = self.status(m);
+            let actions = self.hmi.key(ev, &st, now_ms);
+            self.apply(&actions, m, now_ms);
         }
     }
 
-    /// One key event through the HMI. Out of line, so that the HMI's working state and
-    /// its actions live in this frame only while a key is handled, not in the caller's
-    /// (the firmware's keypad task) beside everything else inlined there.
-    #[inline(never)]
-    fn key_event<M: MotionControl>(&mut self, ev: KeyEvent, m: &mut M, now_ms: u32) {
-        let st = self.status(m);
-        let actions = self.key_actions(ev, &st, now_ms);
-        self.apply(&actions, m, now_ms);
-    }
-
-    /// The HMI's handling of one key alone, out of line like `tick_actions`: its
-    /// working state is gone before the actions are applied.
-    #[inline(never)]
-    fn key_actions(&mut self, ev: KeyEvent, st: &hmi::Status, now_ms: u32) -> hmi::Actions {
-        self.hmi.key(ev, st, now_ms)
-    }
-
-    /// Background work: the protocol's lines and messages, the HMI's timers, the
-    /// completion of a keypad abort, the busy LED.
+    /// Background work: the protocol's lines and messages, then the HMI's timers (the
+    /// completion of a keypad abort, the busy LED).
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         self.protocol.poll(m, now_ms);
-        self.hmi_tick(m, now_ms);
-    }
-
-    /// The HMI's timers. Out of line, so that its actions (a 440-byte list) are not
-    /// part of the caller's frame (the firmware's protocol task) while the protocol
-    /// runs, and the protocol's locals are gone while the actions are applied.
-    #[inline(never)]
-    fn hmi_tick<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         let st = self.status(m);
-        let actions = self.tick_actions(&st, now_ms);
+        let actions = self.hmi.tick(&st, now_ms);
         self.apply(&actions, m, now_ms);
-    }
-
-    /// The HMI's timer step alone, out of line too: its working state is gone before
-    /// the actions are applied (through the machine and the planner, the deeper
-    /// path).
-    #[inline(never)]
-    fn tick_actions(&mut self, st: &hmi::Status, now_ms: u32) -> hmi::Actions {
-        self.hmi.tick(st, now_ms)
     }
 
     fn apply<M: MotionControl>(&mut self, actions: &[Action], m: &mut M, now_ms: u32) {

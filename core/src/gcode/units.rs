@@ -8,7 +8,6 @@ use crate::motion::{StepPos, AXES};
 use crate::settings::Settings;
 
 /// mm to steps for one axis, rounding half away from zero (saturating).
-#[inline(never)]
 pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
     round_i32(mm * steps_per_mm)
 }
