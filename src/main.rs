@@ -3,7 +3,7 @@
 //! here only move bytes, pins and time between the hardware and the same `Controller`
 //! and `Pipeline` that the simulator drives.
 //!
-//! Priorities (higher preempts lower), as in DESIGN.md:
+//! Priorities (higher preempts lower; docs/architecture.md has the lock map):
 //!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3): outputs off at once; the 1 ms
 //!      tick (SysTick, above every lock so that no millisecond is lost): the clock and
 //!      the start of the periodic tasks below

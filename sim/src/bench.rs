@@ -1,6 +1,6 @@
 //! Bench analysis: measures a step trace against the ideal path of a reference program.
 //!
-//! Owns the ideal-path JSON format of `shared/bench/*.json`, the figures we compare with
+//! Owns the ideal-path JSON format of `bench/*.json`, the figures we compare with
 //! Grbl (job time, max/rms deviation, steps per axis, final position; measured with the
 //! simulator's `analysis`) and the reading of Grbl's own figures from the bench README, so
 //! that no expected number is written into the code.
@@ -336,7 +336,7 @@ mod tests {
     }
 
     #[test]
-    fn reads_the_shared_bench_readme() {
+    fn reads_grbls_figures_of_the_bench() {
         let path = crate::paths::grbl_figures(&crate::paths::bench_dir());
         let text = std::fs::read_to_string(&path).expect("Grbl's figures of the bench");
         let rows = read_grbl_table(&text);

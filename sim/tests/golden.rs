@@ -1,4 +1,4 @@
-//! Golden tests: every reference program of shared/bench run through the simulator
+//! Golden tests: every reference program of bench/ run through the simulator
 //! (protocol, planner, step engine in virtual time) and measured against its ideal path
 //! and Grbl's figures read from the bench README. The goals of the motion issue: job
 //! time no longer than Grbl's, max deviation <= 0.71 step, final position exact; and
