@@ -8,8 +8,9 @@
 //! (G4 dwells, servo pen lifts) wait in order behind the moves before them and run as
 //! pure-wait step commands, so their timing comes from the same timer as the steps;
 //! hold/resume/clear map onto the preparation and the planner; the position is the
-//! executor's count. Owned by the simulator's issue; the firmware's prep task uses it
-//! through the same [`StepSide`] trait.
+//! executor's count. The firmware (its preparation task, `inkstep::steps::BoardSide`)
+//! and the simulator (`SimSide`) each give it their interrupt side through the same
+//! [`StepSide`] trait.
 
 use crate::interpolation::Tick;
 use crate::machine::{MotionControl, QueueFull};

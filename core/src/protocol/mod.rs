@@ -12,23 +12,13 @@
 //! output buffer drained with [`Protocol::read_output`]; work that produces output
 //! only starts when the buffer has room for it, so responses are never truncated.
 //!
-//! Driving it (firmware protocol task, simulator loop), all from one context:
-//! ```text
-//! boot:  (settings, st) = store.load_settings().await
-//!        p = Protocol::new(settings); if let Some(t) = st.message() { p.notify(t) }
-//!        p.machine_mut().set_coords(store.load_coords().await.0)
-//!        for i in 0..STARTUP_LINES { p.set_startup_line(i, &store.load_startup(i).await.0) }
-//! loop:  n = p.receive(&usb_rx[..], &mut planner, now_ms)   // drain only n bytes
-//!        p.poll(&mut planner, now_ms)            // also every ms or so when idle:
-//!                                                  // homing and debounce run on time
-//!        usb_tx.write(&buf[..p.read_output(&mut buf)])
-//!        p.set_inputs(levels, &mut planner, now_ms)          // on any input change
-//!        busy_led.set(p.machine().busy(&planner))
-//!        when !busy: save what take_settings_dirty / take_coords_dirty /
-//!                    take_startup_dirty report (flash writes stall the CPU)
-//! ```
-//! The e-stop interrupt stops the step engine itself before the protocol task
-//! learns of it through `set_inputs`.
+//! It is driven from one context, the protocol tick: [`crate::controller::Controller`]
+//! boots it from the settings store, hands it the host's bytes ([`Protocol::take_byte`]
+//! on each byte the host ring holds, until one is refused), polls it, moves its output
+//! to the host ring ([`Protocol::read_output`]), gives it the input levels
+//! ([`Protocol::set_inputs`]) and saves what its `take_*_dirty` report at rest. The
+//! e-stop interrupt stops the step engine itself before the tick learns of it through
+//! `set_inputs`. docs/architecture.md shows the whole path.
 
 mod commands;
 mod report;
