@@ -27,7 +27,6 @@ use crate::settings::{PenMode, Settings};
 use crate::settings_store::SettingsStore;
 use crate::stepper::output::OutputConfig;
 use core::mem::MaybeUninit;
-use core::ptr::addr_of_mut;
 use embedded_storage::nor_flash::NorFlash;
 use heapless::Vec;
 
@@ -133,40 +132,17 @@ impl Controller {
         settings: &Settings,
         now_ms: u32,
     ) -> &'a mut Controller {
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        const _: fn(&Controller) = |Controller {
-                                        protocol: _,
-                                        keypad: _,
-                                        hmi: _,
-                                        outputs: _,
-                                        dir: _,
-                                        view_pos: _,
-                                        port_open: _,
-                                        notice: _,
-                                        saves: _,
-                                    }| {};
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (the protocol through its own
-        // `init_in`, on its field viewed as `MaybeUninit`, which has the same layout)
-        // and the list below names every field, so the controller is initialised when
-        // `assume_init_mut` runs.
-        unsafe {
-            Protocol::init_in(
-                &mut *addr_of_mut!((*p).protocol).cast::<MaybeUninit<Protocol>>(),
-                settings,
-            );
-            addr_of_mut!((*p).keypad).write(Keypad::new(KeypadConfig::default()));
-            addr_of_mut!((*p).hmi).write(Hmi::new(hmi_config(settings), now_ms));
-            addr_of_mut!((*p).outputs).write(Outputs::default());
-            addr_of_mut!((*p).dir).write([0, 0]);
-            addr_of_mut!((*p).view_pos).write([0; 3]);
-            addr_of_mut!((*p).port_open).write(false);
-            addr_of_mut!((*p).notice).write(None);
-            addr_of_mut!((*p).saves).write(Saves::default());
-            slot.assume_init_mut()
-        }
+        crate::init_fields!(slot => Controller {
+            protocol in |cell| Protocol::init_in(cell, settings),
+            keypad = Keypad::new(KeypadConfig::default()),
+            hmi = Hmi::new(hmi_config(settings), now_ms),
+            outputs = Outputs::default(),
+            dir = [0, 0],
+            view_pos = [0; 3],
+            port_open = false,
+            notice = None,
+            saves = Saves::default(),
+        })
     }
 
     /// Power-up from the store: the settings (the defaults if the store has none or

@@ -121,44 +121,19 @@ impl<S: StepSide> Pipeline<S> {
         prep: PrepConfig,
         side: S,
     ) -> &'a mut Self {
-        use core::ptr::addr_of_mut;
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        let _: fn(&Self) = |Self {
-                                planner: _,
-                                prep: _,
-                                side: _,
-                                timer_hz: _,
-                                pending: _,
-                                wait_left: _,
-                                waiting: _,
-                                pen_down: _,
-                                pen_lift_ms: _,
-                                held: _,
-                            }| {};
         let pos = side.position();
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (no reference to the uninitialised
-        // pipeline is made) and the list below names every field, so the pipeline is
-        // initialised when `assume_init_mut` runs.
-        unsafe {
-            Planner::init_in(
-                &mut *addr_of_mut!((*p).planner).cast::<core::mem::MaybeUninit<Planner>>(),
-                planner_config(s),
-                pos,
-            );
-            addr_of_mut!((*p).prep).write(Prep::new(prep, pos));
-            addr_of_mut!((*p).side).write(side);
-            addr_of_mut!((*p).timer_hz).write(prep.timer_hz);
-            addr_of_mut!((*p).pending).write(Deque::new());
-            addr_of_mut!((*p).wait_left).write(0);
-            addr_of_mut!((*p).waiting).write(false);
-            addr_of_mut!((*p).pen_down).write(false);
-            addr_of_mut!((*p).pen_lift_ms).write(s.pen_lift_ms());
-            addr_of_mut!((*p).held).write(false);
-            slot.assume_init_mut()
-        }
+        crate::init_fields!(slot => Self {
+            planner in |cell| Planner::init_in(cell, planner_config(s), pos),
+            prep = Prep::new(prep, pos),
+            side = side,
+            timer_hz = prep.timer_hz,
+            pending = Deque::new(),
+            wait_left = 0,
+            waiting = false,
+            pen_down = false,
+            pen_lift_ms = s.pen_lift_ms(),
+            held = false,
+        })
     }
 
     pub fn side(&self) -> &S {

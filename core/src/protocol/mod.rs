@@ -31,7 +31,6 @@ use crate::motion::AXES;
 use crate::settings::Settings;
 use commands::Listing;
 use core::mem::MaybeUninit;
-use core::ptr::addr_of_mut;
 use heapless::{Deque, String, Vec};
 
 /// Receive buffer size advertised to character-counting senders (`Bf:` and `$I`).
@@ -104,58 +103,26 @@ impl Protocol {
         slot: &'a mut MaybeUninit<Protocol>,
         settings: &Settings,
     ) -> &'a mut Protocol {
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        const _: fn(&Protocol) = |Protocol {
-                                      machine: _,
-                                      rx: _,
-                                      line: _,
-                                      cleaner: _,
-                                      line_too_long: _,
-                                      line_ready: _,
-                                      after_cr: _,
-                                      out: _,
-                                      status_requested: _,
-                                      listing: _,
-                                      lines_received: _,
-                                      reports: _,
-                                      startup: _,
-                                      startup_next: _,
-                                      startup_dirty: _,
-                                      wco_shown: _,
-                                      truncated: _,
-                                      pending_welcome: _,
-                                  }| {};
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (the machine through its own
-        // `init_in`, on its field viewed as `MaybeUninit`, which has the same layout)
-        // and the list below names every field, so the protocol is initialised when
-        // `assume_init_mut` runs.
-        let proto = unsafe {
-            Machine::init_in(
-                &mut *addr_of_mut!((*p).machine).cast::<MaybeUninit<Machine>>(),
-                settings,
-            );
-            addr_of_mut!((*p).rx).write(Deque::new());
-            addr_of_mut!((*p).line).write(Vec::new());
-            addr_of_mut!((*p).cleaner).write(LineCleaner::new());
-            addr_of_mut!((*p).line_too_long).write(false);
-            addr_of_mut!((*p).line_ready).write(false);
-            addr_of_mut!((*p).after_cr).write(false);
-            addr_of_mut!((*p).out).write(Deque::new());
-            addr_of_mut!((*p).status_requested).write(false);
-            addr_of_mut!((*p).listing).write(None);
-            addr_of_mut!((*p).lines_received).write(0);
-            addr_of_mut!((*p).reports).write(0);
-            addr_of_mut!((*p).startup).write([String::new(), String::new()]);
-            addr_of_mut!((*p).startup_next).write(Some(0));
-            addr_of_mut!((*p).startup_dirty).write(false);
-            addr_of_mut!((*p).wco_shown).write([f32::NAN; AXES]);
-            addr_of_mut!((*p).truncated).write(0);
-            addr_of_mut!((*p).pending_welcome).write(false);
-            slot.assume_init_mut()
-        };
+        let proto = crate::init_fields!(slot => Protocol {
+            machine in |cell| Machine::init_in(cell, settings),
+            rx = Deque::new(),
+            line = Vec::new(),
+            cleaner = LineCleaner::new(),
+            line_too_long = false,
+            line_ready = false,
+            after_cr = false,
+            out = Deque::new(),
+            status_requested = false,
+            listing = None,
+            lines_received = 0,
+            reports = 0,
+            startup = [String::new(), String::new()],
+            startup_next = Some(0),
+            startup_dirty = false,
+            wco_shown = [f32::NAN; AXES],
+            truncated = 0,
+            pending_welcome = false,
+        });
         proto.welcome();
         proto
     }
