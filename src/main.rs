@@ -21,6 +21,8 @@
 //! tick pends (I2C1_EV, SPI1, USART3, USART2, otherwise unused), so the image carries
 //! no async executor and no timer queue.
 #![no_std]
+// Every unsafe block says why it is sound (a `SAFETY:` comment).
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![no_main]
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};

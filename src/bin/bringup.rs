@@ -11,6 +11,8 @@
 //! - USB: a CDC-ACM serial port that greets and echoes every byte back.
 //! - The watchdog is fed by the keypad task.
 #![no_std]
+// Every unsafe block says why it is sound (a `SAFETY:` comment).
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![no_main]
 
 use defmt_rtt as _;
