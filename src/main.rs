@@ -1,7 +1,8 @@
 //! inkstep firmware: thin RTIC wiring between the Blue Pill's peripherals (`board`) and
 //! the hardware-free core (`inkstep-core`). Every decision is the core's: the tasks
 //! here only move bytes, pins and time between the hardware and the same `Controller`
-//! and `Pipeline` that the simulator drives.
+//! and `Pipeline` that the simulator drives (docs/architecture.md: the data flow and
+//! the lock map).
 //!
 //! Priorities (higher preempts lower; docs/architecture.md has the lock map):
 //!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3): outputs off at once; the 1 ms

@@ -1,7 +1,8 @@
 //! inkstep-core: everything in inkstep that is not a register access.
 //!
 //! `no_std` and allocation-free so that the firmware, the simulator and the host tests
-//! all run this one copy of the logic. Modules are grouped by responsibility:
+//! all run this one copy of the logic. docs/architecture.md shows the data flow through
+//! the modules and the firmware's tasks. Modules are grouped by responsibility:
 //! - the motion contract between move producers and the planner: [`motion`]
 //! - exact interpolation in integer step space: [`interpolation`]
 //! - look-ahead planning, junctions and velocity profiles: [`planner`]
