@@ -12,3 +12,4 @@ pub mod stream;
 pub mod svg_in;
 pub mod text;
 pub mod toolpath;
+pub mod web;
