@@ -4,7 +4,7 @@
 //! init's stack and then copied. `new` for the same types goes through [`build`], so
 //! each type lists its initial values once, in `init_in`.
 //!
-//! Every `init_in` is one [`init_fields!`] call: the one place with the `unsafe` code
+//! Every `init_in` is one [`init_fields!`](crate::init_fields) call: the one place with the `unsafe` code
 //! this takes, audited once here.
 
 use core::mem::MaybeUninit;
