@@ -37,9 +37,10 @@ const KEY_COORDS: u8 = 1;
 const KEY_STARTUP: u8 = 2; // 2 .. 2 + STARTUP_LINES
 const KEYS: usize = 2 + STARTUP_LINES;
 
-/// Coordinate image: version, 8 x 3 floats, CRC-32.
-const COORDS_LEN: usize = 1 + 8 * AXES * 4 + 4;
-const COORDS_VERSION: u8 = 1;
+/// Coordinate image: version, 8 x 3 nanometre values (i64), CRC-32. Version 1 held
+/// f32 mm; a stored version 1 image reads as corrupt (defaults, and the user is told).
+const COORDS_LEN: usize = 1 + 8 * AXES * 8 + 4;
+const COORDS_VERSION: u8 = 2;
 
 /// Page header: sequence number, then its CRC-32 mixed with this tag ("inkstep store
 /// v1"), so that neither erased flash nor another layout passes for a header.
@@ -422,7 +423,7 @@ fn coords_to_image(c: &Coords) -> [u8; COORDS_LEN] {
     out[0] = COORDS_VERSION;
     let all = c.wcs.iter().chain([&c.g28, &c.g30]).flat_map(|p| p.iter());
     if let Some(body) = out.get_mut(1..COORDS_LEN - 4) {
-        for (chunk, v) in body.chunks_exact_mut(4).zip(all) {
+        for (chunk, v) in body.chunks_exact_mut(8).zip(all) {
             chunk.copy_from_slice(&v.to_le_bytes());
         }
     }
@@ -439,13 +440,10 @@ fn coords_from_image(img: &[u8; COORDS_LEN]) -> Option<Coords> {
         return None;
     }
     let mut c = Coords::default();
-    let mut chunks = body.get(1..)?.chunks_exact(4);
+    let mut chunks = body.get(1..)?.chunks_exact(8);
     let points = c.wcs.iter_mut().chain([&mut c.g28, &mut c.g30]);
     for v in points.flat_map(|p| p.iter_mut()) {
-        *v = f32::from_le_bytes(chunks.next()?.try_into().ok()?);
-        if !v.is_finite() {
-            return None;
-        }
+        *v = i64::from_le_bytes(chunks.next()?.try_into().ok()?);
     }
     Some(c)
 }

@@ -302,11 +302,11 @@ fn changes_are_saved_at_rest_and_survive_a_reboot() {
     assert!(m.is_moving());
     sh.tick(&mut c, &mut m);
     let (coords, _) = sh.store.load_coords();
-    assert_eq!(coords.wcs[0][X], 0.0, "nothing written while moving");
+    assert_eq!(coords.wcs[0][X], 0, "nothing written while moving");
     m.run_all();
     sh.tick(&mut c, &mut m);
     let (coords, _) = sh.store.load_coords();
-    assert_eq!(coords.wcs[0][X], 5.0);
+    assert_eq!(coords.wcs[0][X], 5_000_000, "5 mm in nanometres");
     let mut store = sh.store;
     let c2 = inkstep_core::in_place::build(|slot| Controller::boot_in(slot, &mut store, 0));
     assert_eq!(c2.protocol().machine().settings().max_rate(X), 1234.0);

@@ -33,8 +33,8 @@ fn round_trip_of_settings_coords_and_startup_lines() {
     let s = with(100, 123.5);
     st.save_settings(&s).unwrap();
     let mut c = Coords::default();
-    c.wcs[1] = [1.0, -2.0, 3.5];
-    c.g28 = [10.0, 20.0, 0.0];
+    c.wcs[1] = [1_000_000, -2_000_000, 3_500_000];
+    c.g28 = [10_000_000, 20_000_000, 0];
     st.save_coords(&c).unwrap();
     st.save_startup(1, "G21G90").unwrap();
     let mut st = store(st.into_flash());
@@ -125,11 +125,11 @@ fn power_cut_at_every_write_and_erase_step_keeps_old_or_new() {
 fn power_cut_while_saving_any_key_leaves_the_others_and_the_store_working() {
     let s = with(100, 70.0);
     let c_old = Coords {
-        g28: [1.0, 2.0, 3.0],
+        g28: [1_000_000, 2_000_000, 3_000_000],
         ..Coords::default()
     };
     let c_new = Coords {
-        g28: [4.0, 5.0, 6.0],
+        g28: [4_000_000, 5_000_000, 6_000_000],
         ..Coords::default()
     };
     let mut scenarios = 0;

@@ -102,6 +102,23 @@ impl Pty {
         }
     }
 
+    /// Waits until the client has sent something, at most `timeout`: true if bytes
+    /// are waiting. A server that has nothing else to do sleeps here, so that a byte
+    /// (a `?`) is read the moment it arrives rather than at the next tick.
+    pub fn wait_readable(&self, timeout: std::time::Duration) -> io::Result<bool> {
+        use rustix::event::{poll, PollFd, PollFlags, Timespec};
+        let mut fds = [PollFd::new(&self.master, PollFlags::IN)];
+        let timeout = Timespec {
+            tv_sec: timeout.as_secs() as _,
+            tv_nsec: timeout.subsec_nanos() as _,
+        };
+        match poll(&mut fds, Some(&timeout)) {
+            Ok(n) => Ok(n > 0 && fds[0].revents().contains(PollFlags::IN)),
+            Err(rustix::io::Errno::INTR) => Ok(false),
+            Err(e) => Err(e.into()),
+        }
+    }
+
     /// Queues bytes for the client and sends as many as it takes now.
     pub fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.pending.extend_from_slice(bytes);

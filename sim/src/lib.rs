@@ -11,6 +11,7 @@ pub mod demo;
 pub mod flash;
 pub mod keys;
 pub mod kinematics;
+pub mod latency;
 pub mod lcd;
 pub mod paths;
 pub mod plot;

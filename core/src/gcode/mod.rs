@@ -60,6 +60,7 @@ pub enum Status {
     ArcRadiusError = 34,
     NoOffsetsInPlane = 35,
     UnusedWords = 36,
+    G43DynamicAxisError = 37,
     MaxValueExceeded = 38,
 }
 

@@ -15,7 +15,7 @@ pub mod state;
 use crate::motion::{Command, StepPos};
 
 pub use safety::{Alarm, InputPolarity, Inputs, PinLevels};
-pub use state::{Machine, RunState};
+pub use state::{Machine, RunState, Taken};
 
 /// The planner queue has no room for another command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -11,7 +11,7 @@ use super::homing::{Homing, HomingError, Progress};
 use super::safety::{Alarm, Inputs};
 use super::MotionControl;
 use crate::gcode::interpreter::Room;
-use crate::gcode::units::to_mm;
+use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
 use crate::motion::Command;
 use crate::motion::{Move, AXES};
@@ -39,6 +39,16 @@ pub enum RunState {
     Alarm,
     Home,
     Check,
+}
+
+/// A line the machine took, and when its `ok` may go out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Taken {
+    /// Answer it now.
+    Now,
+    /// Answer once the queue has run empty: a G4's `ok` comes after its dwell, as in
+    /// Grbl, so that senders can wait for the motion before it with `G4 P0.01`.
+    WhenIdle,
 }
 
 /// Something the protocol should tell the host.
@@ -86,8 +96,7 @@ pub struct Machine {
     door: bool,
     /// The hold came from the feed-hold pin and ends when it is released.
     hold_by_pin: bool,
-    /// M0 seen: hold once the queue has run empty.
-    pause_pending: bool,
+    /// M0 ran: held at rest until cycle start (the lines after it queue meanwhile).
     paused: bool,
     /// Soft-limit alarm: bring motion to rest, then drop the queue.
     stop_then_clear: bool,
@@ -130,7 +139,6 @@ impl Machine {
             hold = false,
             door = false,
             hold_by_pin = false,
-            pause_pending = false,
             paused = false,
             stop_then_clear = false,
             feed_ovr = 100,
@@ -146,12 +154,17 @@ impl Machine {
         m
     }
 
-    /// With homing enabled and the position unknown, lock until `$H` or `$X` (the
-    /// protocol's welcome line says how to unlock).
+    /// With homing enabled the machine starts (and resets) locked until `$H` or `$X`.
     fn lock_if_unhomed(&mut self) {
-        if self.settings.homing_enabled() && !self.homed && !self.locked {
+        if self.settings.homing_enabled() && !self.homed {
             self.locked = true;
         }
+    }
+
+    /// In alarm and `$H` or `$X` would unlock it (not while an e-stop is held): the
+    /// welcome line is then followed by Grbl's `[MSG:'$H'|'$X' to unlock]`.
+    pub fn needs_unlock(&self) -> bool {
+        self.locked && !self.needs_reset
     }
 
     fn event(&mut self, e: Event) {
@@ -235,11 +248,11 @@ impl Machine {
         self.homing.is_some() || m.is_moving()
     }
 
-    /// G-code lines are taken only when this holds: after M0 they wait for cycle
-    /// start, and during a stop that will drop the queue they wait until it is done
-    /// (otherwise they would be answered `ok` and then dropped).
+    /// G-code lines are taken only when this holds: during a stop that will drop the
+    /// queue they wait until it is done (otherwise they would be answered `ok` and
+    /// then dropped).
     pub fn can_accept(&self) -> bool {
-        !self.pause_pending && !self.paused && !self.stop_then_clear && !self.jog_cancel
+        !self.stop_then_clear && !self.jog_cancel
     }
 
     fn idle_or_alarm<M: MotionControl>(&self, m: &M) -> bool {
@@ -284,15 +297,16 @@ impl Machine {
     }
 
     /// Execute one cleaned G-code line. `None` means "not now": the block needs more
-    /// free planner entries than there are, or an M0 pause is pending. Nothing has
-    /// changed then; the caller keeps the line and retries (back-pressure).
+    /// free planner entries than there are, or it is a sync point (G4, M0, M2, G10,
+    /// G92, ...) and motion before it has not finished. Nothing has changed then; the
+    /// caller keeps the line and retries (back-pressure).
     pub fn execute<M: MotionControl>(
         &mut self,
         line: &[u8],
         line_no: u32,
         m: &mut M,
         now_ms: u32,
-    ) -> Option<Result<(), Status>> {
+    ) -> Option<Result<Taken, Status>> {
         if self.locked || self.homing.is_some() {
             return Some(Err(Status::SystemLocked));
         }
@@ -303,7 +317,7 @@ impl Machine {
             return None;
         }
         // Committed only if the planner has room for the result (check mode queues
-        // nothing); M2/M30 also waits for the queue to run empty.
+        // nothing); a sync point also waits for the queue to run empty.
         let room = if self.check_mode {
             Room {
                 cmds: usize::MAX,
@@ -326,7 +340,7 @@ impl Machine {
             Err(Reject::SoftLimit) => {
                 // Grbl: the line is answered ok, motion stops, alarm 2 (no reset needed).
                 self.raise(Alarm::SoftLimit, m);
-                return Some(Ok(()));
+                return Some(Ok(Taken::Now));
             }
         }
         if out.stop == Some(Stop::End) {
@@ -336,25 +350,35 @@ impl Machine {
             self.coords_dirty = true;
         }
         if self.check_mode {
-            return Some(Ok(()));
+            // Dwells and pauses are skipped in check mode, as in Grbl.
+            return Some(Ok(Taken::Now));
         }
         for cmd in out.cmds.iter() {
             if m.push(*cmd).is_err() {
                 // free() promised room; if a planner disagrees, stop rather than
                 // lose a move silently.
                 self.raise(Alarm::AbortCycle, m);
-                return Some(Ok(()));
+                return Some(Ok(Taken::Now));
             }
             if let Command::Move(_) = cmd {
                 self.count_move(now_ms);
             }
         }
         match out.stop {
-            Some(Stop::Pause) => self.pause_pending = true,
+            Some(Stop::Pause) => {
+                // At rest (M0 is a sync point): hold until cycle start; the lines after
+                // it are planned meanwhile and wait in the held queue.
+                self.paused = true;
+                m.hold();
+            }
             Some(Stop::End) => self.job.ending = self.job.running,
             None => {}
         }
-        Some(Ok(()))
+        Some(Ok(if out.has_dwell() {
+            Taken::WhenIdle
+        } else {
+            Taken::Now
+        }))
     }
 
     /// Check a line (for `$N`) without running it or changing any state.
@@ -482,7 +506,6 @@ impl Machine {
         self.door = false;
         self.hold_by_pin = false;
         self.job = Job::default();
-        self.pause_pending = false;
         self.paused = false;
     }
 
@@ -549,7 +572,7 @@ impl Machine {
             self.jog_cancel(m);
             return;
         }
-        if !m.is_idle() || self.pause_pending {
+        if !m.is_idle() {
             self.hold = true;
             m.hold();
         }
@@ -607,7 +630,7 @@ impl Machine {
             return Err(Status::IdleError);
         }
         if let Command::Move(mv) = &cmd {
-            let end = to_mm(&mv.target, &self.settings);
+            let end = to_nm(&mv.target, &self.settings);
             if self.settings.soft_limits()
                 && !crate::gcode::units::within_travel(&end, &self.settings)
             {
@@ -639,7 +662,6 @@ impl Machine {
     /// Stop cleanly and forget the rest (the keypad's abort): decelerate to rest, then
     /// drop the queue; the position stays exact.
     pub fn stop_and_clear<M: MotionControl>(&mut self, m: &mut M) {
-        self.pause_pending = false;
         self.paused = false;
         self.hold = false;
         self.door = false;
@@ -750,7 +772,7 @@ impl Machine {
         }
     }
 
-    /// Make progress: homing, pauses, job end, jog cancel, soft-limit stop.
+    /// Make progress: homing, job end, jog cancel, soft-limit stop.
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         if self.homing.is_some() {
             self.step_homing(m, now_ms);
@@ -769,10 +791,6 @@ impl Machine {
         }
         if self.jogging && m.is_idle() && !self.jog_cancel {
             self.jogging = false;
-        }
-        if self.pause_pending && m.is_idle() {
-            self.pause_pending = false;
-            self.paused = true;
         }
         if self.job.ending && m.is_idle() {
             let ms = now_ms.wrapping_sub(self.job.start_ms);

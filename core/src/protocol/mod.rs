@@ -25,8 +25,9 @@ mod report;
 mod stream;
 
 use crate::decimal::{put_int, Sink};
+use crate::gcode::units::{Nm, NmPos};
 use crate::gcode::{LineCleaner, StartupLine, Status, LINE_MAX, STARTUP_LINES};
-use crate::machine::{Inputs, Machine, MotionControl};
+use crate::machine::{Inputs, Machine, MotionControl, Taken};
 use crate::motion::AXES;
 use crate::settings::Settings;
 use commands::Listing;
@@ -42,6 +43,9 @@ pub const OUT_CAP: usize = 384;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
 const OUT_RESERVE: usize = 256;
+/// Most `?`s remembered while the output buffer is too full for their reports (a
+/// sender waits for each answer; this only bounds a flood).
+const STATUS_PENDING_MAX: u8 = 8;
 /// Status reports between repeated `WCO:` / `Ov:` fields.
 const REFRESH_EVERY: u8 = 10;
 
@@ -61,17 +65,22 @@ pub struct Protocol {
     /// The last line ended with CR: a following LF belongs to it.
     after_cr: bool,
     out: Deque<u8, OUT_CAP>,
-    status_requested: bool,
+    /// `?`s waiting for room in the output buffer (each gets its own report).
+    status_requested: u8,
     listing: Option<Listing>,
     lines_received: u32,
     reports: u8,
     startup: [StartupLine; STARTUP_LINES],
     startup_next: Option<usize>,
     startup_dirty: bool,
-    wco_shown: [f32; AXES],
+    /// The work offset last shown (`WCO:` repeats when it changes).
+    wco_shown: NmPos,
     truncated: u32,
     /// Leaving check mode resets; the welcome line follows the `ok`.
     pending_welcome: bool,
+    /// The last line's `ok` goes out once the queue has run empty (a G4 after its
+    /// dwell); no other line runs before it.
+    ok_when_idle: bool,
 }
 
 struct OutWriter<'a> {
@@ -112,16 +121,17 @@ impl Protocol {
             line_ready = false,
             after_cr = false,
             out = Deque::new(),
-            status_requested = false,
+            status_requested = 0,
             listing = None,
             lines_received = 0,
             reports = 0,
             startup = [String::new(), String::new()],
             startup_next = Some(0),
             startup_dirty = false,
-            wco_shown = [f32::NAN; AXES],
+            wco_shown = [Nm::MIN; AXES],
             truncated = 0,
             pending_welcome = false,
+            ok_when_idle = false,
         });
         proto.welcome();
         proto
@@ -235,7 +245,7 @@ impl Protocol {
                 return;
             }
             self.flush_events();
-            if self.status_requested {
+            if self.status_requested > 0 {
                 self.status_report(m);
                 continue;
             }
@@ -247,6 +257,14 @@ impl Protocol {
                 if !self.run_startup(i, m, now_ms) {
                     return;
                 }
+                continue;
+            }
+            if self.ok_when_idle {
+                if !m.is_idle() {
+                    return;
+                }
+                self.ok_when_idle = false;
+                self.respond(Ok(()));
                 continue;
             }
             if !self.line_ready && !self.frame_line() {
@@ -280,7 +298,13 @@ impl Protocol {
                 if r.is_some() {
                     self.lines_received = line_no;
                 }
-                r
+                if r == Some(Ok(Taken::WhenIdle)) {
+                    self.flush_events();
+                    self.finish_frame();
+                    self.ok_when_idle = true;
+                    return true;
+                }
+                r.map(|r| r.map(|_| ()))
             }
         };
         let Some(r) = r else {

@@ -4,7 +4,7 @@
 //! the framing of lines (CR, LF or CR LF end a line; the cleaner strips spaces and
 //! comments).
 
-use super::{Protocol, OUT_RESERVE, RX_BUFFER_SIZE};
+use super::{Protocol, OUT_RESERVE, RX_BUFFER_SIZE, STATUS_PENDING_MAX};
 use crate::machine::MotionControl;
 
 impl Protocol {
@@ -32,10 +32,13 @@ impl Protocol {
     /// Handle `b` if it is a real-time command.
     fn realtime<M: MotionControl>(&mut self, b: u8, m: &mut M, now_ms: u32) -> bool {
         match b {
+            // Every `?` gets its own report: now, or as soon as the output buffer has
+            // room (Grbl drops a `?` that comes before the last one was answered).
             b'?' => {
-                self.status_requested = true;
                 if self.room() >= OUT_RESERVE {
                     self.status_report(m);
+                } else if self.status_requested < STATUS_PENDING_MAX {
+                    self.status_requested += 1;
                 }
             }
             b'!' => self.machine.feed_hold(m),
@@ -60,6 +63,7 @@ impl Protocol {
         self.cleaner.reset();
         self.line_too_long = false;
         self.line_ready = false;
+        self.ok_when_idle = false;
         self.after_cr = false;
         self.listing = None;
         self.lines_received = 0;
