@@ -61,7 +61,19 @@ pub fn round_div(a: i128, d: u32) -> i128 {
 /// `a` in decimal with `decimals` digits after a point (at least one before it),
 /// behind a `-` if `neg`.
 pub fn put_decimal(w: &mut dyn Sink, a: u64, neg: bool, decimals: usize) {
-    let mut buf = [0u8; 24];
+    let mut buf = [0u8; DECIMAL_MAX];
+    let n = decimal(&mut buf, a, neg, decimals);
+    w.put(buf.get(buf.len() - n..).unwrap_or(&[]));
+}
+
+/// The longest text [`decimal`] writes: 20 digits of a u64, a point and a sign.
+pub const DECIMAL_MAX: usize = 24;
+
+/// The one decimal writer: `a` in decimal with `decimals` digits after a point (at
+/// least one before it), behind a `-` if `neg`, at the end of `buf`; returns its
+/// length. Long division by 10 over 16-bit limbs with the core's 32-bit divide: no
+/// 64-bit division routine.
+pub fn decimal(buf: &mut [u8; DECIMAL_MAX], a: u64, neg: bool, decimals: usize) -> usize {
     let mut start = buf.len();
     let mut rest = u128::from(a);
     let mut k = 0;
@@ -89,18 +101,16 @@ pub fn put_decimal(w: &mut dyn Sink, a: u64, neg: bool, decimals: usize) {
             *d = b'-';
         }
     }
-    w.put(buf.get(start..).unwrap_or(&[]));
+    buf.len() - start
 }
 
 /// `x` rounded half away from zero to an `i32` (saturating): one copy of the
 /// conversion's range checks for every caller.
-#[inline(never)]
 pub fn round_i32(x: f32) -> i32 {
     fmath::round(x) as i32
 }
 
-/// `x` truncated to a `u32` (saturating, NaN = 0), out of line for the same reason.
-#[inline(never)]
+/// `x` truncated to a `u32` (saturating, NaN = 0).
 pub fn to_u32(x: f32) -> u32 {
     x as u32
 }

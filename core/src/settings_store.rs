@@ -20,19 +20,16 @@
 //! stale layout or damaged data is never taken for settings: the store falls back to
 //! defaults and says so.
 //!
-//! The store is synchronous: flash writes stall the CPU anyway, and the firmware only
-//! saves while the machine is at rest. [`BlockingFlash`] wraps the blocking
-//! `embedded-storage` flash (the stm32f1xx-hal writer, the host mocks).
+//! The store is synchronous, over any blocking `embedded-storage` NOR flash (the
+//! board's internal flash, the simulator's and the tests' mocks): flash writes stall
+//! the CPU anyway, and the controller only saves while the machine is at rest.
 
 use crate::crc::crc32;
 use crate::gcode::interpreter::Coords;
 use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::motion::AXES;
 use crate::settings::{Settings, IMAGE_LEN};
-use core::future::Future;
 use core::ops::Range;
-use core::pin::pin;
-use core::task::{Context, Poll, Waker};
 use embedded_storage::nor_flash::NorFlash;
 
 const KEY_SETTINGS: u8 = 0;
@@ -130,9 +127,9 @@ pub struct SettingsStore<F> {
     page_size: u32,
 }
 
-impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
+impl<F: NorFlash> SettingsStore<F> {
     /// `range` must be page aligned and hold at least two pages.
-    pub fn new(flash: BlockingFlash<F>, range: Range<u32>) -> Result<Self, RangeError> {
+    pub fn new(flash: F, range: Range<u32>) -> Result<Self, RangeError> {
         let page_size = F::ERASE_SIZE as u32;
         if page_size < rec_size(255) * 2
             || !range.start.is_multiple_of(page_size)
@@ -149,13 +146,13 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     }
 
     /// Give the flash back (tests use it to "power-cycle").
-    pub fn into_flash(self) -> BlockingFlash<F> {
+    pub fn into_flash(self) -> F {
         self.flash
     }
 
     fn read<'b>(&mut self, buf: &'b mut Buf, addr: u32, len: usize) -> Result<&'b [u8], F::Error> {
         let part = buf.get_mut(..len).unwrap_or(&mut []);
-        self.flash.0.read(addr, part)?;
+        self.flash.read(addr, part)?;
         Ok(part)
     }
 
@@ -241,7 +238,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         };
         let n = usize::from(n);
         let read = match out.get_mut(..n) {
-            Some(dst) => self.flash.0.read(at + REC_HEAD as u32, dst).is_ok(),
+            Some(dst) => self.flash.read(at + REC_HEAD as u32, dst).is_ok(),
             None => false,
         };
         if read {
@@ -265,7 +262,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
                 c.copy_from_slice(&crc.to_le_bytes());
             }
         }
-        self.flash.0.write(at, buf.get(..size).unwrap_or(&[]))?;
+        self.flash.write(at, buf.get(..size).unwrap_or(&[]))?;
         Ok(size as u32)
     }
 
@@ -303,7 +300,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         let end = target + self.page_size;
         // Normally erased when it was vacated; not after a cut or on a dirty region.
         if !self.blank(buf, target, end) {
-            self.flash.0.erase(target, end)?;
+            self.flash.erase(target, end)?;
         }
         let mut at = target + PAGE_HEAD;
         for k in 0..KEYS as u8 {
@@ -314,7 +311,6 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
             } else if let Some((from, n)) = old {
                 let data = buf.get_mut(REC_HEAD..REC_HEAD + usize::from(n));
                 self.flash
-                    .0
                     .read(from + REC_HEAD as u32, data.unwrap_or(&mut []))?;
                 n
             } else {
@@ -330,10 +326,10 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         let mut head = [0u8; PAGE_HEAD as usize];
         head[..4].copy_from_slice(&seq.to_le_bytes());
         head[4..].copy_from_slice(&(crc32(&seq.to_le_bytes()) ^ PAGE_TAG).to_le_bytes());
-        self.flash.0.write(target, &head)?;
+        self.flash.write(target, &head)?;
         // Everything live is in the new page: vacate the old one.
         if let Some(s) = scan {
-            self.flash.0.erase(s.page, s.page + self.page_size)?;
+            self.flash.erase(s.page, s.page + self.page_size)?;
         }
         Ok(())
     }
@@ -451,19 +447,3 @@ fn coords_from_image(img: &[u8; COORDS_LEN]) -> Option<Coords> {
     }
     Some(c)
 }
-
-/// Run a future to completion by polling it. Only for futures that complete without
-/// waiting for an interrupt (the store itself is synchronous and does not need it).
-pub fn block_on<T>(f: impl Future<Output = T>) -> T {
-    let mut f = pin!(f);
-    let mut cx = Context::from_waker(Waker::noop());
-    loop {
-        if let Poll::Ready(v) = f.as_mut().poll(&mut cx) {
-            return v;
-        }
-    }
-}
-
-/// The blocking `embedded-storage` NOR flash the store works on (kept as a wrapper so
-/// that the firmware's and the tests' types stay as they were).
-pub struct BlockingFlash<F>(pub F);

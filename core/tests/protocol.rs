@@ -561,7 +561,7 @@ fn ram_budget_of_the_protocol() {
         "RAM: Protocol {} B (Machine {} B, Interpreter {} B, Settings {} B)",
         sizes.0, sizes.1, sizes.2, sizes.3
     );
-    // DESIGN.md budgets 19 KB of RAM for statics and stacks; the protocol may take 2 KB.
+    // The product budgets 19 KB of RAM (README, Size budget) for statics and stacks; the protocol may take 2 KB.
     assert!(sizes.0 <= 2048, "{sizes:?}");
 }
 

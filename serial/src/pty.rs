@@ -185,6 +185,12 @@ impl Pty {
     pub fn clients(&self) -> usize {
         self.clients
     }
+
+    /// Whether clients opening and closing the port are noticed at all (the system
+    /// gave an inotify watch); if not, [`Pty::clients`] says nothing.
+    pub fn notices_clients(&self) -> bool {
+        self.watch.is_some()
+    }
 }
 
 impl Drop for Pty {

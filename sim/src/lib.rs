@@ -4,9 +4,11 @@
 //! `inkstep-core` code the firmware runs, and records what comes out (responses, step
 //! events, LCD frames). Everything that decides anything lives in the core.
 
+pub mod analysis;
 pub mod bench;
 pub mod board;
 pub mod demo;
+pub mod flash;
 pub mod keys;
 pub mod kinematics;
 pub mod latency;

@@ -54,10 +54,10 @@ enum Cmd {
         #[arg(long)]
         char_count: bool,
     },
-    /// Run the reference programs of shared/bench and compare with Grbl's figures.
+    /// Run the reference programs of bench/ and compare with Grbl's figures.
     Bench {
-        /// Folder of the reference programs (default: ../shared/bench beside the
-        /// repository, else the repository's bench/).
+        /// Folder of the reference programs, their ideal paths and Grbl's figures
+        /// (default: the repository's bench/).
         #[arg(long)]
         dir: Option<PathBuf>,
     },

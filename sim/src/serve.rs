@@ -7,7 +7,8 @@
 //! it comes back to the pty every [`IO_EVERY`] of real time, however far virtual time
 //! has to go (at high speeds, or when the host falls behind, one long catch-up would
 //! hold every `?` until it ended). The pty is the shared one of inkstep-serial; clients
-//! opening and closing it are logged.
+//! opening and closing it are logged and are the board's port open/close (USB CDC's
+//! DTR on the board): opening it brings the welcome line.
 
 use crate::board::{Board, TICK_HZ};
 use inkstep_core::settings::Settings;
@@ -42,6 +43,10 @@ pub fn serve(
     use std::io::Write;
     let _ = std::io::stdout().flush();
     let mut board = Board::new(Settings::default());
+    // Where the pty cannot tell, the port counts as open all along.
+    if pty.notices_clients() {
+        board.set_port_open(false);
+    }
     let start = Instant::now();
     let mut inbox: Vec<u8> = Vec::new();
     let mut buf = [0u8; 1024];
@@ -63,6 +68,7 @@ pub fn serve(
                 ClientEvent::Closed => println!("a client closed the port"),
             }
             let _ = std::io::stdout().flush();
+            board.set_port_open(pty.clients() > 0);
         }
         let target = (start.elapsed().as_secs_f64() * speed * TICK_HZ as f64) as u64;
         if target > board.now() {

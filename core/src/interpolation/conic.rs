@@ -221,13 +221,11 @@ impl Conic {
         dt * crate::fmath::sqrt(vx * vx + vy * vy)
     }
 
-    #[inline(never)]
     fn f(&self, x: i64, y: i64) -> i64 {
         self.a * x * x + self.b * y * y - self.c
     }
 
     /// Tangent direction (not normalised) at (x, y) in the feed direction.
-    #[inline(never)]
     fn tangent(&self, x: i64, y: i64) -> (i64, i64) {
         let (tx, ty) = (-self.b * y, self.a * x);
         if self.ccw {
@@ -241,7 +239,6 @@ impl Conic {
     /// target x p, oriented so that it grows in the feed direction. i64 is enough:
     /// every coordinate is within 2^30.5 of the centre (the limits checked in
     /// [`Conic::build`]), so each product is below 2^61.
-    #[inline(never)]
     fn side(&self, x: i64, y: i64) -> i64 {
         let cr = self.tx * y - self.ty * x;
         if self.ccw {
@@ -251,7 +248,6 @@ impl Conic {
         }
     }
 
-    #[inline(never)]
     fn ahead(&self, x: i64, y: i64) -> bool {
         self.tx * x + self.ty * y > 0
     }
@@ -391,7 +387,6 @@ impl Conic {
 }
 
 impl Interpolate for Conic {
-    #[inline(never)]
     fn next_tick(&mut self) -> Option<Tick> {
         if self.finished {
             return None;

@@ -17,7 +17,6 @@ use crate::motion::Command;
 use crate::motion::{Move, AXES};
 use crate::settings::Settings;
 use core::mem::MaybeUninit;
-use core::ptr::addr_of_mut;
 use heapless::Deque;
 
 /// The state shown in status reports.
@@ -123,65 +122,34 @@ impl Machine {
     /// so that no whole machine is built on the stack and copied.
     #[allow(unsafe_code)]
     pub fn init_in<'a>(slot: &'a mut MaybeUninit<Machine>, settings: &Settings) -> &'a mut Machine {
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        const _: fn(&Machine) = |Machine {
-                                     settings: _,
-                                     interp: _,
-                                     locked: _,
-                                     alarm: _,
-                                     needs_reset: _,
-                                     check_mode: _,
-                                     jogging: _,
-                                     jog_cancel: _,
-                                     homing: _,
-                                     homed: _,
-                                     hold: _,
-                                     door: _,
-                                     hold_by_pin: _,
-                                     paused: _,
-                                     stop_then_clear: _,
-                                     feed_ovr: _,
-                                     rapid_ovr: _,
-                                     ovr_changed: _,
-                                     inputs: _,
-                                     job: _,
-                                     events: _,
-                                     settings_dirty: _,
-                                     coords_dirty: _,
-                                 }| {};
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (no reference to the uninitialised
-        // machine is made) and the list below names every field, so the machine is
-        // initialised when `assume_init_mut` runs.
-        let m = unsafe {
-            addr_of_mut!((*p).settings).write(settings.clone());
-            // A const template (copied from flash) instead of field-by-field stores.
-            addr_of_mut!((*p).interp).write(const { Interpreter::new() });
-            addr_of_mut!((*p).locked).write(false);
-            addr_of_mut!((*p).alarm).write(None);
-            addr_of_mut!((*p).needs_reset).write(false);
-            addr_of_mut!((*p).check_mode).write(false);
-            addr_of_mut!((*p).jogging).write(false);
-            addr_of_mut!((*p).jog_cancel).write(false);
-            addr_of_mut!((*p).homing).write(None);
-            addr_of_mut!((*p).homed).write(false);
-            addr_of_mut!((*p).hold).write(false);
-            addr_of_mut!((*p).door).write(false);
-            addr_of_mut!((*p).hold_by_pin).write(false);
-            addr_of_mut!((*p).paused).write(false);
-            addr_of_mut!((*p).stop_then_clear).write(false);
-            addr_of_mut!((*p).feed_ovr).write(100);
-            addr_of_mut!((*p).rapid_ovr).write(100);
-            addr_of_mut!((*p).ovr_changed).write(false);
-            addr_of_mut!((*p).inputs).write(Inputs::default());
-            addr_of_mut!((*p).job).write(Job::default());
-            addr_of_mut!((*p).events).write(Deque::new());
-            addr_of_mut!((*p).settings_dirty).write(false);
-            addr_of_mut!((*p).coords_dirty).write(false);
-            slot.assume_init_mut()
-        };
+        // The interpreter from a const template (copied from flash) instead of field by
+        // field.
+        const FRESH: Interpreter = Interpreter::new();
+        let m = crate::init_fields!(slot => Machine {
+            settings = settings.clone(),
+            interp = FRESH,
+            locked = false,
+            alarm = None,
+            needs_reset = false,
+            check_mode = false,
+            jogging = false,
+            jog_cancel = false,
+            homing = None,
+            homed = false,
+            hold = false,
+            door = false,
+            hold_by_pin = false,
+            paused = false,
+            stop_then_clear = false,
+            feed_ovr = 100,
+            rapid_ovr = 100,
+            ovr_changed = false,
+            inputs = Inputs::default(),
+            job = Job::default(),
+            events = Deque::new(),
+            settings_dirty = false,
+            coords_dirty = false,
+        });
         m.lock_if_unhomed();
         m
     }

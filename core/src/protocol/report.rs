@@ -20,8 +20,9 @@ pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
 }
 
 impl Protocol {
-    /// The welcome line (power-up, reset, leaving check mode), followed, as in Grbl,
-    /// by how to unlock whenever the machine starts in alarm.
+    /// The welcome line (power-up, reset, leaving check mode, the host opening the
+    /// port), followed, as in Grbl, by how to unlock whenever the machine starts in
+    /// alarm.
     pub(super) fn welcome(&mut self) {
         self.say(&[b"\r\n", WELCOME.as_bytes()]);
         if self.machine.needs_unlock() {

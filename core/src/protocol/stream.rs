@@ -16,14 +16,17 @@ impl Protocol {
     /// Feed received bytes; returns how many were consumed. Bytes not consumed must be
     /// offered again later (the receive buffer was full).
     pub fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
-        let mut used = 0;
-        for &b in bytes {
-            if !self.realtime(b, m, now_ms) && self.rx.push_back(b).is_err() {
-                break;
-            }
-            used += 1;
-        }
-        used
+        bytes
+            .iter()
+            .take_while(|&&b| self.take_byte(b, m, now_ms))
+            .count()
+    }
+
+    /// One received byte: a real-time command acts at once, any other byte goes into
+    /// the receive buffer. False if the buffer is full: the byte was not taken and must
+    /// be offered again later (back-pressure).
+    pub fn take_byte<M: MotionControl>(&mut self, b: u8, m: &mut M, now_ms: u32) -> bool {
+        self.realtime(b, m, now_ms) || self.rx.push_back(b).is_ok()
     }
 
     /// Handle `b` if it is a real-time command.
