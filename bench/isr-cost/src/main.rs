@@ -30,9 +30,14 @@ const PROGRAMS: [&[u8]; 4] = [
 ];
 
 /// Per program: step events, interrupts, final X, final Y; then per program the steps
-/// summed over the axes (read by measure.py).
+/// summed over the axes, the interrupts that found the queue empty before the job was
+/// done, and the virtual milliseconds the program took (read by measure.py).
 #[no_mangle]
-pub static mut BENCH_RESULT: [u32; 20] = [0; 20];
+pub static mut BENCH_RESULT: [u32; 28] = [0; 28];
+
+/// The program running now (measure.py charges every call to it).
+#[no_mangle]
+pub static mut BENCH_PROGRAM: u32 = 0;
 
 /// The protocol's replies (last 1 KB), for measure.py to show when a program fails.
 #[no_mangle]
@@ -55,6 +60,7 @@ fn log(bytes: &[u8]) {
 
 const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
 const UIF: u32 = 1;
+const TIM2_ARR: *const u32 = 0x4000_002C as *const u32;
 
 /// The TIM2 interrupt handler exactly as RTIC generates it for the firmware's priority-6
 /// `step` task (`rtic::export::run` saves and restores BASEPRI around the body), compiled
@@ -89,6 +95,12 @@ pub extern "C" fn bench_kick(out: &mut StepOutput) {
 #[no_mangle]
 pub extern "C" fn bench_prepare(link: &mut Link<BoardSide>) {
     link.fill();
+}
+
+/// The period the step interrupt just programmed (TIM2 ARR + 1), timer ticks.
+fn period() -> u64 {
+    // SAFETY: the emulator maps the timer registers as plain memory.
+    u64::from(unsafe { core::ptr::read_volatile(TIM2_ARR) }) + 1
 }
 
 fn raise(flags: u32) {
@@ -142,11 +154,34 @@ fn main() -> ! {
         let mut out = steps::install(Executor::new([0; 3], 0x1_0000), rx, pins, tim);
         let mut link = Link::new(&settings, prep, BoardSide { tx });
         let mut ctl = Controller::new(settings.clone(), 0);
-        let (mut sent, mut ticks, mut events, mut irqs) = (0usize, 0u64, 0u32, 0u32);
+        // SAFETY: single-threaded bench; measure.py charges each call to this program.
+        unsafe { core::ptr::write_volatile(core::ptr::addr_of_mut!(BENCH_PROGRAM), p as u32) };
+        let (mut sent, mut events, mut irqs, mut dry) = (0usize, 0u32, 0u32, 0u32);
         let mut axis_steps = 0u32;
         let mut sink = [0u8; 128];
+        // Virtual time in timer ticks: the step interrupts happen when the periods the
+        // interrupt programs end; the protocol and the preparation run every
+        // millisecond, as the firmware's SysTick pends them.
+        let (mut next_ms, mut next_irq) = (0u64, None::<u64>);
         loop {
-            let now = (ticks / 72_000) as u32;
+            if let Some(at) = next_irq.filter(|&at| at < next_ms) {
+                let before = steps::position();
+                bench_tick(&mut out);
+                irqs += 1;
+                let after = steps::position();
+                if after != before {
+                    events += 1;
+                    axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
+                }
+                next_irq = out.timer.is_running().then(|| at + period());
+                if next_irq.is_none() && !inkstep_core::machine::MotionControl::is_idle(&link) {
+                    // The queue ran dry while the job still had steps to make.
+                    dry += 1;
+                }
+                continue;
+            }
+            let now = (next_ms / 72_000) as u32;
+            next_ms += 72_000;
             if sent < prog.len() {
                 sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut link, now);
             }
@@ -159,29 +194,17 @@ fn main() -> ! {
             }
             ctl.poll(&mut link, now);
             bench_prepare(&mut link);
-            // Start the timer as the firmware's kick does (a pend with no flags).
-            bench_kick(&mut out);
-            // Run interrupts until the prepared commands are used up.
-            while out.timer.is_running() {
-                let before = steps::position();
-                bench_tick(&mut out);
-                irqs += 1;
-                let after = steps::position();
-                if after != before {
-                    events += 1;
-                    axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
-                }
-                ticks += 2000;
-                if link.side().queued() < 32 {
-                    break;
-                }
+            if next_irq.is_none() && link.side().queued() > 0 {
+                // Start the timer as the firmware's kick does (a pend with no flags).
+                bench_kick(&mut out);
+                next_irq = out.timer.is_running().then(|| next_ms - 72_000 + period());
             }
             // Done when every byte was taken AND executed (nothing left in the protocol's
             // receive buffer), and the machine is at rest.
             let drained = ctl.protocol().rx_free() == inkstep_core::protocol::RX_BUFFER_SIZE;
             let done = sent >= prog.len()
                 && drained
-                && !out.timer.is_running()
+                && next_irq.is_none()
                 && link.side().queued() == 0;
             if done && inkstep_core::machine::MotionControl::is_idle(&link) {
                 break;
@@ -198,6 +221,8 @@ fn main() -> ! {
             r[4 * p + 2] = pos[0] as u32;
             r[4 * p + 3] = pos[1] as u32;
             r[16 + p] = axis_steps;
+            r[20 + p] = dry;
+            r[24 + p] = (next_ms / 72_000) as u32;
         }
     }
     loop {

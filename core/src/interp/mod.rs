@@ -14,6 +14,7 @@
 //! Submodules: [`line`] (straight lines), [`conic`] (circles and axis-aligned
 //! ellipses), [`curve`] (y = f(x), e.g. the sine), [`shapes`] (polylines such as the star).
 
+pub mod circle;
 pub mod conic;
 pub mod curve;
 pub mod line;
