@@ -80,6 +80,11 @@ def main():
     starts = [f[0] for f in funcs]
     prof = {}
     prof_of = {}
+    # Calls of each function inside the profiled calls (blocks at its entry).
+    entry_of = {a: name for a, _, size, name in funcs}
+    entered = {}
+    prof_prog = {}
+    entered_prog = {}
 
     def owner(addr):
         i = bisect.bisect_right(starts, addr) - 1
@@ -90,7 +95,9 @@ def main():
             i -= 1
             if i >= 0 and funcs[i][0] + 4096 < addr:
                 break
-        return '?'
+        # No sized symbol covers it: the nearest symbol before it.
+        near = max(((a, n) for n, (a, _) in syms.items() if (a & ~1) <= addr), default=(0, '?'))
+        return '~' + near[1]
 
     def on_block(uc, addr, size, _):
         n = block_len.get((addr, size))
@@ -129,6 +136,12 @@ def main():
                 if o is None:
                     o = prof_of[addr] = owner(addr)
                 prof[o] = prof.get(o, 0) + n
+                pp = prof_prog.setdefault(state['prog'], {})
+                pp[o] = pp.get(o, 0) + n
+                if addr in entry_of:
+                    entered[entry_of[addr]] = entered.get(entry_of[addr], 0) + 1
+                    ep = entered_prog.setdefault(state['prog'], {})
+                    ep[entry_of[addr]] = ep.get(entry_of[addr], 0) + 1
 
     def on_intr(uc, intno, _):
         uc.emu_stop()  # bkpt: the bench's main is done
@@ -153,6 +166,9 @@ def main():
         result['protocol_log_tail'] = bytes(uc.mem_read(addr, size)).rstrip(b'\0').decode('ascii', 'replace')
     if args.profile:
         result['profile'] = dict(sorted(prof.items(), key=lambda kv: -kv[1]))
+        result['profile_calls'] = entered
+        result['profile_calls_by_program'] = {str(k): v for k, v in entered_prog.items()}
+        result['profile_by_program'] = {str(k): dict(sorted(v.items(), key=lambda kv: -kv[1])) for k, v in prof_prog.items()}
     if args.json:
         with open(args.json, 'w') as f:
             json.dump(result, f, indent=1)

@@ -29,7 +29,7 @@
 //! off the traced points. Full circles are `target == start`; `turns` adds revolutions.
 
 use super::line::Line;
-use super::{tick_xy, InterpError, Interpolate, Method, Tick};
+use super::{tick_xy, InterpError, Interpolate, Method, Next, Tick};
 use crate::motion::{StepPos, X, Y};
 
 /// Largest |coordinate| relative to the centre, 1/256 step (2^22 steps, 52 m at 80
@@ -100,6 +100,9 @@ pub struct Circle {
     stage: Stage,
     /// The point before the last tick (classic and tail ticks: their length).
     prev: [i32; 2],
+    /// The major coordinate where the last [`Circle::path_ahead`] ended and the
+    /// circle's minor there (the next call usually begins there).
+    last_end: core::cell::Cell<(usize, i32, f32)>,
 }
 
 /// Sign of v as -1, 0 or 1.
@@ -130,23 +133,21 @@ fn isqrt(v: i64) -> i64 {
 
 impl Circle {
     /// Arc from the integer `start` to the integer `target`, on the circle around
-    /// `center` through `from` (both absolute, 1/256 step; `from` is the exact start,
-    /// which `start` rounds). `turns` extra revolutions; `target == start` is a full
+    /// `center` through `from` (both absolute, 1/256 step, i64 so that a whole-step
+    /// centre anywhere in the step range fits; `from` is the exact start, which `start`
+    /// rounds). `turns` extra revolutions; `target == start` is a full
     /// circle.
     pub fn new(
         start: StepPos,
-        from: [i32; 2],
-        center: [i32; 2],
+        from: [i64; 2],
+        center: [i64; 2],
         target: StepPos,
         ccw: bool,
         turns: u16,
         method: Method,
     ) -> Result<Self, InterpError> {
-        let rel = |v: i32, c: i32| i64::from(v) * i64::from(ONE) - i64::from(c);
-        let exact = [
-            i64::from(from[0]) - i64::from(center[0]),
-            i64::from(from[1]) - i64::from(center[1]),
-        ];
+        let rel = |v: i32, c: i64| (i64::from(v) * i64::from(ONE)).wrapping_sub(c);
+        let exact = [from[0].wrapping_sub(center[0]), from[1].wrapping_sub(center[1])];
         let p = [rel(start[X], center[0]), rel(start[Y], center[1])];
         let t = [rel(target[X], center[0]), rel(target[Y], center[1])];
         if exact.iter().chain(&p).chain(&t).any(|v| v.abs() > LIMIT) {
@@ -180,6 +181,7 @@ impl Circle {
             target: [t[0] as i32, t[1] as i32],
             stage: Stage::Trace,
             prev: [0; 2],
+            last_end: core::cell::Cell::new((2, 0, 0.0)),
         };
         c.f = c.value(c.p);
         let per_turn = match method {
@@ -453,27 +455,43 @@ impl Circle {
         self.stage = Stage::Tail(Line::new([0; 3], [d[0], d[1], 0], self.method));
     }
 
-    /// Ticks left in the present piece that [`Circle::path_ahead`] can time as one run
-    /// (moving on to the next piece when this one is used up): a DDA piece's count, 1
-    /// for every tick timed on its own (classic, the tail), 0 when the arc is done.
-    pub fn piece_left(&mut self) -> u32 {
+    /// What comes next (moving on to the next piece when this one is used up): a DDA
+    /// piece is a run; a classic tick is timed on its own; settle and tail steps are
+    /// extra steps.
+    pub fn next(&mut self) -> Next {
         loop {
             match (&self.stage, self.method) {
-                (Stage::Done, _) => return 0,
+                (Stage::Done, _) => return Next::Done,
+                (Stage::Settle(_) | Stage::Tail(_), _) => return Next::Extra,
                 (Stage::Trace, Method::Dda) if self.piece.left == 0 => self.next_piece(),
-                (Stage::Trace, Method::Dda) => return self.piece.left,
-                _ => return 1,
+                (Stage::Trace, Method::Dda) => return Next::Run(self.piece.left),
+                (Stage::Trace, Method::Classic) => return Next::Tick,
             }
         }
     }
 
-    /// Whether the present piece is timed as a run ([`Circle::path_ahead`]) rather than
-    /// tick by tick ([`Circle::last_tick_len`]).
-    pub fn is_run(&self) -> bool {
-        matches!(self.stage, Stage::Trace) && self.method == Method::Dda
+    /// Largest |d^n s / dk^n| (n = 1..4) over the next `k` ticks of a DDA piece, s the
+    /// path in steps and k the major coordinate: s = R asin(u), u = k / R, whose
+    /// derivatives grow with |u| (at most 1/sqrt 2 in a piece). Bounded without roots:
+    /// 1/(1-u^2), u/(1-u^2)^2, (1+2u^2)/(1-u^2)^3 and (9u+6u^3)/(1-u^2)^4, over R^n.
+    pub fn run_bounds(&self, k: u32) -> [f32; 4] {
+        let m = self.piece.major;
+        let r = self.radius.max(1.0);
+        let m0 = self.p[m] as f32 / ONE as f32;
+        let m1 = m0 + k as f32 * sgn(self.dir[m]) as f32;
+        let u = (crate::fmath::abs(m0).max(crate::fmath::abs(m1)) / r).min(0.7072);
+        let u2 = u * u;
+        let c = 1.0 / (1.0 - u2);
+        let ir = 1.0 / r;
+        [
+            c,
+            u * c * c * ir,
+            (1.0 + 2.0 * u2) * c * c * c * ir * ir,
+            (9.0 + 6.0 * u2) * u * (c * c) * (c * c) * ir * ir * ir,
+        ]
     }
 
-    /// Path position `k` ticks ahead in the present DDA piece (k <= piece_left),
+    /// Path position `k` ticks ahead in the present DDA piece (k <= its run),
     /// relative to the present point, in steps along the circle, and its rate in steps
     /// per tick there. The position of a tick is the point of the circle at its major
     /// coordinate.
@@ -486,7 +504,15 @@ impl Circle {
         let m1 = m0 + (k as f32) * sgn(self.dir[m]) as f32;
         let side = if self.p[n] < 0 { -1.0 } else { 1.0 };
         let minor = |mm: f32| side * crate::fmath::sqrt((r * r - mm * mm).max(0.0));
-        let (n0, n1) = (minor(m0), minor(m1));
+        // The circle's minor at the present major: from the last call when it ended here.
+        let (cached_axis, cached_m, cached_n) = self.last_end.get();
+        let n0 = if (cached_axis, cached_m) == (m, self.p[m]) {
+            cached_n
+        } else {
+            minor(m0)
+        };
+        let n1 = minor(m1);
+        self.last_end.set((m, self.p[m] + k as i32 * self.dir[m], n1));
         // Angle between the two circle points (small: one piece is an octant).
         let cross = m0 * n1 - m1 * n0;
         let dot = m0 * m1 + n0 * n1;
@@ -664,7 +690,7 @@ mod tests {
         let mut v = std::vec![p];
         let mut buf = [Tick(0); 7];
         loop {
-            if c.piece_left() == 0 {
+            if c.next() == Next::Done {
                 break;
             }
             let n = c.ticks(&mut buf);
@@ -707,8 +733,8 @@ mod tests {
         Check { max_dist }
     }
 
-    fn q8(v: f64) -> i32 {
-        (v * 256.0).round() as i32
+    fn q8(v: f64) -> i64 {
+        (v * 256.0).round() as i64
     }
 
     #[test]
@@ -757,7 +783,7 @@ mod tests {
             Some(InterpError::Degenerate)
         );
         assert_eq!(
-            Circle::new([0; 3], [0, 0], [i32::MAX, 0], [0; 3], true, 0, Method::Dda).err(),
+            Circle::new([0; 3], [0, 0], [1 << 40, 0], [0; 3], true, 0, Method::Dda).err(),
             Some(InterpError::TooLarge)
         );
     }
@@ -765,13 +791,13 @@ mod tests {
     /// An arc as G-code gives it: a centre anywhere (between steps), an exact start on
     /// its circle at angle `a0`, the end at angle `a1` (rounded to the grid for the
     /// target; the start rounded for the machine position).
-    fn arc(cx: f64, cy: f64, r: f64, a0: f64, a1: f64) -> (StepPos, [i32; 2], [i32; 2], StepPos, [f64; 2], f64) {
+    fn arc(cx: f64, cy: f64, r: f64, a0: f64, a1: f64) -> (StepPos, [i64; 2], [i64; 2], StepPos, [f64; 2], f64) {
         let from = [cx + r * a0.cos(), cy + r * a0.sin()];
         let from_q = [q8(from[0]), q8(from[1])];
         let center_q = [q8(cx), q8(cy)];
         // The circle the interpolator traces: through the Q8 start around the Q8 centre.
-        let c = [f64::from(center_q[0]) / 256.0, f64::from(center_q[1]) / 256.0];
-        let rr = (f64::from(from_q[0] - center_q[0]) / 256.0).hypot(f64::from(from_q[1] - center_q[1]) / 256.0);
+        let c = [center_q[0] as f64 / 256.0, center_q[1] as f64 / 256.0];
+        let rr = ((from_q[0] - center_q[0]) as f64 / 256.0).hypot((from_q[1] - center_q[1]) as f64 / 256.0);
         let start = [from[0].round() as i32, from[1].round() as i32, 0];
         let target = [(c[0] + rr * a1.cos()).round() as i32, (c[1] + rr * a1.sin()).round() as i32, 0];
         (start, from_q, center_q, target, c, rr)

@@ -90,6 +90,80 @@ impl Ramp {
     }
 }
 
+impl Ramp {
+    /// Time into the ramp at which it has covered `d` (0 <= d <= dist), and the speed
+    /// there; `hint` is a guess of the time (the last answer on this ramp).
+    ///
+    /// Trapezoid: closed form, t = 2 d / (v0 + v) with v^2 = v0^2 + 2 a d (no
+    /// cancellation at any speed). Cosine: the distance law has no inverse in closed
+    /// form, so Newton's method on it, kept inside a shrinking bracket.
+    fn time_for(&self, shape: Shape, d: f32, hint: f32) -> (f32, f32) {
+        if self.t <= 0.0 || d <= 0.0 {
+            return (0.0, self.v0);
+        }
+        match shape {
+            Shape::Trapezoid => {
+                let acc = (self.v1 - self.v0) / self.t;
+                let v = crate::fmath::sqrt((self.v0 * self.v0 + 2.0 * acc * d).max(0.0));
+                let sum = self.v0 + v;
+                let t = if sum > 0.0 { 2.0 * d / sum } else { 0.0 };
+                (t.min(self.t), v)
+            }
+            Shape::Cosine => {
+                let (mut lo, mut hi) = (0.0f32, self.t);
+                let mut t = hint.clamp(0.0, self.t);
+                for _ in 0..40 {
+                    let (s, v) = self.forward(shape, t);
+                    let f = s - d;
+                    if f > 0.0 {
+                        hi = t;
+                    } else {
+                        lo = t;
+                    }
+                    if crate::fmath::abs(f) <= 1e-7 * d.max(1e-3) || hi - lo <= 1e-9 * self.t {
+                        return (t, v);
+                    }
+                    let next = if v > 0.0 { t - f / v } else { -1.0 };
+                    t = if next > lo && next < hi {
+                        next
+                    } else {
+                        0.5 * (lo + hi)
+                    };
+                }
+                (t, self.forward(shape, t).1)
+            }
+        }
+    }
+
+    /// Bounds of |acceleration|, |jerk| and |d jerk/dt| along the ramp (mm/s^2, /s^3,
+    /// /s^4): what the step timing's error bound needs.
+    fn derivative_bounds(&self, shape: Shape) -> [f32; 3] {
+        if self.t <= 0.0 {
+            return [0.0; 3];
+        }
+        let dv = crate::fmath::abs(self.v1 - self.v0);
+        match shape {
+            Shape::Trapezoid => [dv / self.t, 0.0, 0.0],
+            Shape::Cosine => {
+                let w = PI / self.t;
+                let a = 0.5 * dv * w;
+                [a, a * w, a * w * w]
+            }
+        }
+    }
+}
+
+/// One of a profile's three phases.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// The first ramp (to the peak speed; down if the speed was above it).
+    Up,
+    Cruise,
+    /// The last ramp, timed back from the profile's end.
+    Down,
+}
+
 /// A ramp-cruise-ramp profile over a known distance.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Profile {
@@ -110,13 +184,25 @@ impl Profile {
         let dist = dist.max(0.0);
         let v0 = v0.max(0.0);
         let v_max = v_max.max(0.0);
-        // Exit speeds reachable over `dist` from v0 lie in [lo, hi].
-        let hi = crate::fmath::sqrt(v0 * v0 + 2.0 * ae * dist);
-        let lo = crate::fmath::sqrt((v0 * v0 - 2.0 * ae * dist).max(0.0));
-        let ve = v_exit.max(0.0).min(hi).max(lo);
+        // Exit speeds reachable over `dist` from v0 lie in [lo, hi] (compared as squares:
+        // a root only where the bound applies; this runs once per block).
+        let hi2 = v0 * v0 + 2.0 * ae * dist;
+        let lo2 = v0 * v0 - 2.0 * ae * dist;
+        let ve = v_exit.max(0.0);
+        let ve = if ve * ve > hi2 {
+            crate::fmath::sqrt(hi2)
+        } else if ve * ve < lo2 {
+            crate::fmath::sqrt(lo2)
+        } else {
+            ve
+        };
         // Where an acceleration from v0 meets a deceleration to ve (>= both of them).
-        let meet = crate::fmath::sqrt(ae * dist + 0.5 * (v0 * v0 + ve * ve));
-        let peak = if meet <= v_max { meet } else { v_max.max(ve) };
+        let meet2 = ae * dist + 0.5 * (v0 * v0 + ve * ve);
+        let peak = if meet2 <= v_max * v_max {
+            crate::fmath::sqrt(meet2)
+        } else {
+            v_max.max(ve)
+        };
         let up = Ramp::new(shape, v0, peak, a);
         let down = Ramp::new(shape, peak, ve, a);
         let cruise_d = (dist - up.dist() - down.dist()).max(0.0);
@@ -144,6 +230,73 @@ impl Profile {
             cruise_v: 0.0,
             cruise_t: 0.0,
             down: r,
+        }
+    }
+
+    /// Distance covered when the first ramp ends and when the cruise ends.
+    pub fn phase_ends(&self) -> (f32, f32) {
+        let up = self.up.dist();
+        (up, up + self.cruise_v * self.cruise_t)
+    }
+
+    /// Duration of each phase, seconds.
+    pub fn phase_durations(&self) -> [f32; 3] {
+        [self.up.t, self.cruise_t, self.down.t]
+    }
+
+    /// Phase-local time and the speed there: for [`Phase::Up`] the time from the
+    /// profile's start at which it has covered `d` (mm from the start); for
+    /// [`Phase::Cruise`] the time from the cruise's start at `d` mm into the cruise; for
+    /// [`Phase::Down`] the time left to the end when `d` mm are left. Each is computed
+    /// from its own end of the phase so that small distances near a slow end keep their
+    /// precision. `hint`: a guess of the answer (the last one in this phase).
+    pub fn phase_time(&self, phase: Phase, d: f32, hint: f32) -> (f32, f32) {
+        let d = d.max(0.0);
+        match phase {
+            Phase::Up => self.up.time_for(self.shape, d.min(self.up.dist()), hint),
+            Phase::Cruise => {
+                let t = if self.cruise_v > 0.0 {
+                    d / self.cruise_v
+                } else {
+                    0.0
+                };
+                (t, self.cruise_v)
+            }
+            Phase::Down => {
+                let rev = Ramp {
+                    v0: self.down.v1,
+                    v1: self.down.v0,
+                    t: self.down.t,
+                };
+                rev.time_for(self.shape, d.min(rev.dist()), hint)
+            }
+        }
+    }
+
+    /// Bounds of |acceleration|, |jerk| and |d jerk/dt| within `phase`.
+    pub fn derivative_bounds(&self, phase: Phase) -> [f32; 3] {
+        match phase {
+            Phase::Up => self.up.derivative_bounds(self.shape),
+            Phase::Cruise => [0.0; 3],
+            Phase::Down => self.down.derivative_bounds(self.shape),
+        }
+    }
+
+    /// Speed at the start and at the end of `phase`.
+    pub fn phase_speeds(&self, phase: Phase) -> (f32, f32) {
+        match phase {
+            Phase::Up => (self.up.v0, self.up.v1),
+            Phase::Cruise => (self.cruise_v, self.cruise_v),
+            Phase::Down => (self.down.v0, self.down.v1),
+        }
+    }
+
+    /// Whether the speed rises (or stays) through `phase`.
+    pub fn phase_rises(&self, phase: Phase) -> bool {
+        match phase {
+            Phase::Up => self.up.v1 >= self.up.v0,
+            Phase::Cruise => true,
+            Phase::Down => self.down.v1 >= self.down.v0,
         }
     }
 

@@ -47,9 +47,10 @@ impl StepCmd {
 
 /// Where prepared commands go.
 pub trait CmdSink {
-    fn has_room(&self) -> bool;
-    /// Returns false if full (the command is dropped; call `has_room` first).
-    fn push(&mut self, c: StepCmd) -> bool;
+    /// Commands that fit now.
+    fn room(&self) -> usize;
+    /// Appends `cmds` in order, as many as fit (call `room` first): the count taken.
+    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize;
 }
 
 /// Where the interrupt takes commands from.
@@ -58,11 +59,11 @@ pub trait CmdSource {
 }
 
 impl<const N: usize> CmdSink for Queue<StepCmd, N> {
-    fn has_room(&self) -> bool {
-        !self.is_full()
+    fn room(&self) -> usize {
+        self.capacity() - self.len()
     }
-    fn push(&mut self, c: StepCmd) -> bool {
-        self.enqueue(c).is_ok()
+    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
+        cmds.iter().take_while(|&&c| self.enqueue(c).is_ok()).count()
     }
 }
 
@@ -73,11 +74,11 @@ impl<const N: usize> CmdSource for Queue<StepCmd, N> {
 }
 
 impl CmdSink for Producer<'_, StepCmd> {
-    fn has_room(&self) -> bool {
-        self.ready()
+    fn room(&self) -> usize {
+        self.capacity() - self.len()
     }
-    fn push(&mut self, c: StepCmd) -> bool {
-        self.enqueue(c).is_ok()
+    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
+        cmds.iter().take_while(|&&c| self.enqueue(c).is_ok()).count()
     }
 }
 
