@@ -1,14 +1,14 @@
 //! inkstep firmware: thin RTIC wiring between the Blue Pill's peripherals (`board`) and
 //! the hardware-free core (`inkstep-core`). Every decision is the core's: the tasks
 //! here only move bytes, pins and time between the hardware and the same `Controller`
-//! and `Link` that the simulator drives.
+//! and `Pipeline` that the simulator drives.
 //!
 //! Priorities (higher preempts lower), as in DESIGN.md:
 //!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3): outputs off at once; the 1 ms
 //!      tick (SysTick, above every lock so that no millisecond is lost): the clock and
 //!      the start of the periodic tasks below
 //!   6  step timer (TIM2): the core's `Executor`, integer work only
-//!   5  USB (endpoint <-> byte queues) and segment preparation (`Link::fill`, every
+//!   5  USB (endpoint <-> byte queues) and segment preparation (`Pipeline::fill`, every
 //!      tick)
 //!   4  protocol / G-code / machine state (every tick), feed-hold and cycle-start inputs
 //!   3  keypad scan (one column every 5 ms), buzzer, the watchdog
@@ -26,7 +26,7 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use defmt_rtt as _;
 use inkstep::board;
 use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
-use inkstep_core::link::StepSide;
+use inkstep_core::pipeline::StepSide;
 use inkstep_core::ring::{ByteRing, ByteRx, ByteTx};
 use inkstep_core::stepper::exec::Executor;
 
@@ -60,10 +60,10 @@ mod app {
     use core::mem::MaybeUninit;
     use cortex_m::peripheral::syst::SystClkSource;
     use inkstep_core::controller::Controller;
+    use inkstep_core::gcode::STARTUP_LINES;
     use inkstep_core::hmi::buzzer::Buzzer;
-    use inkstep_core::link::Link;
     use inkstep_core::machine::Inputs;
-    use inkstep_core::protocol::STARTUP_LINES;
+    use inkstep_core::pipeline::Pipeline;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
     use inkstep_core::settings::{OutputMode, PenMode, Settings};
     use inkstep_core::settings_store::{BlockingFlash, SettingsStore};
@@ -85,7 +85,7 @@ mod app {
 
     type Store = SettingsStore<BlockingFlash<board::SettingsFlash>>;
 
-    // The controller (2 KB) and the link (4 KB, the planner's buffer) are built in
+    // The controller (2 KB) and the pipeline (4 KB, the planner's buffer) are built in
     // place in init's static cells and shared by reference: returned by value they
     // would be built on init's stack (more than the stack left beside the statics)
     // and copied. They are one resource (`Core`), locked together. The USB device and
@@ -124,7 +124,7 @@ mod app {
         ctl_cell: MaybeUninit<Controller> = MaybeUninit::uninit(),
         screens_cell: MaybeUninit<Screens> = MaybeUninit::uninit(),
         fb_cell: MaybeUninit<FrameBuffer> = MaybeUninit::uninit(),
-        link_cell: MaybeUninit<Link<BoardSide>> = MaybeUninit::uninit(),
+        pipeline_cell: MaybeUninit<Pipeline<BoardSide>> = MaybeUninit::uninit(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
         let b = board::init(cx.device, cx.local.usb_cells);
@@ -152,10 +152,10 @@ mod app {
             Err(_) => defmt::panic!("settings flash range"),
         };
         let (steps_tx, steps_rx) = cx.local.steps.split();
-        let (ctl, link) = boot_core(
+        let (ctl, pipeline) = boot_core(
             &mut store,
             cx.local.ctl_cell,
-            cx.local.link_cell,
+            cx.local.pipeline_cell,
             BoardSide { tx: steps_tx },
         );
         let settings = ctl.protocol().machine().settings();
@@ -184,7 +184,7 @@ mod app {
         rtic::pend(Interrupt::USART2);
         (
             Shared {
-                core: Core { ctl, link },
+                core: Core { ctl, pipeline },
             },
             Local {
                 usb: b.usb,
@@ -211,15 +211,15 @@ mod app {
     }
 
     /// The settings, offsets and startup lines from flash, and the controller and the
-    /// link built in place in their static cells from them (inlined: out of line it
+    /// pipeline built in place in their static cells from them (inlined: out of line it
     /// saves no stack and costs ~500 bytes of flash).
     #[inline(always)]
     fn boot_core(
         store: &mut Store,
         ctl_cell: &'static mut MaybeUninit<Controller>,
-        link_cell: &'static mut MaybeUninit<Link<BoardSide>>,
+        pipeline_cell: &'static mut MaybeUninit<Pipeline<BoardSide>>,
         side: BoardSide,
-    ) -> (&'static mut Controller, &'static mut Link<BoardSide>) {
+    ) -> (&'static mut Controller, &'static mut Pipeline<BoardSide>) {
         // A corrupt store falls back to defaults and says so.
         let (settings, load) = store.load_settings();
         let ctl = Controller::init_in(ctl_cell, &settings, 0);
@@ -237,8 +237,13 @@ mod app {
             timer_hz: board::STEP_TIMER_HZ,
             ..PrepConfig::default()
         };
-        let link = Link::init_in(link_cell, ctl.protocol().machine().settings(), prep, side);
-        (ctl, link)
+        let pipeline = Pipeline::init_in(
+            pipeline_cell,
+            ctl.protocol().machine().settings(),
+            prep,
+            side,
+        );
+        (ctl, pipeline)
     }
 
     // The LCD task's retained state, built out of line: their temporaries (the frame
@@ -258,17 +263,17 @@ mod app {
         cell.write(FrameBuffer::new())
     }
 
-    /// The controller and the motion link, one resource: every task that uses the
-    /// controller also drives the link, so one lock (at the tick's priority, where
+    /// The controller and the motion pipeline, one resource: every task that uses the
+    /// controller also drives the pipeline, so one lock (at the tick's priority, where
     /// the segment preparation runs) covers both.
     pub struct Core {
         ctl: &'static mut Controller,
-        link: &'static mut Link<BoardSide>,
+        pipeline: &'static mut Pipeline<BoardSide>,
     }
 
     impl Core {
-        fn parts(&mut self) -> (&mut Controller, &mut Link<BoardSide>) {
-            (&mut *self.ctl, &mut *self.link)
+        fn parts(&mut self) -> (&mut Controller, &mut Pipeline<BoardSide>) {
+            (&mut *self.ctl, &mut *self.pipeline)
         }
     }
 
@@ -449,9 +454,9 @@ mod app {
     #[task(binds = I2C1_EV, priority = 5, shared = [core])]
     fn prepare(mut cx: prepare::Context) {
         let kick = cx.shared.core.lock(|c| {
-            let link = &mut *c.link;
-            link.fill();
-            link.side().queued() > 0
+            let pipeline = &mut *c.pipeline;
+            pipeline.fill();
+            pipeline.side().queued() > 0
         });
         if kick {
             steps::kick();
@@ -470,7 +475,7 @@ mod app {
         let tx = &mut *cx.local.usb_tx_in;
         let (busy, settings_changed, pen_down, pen_pulse, alarmed, estop_inverted) =
             cx.shared.core.lock(|c| {
-                let (ctl, link) = c.parts();
+                let (ctl, pipeline) = c.parts();
                 let s = ctl.protocol().machine().settings();
                 let inputs = Inputs {
                     estop: pins.estop_open() != s.invert_inputs(),
@@ -482,10 +487,10 @@ mod app {
                     feed_hold: pins.feed_hold_low(),
                     cycle_start: pins.cycle_start_low(),
                 };
-                ctl.protocol_mut().set_inputs(inputs, link, now);
-                let taken = ctl.usb_rx(carry.bytes(), link, now);
+                ctl.protocol_mut().set_inputs(inputs, pipeline, now);
+                let taken = ctl.usb_rx(carry.bytes(), pipeline, now);
                 carry.consume(taken);
-                ctl.poll(link, now);
+                ctl.poll(pipeline, now);
                 let mut out = [0u8; 64];
                 let room = tx.free().min(out.len());
                 let n = out.get_mut(..room).map_or(0, |b| ctl.usb_tx(b));
@@ -497,7 +502,7 @@ mod app {
                     ctl.settings_changed();
                 }
                 let busy = ctl.take_outputs().busy_led;
-                let pen_down = link.pen_down();
+                let pen_down = pipeline.pen_down();
                 // Only what the outputs need is read here; the settings stay in place.
                 let s = ctl.protocol().machine().settings();
                 if changed {
@@ -595,14 +600,14 @@ mod app {
     /// machine (one body for both interrupts).
     #[inline(never)]
     fn input_edge(c: &mut Core, now: u32, cycle_start: bool) {
-        let (ctl, link) = c.parts();
+        let (ctl, pipeline) = c.parts();
         let mut i = ctl.protocol().machine().inputs();
         if cycle_start {
             i.cycle_start = board::Inputs::read_cycle_start_low();
         } else {
             i.feed_hold = board::Inputs::read_feed_hold_low();
         }
-        ctl.protocol_mut().set_inputs(i, link, now);
+        ctl.protocol_mut().set_inputs(i, pipeline, now);
     }
 
     /// The keypad: drive the column the scanner asks for, read its rows one scan
@@ -614,8 +619,8 @@ mod app {
         let rows = cx.local.keypad.read_rows();
         let now = now_ms();
         let (out, col) = cx.shared.core.lock(|c| {
-            let (ctl, link) = c.parts();
-            ctl.key_scan(rows, link, now);
+            let (ctl, pipeline) = c.parts();
+            ctl.key_scan(rows, pipeline, now);
             (ctl.take_outputs(), ctl.keypad().column())
         });
         cx.local.keypad.select_column(col);
@@ -655,14 +660,14 @@ mod app {
         // The teaching view's feed directions: which way each axis moved since the
         // last refresh (the step interrupt stays free of bookkeeping for it).
         let snap = cx.shared.core.lock(|c| {
-            let (ctl, link) = c.parts();
-            let pos = link.side().position();
+            let (ctl, pipeline) = c.parts();
+            let pos = pipeline.side().position();
             if pos != *last_pos {
                 let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
                 ctl.note_direction([sign(0), sign(1)]);
                 *last_pos = pos;
             }
-            (ctl.hmi().clone(), ctl.status(link))
+            (ctl.hmi().clone(), ctl.status(pipeline))
         });
         let _ = screens.render(&snap.0, &snap.1, now, fb);
         if st7920::flush(fb, |bytes| spi.write(bytes)).is_err() {

@@ -20,9 +20,9 @@
 use crate::board::{self, StepPort, StepTimer};
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicU32, Ordering};
-use inkstep_core::interp::Tick;
-use inkstep_core::link::StepSide;
+use inkstep_core::interpolation::Tick;
 use inkstep_core::motion::StepPos;
+use inkstep_core::pipeline::StepSide;
 use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::phase4::Phase4;
 use inkstep_core::stepper::queue::{QueueRx, QueueTx, StepQueue};
@@ -151,7 +151,7 @@ pub fn position() -> StepPos {
     with_stepper(|s| s.exec.position()).unwrap_or([0; 3])
 }
 
-/// The link's view of the interrupt side on the board.
+/// The pipeline's view of the interrupt side on the board.
 pub struct BoardSide {
     pub tx: StepTx,
 }

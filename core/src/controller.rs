@@ -12,12 +12,14 @@
 //! Owned by the simulator's issue; kept small on purpose: no decision of the protocol,
 //! the planner or the HMI is made here, only their wiring.
 
+use crate::decimal::{put_int, Sink};
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
 use crate::keypad::{KeyEvent, Keypad, KeypadConfig};
-use crate::machine::{Command, MotionControl, RunState};
+use crate::machine::{MotionControl, RunState};
+use crate::motion::Command;
 use crate::motion::{X, Y, Z};
 use crate::protocol::Protocol;
-use crate::settings::{put_int, Settings, Sink};
+use crate::settings::Settings;
 use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 use heapless::Vec;

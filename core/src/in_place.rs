@@ -1,5 +1,5 @@
 //! Building large structs in their final place. The firmware's controller, protocol,
-//! machine, link and planner (several KB together) are written field by field into
+//! machine, pipeline and planner (several KB together) are written field by field into
 //! their static cells by each type's `init_in`, so that no whole value is built on
 //! init's stack and then copied. `new` for the same types goes through [`build`], so
 //! each type lists its initial values once, in `init_in`.

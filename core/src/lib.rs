@@ -3,41 +3,46 @@
 //! `no_std` and allocation-free so that the firmware, the simulator and the host tests
 //! all run this one copy of the logic. Modules are grouped by responsibility:
 //! - the motion contract between move producers and the planner: [`motion`]
-//! - exact interpolation in integer step space: [`interp`]
+//! - exact interpolation in integer step space: [`interpolation`]
 //! - look-ahead planning, junctions and velocity profiles: [`planner`]
 //! - step generation (segment preparation, the step interrupt's work): [`stepper`]
 //! - task-to-interrupt rings (the USB byte stream; their shared index ordering): [`ring`]
 //! - measurement of step traces against an ideal path: [`analysis`]
 //! - the benchmark programs' G-code subset: [`refprog`]
 //! - libm-free f32 math (sine, cosine, arctangent, square root): [`fmath`]
-//! - machine settings and their flash store: [`settings`], [`settings_store`]
+//! - decimal text without `core::fmt` (replies, listings): [`decimal`]; the stores'
+//!   checksum: [`crc`]
+//! - machine settings (the `$n` table, checks, byte image) and their flash store: [`settings`], [`settings_store`]
 //! - G-code parsing and interpretation: [`gcode`]
 //! - machine state, safety and the planner interface: [`machine`]
 //! - the Grbl 1.1 serial protocol: [`protocol`]
 //! - standalone use: [`keypad`] (scan and debounce), [`hmi`] (menus and drawing modes),
 //!   [`screens`] (LCD pages, framebuffer and ST7920 flush)
 //! - the wiring of protocol, keypad, HMI and planner shared by firmware and simulator:
-//!   [`controller`], and the planner behind the machine's motion trait: [`link`]
+//!   [`controller`], and the motion pipeline behind the machine's motion trait:
+//!   [`pipeline`]
 //! - construction of those large structs in their final place: [`in_place`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
 // Denied, not forbidden: the in-place constructors (`init_in` of the controller,
-// protocol, machine, link and planner, and `in_place::build`) allow it locally to
+// protocol, machine, pipeline and planner, and `in_place::build`) allow it locally to
 // build the firmware's static cells field by field instead of on init's stack.
 #![deny(unsafe_code)]
 
 pub mod analysis;
 pub mod controller;
+pub mod crc;
+pub mod decimal;
 pub mod fmath;
 pub mod gcode;
 pub mod hmi;
 pub mod in_place;
-pub mod interp;
+pub mod interpolation;
 pub mod keypad;
-pub mod link;
 pub mod machine;
 pub mod motion;
+pub mod pipeline;
 pub mod planner;
 pub mod protocol;
 pub mod refprog;

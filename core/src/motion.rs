@@ -1,5 +1,6 @@
 //! The motion contract: what producers (G-code interpreter, keypad modes) hand to the
-//! planner. Everything is in integer step space so that interpolation is exact; the
+//! planner, move by move ([`Move`]) and as queue entries ([`Command`]: moves, dwells,
+//! servo pen lifts). Everything is in integer step space so that interpolation is exact; the
 //! planner converts rates and accelerations with the settings' steps/mm.
 //!
 //! Kept tiny and stable on purpose: several modules depend on these types.
@@ -88,4 +89,18 @@ pub struct Move {
     pub feed: Feed,
     /// Source line number (G-code N word or stream line), for reports. 0 if none.
     pub line: u32,
+}
+
+/// One entry of the planner queue.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Command {
+    /// Move along a path.
+    Move(Move),
+    /// Wait `ms` milliseconds at rest (G4), after the moves before it have finished.
+    Dwell { ms: u32 },
+    /// Lift (`down == false`) or drop the pen with the RC servo, waiting the lift time
+    /// ($204) at rest. Only used when the pen is a servo ($201 = 1); with a Z-axis pen
+    /// the interpreter queues Z moves instead.
+    Pen { down: bool },
 }

@@ -24,10 +24,11 @@
 //! saves while the machine is at rest. [`BlockingFlash`] wraps the blocking
 //! `embedded-storage` flash (the stm32f1xx-hal writer, the host mocks).
 
-use crate::gcode::interp::Coords;
+use crate::crc::crc32;
+use crate::gcode::interpreter::Coords;
+use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::motion::AXES;
-use crate::protocol::{StartupLine, LINE_MAX, STARTUP_LINES};
-use crate::settings::{crc32, Settings, IMAGE_LEN};
+use crate::settings::{Settings, IMAGE_LEN};
 use core::future::Future;
 use core::ops::Range;
 use core::pin::pin;

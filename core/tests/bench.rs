@@ -10,7 +10,7 @@
 //! programmed path rather than the path between rounded ends.
 
 use inkstep_core::analysis::{Analyzer, Ideal, TraceStats};
-use inkstep_core::interp::Method;
+use inkstep_core::interpolation::Method;
 use inkstep_core::motion::{Move, StepPos};
 use inkstep_core::planner::PlannerConfig;
 use inkstep_core::refprog::RefProgram;

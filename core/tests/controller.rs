@@ -7,7 +7,7 @@ use common::{drain, FakePlanner};
 use inkstep_core::controller::Controller;
 use inkstep_core::hmi::{MachineState, Page, BOOT_MS};
 use inkstep_core::keypad::{Key, KEYMAP};
-use inkstep_core::machine::Command;
+use inkstep_core::motion::Command;
 use inkstep_core::motion::{Path, X};
 use inkstep_core::settings::Settings;
 

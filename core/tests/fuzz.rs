@@ -277,12 +277,12 @@ fn a_million_random_and_mutated_lines_never_panic() {
 #[test]
 fn rejected_blocks_change_nothing() {
     use inkstep_core::gcode::parser::clean_line;
-    use inkstep_core::gcode::Interp;
+    use inkstep_core::gcode::Interpreter;
     let mut r = Rng(0x0DDB_1A5E_5BAD_5EED);
     let mut s = Settings::default();
     s.set(22, 1.0).unwrap();
     s.set(20, 1.0).unwrap();
-    let mut it = Interp::new();
+    let mut it = Interpreter::new();
     let (mut ok, mut rejected) = (0, 0);
     for _ in 0..200_000 {
         let raw = make_line(&mut r);
@@ -304,7 +304,7 @@ fn rejected_blocks_change_nothing() {
             }
         }
         // Every accepted block leaves the position inside the travel (soft limits on).
-        assert!(inkstep_core::gcode::interp::within_travel(it.position(), &s) || ok == 0);
+        assert!(inkstep_core::gcode::units::within_travel(it.position(), &s) || ok == 0);
     }
     println!("interpreter: {ok} accepted, {rejected} rejected without side effects");
     assert!(ok > 1000 && rejected > 1000);

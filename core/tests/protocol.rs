@@ -4,7 +4,8 @@
 mod common;
 
 use common::{drain, send, FakePlanner};
-use inkstep_core::machine::{Command, Inputs, MotionControl, RunState};
+use inkstep_core::machine::{Inputs, MotionControl, RunState};
+use inkstep_core::motion::Command;
 use inkstep_core::motion::{Feed, Move, Path};
 use inkstep_core::protocol::{Protocol, RX_BUFFER_SIZE, WELCOME};
 use inkstep_core::settings::Settings;
@@ -525,16 +526,16 @@ fn busy_follows_motion() {
 
 #[test]
 fn ram_budget_of_the_protocol() {
-    use inkstep_core::gcode::Interp;
+    use inkstep_core::gcode::Interpreter;
     use inkstep_core::machine::Machine;
     let sizes = (
         std::mem::size_of::<Protocol>(),
         std::mem::size_of::<Machine>(),
-        std::mem::size_of::<Interp>(),
+        std::mem::size_of::<Interpreter>(),
         std::mem::size_of::<Settings>(),
     );
     println!(
-        "RAM: Protocol {} B (Machine {} B, Interp {} B, Settings {} B)",
+        "RAM: Protocol {} B (Machine {} B, Interpreter {} B, Settings {} B)",
         sizes.0, sizes.1, sizes.2, sizes.3
     );
     // DESIGN.md budgets 19 KB of RAM for statics and stacks; the protocol may take 2 KB.

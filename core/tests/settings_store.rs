@@ -5,7 +5,7 @@
 use embedded_storage::nor_flash::{
     ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
 };
-use inkstep_core::gcode::interp::Coords;
+use inkstep_core::gcode::interpreter::Coords;
 use inkstep_core::settings::Settings;
 use inkstep_core::settings_store::{BlockingFlash, LoadStatus, SettingsStore};
 use std::ops::Range;

@@ -2,9 +2,10 @@
 //! simulator accept: G21 G90, pen-up travel as G0, pen-down strokes as G1
 //! with F, and the pen lifted and dropped either by M5/M3 (the firmware maps
 //! them to the servo or Z, as its settings say) or by moving Z explicitly.
+//! The program ends by parking the pen where the route says (a G0 there).
 //! Lines stay short (well under Grbl's 80-character line buffer).
 
-use crate::geom::{pen_down_length, pen_up_travel, Pt, Stroke};
+use crate::geom::{pen_down_length, pen_up_travel, Pt, Route, Stroke};
 use std::fmt::Write as _;
 
 /// How the pen is lifted and dropped.
@@ -23,8 +24,9 @@ pub struct GcodeOptions {
     pub feed: f64,
     /// Dwell after each pen move (s), 0 for none.
     pub dwell: f64,
-    /// Where the pen starts and returns to at the end.
-    pub home: Pt,
+    /// Where the pen starts (for the travel in the header) and where the
+    /// program parks it at the end (none: it stays after the last stroke).
+    pub route: Route,
 }
 
 impl Default for GcodeOptions {
@@ -33,7 +35,7 @@ impl Default for GcodeOptions {
             pen: Pen::M3,
             feed: 1500.0,
             dwell: 0.0,
-            home: Pt::new(0.0, 0.0),
+            route: Route::closed(Pt::new(0.0, 0.0)),
         }
     }
 }
@@ -75,7 +77,7 @@ pub fn to_gcode(strokes: &[Stroke], o: &GcodeOptions) -> String {
         "(inkstep-host: {} strokes, pen-down {} mm, pen-up {} mm)",
         strokes.len(),
         num(pen_down_length(strokes)),
-        num(pen_up_travel(strokes, o.home))
+        num(pen_up_travel(strokes, o.route))
     );
     out.push_str("G21 G90 G94\n");
     pen_line(&mut out, o, false);
@@ -93,7 +95,9 @@ pub fn to_gcode(strokes: &[Stroke], o: &GcodeOptions) -> String {
         }
         pen_line(&mut out, o, false);
     }
-    let _ = writeln!(out, "G0 X{} Y{}", num(o.home.x), num(o.home.y));
+    if let Some(p) = o.route.park {
+        let _ = writeln!(out, "G0 X{} Y{}", num(p.x), num(p.y));
+    }
     out.push_str("M2\n");
     out
 }
@@ -101,7 +105,7 @@ pub fn to_gcode(strokes: &[Stroke], o: &GcodeOptions) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gcode_in::{check_grbl, parse, MoveKind};
+    use crate::toolpath::{check_grbl, parse, MoveKind};
 
     #[test]
     fn numbers_are_short() {
@@ -146,8 +150,16 @@ mod tests {
                 .map(|m| m.from.dist(m.to))
                 .sum();
             // To the first stroke, between strokes, and home.
-            let expect = pen_up_travel(&strokes, o.home) + Pt::new(6.0, 6.5).dist(o.home);
-            assert!((travel - expect).abs() < 1e-9, "{travel} {expect}");
+            // From the origin (where the reader starts), between strokes, and the park.
+            let expect = pen_up_travel(&strokes, o.route);
+            assert!((travel - expect).abs() < 1e-5, "{travel} {expect}");
+            assert!(
+                (expect
+                    - pen_up_travel(&strokes, Route::open(o.route.start))
+                    - Pt::new(6.0, 6.5).dist(Pt::new(0.0, 0.0)))
+                .abs()
+                    < 1e-9
+            );
         }
     }
 }

@@ -4,7 +4,6 @@
 
 pub mod bench;
 pub mod font;
-pub mod gcode_in;
 pub mod gcode_out;
 pub mod geom;
 pub mod plan;
@@ -12,3 +11,5 @@ pub mod preview;
 pub mod stream;
 pub mod svg_in;
 pub mod text;
+pub mod toolpath;
+pub mod web;

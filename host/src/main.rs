@@ -3,9 +3,9 @@
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use inkstep_host::gcode_out::{to_gcode, GcodeOptions, Pen};
-use inkstep_host::geom::{pen_up_travel, Pt, Stroke};
+use inkstep_host::geom::{pen_up_travel, Pt, Route, Stroke};
 use inkstep_host::plan::{plan, PlanOptions};
-use inkstep_host::{bench, gcode_in, preview, stream, svg_in, text};
+use inkstep_host::{bench, preview, stream, svg_in, text, toolpath, web};
 use std::path::PathBuf;
 
 #[derive(Parser)]
@@ -35,6 +35,20 @@ enum Cmd {
     },
     /// List serial ports.
     Ports,
+    /// A web page for the machine (PC or phone): the drawing live, state,
+    /// controls, settings, and jobs from G-code, SVG or text.
+    Serve {
+        /// Serial port, e.g. /dev/ttyACM0 or the simulator's pty.
+        #[arg(long)]
+        port: String,
+        /// Address to listen on. On a loopback address the page is open; on
+        /// any other, controlling needs the token printed at start.
+        #[arg(long, default_value = "127.0.0.1:8080")]
+        listen: std::net::SocketAddr,
+        /// Without the token, show nothing (instead of a page to watch).
+        #[arg(long)]
+        private: bool,
+    },
     /// Text to G-code: Latin in a Hershey font, Chinese from stroke medians.
     Text {
         text: String,
@@ -69,10 +83,12 @@ enum Cmd {
         #[arg(long, default_value_t = 1600)]
         width: u32,
     },
-    /// Pen-up travel of natural, greedy, inkstep and vpype orders on a text.
+    /// Pen-up travel of the driven route (read back from the G-code, park
+    /// included) for natural, greedy, inkstep and vpype orders; fails when
+    /// vpype ran and inkstep misses the goal (<= 0.85 x vpype's best).
     PlanBench {
-        #[arg(default_value = bench::DEFAULT_TEXT)]
-        text: String,
+        /// Texts to measure (default: the three benchmark texts).
+        texts: Vec<String>,
         /// vpype command to compare with ("" to skip).
         #[arg(long, default_value = "vpype")]
         vpype: String,
@@ -108,9 +124,13 @@ struct OutArgs {
     /// Dwell after each pen lift or drop (s).
     #[arg(long, default_value_t = 0.0)]
     dwell: f64,
-    /// Pen start position "X,Y" in mm (the plan starts there, the job ends there).
+    /// Pen start position "X,Y" in mm (where the planned route begins).
     #[arg(long, default_value = "0,0", value_parser = parse_pt, allow_hyphen_values = true)]
     start: Pt,
+    /// Where the job parks the pen: "origin", "none" (it stays after the last
+    /// stroke) or "X,Y" in mm. The planner optimises the route up to there.
+    #[arg(long, default_value = "origin", value_parser = parse_park, allow_hyphen_values = true)]
+    park: Park,
     /// Keep the strokes in the given order (no planning).
     #[arg(long)]
     no_plan: bool,
@@ -122,6 +142,18 @@ struct OutArgs {
     no_join: bool,
 }
 
+/// The `--park` choice.
+#[derive(Clone, Copy, Debug)]
+struct Park(Option<Pt>);
+
+fn parse_park(s: &str) -> Result<Park, String> {
+    match s {
+        "origin" => Ok(Park(Some(Pt::new(0.0, 0.0)))),
+        "none" => Ok(Park(None)),
+        _ => parse_pt(s).map(|p| Park(Some(p))),
+    }
+}
+
 fn parse_pt(s: &str) -> Result<Pt, String> {
     let (x, y) = s.split_once(',').ok_or("expected X,Y")?;
     Ok(Pt::new(
@@ -131,7 +163,11 @@ fn parse_pt(s: &str) -> Result<Pt, String> {
 }
 
 fn write_program(strokes: &[Stroke], a: &OutArgs, output: &PathBuf) -> Result<()> {
-    let before = pen_up_travel(strokes, a.start);
+    let route = Route {
+        start: a.start,
+        park: a.park.0,
+    };
+    let before = pen_up_travel(strokes, route);
     let ordered = if a.no_plan {
         strokes.to_vec()
     } else {
@@ -140,7 +176,7 @@ fn write_program(strokes: &[Stroke], a: &OutArgs, output: &PathBuf) -> Result<()
             join: !a.no_join,
             ..PlanOptions::default()
         };
-        plan(strokes, a.start, &opts)
+        plan(strokes, route, &opts)
     };
     let pen = match a.pen {
         PenMode::M3 => Pen::M3,
@@ -154,16 +190,16 @@ fn write_program(strokes: &[Stroke], a: &OutArgs, output: &PathBuf) -> Result<()
         pen,
         feed: a.feed,
         dwell: a.dwell,
-        home: a.start,
+        route,
     };
     let g = to_gcode(&ordered, &o);
     std::fs::write(output, &g).with_context(|| format!("writing {}", output.display()))?;
     eprintln!(
-        "{}: {} strokes in, {} out; pen-up travel {:.1} mm (as given {:.1} mm); {} lines",
+        "{}: {} strokes in, {} out; pen-up travel {:.1} mm with the park (as given {:.1} mm); {} lines",
         output.display(),
         strokes.len(),
         ordered.len(),
-        pen_up_travel(&ordered, a.start),
+        pen_up_travel(&ordered, route),
         before,
         g.lines().count()
     );
@@ -179,6 +215,11 @@ fn main() -> Result<()> {
             status_hz,
         } => stream::send::run(&file, &port, baud, status_hz),
         Cmd::Ports => stream::send::list_ports(),
+        Cmd::Serve {
+            port,
+            listen,
+            private,
+        } => web::run(port, listen, private),
         Cmd::Text {
             text,
             size,
@@ -207,7 +248,7 @@ fn main() -> Result<()> {
         } => {
             let src = std::fs::read_to_string(&file)
                 .with_context(|| format!("reading {}", file.display()))?;
-            let moves = gcode_in::parse(&src)?;
+            let moves = toolpath::parse(&src)?;
             let (pm, st) = preview::render(&moves, width)?;
             pm.save_png(&output)
                 .with_context(|| format!("writing {}", output.display()))?;
@@ -221,12 +262,41 @@ fn main() -> Result<()> {
             );
             Ok(())
         }
-        Cmd::PlanBench { text, vpype, kicks } => {
+        Cmd::PlanBench {
+            texts,
+            vpype,
+            kicks,
+        } => {
             let mut opts = PlanOptions::default();
             opts.effort.kicks = kicks;
-            let rows = bench::run(&text, &opts, (!vpype.is_empty()).then_some(vpype.as_str()))?;
-            println!("text: {text}  (units: 1/1024 of the character box; start: top-left of the first box)");
-            print!("{}", bench::table(&rows));
+            let texts = if texts.is_empty() {
+                bench::TEXTS.iter().map(|t| t.to_string()).collect()
+            } else {
+                texts
+            };
+            let mut missed = Vec::new();
+            for text in &texts {
+                let r = bench::run(text, &opts, (!vpype.is_empty()).then_some(vpype.as_str()))?;
+                println!(
+                    "\ntext: {text}  ({} mm boxes; pen starts at the origin and parks there)",
+                    bench::SIZE_MM
+                );
+                print!("{}", bench::table(&r));
+                if let Some(ratio) = r.ratio() {
+                    let ok = ratio <= bench::GOAL;
+                    println!(
+                        "inkstep / vpype best = {ratio:.3} (goal <= {}): {}",
+                        bench::GOAL,
+                        if ok { "met" } else { "MISSED" }
+                    );
+                    if !ok {
+                        missed.push(text.clone());
+                    }
+                }
+            }
+            if !missed.is_empty() {
+                anyhow::bail!("goal missed on: {}", missed.join(", "));
+            }
             Ok(())
         }
     }

@@ -2,7 +2,7 @@
 //! thin dashed red, the start as a green dot, fitted into the image with a
 //! margin and y up like the machine. tiny-skia does the anti-aliased drawing.
 
-use crate::gcode_in::{Move, MoveKind};
+use crate::toolpath::{Move, MoveKind};
 use anyhow::{anyhow, Result};
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Stroke, StrokeDash, Transform};
 
@@ -90,7 +90,7 @@ pub fn render(moves: &[Move], width: u32) -> Result<(Pixmap, Stats)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gcode_in::parse;
+    use crate::toolpath::parse;
 
     #[test]
     fn strokes_and_travel_get_their_colours() {

@@ -1,7 +1,7 @@
 //! The command line end to end: `text`, `svg` and `preview` write files
 //! that parse back, and `plan-bench` prints its table.
 
-use inkstep_host::gcode_in::{check_grbl, parse, MoveKind};
+use inkstep_host::toolpath::{check_grbl, parse, MoveKind};
 use std::path::PathBuf;
 use std::process::Command;
 

@@ -1,74 +1,32 @@
 //! `inkstep-host send` end to end through a real pseudo-terminal, the way it
 //! talks to the simulator (`cargo sim serve`) or a board: the fake Grbl
-//! (tests/common) sits on the pty master in a thread, the real binary opens
+//! (tests/common) sits on the server side of inkstep-serial's pty in a thread, the real binary opens
 //! the slave path with serialport, and the test checks the exit code, the
 //! message and that the 128-byte buffer never overflowed.
 
 mod common;
 
 use common::FakeGrbl;
-use inkstep_host::stream::streamer::Transport;
-use std::ffi::CStr;
+use inkstep_serial::port::Transport;
+use inkstep_serial::pty::Pty;
 use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread;
 use std::time::Duration;
 
-struct Pty {
-    master: i32,
-    slave: i32,
-    path: String,
-}
-
-fn open_pty() -> Pty {
-    let (mut master, mut slave) = (0, 0);
-    let rc = unsafe {
-        libc::openpty(
-            &mut master,
-            &mut slave,
-            std::ptr::null_mut(),
-            std::ptr::null(),
-            std::ptr::null(),
-        )
-    };
-    assert_eq!(rc, 0, "openpty failed");
-    let mut buf = [0 as libc::c_char; 256];
-    assert_eq!(
-        unsafe { libc::ttyname_r(slave, buf.as_mut_ptr(), buf.len()) },
-        0
-    );
-    let path = unsafe { CStr::from_ptr(buf.as_ptr()) }
-        .to_string_lossy()
-        .into_owned();
-    unsafe { libc::fcntl(master, libc::F_SETFL, libc::O_NONBLOCK) };
-    Pty {
-        master,
-        slave,
-        path,
-    }
-}
-
-/// Runs the fake on the master side until `stop`; returns it for checks.
-fn serve(master: i32, stop: Arc<AtomicBool>) -> thread::JoinHandle<FakeGrbl> {
+/// Runs the fake on the server side of a pty until `stop`; returns it for checks.
+fn serve(mut pty: Pty, stop: Arc<AtomicBool>) -> thread::JoinHandle<FakeGrbl> {
     thread::spawn(move || {
         let mut g = FakeGrbl::new();
         let mut buf = [0u8; 256];
         while !stop.load(Ordering::Relaxed) {
-            let n = unsafe { libc::read(master, buf.as_mut_ptr().cast(), buf.len()) };
+            let n = pty.read_available(&mut buf).unwrap();
             if n > 0 {
-                g.send(&buf[..n as usize]).unwrap();
+                g.send(&buf[..n]).unwrap();
             }
             let m = g.recv(&mut buf).unwrap();
-            let mut off = 0;
-            while off < m {
-                let w = unsafe { libc::write(master, buf[off..m].as_ptr().cast(), m - off) };
-                if w > 0 {
-                    off += w as usize;
-                } else {
-                    thread::sleep(Duration::from_micros(100));
-                }
-            }
+            pty.send(&buf[..m]).unwrap();
             thread::sleep(Duration::from_micros(300));
         }
         g
@@ -76,9 +34,10 @@ fn serve(master: i32, stop: Arc<AtomicBool>) -> thread::JoinHandle<FakeGrbl> {
 }
 
 fn run_send(program: &str) -> (std::process::Output, FakeGrbl) {
-    let pty = open_pty();
+    let pty = Pty::open().unwrap();
+    let path = pty.path().to_str().unwrap().to_string();
     let stop = Arc::new(AtomicBool::new(false));
-    let h = serve(pty.master, stop.clone());
+    let h = serve(pty, stop.clone());
     let dir = std::env::temp_dir().join(format!(
         "inkstep-pty-{}-{}",
         std::process::id(),
@@ -92,7 +51,7 @@ fn run_send(program: &str) -> (std::process::Output, FakeGrbl) {
             "send",
             file.to_str().unwrap(),
             "--port",
-            &pty.path,
+            &path,
             "--status-hz",
             "20",
         ])
@@ -100,10 +59,6 @@ fn run_send(program: &str) -> (std::process::Output, FakeGrbl) {
         .unwrap();
     stop.store(true, Ordering::Relaxed);
     let g = h.join().unwrap();
-    unsafe {
-        libc::close(pty.slave);
-        libc::close(pty.master);
-    }
     let _ = std::fs::remove_dir_all(&dir);
     (out, g)
 }

@@ -4,8 +4,8 @@
 mod common;
 
 use common::FakeGrbl;
-use inkstep_host::stream::grbl::Status;
-use inkstep_host::stream::streamer::{prepare, stream, Config, Line, Observer, Outcome};
+use inkstep_serial::grbl::Status;
+use inkstep_serial::stream::{prepare, stream, Config, Line, Observer, Outcome};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Duration;
@@ -173,7 +173,7 @@ fn a_machine_in_alarm_is_not_streamed_to() {
 }
 
 #[test]
-fn prepare_strips_and_rejects_oversized_lines() {
+fn prepare_cleans_as_grbl_does_and_rejects_oversized_lines() {
     let lines = prepare("G0 X1 (c)\n; only comment\n\n  g1 y2\n", 128).unwrap();
     assert_eq!(
         lines,
@@ -184,7 +184,7 @@ fn prepare_strips_and_rejects_oversized_lines() {
             },
             Line {
                 file_line: 4,
-                text: "g1y2".into()
+                text: "G1Y2".into()
             }
         ]
     );

@@ -4,12 +4,12 @@
 //! the pen ends where the program says.
 
 use inkstep_host::gcode_out::{to_gcode, GcodeOptions, Pen};
-use inkstep_host::geom::Pt;
+use inkstep_host::geom::{Pt, Route};
 use inkstep_host::plan::{plan, PlanOptions};
 use inkstep_host::svg_in::strokes_from_svg;
 use inkstep_host::text::layout;
 use inkstep_sim::run::run_gcode;
-use inkstep_sim::sender::Flow;
+use inkstep_sim::run::Flow;
 
 fn run_clean(gcode: &str, what: &str) {
     let r = run_gcode(gcode, Flow::CharCount(128));
@@ -28,7 +28,11 @@ fn run_clean(gcode: &str, what: &str) {
 #[test]
 fn text_in_both_scripts_runs_through_the_simulator_in_both_pen_modes() {
     let lay = layout("一帆风顺 Hello", 12.0, "futural").expect("layout");
-    let strokes = plan(&lay.strokes, Pt::new(0.0, 0.0), &PlanOptions::default());
+    let strokes = plan(
+        &lay.strokes,
+        Route::closed(Pt::new(0.0, 0.0)),
+        &PlanOptions::default(),
+    );
     run_clean(
         &to_gcode(&strokes, &GcodeOptions::default()),
         "text, M3 pen",
@@ -54,6 +58,10 @@ fn svg_shapes_run_through_the_simulator() {
     </svg>"#;
     let strokes = strokes_from_svg(svg, 0.05).expect("svg");
     assert!(strokes.len() >= 4);
-    let strokes = plan(&strokes, Pt::new(0.0, 0.0), &PlanOptions::default());
+    let strokes = plan(
+        &strokes,
+        Route::closed(Pt::new(0.0, 0.0)),
+        &PlanOptions::default(),
+    );
     run_clean(&to_gcode(&strokes, &GcodeOptions::default()), "svg");
 }

@@ -5,25 +5,52 @@
 //! core's `analysis`) and the reading of Grbl's own figures from the bench README, so
 //! that no expected number is written into the code.
 
+use crate::run::Flow;
 use crate::run::{run_gcode, RunResult};
-use crate::sender::Flow;
 use crate::trace::Trace;
 use inkstep_core::analysis::{self, Analyzer};
 use serde::Deserialize;
 use std::path::Path;
 
-/// The ideal path a program describes, in millimetres.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(tag = "type", rename_all = "lowercase")]
+/// The ideal path a program describes, in millimetres: `{"type": "poly", "pts": [[x, y],
+/// ...]}` or `{"type": "circle", "c": [x, y], "r": r}`.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Ideal {
     Poly { pts: Vec<[f64; 2]> },
     Circle { c: [f64; 2], r: f64 },
 }
 
+/// The two shapes' fields, read by the `type` tag. Not serde's internally tagged enum:
+/// that buffers the numbers, and with serde_json's `arbitrary_precision` (which
+/// defmt-decoder turns on when the workspace is built together) buffered numbers no
+/// longer read as f64.
+#[derive(Deserialize)]
+struct IdealFile {
+    #[serde(rename = "type")]
+    kind: String,
+    #[serde(default)]
+    pts: Vec<[f64; 2]>,
+    c: Option<[f64; 2]>,
+    r: Option<f64>,
+}
+
+impl std::str::FromStr for Ideal {
+    type Err = String;
+    fn from_str(text: &str) -> Result<Ideal, String> {
+        let f: IdealFile = serde_json::from_str(text).map_err(|e| e.to_string())?;
+        match (f.kind.as_str(), f.c, f.r) {
+            ("poly", _, _) => Ok(Ideal::Poly { pts: f.pts }),
+            ("circle", Some(c), Some(r)) => Ok(Ideal::Circle { c, r }),
+            ("circle", _, _) => Err("a circle needs c and r".into()),
+            (other, _, _) => Err(format!("unknown ideal path type {other:?}")),
+        }
+    }
+}
+
 impl Ideal {
     pub fn read_file(path: &Path) -> Result<Ideal, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+        text.parse().map_err(|e| format!("{}: {e}", path.display()))
     }
 
     /// The core's view of the path, for its [`Analyzer`].
@@ -239,16 +266,16 @@ mod tests {
 
     #[test]
     fn parses_both_ideal_kinds() {
-        let p: Ideal =
-            serde_json::from_str(r#"{"type": "poly", "pts": [[0.0, 0.0], [1, 2]]}"#).unwrap();
+        let p: Ideal = r#"{"type": "poly", "pts": [[0.0, 0.0], [1, 2]]}"#.parse().unwrap();
         assert_eq!(
             p,
             Ideal::Poly {
                 pts: vec![[0.0, 0.0], [1.0, 2.0]]
             }
         );
-        let c: Ideal =
-            serde_json::from_str(r#"{"type": "circle", "c": [20.0, 0.0], "r": 20.0}"#).unwrap();
+        let c: Ideal = r#"{"type": "circle", "c": [20.0, 0.0], "r": 20.0}"#
+            .parse()
+            .unwrap();
         assert_eq!(
             c,
             Ideal::Circle {

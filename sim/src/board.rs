@@ -3,15 +3,15 @@
 //! Owns only scheduling, the way RTIC runs the firmware: the step-timer interrupt
 //! (the core's executor) fires at the times it asks for, and between interrupts the
 //! lower-priority work runs to completion: USB bytes into the protocol, the protocol's
-//! lines, the HMI's timers, segment preparation (the core's [`Controller`] and [`Link`]),
+//! lines, the HMI's timers, segment preparation (the core's [`Controller`] and [`Pipeline`]),
 //! and every 5 ms one keypad column scan of the simulated matrix. Nothing here decides
 //! anything about motion, G-code or menus.
 
 use heapless::spsc::Queue;
 use inkstep_core::controller::Controller;
 use inkstep_core::keypad::{Key, KEYMAP};
-use inkstep_core::link::{Link, StepSide};
 use inkstep_core::motion::StepPos;
+use inkstep_core::pipeline::{Pipeline, StepSide};
 use inkstep_core::screens::framebuffer::FrameBuffer;
 use inkstep_core::screens::Screens;
 use inkstep_core::settings::Settings;
@@ -78,7 +78,7 @@ pub struct StepEvent {
 
 pub struct Board {
     pub ctl: Controller,
-    pub link: Link<SimSide>,
+    pub pipeline: Pipeline<SimSide>,
     now: u64,
     next_irq: Option<u64>,
     next_scan: u64,
@@ -101,10 +101,10 @@ impl Board {
             timer_hz: TICK_HZ as u32,
             ..PrepConfig::default()
         };
-        let link = Link::new(&settings, prep, side);
+        let pipeline = Pipeline::new(&settings, prep, side);
         Board {
             ctl: Controller::new(settings, 0),
-            link,
+            pipeline,
             now: 0,
             next_irq: None,
             next_scan: 0,
@@ -128,7 +128,7 @@ impl Board {
     /// Redraws the LCD now (as its task would), so the frame buffer is current.
     pub fn refresh_lcd(&mut self) {
         let now = self.now_ms();
-        let st = self.ctl.status(&self.link);
+        let st = self.ctl.status(&self.pipeline);
         if let Some(l) = self.lcd.as_mut() {
             // Drawing into the frame buffer cannot fail (it is plain memory).
             let _ = l.screens.render(self.ctl.hmi(), &st, now, &mut l.fb);
@@ -148,7 +148,7 @@ impl Board {
     /// USB bytes from the host; returns how many the board took.
     pub fn usb_write(&mut self, bytes: &[u8]) -> usize {
         let now = self.now_ms();
-        let n = self.ctl.usb_rx(bytes, &mut self.link, now);
+        let n = self.ctl.usb_rx(bytes, &mut self.pipeline, now);
         self.background();
         n
     }
@@ -175,21 +175,21 @@ impl Board {
     /// Nothing moving, nothing queued.
     pub fn is_idle(&self) -> bool {
         use inkstep_core::machine::MotionControl;
-        self.next_irq.is_none() && self.link.is_idle()
+        self.next_irq.is_none() && self.pipeline.is_idle()
     }
 
     /// The lower-priority tasks, run to completion: protocol and HMI, settings
     /// changes, segment preparation, and starting the step timer when it is idle.
     fn background(&mut self) {
         let now = self.now_ms();
-        self.ctl.poll(&mut self.link, now);
+        self.ctl.poll(&mut self.pipeline, now);
         // The planner took the new settings when they changed (MotionControl::configure).
         if self.ctl.protocol_mut().machine_mut().take_settings_dirty() {
             self.ctl.settings_changed();
         }
-        self.link.fill();
+        self.pipeline.fill();
         if self.next_irq.is_none() {
-            let side = self.link.side_mut();
+            let side = self.pipeline.side_mut();
             if let Some(o) = side.exec.start(&mut side.queue) {
                 self.first_motion.get_or_insert(self.now);
                 self.next_irq = Some(self.now + u64::from(o.reload.max(1)));
@@ -206,7 +206,7 @@ impl Board {
             }
         }
         let now = self.now_ms();
-        self.ctl.key_scan(rows, &mut self.link, now);
+        self.ctl.key_scan(rows, &mut self.pipeline, now);
     }
 
     /// Runs virtual time up to `until` ticks, calling `on_step` for every step.
@@ -233,11 +233,11 @@ impl Board {
             }
             self.now = t;
             if self.next_irq == Some(t) {
-                let side = self.link.side_mut();
+                let side = self.pipeline.side_mut();
                 let o = side.exec.on_interrupt(&mut side.queue);
                 if o.step != 0 {
                     let pos = side.exec.position();
-                    let servo_down = self.link.pen_down();
+                    let servo_down = self.pipeline.pen_down();
                     on_step(StepEvent {
                         t,
                         step: o.step,

@@ -11,7 +11,7 @@ use crate::keys::{parse, Step, TAP_MS};
 use crate::lcd;
 use crate::render::Drawing;
 use crate::run::run_on_with;
-use crate::sender::Flow;
+use crate::run::Flow;
 use crate::trace::{Row, Trace};
 use inkstep_core::settings::Settings;
 use std::path::{Path, PathBuf};
@@ -202,9 +202,9 @@ mod tests {
             dir.path(),
         )
         .unwrap();
-        let st = s.board.ctl.status(&s.board.link);
+        let st = s.board.ctl.status(&s.board.pipeline);
         assert_eq!(st.state, MachineState::Idle, "{st:?}");
-        assert!(s.board.link.is_idle());
+        assert!(s.board.pipeline.is_idle());
         assert!(s.board.is_idle());
         // The position is the executor's count, the last step of the trace.
         assert_eq!(st.pos, s.events.last().unwrap().pos);
@@ -214,7 +214,7 @@ mod tests {
         // And the machine takes G-code afterwards, from where it is.
         let bad = s.stream("G91 G1 X5 F1200\n", None).unwrap();
         assert!(bad.is_empty(), "{bad:?}");
-        let end = s.board.link.side().exec.position();
+        let end = s.board.pipeline.side().exec.position();
         assert_eq!(end[0], st.pos[0] + 400);
     }
 }

@@ -4,7 +4,7 @@
 use clap::{Parser, Subcommand};
 use inkstep_core::settings::Settings;
 use inkstep_sim::board::{Board, TICK_HZ};
-use inkstep_sim::sender::Flow;
+use inkstep_sim::run::Flow;
 use inkstep_sim::trace::{Trace, TraceWriter};
 use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
 use std::path::{Path, PathBuf};
@@ -281,7 +281,7 @@ fn cmd_demo(out: &Path, keys: Option<&str>) -> Result<ExitCode, String> {
             (b - a) as f64 / TICK_HZ as f64
         );
     }
-    let pos = s.board.link.side().exec.position();
+    let pos = s.board.pipeline.side().exec.position();
     say!(
         "  virtual time {:.1} s, final position {},{},{} steps; ran in {:.2} s",
         s.board.now() as f64 / TICK_HZ as f64,

@@ -1,15 +1,29 @@
 //! `cargo sim run`: a G-code file streamed through the real protocol handler at full
 //! speed in virtual time, as a sender on the PC would stream it to the board.
 //!
-//! Owns the host-side loop only: the [`Sender`] writes what flow control allows, the
-//! [`Board`] takes what its receive buffer can hold, responses go back to the sender,
-//! and virtual time advances while both wait. The result carries every step event.
+//! Owns the host-side loop only: the one Grbl [`Sender`] (inkstep-serial) writes what
+//! flow control allows, the [`Board`] takes what its receive buffer can hold, responses
+//! go back to the sender, and virtual time advances while both wait. Every line of the
+//! file is sent as it is (the board answers comments and blanks too, like Grbl) and an
+//! error does not stop the stream: the result lists each one with its line, and carries
+//! every step event.
 
 use crate::board::{Board, StepEvent, TICK_HZ};
 use crate::render::{Drawing, Pen};
-use crate::sender::{Flow, LineError, Sender};
 use crate::trace::{Row, Trace};
 use inkstep_core::settings::{PenMode, Settings};
+use inkstep_serial::grbl::Reply;
+pub use inkstep_serial::sender::Flow;
+use inkstep_serial::sender::{Answer, Event, Sender};
+
+/// A line that was answered with an error.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LineError {
+    /// 1-based line number in the file.
+    pub line_no: usize,
+    pub text: String,
+    pub response: String,
+}
 
 /// Virtual time after which a run is abandoned (a job that never ends).
 const TIME_LIMIT_S: u64 = 3600;
@@ -107,7 +121,28 @@ pub fn run_on_with(
     flow: Flow,
     each_ms: &mut dyn FnMut(&mut Board),
 ) -> RunResult {
-    let mut sender = Sender::new(text, flow);
+    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
+    let mut sender = Sender::new(flow);
+    for (i, l) in lines.iter().enumerate() {
+        sender.push(i, *l);
+    }
+    let (mut errors, mut alarms, mut messages) = (Vec::new(), Vec::new(), Vec::new());
+    let mut received = |sender: &mut Sender<usize>, bytes: &[u8]| {
+        for e in sender.received(bytes) {
+            match e {
+                Event::Answered(i, Answer::Error(n)) => errors.push(LineError {
+                    line_no: i + 1,
+                    text: lines[i].to_string(),
+                    response: format!("error:{n}"),
+                }),
+                Event::Reply(Reply::Alarm(n)) => alarms.push(format!("ALARM:{n}")),
+                Event::Reply(Reply::Feedback(m)) if m.starts_with("MSG:") => {
+                    messages.push(format!("[{m}]"))
+                }
+                _ => {}
+            }
+        }
+    };
     let mut events = Vec::new();
     let mut unsent: Vec<u8> = Vec::new();
     let limit = board.now() + TIME_LIMIT_S * TICK_HZ;
@@ -118,7 +153,7 @@ pub fn run_on_with(
         // does virtual time move on (USB latency is far below a step period).
         let out = board.usb_read();
         let mut progressed = !out.is_empty();
-        sender.received(&out);
+        received(&mut sender, &out);
         unsent.extend(sender.to_send());
         if !unsent.is_empty() {
             let n = board.usb_write(&unsent);
@@ -127,7 +162,7 @@ pub fn run_on_with(
         }
         let out = board.usb_read();
         progressed |= !out.is_empty();
-        sender.received(&out);
+        received(&mut sender, &out);
         if sender.done() && unsent.is_empty() && board.is_idle() {
             break;
         }
@@ -141,15 +176,14 @@ pub fn run_on_with(
             each_ms(board);
         }
     }
-    let lines = sender.total_lines();
     RunResult {
         events,
         first_motion: board.first_motion,
-        errors: sender.errors,
-        alarms: sender.alarms,
-        messages: sender.messages,
-        lines,
-        final_pos: board.link.side().exec.position(),
+        errors,
+        alarms,
+        messages,
+        lines: lines.len(),
+        final_pos: board.pipeline.side().exec.position(),
         end: board.now(),
         timed_out,
         settings: board.ctl.protocol().machine().settings().clone(),

@@ -3,11 +3,12 @@
 //!
 //! Owns the real-time pacing only: virtual time follows the wall clock (times `speed`),
 //! bytes cross between the pty and the board's USB entry points every millisecond, so
-//! a `?` is answered within about a millisecond of real time.
+//! a `?` is answered within about a millisecond of real time. The pty is the shared one
+//! of inkstep-serial; clients opening and closing it are logged.
 
 use crate::board::{Board, TICK_HZ};
-use crate::pty::Pty;
 use inkstep_core::settings::Settings;
+use inkstep_serial::pty::{ClientEvent, Pty};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -48,6 +49,13 @@ pub fn serve(
             pty.send(&out).map_err(|e| e.to_string())?;
         }
         pty.flush_pending().map_err(|e| e.to_string())?;
+        for e in pty.client_events().map_err(|e| e.to_string())? {
+            match e {
+                ClientEvent::Opened => println!("a client opened the port"),
+                ClientEvent::Closed => println!("a client closed the port"),
+            }
+            let _ = std::io::stdout().flush();
+        }
         let target = (start.elapsed().as_secs_f64() * speed * TICK_HZ as f64) as u64;
         if target > board.now() {
             board.run_until(target, &mut |_| {});

@@ -33,18 +33,18 @@ fn feed_hold_and_resume_lose_no_step() {
     assert!(status(&mut b).starts_with("<Run|"));
     b.usb_write(b"!");
     run_ms(&mut b, 400, &mut ev);
-    let held_at = b.link.side().exec.position();
+    let held_at = b.pipeline.side().exec.position();
     let st = status(&mut b);
     assert!(st.starts_with("<Hold:0|"), "{st}");
     run_ms(&mut b, 500, &mut ev);
     assert_eq!(
-        b.link.side().exec.position(),
+        b.pipeline.side().exec.position(),
         held_at,
         "nothing moves while held"
     );
     b.usb_write(b"~");
     assert!(b.run_to_idle(Board::ms_to_ticks(60_000), &mut |e| ev.push(e)));
-    assert_eq!(b.link.side().exec.position(), [0, 3200, 0]);
+    assert_eq!(b.pipeline.side().exec.position(), [0, 3200, 0]);
     let x: u32 = ev.iter().filter(|e| e.step & 1 != 0).count() as u32;
     let y: u32 = ev.iter().filter(|e| e.step & 2 != 0).count() as u32;
     assert_eq!((x, y), (4800 + 4800, 1600 + 1600));
@@ -89,10 +89,10 @@ fn servo_pen_moves_after_the_steps_before_it_and_waits_its_lift_time() {
     let mut last_down = true;
     for _ in 0..5_000 {
         run_ms(&mut b, 1, &mut ev);
-        if last_down && !b.link.pen_down() && pen_up_at_pos.is_none() && !ev.is_empty() {
-            pen_up_at_pos = Some(b.link.side().exec.position());
+        if last_down && !b.pipeline.pen_down() && pen_up_at_pos.is_none() && !ev.is_empty() {
+            pen_up_at_pos = Some(b.pipeline.side().exec.position());
         }
-        last_down = b.link.pen_down();
+        last_down = b.pipeline.pen_down();
         if b.is_idle() && ev.last().map(|e| e.pos) == Some([0, 0, 0]) {
             break;
         }

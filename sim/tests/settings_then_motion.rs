@@ -4,7 +4,7 @@
 //! rebuilt only after the burst, losing the moves queued in it.
 
 use inkstep_sim::run::run_gcode;
-use inkstep_sim::sender::Flow;
+use inkstep_sim::run::Flow;
 
 #[test]
 fn a_move_right_after_settings_in_the_same_burst_is_drawn() {

@@ -38,7 +38,7 @@ mod app {
         text::{Baseline, Text},
     };
     use inkstep::steps::{self, StepCmdQueue, StepOutput, StepTx};
-    use inkstep_core::interp::Tick;
+    use inkstep_core::interpolation::Tick;
     use inkstep_core::keypad::{KeyKind, Keypad, KeypadConfig};
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920};
     use inkstep_core::stepper::exec::Executor;

@@ -1,7 +1,7 @@
 //! Interrupt-cost bench: runs the firmware's real step path on a Cortex-M3 (in the
 //! unicorn emulator, see measure.py) over the reference programs in bench/*.nc.
 //!
-//! The programs go through the core's protocol and G-code interpreter into the link
+//! The programs go through the core's protocol and G-code interpreter into the pipeline
 //! (planner + segment preparation), whose step commands cross the same SPSC queue to
 //! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
 //! interrupt body with its register accesses. The emulator has no timer, so before each
@@ -16,7 +16,7 @@ use defmt_rtt as _;
 use inkstep::board::{self, StepPins};
 use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput};
 use inkstep_core::controller::Controller;
-use inkstep_core::link::{Link, StepSide};
+use inkstep_core::pipeline::{Pipeline, StepSide};
 use inkstep_core::settings::Settings;
 use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::prep::PrepConfig;
@@ -93,8 +93,8 @@ pub extern "C" fn bench_kick(out: &mut StepOutput) {
 /// One run of segment preparation, as the firmware's prepare task does it.
 #[inline(never)]
 #[no_mangle]
-pub extern "C" fn bench_prepare(link: &mut Link<BoardSide>) {
-    link.fill();
+pub extern "C" fn bench_prepare(pipeline: &mut Pipeline<BoardSide>) {
+    pipeline.fill();
 }
 
 /// The period the step interrupt just programmed (TIM2 ARR + 1), timer ticks.
@@ -152,7 +152,7 @@ fn main() -> ! {
             break;
         };
         let mut out = steps::install(Executor::new([0; 3], 0x1_0000), rx, pins, tim);
-        let mut link = Link::new(&settings, prep, BoardSide { tx });
+        let mut pipeline = Pipeline::new(&settings, prep, BoardSide { tx });
         let mut ctl = Controller::new(settings.clone(), 0);
         // SAFETY: single-threaded bench; measure.py charges each call to this program.
         unsafe { core::ptr::write_volatile(core::ptr::addr_of_mut!(BENCH_PROGRAM), p as u32) };
@@ -174,7 +174,7 @@ fn main() -> ! {
                     axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
                 }
                 next_irq = out.timer.is_running().then(|| at + period());
-                if next_irq.is_none() && !inkstep_core::machine::MotionControl::is_idle(&link) {
+                if next_irq.is_none() && !inkstep_core::machine::MotionControl::is_idle(&pipeline) {
                     // The queue ran dry while the job still had steps to make.
                     dry += 1;
                 }
@@ -183,7 +183,7 @@ fn main() -> ! {
             let now = (next_ms / 72_000) as u32;
             next_ms += 72_000;
             if sent < prog.len() {
-                sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut link, now);
+                sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut pipeline, now);
             }
             loop {
                 let n = ctl.usb_tx(&mut sink);
@@ -192,9 +192,9 @@ fn main() -> ! {
                 }
                 log(sink.get(..n).unwrap_or(&[]));
             }
-            ctl.poll(&mut link, now);
-            bench_prepare(&mut link);
-            if next_irq.is_none() && link.side().queued() > 0 {
+            ctl.poll(&mut pipeline, now);
+            bench_prepare(&mut pipeline);
+            if next_irq.is_none() && pipeline.side().queued() > 0 {
                 // Start the timer as the firmware's kick does (a pend with no flags).
                 bench_kick(&mut out);
                 next_irq = out.timer.is_running().then(|| next_ms - 72_000 + period());
@@ -205,8 +205,8 @@ fn main() -> ! {
             let done = sent >= prog.len()
                 && drained
                 && next_irq.is_none()
-                && link.side().queued() == 0;
-            if done && inkstep_core::machine::MotionControl::is_idle(&link) {
+                && pipeline.side().queued() == 0;
+            if done && inkstep_core::machine::MotionControl::is_idle(&pipeline) {
                 break;
             }
         }

@@ -1,14 +1,26 @@
-//! G-code: the line cleaner and word parser ([`parser`]) and the modal interpreter
-//! ([`interp`]) that turns blocks into queued motion in steps.
+//! G-code: the line cleaner and word parser ([`parser`]), the modal groups
+//! ([`modal`]), the interpreter ([`interpreter`]) that turns blocks into queued motion
+//! in steps, the arc geometry of G2/G3 ([`arcs`]), and millimetres to steps with the
+//! travel limits ([`units`]).
 //!
 //! Errors use Grbl 1.1's status numbers ([`Status`]) so that senders show the right
 //! message; they are shared with the `$` commands of the protocol.
 
-pub mod interp;
+mod arcs;
+pub mod interpreter;
+pub mod modal;
 pub mod parser;
+pub mod units;
 
-pub use interp::{Interp, Outcome, Reject, Stop};
+pub use interpreter::{Interpreter, Outcome, Reject, Stop};
 pub use parser::{Block, LineCleaner};
+
+/// Longest line after cleaning (Grbl's limit); longer lines get `error:11`.
+pub const LINE_MAX: usize = 80;
+/// Number of `$N` startup lines: G-code lines kept in flash and run after each reset.
+pub const STARTUP_LINES: usize = 2;
+/// A startup line as stored.
+pub type StartupLine = heapless::String<LINE_MAX>;
 
 /// Grbl 1.1 status codes, sent as `error:N`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

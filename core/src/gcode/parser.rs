@@ -165,7 +165,7 @@ fn code_of(value: f32) -> Result<Code, Status> {
     if value > 999.0 {
         return Err(Status::UnsupportedCommand);
     }
-    let hundredths = crate::settings::to_u32(crate::fmath::round(value * 100.0));
+    let hundredths = crate::decimal::to_u32(crate::fmath::round(value * 100.0));
     if !hundredths.is_multiple_of(10) {
         return Err(Status::CommandValueNotInteger);
     }

@@ -6,8 +6,9 @@
 //! It only decides what to queue next and when it has failed; the machine state owns
 //! the planner, the alarms and the position it sets at the end.
 
-use super::{Command, MotionControl};
-use crate::gcode::interp::mm_to_steps;
+use super::MotionControl;
+use crate::gcode::units::mm_to_steps;
+use crate::motion::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::Settings;
 

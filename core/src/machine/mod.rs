@@ -1,32 +1,21 @@
 //! Machine control: the [`MotionControl`] trait that the planner implements, the
-//! commands queued through it, and the machine state ([`state`]): alarms, hold, jog,
-//! homing, check mode and the safety inputs.
+//! commands queued through it, the machine state ([`state`]: idle, run, hold, jog,
+//! homing, alarm, check mode and their rules), its alarms and safety inputs
+//! ([`safety`]), and the homing cycle ([`homing`]).
 //!
 //! The trait is deliberately small so that the G-code interpreter, the protocol and the
 //! keypad modes all drive the same planner the same way, and so that tests can use a
-//! fake planner. Everything the planner needs to know about a block travels in
+//! fake planner. Everything the planner needs to know about a block travels in a
 //! [`Command`].
 
 pub mod homing;
+pub mod safety;
 pub mod state;
 
-use crate::motion::{Move, StepPos};
+use crate::motion::{Command, StepPos};
 
-pub use state::{Alarm, Inputs, Machine, RunState};
-
-/// One entry of the planner queue.
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Command {
-    /// Move along a path.
-    Move(Move),
-    /// Wait `ms` milliseconds at rest (G4), after the moves before it have finished.
-    Dwell { ms: u32 },
-    /// Lift (`down == false`) or drop the pen with the RC servo, waiting the lift time
-    /// ($204) at rest. Only used when the pen is a servo ($201 = 1); with a Z-axis pen
-    /// the interpreter queues Z moves instead.
-    Pen { down: bool },
-}
+pub use safety::{Alarm, Inputs};
+pub use state::{Machine, RunState};
 
 /// The planner queue has no room for another command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

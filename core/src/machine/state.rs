@@ -8,40 +8,17 @@
 //! Time comes in as milliseconds from the caller (`now_ms`), so tests run in virtual time.
 
 use super::homing::{Homing, HomingError, Progress};
-use super::{Command, MotionControl};
-use crate::gcode::interp::to_mm;
-use crate::gcode::interp::Room;
-use crate::gcode::{Interp, Outcome, Reject, Status, Stop};
+use super::safety::{Alarm, Inputs};
+use super::MotionControl;
+use crate::gcode::interpreter::Room;
+use crate::gcode::units::to_mm;
+use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
+use crate::motion::Command;
 use crate::motion::{Move, AXES};
 use crate::settings::Settings;
 use core::mem::MaybeUninit;
 use core::ptr::addr_of_mut;
 use heapless::Deque;
-
-/// Alarms, with Grbl's numbers (10 is inkstep's e-stop, as grblHAL numbers it).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[repr(u8)]
-pub enum Alarm {
-    HardLimit = 1,
-    SoftLimit = 2,
-    AbortCycle = 3,
-    HomingFailReset = 6,
-    HomingFailDoor = 7,
-    HomingFailPullOff = 8,
-    HomingFailApproach = 9,
-    EStop = 10,
-}
-
-impl Alarm {
-    pub fn code(self) -> u8 {
-        self as u8
-    }
-    /// Critical alarms need a soft reset before `$X`/`$H` (position may be lost).
-    fn critical(self) -> bool {
-        matches!(self, Alarm::HardLimit | Alarm::EStop)
-    }
-}
 
 /// The state shown in status reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,17 +40,6 @@ pub enum RunState {
     Alarm,
     Home,
     Check,
-}
-
-/// Input levels, already corrected for inversion (true = active).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Inputs {
-    pub estop: bool,
-    /// Limit/home switch per axis.
-    pub limits: [bool; AXES],
-    /// The SYNC / feed-hold input: pause while active.
-    pub feed_hold: bool,
-    pub cycle_start: bool,
 }
 
 /// Something the protocol should tell the host.
@@ -103,7 +69,7 @@ struct Job {
 /// The machine.
 pub struct Machine {
     settings: Settings,
-    interp: Interp,
+    interp: Interpreter,
     /// In the alarm state (G-code locked out until `$X`, `$H` or a cleared alarm).
     locked: bool,
     /// The alarm that caused the lock, if any (the power-up lock has none).
@@ -184,7 +150,7 @@ impl Machine {
         let m = unsafe {
             addr_of_mut!((*p).settings).write(settings.clone());
             // A const template (copied from flash) instead of field-by-field stores.
-            addr_of_mut!((*p).interp).write(const { Interp::new() });
+            addr_of_mut!((*p).interp).write(const { Interpreter::new() });
             addr_of_mut!((*p).locked).write(false);
             addr_of_mut!((*p).alarm).write(None);
             addr_of_mut!((*p).needs_reset).write(false);
@@ -236,11 +202,11 @@ impl Machine {
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
-    pub fn interp(&self) -> &Interp {
+    pub fn interp(&self) -> &Interpreter {
         &self.interp
     }
     /// Replace the coordinate data (loaded from flash at boot).
-    pub fn set_coords(&mut self, c: crate::gcode::interp::Coords) {
+    pub fn set_coords(&mut self, c: crate::gcode::interpreter::Coords) {
         self.interp.set_coords(c);
     }
     /// The alarm that locked the machine, while locked.
@@ -337,7 +303,7 @@ impl Machine {
     /// `$RST=#`: zero the work offsets and stored positions.
     pub fn clear_coords(&mut self) {
         self.interp
-            .set_coords(crate::gcode::interp::Coords::default());
+            .set_coords(crate::gcode::interpreter::Coords::default());
         self.coords_dirty = true;
     }
 
@@ -658,7 +624,7 @@ impl Machine {
     /// Queue a command made outside G-code (the keypad's drawing modes). Refused in
     /// alarm, homing, jogging or check mode; a line target outside travel with soft
     /// limits on is refused with `error:15` semantics ([`Status::TravelExceeded`]);
-    /// shapes check their own extent with [`crate::gcode::interp::within_travel`].
+    /// shapes check their own extent with [`crate::gcode::units::within_travel`].
     /// The interpreter continues from the command's end point.
     pub fn queue<M: MotionControl>(
         &mut self,
@@ -675,7 +641,7 @@ impl Machine {
         if let Command::Move(mv) = &cmd {
             let end = to_mm(&mv.target, &self.settings);
             if self.settings.soft_limits()
-                && !crate::gcode::interp::within_travel(&end, &self.settings)
+                && !crate::gcode::units::within_travel(&end, &self.settings)
             {
                 return Err(Status::TravelExceeded);
             }

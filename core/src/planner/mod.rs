@@ -20,7 +20,7 @@
 pub mod geometry;
 pub mod profile;
 
-use crate::interp::Method;
+use crate::interpolation::Method;
 use crate::motion::{Feed, Move, StepPos, AXES, POS_LIMIT};
 use heapless::Deque;
 pub use profile::{Profile, Shape};
@@ -136,8 +136,8 @@ impl Planner {
         crate::in_place::build(|slot| Planner::init_in(slot, cfg, position))
     }
 
-    /// [`Planner::new`] built in `slot` (the firmware's static link cell, through
-    /// [`Link::init_in`](crate::link::Link::init_in)): field by field, so that the
+    /// [`Planner::new`] built in `slot` (the firmware's static pipeline cell, through
+    /// [`Pipeline::init_in`](crate::pipeline::Pipeline::init_in)): field by field, so that the
     /// block buffer (1.7 KB) is not built on the stack and copied.
     #[allow(unsafe_code)]
     pub fn init_in(

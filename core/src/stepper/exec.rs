@@ -306,7 +306,7 @@ impl Executor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interp::Tick;
+    use crate::interpolation::Tick;
     use heapless::spsc::Queue;
 
     /// A queue holding one command per `(axis deltas, wait)` pair, in order.

@@ -13,7 +13,7 @@ pub mod phase4;
 pub mod prep;
 pub mod queue;
 
-use crate::interp::Tick;
+use crate::interpolation::Tick;
 use heapless::spsc::{Consumer, Producer, Queue};
 
 /// Largest wait one command can carry (24 bits of timer ticks).

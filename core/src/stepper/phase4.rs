@@ -3,7 +3,7 @@
 //! (0x01, 0x03, 0x02, 0x06, 0x04, 0x0C, 0x08, 0x09), backwards for negative steps.
 //! Owns only the sequence index per axis; the board module writes the 4 bits to pins.
 
-use crate::interp::Tick;
+use crate::interpolation::Tick;
 use crate::motion::AXES;
 
 /// The half-step sequence (bit 0 = coil A ... bit 3 = coil D).

@@ -6,7 +6,7 @@
 //! Timing. A tick's path position is where the ideal path is when the tick happens: on
 //! a line, k times the line's length over its tick count; on a DDA circle, the point of
 //! the circle at the tick's major coordinate; along other curves, the sum of the ticks'
-//! lengths (see [`crate::interp::Next`]). Its ideal time is when the profile reaches
+//! lengths (see [`crate::interpolation::Next`]). Its ideal time is when the profile reaches
 //! that position. Preparation cuts a run of ticks into segments; for each it evaluates
 //! the ideal time and its slope (speed, and the path's rate per tick) exactly at both
 //! ends (f32, phase-local so that rounding stays far below a microsecond), and times the
@@ -27,7 +27,7 @@
 //! step is lost.
 
 use super::{CmdSink, StepCmd, MAX_WAIT};
-use crate::interp::{Interp, Next, Tick};
+use crate::interpolation::{Interpolator, Next, Tick};
 use crate::motion::{StepPos, X, Y};
 use crate::planner::profile::Phase;
 use crate::planner::{Block, Planner, PlannerConfig, Profile};
@@ -296,7 +296,7 @@ enum Pending {
 #[derive(Clone, Debug)]
 struct Active {
     block: Block,
-    interp: Interp,
+    interp: Interpolator,
     /// mm per unit of the interpolator's run (a line's tick, a circle's step).
     scale: f32,
     /// A line's tick in Q units: its ticks' positions are exact multiples of it.
@@ -522,7 +522,7 @@ impl Prep {
                 return false;
             };
             let cfg = planner.config();
-            let interp = match Interp::new(self.pos, &block.mv, cfg.method) {
+            let interp = match Interpolator::new(self.pos, &block.mv, cfg.method) {
                 Ok(i) => i,
                 Err(_) => {
                     self.skipped = self.skipped.wrapping_add(1);
@@ -530,7 +530,7 @@ impl Prep {
                 }
             };
             let (scale, line_tick_q, len_q) = match &interp {
-                Interp::Line(l) => {
+                Interpolator::Line(l) => {
                     // Every tick of a line covers the same length (of the length the
                     // planner planned): its positions are exact multiples, and the last
                     // lands on the block's end.

@@ -155,7 +155,7 @@ impl<const N: usize> CmdSource for QueueRx<'_, N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interp::Tick;
+    use crate::interpolation::Tick;
 
     #[test]
     fn fifo_order_wraparound_full_and_clear() {

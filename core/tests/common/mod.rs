@@ -3,7 +3,8 @@
 //! so switches can be hit part-way and holds stop between steps.
 #![allow(dead_code)]
 
-use inkstep_core::machine::{Command, MotionControl, QueueFull};
+use inkstep_core::machine::{MotionControl, QueueFull};
+use inkstep_core::motion::Command;
 use inkstep_core::motion::StepPos;
 use inkstep_core::protocol::Protocol;
 use std::collections::VecDeque;

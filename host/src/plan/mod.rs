@@ -1,15 +1,16 @@
 //! Pen-path planning: the one entry point that turns strokes in any order
-//! into strokes in drawing order. Euler joining first (strokes meeting at
-//! junctions become single trails), then ordering and orientation. The
-//! result is never worse than the strokes as given: if the search loses to
-//! the natural order (it cannot, but the guard makes it a guarantee), the
-//! natural order is returned. Closed strokes are then rotated to start at
-//! their best vertex, and strokes that meet exactly are drawn as one.
+//! into strokes in drawing order, for the whole route the program drives: from
+//! the pen's start, through every stroke, to where the pen parks. Euler joining
+//! first (strokes meeting at junctions become single trails), then ordering and
+//! orientation. The result is never worse than the strokes as given: if the
+//! search loses to the natural order (it cannot, but the guard makes it a
+//! guarantee), the natural order is returned. Closed strokes are then rotated to
+//! start at their best vertex, and strokes that meet exactly are drawn as one.
 
 pub mod euler;
 pub mod order;
 
-use crate::geom::{pen_up_travel, Pt, Stroke};
+use crate::geom::{pen_up_travel, Pt, Route, Stroke};
 pub use order::Effort;
 
 #[derive(Clone, Copy, Debug)]
@@ -34,20 +35,20 @@ impl Default for PlanOptions {
     }
 }
 
-/// Orders (and orients, joins) strokes to reduce pen-up travel from `start`.
-pub fn plan(strokes: &[Stroke], start: Pt, opt: &PlanOptions) -> Vec<Stroke> {
+/// Orders (and orients, joins) strokes to reduce the pen-up travel of the route.
+pub fn plan(strokes: &[Stroke], route: Route, opt: &PlanOptions) -> Vec<Stroke> {
     let strokes: Vec<Stroke> = strokes.iter().filter(|s| !s.is_empty()).cloned().collect();
     let joined = if opt.join {
         euler::join(&strokes, opt.join_tol, opt.reverse)
     } else {
         strokes.clone()
     };
-    let mut planned = order_strokes(&joined, start, opt.reverse, opt.effort);
-    rotate_loops(&mut planned, start);
+    let mut planned = order_strokes(&joined, route, opt.reverse, opt.effort);
+    rotate_loops(&mut planned, route);
     if opt.join {
         planned = merge_touching(planned);
     }
-    if pen_up_travel(&planned, start) <= pen_up_travel(&strokes, start) {
+    if pen_up_travel(&planned, route) <= pen_up_travel(&strokes, route) {
         planned
     } else {
         strokes
@@ -56,9 +57,9 @@ pub fn plan(strokes: &[Stroke], start: Pt, opt: &PlanOptions) -> Vec<Stroke> {
 
 /// A closed stroke (first point == last) can be drawn from any of its
 /// vertices: start each one at the vertex nearest to the pen coming in and
-/// the next stroke going out. Each change lowers the travel, so this only
-/// improves; two passes let neighbouring loops settle.
-pub fn rotate_loops(strokes: &mut [Stroke], start: Pt) {
+/// the next stroke (or the park) going out. Each change lowers the travel, so
+/// this only improves; two passes let neighbouring loops settle.
+pub fn rotate_loops(strokes: &mut [Stroke], route: Route) {
     for _ in 0..2 {
         for k in 0..strokes.len() {
             let s = &strokes[k];
@@ -66,11 +67,11 @@ pub fn rotate_loops(strokes: &mut [Stroke], start: Pt) {
                 continue;
             }
             let before = if k == 0 {
-                start
+                route.start
             } else {
                 *strokes[k - 1].last().unwrap()
             };
-            let after = strokes.get(k + 1).map(|n| n[0]);
+            let after = strokes.get(k + 1).map(|n| n[0]).or(route.park);
             let cost = |p: Pt| before.dist(p) + after.map_or(0.0, |a| p.dist(a));
             let best = (0..s.len() - 1)
                 .min_by(|&a, &b| cost(s[a]).total_cmp(&cost(s[b])))
@@ -100,9 +101,14 @@ pub fn merge_touching(strokes: Vec<Stroke>) -> Vec<Stroke> {
 }
 
 /// Orders and orients strokes without joining them.
-pub fn order_strokes(strokes: &[Stroke], start: Pt, reverse: bool, effort: Effort) -> Vec<Stroke> {
+pub fn order_strokes(
+    strokes: &[Stroke],
+    route: Route,
+    reverse: bool,
+    effort: Effort,
+) -> Vec<Stroke> {
     let ends: Vec<(Pt, Pt)> = strokes.iter().map(|s| (s[0], *s.last().unwrap())).collect();
-    let p = order::Problem::new(&ends, start, reverse);
+    let p = order::Problem::new(&ends, route, reverse);
     let t = p.solve(effort);
     apply(strokes, &t)
 }
@@ -136,13 +142,48 @@ mod tests {
             Pt::new(0.0, 0.0),
         ];
         let mut s = vec![square.clone()];
-        rotate_loops(&mut s, Pt::new(2.0, 2.0));
+        rotate_loops(&mut s, Route::open(Pt::new(2.0, 2.0)));
         assert_eq!(s[0][0], Pt::new(1.0, 1.0));
         assert_eq!(s[0].last(), Some(&Pt::new(1.0, 1.0)));
         assert_eq!(s[0].len(), 5);
         // The direction of drawing is kept: (1,1) -> (0,1) as in the original.
         assert_eq!(s[0][1], Pt::new(0.0, 1.0));
-        let planned = plan(&[square], Pt::new(2.0, 2.0), &PlanOptions::default());
-        assert!((pen_up_travel(&planned, Pt::new(2.0, 2.0)) - 2f64.sqrt()).abs() < 1e-12);
+        let route = Route::open(Pt::new(2.0, 2.0));
+        let planned = plan(
+            std::slice::from_ref(&square),
+            route,
+            &PlanOptions::default(),
+        );
+        assert!((pen_up_travel(&planned, route) - 2f64.sqrt()).abs() < 1e-12);
+        // With a park, the loop starts (and ends) at the corner that minimises
+        // the way in plus the way out: (0,1), sqrt(5) + 1 (not (1,1), sqrt(2) + 2).
+        let route = Route {
+            start: Pt::new(2.0, 2.0),
+            park: Some(Pt::new(-1.0, 1.0)),
+        };
+        let planned = plan(&[square], route, &PlanOptions::default());
+        assert_eq!(planned[0][0], Pt::new(0.0, 1.0));
+        assert!((pen_up_travel(&planned, route) - (5f64.sqrt() + 1.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_park_is_part_of_the_route() {
+        // Three dots. Open, the best route from the origin is P, R, Q (1 + 6.40 +
+        // 7.07); back home it is P, Q, R (1 + 9 + 7.07 + 7.07), which the open
+        // plan misses by 0.33.
+        let (p, q, r) = (Pt::new(1.0, 0.0), Pt::new(10.0, 0.0), Pt::new(5.0, 5.0));
+        let strokes = vec![vec![r], vec![q], vec![p]];
+        let open = Route::open(Pt::new(0.0, 0.0));
+        let closed = Route::closed(Pt::new(0.0, 0.0));
+        let p_open = plan(&strokes, open, &PlanOptions::default());
+        let p_closed = plan(&strokes, closed, &PlanOptions::default());
+        assert_eq!(p_open, vec![vec![p], vec![r], vec![q]]);
+        assert!(
+            p_closed == vec![vec![p], vec![q], vec![r]]
+                || p_closed == vec![vec![r], vec![q], vec![p]]
+        );
+        let best = 1.0 + 9.0 + 2.0 * 50f64.sqrt();
+        assert!((pen_up_travel(&p_closed, closed) - best).abs() < 1e-12);
+        assert!(pen_up_travel(&p_open, closed) > best + 0.3);
     }
 }

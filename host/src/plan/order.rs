@@ -1,7 +1,11 @@
 //! Stroke ordering: choose the order (and, when allowed, the direction) in
-//! which strokes are drawn so that pen-up travel from a given start is small.
+//! which strokes are drawn so that the pen-up travel of the whole route, from the
+//! pen's start to where it parks, is small.
 //!
-//! This is an open asymmetric-endpoint TSP. The strategy, measured on the
+//! This is an asymmetric-endpoint TSP with fixed ends: a path from the start to
+//! the park, a closed tour when they are the same point, or an open path when the
+//! pen stays where the last stroke ends. Every move below prices the step to the
+//! park like any other gap, so the whole route is what gets optimised. The strategy, measured on the
 //! benchmark text: a greedy nearest-endpoint tour and the natural order both
 //! go through the same local search (2-opt with stroke reversal, or-opt moves
 //! of chains of 1-3 strokes, and an exact DP over subsets with orientation on
@@ -10,15 +14,19 @@
 //! the cost, so the result is never worse than the natural order. A seeded
 //! generator keeps the result reproducible.
 
-use crate::geom::Pt;
+use crate::geom::{Pt, Route};
 use std::time::{Duration, Instant};
 
 const EPS: f64 = 1e-9;
 
-/// Stroke end points and the start of the pen: all ordering needs to know.
+/// Stroke end points and the ends of the route: all ordering needs to know.
 pub struct Problem {
-    /// End points: 2i is stroke i's start, 2i + 1 its end, 2n the pen start.
+    /// End points: 2i is stroke i's start, 2i + 1 its end, 2n the pen start,
+    /// 2n + 1 the park if there is one.
     pts: Vec<Pt>,
+    /// Number of strokes.
+    n: usize,
+    park: bool,
     /// Full distance matrix over `pts` when it is small enough to keep.
     dm: Option<Vec<f64>>,
     reversible: bool,
@@ -58,9 +66,10 @@ impl Default for Effort {
 }
 
 impl Problem {
-    pub fn new(ends: &[(Pt, Pt)], start: Pt, reversible: bool) -> Self {
+    pub fn new(ends: &[(Pt, Pt)], route: Route, reversible: bool) -> Self {
         let mut pts: Vec<Pt> = ends.iter().flat_map(|e| [e.0, e.1]).collect();
-        pts.push(start);
+        pts.push(route.start);
+        pts.extend(route.park);
         let dm = (ends.len() <= MATRIX_MAX).then(|| {
             pts.iter()
                 .flat_map(|a| pts.iter().map(move |b| a.dist(*b)))
@@ -68,13 +77,15 @@ impl Problem {
         });
         Problem {
             pts,
+            n: ends.len(),
+            park: route.park.is_some(),
             dm,
             reversible,
         }
     }
 
     pub fn len(&self) -> usize {
-        self.pts.len() / 2
+        self.n
     }
 
     pub fn is_empty(&self) -> bool {
@@ -82,7 +93,11 @@ impl Problem {
     }
 
     fn start(&self) -> Id {
-        self.pts.len() - 1
+        2 * self.n
+    }
+
+    fn park(&self) -> Option<Id> {
+        self.park.then_some(2 * self.n + 1)
     }
 
     #[inline]
@@ -115,7 +130,7 @@ impl Problem {
             c += self.d(at, self.entry(i, t.rev[k]));
             at = self.exit(i, t.rev[k]);
         }
-        c
+        c + self.park().map_or(0.0, |p| self.d(at, p))
     }
 
     /// Nearest free end point next, from the start.
@@ -220,6 +235,16 @@ impl Problem {
         }
     }
 
+    /// Where the pen goes after the gap before position `k`: stroke k's entry, or
+    /// the park past the last stroke (None for an open route).
+    fn after(&self, t: &Tour, k: usize) -> Option<Id> {
+        if k < t.order.len() {
+            Some(self.ent(t, k))
+        } else {
+            self.park()
+        }
+    }
+
     /// One first-improvement pass of segment reversal (which also reverses
     /// every stroke inside; j == i is a single flip). Needs reversible strokes.
     pub fn two_opt(&self, t: &mut Tour, deadline: Instant) -> bool {
@@ -238,8 +263,7 @@ impl Problem {
             for j in i..n {
                 let xj = self.ext(t, j);
                 let mut delta = self.d(p, xj) - d_pi;
-                if j + 1 < n {
-                    let q = self.ent(t, j + 1);
+                if let Some(q) = self.after(t, j + 1) {
                     delta += self.d(ei, q) - self.d(xj, q);
                 }
                 if delta < -EPS {
@@ -294,12 +318,12 @@ impl Problem {
         let e = i + len - 1;
         let p = self.before(t, i);
         let (si, se) = (self.ent(t, i), self.ext(t, e));
-        let next = (e + 1 < n).then(|| self.ent(t, e + 1));
+        let next = self.after(t, e + 1);
         let gain = self.d(p, si) + next.map_or(0.0, |q| self.d(se, q) - self.d(p, q));
         let mut best: Option<(f64, usize, bool)> = None;
         for g in (0..=n).filter(|&g| g < i || g > i + len) {
             let x = self.before(t, g);
-            let y = (g < n).then(|| self.ent(t, g));
+            let y = self.after(t, g);
             let base = y.map_or(0.0, |y| self.d(x, y));
             let fwd = self.d(x, si) + y.map_or(0.0, |y| self.d(se, y)) - base;
             let mut cand = (fwd, false);
@@ -338,7 +362,7 @@ impl Problem {
 
     fn solve_window(&self, t: &mut Tour, s: usize, w: usize) -> bool {
         let p = self.before(t, s);
-        let q = (s + w < t.order.len()).then(|| self.ent(t, s + w));
+        let q = self.after(t, s + w);
         let items: Vec<usize> = t.order[s..s + w].to_vec();
         let fixed: Vec<bool> = t.rev[s..s + w].to_vec();
         let o_of = |k: usize, o: usize| if self.reversible { o == 1 } else { fixed[k] };
@@ -472,7 +496,7 @@ mod tests {
                 seg(0.0, 0.0, 1.0, 0.0),
                 seg(5.0, 0.0, 4.0, 0.0),
             ],
-            Pt::new(0.0, 0.0),
+            Route::open(Pt::new(0.0, 0.0)),
             true,
         );
         let t = p.solve(Effort::default());
@@ -485,7 +509,7 @@ mod tests {
     fn keeps_direction_when_not_reversible() {
         let p = Problem::new(
             &[seg(1.0, 0.0, 0.0, 0.0), seg(2.0, 0.0, 3.0, 0.0)],
-            Pt::new(0.0, 0.0),
+            Route::open(Pt::new(0.0, 0.0)),
             false,
         );
         let t = p.solve(Effort::default());
@@ -499,7 +523,7 @@ mod tests {
         let mut rng = XorShift(12345);
         let mut r = || rng.below(1000) as f64 / 10.0;
         let ends: Vec<_> = (0..6).map(|_| seg(r(), r(), r(), r())).collect();
-        let p = Problem::new(&ends, Pt::new(0.0, 0.0), true);
+        let p = Problem::new(&ends, Route::closed(Pt::new(0.0, 0.0)), true);
         let mut t = p.natural();
         p.window_dp(&mut t, 6, Instant::now() + Duration::from_secs(60));
         // Brute force over all orders and orientations.
@@ -527,7 +551,14 @@ mod tests {
         let mut rng = XorShift(777);
         let mut r = || rng.below(1000) as f64 / 10.0;
         let ends: Vec<_> = (0..7).map(|_| seg(r(), r(), r(), r())).collect();
-        let p = Problem::new(&ends, Pt::new(0.0, 0.0), false);
+        let p = Problem::new(
+            &ends,
+            Route {
+                start: Pt::new(0.0, 0.0),
+                park: Some(Pt::new(50.0, 50.0)),
+            },
+            false,
+        );
         let mut t = p.natural();
         p.window_dp(&mut t, 7, Instant::now() + Duration::from_secs(60));
         let mut best = f64::INFINITY;

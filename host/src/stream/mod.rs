@@ -1,7 +1,4 @@
-//! Talking to the board: Grbl replies (grbl), character-counting streaming
-//! over any transport (streamer), and the `send`/`ports` commands around a
-//! serial port (send).
+//! Talking to the board from the command line: the `send` and `ports` commands
+//! around inkstep-serial's stream and port.
 
-pub mod grbl;
 pub mod send;
-pub mod streamer;

@@ -1,49 +1,17 @@
-//! The `send` and `ports` commands: a serial port as the streamer's
-//! transport, an indicatif progress bar (lines, percent, ETA) with the live
-//! state and position, and Ctrl-C wired to the streamer's stop flag (feed
+//! The `send` and `ports` commands: the serial port as the transport of
+//! inkstep-serial's stream, an indicatif progress bar (lines, percent, ETA) with
+//! the live state and position, and Ctrl-C wired to the stream's stop flag (feed
 //! hold, then soft reset).
 
-use super::grbl::{alarm_text, error_text, Status};
-use super::streamer::{prepare, stream, Config, Observer, Outcome, Transport};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::io::{self, Read, Write};
+use inkstep_serial::grbl::{alarm_text, error_text, Status};
+use inkstep_serial::port::{self, Port};
+use inkstep_serial::stream::{prepare, stream, Config, Observer, Outcome};
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
-
-struct Serial(Box<dyn serialport::SerialPort>);
-
-impl Transport for Serial {
-    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
-        self.0.write_all(bytes)?;
-        loop {
-            match self.0.flush() {
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
-                r => return r,
-            }
-        }
-    }
-    fn recv(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        match self.0.read(buf) {
-            Ok(n) => Ok(n),
-            // A timeout is just "nothing yet"; EINTR comes with Ctrl-C,
-            // which the streamer handles through its stop flag.
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    io::ErrorKind::TimedOut
-                        | io::ErrorKind::WouldBlock
-                        | io::ErrorKind::Interrupted
-                ) =>
-            {
-                Ok(0)
-            }
-            Err(e) => Err(e),
-        }
-    }
-}
 
 struct Bar(ProgressBar);
 
@@ -78,11 +46,7 @@ pub fn run(file: &Path, port: &str, baud: u32, status_hz: f64) -> Result<()> {
         ..Config::default()
     };
     let lines = prepare(&program, cfg.rx_size).map_err(anyhow::Error::msg)?;
-    let sp = serialport::new(port, baud)
-        .timeout(Duration::from_millis(10))
-        .open()
-        .with_context(|| format!("opening {port}"))?;
-    let mut t = Serial(sp);
+    let mut t = Port::open(port, baud).with_context(|| format!("opening {port}"))?;
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
@@ -136,25 +100,14 @@ pub fn run(file: &Path, port: &str, baud: u32, status_hz: f64) -> Result<()> {
 
 /// Prints the serial ports the system knows.
 pub fn list_ports() -> Result<()> {
-    let ports = serialport::available_ports().context("listing serial ports")?;
+    let ports = port::list().context("listing serial ports")?;
     if ports.is_empty() {
         println!(
             "no serial ports found (the simulator's pty is not listed: pass its path to --port)"
         );
     }
-    for p in ports {
-        let kind = match p.port_type {
-            serialport::SerialPortType::UsbPort(u) => format!(
-                "USB {:04x}:{:04x} {}",
-                u.vid,
-                u.pid,
-                u.product.unwrap_or_default()
-            ),
-            serialport::SerialPortType::PciPort => "PCI".into(),
-            serialport::SerialPortType::BluetoothPort => "Bluetooth".into(),
-            serialport::SerialPortType::Unknown => String::new(),
-        };
-        println!("{}\t{}", p.port_name, kind);
+    for (name, kind) in ports {
+        println!("{name}\t{kind}");
     }
     Ok(())
 }

@@ -5,7 +5,7 @@
 //! Lines containing G999 get error:20, lines containing LIMIT raise ALARM:1.
 #![allow(dead_code)]
 
-use inkstep_host::stream::streamer::Transport;
+use inkstep_serial::port::Transport;
 use std::collections::VecDeque;
 use std::io;
 use std::sync::atomic::{AtomicBool, Ordering};

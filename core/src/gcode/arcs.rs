@@ -1,0 +1,169 @@
+//! Arc geometry for G2/G3: the centre and sweep from the I/J or R words (with Grbl's
+//! tolerance for end points that CAM rounding moved off the circle), the arc as a path
+//! in step space (a circle, or the ellipse it becomes with unequal X/Y resolution),
+//! and the points that bound its extent for the travel checks.
+
+use super::parser::Block;
+use super::units::{mm_to_steps, Reach};
+use super::Status;
+use crate::fmath;
+use crate::motion::{Path, AXES};
+use crate::settings::Settings;
+use core::f32::consts::{FRAC_PI_2, TAU};
+
+/// Grbl's tolerance for arc end points that CAM rounding moved off the circle.
+const ARC_ABS_TOL: f32 = 0.005;
+const ARC_MAX_ERR: f32 = 0.5;
+const ARC_REL_TOL: f32 = 0.001;
+
+/// A G2/G3 arc in the XY plane, machine mm.
+pub(super) struct ArcGeom {
+    /// Centre, absolute machine mm (X, Y).
+    pub(super) center: [f32; 2],
+    pub(super) radius: f32,
+    pub(super) start_angle: f32,
+    /// Swept angle, > 0, in the arc's direction.
+    pub(super) sweep: f32,
+}
+
+/// Normalise an angle difference into (0, 2*pi].
+fn positive_sweep(mut a: f32) -> f32 {
+    while a <= 0.0 {
+        a += TAU;
+    }
+    while a > TAU {
+        a -= TAU;
+    }
+    a
+}
+
+/// Centre and sweep of a G2/G3 block from its I/J or R words (in block units).
+pub(super) fn arc_geometry(
+    b: &mut Block,
+    start: &[f32; AXES],
+    target: &[f32; AXES],
+    ccw: bool,
+    scale: f32,
+) -> Result<ArcGeom, Status> {
+    let dx = target[0] - start[0];
+    let dy = target[1] - start[1];
+    let (ci, cj) = if let Some(r) = b.take(b'R') {
+        let r = r * scale;
+        if dx == 0.0 && dy == 0.0 {
+            return Err(Status::InvalidTarget);
+        }
+        let mut disc = 4.0 * r * r - dx * dx - dy * dy;
+        if disc < 0.0 {
+            // A half circle with a rounded radius: accept within the tolerance.
+            let chord = fmath::hypot(dx, dy);
+            if chord / 2.0 - fmath::abs(r) > ARC_ABS_TOL {
+                return Err(Status::ArcRadiusError);
+            }
+            disc = 0.0;
+        }
+        // Offset of the centre from the chord midpoint, as a multiple of the chord
+        // turned by 90 degrees; its sign picks the side (G2 with positive R: right).
+        let mut h = -fmath::sqrt(disc) / fmath::hypot(dx, dy);
+        if ccw {
+            h = -h;
+        }
+        if r < 0.0 {
+            h = -h;
+        }
+        (0.5 * (dx - dy * h), 0.5 * (dy + dx * h))
+    } else {
+        let i = b.take(b'I').map(|v| v * scale);
+        let j = b.take(b'J').map(|v| v * scale);
+        if i.is_none() && j.is_none() {
+            return Err(Status::NoOffsetsInPlane);
+        }
+        (i.unwrap_or(0.0), j.unwrap_or(0.0))
+    };
+    if b.get(b'K').is_some() {
+        return Err(Status::UnusedWords);
+    }
+    let center = [start[0] + ci, start[1] + cj];
+    let r_start = fmath::hypot(ci, cj);
+    let r_end = fmath::hypot(target[0] - center[0], target[1] - center[1]);
+    let dr = fmath::abs(r_end - r_start);
+    if !r_start.is_finite()
+        || !r_end.is_finite()
+        || r_start <= 0.0
+        || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start))
+    {
+        return Err(Status::InvalidTarget);
+    }
+    let a0 = fmath::atan2(-cj, -ci);
+    let a1 = fmath::atan2(target[1] - center[1], target[0] - center[0]);
+    let same_point = dx == 0.0 && dy == 0.0;
+    let sweep = if same_point {
+        TAU
+    } else if ccw {
+        positive_sweep(a1 - a0)
+    } else {
+        positive_sweep(a0 - a1)
+    };
+    Ok(ArcGeom {
+        center,
+        radius: r_start,
+        start_angle: a0,
+        sweep,
+    })
+}
+
+/// The arc in step space: a circle if X and Y have the same resolution, else the
+/// ellipse the circle becomes.
+pub(super) fn arc_path(g: &ArcGeom, start: &[f32; AXES], ccw: bool, s: &Settings) -> Path {
+    let sx = s.steps_per_mm(0);
+    let sy = s.steps_per_mm(1);
+    let start_steps = [mm_to_steps(start[0], sx), mm_to_steps(start[1], sy)];
+    let center = [
+        mm_to_steps(g.center[0], sx).saturating_sub(start_steps[0]),
+        mm_to_steps(g.center[1], sy).saturating_sub(start_steps[1]),
+    ];
+    if sx == sy {
+        Path::Arc {
+            center,
+            ccw,
+            turns: 0,
+        }
+    } else {
+        let a = mm_to_steps(g.radius, sx);
+        let b = mm_to_steps(g.radius, sy);
+        Path::Ellipse { center, a, b, ccw }
+    }
+}
+
+/// Check the points that bound the arc: its end and every axis extreme it passes.
+pub(super) fn arc_extremes(
+    g: &ArcGeom,
+    start: &[f32; AXES],
+    target: &[f32; AXES],
+    ccw: bool,
+    pts: &mut Reach,
+    s: &Settings,
+) {
+    pts.add(target, s);
+    // cos and sin of k * 90 degrees, without pulling sinf/cosf into the image.
+    let axes_dirs = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)];
+    for (k, &(cs, sn)) in axes_dirs.iter().enumerate() {
+        let angle = k as f32 * FRAC_PI_2;
+        let from_start = if ccw {
+            positive_sweep(angle - g.start_angle)
+        } else {
+            positive_sweep(g.start_angle - angle)
+        };
+        if from_start <= g.sweep || g.sweep >= TAU - 1e-6 {
+            let frac = if g.sweep > 0.0 {
+                (from_start / g.sweep).min(1.0)
+            } else {
+                0.0
+            };
+            let z = start[2] + (target[2] - start[2]) * frac;
+            pts.add(
+                &[g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z],
+                s,
+            );
+        }
+    }
+}

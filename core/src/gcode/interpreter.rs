@@ -1,0 +1,1121 @@
+//! The G-code interpreter: modal state, coordinate systems and the translation of one
+//! block into planner [`Command`]s in steps.
+//!
+//! Each block is checked completely before anything changes (Grbl's rule: a rejected
+//! line has no effect), then applied in the NIST order (feed, pen, dwell, units,
+//! coordinate system, distance mode, non-modal commands, motion, program stop). The
+//! position is kept in machine millimetres and converted to steps per target with
+//! round-half-away-from-zero, so rounding never accumulates. Soft limits are checked
+//! here, on every target of the block (for arcs, on their extent), before any command
+//! leaves.
+
+use super::arcs::{arc_extremes, arc_geometry, arc_path};
+use super::modal::{
+    group_codes, Modal, MotionMode, NonModal, GROUPS, G_CODES, MOTION_MODES, M_CODES, NONE,
+    NON_MODAL,
+};
+use super::parser::Block;
+use super::units::{in_step_range, mm_to_steps, to_mm, to_steps, within_travel, Reach};
+use super::Status;
+use crate::decimal::{put_int, round_i32, to_u32, Sink};
+use crate::fmath;
+use crate::motion::Command;
+use crate::motion::{Feed, Move, Path, StepPos, AXES};
+use crate::settings::{PenMode, Settings};
+use heapless::Vec;
+
+/// Most commands one block can queue (pen, G28 intermediate, G28 target, pen at M2).
+pub const MAX_COMMANDS: usize = 4;
+pub(super) const MM_PER_INCH: f32 = 25.4;
+/// Largest line number Grbl accepts.
+pub const MAX_LINE_NUMBER: f32 = 9_999_999.0;
+
+/// Coordinate data that Grbl keeps across resets (and inkstep in flash).
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Coords {
+    /// G54..G59 offsets, mm.
+    pub wcs: [[f32; AXES]; 6],
+    /// G28 and G30 stored positions, machine mm.
+    pub g28: [f32; AXES],
+    pub g30: [f32; AXES],
+}
+
+/// Program flow requested by a block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// M0: pause when the queue has run empty, until cycle start.
+    Pause,
+    /// M2 / M30: end of program (modal state already reset).
+    End,
+}
+
+/// A block's effect for the machine to carry out.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Outcome {
+    pub cmds: Vec<Command, MAX_COMMANDS>,
+    pub stop: Option<Stop>,
+    /// G10, G28.1 or G30.1 changed the coordinate data (worth saving).
+    pub coords_changed: bool,
+}
+
+/// What the caller of [`Interpreter::execute_into`] can take now.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Room {
+    /// Commands that fit the planner queue.
+    pub cmds: usize,
+    /// The queue has run empty (a program end may run).
+    pub idle: bool,
+}
+
+/// Why a block was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reject {
+    /// `error:N`.
+    Error(Status),
+    /// A target lies outside the travel with soft limits on (alarm 2 for G-code).
+    SoftLimit,
+}
+
+impl From<Status> for Reject {
+    fn from(s: Status) -> Self {
+        Reject::Error(s)
+    }
+}
+
+/// The interpreter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Interpreter {
+    modal: Modal,
+    /// Programmed feed in mm/min (G94) or per-block inverse time; 0 = undefined.
+    feed: f32,
+    spindle: f32,
+    /// Position in machine mm, the end of the last queued block.
+    pos: [f32; AXES],
+    coords: Coords,
+    g92: [f32; AXES],
+}
+
+impl Default for Interpreter {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Interpreter {
+    pub const fn new() -> Self {
+        Interpreter {
+            modal: Modal {
+                motion: MotionMode::Rapid,
+                inches: false,
+                incremental: false,
+                inverse_time: false,
+                wcs: 0,
+                pen_down: false,
+            },
+            feed: 0.0,
+            spindle: 0.0,
+            pos: [0.0; AXES],
+            coords: Coords {
+                wcs: [[0.0; AXES]; 6],
+                g28: [0.0; AXES],
+                g30: [0.0; AXES],
+            },
+            g92: [0.0; AXES],
+        }
+    }
+
+    pub fn modal(&self) -> &Modal {
+        &self.modal
+    }
+    pub fn coords(&self) -> &Coords {
+        &self.coords
+    }
+    /// Replace the coordinate data (loaded from flash at boot).
+    pub fn set_coords(&mut self, c: Coords) {
+        self.coords = c;
+    }
+    pub fn g92(&self) -> &[f32; AXES] {
+        &self.g92
+    }
+    /// Position at the end of the queued program, machine mm.
+    pub fn position(&self) -> &[f32; AXES] {
+        &self.pos
+    }
+    /// Last programmed S value.
+    pub fn spindle(&self) -> f32 {
+        self.spindle
+    }
+    /// Feed in mm/min as programmed (0 if undefined).
+    pub fn feed(&self) -> f32 {
+        self.feed
+    }
+    /// The work coordinate offset (active system + G92), mm.
+    pub fn work_offset(&self) -> [f32; AXES] {
+        self.offset_of(self.modal.wcs)
+    }
+
+    /// Offset of coordinate system `wcs` (0 = G54) plus G92, mm.
+    fn offset_of(&self, wcs: u8) -> [f32; AXES] {
+        let mut o = self.g92;
+        if let Some(w) = self.coords.wcs.get(usize::from(wcs)) {
+            for (o, w) in o.iter_mut().zip(w.iter()) {
+                *o += w; // f32 addition commutes exactly: same as w + g92
+            }
+        }
+        o
+    }
+
+    /// Take the position from the planner after a stop that discarded the queue.
+    pub fn sync_position(&mut self, steps: &StepPos, s: &Settings) {
+        self.pos = to_mm(steps, s);
+    }
+
+    /// Soft reset: modal state back to defaults (G0 G54 G17 G21 G90 G94 M5, F0) and
+    /// the G92 offset cleared, as Grbl re-initialises its parser; the position and
+    /// the stored coordinate data stay.
+    pub fn reset_modal(&mut self) {
+        self.modal = Modal::default();
+        self.feed = 0.0;
+        self.spindle = 0.0;
+        self.g92 = [0.0; AXES];
+    }
+
+    /// `[GC:...]` body for `$G` (without brackets).
+    pub fn write_modal(&self, w: &mut dyn Sink) {
+        let m = &self.modal;
+        w.put(match m.motion {
+            MotionMode::Rapid => b"GC:G0",
+            MotionMode::Linear => b"GC:G1",
+            MotionMode::ArcCw => b"GC:G2",
+            MotionMode::ArcCcw => b"GC:G3",
+            MotionMode::Cancel => b"GC:G80",
+        });
+        // The defaults, with the digits that the modal state changes patched in.
+        let mut tail = *b" G54 G17 G21 G90 G94 M5 M9 T0 F";
+        tail[3] = b'4' + m.wcs.min(5); // G54..G59
+        tail[11] -= u8::from(m.inches); // G20
+        tail[15] += u8::from(m.incremental); // G91
+        tail[19] -= u8::from(m.inverse_time); // G93
+        tail[22] -= 2 * u8::from(m.pen_down); // M3
+        w.put(&tail);
+        let scale = if m.inches { MM_PER_INCH } else { 1.0 };
+        put_int(w, round_i32(self.feed / scale));
+        w.put(b" S");
+        put_int(w, round_i32(self.spindle));
+    }
+
+    /// Interpret one cleaned line (no spaces, upper case, no comments).
+    /// `line_no` is used for the queued moves when the block has no N word.
+    pub fn execute(&mut self, line: &[u8], s: &Settings, line_no: u32) -> Result<Outcome, Reject> {
+        let mut out = Outcome::default();
+        let all = Room {
+            cmds: usize::MAX,
+            idle: true,
+        };
+        self.execute_into(line, s, line_no, &mut out, Some(all))?;
+        Ok(out)
+    }
+
+    /// [`Interpreter::execute`] into `out` (which must be empty), committing the block only
+    /// if the caller has `room` for it: `Ok(false)` leaves the interpreter unchanged
+    /// (the outcome is still filled in), and `room: None` only checks the block. The
+    /// machine needs no trial copy of the interpreter that way.
+    pub fn execute_into(
+        &mut self,
+        line: &[u8],
+        s: &Settings,
+        line_no: u32,
+        out: &mut Outcome,
+        room: Option<Room>,
+    ) -> Result<bool, Reject> {
+        let mut b = Block::default();
+        b.parse_into(line)?;
+
+        // --- Group the codes (one modal group may be named once per block). ---
+        let mut groups = [NONE; GROUPS];
+        group_codes(&b.g, &G_CODES, &mut groups, true)?;
+        group_codes(&b.m, &M_CODES, &mut groups, false)?;
+        let [motion, non_modal, units, distance, feed_mode, wcs, _, _, _, _, _, stop, m1, pen, _] =
+            groups;
+        let motion = MOTION_MODES.get(usize::from(motion)).copied();
+        let non_modal = NON_MODAL.get(usize::from(non_modal)).copied();
+        // M1 (optional stop) is ignored, as Grbl does without a stop switch, but it
+        // shares the stop group.
+        if m1 != NONE && stop != NONE {
+            return Err(Status::ModalGroupViolation.into());
+        }
+        let stop = match stop {
+            0 => Some(Stop::Pause),
+            1 => Some(Stop::End),
+            _ => None,
+        };
+
+        // --- Value words. ---
+        for &letter in b"FNPSTL" {
+            if b.get(letter).is_some_and(|v| v < 0.0) {
+                return Err(Status::NegativeValue.into());
+            }
+        }
+        let n_word = b.take(b'N');
+        if n_word.is_some_and(|n| n > MAX_LINE_NUMBER) {
+            return Err(Status::InvalidLineNumber.into());
+        }
+        let line_tag = n_word.map_or(line_no, to_u32);
+        if b.take(b'T').is_some_and(|t| t > 255.0) {
+            return Err(Status::MaxValueExceeded.into());
+        }
+        let spindle = b.take(b'S');
+
+        let mut modal = self.modal;
+        if units != NONE {
+            modal.inches = units != 0;
+        }
+        if distance != NONE {
+            modal.incremental = distance != 0;
+        }
+        if wcs != NONE {
+            modal.wcs = wcs;
+        }
+        let scale = if modal.inches { MM_PER_INCH } else { 1.0 };
+
+        let mut feed = self.feed;
+        if feed_mode != NONE {
+            let inverse = feed_mode != 0;
+            if inverse != modal.inverse_time {
+                feed = 0.0; // switching feed modes leaves the feed undefined
+            }
+            modal.inverse_time = inverse;
+        }
+        let f_word = b.take(b'F');
+        if modal.inverse_time {
+            feed = f_word.unwrap_or(0.0); // per block, never modal
+        } else if let Some(f) = f_word {
+            feed = f * scale;
+        }
+
+        // Axis words in mm, and the mask of the axes named.
+        let mut words = [0.0f32; AXES];
+        let mut axes = 0u8;
+        for (k, (w, &letter)) in words.iter_mut().zip(b"XYZ").enumerate() {
+            if let Some(v) = b.take(letter) {
+                *w = v * scale;
+                axes |= 1 << k;
+            }
+        }
+        let has_axis = axes != 0;
+
+        // Which command uses the axis words.
+        let nm_uses_axes = matches!(
+            non_modal,
+            Some(NonModal::SetCoord | NonModal::Home28 | NonModal::Home30 | NonModal::SetG92)
+        );
+        if nm_uses_axes && motion.is_some_and(|m| m != MotionMode::Cancel) {
+            return Err(Status::AxisCommandConflict.into());
+        }
+        if let Some(m) = motion {
+            modal.motion = m;
+        }
+        // Motion runs if it was named in the block, or implicitly for axis words.
+        let motion_cmd = !nm_uses_axes && (motion.is_some() || has_axis);
+        if motion_cmd && modal.motion == MotionMode::Cancel && has_axis {
+            return Err(Status::AxisWordsExist.into());
+        }
+        let absolute_override = non_modal == Some(NonModal::Absolute);
+        if absolute_override
+            && !(motion_cmd && matches!(modal.motion, MotionMode::Rapid | MotionMode::Linear))
+        {
+            return Err(Status::G53InvalidMotionMode.into());
+        }
+        let feed_motion = motion_cmd
+            && matches!(
+                modal.motion,
+                MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
+            );
+        if feed_motion && feed <= 0.0 {
+            return Err(Status::UndefinedFeedRate.into());
+        }
+
+        let mut coords = self.coords;
+        let mut g92 = self.g92;
+        let mut pos = self.pos;
+        let mut planned = Reach {
+            in_range: true,
+            in_travel: true,
+        };
+
+        // Pen (M3/M4/M5) runs before motion.
+        if pen != NONE {
+            let down = pen != 0;
+            if down != modal.pen_down {
+                pen_move(out, &mut pos, down, s, line_tag, &mut planned)?;
+            }
+            modal.pen_down = down;
+        }
+
+        // --- Targets, in machine mm. ---
+        let offset = self.offset_of(modal.wcs);
+        let mut target = pos;
+        for (k, ((t, &v), (&p, &o))) in target
+            .iter_mut()
+            .zip(words.iter())
+            .zip(pos.iter().zip(offset.iter()))
+            .enumerate()
+        {
+            if axes >> k & 1 != 0 {
+                *t = if absolute_override {
+                    v
+                } else if modal.incremental {
+                    p + v
+                } else {
+                    v + o
+                };
+            }
+        }
+
+        match non_modal {
+            Some(NonModal::Dwell) => {
+                let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
+                // Saturates at u32::MAX ms (the value is finite: P has at most 19 digits).
+                let ms = to_u32(fmath::round(p * 1000.0));
+                push(out, Command::Dwell { ms })?;
+            }
+            Some(NonModal::SetCoord) => {
+                let l = b.take(b'L').ok_or(Status::ValueWordMissing)?;
+                let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
+                if p != fmath::trunc(p) || l != fmath::trunc(l) {
+                    return Err(Status::CommandValueNotInteger.into());
+                }
+                if p > 6.0 {
+                    return Err(Status::UnsupportedCoordSys.into());
+                }
+                if !has_axis {
+                    return Err(Status::NoAxisWords.into());
+                }
+                let idx = if p == 0.0 {
+                    usize::from(modal.wcs)
+                } else {
+                    to_u32(p) as usize - 1
+                };
+                let from = match to_u32(l) {
+                    2 => None,
+                    20 => Some(&g92),
+                    _ => return Err(Status::UnsupportedCommand.into()),
+                };
+                if let Some(sys) = coords.wcs.get_mut(idx) {
+                    set_axes(sys, axes, &words, &pos, from);
+                }
+                out.coords_changed = true;
+            }
+            Some(NonModal::Home28 | NonModal::Home30) => {
+                let stored = if non_modal == Some(NonModal::Home28) {
+                    coords.g28
+                } else {
+                    coords.g30
+                };
+                if has_axis {
+                    push_rapid(out, &target, s, line_tag, &mut planned)?;
+                }
+                push_rapid(out, &stored, s, line_tag, &mut planned)?;
+                pos = stored;
+            }
+            Some(NonModal::Set28) => {
+                coords.g28 = pos;
+                out.coords_changed = true;
+            }
+            Some(NonModal::Set30) => {
+                coords.g30 = pos;
+                out.coords_changed = true;
+            }
+            Some(NonModal::SetG92) => {
+                if !has_axis {
+                    return Err(Status::NoAxisWords.into());
+                }
+                let w = coords
+                    .wcs
+                    .get(usize::from(modal.wcs))
+                    .unwrap_or(&[0.0; AXES]);
+                set_axes(&mut g92, axes, &words, &pos, Some(w));
+            }
+            Some(NonModal::ResetG92) => g92 = [0.0; AXES],
+            Some(NonModal::Absolute) | None => {}
+        }
+
+        if motion_cmd {
+            let arc = matches!(modal.motion, MotionMode::ArcCw | MotionMode::ArcCcw);
+            if arc || (has_axis && modal.motion != MotionMode::Cancel) {
+                let ccw = modal.motion == MotionMode::ArcCcw;
+                let (len, path) = if arc {
+                    if !has_axis {
+                        return Err(Status::NoAxisWords.into());
+                    }
+                    if axes & 3 == 0 {
+                        return Err(Status::NoAxisWordsInPlane.into());
+                    }
+                    let g = arc_geometry(&mut b, &pos, &target, ccw, scale)?;
+                    arc_extremes(&g, &pos, &target, ccw, &mut planned, s);
+                    let arc_len = fmath::hypot(g.radius * g.sweep, target[2] - pos[2]);
+                    (arc_len, arc_path(&g, &pos, ccw, s))
+                } else {
+                    planned.add(&target, s);
+                    (path_length(&pos, &target), line_path(&pos, &target, s))
+                };
+                let f = if modal.motion == MotionMode::Rapid {
+                    Feed::Rapid
+                } else if modal.inverse_time {
+                    Feed::MmPerMin(len * feed)
+                } else {
+                    Feed::MmPerMin(feed)
+                };
+                let steps = to_steps(&target, s);
+                if arc || steps != to_steps(&pos, s) {
+                    push(
+                        out,
+                        Command::Move(Move {
+                            target: steps,
+                            path,
+                            feed: f,
+                            line: line_tag,
+                        }),
+                    )?;
+                }
+                pos = target;
+            }
+        }
+
+        // Everything the block asked for must have been used.
+        let leftover_axes = has_axis && !motion_cmd && !nm_uses_axes;
+        if leftover_axes {
+            return Err(Status::AxisWordsExist.into());
+        }
+        if b.any_value() {
+            return Err(Status::UnusedWords.into());
+        }
+        if !planned.in_range {
+            return Err(Status::InvalidTarget.into());
+        }
+        if s.soft_limits() && !planned.in_travel {
+            return Err(Reject::SoftLimit);
+        }
+
+        if stop == Some(Stop::End) {
+            if modal.pen_down {
+                // Checked already: the lift stays where the block's moves went.
+                pen_move(out, &mut pos, false, s, line_tag, &mut planned)?;
+            }
+            modal = Modal {
+                inches: modal.inches,
+                motion: MotionMode::Linear,
+                ..Modal::default()
+            };
+        }
+
+        out.stop = stop;
+        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
+        // motion before it has finished, so its `ok` means "program done".
+        let fits =
+            room.is_some_and(|r| out.cmds.len() <= r.cmds && (r.idle || stop != Some(Stop::End)));
+        if !fits {
+            return Ok(false);
+        }
+
+        // Commit.
+        self.modal = modal;
+        self.feed = if modal.inverse_time { 0.0 } else { feed };
+        if let Some(sp) = spindle {
+            self.spindle = sp;
+        }
+        self.pos = pos;
+        self.coords = coords;
+        self.g92 = g92;
+        Ok(true)
+    }
+
+    /// Interpret the body of a `$J=` jog line (cleaned, without `$J=`): only G20/G21,
+    /// G90/G91, G53, axis words, F and N are allowed; modal state is left unchanged.
+    /// A target outside travel with soft limits on is `error:15`.
+    pub fn jog(&mut self, line: &[u8], s: &Settings) -> Result<Move, Status> {
+        let mut b = Block::default();
+        b.parse_into(line)?;
+        if !b.m.is_empty() {
+            return Err(Status::InvalidJogCommand);
+        }
+        let mut inches = self.modal.inches;
+        let mut incremental = self.modal.incremental;
+        let mut absolute_override = false;
+        for &code in b.g.iter() {
+            match code {
+                200 => inches = true,
+                210 => inches = false,
+                900 => incremental = false,
+                910 => incremental = true,
+                530 => absolute_override = true,
+                _ => return Err(Status::InvalidJogCommand),
+            }
+        }
+        let _ = b.take(b'N');
+        let scale = if inches { MM_PER_INCH } else { 1.0 };
+        let f = b.take(b'F').ok_or(Status::UndefinedFeedRate)?;
+        if f <= 0.0 {
+            return Err(if f < 0.0 {
+                Status::NegativeValue
+            } else {
+                Status::UndefinedFeedRate
+            });
+        }
+        let offset = self.work_offset();
+        let mut target = self.pos;
+        let mut any = false;
+        for (axis, &letter) in b"XYZ".iter().enumerate() {
+            if let Some(v) = b.take(letter) {
+                any = true;
+                let v = v * scale;
+                if let (Some(t), Some(&p), Some(&o)) =
+                    (target.get_mut(axis), self.pos.get(axis), offset.get(axis))
+                {
+                    *t = if absolute_override {
+                        v
+                    } else if incremental {
+                        p + v
+                    } else {
+                        v + o
+                    };
+                }
+            }
+        }
+        if b.any_value() {
+            return Err(Status::InvalidJogCommand);
+        }
+        if !any {
+            return Err(Status::NoAxisWords);
+        }
+        if !in_step_range(&target, s) {
+            return Err(Status::InvalidTarget);
+        }
+        if s.soft_limits() && !within_travel(&target, s) {
+            return Err(Status::TravelExceeded);
+        }
+        self.pos = target;
+        Ok(Move {
+            target: to_steps(&target, s),
+            path: Path::Line,
+            feed: Feed::MmPerMin(f * scale),
+            line: 0,
+        })
+    }
+}
+
+/// A straight move's path: XY lines carry their exact end points (1/256 step) so the
+/// steps follow the programmed line, not the line between rounded ends; moves that
+/// change Z (or lie outside the fine range) stay plain lines.
+fn line_path(pos: &[f32; AXES], target: &[f32; AXES], s: &Settings) -> Path {
+    // Exact: scaling by 256 commutes with the rounding multiply.
+    let (sx, sy) = (s.steps_per_mm(0) * 256.0, s.steps_per_mm(1) * 256.0);
+    let v = [
+        mm_to_steps(pos[0], sx),
+        mm_to_steps(pos[1], sy),
+        mm_to_steps(target[0], sx),
+        mm_to_steps(target[1], sy),
+    ];
+    // Saturation starts at 2^31, beyond the fine range's bound.
+    if pos[2] == target[2] && v.iter().all(|c| c.unsigned_abs() < 2_000_000_000) {
+        Path::LineFine {
+            from: [v[0], v[1]],
+            to: [v[2], v[3]],
+        }
+    } else {
+        Path::Line
+    }
+}
+
+fn push(out: &mut Outcome, c: Command) -> Result<(), Status> {
+    out.cmds.push(c).map_err(|_| Status::Overflow)
+}
+
+/// A rapid straight move to `p` (checked as planned).
+fn push_rapid(
+    out: &mut Outcome,
+    p: &[f32; AXES],
+    s: &Settings,
+    line: u32,
+    planned: &mut Reach,
+) -> Result<(), Status> {
+    planned.add(p, s);
+    push(
+        out,
+        Command::Move(Move {
+            target: to_steps(p, s),
+            path: Path::Line,
+            feed: Feed::Rapid,
+            line,
+        }),
+    )
+}
+
+/// Lift or drop the pen: a servo command, or a rapid Z move to $205 / $206.
+fn pen_move(
+    out: &mut Outcome,
+    pos: &mut [f32; AXES],
+    down: bool,
+    s: &Settings,
+    line: u32,
+    planned: &mut Reach,
+) -> Result<(), Status> {
+    match s.pen_mode() {
+        PenMode::Servo => push(out, Command::Pen { down }),
+        PenMode::ZAxis => {
+            pos[2] = if down { s.pen_z_down() } else { s.pen_z_up() };
+            push_rapid(out, pos, s, line, planned)
+        }
+    }
+}
+
+/// G10 / G92: each named axis of `dst` becomes its word (`from` None), or the offset
+/// that makes the current position read as the word (`pos - from - word`).
+fn set_axes(
+    dst: &mut [f32; AXES],
+    axes: u8,
+    words: &[f32; AXES],
+    pos: &[f32; AXES],
+    from: Option<&[f32; AXES]>,
+) {
+    let zero = [0.0; AXES];
+    let base = from.unwrap_or(&zero);
+    for (k, ((d, &v), (&p, &b))) in dst
+        .iter_mut()
+        .zip(words.iter())
+        .zip(pos.iter().zip(base.iter()))
+        .enumerate()
+    {
+        if axes >> k & 1 != 0 {
+            *d = if from.is_some() { p - b - v } else { v };
+        }
+    }
+}
+
+fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
+    let mut sum = 0.0;
+    for (x, y) in a.iter().zip(b.iter()) {
+        sum += (y - x) * (y - x);
+    }
+    fmath::sqrt(sum)
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::parser::clean_line;
+
+    fn run(it: &mut Interpreter, s: &Settings, line: &str) -> Result<Outcome, Reject> {
+        let mut buf: heapless::Vec<u8, 128> = heapless::Vec::new();
+        clean_line(line.as_bytes(), &mut buf).map_err(Reject::Error)?;
+        it.execute(&buf, s, 7)
+    }
+
+    fn moves(o: &Outcome) -> std::vec::Vec<Move> {
+        o.cmds
+            .iter()
+            .filter_map(|c| match c {
+                Command::Move(m) => Some(*m),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn err(n: Status) -> Result<Outcome, Reject> {
+        Err(Reject::Error(n))
+    }
+
+    #[test]
+    fn lines_round_to_steps_and_carry_feed_and_line_numbers() {
+        let s = Settings::default(); // 80 step/mm on X and Y
+        let mut it = Interpreter::new();
+        let o = run(&mut it, &s, "G1 X10.0031 Y-0.00624 F600").unwrap();
+        // The rounded target, and the exact ends in 1/256 step for the interpolator:
+        // 10.0031 mm = 800.248 steps, -0.00624 mm = -0.4992 steps.
+        assert_eq!(
+            moves(&o),
+            [Move {
+                target: [800, 0, 0],
+                path: Path::LineFine {
+                    from: [0, 0],
+                    to: [204864, -128]
+                },
+                feed: Feed::MmPerMin(600.0),
+                line: 7
+            }]
+        );
+        let o = run(&mut it, &s, "N42 G91 X1 Y1").unwrap();
+        let m = moves(&o)[0];
+        assert_eq!((m.target, m.line), ([880, 80, 0], 42));
+        let o = run(&mut it, &s, "G0 X-1").unwrap();
+        assert_eq!(moves(&o)[0].feed, Feed::Rapid);
+        assert_eq!(moves(&o)[0].target, [800, 80, 0]);
+        // Inches apply to axes and feed.
+        let o = run(&mut it, &s, "G20 G90 G1 X1 F10").unwrap();
+        assert_eq!(moves(&o)[0].target, [2032, 80, 0]);
+        assert_eq!(moves(&o)[0].feed, Feed::MmPerMin(254.0));
+    }
+
+    #[test]
+    fn grbl_error_numbers_for_bad_blocks() {
+        let s = Settings::default();
+        let mut it = Interpreter::new();
+        assert_eq!(run(&mut it, &s, "G1 X1"), err(Status::UndefinedFeedRate));
+        assert_eq!(
+            run(&mut it, &s, "G0 G1 X1"),
+            err(Status::ModalGroupViolation)
+        );
+        assert_eq!(run(&mut it, &s, "G5 X1"), err(Status::UnsupportedCommand));
+        assert_eq!(run(&mut it, &s, "G0 X1 I2"), err(Status::UnusedWords));
+        assert_eq!(
+            run(&mut it, &s, "G0 G92 X1"),
+            err(Status::AxisCommandConflict)
+        );
+        assert_eq!(run(&mut it, &s, "G80 X1"), err(Status::AxisWordsExist));
+        assert_eq!(run(&mut it, &s, "G4"), err(Status::ValueWordMissing));
+        assert_eq!(run(&mut it, &s, "G4 P-1"), err(Status::NegativeValue));
+        assert_eq!(
+            run(&mut it, &s, "N10000000 G0 X1"),
+            err(Status::InvalidLineNumber)
+        );
+        assert_eq!(run(&mut it, &s, "G59.1"), err(Status::UnsupportedCoordSys));
+        assert_eq!(
+            run(&mut it, &s, "G53 G2 X1 I1 F10"),
+            err(Status::G53InvalidMotionMode)
+        );
+        assert_eq!(run(&mut it, &s, "G2 I1 F10"), err(Status::NoAxisWords));
+        assert_eq!(
+            run(&mut it, &s, "G2 Z1 I1 F10"),
+            err(Status::NoAxisWordsInPlane)
+        );
+        assert_eq!(run(&mut it, &s, "G2 X1 F10"), err(Status::NoOffsetsInPlane));
+        assert_eq!(
+            run(&mut it, &s, "G2 X10 R2 F10"),
+            err(Status::ArcRadiusError)
+        );
+        assert_eq!(run(&mut it, &s, "G2 X0 R2 F10"), err(Status::InvalidTarget));
+        assert_eq!(
+            run(&mut it, &s, "G10 L3 P1 X1"),
+            err(Status::UnsupportedCommand)
+        );
+        assert_eq!(
+            run(&mut it, &s, "G10 L2 P7 X1"),
+            err(Status::UnsupportedCoordSys)
+        );
+        assert_eq!(run(&mut it, &s, "M6"), err(Status::UnsupportedCommand));
+        assert_eq!(
+            run(&mut it, &s, "G1.5 X1"),
+            err(Status::CommandValueNotInteger)
+        );
+        assert_eq!(run(&mut it, &s, "T300"), err(Status::MaxValueExceeded));
+        // A rejected block changes nothing.
+        assert_eq!(it, Interpreter::new());
+    }
+
+    #[test]
+    fn every_g_code_lands_in_its_modal_group() {
+        let s = Settings::default();
+        // Each supported code with its modal group (Grbl's groups).
+        let codes: [(&str, u8); 31] = [
+            ("G0", 1),
+            ("G1", 1),
+            ("G2", 1),
+            ("G3", 1),
+            ("G80", 1),
+            ("G4", 0),
+            ("G10", 0),
+            ("G28", 0),
+            ("G28.1", 0),
+            ("G30", 0),
+            ("G30.1", 0),
+            ("G53", 0),
+            ("G92", 0),
+            ("G92.1", 0),
+            ("G17", 2),
+            ("G20", 6),
+            ("G21", 6),
+            ("G90", 3),
+            ("G91", 3),
+            ("G91.1", 4),
+            ("G93", 5),
+            ("G94", 5),
+            ("G40", 7),
+            ("G43.1", 8),
+            ("G49", 8),
+            ("G54", 12),
+            ("G55", 12),
+            ("G56", 12),
+            ("G57", 12),
+            ("G58", 12),
+            ("G59", 12),
+        ];
+        for (a, ga) in codes {
+            for (b, gb) in codes {
+                let r = run(&mut Interpreter::new(), &s, &std::format!("{a} {b}"));
+                let violation = r == err(Status::ModalGroupViolation);
+                if a == "G43.1" || b == "G43.1" {
+                    // Dynamic tool length offset is not supported.
+                    assert!(r.is_err(), "{a} {b}");
+                } else {
+                    assert_eq!(violation, ga == gb, "{a} {b}: {r:?}");
+                }
+            }
+        }
+        let modal = |line: &str| {
+            let mut it = Interpreter::new();
+            run(&mut it, &s, line).unwrap();
+            *it.modal()
+        };
+        assert_eq!(modal("G1 F100").motion, MotionMode::Linear);
+        assert_eq!(modal("G0").motion, MotionMode::Rapid);
+        assert_eq!(modal("G2 X1 I0.5 F100").motion, MotionMode::ArcCw);
+        assert_eq!(modal("G3 X1 I0.5 F100").motion, MotionMode::ArcCcw);
+        assert_eq!(modal("G80").motion, MotionMode::Cancel);
+        assert!(modal("G20").inches && !modal("G21").inches);
+        assert!(modal("G91").incremental && !modal("G90").incremental);
+        assert!(modal("G93").inverse_time && !modal("G94").inverse_time);
+        for (k, w) in ["G54", "G55", "G56", "G57", "G58", "G59"]
+            .iter()
+            .enumerate()
+        {
+            assert_eq!(usize::from(modal(w).wcs), k);
+        }
+        assert_eq!(modal("G61 G17 G91.1 G40 G49 G94").motion, MotionMode::Rapid);
+    }
+
+    #[test]
+    fn arcs_in_ij_and_r_form_with_cam_tolerance() {
+        let s = Settings::default();
+        let mut it = Interpreter::new();
+        let o = run(&mut it, &s, "G2 X10 Y0 I5 J0 F300").unwrap();
+        let m = moves(&o)[0];
+        assert_eq!(m.target, [800, 0, 0]);
+        assert_eq!(
+            m.path,
+            Path::Arc {
+                center: [400, 0],
+                ccw: false,
+                turns: 0
+            }
+        );
+        // Negative R: the long way round (centre on the other side).
+        let mut it = Interpreter::new();
+        let short = moves(&run(&mut it, &s, "G2 X10 Y0 R7.0710678 F300").unwrap())[0];
+        let mut it = Interpreter::new();
+        let long = moves(&run(&mut it, &s, "G2 X10 Y0 R-7.0710678 F300").unwrap())[0];
+        assert_eq!(
+            short.path,
+            Path::Arc {
+                center: [400, -400],
+                ccw: false,
+                turns: 0
+            }
+        );
+        assert_eq!(
+            long.path,
+            Path::Arc {
+                center: [400, 400],
+                ccw: false,
+                turns: 0
+            }
+        );
+        // End point 0.004 mm off the circle (CAM rounding) is accepted, 0.1 mm is not.
+        let mut it = Interpreter::new();
+        assert!(run(&mut it, &s, "G3 X10.004 Y0 I5 F300").is_ok());
+        let mut it = Interpreter::new();
+        assert_eq!(
+            run(&mut it, &s, "G3 X10.1 Y0 I5 F300"),
+            err(Status::InvalidTarget)
+        );
+        // Full circle with I/J: target equals start.
+        let mut it = Interpreter::new();
+        let full = moves(&run(&mut it, &s, "G3 X0 Y0 I5 F300").unwrap())[0];
+        assert_eq!(full.target, [0, 0, 0]);
+        assert_eq!(
+            full.path,
+            Path::Arc {
+                center: [400, 0],
+                ccw: true,
+                turns: 0
+            }
+        );
+    }
+
+    #[test]
+    fn arcs_with_unequal_resolution_become_ellipses_in_step_space() {
+        let mut s = Settings::default();
+        s.set(101, 40.0).unwrap();
+        let mut it = Interpreter::new();
+        let m = moves(&run(&mut it, &s, "G3 X10 Y0 I5 F300").unwrap())[0];
+        assert_eq!(m.target, [800, 0, 0]);
+        assert_eq!(
+            m.path,
+            Path::Ellipse {
+                center: [400, 0],
+                a: 400,
+                b: 200,
+                ccw: true
+            }
+        );
+    }
+
+    proptest::proptest! {
+        /// R-form arcs: the centre is equidistant from both ends, on the side that
+        /// gives at most half a turn for positive R and at least half for negative R.
+        #[test]
+        fn r_form_centres_are_consistent(
+            x0 in -100.0f32..100.0, y0 in -100.0f32..100.0,
+            dx in -50.0f32..50.0, dy in -50.0f32..50.0,
+            extra in 0.0f32..50.0, neg in proptest::bool::ANY, ccw in proptest::bool::ANY,
+        ) {
+            let chord = libm::hypotf(dx, dy);
+            proptest::prop_assume!(chord > 0.5);
+            let r = chord / 2.0 + extra + 0.01;
+            let s = Settings::default();
+            let mut it = Interpreter::new();
+            run(&mut it, &s, &std::format!("G0 X{x0:.4} Y{y0:.4}")).unwrap();
+            let start = *it.position();
+            let line = std::format!("G{} X{:.4} Y{:.4} R{}{:.4} F100", if ccw { 3 } else { 2 }, x0 + dx, y0 + dy, if neg { "-" } else { "" }, r);
+            let o = run(&mut it, &s, &line).unwrap();
+            let m = moves(&o)[0];
+            let Path::Arc { center, ccw: dir, .. } = m.path else { panic!("not an arc") };
+            proptest::prop_assert_eq!(dir, ccw);
+            let spm = s.steps_per_mm(0);
+            // The centre is relative to the start's step position (the rounded start),
+            // which is where the machine is when the arc begins.
+            let c = [
+                (libm::roundf(start[0] * spm) + center[0] as f32) / spm,
+                (libm::roundf(start[1] * spm) + center[1] as f32) / spm,
+            ];
+            let end = it.position();
+            let r0 = libm::hypotf(start[0] - c[0], start[1] - c[1]);
+            let r1 = libm::hypotf(end[0] - c[0], end[1] - c[1]);
+            proptest::prop_assert!((r0 - r1).abs() < 2.0 / spm, "r0 {} r1 {}", r0, r1);
+            // Which side: cross product of chord and centre offset.
+            let cross = dx * (c[1] - start[1]) - dy * (c[0] - start[0]);
+            let short = (cross > 0.0) == ccw; // centre left of travel for a short CCW arc
+            if extra > 0.5 {
+                proptest::prop_assert_eq!(short, !neg, "cross {}", cross);
+            }
+        }
+    }
+
+    /// A near-semicircle whose centre lies close to the chord: the centre must be the
+    /// grid point nearest the exact one, relative to the start's step position.
+    #[test]
+    fn r_form_near_semicircle_centre_is_the_nearest_grid_point() {
+        let s = Settings::default();
+        let mut it = Interpreter::new();
+        run(&mut it, &s, "G0 X40.4444 Y-47.9680").unwrap();
+        let o = run(&mut it, &s, "G2 X84.4295 Y-30.6952 R24.8752 F100").unwrap();
+        let Path::Arc { center, .. } = moves(&o)[0].path else {
+            panic!("not an arc")
+        };
+        // Exact centre (65.28043, -46.57250) mm = (5222.43, -3725.80) steps, nearest grid
+        // point (5222, -3726); the start is at step (3236, -3837).
+        assert_eq!(center, [5222 - 3236, -3726 + 3837]);
+    }
+
+    #[test]
+    fn targets_beyond_the_step_range_are_refused() {
+        let s = Settings::default();
+        let mut it = Interpreter::new();
+        assert_eq!(run(&mut it, &s, "G0 X99999999"), err(Status::InvalidTarget));
+        assert_eq!(it.jog(b"X99999999F10", &s), Err(Status::InvalidTarget));
+        assert_eq!(it, Interpreter::new());
+    }
+
+    #[test]
+    fn work_offsets_g92_g10_g28_g53() {
+        let s = Settings::default();
+        let mut it = Interpreter::new();
+        run(&mut it, &s, "G10 L2 P2 X10 Y20").unwrap();
+        run(&mut it, &s, "G55 G0 X1 Y1").unwrap();
+        assert_eq!(it.position(), &[11.0, 21.0, 0.0]);
+        run(&mut it, &s, "G92 X0 Y0").unwrap();
+        let o = run(&mut it, &s, "G0 X1").unwrap();
+        assert_eq!(moves(&o)[0].target, [12 * 80, 21 * 80, 0]);
+        run(&mut it, &s, "G92.1").unwrap();
+        let o = run(&mut it, &s, "G53 G0 X0 Y0").unwrap();
+        assert_eq!(moves(&o)[0].target, [0, 0, 0]);
+        run(&mut it, &s, "G0 X5 Y5").unwrap(); // G55: machine 15, 25
+        run(&mut it, &s, "G28.1").unwrap();
+        assert_eq!(it.coords().g28, [15.0, 25.0, 0.0]);
+        run(&mut it, &s, "G53 G0 X0 Y0").unwrap();
+        let o = run(&mut it, &s, "G28 G91 X1").unwrap();
+        let ms = moves(&o);
+        assert_eq!(ms.len(), 2, "intermediate point, then the stored position");
+        assert_eq!(ms[0].target, [80, 0, 0]);
+        assert_eq!(ms[1].target, [15 * 80, 25 * 80, 0]);
+        run(&mut it, &s, "G90 G10 L20 P0 X0").unwrap();
+        assert_eq!(it.work_offset()[0], 15.0);
+    }
+
+    #[test]
+    fn pen_dwell_and_program_end() {
+        let mut s = Settings::default();
+        let mut it = Interpreter::new();
+        let o = run(&mut it, &s, "M3 G1 X1 F100").unwrap();
+        assert_eq!(moves(&o)[0].target, [0, 0, -800], "Z pen drops first");
+        assert_eq!(moves(&o)[1].target, [80, 0, -800]);
+        let o = run(&mut it, &s, "G4 P0.25").unwrap();
+        assert_eq!(&o.cmds[..], &[Command::Dwell { ms: 250 }]);
+        let o = run(&mut it, &s, "M30").unwrap();
+        assert_eq!(o.stop, Some(Stop::End));
+        assert_eq!(moves(&o)[0].target, [80, 0, 0], "program end lifts the pen");
+        assert_eq!(it.modal().motion, MotionMode::Linear);
+        s.set(201, 1.0).unwrap();
+        let o = run(&mut it, &s, "M3").unwrap();
+        assert_eq!(&o.cmds[..], &[Command::Pen { down: true }]);
+        let o = run(&mut it, &s, "M3").unwrap();
+        assert!(o.cmds.is_empty(), "no change, nothing queued");
+        assert_eq!(run(&mut it, &s, "M0").unwrap().stop, Some(Stop::Pause));
+    }
+
+    #[test]
+    fn modal_report_names_every_changed_mode() {
+        let s = Settings::default();
+        let report = |it: &Interpreter| {
+            let mut v: heapless::Vec<u8, 64> = heapless::Vec::new();
+            it.write_modal(&mut v);
+            std::string::String::from_utf8(v.to_vec()).unwrap()
+        };
+        let mut it = Interpreter::new();
+        assert_eq!(report(&it), "GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0");
+        run(&mut it, &s, "G20 G91 G93 G59 M3 G1 X1 F1 S12").unwrap();
+        assert_eq!(report(&it), "GC:G1 G59 G17 G20 G91 G93 M3 M9 T0 F0 S12");
+        run(&mut it, &s, "G21 G90 G94 G56 M5 G80 F300").unwrap();
+        assert_eq!(report(&it), "GC:G80 G56 G17 G21 G90 G94 M5 M9 T0 F300 S12");
+    }
+
+    #[test]
+    fn inverse_time_feed_needs_f_every_block() {
+        let s = Settings::default();
+        let mut it = Interpreter::new();
+        let o = run(&mut it, &s, "G93 G1 X10 F2").unwrap();
+        assert_eq!(moves(&o)[0].feed, Feed::MmPerMin(20.0));
+        assert_eq!(run(&mut it, &s, "G1 X20"), err(Status::UndefinedFeedRate));
+        run(&mut it, &s, "G94").unwrap();
+        assert_eq!(run(&mut it, &s, "G1 X20"), err(Status::UndefinedFeedRate));
+    }
+
+    #[test]
+    fn soft_limits_reject_targets_and_arc_extents() {
+        let mut s = Settings::default();
+        s.set(22, 1.0).unwrap();
+        s.set(20, 1.0).unwrap(); // X, Y in [0, 300] x [0, 200]
+        let mut it = Interpreter::new();
+        assert!(run(&mut it, &s, "G0 X100 Y100").is_ok());
+        assert_eq!(run(&mut it, &s, "G0 X301"), Err(Reject::SoftLimit));
+        assert_eq!(run(&mut it, &s, "G0 Y-0.1"), Err(Reject::SoftLimit));
+        // Ends inside, but the arc bulges below Y = 0.
+        assert_eq!(
+            run(&mut it, &s, "G2 X100 Y100 J-60 F100"),
+            Err(Reject::SoftLimit)
+        );
+        assert!(run(&mut it, &s, "G2 X100 Y100 J-50 F100").is_ok());
+        assert_eq!(it.jog(b"G91X-200F100", &s), Err(Status::TravelExceeded));
+        assert!(it.jog(b"G91X-100F100", &s).is_ok());
+        assert_eq!(it.jog(b"G1X1F100", &s), Err(Status::InvalidJogCommand));
+        assert_eq!(it.jog(b"X1", &s), Err(Status::UndefinedFeedRate));
+    }
+}

@@ -1,0 +1,336 @@
+//! The Grbl 1.1 line protocol over a byte stream (USB CDC-ACM in the firmware, a pty in
+//! the simulator).
+//!
+//! Bytes go in with [`Protocol::receive`]; real-time commands (`?`, `!`, `~`, 0x18,
+//! 0x85, overrides, every byte >= 0x80) act at once, even mid-line, and never take
+//! buffer space. Other bytes wait in a 128-byte receive buffer, the one senders count
+//! characters against; when it is full `receive` stops consuming and returns how many
+//! bytes it took, so the caller leaves the rest in its endpoint (back-pressure, no
+//! byte is ever dropped). [`Protocol::poll`] frames lines, runs them through the
+//! [`Machine`] and answers `ok` / `error:N`; a line whose motion does not fit the
+//! planner queue waits, and so does everything behind it. Responses collect in an
+//! output buffer drained with [`Protocol::read_output`]; work that produces output
+//! only starts when the buffer has room for it, so responses are never truncated.
+//!
+//! Driving it (firmware protocol task, simulator loop), all from one context:
+//! ```text
+//! boot:  (settings, st) = store.load_settings().await
+//!        p = Protocol::new(settings); if let Some(t) = st.message() { p.notify(t) }
+//!        p.machine_mut().set_coords(store.load_coords().await.0)
+//!        for i in 0..STARTUP_LINES { p.set_startup_line(i, &store.load_startup(i).await.0) }
+//! loop:  n = p.receive(&usb_rx[..], &mut planner, now_ms)   // drain only n bytes
+//!        p.poll(&mut planner, now_ms)            // also every ms or so when idle:
+//!                                                  // homing and debounce run on time
+//!        usb_tx.write(&buf[..p.read_output(&mut buf)])
+//!        p.set_inputs(levels, &mut planner, now_ms)          // on any input change
+//!        busy_led.set(p.machine().busy(&planner))
+//!        when !busy: save what take_settings_dirty / take_coords_dirty /
+//!                    take_startup_dirty report (flash writes stall the CPU)
+//! ```
+//! The e-stop interrupt stops the step engine itself before the protocol task
+//! learns of it through `set_inputs`.
+
+mod commands;
+mod report;
+mod stream;
+
+use crate::decimal::{put_int, Sink};
+use crate::gcode::{LineCleaner, StartupLine, Status, LINE_MAX, STARTUP_LINES};
+use crate::machine::{Inputs, Machine, MotionControl};
+use crate::motion::AXES;
+use crate::settings::Settings;
+use commands::Listing;
+use core::mem::MaybeUninit;
+use core::ptr::addr_of_mut;
+use heapless::{Deque, String, Vec};
+
+/// Receive buffer size advertised to character-counting senders (`Bf:` and `$I`).
+pub const RX_BUFFER_SIZE: usize = 128;
+/// Output buffer size: the reserve below plus room for a few replies. Replies wait here
+/// until the USB task takes them (64 bytes a millisecond); a long listing continues as
+/// room frees up.
+pub const OUT_CAP: usize = 384;
+/// Room kept free before starting anything that writes (the longest single output:
+/// a status report or one listing line plus a message).
+const OUT_RESERVE: usize = 256;
+/// Status reports between repeated `WCO:` / `Ov:` fields.
+const REFRESH_EVERY: u8 = 10;
+
+/// The welcome line that senders look for.
+pub const WELCOME: &str = "Grbl 1.1h ['$' for help]";
+const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The protocol handler.
+pub struct Protocol {
+    machine: Machine,
+    rx: Deque<u8, RX_BUFFER_SIZE>,
+    line: Vec<u8, LINE_MAX>,
+    cleaner: LineCleaner,
+    line_too_long: bool,
+    /// A complete line waits in `line` for room in the planner.
+    line_ready: bool,
+    /// The last line ended with CR: a following LF belongs to it.
+    after_cr: bool,
+    out: Deque<u8, OUT_CAP>,
+    status_requested: bool,
+    listing: Option<Listing>,
+    lines_received: u32,
+    reports: u8,
+    startup: [StartupLine; STARTUP_LINES],
+    startup_next: Option<usize>,
+    startup_dirty: bool,
+    wco_shown: [f32; AXES],
+    truncated: u32,
+    /// Leaving check mode resets; the welcome line follows the `ok`.
+    pending_welcome: bool,
+}
+
+struct OutWriter<'a> {
+    out: &'a mut Deque<u8, OUT_CAP>,
+    truncated: &'a mut u32,
+}
+
+impl Sink for OutWriter<'_> {
+    fn put(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            if self.out.push_back(b).is_err() {
+                *self.truncated = self.truncated.saturating_add(1);
+            }
+        }
+    }
+}
+
+impl Protocol {
+    /// Power-up: the welcome line is queued at once.
+    pub fn new(settings: Settings) -> Protocol {
+        crate::in_place::build(|slot| Protocol::init_in(slot, &settings))
+    }
+
+    /// [`Protocol::new`] built in `slot` (the firmware's static cell, through
+    /// [`Controller::init_in`](crate::controller::Controller::init_in)): field by field,
+    /// so that no whole protocol (1.5 KB) is built on the stack and copied.
+    #[allow(unsafe_code)]
+    pub fn init_in<'a>(
+        slot: &'a mut MaybeUninit<Protocol>,
+        settings: &Settings,
+    ) -> &'a mut Protocol {
+        // Lists every field (no `..`): a new field fails to compile here until it is
+        // written below too.
+        const _: fn(&Protocol) = |Protocol {
+                                      machine: _,
+                                      rx: _,
+                                      line: _,
+                                      cleaner: _,
+                                      line_too_long: _,
+                                      line_ready: _,
+                                      after_cr: _,
+                                      out: _,
+                                      status_requested: _,
+                                      listing: _,
+                                      lines_received: _,
+                                      reports: _,
+                                      startup: _,
+                                      startup_next: _,
+                                      startup_dirty: _,
+                                      wco_shown: _,
+                                      truncated: _,
+                                      pending_welcome: _,
+                                  }| {};
+        let p = slot.as_mut_ptr();
+        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
+        // is written once through a raw field pointer (the machine through its own
+        // `init_in`, on its field viewed as `MaybeUninit`, which has the same layout)
+        // and the list below names every field, so the protocol is initialised when
+        // `assume_init_mut` runs.
+        let proto = unsafe {
+            Machine::init_in(
+                &mut *addr_of_mut!((*p).machine).cast::<MaybeUninit<Machine>>(),
+                settings,
+            );
+            addr_of_mut!((*p).rx).write(Deque::new());
+            addr_of_mut!((*p).line).write(Vec::new());
+            addr_of_mut!((*p).cleaner).write(LineCleaner::new());
+            addr_of_mut!((*p).line_too_long).write(false);
+            addr_of_mut!((*p).line_ready).write(false);
+            addr_of_mut!((*p).after_cr).write(false);
+            addr_of_mut!((*p).out).write(Deque::new());
+            addr_of_mut!((*p).status_requested).write(false);
+            addr_of_mut!((*p).listing).write(None);
+            addr_of_mut!((*p).lines_received).write(0);
+            addr_of_mut!((*p).reports).write(0);
+            addr_of_mut!((*p).startup).write([String::new(), String::new()]);
+            addr_of_mut!((*p).startup_next).write(Some(0));
+            addr_of_mut!((*p).startup_dirty).write(false);
+            addr_of_mut!((*p).wco_shown).write([f32::NAN; AXES]);
+            addr_of_mut!((*p).truncated).write(0);
+            addr_of_mut!((*p).pending_welcome).write(false);
+            slot.assume_init_mut()
+        };
+        proto.welcome();
+        proto
+    }
+
+    pub fn machine(&self) -> &Machine {
+        &self.machine
+    }
+    /// For the keypad modes and the firmware's loading of stored data.
+    pub fn machine_mut(&mut self) -> &mut Machine {
+        &mut self.machine
+    }
+    /// Bytes waiting in the output buffer.
+    pub fn output_len(&self) -> usize {
+        self.out.len()
+    }
+    /// Bytes that did not fit the output buffer (0 unless the host never reads).
+    pub fn truncated(&self) -> u32 {
+        self.truncated
+    }
+    pub fn startup_line(&self, i: usize) -> Option<&str> {
+        self.startup.get(i).map(|s| s.as_str())
+    }
+    /// Load a stored `$N` line at boot.
+    pub fn set_startup_line(&mut self, i: usize, line: &str) {
+        if let Some(slot) = self.startup.get_mut(i) {
+            slot.clear();
+            let _ = slot.push_str(line.get(..LINE_MAX.min(line.len())).unwrap_or(""));
+        }
+    }
+    /// A `$N` line changed and should be saved (cleared by reading).
+    pub fn take_startup_dirty(&mut self) -> bool {
+        core::mem::take(&mut self.startup_dirty)
+    }
+
+    /// Take up to `buf.len()` bytes of responses.
+    pub fn read_output(&mut self, buf: &mut [u8]) -> usize {
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            match self.out.pop_front() {
+                Some(b) => {
+                    *slot = b;
+                    n += 1;
+                }
+                None => break,
+            }
+        }
+        n
+    }
+
+    fn room(&self) -> usize {
+        OUT_CAP - self.out.len()
+    }
+
+    fn w(&mut self) -> OutWriter<'_> {
+        OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
+        }
+    }
+
+    /// One response line: `parts` in order, then CR LF.
+    fn say(&mut self, parts: &[&[u8]]) {
+        let mut w = self.w();
+        for p in parts {
+            w.put(p);
+        }
+        w.put(b"\r\n");
+    }
+
+    /// A line of `head`, a number and `tail`.
+    fn say_n(&mut self, head: &[u8], n: u8, tail: &[u8]) {
+        let mut w = self.w();
+        w.put(head);
+        put_int(&mut w, i32::from(n));
+        w.put(tail);
+        w.put(b"\r\n");
+    }
+
+    /// Queue a `[MSG:...]` line (e.g. the settings store's load report at boot).
+    pub fn notify(&mut self, text: &str) {
+        self.say(&[b"[MSG:", text.as_bytes(), b"]"]);
+    }
+
+    /// Update the input levels (e-stop, limits, feed hold, cycle start).
+    pub fn set_inputs<M: MotionControl>(&mut self, inputs: Inputs, m: &mut M, now_ms: u32) {
+        self.machine.set_inputs(inputs, m, now_ms);
+        if self.room() >= OUT_RESERVE {
+            self.flush_events();
+        }
+    }
+
+    /// Make progress: run buffered lines, continue listings, emit messages.
+    pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
+        self.machine.poll(m, now_ms);
+        loop {
+            if self.room() < OUT_RESERVE {
+                return;
+            }
+            self.flush_events();
+            if self.status_requested {
+                self.status_report(m);
+                continue;
+            }
+            if let Some(l) = self.listing {
+                self.continue_listing(l);
+                continue;
+            }
+            if let Some(i) = self.startup_next {
+                if !self.run_startup(i, m, now_ms) {
+                    return;
+                }
+                continue;
+            }
+            if !self.line_ready && !self.frame_line() {
+                return;
+            }
+            if !self.run_line(m, now_ms) {
+                return;
+            }
+        }
+    }
+
+    /// Execute the framed line. False if it must wait (planner full).
+    fn run_line<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) -> bool {
+        if self.line_too_long {
+            self.finish_line(Err(Status::Overflow));
+            return true;
+        }
+        // The line stays where it is while it runs (and if it waits): the machine
+        // borrows it beside the fields it changes, so no copy of it sits on the stack
+        // under the G-code and reconfiguration paths.
+        let r = match self.line.first() {
+            None => {
+                // Grbl answers blank lines (and lines of only a comment) with ok,
+                // but a bare CR LF pair is one line end, not two.
+                Some(Ok(()))
+            }
+            Some(b'$') => self.system_command(m),
+            Some(_) => {
+                let line_no = self.lines_received.wrapping_add(1);
+                let r = self.machine.execute(&self.line, line_no, m, now_ms);
+                if r.is_some() {
+                    self.lines_received = line_no;
+                }
+                r
+            }
+        };
+        let Some(r) = r else {
+            return false;
+        };
+        self.flush_events();
+        if self.listing.is_none() || r.is_err() {
+            self.listing = if r.is_err() { None } else { self.listing };
+            self.finish_line(r);
+        } else {
+            self.finish_frame();
+        }
+        true
+    }
+
+    fn finish_line(&mut self, r: Result<(), Status>) {
+        self.finish_frame();
+        self.respond(r);
+        if core::mem::take(&mut self.pending_welcome) {
+            self.welcome();
+        }
+    }
+}

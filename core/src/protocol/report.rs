@@ -1,0 +1,142 @@
+//! What the protocol tells the host on its own: the welcome line, `ok` / `error:N`,
+//! alarms and messages from the machine's events, and the status report
+//! (`<Idle|MPos:...|FS:...>`).
+
+use super::{OutWriter, Protocol, REFRESH_EVERY, RX_BUFFER_SIZE, WELCOME};
+use crate::decimal::{put_decimal, put_int, round_i32, write_fixed3, Sink};
+use crate::gcode::Status;
+use crate::machine::state::Event;
+use crate::machine::{MotionControl, RunState};
+use crate::motion::AXES;
+
+pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
+    for (i, x) in v.iter().enumerate() {
+        if i > 0 {
+            w.put(b",");
+        }
+        write_fixed3(w, x / scale);
+    }
+}
+
+impl Protocol {
+    pub(super) fn welcome(&mut self) {
+        self.say(&[b"\r\n", WELCOME.as_bytes()]);
+    }
+
+    pub(super) fn respond(&mut self, r: Result<(), Status>) {
+        match r {
+            Ok(()) => self.say(&[b"ok"]),
+            Err(e) => self.say_n(b"error:", e.code(), b""),
+        }
+    }
+
+    pub(super) fn flush_events(&mut self) {
+        while let Some(e) = self.machine.next_event() {
+            match e {
+                Event::Alarm(a) => self.say_n(b"ALARM:", a.code(), b""),
+                Event::Msg(t) => self.say(&[b"[MSG:", t.as_bytes(), b"]"]),
+                Event::JobStarted => self.say(&[b"[MSG:Job started]"]),
+                Event::JobFinished { ms, moves } => {
+                    let mut w = self.w();
+                    w.put(b"[MSG:Job finished: ");
+                    // Seconds with three decimals: exact, as f32 holds any u32 / 1000
+                    // only approximately, so the digits come from the integer.
+                    put_decimal(&mut w, u64::from(ms), false, 3);
+                    w.put(b" s, ");
+                    put_decimal(&mut w, u64::from(moves), false, 0);
+                    w.put(b" moves]\r\n");
+                }
+            }
+        }
+    }
+
+    /// `<State|MPos:...|FS:...|Bf:...|...>`.
+    pub(super) fn status_report<M: MotionControl>(&mut self, m: &M) {
+        self.status_requested = false;
+        self.reports = self.reports.wrapping_add(1);
+        let reports = self.reports;
+        // Each value is fetched where it is written: fewer live values to spill. The
+        // writer borrows only the output fields, so the machine stays reachable.
+        let machine = &mut self.machine;
+        let mut w = OutWriter {
+            out: &mut self.out,
+            truncated: &mut self.truncated,
+        };
+        w.put(match machine.state(m) {
+            RunState::Idle => b"<Idle",
+            RunState::Run => b"<Run",
+            RunState::Hold { complete: true } => b"<Hold:0",
+            RunState::Hold { complete: false } => b"<Hold:1",
+            RunState::Jog => b"<Jog",
+            RunState::Door { at_rest: true } => b"<Door:0",
+            RunState::Door { at_rest: false } => b"<Door:2",
+            RunState::Alarm => b"<Alarm",
+            RunState::Home => b"<Home",
+            RunState::Check => b"<Check",
+        });
+        let settings = machine.settings();
+        let scale = if settings.report_inches() { 25.4 } else { 1.0 };
+        let mask = settings.status_mask();
+        let mut pos = machine.machine_position(m);
+        let wco = machine.interp().work_offset();
+        if mask & 1 != 0 {
+            w.put(b"|MPos:");
+        } else {
+            for (p, o) in pos.iter_mut().zip(wco.iter()) {
+                *p -= o;
+            }
+            w.put(b"|WPos:");
+        }
+        axis_triplet(&mut w, &pos, scale);
+        if mask & 2 != 0 {
+            w.put(b"|Bf:");
+            put_int(&mut w, m.free() as i32);
+            w.put(b",");
+            put_int(&mut w, (RX_BUFFER_SIZE - self.rx.len()) as i32);
+        }
+        w.put(b"|FS:");
+        put_int(&mut w, round_i32(m.speed() / scale));
+        w.put(b",");
+        // The pen is the spindle: report S while it is down.
+        let interp = machine.interp();
+        put_int(
+            &mut w,
+            if interp.modal().pen_down {
+                round_i32(interp.spindle())
+            } else {
+                0
+            },
+        );
+        let inputs = machine.inputs();
+        let pins = [
+            inputs.limits[0],
+            inputs.limits[1],
+            inputs.limits[2],
+            inputs.feed_hold,
+            inputs.cycle_start,
+            inputs.estop,
+        ];
+        if pins.contains(&true) {
+            w.put(b"|Pn:");
+            for (on, c) in pins.iter().zip(b"XYZHSE".chunks(1)) {
+                if *on {
+                    w.put(c);
+                }
+            }
+        }
+        if reports % REFRESH_EVERY == 1 || wco != self.wco_shown {
+            w.put(b"|WCO:");
+            axis_triplet(&mut w, &wco, scale);
+            self.wco_shown = wco;
+        }
+        if machine.take_overrides_changed() || reports % REFRESH_EVERY == 6 {
+            let (fo, ro) = machine.overrides();
+            w.put(b"|Ov:");
+            put_int(&mut w, i32::from(fo));
+            w.put(b",");
+            put_int(&mut w, i32::from(ro));
+            w.put(b",100");
+        }
+        w.put(b">\r\n");
+    }
+}

@@ -1,0 +1,95 @@
+//! The byte stream into the protocol: real-time bytes acted on at once (they never
+//! take buffer space), the 128-byte receive buffer senders count characters against
+//! (flow control: a full buffer stops `receive`, back-pressure toward the host), and
+//! the framing of lines (CR, LF or CR LF end a line; the cleaner strips spaces and
+//! comments).
+
+use super::{Protocol, OUT_RESERVE, RX_BUFFER_SIZE};
+use crate::machine::MotionControl;
+
+impl Protocol {
+    /// Free bytes in the receive buffer (what `Bf:` reports).
+    pub fn rx_free(&self) -> usize {
+        RX_BUFFER_SIZE - self.rx.len()
+    }
+
+    /// Feed received bytes; returns how many were consumed. Bytes not consumed must be
+    /// offered again later (the receive buffer was full).
+    pub fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
+        let mut used = 0;
+        for &b in bytes {
+            if !self.realtime(b, m, now_ms) && self.rx.push_back(b).is_err() {
+                break;
+            }
+            used += 1;
+        }
+        used
+    }
+
+    /// Handle `b` if it is a real-time command.
+    fn realtime<M: MotionControl>(&mut self, b: u8, m: &mut M, now_ms: u32) -> bool {
+        match b {
+            b'?' => {
+                self.status_requested = true;
+                if self.room() >= OUT_RESERVE {
+                    self.status_report(m);
+                }
+            }
+            b'!' => self.machine.feed_hold(m),
+            b'~' => self.machine.cycle_start(m),
+            0x18 => self.soft_reset(m),
+            0x84 => self.machine.safety_door(m),
+            0x85 => self.machine.jog_cancel(m),
+            0x90..=0x97 => self.machine.override_command(b, m),
+            // Other extended real-time bytes (door, spindle and coolant overrides)
+            // have no meaning on a plotter; never let them into a line.
+            0x80..=0xFF => {}
+            _ => return false,
+        }
+        let _ = now_ms;
+        true
+    }
+
+    fn soft_reset<M: MotionControl>(&mut self, m: &mut M) {
+        self.machine.soft_reset(m);
+        self.rx.clear();
+        self.line.clear();
+        self.cleaner.reset();
+        self.line_too_long = false;
+        self.line_ready = false;
+        self.after_cr = false;
+        self.listing = None;
+        self.lines_received = 0;
+        self.startup_next = Some(0);
+        self.flush_events();
+        self.welcome();
+    }
+
+    /// Move bytes from the receive buffer into the line; true when a line is complete.
+    pub(super) fn frame_line(&mut self) -> bool {
+        while let Some(b) = self.rx.pop_front() {
+            let lf_after_cr = b == b'\n' && self.after_cr;
+            self.after_cr = b == b'\r';
+            if lf_after_cr {
+                continue;
+            }
+            if b == b'\n' || b == b'\r' {
+                self.cleaner.reset();
+                self.line_ready = true;
+                return true;
+            }
+            if let Some(c) = self.cleaner.push(b) {
+                if self.line.push(c).is_err() {
+                    self.line_too_long = true;
+                }
+            }
+        }
+        false
+    }
+
+    pub(super) fn finish_frame(&mut self) {
+        self.line.clear();
+        self.line_too_long = false;
+        self.line_ready = false;
+    }
+}

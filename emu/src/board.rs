@@ -1,0 +1,587 @@
+//! The Blue Pill board around the CPU: the STM32F103's peripherals on their buses, the
+//! pins between them and the outside (switches, keypad, stepper drivers, the LCD), the
+//! USB cable with its host, and the step trace read off the pins.
+//!
+//! Owns the address decoding (RM0008 memory map, table 3): a register of a modelled
+//! peripheral goes to its model; a peripheral the board does not model, or a model's
+//! unknown register, is a [`BusError`] that stops the run; an address where the chip
+//! has nothing is a bus fault (the machine raises HardFault). Peripherals whose clock
+//! is off are an error too: on the chip their registers read 0 and ignore writes,
+//! which is always a firmware bug.
+
+use crate::clock::t_per_cycle;
+use crate::nvic::Nvic;
+use crate::periph::flash::{self, Flash, Op};
+use crate::periph::gpio::{exti_irq, Afio, Exti, Port};
+use crate::periph::iwdg::Iwdg;
+use crate::periph::rcc::Rcc;
+use crate::periph::spi::Spi;
+use crate::periph::st7920::St7920;
+use crate::periph::timer::{Edge, Timer};
+use crate::periph::usb::Usb;
+use crate::periph::BusError;
+use crate::usb_host::Host;
+
+/// IRQ numbers (RM0008 table 63).
+pub const IRQ_USB_LP: usize = 20;
+pub const IRQ_TIM1_UP: usize = 25;
+pub const IRQ_TIM1_CC: usize = 27;
+pub const IRQ_TIM2: usize = 28;
+pub const IRQ_SPI2: usize = 36;
+
+/// Flash size register value (RM0008 30.1): 128 KB on the STM32F103CB.
+pub const F_SIZE_KB: u16 = 128;
+
+/// What the outside drives onto the input pins.
+#[derive(Clone, Debug, Default)]
+pub struct Outside {
+    /// The NC e-stop switch is open (pressed).
+    pub estop_open: bool,
+    pub limit_x_open: bool,
+    pub limit_y_open: bool,
+    /// The feed-hold / SYNC input is held low.
+    pub feed_hold_low: bool,
+    pub cycle_start_low: bool,
+    /// Keys held, as (row, column) of the matrix.
+    pub keys: Vec<(usize, usize)>,
+}
+
+/// Why the board wants the run to stop.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Halt {
+    Bus(BusError),
+    PowerCut,
+}
+
+/// A step seen on the step pins: the time and the position after it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Step {
+    pub t: u64,
+    pub pos: [i32; 3],
+}
+
+pub struct Board {
+    pub now: u64,
+    pub nvic: Nvic,
+    pub rcc: Rcc,
+    pub flash: Flash,
+    pub gpio: [Port; 3],
+    pub afio: Afio,
+    pub exti: Exti,
+    pub tim1: Timer,
+    pub tim2: Timer,
+    pub spi2: Spi,
+    pub lcd: St7920,
+    pub iwdg: Iwdg,
+    pub usb: Usb,
+    pub host: Host,
+    pub outside: Outside,
+    /// Where the settings pages are (flash offsets), served through the bus.
+    pub settings: std::ops::Range<u32>,
+    /// A halt requested by a peripheral.
+    pub halt: Option<Halt>,
+    /// A precise bus fault from a peripheral access: HardFault at the next boundary.
+    pub bus_fault: Option<String>,
+    /// The CPU stalls (flash programming) until this time.
+    pub stall_until: u64,
+    /// Flash bytes that changed and must be copied into the CPU's view.
+    pub flash_dirty: Vec<(usize, usize)>,
+    /// Alternate-function output levels of PA0..PA15 (the timers' channels).
+    af_a: u32,
+    /// Step pins PA0..PA2 and their last levels; the position they produced.
+    step_levels: u32,
+    pub pos: [i32; 3],
+    pub steps: Vec<Step>,
+    pub record_steps: bool,
+    /// Step rising edges on each axis (counted even when not recording).
+    pub step_edges: [u64; 3],
+    edges: Vec<Edge>,
+    spi_out: Vec<(u64, u16)>,
+    lcd_cs: bool,
+    /// Pin levels changed since the last look at EXTI and the USB pull-up.
+    pins_dirty: bool,
+    pub last_irq_lines: u64,
+}
+
+impl Board {
+    pub fn new(flash: Flash, settings: std::ops::Range<u32>) -> Board {
+        let mut b = Board {
+            now: 0,
+            nvic: Nvic::new(),
+            rcc: Rcc::new(),
+            flash,
+            gpio: [Port::new(), Port::new(), Port::new()],
+            afio: Afio::new(),
+            exti: Exti::new(),
+            tim1: Timer::new("TIM1", true),
+            tim2: Timer::new("TIM2", false),
+            spi2: Spi::new("SPI2"),
+            lcd: St7920::new(),
+            iwdg: Iwdg::new(),
+            usb: Usb::new(),
+            host: Host::new(),
+            outside: Outside::default(),
+            settings,
+            halt: None,
+            bus_fault: None,
+            stall_until: 0,
+            flash_dirty: Vec::new(),
+            af_a: 0,
+            step_levels: 0,
+            pos: [0; 3],
+            steps: Vec::new(),
+            record_steps: true,
+            step_edges: [0; 3],
+            edges: Vec::new(),
+            spi_out: Vec::new(),
+            lcd_cs: false,
+            pins_dirty: true,
+            last_irq_lines: 0,
+        };
+        b.clocks_changed();
+        b
+    }
+
+    /// A system reset (watchdog, AIRCR): every peripheral back to its reset state, the
+    /// flash array, the LCD (it has its own supply) and the USB host keep theirs.
+    pub fn system_reset(&mut self, csr_flag: u32) {
+        self.nvic = Nvic::new();
+        self.rcc.reset_keep_flags(csr_flag);
+        self.flash.reset();
+        self.gpio = [Port::new(), Port::new(), Port::new()];
+        self.afio = Afio::new();
+        self.exti = Exti::new();
+        self.tim1.reset();
+        self.tim2.reset();
+        self.spi2.reset();
+        self.iwdg = Iwdg::new();
+        self.usb = Usb::new();
+        self.af_a = 0;
+        self.lcd_cs = false;
+        self.pins_dirty = true;
+        self.clocks_changed();
+        self.pins_changed();
+    }
+
+    pub fn sysclk_hz(&self) -> u32 {
+        self.rcc.sysclk_hz()
+    }
+
+    fn clocks_changed(&mut self) {
+        let tim1 = t_per_cycle(self.rcc.tim_apb2_hz());
+        let tim2 = t_per_cycle(self.rcc.tim_apb1_hz());
+        self.tim1.tick_t = tim1;
+        self.tim2.tick_t = tim2;
+        self.spi2.pclk_t = t_per_cycle(self.rcc.pclk1_hz());
+    }
+
+    /// The earliest time anything on the board happens by itself.
+    pub fn next_event(&self) -> u64 {
+        let mut t = self.host.next_event();
+        for e in [
+            self.nvic.systick.next_event(),
+            self.tim1.next_event(),
+            self.tim2.next_event(),
+            self.spi2.next_event(),
+            self.iwdg.deadline(),
+        ]
+        .into_iter()
+        .flatten()
+        {
+            t = t.min(e);
+        }
+        t
+    }
+
+    /// Bring every peripheral to `now`. Returns true when the watchdog fired.
+    pub fn advance(&mut self, now: u64) -> bool {
+        self.now = self.now.max(now);
+        let now = self.now;
+        let hclk = self.rcc.hclk_hz();
+        self.nvic.advance(now, hclk);
+        self.edges.clear();
+        let mut edges = std::mem::take(&mut self.edges);
+        self.tim1.advance(now, &mut edges);
+        self.apply_edges(&edges, true);
+        edges.clear();
+        self.tim2.advance(now, &mut edges);
+        self.apply_edges(&edges, false);
+        self.edges = edges;
+        let mut out = std::mem::take(&mut self.spi_out);
+        out.clear();
+        self.spi2.advance(now, &mut out);
+        for &(t, frame) in &out {
+            if self.lcd_cs {
+                if let Err(e) = self.lcd.byte(t, frame as u8) {
+                    self.halt = Some(Halt::Bus(e));
+                }
+            }
+        }
+        self.spi_out = out;
+        self.host.advance(now, &mut self.usb);
+        if self.pins_dirty {
+            self.pins_changed();
+        }
+        self.update_irqs();
+        self.iwdg.deadline().is_some_and(|d| d <= now)
+    }
+
+    /// Timer output edges onto the pins, in time order (TIM1 CH1 = PA8; TIM2 CH1-4 =
+    /// PA0-PA3, no remap).
+    fn apply_edges(&mut self, edges: &[Edge], tim1: bool) {
+        for e in edges {
+            let pin = if tim1 {
+                if e.channel != 0 {
+                    continue;
+                }
+                8
+            } else {
+                e.channel
+            };
+            if e.level {
+                self.af_a |= 1 << pin;
+            } else {
+                self.af_a &= !(1 << pin);
+            }
+            if pin < 3 {
+                self.watch_steps(e.t);
+            }
+        }
+    }
+
+    /// The level of pin `n` of port `p` (0 = A).
+    pub fn pin(&self, p: usize, n: usize) -> bool {
+        let af = p == 0 && self.af_a & (1 << n) != 0;
+        self.gpio[p].level(n, self.outside_level(p, n), af)
+    }
+
+    /// What the outside drives onto pin `n` of port `p` (None: nothing, so a pull
+    /// resistor or the floating input decides).
+    fn outside_level(&self, p: usize, n: usize) -> Option<bool> {
+        let o = &self.outside;
+        let nc = |open: bool| if open { None } else { Some(false) };
+        match (p, n) {
+            (1, 0) => nc(o.estop_open),
+            (1, 1) => nc(o.limit_x_open),
+            (1, 3) => nc(o.limit_y_open),
+            (1, 4) => o.feed_hold_low.then_some(false),
+            (1, 5) => o.cycle_start_low.then_some(false),
+            (1, 6..=9) => {
+                let row = n - 6;
+                let low = o
+                    .keys
+                    .iter()
+                    .any(|&(r, c)| r == row && !self.column_level(c));
+                low.then_some(false)
+            }
+            _ => None,
+        }
+    }
+
+    /// A keypad column line (PB10, PB11, PA15, PC14; open drain, high when released).
+    fn column_level(&self, c: usize) -> bool {
+        let (p, n) = match c {
+            0 => (1, 10),
+            1 => (1, 11),
+            2 => (0, 15),
+            _ => (2, 14),
+        };
+        self.gpio[p].level(n, None, false)
+    }
+
+    /// Step pins: a rising edge on PA0..PA2 is one step of X, Y, Z, its direction the
+    /// DIR pin's level (PA3..PA5, high = negative) at that moment.
+    fn watch_steps(&mut self, t: u64) {
+        let mut levels = 0;
+        for a in 0..3 {
+            if self.pin(0, a) {
+                levels |= 1 << a;
+            }
+        }
+        let rising = levels & !self.step_levels;
+        self.step_levels = levels;
+        if rising == 0 {
+            return;
+        }
+        for a in 0..3 {
+            if rising & (1 << a) != 0 {
+                let negative = self.pin(0, 3 + a);
+                self.pos[a] += if negative { -1 } else { 1 };
+                self.step_edges[a] += 1;
+            }
+        }
+        if self.record_steps {
+            match self.steps.last_mut() {
+                Some(last) if last.t == t => last.pos = self.pos,
+                _ => self.steps.push(Step { t, pos: self.pos }),
+            }
+        }
+    }
+
+    /// Pin levels may have changed: EXTI edges, the step pins, the USB pull-up.
+    pub fn pins_changed(&mut self) {
+        self.pins_dirty = false;
+        let mut levels = 0;
+        for line in 0..16 {
+            let port = self.afio.exti_port(line);
+            if port < 3 && self.pin(port, line) {
+                levels |= 1 << line;
+            }
+        }
+        self.exti.update(levels);
+        self.watch_steps(self.now);
+        // The fixed pull-up on D+ (PA12) shows the device unless the pin drives low.
+        let dp_low = self.gpio[0].is_output(12) && !self.pin(0, 12);
+        self.host.set_attached(!dp_low, self.now);
+        let cs = self.pin(1, 12);
+        if self.lcd_cs && !cs {
+            self.lcd.deselect();
+        }
+        self.lcd_cs = cs;
+    }
+
+    /// The outside changed (a switch, a key).
+    pub fn set_outside(&mut self, o: Outside) {
+        self.outside = o;
+        self.pins_changed();
+        self.update_irqs();
+    }
+
+    /// Peripheral interrupt requests onto the NVIC (level-sensitive: an asserted line
+    /// keeps its interrupt pending).
+    pub fn update_irqs(&mut self) {
+        let mut lines: u64 = 0;
+        let mut req = self.exti.requests();
+        while req != 0 {
+            let line = req.trailing_zeros() as usize;
+            req &= req - 1;
+            if line < 16 {
+                lines |= 1 << exti_irq(line);
+            }
+        }
+        let (up, cc) = self.tim1.irq();
+        if up {
+            lines |= 1 << IRQ_TIM1_UP;
+        }
+        if cc {
+            lines |= 1 << IRQ_TIM1_CC;
+        }
+        let (up, cc) = self.tim2.irq();
+        if up || cc {
+            lines |= 1 << IRQ_TIM2;
+        }
+        if self.spi2.irq() {
+            lines |= 1 << IRQ_SPI2;
+        }
+        if self.usb.irq() {
+            lines |= 1 << IRQ_USB_LP;
+        }
+        let mut l = lines;
+        while l != 0 {
+            let irq = l.trailing_zeros() as usize;
+            l &= l - 1;
+            self.nvic.pend_irq(irq);
+        }
+        self.last_irq_lines = lines;
+    }
+
+    fn clock_on(&self, apb2: bool, bit: u32, name: &str) -> Result<(), BusError> {
+        let en = if apb2 {
+            self.rcc.apb2enr
+        } else {
+            self.rcc.apb1enr
+        };
+        if en & (1 << bit) == 0 {
+            return Err(BusError(format!("{name} accessed with its clock off")));
+        }
+        Ok(())
+    }
+
+    /// A peripheral-space read (0x4000_0000..).
+    pub fn read(&mut self, addr: u32, size: usize) -> Result<u32, BusError> {
+        let now = self.now;
+        let off = addr & 0x3FF;
+        let v = match addr & !0x3FF {
+            0x4000_0000 => {
+                self.clock_on(false, 0, "TIM2")?;
+                self.tim2.read(off, now)?
+            }
+            0x4000_3000 => self.iwdg.read(off, now)?,
+            0x4000_3800 => {
+                self.clock_on(false, 14, "SPI2")?;
+                self.spi2.read(off)?
+            }
+            0x4000_5C00 => {
+                self.clock_on(false, 23, "USB")?;
+                self.usb.read(off)?
+            }
+            0x4000_6000 => {
+                self.clock_on(false, 23, "USB packet memory")?;
+                self.usb.pma_read(off, size)
+            }
+            0x4001_0000 => {
+                self.clock_on(true, 0, "AFIO")?;
+                self.afio.read(off)?
+            }
+            0x4001_0400 => self.exti.read(off)?,
+            0x4001_0800 | 0x4001_0C00 | 0x4001_1000 => {
+                let p = ((addr - 0x4001_0800) / 0x400) as usize;
+                self.clock_on(true, 2 + p as u32, "GPIO")?;
+                let idr = (0..16)
+                    .filter(|&n| self.pin(p, n))
+                    .fold(0, |v, n| v | 1 << n);
+                self.gpio[p].read(off, idr)?
+            }
+            0x4001_2C00 => {
+                self.clock_on(true, 11, "TIM1")?;
+                self.tim1.read(off, now)?
+            }
+            0x4002_1000 => self.rcc.read(off)?,
+            0x4002_2000 => self.flash.read_reg(off)?,
+            a => return Err(unmodelled(a)),
+        };
+        Ok(match size {
+            1 => (v >> (8 * (addr & 3))) & 0xFF,
+            2 => (v >> (8 * (addr & 2))) & 0xFFFF,
+            _ => v,
+        })
+    }
+
+    /// A peripheral-space write.
+    pub fn write(&mut self, addr: u32, size: usize, v: u32) -> Result<(), BusError> {
+        let now = self.now;
+        let off = addr & 0x3FF;
+        // Narrow writes to 32-bit registers replicate the data on the APB bus.
+        let v = match size {
+            1 => (v & 0xFF) * 0x0101_0101,
+            2 => (v & 0xFFFF) * 0x0001_0001,
+            _ => v,
+        };
+        let mut edges = std::mem::take(&mut self.edges);
+        edges.clear();
+        match addr & !0x3FF {
+            0x4000_0000 => {
+                self.clock_on(false, 0, "TIM2")?;
+                self.tim2.write(off, v, now, &mut edges)?;
+                self.apply_edges(&edges, false);
+            }
+            0x4000_3000 => self.iwdg.write(off, v, now)?,
+            0x4000_3800 => {
+                self.clock_on(false, 14, "SPI2")?;
+                self.spi2.write(off, v, now)?;
+            }
+            0x4000_5C00 => {
+                self.clock_on(false, 23, "USB")?;
+                let was = self.usb.powered();
+                self.usb.write(off, v)?;
+                if was != self.usb.powered() {
+                    self.pins_dirty = true;
+                }
+            }
+            0x4000_6000 => {
+                self.clock_on(false, 23, "USB packet memory")?;
+                self.usb.pma_write(off, size, v);
+            }
+            0x4001_0000 => {
+                self.clock_on(true, 0, "AFIO")?;
+                self.afio.write(off, v)?;
+                self.pins_dirty = true;
+            }
+            0x4001_0400 => self.exti.write(off, v)?,
+            0x4001_0800 | 0x4001_0C00 | 0x4001_1000 => {
+                let p = ((addr - 0x4001_0800) / 0x400) as usize;
+                self.clock_on(true, 2 + p as u32, "GPIO")?;
+                self.gpio[p].write(off, v)?;
+                self.pins_dirty = true;
+            }
+            0x4001_2C00 => {
+                self.clock_on(true, 11, "TIM1")?;
+                self.tim1.write(off, v, now, &mut edges)?;
+                self.apply_edges(&edges, true);
+            }
+            0x4002_1000 => {
+                self.rcc.write(off, v)?;
+                self.clocks_changed();
+            }
+            0x4002_2000 => {
+                let op = self.flash.write_reg(off, v)?;
+                self.flash_op(op);
+            }
+            a => return Err(unmodelled(a)),
+        }
+        self.edges = edges;
+        if self.pins_dirty {
+            self.pins_changed();
+        }
+        self.update_irqs();
+        Ok(())
+    }
+
+    fn flash_op(&mut self, op: Op) {
+        match op {
+            Op::None => {}
+            Op::Changed { at, len, stall_t } => {
+                self.stall_until = self.now + stall_t;
+                self.flash_dirty.push((at, len));
+            }
+            Op::PowerCut => self.halt = Some(Halt::PowerCut),
+        }
+    }
+
+    /// A read of the settings pages (served here so that programming is modelled).
+    pub fn settings_read(&self, offset: u32, size: usize) -> u32 {
+        self.flash
+            .read_array((self.settings.start + offset) as usize, size)
+    }
+
+    pub fn settings_write(&mut self, offset: u32, size: usize, v: u32) -> Result<(), BusError> {
+        let op = self
+            .flash
+            .write_array((self.settings.start + offset) as usize, size, v)?;
+        self.flash_op(op);
+        Ok(())
+    }
+
+    /// System memory (0x1FFF_F000 page): the flash size register and the unique ID.
+    pub fn system_read(&self, addr: u32, size: usize) -> Result<u32, BusError> {
+        match (addr, size) {
+            (0x1FFF_F7E0, 2) => Ok(u32::from(F_SIZE_KB)),
+            (0x1FFF_F7E8..=0x1FFF_F7F7, _) => Ok(0x494E_4B53),
+            _ => Err(BusError(format!(
+                "system memory read at 0x{addr:08X} ({size} bytes)"
+            ))),
+        }
+    }
+}
+
+/// The error for a peripheral-space address: a real peripheral the board does not
+/// model, or a hole in the map (RM0008 table 3).
+fn unmodelled(base: u32) -> BusError {
+    const NAMES: &[(u32, &str)] = &[
+        (0x4000_0400, "TIM3"),
+        (0x4000_0800, "TIM4"),
+        (0x4000_2800, "RTC"),
+        (0x4000_2C00, "WWDG"),
+        (0x4000_4400, "USART2"),
+        (0x4000_4800, "USART3"),
+        (0x4000_5400, "I2C1"),
+        (0x4000_5800, "I2C2"),
+        (0x4000_6400, "bxCAN"),
+        (0x4000_6C00, "BKP"),
+        (0x4000_7000, "PWR"),
+        (0x4001_1400, "GPIOD"),
+        (0x4001_1800, "GPIOE"),
+        (0x4001_2400, "ADC1"),
+        (0x4001_2800, "ADC2"),
+        (0x4001_3000, "SPI1"),
+        (0x4001_3800, "USART1"),
+        (0x4002_0000, "DMA1"),
+        (0x4002_3000, "CRC"),
+    ];
+    match NAMES.iter().find(|(a, _)| *a == base) {
+        Some((_, n)) => BusError(format!("{n} (0x{base:08X}) is not modelled")),
+        None => BusError(format!("no peripheral at 0x{base:08X}")),
+    }
+}
+
+pub use flash::BASE as FLASH_BASE;

@@ -1,0 +1,13 @@
+//! inkstep-emu: the unmodified firmware image on an emulated STM32F103CB board
+//! (emu/README.md). The CPU is unicorn's Cortex-M3; everything around it (exceptions,
+//! peripherals, the USB host, the outside of the board) is modelled here.
+
+pub mod board;
+pub mod clock;
+pub mod elf;
+pub mod machine;
+pub mod nvic;
+pub mod periph;
+pub mod rtt;
+pub mod session;
+pub mod usb_host;

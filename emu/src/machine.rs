@@ -1,0 +1,1043 @@
+//! The emulated STM32F103CB: the unicorn Cortex-M3 CPU with the board's memory map,
+//! the ARMv7-M exception model done here (unicorn has no NVIC: stacking, EXC_RETURN,
+//! tail-chaining, late arrival, fault escalation), the cycle model, and the run loop.
+//!
+//! Cycle model (emu/README.md): every instruction costs 1.5 CPU cycles (the Cortex-M3's
+//! single-cycle core behind the flash's 2 wait states at 72 MHz, with the prefetch
+//! buffer hiding most of them); exception entry 12 cycles, return 12, tail-chain 6;
+//! flash programming stalls the CPU for the operation's time; WFI sleeps until the
+//! next event. Time advances per translated block (a straight run of instructions):
+//! interrupts are taken at block boundaries, peripherals (timers, SPI, USB) have
+//! their own exact times.
+
+use crate::board::{Board, Halt, FLASH_BASE};
+use crate::clock::{t_per_cycle, us};
+use crate::elf::Image;
+use crate::nvic::{ENTRY_CYCLES, HARDFAULT, RETURN_CYCLES, SVCALL, TAIL_CHAIN_CYCLES};
+use crate::periph::flash::{Flash, SIZE as FLASH_SIZE};
+use crate::rtt::{self, Log};
+use std::collections::HashMap;
+use unicorn_engine::unicorn_const::{uc_error, Arch, Mode, Prot};
+use unicorn_engine::{ArmCpuModel, RegisterARM, Unicorn};
+
+pub const RAM_BASE: u32 = 0x2000_0000;
+pub const RAM_SIZE: u32 = 20 * 1024;
+const SCS_BASE: u64 = 0xE000_0000;
+
+/// Why a run stopped before its time was up.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// An access no model answers (the message names the register), at this PC.
+    Bus { message: String, pc: u32 },
+    /// A semihosting exit (defmt-test's end) with this status.
+    Exit(i32),
+    /// A BKPT outside semihosting: a debugger would halt here.
+    Breakpoint { pc: u32, in_hardfault: bool },
+    /// A fault while in HardFault: the core locks up.
+    Lockup { pc: u32 },
+    /// The power was cut at a flash operation.
+    PowerCut,
+    /// The CPU failed in a way the model does not cover.
+    Cpu { message: String, pc: u32 },
+}
+
+impl std::fmt::Display for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stop::Bus { message, pc } => write!(f, "{message} (PC 0x{pc:08X})"),
+            Stop::Exit(s) => write!(f, "semihosting exit with status {s}"),
+            Stop::Breakpoint { pc, in_hardfault } => {
+                write!(
+                    f,
+                    "breakpoint at PC 0x{pc:08X}{}",
+                    if *in_hardfault { " in HardFault" } else { "" }
+                )
+            }
+            Stop::Lockup { pc } => write!(f, "lockup: a fault in HardFault (PC 0x{pc:08X})"),
+            Stop::PowerCut => write!(f, "power cut at a flash operation"),
+            Stop::Cpu { message, pc } => write!(f, "{message} (PC 0x{pc:08X})"),
+        }
+    }
+}
+
+/// Per-exception time, for CPU load figures.
+#[derive(Clone, Debug, Default)]
+pub struct Profile {
+    /// Time units spent in each exception (exclusive of what preempted it); index 0
+    /// is thread mode (init and idle).
+    pub busy: Vec<u64>,
+    /// Entries of each exception.
+    pub entries: Vec<u64>,
+    /// Time asleep in WFI.
+    pub sleep: u64,
+}
+
+/// Everything the hooks reach: the board and the CPU-side bookkeeping.
+pub struct State {
+    pub board: Board,
+    /// Instruction counts of translated blocks, by (address, size).
+    blocks: HashMap<(u64, u32), u32>,
+    /// Stop the CPU at the next block boundary.
+    stop_requested: bool,
+    /// The current run's end.
+    until: u64,
+    next_event: u64,
+    pub stop: Option<Stop>,
+    /// The last block's address (the PC reported with a bus error).
+    last_block: u32,
+    pub log: Option<Log>,
+    rtt: Option<u32>,
+    pub profile: Profile,
+    profile_mark: u64,
+    pub instructions: u64,
+    /// Watchdog resets so far.
+    pub watchdog_resets: u32,
+    pub hardfaults: u32,
+    /// The log is echoed to stderr as it is decoded.
+    pub echo_log: bool,
+    /// Delay-loop iterations skipped at their cycle cost.
+    pub delay_loops_skipped: u64,
+    /// The CPU branched to this EXC_RETURN value.
+    exc_return: Option<u32>,
+    /// Read the RTT channel when the CPU reaches this address (a log frame ended).
+    drain_at: Option<u32>,
+}
+
+pub struct Machine<'a> {
+    pub uc: Unicorn<'a, State>,
+}
+
+fn instr_len(halfword: u16) -> u32 {
+    // Thumb-2: 0b11101, 0b11110 and 0b11111 in the top bits start a 32-bit instruction.
+    if halfword >> 11 >= 0b11101 {
+        4
+    } else {
+        2
+    }
+}
+
+impl<'a> Machine<'a> {
+    /// A board with `image` flashed and its flash array in `flash` (kept by the caller
+    /// in a file, or blank), held in reset until the first run.
+    pub fn new(image: &Image, mut flash: Flash) -> Result<Machine<'a>, String> {
+        let in_flash: Vec<(u32, &[u8])> = image
+            .segments
+            .iter()
+            .filter(|(a, _)| (FLASH_BASE..FLASH_BASE + FLASH_SIZE as u32).contains(a))
+            .map(|(a, d)| (*a, d.as_slice()))
+            .collect();
+        flash.load(&in_flash)?;
+        let settings = match (
+            image.symbol("_settings_start"),
+            image.symbol("_settings_end"),
+        ) {
+            (Some(s), Some(e)) => (s - FLASH_BASE)..(e - FLASH_BASE),
+            _ => (FLASH_SIZE as u32)..(FLASH_SIZE as u32),
+        };
+        if settings.start % 4096 != 0 || settings.end % 4096 != 0 {
+            return Err(format!(
+                "settings pages 0x{:X}..0x{:X} are not 4 KB aligned (the emulator serves them as one MMIO window)",
+                settings.start, settings.end
+            ));
+        }
+        let log = Log::new(&image.bytes).ok();
+        let state = State {
+            board: Board::new(flash, settings.clone()),
+            blocks: HashMap::new(),
+            stop_requested: false,
+            until: 0,
+            next_event: 0,
+            stop: None,
+            last_block: 0,
+            log,
+            rtt: image.symbol("_SEGGER_RTT"),
+            profile: Profile {
+                busy: vec![0; crate::nvic::EXC_COUNT],
+                entries: vec![0; crate::nvic::EXC_COUNT],
+                sleep: 0,
+            },
+            profile_mark: 0,
+            instructions: 0,
+            watchdog_resets: 0,
+            hardfaults: 0,
+            echo_log: false,
+            delay_loops_skipped: 0,
+            exc_return: None,
+            drain_at: None,
+        };
+        let mut uc = Unicorn::new_with_data(Arch::ARM, Mode::THUMB | Mode::MCLASS, state)
+            .map_err(|e| format!("unicorn: {e:?}"))?;
+        uc.ctl_set_cpu_model(ArmCpuModel::CORTEX_M3 as i32)
+            .map_err(|e| format!("unicorn cpu model: {e:?}"))?;
+        let e = |e: uc_error| format!("unicorn map: {e:?}");
+        // Program flash below the settings pages: read and execute, written only
+        // through the flash controller (copied in when it changes).
+        let prog_end = u64::from(settings.start.min(FLASH_SIZE as u32));
+        uc.mem_map(u64::from(FLASH_BASE), prog_end, Prot::READ | Prot::EXEC)
+            .map_err(e)?;
+        if settings.end > settings.start {
+            uc.mmio_map(
+                u64::from(FLASH_BASE + settings.start),
+                u64::from(settings.end - settings.start),
+                Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
+                    uc.get_data().board.settings_read(off as u32, size) as u64
+                }),
+                Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
+                    let r = uc
+                        .get_data_mut()
+                        .board
+                        .settings_write(off as u32, size, v as u32);
+                    if let Err(err) = r {
+                        // A flash write the controller refuses is a bus error on the chip.
+                        let s = uc.get_data_mut();
+                        s.board.bus_fault = Some(err.0);
+                        s.stop_requested = true;
+                    }
+                    if uc.get_data().board.halt.is_some() || uc.get_data().board.stall_until > 0 {
+                        uc.get_data_mut().stop_requested = true;
+                        let _ = uc.emu_stop();
+                    }
+                }),
+            )
+            .map_err(e)?;
+        }
+        uc.mem_map(u64::from(RAM_BASE), u64::from(RAM_SIZE), Prot::ALL)
+            .map_err(e)?;
+        // Peripherals: APB1, APB2 and AHB up to the CRC unit.
+        uc.mmio_map(
+            0x4000_0000,
+            0x2_4000,
+            Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
+                let addr = 0x4000_0000 + off as u32;
+                let s = uc.get_data_mut();
+                match s.board.read(addr, size) {
+                    Ok(v) => v as u64,
+                    Err(err) => {
+                        s.bus_stop(err.0, addr);
+                        let _ = uc.emu_stop();
+                        0
+                    }
+                }
+            }),
+            Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
+                let addr = 0x4000_0000 + off as u32;
+                let pc = uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
+                let s = uc.get_data_mut();
+                if let Err(err) = s.board.write(addr, size, v as u32) {
+                    s.last_block = pc;
+                    s.bus_stop(err.0, addr);
+                }
+                if s.board.halt.is_some() || s.stop_requested {
+                    let _ = uc.emu_stop();
+                } else {
+                    // A write may have raised an interrupt: look at the next boundary.
+                    s.stop_requested |= s.irq_may_preempt_soon();
+                }
+            }),
+        )
+        .map_err(e)?;
+        // The bit-band aliases (ARMv7-M A3.7, PM0056 2.2.5): each word of the alias
+        // region is one bit of the peripheral or SRAM word below, read or written
+        // with a read-modify-write of that word.
+        uc.mmio_map(
+            0x4200_0000,
+            0x24000 * 32,
+            Some(|uc: &mut Unicorn<State>, off: u64, _size: usize| {
+                let (addr, bit) = ((0x4000_0000 + off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let s = uc.get_data_mut();
+                match s.board.read(addr, 4) {
+                    Ok(v) => u64::from((v >> bit) & 1),
+                    Err(err) => {
+                        s.bus_stop(err.0, addr);
+                        let _ = uc.emu_stop();
+                        0
+                    }
+                }
+            }),
+            Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, v: u64| {
+                let (addr, bit) = ((0x4000_0000 + off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let s = uc.get_data_mut();
+                let r = s.board.read(addr, 4).and_then(|w| {
+                    let w = if v & 1 != 0 {
+                        w | 1 << bit
+                    } else {
+                        w & !(1 << bit)
+                    };
+                    s.board.write(addr, 4, w)
+                });
+                if let Err(err) = r {
+                    s.bus_stop(err.0, addr);
+                    let _ = uc.emu_stop();
+                } else {
+                    s.stop_requested |= s.irq_may_preempt_soon();
+                }
+            }),
+        )
+        .map_err(e)?;
+        uc.mmio_map(
+            0x2200_0000,
+            u64::from(RAM_SIZE) * 32,
+            Some(|uc: &mut Unicorn<State>, off: u64, _size: usize| {
+                let (addr, bit) = ((RAM_BASE + off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let mut w = [0u8; 4];
+                let _ = uc.mem_read(u64::from(addr), &mut w);
+                u64::from((u32::from_le_bytes(w) >> bit) & 1)
+            }),
+            Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, v: u64| {
+                let (addr, bit) = ((RAM_BASE + off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let mut w = [0u8; 4];
+                let _ = uc.mem_read(u64::from(addr), &mut w);
+                let mut x = u32::from_le_bytes(w);
+                x = if v & 1 != 0 {
+                    x | 1 << bit
+                } else {
+                    x & !(1 << bit)
+                };
+                let _ = uc.mem_write(u64::from(addr), &x.to_le_bytes());
+            }),
+        )
+        .map_err(e)?;
+        // System memory: the flash size register and the unique ID.
+        uc.mmio_map(
+            0x1FFF_F000,
+            0x1000,
+            Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
+                let addr = 0x1FFF_F000 + off as u32;
+                let s = uc.get_data_mut();
+                match s.board.system_read(addr, size) {
+                    Ok(v) => v as u64,
+                    Err(err) => {
+                        s.bus_stop(err.0, addr);
+                        let _ = uc.emu_stop();
+                        0
+                    }
+                }
+            }),
+            Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, _v: u64| {
+                let addr = 0x1FFF_F000 + off as u32;
+                uc.get_data_mut()
+                    .bus_stop("write to system memory".into(), addr);
+                let _ = uc.emu_stop();
+            }),
+        )
+        .map_err(e)?;
+        // The private peripheral bus: the system control space (NVIC, SCB, SysTick).
+        uc.mmio_map(
+            SCS_BASE + 0xE000,
+            0x1000,
+            Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
+                let s = uc.get_data_mut();
+                let now = s.board.now;
+                let off = off + 0xE000;
+                let r = if (0xE000..0xF000).contains(&off) {
+                    s.board.nvic.read(off as u32 - 0xE000, size, now).ok()
+                } else {
+                    None
+                };
+                match r {
+                    Some(v) => v as u64,
+                    None => {
+                        s.bus_stop(
+                            format!("system control space: no register ({size} bytes)"),
+                            SCS_BASE as u32 + off as u32,
+                        );
+                        let _ = uc.emu_stop();
+                        0
+                    }
+                }
+            }),
+            Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
+                let s = uc.get_data_mut();
+                let now = s.board.now;
+                let off = off + 0xE000;
+                let ok = (0xE000..0xF000).contains(&off)
+                    && s.board
+                        .nvic
+                        .write(off as u32 - 0xE000, size, v as u32, now)
+                        .is_ok();
+                if !ok {
+                    s.bus_stop(
+                        format!("system control space: no register ({size} bytes)"),
+                        SCS_BASE as u32 + off as u32,
+                    );
+                    let _ = uc.emu_stop();
+                    return;
+                }
+                s.next_event = s.next_event.min(s.board.next_event());
+                s.stop_requested |= s.irq_may_preempt_soon() || s.board.nvic.reset_requested;
+            }),
+        )
+        .map_err(e)?;
+
+        uc.add_block_hook(1, 0, |uc: &mut Unicorn<State>, addr: u64, size: u32| {
+            Machine::on_block(uc, addr, size);
+        })
+        .map_err(|e| format!("unicorn hook: {e:?}"))?;
+        uc.add_intr_hook(|uc: &mut Unicorn<State>, intno: u32| {
+            Machine::on_interrupt(uc, intno);
+        })
+        .map_err(|e| format!("unicorn hook: {e:?}"))?;
+        if let Some(release) = image.symbol("_defmt_release") {
+            let a = u64::from(release & !1);
+            // The frame is complete when the release function returns: drain there.
+            uc.add_code_hook(a, a, |uc: &mut Unicorn<State>, _: u64, _: u32| {
+                let lr = uc.reg_read(RegisterARM::LR).unwrap_or(0) as u32;
+                uc.get_data_mut().drain_at = Some(lr & !1);
+            })
+            .map_err(|e| format!("unicorn hook: {e:?}"))?;
+        }
+        let mut m = Machine { uc };
+        m.sync_flash_all()?;
+        m.reset_cpu()?;
+        Ok(m)
+    }
+
+    pub fn state(&self) -> &State {
+        self.uc.get_data()
+    }
+
+    pub fn state_mut(&mut self) -> &mut State {
+        self.uc.get_data_mut()
+    }
+
+    pub fn board(&mut self) -> &mut Board {
+        &mut self.uc.get_data_mut().board
+    }
+
+    pub fn now(&self) -> u64 {
+        self.uc.get_data().board.now
+    }
+
+    fn sync_flash_all(&mut self) -> Result<(), String> {
+        let end = self.uc.get_data().board.settings.start as usize;
+        let end = end.min(FLASH_SIZE);
+        let bytes = self.uc.get_data().board.flash.array[..end].to_vec();
+        self.uc
+            .mem_write(u64::from(FLASH_BASE), &bytes)
+            .map_err(|e| format!("flash: {e:?}"))
+    }
+
+    /// The core's reset: SP and PC from the vector table, special registers cleared.
+    fn reset_cpu(&mut self) -> Result<(), String> {
+        let mut v = [0u8; 8];
+        self.uc
+            .mem_read(u64::from(FLASH_BASE), &mut v)
+            .map_err(|e| format!("vector table: {e:?}"))?;
+        let sp = u32::from_le_bytes([v[0], v[1], v[2], v[3]]);
+        let pc = u32::from_le_bytes([v[4], v[5], v[6], v[7]]);
+        let uc = &mut self.uc;
+        for r in [
+            RegisterARM::R0,
+            RegisterARM::R1,
+            RegisterARM::R2,
+            RegisterARM::R3,
+            RegisterARM::R4,
+            RegisterARM::R5,
+            RegisterARM::R6,
+            RegisterARM::R7,
+            RegisterARM::R8,
+            RegisterARM::R9,
+            RegisterARM::R10,
+            RegisterARM::R11,
+            RegisterARM::R12,
+        ] {
+            let _ = uc.reg_write(r, 0);
+        }
+        let _ = uc.reg_write(RegisterARM::PRIMASK, 0);
+        let _ = uc.reg_write(RegisterARM::BASEPRI, 0);
+        let _ = uc.reg_write(RegisterARM::FAULTMASK, 0);
+        let _ = uc.reg_write(RegisterARM::CONTROL, 0);
+        let _ = uc.reg_write(RegisterARM::LR, 0xFFFF_FFFF);
+        uc.reg_write(RegisterARM::SP, u64::from(sp))
+            .map_err(|e| format!("{e:?}"))?;
+        // Thumb state from bit 0 of the vector.
+        let _ = uc.reg_write(RegisterARM::XPSR, 1 << 24);
+        uc.reg_write(RegisterARM::PC, u64::from(pc & !1))
+            .map_err(|e| format!("{e:?}"))?;
+        // The vector table sits at flash (VTOR 0 aliases it; the firmware sets VTOR).
+        self.uc.get_data_mut().board.nvic.vtor = FLASH_BASE;
+        Ok(())
+    }
+
+    /// A system reset (watchdog, SYSRESETREQ): peripherals and core reset, RAM kept.
+    pub fn system_reset(&mut self, csr_flag: u32) -> Result<(), String> {
+        let s = self.uc.get_data_mut();
+        s.board.system_reset(csr_flag);
+        s.account(s.board.now);
+        self.reset_cpu()
+    }
+
+    fn on_block(uc: &mut Unicorn<State>, addr: u64, size: u32) {
+        let n = match uc.get_data().blocks.get(&(addr, size)) {
+            Some(&n) => n,
+            None => {
+                let mut code = vec![0u8; size as usize];
+                let _ = uc.mem_read(addr, &mut code);
+                let mut n = 0;
+                let mut i = 0;
+                while i + 1 < code.len() {
+                    i += instr_len(u16::from_le_bytes([code[i], code[i + 1]])) as usize;
+                    n += 1;
+                }
+                uc.get_data_mut().blocks.insert((addr, size), n);
+                n
+            }
+        };
+        // A busy-wait delay loop (`subs rN, #1; bne .-2`, cortex_m::asm::delay): its
+        // remaining iterations are skipped at their exact cycle cost.
+        if size == 4 && n == 2 {
+            if let Some(skipped) = Machine::skip_delay_loop(uc, addr) {
+                uc.get_data_mut().delay_loops_skipped += skipped;
+                let s = uc.get_data_mut();
+                let cpi = s.instr_t();
+                s.board.now += skipped * 2 * cpi;
+                s.instructions += skipped * 2;
+            }
+        }
+        if uc.get_data().drain_at == Some(addr as u32) {
+            uc.get_data_mut().drain_at = None;
+            Machine::drain_rtt(uc);
+        }
+        let s = uc.get_data_mut();
+        s.last_block = addr as u32;
+        s.instructions += u64::from(n);
+        s.board.now += u64::from(n) * s.instr_t();
+        if s.board.now >= s.next_event {
+            s.events();
+        }
+        if s.stop_requested || s.board.now >= s.until || s.board.halt.is_some() {
+            let _ = uc.emu_stop();
+        }
+    }
+
+    /// If the block at `addr` is `subs rN, #1; bne addr`, set rN to 1 (the last
+    /// iteration runs) and return the iterations skipped. Only while nothing is due
+    /// before the loop would end, so no interrupt is delayed.
+    fn skip_delay_loop(uc: &mut Unicorn<State>, addr: u64) -> Option<u64> {
+        let mut code = [0u8; 4];
+        uc.mem_read(addr, &mut code).ok()?;
+        let subs = u16::from_le_bytes([code[0], code[1]]);
+        let bne = u16::from_le_bytes([code[2], code[3]]);
+        // SUBS Rdn, #1 (T2: 00111 ddd 00000001); BNE to the SUBS: offset -6 -> 0xD1FD.
+        if subs & 0xF8FF != 0x3801 || bne != 0xD1FD {
+            return None;
+        }
+        let reg = match (subs >> 8) & 7 {
+            0 => RegisterARM::R0,
+            1 => RegisterARM::R1,
+            2 => RegisterARM::R2,
+            3 => RegisterARM::R3,
+            4 => RegisterARM::R4,
+            5 => RegisterARM::R5,
+            6 => RegisterARM::R6,
+            _ => RegisterARM::R7,
+        };
+        let count = uc.reg_read(reg).ok()?;
+        if count <= 2 {
+            return None;
+        }
+        let s = uc.get_data();
+        let cpi = s.instr_t();
+        // Iterations that fit before the next event.
+        let room = s.next_event.min(s.until).saturating_sub(s.board.now) / (2 * cpi);
+        let skip = (count - 2).min(room);
+        if skip == 0 {
+            return None;
+        }
+        uc.reg_write(reg, count - skip).ok()?;
+        Some(skip)
+    }
+
+    fn on_interrupt(uc: &mut Unicorn<State>, intno: u32) {
+        let pc = uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
+        // QEMU's exception numbers: 1 UDEF, 2 SWI, 7 BKPT.
+        match intno {
+            7 => {
+                // BKPT #imm: the PC is at the instruction (or just after it).
+                let mut at = pc;
+                let mut h = [0u8; 2];
+                let _ = uc.mem_read(u64::from(at), &mut h);
+                if h[1] != 0xBE {
+                    at = pc.wrapping_sub(2);
+                    let _ = uc.mem_read(u64::from(at), &mut h);
+                }
+                let imm = h[0];
+                if imm == 0xAB {
+                    let r0 = uc.reg_read(RegisterARM::R0).unwrap_or(0) as u32;
+                    let r1 = uc.reg_read(RegisterARM::R1).unwrap_or(0) as u32;
+                    let stop = match r0 {
+                        // SYS_EXIT: ADP_Stopped_ApplicationExit is success.
+                        0x18 => Stop::Exit(if r1 == 0x2_0026 { 0 } else { 1 }),
+                        _ => Stop::Cpu {
+                            message: format!("semihosting operation 0x{r0:X} is not modelled"),
+                            pc: at,
+                        },
+                    };
+                    uc.get_data_mut().stop = Some(stop);
+                } else {
+                    let in_hf = uc.get_data().board.nvic.active[HARDFAULT];
+                    uc.get_data_mut().stop = Some(Stop::Breakpoint {
+                        pc: at,
+                        in_hardfault: in_hf,
+                    });
+                }
+                let _ = uc.reg_write(RegisterARM::PC, u64::from(at));
+                let _ = uc.emu_stop();
+            }
+            2 => {
+                // SVC: the PC is already past it; SVCall is pended and taken next.
+                uc.get_data_mut().board.nvic.set_pending(SVCALL);
+                uc.get_data_mut().stop_requested = true;
+                let _ = uc.emu_stop();
+            }
+            1 => {
+                // UDF or an undefined instruction: UsageFault, escalated to HardFault
+                // (the configurable faults are disabled).
+                let s = uc.get_data_mut();
+                s.board.nvic.cfsr |= 1 << 16;
+                s.board.nvic.hfsr |= 1 << 30;
+                s.board.nvic.set_pending(HARDFAULT);
+                s.stop_requested = true;
+                let _ = uc.emu_stop();
+            }
+            8 => {
+                // A branch to an EXC_RETURN value: the exception return happens here.
+                let s = uc.get_data_mut();
+                s.exc_return = Some(pc | 1);
+                s.stop_requested = true;
+                let _ = uc.emu_stop();
+            }
+            _ => {
+                uc.get_data_mut().stop = Some(Stop::Cpu {
+                    message: format!("CPU exception {intno} is not modelled"),
+                    pc,
+                });
+                let _ = uc.emu_stop();
+            }
+        }
+    }
+
+    /// Read what the firmware logged into the RTT up channel.
+    fn drain_rtt(uc: &mut Unicorn<State>) {
+        let Some(cb) = uc.get_data().rtt else {
+            return;
+        };
+        let mut d = [0u8; 24];
+        if uc.mem_read(u64::from(cb + rtt::UP0), &mut d).is_err() {
+            return;
+        }
+        let w = |i: usize| u32::from_le_bytes([d[i], d[i + 1], d[i + 2], d[i + 3]]);
+        let (buf, size, write, mut read) = (w(4), w(8), w(12), w(16));
+        if size == 0 || write >= size || read >= size || write == read {
+            return;
+        }
+        let mut bytes = Vec::new();
+        while read != write {
+            let end = if write > read { write } else { size };
+            let mut chunk = vec![0u8; (end - read) as usize];
+            if uc.mem_read(u64::from(buf + read), &mut chunk).is_err() {
+                return;
+            }
+            bytes.extend_from_slice(&chunk);
+            read = if end == size { 0 } else { end };
+        }
+        let _ = uc.mem_write(u64::from(cb + rtt::UP0 + rtt::UP_READ), &read.to_le_bytes());
+        let s = uc.get_data_mut();
+        let t = us(s.board.now);
+        if let Some(log) = &mut s.log {
+            log.echo = s.echo_log;
+            log.received(&bytes, t);
+        }
+    }
+
+    /// Run until virtual time `until` (or a stop). Returns the stop, if any.
+    pub fn run_until(&mut self, until: u64) -> Option<Stop> {
+        loop {
+            if let Some(stop) = self.uc.get_data_mut().stop.take() {
+                Machine::drain_rtt(&mut self.uc);
+                return Some(stop);
+            }
+            if self.now() >= until {
+                Machine::drain_rtt(&mut self.uc);
+                return None;
+            }
+            if let Err(stop) = self.boundary() {
+                Machine::drain_rtt(&mut self.uc);
+                return Some(stop);
+            }
+            if self.uc.get_data().stop.is_some() {
+                continue;
+            }
+            let s = self.uc.get_data_mut();
+            s.until = until;
+            s.stop_requested = false;
+            s.next_event = s.board.next_event();
+            let pc = self.uc.reg_read(RegisterARM::PC).unwrap_or(0);
+            let r = self.uc.emu_start(pc | 1, 0, 0, 0);
+            if let Err(stop) = self.after_run(r) {
+                Machine::drain_rtt(&mut self.uc);
+                return Some(stop);
+            }
+        }
+    }
+
+    /// At a block boundary: halts, resets, stalls, bus faults, and exceptions to take.
+    fn boundary(&mut self) -> Result<(), Stop> {
+        let pc = self.uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
+        // Flash the controller changed: into the CPU's view.
+        let dirty = std::mem::take(&mut self.uc.get_data_mut().board.flash_dirty);
+        for (at, len) in dirty {
+            if at < self.uc.get_data().board.settings.start as usize {
+                let bytes = self.uc.get_data().board.flash.array[at..at + len].to_vec();
+                let _ = self.uc.mem_write(u64::from(FLASH_BASE) + at as u64, &bytes);
+                let _ = self.uc.ctl_remove_cache(
+                    u64::from(FLASH_BASE) + at as u64,
+                    u64::from(FLASH_BASE) + (at + len) as u64,
+                );
+            }
+        }
+        let s = self.uc.get_data_mut();
+        match s.board.halt.take() {
+            Some(Halt::Bus(e)) => return Err(Stop::Bus { message: e.0, pc }),
+            Some(Halt::PowerCut) => return Err(Stop::PowerCut),
+            None => {}
+        }
+        if s.board.stall_until > s.board.now {
+            let t = s.board.stall_until;
+            s.board.now = t;
+        }
+        s.board.stall_until = 0;
+        let now = s.board.now;
+        s.events_at(now);
+        if s.board.nvic.reset_requested {
+            s.board.nvic.reset_requested = false;
+            // RCC_CSR SFTRSTF.
+            self.system_reset(1 << 28)
+                .map_err(|m| Stop::Cpu { message: m, pc })?;
+        }
+        if self.uc.get_data().watchdog_fired() {
+            self.uc.get_data_mut().watchdog_resets += 1;
+            // RCC_CSR IWDGRSTF.
+            self.system_reset(1 << 29)
+                .map_err(|m| Stop::Cpu { message: m, pc })?;
+        }
+        if let Some(msg) = self.uc.get_data_mut().board.bus_fault.take() {
+            // A bus error answer: BusFault, escalated to HardFault.
+            let _ = msg;
+            self.fault(pc)?;
+        }
+        self.take_pending()
+    }
+
+    /// Take the most urgent pending exception if it preempts.
+    fn take_pending(&mut self) -> Result<(), Stop> {
+        let (primask, basepri, faultmask) = self.masks();
+        let s = self.uc.get_data();
+        if let Some(e) = s.board.nvic.preempting(primask, basepri, faultmask) {
+            self.enter(e)?;
+        }
+        Ok(())
+    }
+
+    fn masks(&self) -> (bool, u32, bool) {
+        let r = |reg| self.uc.reg_read(reg).unwrap_or(0);
+        (
+            r(RegisterARM::PRIMASK) & 1 != 0,
+            r(RegisterARM::BASEPRI) as u32,
+            r(RegisterARM::FAULTMASK) & 1 != 0,
+        )
+    }
+
+    fn reg(&self, r: RegisterARM) -> u32 {
+        self.uc.reg_read(r).unwrap_or(0) as u32
+    }
+
+    /// Exception entry (ARMv7-M B1.5.6): the 8-word frame on the main stack (aligned
+    /// to 8 bytes when CCR.STKALIGN is set), EXC_RETURN in LR, the vector in PC.
+    fn enter(&mut self, e: usize) -> Result<(), Stop> {
+        let pc = self.reg(RegisterARM::PC);
+        let s = self.uc.get_data();
+        let current = s.board.nvic.current() as u32;
+        let stkalign = s.board.nvic.ccr & (1 << 9) != 0;
+        let vtor = s.board.nvic.vtor;
+        let mut sp = self.reg(RegisterARM::SP);
+        let mut xpsr = (self.reg(RegisterARM::XPSR) & !0x1FF) | current;
+        if stkalign && sp & 4 != 0 {
+            sp -= 4;
+            xpsr |= 1 << 9;
+        }
+        sp -= 32;
+        let frame = [
+            self.reg(RegisterARM::R0),
+            self.reg(RegisterARM::R1),
+            self.reg(RegisterARM::R2),
+            self.reg(RegisterARM::R3),
+            self.reg(RegisterARM::R12),
+            self.reg(RegisterARM::LR),
+            pc,
+            xpsr,
+        ];
+        let bytes: Vec<u8> = frame.iter().flat_map(|w| w.to_le_bytes()).collect();
+        if self.uc.mem_write(u64::from(sp), &bytes).is_err() {
+            // A stacking fault: outside RAM the push fails (MSTKERR / STKERR).
+            return self.stacking_fault(pc, e);
+        }
+        let _ = self.uc.reg_write(RegisterARM::SP, u64::from(sp));
+        let exc_return: u32 = if current == 0 {
+            0xFFFF_FFF9
+        } else {
+            0xFFFF_FFF1
+        };
+        let _ = self.uc.reg_write(RegisterARM::LR, u64::from(exc_return));
+        self.vector(e, vtor, pc)?;
+        let s = self.uc.get_data_mut();
+        let cost = ENTRY_CYCLES * t_per_cycle(s.board.sysclk_hz());
+        s.switch_to(e, cost);
+        Ok(())
+    }
+
+    fn stacking_fault(&mut self, pc: u32, e: usize) -> Result<(), Stop> {
+        if e == HARDFAULT || self.uc.get_data().board.nvic.active[HARDFAULT] {
+            return Err(Stop::Lockup { pc });
+        }
+        Err(Stop::Cpu {
+            message: format!("stack overflow: exception {e} could not be stacked"),
+            pc,
+        })
+    }
+
+    fn vector(&mut self, e: usize, vtor: u32, pc: u32) -> Result<(), Stop> {
+        let mut v = [0u8; 4];
+        self.uc
+            .mem_read(u64::from(vtor + 4 * e as u32), &mut v)
+            .map_err(|_| Stop::Cpu {
+                message: format!("vector {e} unreadable"),
+                pc,
+            })?;
+        let handler = u32::from_le_bytes(v) & !1;
+        let _ = self.uc.reg_write(RegisterARM::PC, u64::from(handler));
+        // Thread-mode IT state does not carry into the handler.
+        let x = self.reg(RegisterARM::XPSR) & !0x0600_FC00;
+        let _ = self.uc.reg_write(RegisterARM::XPSR, u64::from(x | 1 << 24));
+        Ok(())
+    }
+
+    /// Exception return through EXC_RETURN `exc`: tail-chain into a pending exception
+    /// that preempts what would be returned to, or unstack the frame.
+    fn exception_return(&mut self, exc: u32) -> Result<(), Stop> {
+        let pc = exc;
+        if exc & 0xF == 0xD || exc & 0xFFFF_FFF0 != 0xFFFF_FFF0 {
+            return Err(Stop::Cpu {
+                message: format!("EXC_RETURN 0x{exc:08X} (process stack) is not modelled"),
+                pc,
+            });
+        }
+        let s = self.uc.get_data_mut();
+        if s.board.nvic.deactivate().is_none() {
+            return Err(Stop::Cpu {
+                message: "exception return in thread mode".into(),
+                pc,
+            });
+        }
+        let (primask, basepri, faultmask) = self.masks();
+        let s = self.uc.get_data();
+        if let Some(e) = s.board.nvic.preempting(primask, basepri, faultmask) {
+            // Tail-chain: the frame stays, LR keeps the same EXC_RETURN.
+            let vtor = s.board.nvic.vtor;
+            self.vector(e, vtor, pc)?;
+            let _ = self.uc.reg_write(RegisterARM::LR, u64::from(exc));
+            let s = self.uc.get_data_mut();
+            let cost = TAIL_CHAIN_CYCLES * t_per_cycle(s.board.sysclk_hz());
+            s.switch_to(e, cost);
+            return Ok(());
+        }
+        let sp = self.reg(RegisterARM::SP);
+        let mut f = [0u8; 32];
+        self.uc
+            .mem_read(u64::from(sp), &mut f)
+            .map_err(|_| Stop::Cpu {
+                message: "unstacking outside RAM".into(),
+                pc,
+            })?;
+        let w = |i: usize| u32::from_le_bytes([f[4 * i], f[4 * i + 1], f[4 * i + 2], f[4 * i + 3]]);
+        let regs = [
+            RegisterARM::R0,
+            RegisterARM::R1,
+            RegisterARM::R2,
+            RegisterARM::R3,
+            RegisterARM::R12,
+            RegisterARM::LR,
+        ];
+        for (i, r) in regs.into_iter().enumerate() {
+            let _ = self.uc.reg_write(r, u64::from(w(i)));
+        }
+        let xpsr = w(7);
+        let sp = sp + 32 + if xpsr & (1 << 9) != 0 { 4 } else { 0 };
+        let _ = self.uc.reg_write(RegisterARM::SP, u64::from(sp));
+        let _ = self.uc.reg_write(RegisterARM::XPSR, u64::from(xpsr));
+        let _ = self.uc.reg_write(RegisterARM::PC, u64::from(w(6) & !1));
+        let s = self.uc.get_data_mut();
+        let back = s.board.nvic.current();
+        let cost = RETURN_CYCLES * t_per_cycle(s.board.sysclk_hz());
+        s.switch_to(back, cost);
+        Ok(())
+    }
+
+    /// A fault at `pc`: HardFault (forced), or lockup when already in HardFault.
+    fn fault(&mut self, pc: u32) -> Result<(), Stop> {
+        let s = self.uc.get_data_mut();
+        if s.board.nvic.active[HARDFAULT] {
+            return Err(Stop::Lockup { pc });
+        }
+        s.hardfaults += 1;
+        eprintln!(
+            "emu: HardFault at PC 0x{pc:08X}, {:.3} ms",
+            us(s.board.now) / 1000.0
+        );
+        s.board.nvic.hfsr |= 1 << 30;
+        s.board.nvic.cfsr |= 1 << 8;
+        s.board.nvic.set_pending(HARDFAULT);
+        self.enter(HARDFAULT)
+    }
+
+    /// After `emu_start` returned: exception returns, faults, WFI.
+    fn after_run(&mut self, r: Result<(), uc_error>) -> Result<(), Stop> {
+        let pc = self.reg(RegisterARM::PC);
+        if let Some(exc) = self.uc.get_data_mut().exc_return.take() {
+            return self.exception_return(exc);
+        }
+        match r {
+            Ok(()) => {
+                if self.uc.get_data().stop_requested || self.uc.get_data().stop.is_some() {
+                    return Ok(());
+                }
+                // WFI halts unicorn: sleep until the next event unless an interrupt
+                // can be taken now.
+                let mut h = [0u8; 2];
+                let _ = self.uc.mem_read(u64::from(pc.wrapping_sub(2)), &mut h);
+                if u16::from_le_bytes(h) == 0xBF30 {
+                    self.sleep();
+                }
+                Ok(())
+            }
+            Err(uc_error::FETCH_UNMAPPED) if pc >= 0xFFFF_FFF0 => self.exception_return(pc | 1),
+            Err(
+                uc_error::READ_UNMAPPED
+                | uc_error::WRITE_UNMAPPED
+                | uc_error::FETCH_UNMAPPED
+                | uc_error::FETCH_PROT
+                | uc_error::WRITE_PROT
+                | uc_error::READ_PROT,
+            ) => {
+                if self.uc.get_data().stop.is_some() {
+                    return Ok(());
+                }
+                self.fault(pc)
+            }
+            Err(uc_error::INSN_INVALID) => {
+                let s = self.uc.get_data_mut();
+                s.board.nvic.cfsr |= 1 << 16;
+                self.fault(pc)
+            }
+            Err(e) => Err(Stop::Cpu {
+                message: format!("unicorn: {e:?}"),
+                pc,
+            }),
+        }
+    }
+
+    /// WFI: nothing to take now, so time jumps to the next event.
+    fn sleep(&mut self) {
+        let (primask, basepri, faultmask) = self.masks();
+        let s = self.uc.get_data_mut();
+        let now = s.board.now;
+        s.events_at(now);
+        // With PRIMASK set an interrupt still wakes the core (it is then not taken).
+        let wake = s.board.nvic.highest_pending().is_some_and(|(_, g)| {
+            g < s.board.nvic.execution_priority(false, basepri, faultmask) || primask
+        });
+        if wake {
+            return;
+        }
+        let t = s.board.next_event().min(s.until).max(now);
+        s.account(now);
+        s.profile.sleep += t - now;
+        s.board.now = t;
+        s.profile_mark = t;
+        s.events_at(t);
+    }
+}
+
+impl State {
+    /// Time units per instruction: 1.5 cycles of the current CPU clock.
+    fn instr_t(&self) -> u64 {
+        t_per_cycle(self.board.sysclk_hz()) * 3 / 2
+    }
+
+    fn bus_stop(&mut self, message: String, addr: u32) {
+        self.stop = Some(Stop::Bus {
+            message: format!("{message} [address 0x{addr:08X}]"),
+            pc: self.last_block,
+        });
+        self.stop_requested = true;
+    }
+
+    fn watchdog_fired(&self) -> bool {
+        self.board
+            .iwdg
+            .deadline()
+            .is_some_and(|d| d <= self.board.now)
+    }
+
+    /// Peripheral events due now; request a stop when an exception can be taken.
+    fn events(&mut self) {
+        let now = self.board.now;
+        self.events_at(now);
+        if self.irq_may_preempt_soon() || self.watchdog_fired() || self.board.halt.is_some() {
+            self.stop_requested = true;
+        }
+    }
+
+    fn events_at(&mut self, now: u64) {
+        self.board.advance(now);
+        self.next_event = self.board.next_event();
+    }
+
+    /// Something is pending that may preempt: the run loop decides at the boundary.
+    fn irq_may_preempt_soon(&self) -> bool {
+        let nvic = &self.board.nvic;
+        match nvic.highest_pending() {
+            Some((_, g)) => g < nvic.execution_priority(false, 0, false),
+            None => false,
+        }
+    }
+
+    /// Time accounting on an exception switch to `e` (0 = thread), plus its cost.
+    fn switch_to(&mut self, e: usize, cost: u64) {
+        let now = self.board.now;
+        self.account(now);
+        self.board.now += cost;
+        if e != 0 && !self.board.nvic.active[e] {
+            self.board.nvic.activate(e);
+        }
+        if e != 0 {
+            self.profile.entries[e] += 1;
+        }
+        self.profile.busy[e] += cost;
+        self.profile_mark = self.board.now;
+    }
+
+    /// Charge the time since the last mark to the exception running now.
+    fn account(&mut self, now: u64) {
+        let cur = self.board.nvic.current();
+        self.profile.busy[cur] += now.saturating_sub(self.profile_mark);
+        self.profile_mark = now;
+    }
+
+    /// The time accounting brought to now (for a report).
+    pub fn profile_now(&mut self) -> &Profile {
+        let now = self.board.now;
+        self.account(now);
+        &self.profile
+    }
+}

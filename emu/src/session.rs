@@ -1,0 +1,158 @@
+//! A session with the emulated board as a user has it: the firmware image (built with
+//! `cargo build --release` unless one is given), the board booted, the USB port
+//! enumerated by the host, and bytes exchanged with it the way a sender does. The
+//! commands (`main.rs`) and the tests drive the board through this.
+
+use crate::board::Outside;
+use crate::clock::{T_PER_MS, T_PER_S};
+use crate::elf::Image;
+use crate::machine::{Machine, Stop};
+use crate::periph::flash::Flash;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The release product image, built first (what `cargo run --release` flashes).
+pub fn product_elf() -> Result<PathBuf, String> {
+    let root = repo_root();
+    let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .args(["build", "--release", "--bin", "inkstep"])
+        .current_dir(&root)
+        .status()
+        .map_err(|e| format!("cargo build --release: {e}"))?;
+    if !status.success() {
+        return Err("cargo build --release failed".into());
+    }
+    Ok(root.join("target/thumbv7m-none-eabi/release/inkstep"))
+}
+
+/// The workspace root (emu/ is one level down).
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
+}
+
+pub struct Session<'a> {
+    pub m: Machine<'a>,
+    /// Everything the board sent, as text.
+    pub received: String,
+}
+
+impl<'a> Session<'a> {
+    /// A board with `elf` flashed, its flash array kept in `flash_file` if given.
+    pub fn new(elf: &Path, flash_file: Option<&Path>) -> Result<Session<'a>, String> {
+        let image = Image::read(elf)?;
+        let flash = Flash::new(flash_file).map_err(|e| format!("flash file: {e}"))?;
+        let m = Machine::new(&image, flash)?;
+        Ok(Session {
+            m,
+            received: String::new(),
+        })
+    }
+
+    pub fn now(&self) -> u64 {
+        self.m.now()
+    }
+
+    /// Run `t` more time units; a stop is an error (with the log's tail).
+    pub fn run_for(&mut self, t: u64) -> Result<(), String> {
+        let until = self.m.now() + t;
+        self.run_to(until)
+    }
+
+    pub fn run_to(&mut self, until: u64) -> Result<(), String> {
+        if let Some(stop) = self.m.run_until(until) {
+            return Err(self.stopped(stop));
+        }
+        self.collect();
+        Ok(())
+    }
+
+    /// The message for a stop, with the last lines of the defmt log.
+    pub fn stopped(&self, stop: Stop) -> String {
+        let mut msg = format!(
+            "the board stopped at {:.3} ms: {stop}",
+            self.m.now() as f64 / T_PER_MS as f64
+        );
+        if let Some(log) = &self.m.state().log {
+            for l in log.lines.iter().rev().take(5).rev() {
+                msg.push_str("\n  log: ");
+                msg.push_str(l);
+            }
+        }
+        msg
+    }
+
+    fn collect(&mut self) {
+        let rx = std::mem::take(&mut self.m.board().host.rx);
+        self.received.push_str(&String::from_utf8_lossy(&rx));
+    }
+
+    /// Bytes from the host's side of the cable.
+    pub fn send(&mut self, bytes: &[u8]) {
+        self.m.board().host.tx.extend(bytes.iter().copied());
+    }
+
+    /// Take what arrived since the last call.
+    pub fn take_received(&mut self) -> String {
+        self.collect();
+        std::mem::take(&mut self.received)
+    }
+
+    /// Boot until the host has configured the port (and DTR is up).
+    pub fn boot(&mut self) -> Result<(), String> {
+        let limit = self.now() + 2 * T_PER_S;
+        while !self.m.state().board.host.configured {
+            if self.now() >= limit {
+                return Err("the USB port did not enumerate within 2 s".into());
+            }
+            self.run_for(T_PER_MS)?;
+        }
+        // The class driver's SET_CONTROL_LINE_STATE follows the configuration.
+        self.run_for(5 * T_PER_MS)
+    }
+
+    /// Send `line` and wait for its answer (`ok` or `error:N`); returns what came.
+    pub fn command(&mut self, line: &str, timeout: u64) -> Result<String, String> {
+        self.send(format!("{line}\n").as_bytes());
+        let limit = self.now() + timeout;
+        let mut got = String::new();
+        loop {
+            self.run_for(T_PER_MS)?;
+            got.push_str(&self.take_received());
+            if got
+                .lines()
+                .any(|l| l.trim() == "ok" || l.trim().starts_with("error:"))
+            {
+                return Ok(got);
+            }
+            if self.now() >= limit {
+                return Err(format!("no answer to {line:?} (got {got:?})"));
+            }
+        }
+    }
+
+    /// Ask `?` until the status report says `Idle` (or the limit).
+    pub fn wait_idle(&mut self, limit: u64) -> Result<String, String> {
+        let end = self.now() + limit;
+        loop {
+            self.send(b"?");
+            self.run_for(20 * T_PER_MS)?;
+            let got = self.take_received();
+            if let Some(report) = got.lines().find(|l| l.starts_with("<Idle")) {
+                return Ok(report.to_string());
+            }
+            if let Some(report) = got.lines().find(|l| l.starts_with("<Alarm")) {
+                return Err(format!("alarm: {report}"));
+            }
+            if self.now() >= end {
+                return Err("the machine did not come to rest".into());
+            }
+        }
+    }
+
+    pub fn set_outside(&mut self, o: Outside) {
+        self.m.board().set_outside(o);
+    }
+}

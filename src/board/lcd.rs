@@ -1,0 +1,51 @@
+//! The ST7920 LCD on SPI2: the transmit-only link and the controller's start-up.
+
+use super::pins::{bsrr, pin_word};
+use super::SYSCLK_HZ;
+use stm32f1xx_hal::pac;
+use stm32f1xx_hal::spi::Spi;
+
+/// SPI clock for the ST7920: the HAL picks 36 MHz / 128 = 281 kHz, so one 24-bit
+/// serial write (85 µs) outlasts the controller's 72 µs execution time and the bytes
+/// can stream back to back without delays (see core::screens::st7920).
+pub const LCD_SPI_HZ: u32 = 300_000;
+
+/// The LCD link: SPI2, transmit only (the ST7920's serial mode has no read-back),
+/// and the controller's chip select on PB12, which is active high.
+pub struct LcdSpi {
+    pub(super) spi: Spi<pac::SPI2, u8>,
+}
+
+impl LcdSpi {
+    /// Send `bytes` as one transaction: chip select raised around them.
+    pub fn write(&mut self, bytes: &[u8]) -> Result<(), stm32f1xx_hal::spi::Error> {
+        bsrr(pac::GPIOB::ptr(), pin_word(12, true));
+        let sent = self.spi.write(bytes);
+        bsrr(pac::GPIOB::ptr(), pin_word(12, false));
+        sent
+    }
+}
+
+/// Bring the ST7920 up in graphics mode: the st7920 crate's sequence (its reset wait
+/// on a tied reset pin, then basic function set, display on, clear, entry mode,
+/// extended function set, graphics on, each followed by its execution time), without
+/// building that crate's 1 KB frame buffer. Blocking: only for the lowest-priority task.
+pub fn lcd_init(spi: &mut LcdSpi) -> Result<(), stm32f1xx_hal::spi::Error> {
+    /// (instruction, wait after it in µs)
+    const STEPS: [(u8, u32); 6] = [
+        (0x30, 200),
+        (0x0C, 100),
+        (0x01, 10_000),
+        (0x06, 100),
+        (0x34, 10_000),
+        (0x36, 100_000),
+    ];
+    const CYCLES_PER_US: u32 = SYSCLK_HZ / 1_000_000;
+    cortex_m::asm::delay(80_000 * CYCLES_PER_US);
+    for (cmd, wait_us) in STEPS {
+        // One serial frame: command start byte, high nibble, low nibble.
+        spi.write(&[0xF8, cmd & 0xF0, cmd << 4])?;
+        cortex_m::asm::delay(wait_us * CYCLES_PER_US);
+    }
+    Ok(())
+}

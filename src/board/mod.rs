@@ -1,0 +1,248 @@
+//! The Blue Pill board: the pin map, the clocks and [`init`], which sets every
+//! peripheral up; each peripheral's owner lives in a module of its own (step port and
+//! step timer, servo, keypad, inputs, indicators, watchdog, LCD, USB, flash).
+//!
+//! This is the only module that knows which pin does what. Everything it hands out is
+//! a small owner of one job (step port, keypad matrix, LCD, USB, ...) whose methods are
+//! plain register accesses; all decisions are taken in `inkstep-core`.
+//!
+//! | pin      | signal                          | notes                                          |
+//! |----------|---------------------------------|------------------------------------------------|
+//! | PA0      | X STEP  (4-phase: X coil A)     | TIM2 CH1-CH3 in step/dir mode: the timer draws |
+//! | PA1      | Y STEP  (4-phase: X coil B)     | the pulses; GPIO in 4-phase mode. All motion   |
+//! | PA2      | Z STEP  (4-phase: X coil C)     | outputs on GPIOA: one BSRR store sets the rest |
+//! | PA3      | X DIR   (4-phase: X coil D)     |                                                |
+//! | PA4      | Y DIR   (4-phase: Y coil A)     |                                                |
+//! | PA5      | Z DIR   (4-phase: Y coil B)     |                                                |
+//! | PA6      | (4-phase: Y coil C)             | unused in step/dir mode                        |
+//! | PA7      | (4-phase: Y coil D)             | unused in step/dir mode                        |
+//! | PA8      | pen servo PWM (TIM1 CH1, 50 Hz) | 5 V servo signal is fine from 3.3 V            |
+//! | PA9      | stepper ENABLE                  | active low (A4988/DRV8825 /EN); `$4` inverts   |
+//! | PA10     | buzzer                          | active high, through a transistor              |
+//! | PA11/12  | USB D-/D+                       | CDC-ACM serial; PA12 pulled low at boot        |
+//! | PA13/14  | SWDIO/SWCLK                     | probe-rs; JTAG is disabled, SWD stays          |
+//! | PA15     | keypad column 3                 | open-drain, driven low to scan                 |
+//! | PB0      | E-STOP input (EXTI0)            | pull-up; wire NC to GND, open = stop           |
+//! | PB1      | X limit/home switch (EXTI1)     | pull-up; NC to GND, `$5` inverts               |
+//! | PB3      | Y limit/home switch (EXTI3)     | pull-up; NC to GND                             |
+//! | PB4      | feed hold / SYNC in (EXTI4)     | pull-up; low = pause (the seed's SYNC input)   |
+//! | PB5      | cycle start (EXTI5)             | pull-up; falling edge = resume                 |
+//! | PB6-PB9  | keypad rows 1-4                 | pull-up inputs, read together from GPIOB IDR   |
+//! | PB10     | keypad column 1                 | open-drain                                     |
+//! | PB11     | keypad column 2                 | open-drain                                     |
+//! | PB12     | LCD CS (ST7920 RS)              | active high                                    |
+//! | PB13     | LCD SCK (ST7920 E)              | SPI2 mode 0, 281 kHz                           |
+//! | PB15     | LCD MOSI (ST7920 R/W)           | ST7920 PSB tied low (serial mode)              |
+//! | PC13     | busy LED (on board)             | active low                                     |
+//! | PC14     | keypad column 4                 | open-drain (low-speed pin, fine for a keypad)  |
+//! | PC15     | busy output                     | high while moving, for syncing controllers     |
+
+mod flash;
+mod indicators;
+mod inputs;
+mod keypad;
+mod lcd;
+mod pins;
+mod servo;
+mod step_port;
+mod step_timer;
+mod usb;
+mod watchdog;
+
+use pins::{PA_CRH_USB, PORTS};
+
+pub use flash::{
+    flash_size_kb, settings_pages, FlashError, SettingsFlash, FLASH_PAGE_SIZE, FLASH_SIZE,
+};
+pub use indicators::Indicators;
+pub use inputs::{exti_take_pending, InputLevels, Inputs};
+pub use keypad::KeypadMatrix;
+pub use lcd::{lcd_init, LcdSpi, LCD_SPI_HZ};
+pub use servo::PenServo;
+pub use step_port::{
+    bsrr_word, drivers_enabled, emergency_outputs_off, set_enable_polarity, step_outputs, StepPins,
+    StepPort, DIR_SHIFT, MOTION_PINS, STEP_MASK_X, STEP_MASK_Y, STEP_MASK_Z,
+};
+pub use step_timer::{disarm_step_pulses, stop_step_timer, StepTimer};
+pub use usb::{Usb, UsbCells, UsbSerial};
+pub use watchdog::{Watchdog, WATCHDOG_MS};
+
+use stm32f1xx_hal::{
+    flash::FlashExt,
+    gpio::{self, Input},
+    pac,
+    prelude::*,
+    rcc,
+    spi::{Mode, Phase, Polarity, Spi},
+    timer::{Channel, Tim1NoRemap},
+    usb::{Peripheral, UsbBus, UsbBusType},
+};
+use usb_device::{bus::UsbBusAllocator, prelude::*};
+
+/// System clock: 72 MHz from the 8 MHz crystal (PLL x9), APB1 36 MHz, USB 48 MHz.
+pub const SYSCLK_HZ: u32 = 72_000_000;
+/// The step timer (TIM2) counts at the full timer clock (APB1 x2 = 72 MHz, prescaler 1):
+/// waits are exact to 14 ns; longer waits than 16 bits are split by the core's executor.
+pub const STEP_TIMER_HZ: u32 = 72_000_000;
+
+/// Everything `init` hands to the RTIC app.
+pub struct Board {
+    pub step_port: StepPort,
+    pub step_timer: StepTimer,
+    pub servo: PenServo,
+    pub keypad: KeypadMatrix,
+    pub inputs: Inputs,
+    pub indicators: Indicators,
+    pub lcd_spi: LcdSpi,
+    pub usb: &'static mut Usb,
+    pub serial: &'static mut UsbSerial,
+    pub watchdog: Watchdog,
+    pub flash: SettingsFlash,
+    pub sysclk_hz: u32,
+}
+
+/// Bring up the clocks and every peripheral. Called once from `init` with interrupts off.
+///
+/// `usb` is the 'static home of the USB stack (an RTIC init local); each call needs
+/// its own (init runs once).
+pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
+    let mut flash = dp.FLASH.constrain();
+    let mut rcc = dp.RCC.freeze(
+        rcc::Config::hse(8.MHz())
+            .sysclk(SYSCLK_HZ.Hz())
+            .hclk(SYSCLK_HZ.Hz())
+            .pclk1(36.MHz())
+            .pclk2(72.MHz()),
+        &mut flash.acr,
+    );
+    let sysclk_hz = rcc.clocks.sysclk().raw();
+
+    let mut afio = dp.AFIO.constrain(&mut rcc);
+    // Clocks on and ports reset by the HAL; the pin modes are written below.
+    let mut gpioa = dp.GPIOA.split(&mut rcc);
+    let mut gpiob = dp.GPIOB.split(&mut rcc);
+    let _ = dp.GPIOC.split(&mut rcc);
+    let exti = dp.EXTI;
+
+    // JTAG off, SWD on: frees PA15, PB3, PB4.
+    let _ = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
+
+    // Every pin's mode in one store per configuration register, the output levels
+    // first (see the pin table above; `PORTS`). PA12 (USB D+) starts as an output
+    // driven low: the re-enumeration pulse below.
+    for (port, odr, crl, crh) in PORTS {
+        // SAFETY: the ports were just reset; these are their documented registers and
+        // the values configure only the pins in the table.
+        unsafe {
+            (*port).odr().write(|w| w.bits(odr));
+            (*port).crl().write(|w| w.bits(crl));
+            (*port).crh().write(|w| w.bits(crh));
+        }
+    }
+    let (step_port, step_timer) = (StepPort { _owned: () }, StepTimer::new(dp.TIM2));
+
+    // The peripherals' pins as the HAL's types (their nibbles are already set).
+    let servo_pin = gpioa.pa8.into_alternate_push_pull(&mut gpioa.crh);
+    let mut pwm = dp
+        .TIM1
+        .pwm_hz::<Tim1NoRemap, _, _>(servo_pin, &mut afio.mapr, 50.Hz(), &mut rcc);
+    pwm.enable(Channel::C1);
+    let servo = PenServo { pwm: pwm.split() };
+
+    let keypad = KeypadMatrix { _owned: () };
+
+    // EXTI lines 0, 1, 3, 4, 5 from port B. E-stop and limits: NC switches to GND, so
+    // opening (rising edge) is the event; both edges are taken so that releasing is
+    // seen too, and feed hold likewise. Cycle start acts on pressing (falling edge).
+    // The same register values as the HAL's per-pin ExtiPin calls, in one write each.
+    const LINES: u32 = (1 << 0) | (1 << 1) | (1 << 3) | (1 << 4) | (1 << 5);
+    const PORT_B: u32 = 1;
+    // SAFETY: AFIO's clock is on (`constrain`); these EXTICR fields, trigger and mask
+    // bits belong to the lines above, which nothing else configures.
+    unsafe {
+        let afio_regs = &*pac::AFIO::ptr();
+        afio_regs
+            .exticr1()
+            .modify(|r, w| w.bits((r.bits() & !0xF0FF) | PORT_B | (PORT_B << 4) | (PORT_B << 12)));
+        afio_regs
+            .exticr2()
+            .modify(|r, w| w.bits((r.bits() & !0x00FF) | PORT_B | (PORT_B << 4)));
+    }
+    exti.rtsr()
+        .modify(|r, w| unsafe { w.bits((r.bits() | LINES) & !(1 << 5)) });
+    exti.ftsr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
+    exti.imr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
+    let inputs = Inputs { _owned: () };
+    // Not busy: the LED (active low) off and the busy output low, as in `PORTS`.
+    let indicators = Indicators { _owned: () };
+
+    // LCD on SPI2. The ST7920 samples on the rising edge with the clock idle low.
+    let sck = gpiob.pb13.into_alternate_push_pull(&mut gpiob.crh);
+    let mosi = gpiob.pb15.into_alternate_push_pull(&mut gpiob.crh);
+    let spi = Spi::new(
+        dp.SPI2,
+        (
+            Some(sck),
+            None::<gpio::PB14<Input<gpio::Floating>>>,
+            Some(mosi),
+        ),
+        Mode {
+            polarity: Polarity::IdleLow,
+            phase: Phase::CaptureOnFirstTransition,
+        },
+        LCD_SPI_HZ.Hz(),
+        &mut rcc,
+    );
+    let lcd_spi = LcdSpi { spi };
+
+    // USB: force a re-enumeration by pulling D+ low briefly (the Blue Pill has a fixed
+    // pull-up on D+), then hand the pins to the USB peripheral.
+    // PA12 has been driven low since the port setup.
+    cortex_m::asm::delay(sysclk_hz / 100);
+    // SAFETY: GPIOA's CRH with PA12 back to the floating input the USB pins need
+    // (`PA_CRH_USB`); the other pins keep the modes written above.
+    unsafe { (*pac::GPIOA::ptr()).crh().write(|w| w.bits(PA_CRH_USB)) };
+    let usb_periph = Peripheral {
+        usb: dp.USB,
+        pin_dm: gpioa.pa11,
+        pin_dp: gpioa.pa12,
+    };
+    let bus: &'static UsbBusAllocator<UsbBusType> = usb.bus.write(UsbBus::new(usb_periph));
+    let serial = usb.serial.write(usbd_serial::SerialPort::new_with_store(
+        bus,
+        [0; 64],
+        usbd_serial::DefaultBufferStore::default(),
+    ));
+    let usb = usb.dev.write(
+        UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
+            .device_class(usbd_serial::USB_CLASS_CDC)
+            .strings(&[StringDescriptors::default()
+                .manufacturer("inkstep")
+                .product("inkstep pen plotter (Grbl 1.1)")
+                .serial_number("INKSTEP")])
+            // One language with three short strings cannot exceed the builder's limits.
+            .unwrap_or_else(|_| defmt::panic!("usb strings"))
+            .build(),
+    );
+
+    let watchdog = Watchdog::start(dp.IWDG);
+
+    let flash = SettingsFlash::new(flash);
+
+    Board {
+        step_port,
+        step_timer,
+        servo,
+        keypad,
+        inputs,
+        indicators,
+        lcd_spi,
+        usb,
+        serial,
+        watchdog,
+        flash,
+        sysclk_hz,
+    }
+}
