@@ -36,6 +36,8 @@ def main():
     ap.add_argument('elf')
     ap.add_argument('--json')
     ap.add_argument('--names', default='bench_isr,bench_prepare')
+    ap.add_argument('--callers-prog', type=int, help='with --callers: only in this program')
+    ap.add_argument('--callers', help='with --profile: count the callers of functions whose name contains this')
     ap.add_argument('--profile', help='charge the instructions inside calls of NAME to the functions executing them')
     ap.add_argument('--split', action='append', default=['bench_isr=0x40000010:1:update:pend'],
                     help='NAME=REG:MASK:YES:NO charges NAME to NAME_YES if (*REG & MASK) at entry, else NAME_NO')
@@ -83,6 +85,7 @@ def main():
     # Calls of each function inside the profiled calls (blocks at its entry).
     entry_of = {a: name for a, _, size, name in funcs}
     entered = {}
+    callers = {}
     prof_prog = {}
     entered_prog = {}
 
@@ -140,6 +143,12 @@ def main():
                 pp[o] = pp.get(o, 0) + n
                 if addr in entry_of:
                     entered[entry_of[addr]] = entered.get(entry_of[addr], 0) + 1
+                    if args.callers and args.callers in entry_of[addr] and (args.callers_prog is None or state['prog'] == args.callers_prog):
+                        lr = uc.reg_read(UC_ARM_REG_LR) & ~1
+                        c = owner(lr)
+                        if c.startswith('OUTLINED'):
+                            c = c + ' (outlined)'
+                        callers[c] = callers.get(c, 0) + 1
                     ep = entered_prog.setdefault(state['prog'], {})
                     ep[entry_of[addr]] = ep.get(entry_of[addr], 0) + 1
 
@@ -167,6 +176,7 @@ def main():
     if args.profile:
         result['profile'] = dict(sorted(prof.items(), key=lambda kv: -kv[1]))
         result['profile_calls'] = entered
+        result['callers'] = dict(sorted(callers.items(), key=lambda kv: -kv[1]))
         result['profile_calls_by_program'] = {str(k): v for k, v in entered_prog.items()}
         result['profile_by_program'] = {str(k): dict(sorted(v.items(), key=lambda kv: -kv[1])) for k, v in prof_prog.items()}
     if args.json:

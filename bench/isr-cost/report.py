@@ -16,6 +16,7 @@ PROGRAMS = [
     ('circle', (0, 0)),
     ('sine', (5024, -5)),
     ('spiral', (-1600, -1600)),
+    ('fast', (0, 0)),
 ]
 # Goals (issue 14): preparation plus interrupt per step event, on average over the
 # programs; the step interrupt at its worst.
@@ -41,8 +42,7 @@ def main(path):
     tot_pipe = 0.0
     isr_worst = 0
     for i, (name, want_end) in enumerate(PROGRAMS):
-        ev, irq, x, y = w[4 * i: 4 * i + 4]
-        dry = w[4 * n + n + i]
+        ev, irq, x, y, _, dry, _, _ = w[8 * i: 8 * i + 8]
         end = (s32(x), s32(y))
         f = per.get(str(i), {})
         tick = f.get('bench_isr_update', {'calls': 0, 'total': 0, 'worst': 0})

@@ -22,18 +22,19 @@ use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::prep::PrepConfig;
 use stm32f1xx_hal::{gpio::PinState, pac, prelude::*};
 
-const PROGRAMS: [&[u8]; 4] = [
+const PROGRAMS: [&[u8]; 5] = [
     include_bytes!("../../star.nc"),
     include_bytes!("../../circle.nc"),
     include_bytes!("../../sine.nc"),
     include_bytes!("../../spiral.nc"),
+    include_bytes!("../../fast.nc"),
 ];
 
-/// Per program: step events, interrupts, final X, final Y; then per program the steps
-/// summed over the axes, the interrupts that found the queue empty before the job was
-/// done, and the virtual milliseconds the program took (read by measure.py).
+/// Per program: step events, interrupts, final X, final Y, the steps summed over the
+/// axes, the interrupts that found the queue empty before the job was done, and the
+/// virtual milliseconds the program took (read by measure.py).
 #[no_mangle]
-pub static mut BENCH_RESULT: [u32; 28] = [0; 28];
+pub static mut BENCH_RESULT: [[u32; 8]; PROGRAMS.len()] = [[0; 8]; PROGRAMS.len()];
 
 /// The program running now (measure.py charges every call to it).
 #[no_mangle]
@@ -136,7 +137,8 @@ fn main() -> ! {
     // the bench pays its load like the firmware does).
     steps::set_output_config(0, 0, false);
 
-    static mut QUEUES: [StepCmdQueue; 4] = [const { StepCmdQueue::new() }; 4];
+    static mut QUEUES: [StepCmdQueue; PROGRAMS.len()] =
+        [const { StepCmdQueue::new() }; PROGRAMS.len()];
     let settings = Settings::default();
     let prep = PrepConfig {
         timer_hz: board::STEP_TIMER_HZ,
@@ -215,14 +217,17 @@ fn main() -> ! {
         timer = Some(out.timer);
         // SAFETY: single-threaded bench; measure.py reads this after the run.
         unsafe {
-            let r = &mut *core::ptr::addr_of_mut!(BENCH_RESULT);
-            r[4 * p] = events;
-            r[4 * p + 1] = irqs;
-            r[4 * p + 2] = pos[0] as u32;
-            r[4 * p + 3] = pos[1] as u32;
-            r[16 + p] = axis_steps;
-            r[20 + p] = dry;
-            r[24 + p] = (next_ms / 72_000) as u32;
+            let r = &mut (*core::ptr::addr_of_mut!(BENCH_RESULT))[p];
+            *r = [
+                events,
+                irqs,
+                pos[0] as u32,
+                pos[1] as u32,
+                axis_steps,
+                dry,
+                (next_ms / 72_000) as u32,
+                0,
+            ];
         }
     }
     loop {

@@ -258,16 +258,25 @@ impl FineLine {
     }
 
     /// Up to `out.len()` ticks of the main run (no catch-up step pending, and at most
-    /// the columns left): one remainder update per tick.
+    /// the columns left): one remainder update per tick, in locals (the fields are
+    /// written back once).
     fn run_into(&mut self, out: &mut [Tick]) -> usize {
+        let (mut n, mut r, mut minor) = (self.n, self.r, self.pos.1);
+        let (inc, den, column) = (self.inc, self.den, self.column);
         for slot in out.iter_mut() {
-            let (n, r) = self.next_minor();
+            r += inc;
+            if r >= den {
+                r -= den;
+                n += 1;
+            } else if r < 0 {
+                r += den;
+                n -= 1;
+            }
             // After the catch-up the minor moves by at most one: the index is 0..=2.
-            *slot = self.column[((n - self.pos.1 + 1) as usize).min(2)];
-            self.n = n;
-            self.r = r;
-            self.pos.1 = n;
+            *slot = column[((n - minor + 1) as usize).min(2)];
+            minor = n;
         }
+        (self.n, self.r, self.pos.1) = (n, r, minor);
         self.pos.0 += self.dir_maj * out.len() as i32;
         out.len()
     }

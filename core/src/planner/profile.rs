@@ -30,7 +30,7 @@ impl Shape {
     pub fn effective_accel(self, a: f32) -> f32 {
         match self {
             Shape::Trapezoid => a,
-            Shape::Cosine => a * 2.0 / PI,
+            Shape::Cosine => a * (2.0 / PI),
         }
     }
 }
@@ -44,10 +44,11 @@ struct Ramp {
 }
 
 impl Ramp {
-    fn new(shape: Shape, v0: f32, v1: f32, a: f32) -> Self {
+    /// A ramp from `v0` to `v1` at peak acceleration `1 / inv_a`.
+    fn new(shape: Shape, v0: f32, v1: f32, inv_a: f32) -> Self {
         let t = match shape {
-            Shape::Trapezoid => (v1 - v0).abs() / a,
-            Shape::Cosine => PI * (v1 - v0).abs() / (2.0 * a),
+            Shape::Trapezoid => (v1 - v0).abs() * inv_a,
+            Shape::Cosine => 0.5 * PI * (v1 - v0).abs() * inv_a,
         };
         Ramp { v0, v1, t }
     }
@@ -111,7 +112,7 @@ impl Ramp {
             }
             Shape::Cosine => {
                 let (mut lo, mut hi) = (0.0f32, self.t);
-                let mut t = hint.clamp(0.0, self.t);
+                let mut t = hint.max(0.0).min(self.t);
                 for _ in 0..40 {
                     let (s, v) = self.forward(shape, t);
                     let f = s - d;
@@ -168,6 +169,8 @@ pub enum Phase {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Profile {
     shape: Shape,
+    /// Peak acceleration of the ramps.
+    accel: f32,
     up: Ramp,
     cruise_v: f32,
     cruise_t: f32,
@@ -203,12 +206,14 @@ impl Profile {
         } else {
             v_max.max(ve)
         };
-        let up = Ramp::new(shape, v0, peak, a);
-        let down = Ramp::new(shape, peak, ve, a);
+        let inv_a = 1.0 / a;
+        let up = Ramp::new(shape, v0, peak, inv_a);
+        let down = Ramp::new(shape, peak, ve, inv_a);
         let cruise_d = (dist - up.dist() - down.dist()).max(0.0);
         let cruise_t = if peak > 0.0 { cruise_d / peak } else { 0.0 };
         Profile {
             shape,
+            accel: a,
             up,
             cruise_v: peak,
             cruise_t,
@@ -217,7 +222,7 @@ impl Profile {
     }
 
     /// At rest with nothing to cover: what [`Profile::new`] gives for no distance and
-    /// no speed (a placeholder until the first real profile).
+    /// no speed at an acceleration of 1 (a placeholder until the first real profile).
     pub fn rest(shape: Shape) -> Self {
         let r = Ramp {
             v0: 0.0,
@@ -226,6 +231,7 @@ impl Profile {
         };
         Profile {
             shape,
+            accel: 1.0,
             up: r,
             cruise_v: 0.0,
             cruise_t: 0.0,
@@ -237,6 +243,13 @@ impl Profile {
     pub fn phase_ends(&self) -> (f32, f32) {
         let up = self.up.dist();
         (up, up + self.cruise_v * self.cruise_t)
+    }
+
+    /// [`Profile::phase_ends`] and [`Profile::distance`] at once (each ramp's distance
+    /// evaluated once).
+    pub fn phase_ends_and_distance(&self) -> (f32, f32, f32) {
+        let (e0, e1) = self.phase_ends();
+        (e0, e1, e1 + self.down.dist())
     }
 
     /// Duration of each phase, seconds.
@@ -275,10 +288,15 @@ impl Profile {
 
     /// Bounds of |acceleration|, |jerk| and |d jerk/dt| within `phase`.
     pub fn derivative_bounds(&self, phase: Phase) -> [f32; 3] {
-        match phase {
-            Phase::Up => self.up.derivative_bounds(self.shape),
-            Phase::Cruise => [0.0; 3],
-            Phase::Down => self.down.derivative_bounds(self.shape),
+        let ramp = match phase {
+            Phase::Up => self.up,
+            Phase::Cruise => return [0.0; 3],
+            Phase::Down => self.down,
+        };
+        match self.shape {
+            // A trapezoid's ramps run at the acceleration itself (no division).
+            Shape::Trapezoid if ramp.t > 0.0 => [self.accel, 0.0, 0.0],
+            _ => ramp.derivative_bounds(self.shape),
         }
     }
 

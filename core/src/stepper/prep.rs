@@ -146,7 +146,7 @@ impl Ramp {
     /// with a 32-bit division, checked exactly; far from it (near rest), from f32.
     #[inline(always)]
     fn root_near(w: u64, g: u32) -> u32 {
-        let g = g.clamp(1, (1 << 30) - 1);
+        let g = g.max(1).min((1 << 30) - 1);
         let e = w as i64 - (u64::from(g) * u64::from(g)) as i64;
         if e.unsigned_abs() < 1 << 31 {
             let r = (g as i32 + (e as i32) / (2 * g as i32)).max(1) as u64;
@@ -309,6 +309,8 @@ struct Active {
     anchors: [u64; 3],
     /// Where the phases end, Q units from the profile's start (the last is its length).
     ends_q: [u64; 3],
+    /// Timer ticks per mm in the cruise (one division per profile, not per segment).
+    cruise_ticks_per_mm: f32,
     at: Cursor,
     /// Ticks left in the present run (0: ask the interpolator what comes next).
     run_left: u32,
@@ -558,6 +560,7 @@ impl Prep {
                 prof: Profile::rest(shape),
                 anchors: [self.t_last; 3],
                 ends_q: [0; 3],
+                cruise_ticks_per_mm: 0.0,
                 at: Cursor {
                     s: 0,
                     phase: Phase::Up,
@@ -605,13 +608,15 @@ impl Prep {
         let rest_q = a.rest_q.saturating_sub(s_now);
         let rest = from_q(rest_q);
         let prof = Profile::new(cfg.shape, v0, planned.0, planned.1, a.block.accel, rest);
-        let (e0, e1) = prof.phase_ends();
+        let (e0, e1, distance) = prof.phase_ends_and_distance();
         // A profile that covers the block ends exactly on its end (a line's last tick).
-        let end_q = if prof.distance() >= rest * (1.0 - 1e-6) {
+        let end_q = if distance >= rest * (1.0 - 1e-6) {
             rest_q
         } else {
-            to_q(prof.distance())
+            to_q(distance)
         };
+        let (v_cruise, _) = prof.phase_speeds(Phase::Cruise);
+        a.cruise_ticks_per_mm = if v_cruise > 0.0 { hz / v_cruise } else { 0.0 };
         let d = prof.phase_durations();
         let ticks = |t: f32| (t * hz + 0.5) as u64;
         let t0 = self.t_last;
@@ -789,22 +794,34 @@ fn ticks_in(len: u64, q: u64) -> u64 {
     n
 }
 
-/// Commands a step `wait` ticks after the last one takes (pure waits before it when the
-/// wait is longer than a command holds).
+/// Pure waits before a step whose wait is longer than a command holds: each this long
+/// (a power of two, so that counting them is a shift, not a 64-bit division).
+const PURE_WAIT: u64 = 1 << 23;
+
+/// Pure waits a step `wait` ticks after the last one needs before its own command.
+fn pure_waits(wait: u64) -> u64 {
+    if wait > u64::from(MAX_WAIT) {
+        (wait - u64::from(MAX_WAIT) + PURE_WAIT - 1) >> 23
+    } else {
+        0
+    }
+}
+
+/// Commands a step `wait` ticks after the last one takes.
 fn commands_for_wait(wait: u64) -> usize {
-    1 + (wait.saturating_sub(1) / u64::from(MAX_WAIT)) as usize
+    1 + pure_waits(wait) as usize
 }
 
 /// Queues `tick` `wait` ticks after the last command (pure waits first for a long
 /// one); the wait of its own command.
 fn push_waited(sink: &mut dyn CmdSink, tick: Tick, wait: u64) -> u32 {
-    let mut left = wait.max(2);
-    while left > u64::from(MAX_WAIT) {
-        sink.push_slice(&[StepCmd::new(Tick(0), MAX_WAIT)]);
-        left -= u64::from(MAX_WAIT);
+    let n = pure_waits(wait);
+    for _ in 0..n {
+        sink.push_slice(&[StepCmd::new(Tick(0), PURE_WAIT as u32)]);
     }
-    sink.push_slice(&[StepCmd::new(tick, left as u32)]);
-    left as u32
+    let last = wait.max(2) - n * PURE_WAIT;
+    sink.push_slice(&[StepCmd::new(tick, last as u32)]);
+    last as u32
 }
 
 impl Active {
@@ -847,9 +864,17 @@ impl Active {
 
     /// The exact time of position `s` in phase `p`: the cursor there.
     fn exact(&self, p: Phase, s: u64, hz: f32) -> Cursor {
-        let hint = if p == self.at.phase { self.at.t } else { 0.0 };
-        let (t, v) = self.prof.phase_time(p, self.local(p, s), hint);
-        let ticks = (t * hz + 0.5) as u64;
+        let (t, v, ticks) = if p == Phase::Cruise {
+            // The cruise's time is its distance over its speed: a product here (the
+            // phase-local time, a hint for Newton's method elsewhere, is not needed).
+            let ticks = self.local(p, s) * self.cruise_ticks_per_mm;
+            (0.0, self.prof.phase_speeds(p).0, ticks)
+        } else {
+            let hint = if p == self.at.phase { self.at.t } else { 0.0 };
+            let (t, v) = self.prof.phase_time(p, self.local(p, s), hint);
+            (t, v, t * hz)
+        };
+        let ticks = (ticks + 0.5) as u64;
         let at = match p {
             Phase::Up => self.anchors[0] + ticks,
             Phase::Cruise => self.anchors[1] + ticks,
@@ -876,16 +901,14 @@ impl Active {
         let Some(mut p) = self.phase_of(at.s + step_q) else {
             return false;
         };
-        if let Some((seg, s1, rate)) = self
+        if let Some((seg, end)) = self
             .ramp_segment(p, eps, hz, t_last)
             .or_else(|| self.cruise_segment(p, hz, t_last))
+            .or_else(|| self.arc_cruise_segment(p, eps, hz, t_last))
         {
-            // The segment's last tick: the cursor there (exact, as every segment's end).
+            // The cursor moves to the segment's last tick (its exact time).
             self.seg = seg;
-            self.at = Cursor {
-                rate,
-                ..self.exact(p, s1, hz)
-            };
+            self.at = end;
             return true;
         }
         let cap = self.run_left;
@@ -915,7 +938,7 @@ impl Active {
             }
             if n > 1 {
                 let room = end.saturating_sub(at.s) as f32;
-                n = ((n as f32 * room / ds as f32) as u32).clamp(1, n - 1);
+                n = ((n as f32 * room / ds as f32) as u32).max(1).min(n - 1);
                 continue;
             }
             match self.phase_of(s1) {
@@ -969,7 +992,7 @@ impl Active {
     /// A line's ticks in the cruise (at most [`MAX_LINEAR`]): evenly spaced between the
     /// exact times of the first and the last (the cursor before them may still lie in
     /// the ramp before).
-    fn cruise_segment(&self, p: Phase, hz: f32, t_last: u64) -> Option<(Segment, u64, f32)> {
+    fn cruise_segment(&self, p: Phase, hz: f32, t_last: u64) -> Option<(Segment, Cursor)> {
         let q = self.line_tick_q?;
         if p != Phase::Cruise {
             return None;
@@ -982,7 +1005,11 @@ impl Active {
             return None;
         }
         let first = self.exact(p, at.s + q, hz).at;
-        let last = self.exact(p, at.s + q * u64::from(n), hz).at;
+        let end = Cursor {
+            rate: 1.0,
+            ..self.exact(p, at.s + q * u64::from(n), hz)
+        };
+        let last = end.at;
         let d1 = if n > 1 {
             fixed(last.saturating_sub(first) as f32 / (n - 1) as f32)
         } else {
@@ -1003,7 +1030,73 @@ impl Active {
             base: at.at,
             at: t_last.wrapping_sub(at.at) as u32,
         };
-        Some((seg, at.s + q * u64::from(n), 1.0))
+        Some((seg, end))
+    }
+
+    /// A curve's ticks in the cruise (at most [`MAX_SEGMENT`]): the time is the path
+    /// position over the speed, a cubic in the tick count as far as the bound on the
+    /// path's fourth derivative allows. The first tick of the cruise is timed on its
+    /// own (the generic path), so the cursor lies in the cruise.
+    fn arc_cruise_segment(
+        &self,
+        p: Phase,
+        eps: f32,
+        hz: f32,
+        t_last: u64,
+    ) -> Option<(Segment, Cursor)> {
+        let at = self.at;
+        if p != Phase::Cruise || at.phase != p || self.line_tick_q.is_some() || !(at.v > 0.0) {
+            return None;
+        }
+        let end = self.ends_q[1];
+        // mm per run unit over the speed, in timer ticks: the run's rate times this is
+        // a tick's interval.
+        let q = self.scale * hz / at.v;
+        let to_end = from_q(end.saturating_sub(at.s)) * hz / (at.v * at.rate * q);
+        let mut n = self.run_left.min(MAX_SEGMENT).min(to_end as u32).max(1);
+        let b = self.interp.fourth_bound(n) * q;
+        let limit = 384.0 * eps * hz;
+        let nf = n as f32;
+        let mut x = b * nf * nf * nf * nf;
+        while n > 1 && !(x <= limit) {
+            x *= 1.0 / 16.0;
+            n /= 2;
+        }
+        let (rate1, s1) = loop {
+            let (d, r) = self.interp.path_ahead(n);
+            let s1 = at.s + to_q(d * self.scale);
+            if s1 <= end {
+                break (r, s1);
+            }
+            if n == 1 {
+                return None;
+            }
+            n /= 2;
+        };
+        let end = Cursor {
+            rate: rate1,
+            ..self.exact(p, s1, hz)
+        };
+        let span = end.at.saturating_sub(at.at) as f32;
+        let (m0, m1) = (at.rate * q, rate1 * q);
+        let inv = 1.0 / n as f32;
+        let nf = n as f32;
+        let c3 = ((m0 + m1) * nf - 2.0 * span) * inv * inv * inv;
+        let c2 = (3.0 * span - (2.0 * m0 + m1) * nf) * inv * inv;
+        let seg = Segment {
+            left: n,
+            timing: Timing::Poly {
+                acc: 0,
+                d1: fixed(c3 + c2 + m0) as u64,
+                d2: fixed(6.0 * c3 + 2.0 * c2) as u64,
+                d3: fixed(6.0 * c3) as u64,
+                linear: false,
+            },
+            slow: m0.max(m1) > (MAX_WAIT / 2) as f32,
+            base: at.at,
+            at: t_last.wrapping_sub(at.at) as u32,
+        };
+        Some((seg, end))
     }
 
     /// Ticks in a ramp of constant acceleration (trapezoid), timed exactly
@@ -1016,7 +1109,7 @@ impl Active {
         eps: f32,
         hz: f32,
         t_last: u64,
-    ) -> Option<(Segment, u64, f32)> {
+    ) -> Option<(Segment, Cursor)> {
         let [acc, jerk, _] = self.prof.derivative_bounds(p);
         if p == Phase::Cruise || !(acc > 0.0) || jerk != 0.0 {
             return None;
@@ -1062,7 +1155,7 @@ impl Active {
             // the bound (the time error is the position error over the speed).
             let to_end = from_q(end.saturating_sub(at.s)) / (at.rate * self.scale);
             let mut n = self.run_left.min(MAX_SEGMENT).min(to_end.max(1.0) as u32).max(1);
-            let s4 = self.interp.run_bounds(n)[3] * self.scale;
+            let s4 = self.interp.fourth_bound(n) * self.scale;
             // Halving until the bound holds at the segment's slowest point (its start
             // when speeding up, its end when slowing down).
             loop {
@@ -1131,7 +1224,7 @@ impl Active {
         };
         let r = Ramp::root_near(w, (at.v * per_s) as u32);
         let dr = if r > 0 {
-            (dw1 as i64 / (2 * i64::from(r))) as i32
+            (dw1 as i64 as f32 / (2 * r) as f32) as i32
         } else {
             0
         };
@@ -1154,7 +1247,13 @@ impl Active {
             base: at.at,
             at: t_last.wrapping_sub(at.at) as u32,
         };
-        Some((seg, s1, rate1))
+        Some((
+            seg,
+            Cursor {
+                rate: rate1,
+                ..self.exact(p, s1, hz)
+            },
+        ))
     }
 
     /// The longest segment (at most `cap` ticks, and where the time is not linear in
