@@ -101,6 +101,8 @@ pub struct Circle {
     stage: Stage,
     /// The point before the last tick (classic and tail ticks: their length).
     prev: [i32; 2],
+    /// See [`Circle::entry_shift`].
+    entry: f32,
     /// The major coordinate where the last [`Circle::path_ahead`] ended and the
     /// circle's minor there (the next call usually begins there).
     last_end: core::cell::Cell<(usize, i32, f32)>,
@@ -109,6 +111,26 @@ pub struct Circle {
 /// Sign of v as -1, 0 or 1.
 fn sgn(v: i32) -> i32 {
     i32::from(v > 0) - i32::from(v < 0)
+}
+
+/// |atan2(cross, dot)| for the angle (at most 45 degrees: one piece) between two points
+/// of the circle: above tan = 0.2 halved (tan(a/2) = t / (1 + sqrt(1 + t^2))) until
+/// below, then the series to t^11, whose error (< 1e-10) is far below the general
+/// arctangent's 3e-7 rad (which, over a long arc, would shift a step's position by a
+/// thousandth of a step and its time near a stop by microseconds).
+fn small_angle(cross: f32, dot: f32) -> f32 {
+    if !(dot > 0.0) {
+        return crate::fmath::abs(crate::fmath::atan2(cross, dot));
+    }
+    let mut x = crate::fmath::abs(cross) / dot;
+    let mut scale = 1.0;
+    while x > 0.2 {
+        x /= 1.0 + crate::fmath::sqrt(1.0 + x * x);
+        scale *= 2.0;
+    }
+    let z = x * x;
+    let series = 1.0 - z * (1.0 / 3.0 - z * (0.2 - z * (1.0 / 7.0 - z * (1.0 / 9.0 - z * (1.0 / 11.0)))));
+    scale * x * series
 }
 
 /// floor(sqrt(v)) for v >= 0 (no division; runs once per arc).
@@ -183,6 +205,7 @@ impl Circle {
             target: [t[0] as i32, t[1] as i32],
             stage: Stage::Trace,
             prev: [0; 2],
+            entry: 0.0,
             last_end: core::cell::Cell::new((2, 0, 0.0)),
         };
         c.f = c.value(c.p);
@@ -444,8 +467,45 @@ impl Circle {
             self.start_tail();
             return;
         }
+        let old = self.piece.major;
         self.begin_piece();
         self.pass_target(0);
+        self.entry = if self.piece.major == old {
+            0.0
+        } else {
+            self.param_shift(old)
+        };
+    }
+
+    /// Where the present point is along the circle by the new major's coordinate, less
+    /// where it was by the old one's (`old`), steps along the feed: a grid point off
+    /// the circle has a different nearest... point by each coordinate, so a piece of the
+    /// other axis begins a little ahead of (or behind) where the last one ended.
+    fn param_shift(&self, old: usize) -> f32 {
+        let r = self.radius;
+        let s = 1.0 / ONE as f32;
+        let ideal = |major: usize| {
+            let n = 1 - major;
+            let m = self.p[major] as f32 * s;
+            let side = if self.p[n] < 0 { -1.0 } else { 1.0 };
+            let mut q = [0.0f32; 2];
+            q[major] = m;
+            q[n] = side * crate::fmath::sqrt((r * r - m * m).max(0.0));
+            q
+        };
+        let (a, b) = (ideal(old), ideal(1 - old));
+        let angle = crate::fmath::atan2(a[0] * b[1] - a[1] * b[0], a[0] * b[0] + a[1] * b[1]);
+        if self.ccw {
+            r * angle
+        } else {
+            -r * angle
+        }
+    }
+
+    /// Path position of the present run's start less the end of the run before it,
+    /// steps (see [`Circle::param_shift`]; 0 unless the major axis changed).
+    pub fn entry_shift(&self) -> f32 {
+        self.entry
     }
 
     fn start_tail(&mut self) {
@@ -493,6 +553,17 @@ impl Circle {
         ]
     }
 
+    /// The present run is the arc's last (it ends at the target's coordinate).
+    pub fn in_last_piece(&self) -> bool {
+        self.piece.last && matches!(self.stage, Stage::Trace)
+    }
+
+    /// The major axis of the present piece (0 = X): which coordinate a run's path
+    /// position follows.
+    pub fn major(&self) -> usize {
+        self.piece.major
+    }
+
     /// The fourth of [`Circle::run_bounds`] alone (what a cruise or a ramp of constant
     /// acceleration needs).
     pub fn fourth_bound(&self, k: u32) -> f32 {
@@ -527,11 +598,20 @@ impl Circle {
         };
         let n1 = minor(m1);
         self.last_end.set((m, self.p[m] + k as i32 * self.dir[m], n1));
-        // Angle between the two circle points (small: one piece is an octant).
-        let cross = m0 * n1 - m1 * n0;
+        // Angle between the two circle points (small: one piece is an octant). The
+        // cross product from the differences, without cancellation: dm is k, and
+        // dn = n1 - n0 = (m0 - m1)(m0 + m1) / (n0 + n1) on the circle.
+        let dm = m1 - m0;
+        let dn = if n0 + n1 != 0.0 {
+            -dm * (m0 + m1) / (n0 + n1)
+        } else {
+            n1 - n0
+        };
+        let cross = m0 * dn - n0 * dm;
         let dot = m0 * m1 + n0 * n1;
-        let angle = crate::fmath::abs(crate::fmath::atan2(cross, dot));
-        let rate = r / crate::fmath::abs(n1).max(r * 0.70710677);
+        let angle = small_angle(cross, dot);
+        // (Never 0: a piece stays within a step of the diagonal, |minor| >= ~R / sqrt 2.)
+        let rate = r / crate::fmath::abs(n1).max(r * 0.5);
         (r * angle, rate)
     }
 

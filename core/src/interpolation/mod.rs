@@ -212,6 +212,25 @@ impl Interpolator {
         }
     }
 
+    /// Path position where the present run (just begun) starts, less where the run
+    /// before it ended, in run units: a circle's pieces measure the same point by
+    /// different coordinates ([`circle::Circle::entry_shift`]).
+    pub fn entry_shift(&self) -> f32 {
+        match self {
+            Interpolator::Circle(c) => c.entry_shift(),
+            _ => 0.0,
+        }
+    }
+
+    /// The present run ends the path (whose length is then known exactly): an arc's
+    /// last piece. A line is one run from the start.
+    pub fn in_last_run(&self) -> bool {
+        match self {
+            Interpolator::Circle(c) => c.in_last_piece(),
+            _ => false,
+        }
+    }
+
     /// The fourth of [`Interpolator::run_bounds`] alone (a cruise, or a ramp of
     /// constant acceleration).
     pub fn fourth_bound(&self, k: u32) -> f32 {

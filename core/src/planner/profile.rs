@@ -300,6 +300,11 @@ impl Profile {
         }
     }
 
+    /// The ramps' shape.
+    pub fn shape(&self) -> Shape {
+        self.shape
+    }
+
     /// Speed at the start and at the end of `phase`.
     pub fn phase_speeds(&self, phase: Phase) -> (f32, f32) {
         match phase {

@@ -29,7 +29,7 @@
 use super::{CmdSink, StepCmd, MAX_WAIT};
 use crate::interpolation::{Interpolator, Next, Tick};
 use crate::motion::{StepPos, X, Y};
-use crate::planner::profile::Phase;
+use crate::planner::profile::{Phase, Shape};
 use crate::planner::{Block, Planner, PlannerConfig, Profile};
 
 /// Feed-hold state of the preparation.
@@ -146,6 +146,10 @@ impl Ramp {
     /// with a 32-bit division, checked exactly; far from it (near rest), from f32.
     #[inline(always)]
     fn root_near(w: u64, g: u32) -> u32 {
+        if (w as i64) < 0 {
+            // W fell below 0 (a curve's cubic just past rest): at rest.
+            return 0;
+        }
         let g = g.max(1).min((1 << 30) - 1);
         let e = w as i64 - (u64::from(g) * u64::from(g)) as i64;
         if e.unsigned_abs() < 1 << 31 {
@@ -170,6 +174,7 @@ impl Ramp {
     /// exactly.
     #[inline(never)]
     fn root_far(w: u64) -> u32 {
+        let w = if (w as i64) < 0 { 0 } else { w };
         let g = crate::fmath::sqrt(w as f32).max(1.0);
         let e = w as i64 - ((g as u64) * (g as u64)) as i64;
         let mut r = (g + e as f32 / (2.0 * g)).max(0.0) as u64;
@@ -303,6 +308,9 @@ struct Active {
     line_tick_q: Option<u64>,
     /// Length of the block left when the profile was built, Q units.
     rest_q: u64,
+    /// The profile ends exactly at the last step of the path (a line's; an arc's once
+    /// its last piece began in a cruise).
+    exact_end: bool,
     prof: Profile,
     /// Timer ticks of the phases' anchors: the profile's start, the cruise's start, the
     /// profile's end (the last ramp is timed back from it).
@@ -372,7 +380,7 @@ enum Ready {
     Segment,
     /// One tick to time on its own.
     Single,
-    /// The block is done.
+    /// The block is done, or its profile is to be rebuilt first.
     Finished,
 }
 
@@ -557,6 +565,7 @@ impl Prep {
                 scale,
                 line_tick_q,
                 rest_q: len_q,
+                exact_end: line_tick_q.is_some(),
                 prof: Profile::rest(shape),
                 anchors: [self.t_last; 3],
                 ends_q: [0; 3],
@@ -599,7 +608,7 @@ impl Prep {
         }
         self.planned = planned;
         let cfg = planner.config();
-        let (s_now, v_now) = a.now();
+        let (s_now, v_now, t0) = a.now(self.t_last);
         let v0 = if running {
             v_now.max(cfg.start_speed)
         } else {
@@ -619,7 +628,6 @@ impl Prep {
         a.cruise_ticks_per_mm = if v_cruise > 0.0 { hz / v_cruise } else { 0.0 };
         let d = prof.phase_durations();
         let ticks = |t: f32| (t * hz + 0.5) as u64;
-        let t0 = self.t_last;
         a.anchors = [t0, t0 + ticks(d[0]), t0 + ticks(d[0] + d[1] + d[2])];
         a.ends_q = [to_q(e0).min(end_q), to_q(e1).min(end_q), end_q];
         a.rest_q = rest_q;
@@ -655,7 +663,45 @@ impl Prep {
             match a.interp.next() {
                 Next::Run(n) => {
                     a.run_left = n;
+                    // The cursor moves by the shift along the path (and in time, with
+                    // its speed, exactly): the new run's ticks follow from there.
+                    let shift = a.interp.entry_shift() * a.scale;
+                    if shift != 0.0 && a.at.v > 0.0 {
+                        let s = if shift > 0.0 {
+                            a.at.s + to_q(shift)
+                        } else {
+                            a.at.s.saturating_sub(to_q(-shift))
+                        };
+                        if let Some(p) = a.phase_of(s) {
+                            a.at = a.exact(p, s, hz);
+                        }
+                    }
                     a.at.rate = a.interp.path_ahead(0).1;
+                    let memoryless = match a.at.phase {
+                        Phase::Cruise => true,
+                        Phase::Up => a.prof.shape() == Shape::Trapezoid || a.at.s == 0,
+                        Phase::Down => false,
+                    };
+                    let d = a.interp.path_ahead(n).0;
+                    let end_q = a.at.s + to_q(d * a.scale);
+                    // The last ramp must still lie ahead, with a step to spare.
+                    let ramp_q = a.ends_q[2] - a.ends_q[1];
+                    let room = end_q.saturating_sub(a.at.s) > ramp_q + to_q(a.scale * 2.0);
+                    if a.interp.in_last_run() && memoryless && room {
+                        // An arc's last piece: its steps' path is now known to the end, so
+                        // the profile is rebuilt to end exactly at its last step (the
+                        // planned length differs by rounding, and near rest a step's time
+                        // is most sensitive to its position). Only where a profile rebuilt
+                        // from the present state is the same (in a cruise, or a
+                        // trapezoid's first ramp, with the last ramp still ahead): an
+                        // S-curve's ramp or a last ramp about to begin keep the planned
+                        // length, and a last step beyond it comes at its end.
+                        a.rest_q = end_q;
+                        a.exact_end = true;
+                        self.planned = (-1.0, -1.0);
+                        self.generation = self.generation.wrapping_sub(1);
+                        return Ready::Finished;
+                    }
                 }
                 Next::Tick | Next::Extra => return Ready::Single,
                 Next::Done => {
@@ -731,8 +777,15 @@ impl Prep {
                             self.v_last = 0.0;
                             return None;
                         }
-                        // Beyond the profile's end (length rounding): on at the last rate.
-                        (tick, self.t_last + u64::from(self.last_wait), None)
+                        // Beyond the profile's end (an arc's length rounding): at its end, or
+                        // on at the last rate once that has passed.
+                        let end = a.anchors[2];
+                        let at = if end > self.t_last {
+                            end
+                        } else {
+                            self.t_last + u64::from(self.last_wait)
+                        };
+                        (tick, at, None)
                     }
                 }
             }
@@ -825,10 +878,13 @@ fn push_waited(sink: &mut dyn CmdSink, tick: Tick, wait: u64) -> u32 {
 }
 
 impl Active {
-    /// Path position and speed at the last queued tick.
-    fn now(&self) -> (u64, f32) {
+    /// Path position, speed and time of the present point: the cursor between
+    /// segments (it may lie a little off the last queued tick's time after a circle's
+    /// change of coordinate, see [`Interpolator::entry_shift`]), else the last queued
+    /// tick (`t_last`).
+    fn now(&self, t_last: u64) -> (u64, f32, u64) {
         if self.seg.left == 0 {
-            return (self.at.s, self.at.v);
+            return (self.at.s, self.at.v, self.at.at);
         }
         let ahead = match self.line_tick_q {
             Some(q) => q.wrapping_mul(u64::from(self.seg.left)),
@@ -837,7 +893,22 @@ impl Active {
         let s = self.at.s.saturating_sub(ahead);
         let p = self.phase_of(s).unwrap_or(Phase::Down);
         let (_, v) = self.prof.phase_time(p, self.local(p, s), self.at.t);
-        (s, v)
+        (s, v, t_last)
+    }
+
+    /// Path position (Q units from the profile's start) and the run's rate `n` ticks
+    /// ahead: a line's exact multiple; a curve's from the interpolator, and at the end
+    /// of an arc's last run exactly the profile's end (the same point, without the
+    /// rounding of the sum).
+    fn ahead(&self, n: u32) -> (u64, f32) {
+        if let Some(q) = self.line_tick_q {
+            return (self.at.s + q.wrapping_mul(u64::from(n)), 1.0);
+        }
+        let (d, r) = self.interp.path_ahead(n);
+        if n == self.run_left && self.exact_end && self.interp.in_last_run() {
+            return (self.rest_q.max(self.at.s), r);
+        }
+        (self.at.s + to_q(d * self.scale), r)
     }
 
     /// The phase a tick at path position `s` falls in (`None`: beyond the profile).
@@ -898,7 +969,10 @@ impl Active {
             Some(q) => q,
             None => to_q(at.rate * self.scale),
         };
-        let Some(mut p) = self.phase_of(at.s + step_q) else {
+        // The next tick's phase, from the rate (near the end exactly: a curve's last
+        // tick lands on the profile's end).
+        let near = self.phase_of(at.s + step_q).or_else(|| self.phase_of(self.ahead(1).0));
+        let Some(mut p) = near else {
             return false;
         };
         if let Some((seg, end)) = self
@@ -920,14 +994,8 @@ impl Active {
         };
         // The segment's end: within the phase.
         let (s1, rate1) = loop {
-            let (ds, rate1) = match self.line_tick_q {
-                Some(q) => (q.wrapping_mul(u64::from(n)), 1.0),
-                None => {
-                    let (d, r) = self.interp.path_ahead(n);
-                    (to_q(d * self.scale), r)
-                }
-            };
-            let s1 = at.s + ds;
+            let (s1, rate1) = self.ahead(n);
+            let ds = s1 - at.s;
             let end = match p {
                 Phase::Up => self.ends_q[0],
                 Phase::Cruise => self.ends_q[1],
@@ -1063,8 +1131,7 @@ impl Active {
             n /= 2;
         }
         let (rate1, s1) = loop {
-            let (d, r) = self.interp.path_ahead(n);
-            let s1 = at.s + to_q(d * self.scale);
+            let (s1, r) = self.ahead(n);
             if s1 <= end {
                 break (r, s1);
             }
@@ -1171,41 +1238,56 @@ impl Active {
                 }
                 n /= 2;
             }
-            let (ds, rate1) = loop {
-                let (d, r) = self.interp.path_ahead(n);
-                if at.s + to_q(d * self.scale) <= end || n == 1 {
-                    break (d, r);
+            let (s1, rate1) = loop {
+                let (s1, r) = self.ahead(n);
+                if s1 <= end || n == 1 {
+                    break (s1, r);
                 }
                 n = (n / 2).max(1);
             };
-            if at.s + to_q(ds * self.scale) > end {
+            if s1 > end {
                 return None;
             }
-            let d0 = match p {
-                Phase::Up => from_q(at.s),
-                _ => from_q(end.saturating_sub(at.s)),
+            let ds = from_q(s1 - at.s) / self.scale;
+            // W at the segment's last tick (exactly the anchor's at the end of a ramp to
+            // rest, where the time is most sensitive to it).
+            let d1 = match p {
+                Phase::Up => from_q(s1),
+                _ => from_q(end.saturating_sub(s1)),
             };
-            let w = match p {
-                Phase::Up if grows => square(v0).0 as f32 + k * d0,
-                Phase::Up => square(v0).0 as f32 - k * d0,
-                _ => square(v1).0 as f32 + k * d0,
+            let w_end = match p {
+                Phase::Up if grows => square(v0).0 as f32 + k * d1,
+                Phase::Up => square(v0).0 as f32 - k * d1,
+                _ => square(v1).0 as f32 + k * d1,
+            };
+            let w_end = if d1 == 0.0 {
+                match p {
+                    Phase::Up => square(v0).0,
+                    _ => square(v1).0,
+                }
+            } else {
+                w_end.max(0.0) as u64
             };
             // W along the segment: the Hermite cubic of the path position (run units),
-            // scaled to W, as forward differences.
+            // scaled to W, as forward differences; the start is set back from the end
+            // by their exact sum.
             let kk = if grows { k * self.scale } else { -k * self.scale };
             let nf = n as f32;
             let inv = 1.0 / nf;
             let (m0, m1) = (at.rate, rate1);
             let c3 = ((m0 + m1) * nf - 2.0 * ds) * inv * inv * inv;
             let c2 = (3.0 * ds - (2.0 * m0 + m1) * nf) * inv * inv;
-            let as_w = |v: f32| (kk * v) as i64 as u64;
+            let as_w = |v: f32| (kk * v) as i64;
+            let (e1, e2, e3) = (as_w(c3 + c2 + m0), as_w(6.0 * c3 + 2.0 * c2), as_w(6.0 * c3));
+            let n64 = i64::from(n);
+            let sum = n64 * e1 + n64 * (n64 - 1) / 2 * e2 + n64 * (n64 - 1) * (n64 - 2) / 6 * e3;
             (
                 n,
-                w.max(0.0) as u64,
-                as_w(c3 + c2 + m0),
-                as_w(6.0 * c3 + 2.0 * c2),
-                as_w(6.0 * c3),
-                at.s + to_q(ds * self.scale),
+                (w_end as i64).wrapping_sub(sum).max(0) as u64,
+                e1 as u64,
+                e2 as u64,
+                e3 as u64,
+                s1,
                 rate1,
             )
         };
@@ -1328,5 +1410,326 @@ impl Active {
             }
         }
         (n, false)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! Timing accuracy against the ideal profile, computed in f64 from the same block
+    //! (length, speed limit, acceleration) with the profile's own formulas.
+    use super::*;
+    use crate::motion::{Feed, Move, Path};
+    use crate::planner::{geometry, AxisConfig, Shape};
+    use proptest::prelude::*;
+    use std::vec::Vec;
+
+    const HZ: f64 = 72_000_000.0;
+
+    /// Every command, in order.
+    struct VecSink(Vec<StepCmd>);
+
+    impl CmdSink for VecSink {
+        fn room(&self) -> usize {
+            48
+        }
+        fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
+            self.0.extend_from_slice(cmds);
+            cmds.len()
+        }
+    }
+
+    /// Step times (seconds) of `mv` prepared from rest at the origin, pure waits folded
+    /// into the next step.
+    fn step_times(cfg: PlannerConfig, mv: &Move) -> Vec<f64> {
+        let mut planner = Planner::new(cfg, [0; 3]);
+        planner.push(mv).unwrap();
+        let mut prep = Prep::new(PrepConfig::default(), [0; 3]);
+        let mut sink = VecSink(Vec::new());
+        for _ in 0..10_000_000 {
+            prep.fill(&mut planner, &mut sink, 48);
+            if prep.is_idle(&planner) {
+                break;
+            }
+        }
+        let mut t = 0u64;
+        let mut out = Vec::new();
+        for c in &sink.0 {
+            t += u64::from(c.wait());
+            if c.tick().steps() != 0 {
+                out.push(t as f64 / HZ);
+            }
+        }
+        out
+    }
+
+    /// The ideal rest-to-rest profile in f64: time at path position `s`.
+    struct Ideal {
+        shape: Shape,
+        a: f64,
+        peak: f64,
+        ramp_t: f64,
+        ramp_d: f64,
+        total: f64,
+    }
+
+    impl Ideal {
+        fn new(shape: Shape, v_max: f64, a: f64, len: f64) -> Self {
+            let ae = match shape {
+                Shape::Trapezoid => a,
+                Shape::Cosine => a * 2.0 / std::f64::consts::PI,
+            };
+            let peak = (ae * len).sqrt().min(v_max);
+            let ramp_t = match shape {
+                Shape::Trapezoid => peak / a,
+                Shape::Cosine => std::f64::consts::PI * peak / (2.0 * a),
+            };
+            let ramp_d = 0.5 * peak * ramp_t;
+            let total = 2.0 * ramp_t + (len - 2.0 * ramp_d).max(0.0) / peak;
+            Ideal {
+                shape,
+                a,
+                peak,
+                ramp_t,
+                ramp_d,
+                total,
+            }
+        }
+
+        /// Time into a ramp from rest at which it has covered `d`.
+        fn ramp(&self, d: f64) -> f64 {
+            match self.shape {
+                Shape::Trapezoid => (2.0 * d / self.a).sqrt(),
+                Shape::Cosine => {
+                    let w = std::f64::consts::PI / self.ramp_t;
+                    let s = |t: f64| 0.5 * self.peak * (t - (w * t).sin() / w);
+                    let (mut lo, mut hi) = (0.0, self.ramp_t);
+                    for _ in 0..100 {
+                        let mid = 0.5 * (lo + hi);
+                        if s(mid) < d {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    0.5 * (lo + hi)
+                }
+            }
+        }
+
+        /// Time at path position `s`, `left` before the end (both given, so that a
+        /// position near the end keeps its precision: the time of the last steps of a
+        /// ramp to rest is most sensitive to it).
+        fn time(&self, s: f64, left: f64) -> f64 {
+            if s <= self.ramp_d {
+                self.ramp(s)
+            } else if left > self.ramp_d {
+                self.ramp_t + (s - self.ramp_d) / self.peak
+            } else {
+                self.total - self.ramp(left.max(0.0))
+            }
+        }
+    }
+
+    fn config(shape: Shape, steps_per_mm: f32, rate: f32, accel: f32) -> PlannerConfig {
+        let axis = AxisConfig {
+            steps_per_mm,
+            max_rate: rate,
+            accel,
+        };
+        PlannerConfig {
+            axes: [axis, axis, axis],
+            shape,
+            ..PlannerConfig::default()
+        }
+    }
+
+    /// Largest |step time - ideal time| along a line, seconds, and its duration.
+    fn line_error(cfg: PlannerConfig, target: [i32; 3], feed: f32) -> (f64, f64) {
+        let mv = Move {
+            target,
+            path: Path::Line,
+            feed: Feed::MmPerMin(feed),
+            line: 0,
+        };
+        let g = geometry::of_move(&cfg, [0; 3], &mv).unwrap();
+        let v_max = (feed / 60.0).min(g.speed_limit);
+        let ideal = Ideal::new(cfg.shape, f64::from(v_max), f64::from(g.accel), f64::from(g.length));
+        let times = step_times(cfg, &mv);
+        let ticks = target.iter().map(|v| v.unsigned_abs()).max().unwrap();
+        assert_eq!(times.len(), ticks as usize);
+        let per = f64::from(g.length) / f64::from(ticks);
+        let mut worst = 0.0f64;
+        for (k, t) in times.iter().enumerate() {
+            let done = (k + 1) as f64;
+            worst = worst.max((t - ideal.time(done * per, (f64::from(ticks) - done) * per)).abs());
+        }
+        (worst, ideal.total)
+    }
+
+    #[test]
+    fn a_trapezoid_line_is_timed_to_the_timer_tick() {
+        let (err, _) = line_error(config(Shape::Trapezoid, 80.0, 3000.0, 500.0), [8000, 3000, 0], 3000.0);
+        assert!(err < 0.3e-6, "{err}");
+    }
+
+    /// Largest |step time - ideal time| along an arc, seconds, and its duration. A
+    /// tick's ideal position is the circle's point at its major coordinate (computed
+    /// here in f64 from the tick's position and its piece's major axis, which a copy of
+    /// the interpolator tells); extra steps (settle, tail) and ticks beyond the
+    /// profile's end (length rounding) are not compared.
+    fn arc_error(cfg: PlannerConfig, mv: &Move, center: [f64; 2], r: f64) -> (f64, f64) {
+        let g = geometry::of_move(&cfg, [0; 3], mv).unwrap();
+        let feed = match mv.feed {
+            Feed::MmPerMin(f) => f / 60.0,
+            Feed::Rapid => f32::INFINITY,
+        };
+        let v_max = feed.min(g.speed_limit);
+        let times = step_times(cfg, mv);
+        let spm = f64::from(cfg.axes[0].steps_per_mm);
+        let mut runs = Vec::new();
+        let mut it = Interpolator::new([0; 3], mv, cfg.method).unwrap();
+        let mut p = [0i32; 3];
+        let mut k = 0;
+        let mut last_angle: Option<f64> = None;
+        let mut s = 0.0f64;
+        loop {
+            let next = it.next();
+            let major = match &it {
+                Interpolator::Circle(c) => c.major(),
+                _ => 0,
+            };
+            let mut one = [Tick(0)];
+            if it.ticks_into(&mut one) == 0 {
+                break;
+            }
+            one[0].apply(&mut p);
+            let t = times[k];
+            k += 1;
+            if !matches!(next, Next::Run(_)) {
+                continue;
+            }
+            // The circle's point at the tick's major coordinate, on its side.
+            let rel = [f64::from(p[0]) - center[0], f64::from(p[1]) - center[1]];
+            let n = 1 - major;
+            let mut q = [0.0; 2];
+            q[major] = rel[major].clamp(-r, r);
+            q[n] = (r * r - q[major] * q[major]).max(0.0).sqrt() * rel[n].signum();
+            let angle = q[1].atan2(q[0]);
+            if let Some(a) = last_angle {
+                let mut d = angle - a;
+                if d > std::f64::consts::PI {
+                    d -= std::f64::consts::TAU;
+                } else if d < -std::f64::consts::PI {
+                    d += std::f64::consts::TAU;
+                }
+                s += d.abs() * r / spm;
+            } else {
+                // The first tick: from the ideal point at the start's major coordinate.
+                let start = [-center[0], -center[1]];
+                let mut q0 = [0.0; 2];
+                q0[major] = start[major].clamp(-r, r);
+                q0[n] = (r * r - q0[major] * q0[major]).max(0.0).sqrt() * start[n].signum();
+                let mut d = angle - q0[1].atan2(q0[0]);
+                if d > std::f64::consts::PI {
+                    d -= std::f64::consts::TAU;
+                } else if d < -std::f64::consts::PI {
+                    d += std::f64::consts::TAU;
+                }
+                s += d.abs() * r / spm;
+            }
+            last_angle = Some(angle);
+            runs.push((s, t));
+        }
+        // The ideal over the planned length, or over the path's exact length (the
+        // preparation rebuilds the profile to end at the arc's last step when its last
+        // piece begins in a cruise or a trapezoid's first ramp): the run must follow one
+        // of them all along.
+        let planned = f64::from(g.length);
+        let exact = runs.last().map_or(0.0, |r| r.0);
+        let mut best = f64::INFINITY;
+        for len in [planned, exact] {
+            let ideal = Ideal::new(cfg.shape, f64::from(v_max), f64::from(g.accel), len);
+            // Over the planned length the last step (a fraction of a step from its end,
+            // by rounding) comes at the end itself: not compared.
+            let runs = if len == planned {
+                runs.get(..runs.len().saturating_sub(1)).unwrap_or(&[])
+            } else {
+                &runs[..]
+            };
+            let mut w = 0.0f64;
+            // Positions along an arc are sums in f32 (to a thousandth of a step plus
+            // 2e-7 of the distance): near a stop, where that is worth more than a
+            // microsecond, the error is taken at the nearest point within it.
+            for &(s, t) in runs.iter().filter(|r| r.0 <= len) {
+                let tol = 1e-3 / spm + 2e-7 * s;
+                let lo = ideal.time((s - tol).max(0.0), (len - s + tol).min(len));
+                let hi = ideal.time((s + tol).min(len), (len - s - tol).max(0.0));
+                let e = if t < lo {
+                    lo - t
+                } else if t > hi {
+                    t - hi
+                } else {
+                    0.0
+                };
+                w = w.max(e);
+            }
+            best = best.min(w);
+        }
+        let ideal = Ideal::new(cfg.shape, f64::from(v_max), f64::from(g.accel), planned);
+        assert_eq!(k, times.len());
+        (best, ideal.total)
+    }
+
+    #[test]
+    fn an_arc_is_timed_within_a_microsecond() {
+        let cfg = config(Shape::Trapezoid, 80.0, 3000.0, 500.0);
+        let mv = Move {
+            target: [0; 3],
+            path: Path::Arc {
+                center: [1600, 0],
+                ccw: false,
+                turns: 0,
+            },
+            feed: Feed::MmPerMin(3000.0),
+            line: 0,
+        };
+        let (err, total) = arc_error(cfg, &mv, [1600.0, 0.0], 1600.0);
+        assert!(err <= 1e-6 + 2e-7 * total, "{} us", err * 1e6);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        #[test]
+        fn arc_steps_are_within_a_microsecond_of_the_ideal_profile(
+            cx in -3000.0f64..3000.0, cy in -3000.0f64..3000.0, end in 0.0f64..std::f64::consts::TAU,
+            feed in 60.0f32..6000.0, accel in 50.0f32..3000.0, ccw in any::<bool>(), cosine in any::<bool>()) {
+            let r = cx.hypot(cy);
+            prop_assume!(r > 20.0);
+            let shape = if cosine { Shape::Cosine } else { Shape::Trapezoid };
+            let cfg = config(shape, 80.0, 6000.0, accel);
+            let q = |v: f64| (v * 256.0).round() as i32;
+            let target = [(cx + r * end.cos()).round() as i32, (cy + r * end.sin()).round() as i32, 0];
+            let mv = Move {
+                target,
+                path: Path::ArcFine { from: [0, 0], center: [q(cx), q(cy)], ccw, turns: 0 },
+                feed: Feed::MmPerMin(feed),
+                line: 0,
+            };
+            let c = [f64::from(q(cx)) / 256.0, f64::from(q(cy)) / 256.0];
+            let (err, total) = arc_error(cfg, &mv, c, c[0].hypot(c[1]));
+            prop_assert!(err <= 1e-6 + 2e-7 * total, "error {} us over {} s", err * 1e6, total);
+        }
+
+        #[test]
+        fn line_steps_are_within_a_microsecond_of_the_ideal_profile(
+            dx in -6000i32..6000, dy in -6000i32..6000, feed in 30.0f32..6000.0,
+            accel in 20.0f32..3000.0, spm in prop::sample::select(std::vec![40.0f32, 80.0, 320.0, 1280.0]),
+            cosine in any::<bool>()) {
+            prop_assume!(dx != 0 || dy != 0);
+            let shape = if cosine { Shape::Cosine } else { Shape::Trapezoid };
+            let (err, total) = line_error(config(shape, spm, 6000.0, accel), [dx, dy, 0], feed);
+            prop_assert!(err <= 1e-6 + 2e-7 * total, "error {} us over {} s", err * 1e6, total);
+        }
     }
 }
