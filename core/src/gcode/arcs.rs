@@ -112,7 +112,10 @@ pub(super) fn arc_geometry(
 }
 
 /// The arc in step space: a circle if X and Y have the same resolution, else the
-/// ellipse the circle becomes.
+/// ellipse the circle becomes. A circle keeps its exact start and centre in 1/256 step
+/// (`Path::ArcFine`: every step on the grid point nearest the programmed circle, wherever
+/// its centre falls between steps); beyond that range (2^23 steps) the centre is rounded
+/// to a step.
 pub(super) fn arc_path(g: &ArcGeom, start: &[f32; AXES], ccw: bool, s: &Settings) -> Path {
     let sx = s.steps_per_mm(0);
     let sy = s.steps_per_mm(1);
@@ -121,16 +124,32 @@ pub(super) fn arc_path(g: &ArcGeom, start: &[f32; AXES], ccw: bool, s: &Settings
         mm_to_steps(g.center[0], sx).saturating_sub(start_steps[0]),
         mm_to_steps(g.center[1], sy).saturating_sub(start_steps[1]),
     ];
-    if sx == sy {
+    if sx != sy {
+        let a = mm_to_steps(g.radius, sx);
+        let b = mm_to_steps(g.radius, sy);
+        return Path::Ellipse { center, a, b, ccw };
+    }
+    // Scaling by 256 commutes with the rounding multiply; saturation starts at 2^31.
+    let q = sx * 256.0;
+    let fine = [
+        mm_to_steps(start[0], q),
+        mm_to_steps(start[1], q),
+        mm_to_steps(g.center[0], q),
+        mm_to_steps(g.center[1], q),
+    ];
+    if fine.iter().all(|v| v.unsigned_abs() < i32::MAX as u32) {
+        Path::ArcFine {
+            from: [fine[0], fine[1]],
+            center: [fine[2], fine[3]],
+            ccw,
+            turns: 0,
+        }
+    } else {
         Path::Arc {
             center,
             ccw,
             turns: 0,
         }
-    } else {
-        let a = mm_to_steps(g.radius, sx);
-        let b = mm_to_steps(g.radius, sy);
-        Path::Ellipse { center, a, b, ccw }
     }
 }
 
