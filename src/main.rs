@@ -1,16 +1,18 @@
 //! inkstep firmware: thin RTIC wiring between the Blue Pill's peripherals (`board`) and
 //! the hardware-free core (`inkstep-core`). Every decision is the core's: the tasks
 //! here only move bytes, pins and time between the hardware and the same `Controller`
-//! and `Pipeline` that the simulator drives.
+//! and `Pipeline` that the simulator drives (docs/architecture.md: the data flow and
+//! the lock map).
 //!
-//! Priorities (higher preempts lower), as in DESIGN.md:
+//! Priorities (higher preempts lower; docs/architecture.md has the lock map):
 //!   7  e-stop and limit switches (EXTI0, EXTI1, EXTI3): outputs off at once; the 1 ms
 //!      tick (SysTick, above every lock so that no millisecond is lost): the clock and
 //!      the start of the periodic tasks below
 //!   6  step timer (TIM2): the core's `Executor`, integer work only
 //!   5  USB (endpoint <-> byte queues) and segment preparation (`Pipeline::fill`, every
 //!      tick)
-//!   4  protocol / G-code / machine state (every tick), feed-hold and cycle-start inputs
+//!   4  protocol / G-code / machine state (`Controller::service`, every tick),
+//!      feed-hold and cycle-start inputs
 //!   3  keypad scan (one column every 5 ms), buzzer, the watchdog
 //!   1  LCD refresh (every 100 ms): the only task that waits (on its SPI); everything
 //!      preempts it
@@ -20,28 +22,26 @@
 //! tick pends (I2C1_EV, SPI1, USART3, USART2, otherwise unused), so the image carries
 //! no async executor and no timer queue.
 #![no_std]
+// Every unsafe block says why it is sound (a `SAFETY:` comment).
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![no_main]
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use defmt_rtt as _;
 use inkstep::board;
-use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput, PULSE_TICKS};
+use inkstep::steps::{self, BoardSide, StepOutput};
+use inkstep_core::controller::{HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS};
 use inkstep_core::pipeline::StepSide;
 use inkstep_core::ring::{ByteRing, ByteRx, ByteTx};
 use inkstep_core::stepper::exec::Executor;
-
-/// USB byte queues (`inkstep_core::ring`), relays between the USB interrupt and the
-/// protocol task, which trade up to one 64-byte packet each way every millisecond
-/// (64 KB/s, far above what Grbl's protocol needs). RX holds Grbl's whole 128-byte character-counting window
-/// (two packets); the window itself is the protocol's receive buffer (`Bf:`), and a
-/// full ring only NAKs the host (back-pressure, nothing is dropped). TX holds two
-/// packets; the responses wait in the protocol's output buffer (`OUT_CAP`), which only
-/// hands out what this ring has room for.
-const USB_RX: usize = 128;
-const USB_TX: usize = 128;
+use inkstep_core::stepper::output::OutputConfig;
+use inkstep_core::stepper::queue::StepCmdQueue;
+use inkstep_core::stepper::MAX_RELOAD;
 
 /// Hard limits stop stepping at once only when `$21` is on.
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
+/// The host has the serial port open (CDC's DTR), as the USB task last saw it.
+static PORT_OPEN: AtomicBool = AtomicBool::new(false);
 
 /// A fault or panic must leave every motor driver disabled (see `inkstep::fault`).
 #[cortex_m_rt::exception]
@@ -59,14 +59,11 @@ mod app {
     use super::*;
     use core::mem::MaybeUninit;
     use cortex_m::peripheral::syst::SystClkSource;
-    use inkstep_core::controller::Controller;
-    use inkstep_core::gcode::STARTUP_LINES;
+    use inkstep_core::controller::{Controller, HostLink};
     use inkstep_core::hmi::buzzer::Buzzer;
-    use inkstep_core::machine::Inputs;
     use inkstep_core::pipeline::Pipeline;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
-    use inkstep_core::settings::{OutputMode, PenMode, Settings};
-    use inkstep_core::settings_store::{BlockingFlash, SettingsStore};
+    use inkstep_core::settings_store::SettingsStore;
     use inkstep_core::stepper::prep::PrepConfig;
     use stm32f1xx_hal::pac::Interrupt;
 
@@ -78,12 +75,7 @@ mod app {
         NOW_MS.load(Ordering::Relaxed)
     }
 
-    /// One keypad column per scan; the buzzer pattern advances by the same period.
-    const KEYPAD_MS: u32 = 5;
-    /// The LCD refresh period.
-    const LCD_MS: u32 = 100;
-
-    type Store = SettingsStore<BlockingFlash<board::SettingsFlash>>;
+    type Store = SettingsStore<board::SettingsFlash>;
 
     // The controller (2 KB) and the pipeline (4 KB, the planner's buffer) are built in
     // place in init's static cells and shared by reference: returned by value they
@@ -103,24 +95,23 @@ mod app {
         step_out: StepOutput,
         servo: board::PenServo,
         keypad: board::KeypadMatrix,
-        inputs: board::Inputs,
         indicators: board::Indicators,
         lcd_spi: board::LcdSpi,
         screens: &'static mut Screens,
         fb: &'static mut FrameBuffer,
         watchdog: board::Watchdog,
         store: Store,
-        usb_rx_in: ByteTx<'static, USB_RX>,
-        usb_rx_out: ByteRx<'static, USB_RX>,
-        usb_tx_in: ByteTx<'static, USB_TX>,
-        usb_tx_out: ByteRx<'static, USB_TX>,
+        usb_rx_in: ByteTx<'static, HOST_RX_RING>,
+        usb_rx_out: ByteRx<'static, HOST_RX_RING>,
+        usb_tx_in: ByteTx<'static, HOST_TX_RING>,
+        usb_tx_out: ByteRx<'static, HOST_TX_RING>,
     }
 
     #[init(local = [
         usb_cells: board::UsbCells = board::UsbCells::new(),
         steps: StepCmdQueue = StepCmdQueue::new(),
-        usb_rxq: ByteRing<USB_RX> = ByteRing::new(),
-        usb_txq: ByteRing<USB_TX> = ByteRing::new(),
+        usb_rxq: ByteRing<HOST_RX_RING> = ByteRing::new(),
+        usb_txq: ByteRing<HOST_TX_RING> = ByteRing::new(),
         ctl_cell: MaybeUninit<Controller> = MaybeUninit::uninit(),
         screens_cell: MaybeUninit<Screens> = MaybeUninit::uninit(),
         fb_cell: MaybeUninit<FrameBuffer> = MaybeUninit::uninit(),
@@ -145,31 +136,35 @@ mod app {
                 flash_kb
             );
         }
-        // Settings from flash.
-        let mut store = match SettingsStore::new(BlockingFlash(b.flash), board::settings_pages()) {
+        // Settings, offsets and startup lines from flash; a corrupt store falls back to
+        // defaults and the host is told.
+        let mut store = match SettingsStore::new(b.flash, board::settings_pages()) {
             Ok(s) => s,
             // memory.x places the pages inside the chip's flash; this cannot happen.
             Err(_) => defmt::panic!("settings flash range"),
         };
+        let ctl = Controller::boot_in(cx.local.ctl_cell, &mut store, 0);
+        let settings = ctl.protocol().machine().settings();
         let (steps_tx, steps_rx) = cx.local.steps.split();
-        let (ctl, pipeline) = boot_core(
-            &mut store,
-            cx.local.ctl_cell,
+        let prep = PrepConfig {
+            timer_hz: board::STEP_TIMER_HZ,
+            ..PrepConfig::default()
+        };
+        let pipeline = Pipeline::init_in(
             cx.local.pipeline_cell,
+            settings,
+            prep,
             BoardSide { tx: steps_tx },
         );
-        let settings = ctl.protocol().machine().settings();
         let (usb_rx_in, usb_rx_out) = cx.local.usb_rxq.split();
         let (usb_tx_in, usb_tx_out) = cx.local.usb_txq.split();
 
-        let mut step_port = b.step_port;
-        let mut step_timer = b.step_timer;
-        apply_output_settings(settings, &mut step_port, &mut step_timer);
+        apply_output_config(&OutputConfig::from(settings));
         let step_out = steps::install(
-            Executor::new([0; 3], 0x1_0000),
+            Executor::new([0; 3], MAX_RELOAD),
             steps_rx,
-            step_port,
-            step_timer,
+            b.step_port,
+            b.step_timer,
         );
 
         defmt::info!(
@@ -192,14 +187,13 @@ mod app {
                 step_out,
                 servo: b.servo,
                 keypad,
-                inputs: b.inputs,
                 indicators: b.indicators,
                 lcd_spi: b.lcd_spi,
                 // The LCD task's retained state: the screens and the 1 KB frame buffer
                 // (entirely dirty from the start: the first flush sends the whole
                 // screen), built here in .bss rather than on that task's stack.
-                screens: boot_screens(cx.local.screens_cell),
-                fb: boot_frame_buffer(cx.local.fb_cell),
+                screens: cx.local.screens_cell.write(Screens::new()),
+                fb: cx.local.fb_cell.write(FrameBuffer::new()),
                 watchdog: b.watchdog,
                 store,
                 usb_rx_in,
@@ -208,59 +202,6 @@ mod app {
                 usb_tx_out,
             },
         )
-    }
-
-    /// The settings, offsets and startup lines from flash, and the controller and the
-    /// pipeline built in place in their static cells from them (inlined: out of line it
-    /// saves no stack and costs ~500 bytes of flash).
-    #[inline(always)]
-    fn boot_core(
-        store: &mut Store,
-        ctl_cell: &'static mut MaybeUninit<Controller>,
-        pipeline_cell: &'static mut MaybeUninit<Pipeline<BoardSide>>,
-        side: BoardSide,
-    ) -> (&'static mut Controller, &'static mut Pipeline<BoardSide>) {
-        // A corrupt store falls back to defaults and says so.
-        let (settings, load) = store.load_settings();
-        let ctl = Controller::init_in(ctl_cell, &settings, 0);
-        if let Some(msg) = load.message() {
-            defmt::warn!("settings: {}", msg);
-            ctl.protocol_mut().notify(msg);
-        }
-        let (coords, _) = store.load_coords();
-        ctl.protocol_mut().machine_mut().set_coords(coords);
-        for i in 0..STARTUP_LINES {
-            let (line, _) = store.load_startup(i);
-            ctl.protocol_mut().set_startup_line(i, line.as_str());
-        }
-        let prep = PrepConfig {
-            timer_hz: board::STEP_TIMER_HZ,
-            ..PrepConfig::default()
-        };
-        let pipeline = Pipeline::init_in(
-            pipeline_cell,
-            ctl.protocol().machine().settings(),
-            prep,
-            side,
-        );
-        (ctl, pipeline)
-    }
-
-    // The LCD task's retained state, built out of line: their temporaries (the frame
-    // buffer's 1 KB) are then gone before the rest of init runs instead of adding to
-    // init's frame.
-
-    /// The LCD task's screens, in .bss rather than on that task's stack.
-    #[inline(never)]
-    fn boot_screens(cell: &'static mut MaybeUninit<Screens>) -> &'static mut Screens {
-        cell.write(Screens::new())
-    }
-
-    /// The 1 KB frame buffer, entirely dirty from the start: the first flush sends the
-    /// whole screen.
-    #[inline(never)]
-    fn boot_frame_buffer(cell: &'static mut MaybeUninit<FrameBuffer>) -> &'static mut FrameBuffer {
-        cell.write(FrameBuffer::new())
     }
 
     /// The controller and the motion pipeline, one resource: every task that uses the
@@ -277,85 +218,15 @@ mod app {
         }
     }
 
-    /// What waits to be written to flash (at rest).
-    pub struct Saves {
-        settings: bool,
-        coords: bool,
-        startup: bool,
-    }
-
-    impl Saves {
-        const fn new() -> Self {
-            Self {
-                settings: false,
-                coords: false,
-                startup: false,
-            }
-        }
-    }
-
-    /// Received bytes the protocol has not taken yet (it takes only what it can use:
-    /// back-pressure toward the USB queue and the host).
-    pub struct Carry {
-        buf: [u8; 64],
-        len: usize,
-    }
-
-    impl Carry {
-        const fn new() -> Self {
-            Self {
-                buf: [0; 64],
-                len: 0,
-            }
-        }
-
-        /// Top up from the USB receive queue.
-        fn fill(&mut self, rx: &mut ByteRx<'static, USB_RX>) {
-            if let Some(free) = self.buf.get_mut(self.len..) {
-                self.len += rx.pop(free);
-            }
-        }
-
-        fn bytes(&self) -> &[u8] {
-            self.buf.get(..self.len).unwrap_or(&[])
-        }
-
-        /// Drop the first `n` bytes (the ones the protocol took).
-        fn consume(&mut self, n: usize) {
-            let len = self.len.min(self.buf.len());
-            let n = n.min(len);
-            self.buf.copy_within(n..len, 0);
-            self.len = len - n;
-        }
-    }
-
-    /// Output polarity, mode and pulse width for the step interrupt, and the hard-limit
-    /// arming, from the settings (at boot and whenever they change).
-    fn publish_output_settings(s: &Settings) {
-        steps::set_output_config(
-            s.step_invert_mask(),
-            s.dir_invert_mask(),
-            s.output_mode() == OutputMode::FourPhase,
-        );
-        HARD_LIMITS_ARMED.store(s.hard_limits(), Ordering::Relaxed);
-        // `$4` at once: the enable pin is rewritten with the new polarity unless an
-        // e-stop holds the drivers off.
-        board::set_enable_polarity(!s.invert_enable());
+    /// The core's output configuration into the step interrupt, the hard-limit arming
+    /// and the driver enable (at boot and whenever the settings change). `$4` acts at
+    /// once: the enable pin is rewritten with the new polarity unless an e-stop holds
+    /// the drivers off.
+    fn apply_output_config(cfg: &OutputConfig) {
+        steps::set_output_config(cfg);
+        HARD_LIMITS_ARMED.store(cfg.hard_limits, Ordering::Relaxed);
+        board::set_enable_polarity(cfg.enable_active_low);
         steps::drivers_on_unless_halted();
-        let ticks = u32::from(s.step_pulse_us()) * (board::STEP_TIMER_HZ / 1_000_000);
-        PULSE_TICKS.store(ticks.min(0xFFFF), Ordering::Relaxed);
-    }
-
-    /// Output polarity, mode, pulse width and driver enable from the settings (at boot;
-    /// later changes go through `publish_output_settings`).
-    fn apply_output_settings(
-        s: &Settings,
-        port: &mut board::StepPort,
-        timer: &mut board::StepTimer,
-    ) {
-        publish_output_settings(s);
-        timer.set_pulse_ticks(PULSE_TICKS.load(Ordering::Relaxed) as u16);
-        port.set_drivers_enabled(true, !s.invert_enable());
     }
 
     #[idle]
@@ -388,7 +259,6 @@ mod app {
     }
 
     /// A limit switch on EXTI line `line` changed (one body for both axes).
-    #[inline(never)]
     fn limit_switch(line: u8) {
         if board::exti_take_pending(line) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
             steps::halt();
@@ -402,13 +272,15 @@ mod app {
     }
 
     /// USB: poll the device, take bytes from the endpoint only while the RX queue has
-    /// room (so a full queue NAKs the host instead of dropping), send queued output.
+    /// room (so a full queue NAKs the host instead of dropping), send queued output,
+    /// and publish whether the host has the port open.
     #[task(binds = USB_LP_CAN_RX0, priority = 5, local = [usb, serial, usb_rx_in, usb_tx_out])]
     fn usb_lp(cx: usb_lp::Context) {
         let rx = cx.local.usb_rx_in;
         let tx = cx.local.usb_tx_out;
         let serial = &mut **cx.local.serial;
         cx.local.usb.poll(&mut [&mut *serial]);
+        PORT_OPEN.store(serial.dtr(), Ordering::Relaxed);
         let mut buf = [0u8; 64];
         if rx.free() >= buf.len() {
             if let Ok(n) = serial.read(&mut buf) {
@@ -441,10 +313,10 @@ mod app {
         NOW_MS.store(now, Ordering::Relaxed);
         rtic::pend(Interrupt::I2C1_EV);
         rtic::pend(Interrupt::SPI1);
-        if now.is_multiple_of(KEYPAD_MS) {
+        if now.is_multiple_of(KEYPAD_SCAN_MS) {
             rtic::pend(Interrupt::USART3);
         }
-        if now.is_multiple_of(LCD_MS) {
+        if now.is_multiple_of(LCD_REFRESH_MS) {
             rtic::pend(Interrupt::USART2);
         }
     }
@@ -463,151 +335,72 @@ mod app {
         }
     }
 
-    /// The protocol, the machine state and the G-code interpreter, every millisecond:
-    /// inputs, received bytes (only those the protocol takes: back-pressure), the
-    /// periodic work, replies, the busy LED, the pen servo and settings persistence.
-    #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, inputs, servo, store, carry: Carry = Carry::new(), saves: Saves = Saves::new(), pen: Option<bool> = None])]
+    /// The protocol tick: the controller's `service` (inputs, host bytes, the
+    /// protocol, the HMI's timers, replies, settings and their persistence at rest),
+    /// then what it asks of the hardware: the output configuration, the pen servo and
+    /// the release of a halt.
+    #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, servo, store, servo_us: Option<u32> = None])]
     fn protocol(mut cx: protocol::Context) {
         let now = now_ms();
-        let pins = &mut *cx.local.inputs;
-        let carry = &mut *cx.local.carry;
-        carry.fill(cx.local.usb_rx_out);
-        let tx = &mut *cx.local.usb_tx_in;
-        let (busy, settings_changed, pen_down, pen_pulse, alarmed, estop_inverted) =
-            cx.shared.core.lock(|c| {
-                let (ctl, pipeline) = c.parts();
-                let s = ctl.protocol().machine().settings();
-                let inputs = Inputs {
-                    estop: pins.estop_open() != s.invert_inputs(),
-                    limits: [
-                        pins.limit_x_open() != s.invert_limits(),
-                        pins.limit_y_open() != s.invert_limits(),
-                        false,
-                    ],
-                    feed_hold: pins.feed_hold_low(),
-                    cycle_start: pins.cycle_start_low(),
-                };
-                ctl.protocol_mut().set_inputs(inputs, pipeline, now);
-                let taken = ctl.usb_rx(carry.bytes(), pipeline, now);
-                carry.consume(taken);
-                ctl.poll(pipeline, now);
-                let mut out = [0u8; 64];
-                let room = tx.free().min(out.len());
-                let n = out.get_mut(..room).map_or(0, |b| ctl.usb_tx(b));
-                tx.push(out.get(..n).unwrap_or(&[]));
-                // The planner took new settings when they changed (at rest, before
-                // the next line); what is left is the HMI, the outputs and the save.
-                let changed = ctl.protocol_mut().machine_mut().take_settings_dirty();
-                if changed {
-                    ctl.settings_changed();
-                }
-                let busy = ctl.take_outputs().busy_led;
-                let pen_down = pipeline.pen_down();
-                // Only what the outputs need is read here; the settings stay in place.
-                let s = ctl.protocol().machine().settings();
-                if changed {
-                    publish_output_settings(s);
-                }
-                let pen_pulse =
-                    (s.pen_mode() == PenMode::Servo).then(|| s.pen_servo_pulse_us(pen_down));
-                let alarmed = ctl.protocol().machine().alarm().is_some();
-                (
-                    busy,
-                    changed,
-                    pen_down,
-                    pen_pulse,
-                    alarmed,
-                    s.invert_inputs(),
-                )
-            });
+        let pins = board::Inputs::levels();
+        let host = HostLink {
+            rx: cx.local.usb_rx_out,
+            tx: cx.local.usb_tx_in,
+            port_open: PORT_OPEN.load(Ordering::Relaxed),
+        };
+        let store = &mut *cx.local.store;
+        let done = cx.shared.core.lock(|c| {
+            let (ctl, pipeline) = c.parts();
+            ctl.service(host, pins, store, pipeline, now)
+        });
         // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes the
         // USB task's own back-pressure mask (see `usb_lp`).
         unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
         rtic::pend(Interrupt::USB_LP_CAN_RX0);
-        // A reset from the alarm (soft reset / $X) releases the latched halt, only while
-        // the e-stop input is released now: an e-stop pressed after the alarm was read
-        // above must not be undone.
-        steps::release_halt(|| !alarmed && pins.estop_open() == estop_inverted);
-        if settings_changed {
-            cx.local.saves.settings = true;
+        if let Some(cfg) = done.outputs {
+            apply_output_config(&cfg);
         }
-        if let Some(us) = pen_pulse.filter(|_| *cx.local.pen != Some(pen_down)) {
+        if let Some(us) = done
+            .servo_pulse_us
+            .filter(|&us| *cx.local.servo_us != Some(us))
+        {
             cx.local.servo.set_pulse_us(us);
-            *cx.local.pen = Some(pen_down);
+            *cx.local.servo_us = Some(us);
         }
-        // Flash writes stall the CPU (instruction fetch waits), so only at rest.
-        let saves = &mut *cx.local.saves;
-        let store = &mut *cx.local.store;
-        cx.shared.core.lock(|c| persist(c.ctl, saves, store, busy));
+        // A reset from the alarm (soft reset / $X) releases the latched halt, only while
+        // the e-stop input is released now: an e-stop pressed after the inputs were
+        // read above must not be undone.
+        steps::release_halt(|| {
+            !done.alarmed && !done.polarity.decode(board::Inputs::levels()).estop
+        });
         // A tick that came while this ran is dropped: the next run starts at the next
         // tick, so the tasks below always get a turn between two runs.
         cortex_m::peripheral::NVIC::unpend(Interrupt::SPI1);
-    }
-
-    /// What changed goes to flash, at rest. Out of line: the images it stages (the
-    /// settings' 184 bytes, the offsets', a startup line) would otherwise sit in the
-    /// protocol task's frame under its deepest path (a setting change reconfiguring
-    /// the planner).
-    #[inline(never)]
-    fn persist(ctl: &mut Controller, saves: &mut Saves, store: &mut Store, busy: bool) {
-        saves.coords |= ctl.protocol_mut().machine_mut().take_coords_dirty();
-        saves.startup |= ctl.protocol_mut().take_startup_dirty();
-        if busy {
-            return;
-        }
-        if core::mem::take(&mut saves.settings)
-            && store
-                .save_settings(ctl.protocol().machine().settings())
-                .is_err()
-        {
-            defmt::warn!("settings save failed");
-        }
-        if core::mem::take(&mut saves.coords)
-            && store
-                .save_coords(ctl.protocol().machine().interp().coords())
-                .is_err()
-        {
-            defmt::warn!("offsets save failed");
-        }
-        if core::mem::take(&mut saves.startup) {
-            for i in 0..STARTUP_LINES {
-                let line = ctl.protocol().startup_line(i).unwrap_or("");
-                if store.save_startup(i, line).is_err() {
-                    defmt::warn!("startup line save failed");
-                }
-            }
-        }
     }
 
     /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.
     #[task(binds = EXTI4, priority = 4, shared = [core])]
     fn feed_hold(mut cx: feed_hold::Context) {
         if board::exti_take_pending(4) {
-            let now = now_ms();
-            cx.shared.core.lock(|c| input_edge(c, now, false));
+            input_edge(&mut cx.shared.core);
         }
     }
 
     #[task(binds = EXTI9_5, priority = 4, shared = [core])]
     fn cycle_start(mut cx: cycle_start::Context) {
         if board::exti_take_pending(5) {
-            let now = now_ms();
-            cx.shared.core.lock(|c| input_edge(c, now, true));
+            input_edge(&mut cx.shared.core);
         }
     }
 
-    /// The feed-hold (`cycle_start` false) or cycle-start input's new level into the
-    /// machine (one body for both interrupts).
-    #[inline(never)]
-    fn input_edge(c: &mut Core, now: u32, cycle_start: bool) {
-        let (ctl, pipeline) = c.parts();
-        let mut i = ctl.protocol().machine().inputs();
-        if cycle_start {
-            i.cycle_start = board::Inputs::read_cycle_start_low();
-        } else {
-            i.feed_hold = board::Inputs::read_feed_hold_low();
-        }
-        ctl.protocol_mut().set_inputs(i, pipeline, now);
+    /// An input pin changed: its level (with the others) into the controller.
+    fn input_edge(core: &mut impl rtic::Mutex<T = Core>) {
+        let now = now_ms();
+        let pins = board::Inputs::levels();
+        core.lock(|c| {
+            let (ctl, pipeline) = c.parts();
+            ctl.set_pins(pins, pipeline, now);
+        });
     }
 
     /// The keypad: drive the column the scanner asks for, read its rows one scan
@@ -629,7 +422,7 @@ mod app {
         if let Some(b) = out.beep {
             buzzer.play(b);
         }
-        cx.local.indicators.set_buzzer(buzzer.tick(KEYPAD_MS));
+        cx.local.indicators.set_buzzer(buzzer.tick(KEYPAD_SCAN_MS));
         cx.local.watchdog.feed();
     }
 
@@ -642,7 +435,6 @@ mod app {
         screens,
         fb,
         up: bool = false,
-        last_pos: [i32; 3] = [0; 3],
     ])]
     fn lcd_refresh(mut cx: lcd_refresh::Context) {
         let spi = cx.local.lcd_spi;
@@ -655,21 +447,13 @@ mod app {
             *cx.local.up = true;
         }
         let (screens, fb) = (&mut **cx.local.screens, &mut **cx.local.fb);
-        let last_pos = cx.local.last_pos;
         let now = now_ms();
-        // The teaching view's feed directions: which way each axis moved since the
-        // last refresh (the step interrupt stays free of bookkeeping for it).
-        let snap = cx.shared.core.lock(|c| {
+        let (hmi, status) = cx.shared.core.lock(|c| {
             let (ctl, pipeline) = c.parts();
-            let pos = pipeline.side().position();
-            if pos != *last_pos {
-                let sign = |a: usize| (pos[a] - last_pos[a]).signum() as i8;
-                ctl.note_direction([sign(0), sign(1)]);
-                *last_pos = pos;
-            }
-            (ctl.hmi().clone(), ctl.status(pipeline))
+            let status = ctl.refresh_view(pipeline);
+            (ctl.hmi().clone(), status)
         });
-        let _ = screens.render(&snap.0, &snap.1, now, fb);
+        let _ = screens.render(&hmi, &status, now, fb);
         if st7920::flush(fb, |bytes| spi.write(bytes)).is_err() {
             defmt::warn!("LCD write failed");
         }

@@ -153,23 +153,17 @@ mod tests {
     #[test]
     fn settings_store_round_trip(b: &mut Board) {
         use inkstep_core::settings::Settings;
-        use inkstep_core::settings_store::{BlockingFlash, LoadStatus, SettingsStore};
+        use inkstep_core::settings_store::{LoadStatus, SettingsStore};
         {
-            let mut store = defmt::unwrap!(SettingsStore::new(
-                BlockingFlash(&mut b.flash),
-                board::settings_pages()
-            )
-            .ok());
+            let mut store =
+                defmt::unwrap!(SettingsStore::new(&mut b.flash, board::settings_pages()).ok());
             let mut s = Settings::default();
             defmt::unwrap!(s.set(110, 4321.0).ok());
             defmt::unwrap!(store.save_settings(&s).ok());
         }
         // A fresh store over the same pages (as after a reset) loads what was saved.
-        let mut store = defmt::unwrap!(SettingsStore::new(
-            BlockingFlash(&mut b.flash),
-            board::settings_pages()
-        )
-        .ok());
+        let mut store =
+            defmt::unwrap!(SettingsStore::new(&mut b.flash, board::settings_pages()).ok());
         let (loaded, status) = store.load_settings();
         defmt::assert!(status == LoadStatus::Loaded);
         defmt::assert!(loaded.max_rate(0) == 4321.0);

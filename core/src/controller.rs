@@ -1,31 +1,88 @@
-//! The controller: the glue the firmware's tasks and the simulator share, so that
-//! neither carries its own copy of it.
+//! The controller: the shell logic the firmware's tasks and the simulator share, so
+//! that neither decides anything the other does not (docs/architecture.md).
 //!
 //! It ties the Grbl [`Protocol`] (and through it the [`Machine`](crate::machine::Machine))
 //! to the keypad scanner and the standalone [`Hmi`], all driving one planner through
-//! the [`MotionControl`] trait. Its methods are the entry points of the firmware's
-//! tasks: bytes from USB ([`Controller::usb_rx`]), bytes to USB ([`Controller::usb_tx`]),
-//! one keypad column scan ([`Controller::key_scan`]), and the periodic background work
-//! ([`Controller::poll`]). The HMI's [`Action`]s are carried out here, in order, through
-//! the machine state so that keypad motion obeys the same rules as G-code.
+//! the [`MotionControl`] trait. Its methods are the entry points of the shell's tasks,
+//! at the periods below: [`Controller::boot_in`] at power-up, [`Controller::service`]
+//! once per protocol tick (the host's bytes both ways, the input pins with their
+//! polarities, the port's open/close, the settings' effects and their persistence
+//! at rest), [`Controller::set_pins`] from the input interrupts,
+//! [`Controller::key_scan`] once per keypad column, and [`Controller::refresh_view`]
+//! for the LCD. The HMI's [`Action`]s are carried out here, in order, through the
+//! machine state so that keypad motion obeys the same rules as G-code.
 //!
-//! Owned by the simulator's issue; kept small on purpose: no decision of the protocol,
-//! the planner or the HMI is made here, only their wiring.
+//! Kept small on purpose: no decision of the protocol, the planner or the HMI is made
+//! here, only their wiring and the shell's own rules (what to save, and when).
 
 use crate::decimal::{put_int, Sink};
+use crate::gcode::STARTUP_LINES;
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
-use crate::keypad::{KeyEvent, Keypad, KeypadConfig};
-use crate::machine::{MotionControl, RunState};
-use crate::motion::Command;
-use crate::motion::{X, Y, Z};
+use crate::keypad::{Keypad, KeypadConfig};
+use crate::machine::{InputPolarity, MotionControl, PinLevels, RunState};
+use crate::motion::{Command, StepPos, X, Y, Z};
 use crate::protocol::Protocol;
-use crate::settings::Settings;
+use crate::ring::{ByteRx, ByteTx};
+use crate::settings::{PenMode, Settings};
+use crate::settings_store::SettingsStore;
+use crate::stepper::output::OutputConfig;
 use core::mem::MaybeUninit;
-use core::ptr::addr_of_mut;
+use embedded_storage::nor_flash::NorFlash;
 use heapless::Vec;
+
+/// The protocol tick, ms: the protocol and segment preparation run once per tick.
+pub const TICK_MS: u32 = 1;
+/// One keypad column is scanned per this many ms; the buzzer pattern advances by it.
+pub const KEYPAD_SCAN_MS: u32 = 5;
+/// The LCD refresh period, ms.
+pub const LCD_REFRESH_MS: u32 = 100;
+
+/// The byte ring from the host to the protocol (USB receive on the board): it holds
+/// Grbl's whole 128-byte character-counting window (two USB packets). The window
+/// itself is the protocol's receive buffer (`Bf:`); a full ring only NAKs the host
+/// (back-pressure, nothing is dropped).
+pub const HOST_RX_RING: usize = 128;
+/// The byte ring from the protocol to the host: two USB packets. Responses wait in the
+/// protocol's output buffer, which only hands out what this ring has room for.
+pub const HOST_TX_RING: usize = 128;
+/// Bytes handed to the host ring per tick at most: one USB packet (64 KB/s, far above
+/// what Grbl's protocol needs).
+const TX_PER_TICK: usize = 64;
 
 /// Jog moves run this far (mm) unless stopped; key release stops them.
 const JOG_REACH_MM: i32 = 1000;
+
+/// What the shell hands the controller each protocol tick.
+pub struct HostLink<'a, 'r> {
+    /// Bytes from the host; only those the protocol takes leave the ring.
+    pub rx: &'a mut ByteRx<'r, HOST_RX_RING>,
+    /// Bytes to the host; only what fits is written.
+    pub tx: &'a mut ByteTx<'r, HOST_TX_RING>,
+    /// The host has the port open (USB CDC's DTR; a pty that cannot tell: true).
+    pub port_open: bool,
+}
+
+/// What the shell must do after a protocol tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Serviced {
+    /// The settings changed: apply this output configuration.
+    pub outputs: Option<OutputConfig>,
+    /// The pen servo's pulse width, us, when the pen is a servo ($201 = 1).
+    pub servo_pulse_us: Option<u32>,
+    /// The machine is in alarm: a halted step engine stays halted.
+    pub alarmed: bool,
+    /// How the input pins are read now (the shell's halt release checks the e-stop
+    /// pin with it).
+    pub polarity: InputPolarity,
+}
+
+/// What waits to be written to flash, at rest.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Saves {
+    settings: bool,
+    coords: bool,
+    startup: bool,
+}
 
 /// Outputs of the controller that the firmware drives (buzzer, busy LED).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -42,6 +99,13 @@ pub struct Controller {
     outputs: Outputs,
     /// Latest step direction on X and Y (-1, 0, +1), for the teaching view.
     dir: [i8; 2],
+    /// The position at the last [`Controller::refresh_view`].
+    view_pos: StepPos,
+    /// The host had the port open at the last tick.
+    port_open: bool,
+    /// A message from power-up for the host (a corrupt store), said once it listens.
+    notice: Option<&'static str>,
+    saves: Saves,
 }
 
 /// The HMI's view of the machine's configuration, from the settings.
@@ -68,32 +132,41 @@ impl Controller {
         settings: &Settings,
         now_ms: u32,
     ) -> &'a mut Controller {
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        const _: fn(&Controller) = |Controller {
-                                        protocol: _,
-                                        keypad: _,
-                                        hmi: _,
-                                        outputs: _,
-                                        dir: _,
-                                    }| {};
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (the protocol through its own
-        // `init_in`, on its field viewed as `MaybeUninit`, which has the same layout)
-        // and the list below names every field, so the controller is initialised when
-        // `assume_init_mut` runs.
-        unsafe {
-            Protocol::init_in(
-                &mut *addr_of_mut!((*p).protocol).cast::<MaybeUninit<Protocol>>(),
-                settings,
-            );
-            addr_of_mut!((*p).keypad).write(Keypad::new(KeypadConfig::default()));
-            addr_of_mut!((*p).hmi).write(Hmi::new(hmi_config(settings), now_ms));
-            addr_of_mut!((*p).outputs).write(Outputs::default());
-            addr_of_mut!((*p).dir).write([0, 0]);
-            slot.assume_init_mut()
+        crate::init_fields!(slot => Controller {
+            protocol in |cell| Protocol::init_in(cell, settings),
+            keypad = Keypad::new(KeypadConfig::default()),
+            hmi = Hmi::new(hmi_config(settings), now_ms),
+            outputs = Outputs::default(),
+            dir = [0, 0],
+            view_pos = [0; 3],
+            port_open = false,
+            notice = None,
+            saves = Saves::default(),
+        })
+    }
+
+    /// Power-up from the store: the settings (the defaults if the store has none or
+    /// they are unusable: the host is told once it listens), the coordinate data and
+    /// the startup lines, with the controller built in `slot`.
+    pub fn boot_in<'a, F: NorFlash>(
+        slot: &'a mut MaybeUninit<Controller>,
+        store: &mut SettingsStore<F>,
+        now_ms: u32,
+    ) -> &'a mut Controller {
+        let (settings, load) = store.load_settings();
+        let ctl = Controller::init_in(slot, &settings, now_ms);
+        ctl.notice = load.message();
+        #[cfg(feature = "defmt")]
+        if let Some(msg) = ctl.notice {
+            defmt::warn!("settings: {}", msg);
         }
+        let (coords, _) = store.load_coords();
+        ctl.protocol.machine_mut().set_coords(coords);
+        for i in 0..STARTUP_LINES {
+            let (line, _) = store.load_startup(i);
+            ctl.protocol.set_startup_line(i, line.as_str());
+        }
+        ctl
     }
 
     pub fn protocol(&self) -> &Protocol {
@@ -126,9 +199,120 @@ impl Controller {
         self.hmi.set_config(cfg);
     }
 
-    /// Records the direction of the latest step (the step engine's direction bits).
-    pub fn note_direction(&mut self, dir: [i8; 2]) {
-        self.dir = dir;
+    /// The LCD task's view of the machine. The teaching view's feed directions are
+    /// the way each axis moved since the last call (the step interrupt keeps no
+    /// bookkeeping for it).
+    pub fn refresh_view<M: MotionControl>(&mut self, m: &M) -> hmi::Status {
+        let pos = m.position();
+        if pos != self.view_pos {
+            let sign = |a: usize| (i64::from(pos[a]) - i64::from(self.view_pos[a])).signum() as i8;
+            self.dir = [sign(X), sign(Y)];
+            self.view_pos = pos;
+        }
+        self.status(m)
+    }
+
+    /// New levels of the input pins (from the input interrupts, and every tick): read
+    /// with the settings' polarities ($5, $215) into the machine.
+    pub fn set_pins<M: MotionControl>(&mut self, pins: PinLevels, m: &mut M, now_ms: u32) {
+        let polarity = InputPolarity::from(self.protocol.machine().settings());
+        self.protocol.set_inputs(polarity.decode(pins), m, now_ms);
+    }
+
+    /// One protocol tick: the port's opening (the session starts with the welcome
+    /// line; while it is closed, output is dropped), the input pins, the host's bytes
+    /// (only those the protocol takes), the protocol's and the HMI's periodic work,
+    /// the replies, the settings' effects on the HMI and the outputs, and what changed
+    /// to flash at rest.
+    pub fn service<M: MotionControl, F: NorFlash>(
+        &mut self,
+        host: HostLink<'_, '_>,
+        pins: PinLevels,
+        store: &mut SettingsStore<F>,
+        m: &mut M,
+        now_ms: u32,
+    ) -> Serviced {
+        self.port(host.port_open);
+        self.set_pins(pins, m, now_ms);
+        host.rx.pop_while(|b| self.protocol.take_byte(b, m, now_ms));
+        self.poll(m, now_ms);
+        if !host.port_open {
+            self.protocol.discard_output();
+        }
+        let mut out = [0u8; TX_PER_TICK];
+        let room = host.tx.free().min(out.len());
+        let n = out.get_mut(..room).map_or(0, |b| self.usb_tx(b));
+        host.tx.push(out.get(..n).unwrap_or(&[]));
+        // The planner took new settings when they changed (at rest, before the next
+        // line); what is left is the HMI, the outputs and the save.
+        let changed = self.protocol.machine_mut().take_settings_dirty();
+        if changed {
+            self.settings_changed();
+        }
+        self.persist(changed, store, m);
+        let s = self.protocol.machine().settings();
+        Serviced {
+            outputs: changed.then(|| OutputConfig::from(s)),
+            servo_pulse_us: (s.pen_mode() == PenMode::Servo)
+                .then(|| s.pen_servo_pulse_us(m.pen_down())),
+            alarmed: self.protocol.machine().alarm().is_some(),
+            polarity: InputPolarity::from(s),
+        }
+    }
+
+    /// The port's state this tick: opening it starts a session; the power-up notice
+    /// waits for a listener.
+    fn port(&mut self, open: bool) {
+        if open && !self.port_open {
+            self.protocol.start_session();
+        }
+        self.port_open = open;
+        if open {
+            if let Some(msg) = self.notice.take() {
+                self.protocol.notify(msg);
+            }
+        }
+    }
+
+    /// What changed goes to flash, at rest only: flash writes stall the CPU (its
+    /// instruction fetch waits), which a step in flight must not see. A save that fails
+    /// leaves the value in force until power-off and tells the host so: the `ok` of the
+    /// `$n=v`, `G10` or `$Nx=` that changed it has gone out already, so the report is a
+    /// `[MSG:...]` line (docs/grbl.md).
+    fn persist<M: MotionControl, F: NorFlash>(
+        &mut self,
+        settings_changed: bool,
+        store: &mut SettingsStore<F>,
+        m: &M,
+    ) {
+        self.saves.settings |= settings_changed;
+        self.saves.coords |= self.protocol.machine_mut().take_coords_dirty();
+        self.saves.startup |= self.protocol.take_startup_dirty();
+        if self.protocol.machine().busy(m) || self.saves == Saves::default() {
+            return;
+        }
+        let saves = core::mem::take(&mut self.saves);
+        let machine = self.protocol.machine();
+        let settings_ok = !saves.settings || store.save_settings(machine.settings()).is_ok();
+        let coords_ok = !saves.coords || store.save_coords(machine.interp().coords()).is_ok();
+        let mut startup_ok = true;
+        if saves.startup {
+            for i in 0..STARTUP_LINES {
+                let line = self.protocol.startup_line(i).unwrap_or("");
+                startup_ok &= store.save_startup(i, line).is_ok();
+            }
+        }
+        for (ok, msg) in [
+            (settings_ok, "Settings not saved: flash write failed"),
+            (coords_ok, "Offsets not saved: flash write failed"),
+            (startup_ok, "Startup lines not saved: flash write failed"),
+        ] {
+            if !ok {
+                #[cfg(feature = "defmt")]
+                defmt::warn!("{}", msg);
+                self.protocol.notify(msg);
+            }
+        }
     }
 
     /// USB bytes in; returns how many were taken (the rest stay in the endpoint).
@@ -162,54 +346,23 @@ impl Controller {
         }
     }
 
-    /// One keypad column scan: `rows` read while [`Keypad::column`] was driven.
+    /// One keypad column scan: `rows` read while [`Keypad::column`] was driven; each
+    /// key event goes through the HMI and its actions through the machine.
     pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) {
-        let events = self.keypad.feed(rows, now_ms);
-        for ev in events {
-            self.key_event(ev, m, now_ms);
+        for ev in self.keypad.feed(rows, now_ms) {
+            let st = self.status(m);
+            let actions = self.hmi.key(ev, &st, now_ms);
+            self.apply(&actions, m, now_ms);
         }
     }
 
-    /// One key event through the HMI. Out of line, so that the HMI's working state and
-    /// its actions live in this frame only while a key is handled, not in the caller's
-    /// (the firmware's keypad task) beside everything else inlined there.
-    #[inline(never)]
-    fn key_event<M: MotionControl>(&mut self, ev: KeyEvent, m: &mut M, now_ms: u32) {
-        let st = self.status(m);
-        let actions = self.key_actions(ev, &st, now_ms);
-        self.apply(&actions, m, now_ms);
-    }
-
-    /// The HMI's handling of one key alone, out of line like `tick_actions`: its
-    /// working state is gone before the actions are applied.
-    #[inline(never)]
-    fn key_actions(&mut self, ev: KeyEvent, st: &hmi::Status, now_ms: u32) -> hmi::Actions {
-        self.hmi.key(ev, st, now_ms)
-    }
-
-    /// Background work: the protocol's lines and messages, the HMI's timers, the
-    /// completion of a keypad abort, the busy LED.
+    /// Background work: the protocol's lines and messages, then the HMI's timers (the
+    /// completion of a keypad abort, the busy LED).
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         self.protocol.poll(m, now_ms);
-        self.hmi_tick(m, now_ms);
-    }
-
-    /// The HMI's timers. Out of line, so that its actions (a 440-byte list) are not
-    /// part of the caller's frame (the firmware's protocol task) while the protocol
-    /// runs, and the protocol's locals are gone while the actions are applied.
-    #[inline(never)]
-    fn hmi_tick<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         let st = self.status(m);
-        let actions = self.tick_actions(&st, now_ms);
+        let actions = self.hmi.tick(&st, now_ms);
         self.apply(&actions, m, now_ms);
-    }
-
-    /// The HMI's timer step alone, out of line too: its working state is gone before
-    /// the actions are applied (through the machine and the planner, the deeper
-    /// path).
-    #[inline(never)]
-    fn tick_actions(&mut self, st: &hmi::Status, now_ms: u32) -> hmi::Actions {
-        self.hmi.tick(st, now_ms)
     }
 
     fn apply<M: MotionControl>(&mut self, actions: &[Action], m: &mut M, now_ms: u32) {

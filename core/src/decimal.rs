@@ -1,6 +1,9 @@
 //! Decimal text without `core::fmt`: the byte [`Sink`] that replies are written to, and
 //! the number writers and float-to-integer conversions the protocol, the settings
-//! listing and the G-code interpreter share.
+//! listing and the G-code interpreter share; and the one long division ([`div_rem`])
+//! that wide integers (the interpreter's exact lengths, the digits of a number) go
+//! through, so that no 64- or 128-bit division routine lands in the image (on the
+//! Cortex-M3 those cost kilobytes of flash).
 
 use crate::fmath;
 
@@ -25,31 +28,61 @@ impl<const N: usize> Sink for heapless::String<N> {
     }
 }
 
+/// `n / d` and `n % d` for a divisor `1 <= d < 2^24`, by long division over bytes with
+/// the core's 32-bit divide (the remainder stays below 2^24, so a remainder and the
+/// next byte fit 32 bits). `d = 0` gives (0, 0).
+pub fn div_rem(n: u128, d: u32) -> (u128, u32) {
+    if d == 0 {
+        return (0, 0);
+    }
+    let mut q = n.to_be_bytes();
+    let mut r = 0u32;
+    // Leading zero bytes divide to zero bytes with no remainder.
+    for byte in q.iter_mut().skip((n.leading_zeros() / 8) as usize) {
+        let cur = (r << 8) | u32::from(*byte);
+        *byte = (cur / d) as u8; // below 256: r < d
+        r = cur % d;
+    }
+    (u128::from_be_bytes(q), r)
+}
+
+/// `a / d` rounded half away from zero, for a divisor `1 <= d < 2^24`.
+pub fn round_div(a: i128, d: u32) -> i128 {
+    let (q, r) = div_rem(a.unsigned_abs(), d);
+    let q = q + u128::from(u64::from(r) * 2 >= u64::from(d));
+    let q = i128::try_from(q).unwrap_or(i128::MAX);
+    if a < 0 {
+        -q
+    } else {
+        q
+    }
+}
+
 /// `a` in decimal with `decimals` digits after a point (at least one before it),
-/// behind a `-` if `neg`. Long division by 10 over 16-bit limbs with the core's 32-bit
-/// divide: no 64-bit division routine.
+/// behind a `-` if `neg`.
 pub fn put_decimal(w: &mut dyn Sink, a: u64, neg: bool, decimals: usize) {
-    let mut buf = [0u8; 24];
+    let mut buf = [0u8; DECIMAL_MAX];
+    let n = decimal(&mut buf, a, neg, decimals);
+    w.put(buf.get(buf.len() - n..).unwrap_or(&[]));
+}
+
+/// The longest text [`decimal`] writes: 20 digits of a u64, a point and a sign.
+pub const DECIMAL_MAX: usize = 24;
+
+/// The one decimal writer: `a` in decimal with `decimals` digits after a point (at
+/// least one before it), behind a `-` if `neg`, at the end of `buf`; returns its
+/// length. Long division by 10 over 16-bit limbs with the core's 32-bit divide: no
+/// 64-bit division routine.
+pub fn decimal(buf: &mut [u8; DECIMAL_MAX], a: u64, neg: bool, decimals: usize) -> usize {
     let mut start = buf.len();
-    let mut limbs = [
-        (a >> 48) as u32,
-        (a >> 32) as u32 & 0xFFFF,
-        (a >> 16) as u32 & 0xFFFF,
-        a as u32 & 0xFFFF,
-    ];
+    let mut rest = u128::from(a);
     let mut k = 0;
     loop {
-        let mut r = 0u32;
-        let mut more = false;
-        for l in limbs.iter_mut() {
-            let cur = (r << 16) | *l;
-            *l = cur / 10;
-            r = cur % 10;
-            more |= *l != 0;
-        }
+        let (q, digit) = div_rem(rest, 10);
+        rest = q;
         start -= 1;
         if let Some(d) = buf.get_mut(start) {
-            *d = b'0' + r as u8;
+            *d = b'0' + digit as u8;
         }
         k += 1;
         if k == decimals {
@@ -58,7 +91,7 @@ pub fn put_decimal(w: &mut dyn Sink, a: u64, neg: bool, decimals: usize) {
                 *d = b'.';
             }
         }
-        if !more && k > decimals {
+        if rest == 0 && k > decimals {
             break;
         }
     }
@@ -68,18 +101,16 @@ pub fn put_decimal(w: &mut dyn Sink, a: u64, neg: bool, decimals: usize) {
             *d = b'-';
         }
     }
-    w.put(buf.get(start..).unwrap_or(&[]));
+    buf.len() - start
 }
 
 /// `x` rounded half away from zero to an `i32` (saturating): one copy of the
 /// conversion's range checks for every caller.
-#[inline(never)]
 pub fn round_i32(x: f32) -> i32 {
     fmath::round(x) as i32
 }
 
-/// `x` truncated to a `u32` (saturating, NaN = 0), out of line for the same reason.
-#[inline(never)]
+/// `x` truncated to a `u32` (saturating, NaN = 0).
 pub fn to_u32(x: f32) -> u32 {
     x as u32
 }
@@ -102,6 +133,29 @@ pub fn write_fixed3(w: &mut dyn Sink, v: f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_division_matches_the_builtin_one() {
+        let mut x = 0x9E37_79B9_7F4A_7C15_F39C_C060_5CED_C834u128;
+        for d in [1u32, 2, 3, 5, 10, 1000, 15_625, 1_000_000, (1 << 24) - 1] {
+            for _ in 0..200 {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                for n in [x, x >> 40, x >> 90, x & 0xFFFF, 0] {
+                    assert_eq!(
+                        div_rem(n, d),
+                        (n / u128::from(d), (n % u128::from(d)) as u32)
+                    );
+                }
+            }
+        }
+        assert_eq!(round_div(15, 10), 2);
+        assert_eq!(round_div(-15, 10), -2);
+        assert_eq!(round_div(14, 10), 1);
+        assert_eq!(round_div(-14, 10), -1);
+        assert_eq!(round_div(7, 2), 4);
+    }
 
     #[test]
     fn fixed_point_output_matches_three_decimal_rounding() {

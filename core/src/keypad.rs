@@ -91,8 +91,6 @@ impl Key {
     }
 
     /// Whether holding this key auto-repeats. Digits never do (one press, one digit).
-    #[inline(never)]
-    // (A call: inlined at its callers it costs more flash.)
     pub fn repeats(self) -> bool {
         matches!(self, Key::Back | Key::Up | Key::Down)
     }

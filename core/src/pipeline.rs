@@ -8,8 +8,9 @@
 //! (G4 dwells, servo pen lifts) wait in order behind the moves before them and run as
 //! pure-wait step commands, so their timing comes from the same timer as the steps;
 //! hold/resume/clear map onto the preparation and the planner; the position is the
-//! executor's count. Owned by the simulator's issue; the firmware's prep task uses it
-//! through the same [`StepSide`] trait.
+//! executor's count. The firmware (its preparation task, `inkstep::steps::BoardSide`)
+//! and the simulator (`SimSide`) each give it their interrupt side through the same
+//! [`StepSide`] trait.
 
 use crate::interpolation::Tick;
 use crate::machine::{MotionControl, QueueFull};
@@ -112,46 +113,20 @@ impl<S: StepSide> Pipeline<S> {
         prep: PrepConfig,
         side: S,
     ) -> &'a mut Self {
-        use core::ptr::addr_of_mut;
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        let _: fn(&Self) = |Self {
-                                planner: _,
-                                prep: _,
-                                side: _,
-                                timer_hz: _,
-                                pending: _,
-                                wait_left: _,
-                                waiting: _,
-                                pen_down: _,
-                                pen_lift_ms: _,
-                                held: _,
-                                gather: _,
-                            }| {};
         let pos = side.position();
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (no reference to the uninitialised
-        // pipeline is made) and the list below names every field, so the pipeline is
-        // initialised when `assume_init_mut` runs.
-        unsafe {
-            Planner::init_in(
-                &mut *addr_of_mut!((*p).planner).cast::<core::mem::MaybeUninit<Planner>>(),
-                planner_config(s),
-                pos,
-            );
-            addr_of_mut!((*p).prep).write(Prep::new(prep, pos));
-            addr_of_mut!((*p).side).write(side);
-            addr_of_mut!((*p).timer_hz).write(prep.timer_hz);
-            addr_of_mut!((*p).pending).write(Deque::new());
-            addr_of_mut!((*p).wait_left).write(0);
-            addr_of_mut!((*p).waiting).write(false);
-            addr_of_mut!((*p).pen_down).write(false);
-            addr_of_mut!((*p).pen_lift_ms).write(s.pen_lift_ms());
-            addr_of_mut!((*p).held).write(false);
-            addr_of_mut!((*p).gather).write(0);
-            slot.assume_init_mut()
-        }
+        crate::init_fields!(slot => Self {
+            planner in |cell| Planner::init_in(cell, planner_config(s), pos),
+            prep = Prep::new(prep, pos),
+            side = side,
+            timer_hz = prep.timer_hz,
+            pending = Deque::new(),
+            wait_left = 0,
+            waiting = false,
+            pen_down = false,
+            pen_lift_ms = s.pen_lift_ms(),
+            held = false,
+            gather = 0,
+        })
     }
 
     pub fn side(&self) -> &S {
@@ -172,10 +147,6 @@ impl<S: StepSide> Pipeline<S> {
         let pos = self.side.position();
         self.planner.reconfigure(&planner_config(s), pos);
         self.pen_lift_ms = s.pen_lift_ms();
-    }
-    /// The servo pen's commanded state.
-    pub fn pen_down(&self) -> bool {
-        self.pen_down
     }
     /// Source line of the block in execution.
     pub fn line(&self) -> Option<u32> {
@@ -201,7 +172,11 @@ impl<S: StepSide> Pipeline<S> {
         }
         let horizon = self.timer_hz / 1000 * HORIZON_MS;
         let queued = self.side.queued();
-        if queued == 0 && self.prep.is_idle_block() && self.planner.len() == 1 && self.pending.is_empty() {
+        if queued == 0
+            && self.prep.is_idle_block()
+            && self.planner.len() == 1
+            && self.pending.is_empty()
+        {
             // At rest with one move planned: the next ones of a stream are usually a
             // millisecond or two behind it. Waiting that long for them (at most
             // START_GATHER_MS) lets the first move run into the second instead of
@@ -398,22 +373,26 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     fn configure(&mut self, s: &Settings) {
         self.reconfigure(s);
     }
+    fn pen_down(&self) -> bool {
+        self.pen_down
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::motion::{Feed, X, Y};
-    use heapless::spsc::Queue;
+    use crate::stepper::queue::StepQueue;
+    use crate::stepper::CmdSource;
 
     /// A side whose "interrupt" is the test: it drains the queue by hand.
     struct TestSide {
-        queue: Queue<StepCmd, 256>,
+        queue: StepQueue<256>,
         pos: StepPos,
     }
 
     impl StepSide for TestSide {
-        type Sink = Queue<StepCmd, 256>;
+        type Sink = StepQueue<256>;
         fn sink(&mut self) -> &mut Self::Sink {
             &mut self.queue
         }
@@ -421,13 +400,13 @@ mod tests {
             self.pos
         }
         fn is_running(&self) -> bool {
-            !self.queue.is_empty()
+            self.queue.queued() > 0
         }
         fn queued(&self) -> usize {
-            self.queue.len()
+            self.queue.queued()
         }
         fn flush(&mut self) {
-            while self.queue.dequeue().is_some() {}
+            self.queue.clear();
         }
         fn set_position(&mut self, p: StepPos) {
             self.pos = p;
@@ -444,7 +423,7 @@ mod tests {
                 break;
             }
             let side = pipeline.side_mut();
-            while let Some(c) = side.queue.dequeue() {
+            while let Some(c) = side.queue.pop() {
                 c.tick().apply(&mut side.pos);
                 if c.tick().steps() & (1 << axis) != 0 {
                     fastest = fastest.min(c.wait());
@@ -470,7 +449,7 @@ mod tests {
             &s,
             PrepConfig::default(),
             TestSide {
-                queue: Queue::new(),
+                queue: StepQueue::new(),
                 pos: [0; 3],
             },
         );

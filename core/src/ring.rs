@@ -78,6 +78,17 @@ impl<const N: usize> ByteRing<N> {
         (ByteTx { q: self }, ByteRx { q: self })
     }
 
+    /// Bytes waiting (for an owner of both ends, e.g. the simulator).
+    pub fn len(&self) -> usize {
+        self.tail
+            .load(Ordering::Relaxed)
+            .wrapping_sub(self.head.load(Ordering::Relaxed)) as usize
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
     fn slot(&self, index: u32) -> Option<&AtomicU8> {
         self.slots.get((index & Self::MASK) as usize)
     }
@@ -132,6 +143,33 @@ impl<const N: usize> ByteRx<'_, N> {
         store_release(&self.q.head, head);
         n
     }
+
+    /// Hands bytes to `take`, oldest first, while it accepts them: a byte it refuses
+    /// stays at the head for the next call (the protocol's back-pressure). Returns how
+    /// many were taken.
+    pub fn pop_while(&mut self, mut take: impl FnMut(u8) -> bool) -> usize {
+        let start = self.q.head.load(Ordering::Relaxed);
+        let tail = load_acquire(&self.q.tail);
+        let mut head = start;
+        while head != tail {
+            let b = self.q.slot(head).map_or(0, |s| s.load(Ordering::Relaxed));
+            if !take(b) {
+                break;
+            }
+            head = head.wrapping_add(1);
+        }
+        store_release(&self.q.head, head);
+        head.wrapping_sub(start) as usize
+    }
+
+    /// Bytes waiting.
+    pub fn len(&self) -> usize {
+        load_acquire(&self.q.tail).wrapping_sub(self.q.head.load(Ordering::Relaxed)) as usize
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 #[cfg(test)]
@@ -161,6 +199,27 @@ mod tests {
         assert_eq!(&all[..8], b"fghklmno");
         assert_eq!(rx.pop(&mut all), 0);
         assert_eq!(tx.free(), 8);
+    }
+
+    #[test]
+    fn pop_while_leaves_a_refused_byte_at_the_head() {
+        let mut ring: ByteRing<8> = ByteRing::new();
+        let (mut tx, mut rx) = ring.split();
+        tx.push(b"abcdef");
+        assert_eq!(rx.pop_while(|b| b != b'd'), 3);
+        assert_eq!(rx.len(), 3);
+        assert_eq!(rx.pop_while(|_| false), 0, "d stays");
+        tx.push(b"ghij");
+        let mut got = std::vec::Vec::new();
+        assert_eq!(
+            rx.pop_while(|b| {
+                got.push(b);
+                true
+            }),
+            7
+        );
+        assert_eq!(got, b"defghij", "across the end of the buffer");
+        assert!(rx.is_empty());
     }
 
     proptest::proptest! {

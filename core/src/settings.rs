@@ -7,9 +7,9 @@
 //! values (`steps_per_mm(X)`, `homing_enabled()`, ...). Every value fits an `f32`
 //! exactly (integers stay below 2^24).
 //!
-//! The board carries only the columns it needs (numbers, kinds, defaults and ranges,
-//! extracted from [`TABLE`] at compile time); the descriptions stay on the host side
-//! (docs/grbl.md is generated from them), as Grbl 1.1 prints `$n=value` only.
+//! The board carries only what it looks up (numbers, kinds and ranges in `ENTRIES`, and
+//! the defaults, taken from [`TABLE`] at compile time); the descriptions stay on the
+//! host side (docs/grbl.md is generated from them), as Grbl 1.1 prints `$n=value` only.
 
 use crate::crc::crc32;
 use crate::decimal::{put_int, to_u32, write_fixed3, Sink};
@@ -298,80 +298,50 @@ pub const TABLE: [Desc; 44] = [
 /// Number of settings.
 pub const COUNT: usize = TABLE.len();
 
-/// One column of [`TABLE`], at compile time.
-macro_rules! column {
-    ($ty:ty, $zero:expr, $field:ident) => {{
-        let mut out: [$ty; COUNT] = [$zero; COUNT];
-        let mut i = 0;
-        while i < COUNT {
-            out[i] = TABLE[i].$field;
-            i += 1;
-        }
-        out
-    }};
+/// What the board looks up of each [`TABLE`] entry at run time: its number, kind and
+/// range (the defaults are copied once into [`Settings::default`]; the descriptions
+/// stay on the host side, as Grbl 1.1 prints `$n=value` only).
+#[derive(Clone, Copy)]
+struct Entry {
+    number: u16,
+    kind: Kind,
+    min: f32,
+    max: f32,
 }
-static NUMBERS: [u16; COUNT] = column!(u16, 0, number);
-static KINDS: [Kind; COUNT] = column!(Kind, Kind::Int, kind);
-static DEFAULTS: [f32; COUNT] = column!(f32, 0.0, default);
 
-/// Distinct range bounds (min or max) of [`TABLE`], at compile time: the entries keep
-/// one-byte indices into it instead of two floats each.
-const fn bounds<const N: usize>() -> ([f32; N], usize) {
-    let mut out = [0.0f32; N];
-    let mut n = 0;
-    let mut i = 0;
-    while i < 2 * COUNT {
-        let v = if i < COUNT {
-            TABLE[i].min
-        } else {
-            TABLE[i - COUNT].max
-        };
-        let mut k = 0;
-        while k < n && out[k].to_bits() != v.to_bits() {
-            k += 1;
-        }
-        if k == n {
-            out[n] = v;
-            n += 1;
-        }
-        i += 1;
-    }
-    (out, n)
-}
-const BOUNDS_LEN: usize = bounds::<{ 2 * COUNT }>().1;
-static BOUNDS: [f32; BOUNDS_LEN] = {
-    let all = bounds::<{ 2 * COUNT }>().0;
-    let mut out = [0.0f32; BOUNDS_LEN];
-    let mut i = 0;
-    while i < BOUNDS_LEN {
-        out[i] = all[i];
-        i += 1;
-    }
-    out
-};
-/// Per entry: the indices of its min and max in [`BOUNDS`].
-static RANGES: [[u8; 2]; COUNT] = {
-    const fn find(v: f32) -> u8 {
-        let mut k = 0;
-        while BOUNDS[k].to_bits() != v.to_bits() {
-            k += 1;
-        }
-        k as u8
-    }
-    let mut out = [[0u8; 2]; COUNT];
+/// [`TABLE`]'s numbers, kinds and ranges, built at compile time.
+static ENTRIES: [Entry; COUNT] = {
+    let blank = Entry {
+        number: 0,
+        kind: Kind::Int,
+        min: 0.0,
+        max: 0.0,
+    };
+    let mut out = [blank; COUNT];
     let mut i = 0;
     while i < COUNT {
-        out[i] = [find(TABLE[i].min), find(TABLE[i].max)];
+        let d = &TABLE[i];
+        out[i] = Entry {
+            number: d.number,
+            kind: d.kind,
+            min: d.min,
+            max: d.max,
+        };
         i += 1;
     }
     out
 };
 
-/// Allowed range of table entry `i`.
-fn range(i: usize) -> Option<(f32, f32)> {
-    let &[lo, hi] = RANGES.get(i)?;
-    Some((*BOUNDS.get(usize::from(lo))?, *BOUNDS.get(usize::from(hi))?))
-}
+/// The defaults, in table order (computed at compile time).
+const DEFAULTS: [f32; COUNT] = {
+    let mut out = [0.0; COUNT];
+    let mut i = 0;
+    while i < COUNT {
+        out[i] = TABLE[i].default;
+        i += 1;
+    }
+    out
+};
 
 /// Table index of setting `number`, for the accessors: evaluated at compile time, so
 /// a number missing from the table fails the build.
@@ -467,7 +437,7 @@ impl Default for Settings {
 
 /// Table index of setting `number`.
 pub fn index_of(number: u16) -> Option<usize> {
-    NUMBERS.iter().position(|&n| n == number)
+    ENTRIES.iter().position(|e| e.number == number)
 }
 
 impl Settings {
@@ -479,7 +449,7 @@ impl Settings {
     /// Set `$number = value` with Grbl's checks. Integer kinds are truncated toward zero.
     pub fn set(&mut self, number: u16, value: f32) -> Result<(), SettingError> {
         let i = index_of(number).ok_or(SettingError::Invalid)?;
-        let (Some(&kind), Some((min, max))) = (KINDS.get(i), range(i)) else {
+        let Some(&Entry { kind, min, max, .. }) = ENTRIES.get(i) else {
             return Err(SettingError::Invalid);
         };
         if !value.is_finite() {
@@ -687,9 +657,8 @@ impl Settings {
 
     /// Write `$n=value` for table entry `index` (no line ending). `None` past the end.
     pub fn write_entry(&self, index: usize, w: &mut dyn Sink) -> Option<()> {
-        let number = *NUMBERS.get(index)?;
+        let Entry { number, kind, .. } = *ENTRIES.get(index)?;
         let v = *self.vals.get(index)?;
-        let kind = *KINDS.get(index)?;
         w.put(b"$");
         put_int(w, i32::from(number));
         w.put(b"=");
@@ -741,7 +710,7 @@ impl Settings {
         let mut s = Settings::default();
         let values = body.get(4..).unwrap_or(&[]);
         for (i, (slot, chunk)) in s.vals.iter_mut().zip(values.chunks_exact(4)).enumerate() {
-            let (min, max) = range(i).ok_or(ImageError::Range)?;
+            let Entry { min, max, .. } = *ENTRIES.get(i).ok_or(ImageError::Range)?;
             let v = f32::from_le_bytes(chunk.try_into().map_err(|_| ImageError::Length)?);
             if !v.is_finite() || v < min || v > max {
                 return Err(ImageError::Range);

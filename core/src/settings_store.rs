@@ -20,19 +20,16 @@
 //! stale layout or damaged data is never taken for settings: the store falls back to
 //! defaults and says so.
 //!
-//! The store is synchronous: flash writes stall the CPU anyway, and the firmware only
-//! saves while the machine is at rest. [`BlockingFlash`] wraps the blocking
-//! `embedded-storage` flash (the stm32f1xx-hal writer, the host mocks).
+//! The store is synchronous, over any blocking `embedded-storage` NOR flash (the
+//! board's internal flash, the simulator's and the tests' mocks): flash writes stall
+//! the CPU anyway, and the controller only saves while the machine is at rest.
 
 use crate::crc::crc32;
 use crate::gcode::interpreter::Coords;
 use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::motion::AXES;
 use crate::settings::{Settings, IMAGE_LEN};
-use core::future::Future;
 use core::ops::Range;
-use core::pin::pin;
-use core::task::{Context, Poll, Waker};
 use embedded_storage::nor_flash::NorFlash;
 
 const KEY_SETTINGS: u8 = 0;
@@ -40,9 +37,10 @@ const KEY_COORDS: u8 = 1;
 const KEY_STARTUP: u8 = 2; // 2 .. 2 + STARTUP_LINES
 const KEYS: usize = 2 + STARTUP_LINES;
 
-/// Coordinate image: version, 8 x 3 floats, CRC-32.
-const COORDS_LEN: usize = 1 + 8 * AXES * 4 + 4;
-const COORDS_VERSION: u8 = 1;
+/// Coordinate image: version, 8 x 3 nanometre values (i64), CRC-32. Version 1 held
+/// f32 mm; a stored version 1 image reads as corrupt (defaults, and the user is told).
+const COORDS_LEN: usize = 1 + 8 * AXES * 8 + 4;
+const COORDS_VERSION: u8 = 2;
 
 /// Page header: sequence number, then its CRC-32 mixed with this tag ("inkstep store
 /// v1"), so that neither erased flash nor another layout passes for a header.
@@ -129,9 +127,9 @@ pub struct SettingsStore<F> {
     page_size: u32,
 }
 
-impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
+impl<F: NorFlash> SettingsStore<F> {
     /// `range` must be page aligned and hold at least two pages.
-    pub fn new(flash: BlockingFlash<F>, range: Range<u32>) -> Result<Self, RangeError> {
+    pub fn new(flash: F, range: Range<u32>) -> Result<Self, RangeError> {
         let page_size = F::ERASE_SIZE as u32;
         if page_size < rec_size(255) * 2
             || !range.start.is_multiple_of(page_size)
@@ -148,13 +146,13 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
     }
 
     /// Give the flash back (tests use it to "power-cycle").
-    pub fn into_flash(self) -> BlockingFlash<F> {
+    pub fn into_flash(self) -> F {
         self.flash
     }
 
     fn read<'b>(&mut self, buf: &'b mut Buf, addr: u32, len: usize) -> Result<&'b [u8], F::Error> {
         let part = buf.get_mut(..len).unwrap_or(&mut []);
-        self.flash.0.read(addr, part)?;
+        self.flash.read(addr, part)?;
         Ok(part)
     }
 
@@ -240,7 +238,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         };
         let n = usize::from(n);
         let read = match out.get_mut(..n) {
-            Some(dst) => self.flash.0.read(at + REC_HEAD as u32, dst).is_ok(),
+            Some(dst) => self.flash.read(at + REC_HEAD as u32, dst).is_ok(),
             None => false,
         };
         if read {
@@ -264,7 +262,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
                 c.copy_from_slice(&crc.to_le_bytes());
             }
         }
-        self.flash.0.write(at, buf.get(..size).unwrap_or(&[]))?;
+        self.flash.write(at, buf.get(..size).unwrap_or(&[]))?;
         Ok(size as u32)
     }
 
@@ -302,7 +300,7 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         let end = target + self.page_size;
         // Normally erased when it was vacated; not after a cut or on a dirty region.
         if !self.blank(buf, target, end) {
-            self.flash.0.erase(target, end)?;
+            self.flash.erase(target, end)?;
         }
         let mut at = target + PAGE_HEAD;
         for k in 0..KEYS as u8 {
@@ -313,7 +311,6 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
             } else if let Some((from, n)) = old {
                 let data = buf.get_mut(REC_HEAD..REC_HEAD + usize::from(n));
                 self.flash
-                    .0
                     .read(from + REC_HEAD as u32, data.unwrap_or(&mut []))?;
                 n
             } else {
@@ -329,10 +326,10 @@ impl<F: NorFlash> SettingsStore<BlockingFlash<F>> {
         let mut head = [0u8; PAGE_HEAD as usize];
         head[..4].copy_from_slice(&seq.to_le_bytes());
         head[4..].copy_from_slice(&(crc32(&seq.to_le_bytes()) ^ PAGE_TAG).to_le_bytes());
-        self.flash.0.write(target, &head)?;
+        self.flash.write(target, &head)?;
         // Everything live is in the new page: vacate the old one.
         if let Some(s) = scan {
-            self.flash.0.erase(s.page, s.page + self.page_size)?;
+            self.flash.erase(s.page, s.page + self.page_size)?;
         }
         Ok(())
     }
@@ -426,7 +423,7 @@ fn coords_to_image(c: &Coords) -> [u8; COORDS_LEN] {
     out[0] = COORDS_VERSION;
     let all = c.wcs.iter().chain([&c.g28, &c.g30]).flat_map(|p| p.iter());
     if let Some(body) = out.get_mut(1..COORDS_LEN - 4) {
-        for (chunk, v) in body.chunks_exact_mut(4).zip(all) {
+        for (chunk, v) in body.chunks_exact_mut(8).zip(all) {
             chunk.copy_from_slice(&v.to_le_bytes());
         }
     }
@@ -443,29 +440,10 @@ fn coords_from_image(img: &[u8; COORDS_LEN]) -> Option<Coords> {
         return None;
     }
     let mut c = Coords::default();
-    let mut chunks = body.get(1..)?.chunks_exact(4);
+    let mut chunks = body.get(1..)?.chunks_exact(8);
     let points = c.wcs.iter_mut().chain([&mut c.g28, &mut c.g30]);
     for v in points.flat_map(|p| p.iter_mut()) {
-        *v = f32::from_le_bytes(chunks.next()?.try_into().ok()?);
-        if !v.is_finite() {
-            return None;
-        }
+        *v = i64::from_le_bytes(chunks.next()?.try_into().ok()?);
     }
     Some(c)
 }
-
-/// Run a future to completion by polling it. Only for futures that complete without
-/// waiting for an interrupt (the store itself is synchronous and does not need it).
-pub fn block_on<T>(f: impl Future<Output = T>) -> T {
-    let mut f = pin!(f);
-    let mut cx = Context::from_waker(Waker::noop());
-    loop {
-        if let Poll::Ready(v) = f.as_mut().poll(&mut cx) {
-            return v;
-        }
-    }
-}
-
-/// The blocking `embedded-storage` NOR flash the store works on (kept as a wrapper so
-/// that the firmware's and the tests' types stay as they were).
-pub struct BlockingFlash<F>(pub F);

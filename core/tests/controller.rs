@@ -3,13 +3,85 @@
 
 mod common;
 
+use common::flash::{CutFlash, STORE_RANGE};
 use common::{drain, FakePlanner};
-use inkstep_core::controller::Controller;
-use inkstep_core::hmi::{MachineState, Page, BOOT_MS};
+use inkstep_core::controller::{Controller, HostLink, Serviced, HOST_RX_RING, HOST_TX_RING};
+use inkstep_core::hmi::{Beep, MachineState, Page, BOOT_MS};
 use inkstep_core::keypad::{Key, KEYMAP};
+use inkstep_core::machine::{Inputs, MotionControl, PinLevels};
 use inkstep_core::motion::Command;
 use inkstep_core::motion::{Path, X};
+use inkstep_core::ring::ByteRing;
 use inkstep_core::settings::Settings;
+use inkstep_core::settings_store::SettingsStore;
+
+/// The pins at rest with the board's wiring: switches closed (low), the feed-hold and
+/// cycle-start inputs released (high).
+const AT_REST: PinLevels = PinLevels {
+    estop: false,
+    limits: [Some(false), Some(false), None],
+    feed_hold: true,
+    cycle_start: true,
+};
+
+/// The shell's side of the protocol tick, as the firmware's task and the simulator
+/// have it: the host's byte rings, the pins, the port and the store.
+struct Shell {
+    rx: ByteRing<HOST_RX_RING>,
+    tx: ByteRing<HOST_TX_RING>,
+    pins: PinLevels,
+    port_open: bool,
+    store: SettingsStore<CutFlash>,
+    now: u32,
+}
+
+impl Shell {
+    /// A board whose flash holds `settings`, booted, with the host's port open.
+    fn boot(settings: &Settings) -> (Shell, Controller) {
+        let mut store = SettingsStore::new(CutFlash::new(), STORE_RANGE).unwrap();
+        store.save_settings(settings).unwrap();
+        let c = inkstep_core::in_place::build(|slot| Controller::boot_in(slot, &mut store, 0));
+        let shell = Shell {
+            rx: ByteRing::new(),
+            tx: ByteRing::new(),
+            pins: AT_REST,
+            port_open: true,
+            store,
+            now: 0,
+        };
+        (shell, c)
+    }
+
+    fn tick(&mut self, c: &mut Controller, m: &mut FakePlanner) -> Serviced {
+        self.now += 1;
+        let (_, mut rx) = self.rx.split();
+        let (mut tx, _) = self.tx.split();
+        let host = HostLink {
+            rx: &mut rx,
+            tx: &mut tx,
+            port_open: self.port_open,
+        };
+        c.service(host, self.pins, &mut self.store, m, self.now)
+    }
+
+    /// `bytes` from the host, then ticks until everything is taken and answered.
+    fn send(&mut self, c: &mut Controller, m: &mut FakePlanner, bytes: &[u8]) -> String {
+        assert_eq!(self.rx.split().0.push(bytes), bytes.len());
+        let mut out = String::new();
+        for _ in 0..50 {
+            self.tick(c, m);
+            out += &self.read();
+        }
+        out
+    }
+
+    /// What the host has received.
+    fn read(&mut self) -> String {
+        let mut buf = [0u8; HOST_TX_RING];
+        let n = self.tx.split().1.pop(&mut buf);
+        String::from_utf8(buf[..n].to_vec()).unwrap()
+    }
+}
 
 /// Scan the matrix every 5 ms from `from` to `to` with `held` keys down.
 fn scan(c: &mut Controller, m: &mut FakePlanner, held: &[Key], from: u32, to: u32) {
@@ -150,4 +222,184 @@ fn keypad_set_origin_keeps_modal_state_and_overrides() {
         "{:?}",
         m.log.last()
     );
+}
+
+/// `$215` inverts the e-stop, feed-hold and cycle-start inputs (not only the e-stop):
+/// the same pin levels read as active, and a released-level feed-hold pin holds
+/// motion once inverted.
+#[test]
+fn setting_215_inverts_feed_hold_and_cycle_start_too() {
+    let mut m = FakePlanner::new(16);
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    sh.tick(&mut c, &mut m);
+    assert_eq!(c.protocol().machine().inputs(), Inputs::default());
+    // With $215=1 the same pins at rest read as all three inputs active.
+    let mut s = Settings::default();
+    s.set(215, 1.0).unwrap();
+    let (mut sh, mut c) = Shell::boot(&s);
+    sh.tick(&mut c, &mut m);
+    let i = c.protocol().machine().inputs();
+    assert!(i.estop && i.feed_hold && i.cycle_start, "{i:?}");
+    // Wired for the inversion: the e-stop pin high (released), feed hold and cycle
+    // start low (released)...
+    let (mut sh, mut c) = Shell::boot(&s);
+    sh.pins.estop = true;
+    sh.pins.feed_hold = false;
+    sh.pins.cycle_start = false;
+    sh.tick(&mut c, &mut m);
+    assert_eq!(c.protocol().machine().inputs(), Inputs::default());
+    m.rate = 1;
+    sh.send(&mut c, &mut m, b"G1 X10 F600\n");
+    assert!(m.is_moving());
+    // ...and a high feed-hold pin is a hold.
+    sh.pins.feed_hold = true;
+    sh.tick(&mut c, &mut m);
+    let i = c.protocol().machine().inputs();
+    assert!(i.feed_hold && !i.cycle_start && !i.estop, "{i:?}");
+    assert!(m.holding, "the inverted feed-hold pin holds motion");
+    // The same levels through the interrupt path.
+    sh.pins.feed_hold = false;
+    sh.pins.cycle_start = true;
+    c.set_pins(sh.pins, &mut m, sh.now);
+    assert!(c.protocol().machine().inputs().cycle_start);
+    assert!(!m.holding, "released and cycle start: resumed");
+}
+
+/// A save that fails is reported to the sender after the `ok` (which has gone out
+/// when the save runs, at rest): the setting is in force until power-off.
+#[test]
+fn a_failed_settings_save_is_reported_to_the_sender() {
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let mut m = FakePlanner::new(16);
+    let mut flash = sh.store.into_flash();
+    flash.cut_at = Some(flash.ops); // the next write or erase fails, and all after it
+    sh.store = SettingsStore::new(flash, STORE_RANGE).unwrap();
+    let out = sh.send(&mut c, &mut m, b"$100=100\n");
+    assert!(
+        out.ends_with("ok\r\n[MSG:Settings not saved: flash write failed]\r\n"),
+        "{out:?}"
+    );
+    assert_eq!(c.protocol().machine().settings().steps_per_mm(X), 100.0);
+    let out = sh.send(&mut c, &mut m, b"G10 L2 P1 X5\n");
+    assert!(
+        out.contains("[MSG:Offsets not saved: flash write failed]"),
+        "{out:?}"
+    );
+}
+
+/// Settings, offsets and startup lines go to flash, and only at rest (flash writes
+/// stall the CPU); a later boot from the same flash has them.
+#[test]
+fn changes_are_saved_at_rest_and_survive_a_reboot() {
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let mut m = FakePlanner::new(16);
+    m.rate = 1;
+    sh.send(
+        &mut c,
+        &mut m,
+        b"$110=1234\n$N0=G21\nG1 X1 F600\nG10 L2 P1 X5\n",
+    );
+    assert!(m.is_moving());
+    sh.tick(&mut c, &mut m);
+    let (coords, _) = sh.store.load_coords();
+    assert_eq!(coords.wcs[0][X], 0, "nothing written while moving");
+    m.run_all();
+    sh.tick(&mut c, &mut m);
+    let (coords, _) = sh.store.load_coords();
+    assert_eq!(coords.wcs[0][X], 5_000_000, "5 mm in nanometres");
+    let mut store = sh.store;
+    let c2 = inkstep_core::in_place::build(|slot| Controller::boot_in(slot, &mut store, 0));
+    assert_eq!(c2.protocol().machine().settings().max_rate(X), 1234.0);
+    assert_eq!(c2.protocol().startup_line(0), Some("G21"));
+}
+
+/// Opening the port starts a session: the welcome line, and in alarm how to unlock
+/// (as after a reset); while the port is closed nothing is kept for the host.
+#[test]
+fn opening_the_port_sends_the_welcome_and_in_alarm_the_unlock_hint() {
+    let mut s = Settings::default();
+    s.set(22, 1.0).unwrap(); // homing enabled: the machine starts locked
+    let (mut sh, mut c) = Shell::boot(&s);
+    let mut m = FakePlanner::new(16);
+    sh.port_open = false;
+    for _ in 0..5 {
+        sh.tick(&mut c, &mut m);
+    }
+    assert_eq!(sh.read(), "", "nobody listens: nothing kept");
+    sh.port_open = true;
+    let out = sh.send(&mut c, &mut m, b"");
+    assert_eq!(
+        out,
+        "\r\nGrbl 1.1h ['$' for help]\r\n[MSG:'$H'|'$X' to unlock]\r\n"
+    );
+    // Unlocked, a reopened port gets the welcome alone.
+    sh.send(&mut c, &mut m, b"$X\n");
+    sh.port_open = false;
+    sh.tick(&mut c, &mut m);
+    sh.port_open = true;
+    assert_eq!(
+        sh.send(&mut c, &mut m, b""),
+        "\r\nGrbl 1.1h ['$' for help]\r\n"
+    );
+    // A reset in alarm says it too.
+    m.rate = 1;
+    sh.send(&mut c, &mut m, b"G1 X10 F600\n");
+    let out = sh.send(&mut c, &mut m, b"\x18");
+    assert!(
+        out.ends_with("ALARM:3\r\n\r\nGrbl 1.1h ['$' for help]\r\n[MSG:'$H'|'$X' to unlock]\r\n"),
+        "{out:?}"
+    );
+}
+
+/// A corrupt store's notice waits until the host listens, after the welcome.
+#[test]
+fn the_power_up_notice_waits_for_the_host() {
+    let mut flash = CutFlash::new();
+    flash.mem.fill(0x00); // not erased, not a store: corrupt
+    let mut store = SettingsStore::new(flash, STORE_RANGE).unwrap();
+    let mut c = inkstep_core::in_place::build(|slot| Controller::boot_in(slot, &mut store, 0));
+    let mut sh = Shell {
+        rx: ByteRing::new(),
+        tx: ByteRing::new(),
+        pins: AT_REST,
+        port_open: false,
+        store,
+        now: 0,
+    };
+    let mut m = FakePlanner::new(16);
+    sh.tick(&mut c, &mut m);
+    assert_eq!(sh.read(), "");
+    sh.port_open = true;
+    assert_eq!(
+        sh.send(&mut c, &mut m, b""),
+        "\r\nGrbl 1.1h ['$' for help]\r\n[MSG:Stored data corrupt, defaults restored]\r\n"
+    );
+}
+
+/// The protocol tick leaves the HMI's beep and busy LED to the keypad task (which
+/// plays the buzzer): a completion beep raised during the tick is still there.
+#[test]
+fn the_completion_beep_survives_the_protocol_tick() {
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let mut m = FakePlanner::new(16);
+    for _ in 0..(BOOT_MS + 100) {
+        sh.tick(&mut c, &mut m);
+    }
+    let t = sh.now;
+    // The star: '6', Enter (preview), Enter (draw).
+    scan(&mut c, &mut m, &[Key::Digit(6)], t, t + 200);
+    scan(&mut c, &mut m, &[], t + 200, t + 400);
+    scan(&mut c, &mut m, &[Key::Enter], t + 400, t + 600);
+    scan(&mut c, &mut m, &[], t + 600, t + 800);
+    scan(&mut c, &mut m, &[Key::Enter], t + 800, t + 1000);
+    scan(&mut c, &mut m, &[], t + 1000, t + 1200);
+    assert!(!m.queue.is_empty(), "the star is queued");
+    sh.now = t + 1200;
+    let _ = c.take_outputs();
+    sh.tick(&mut c, &mut m);
+    m.run_all();
+    for _ in 0..10 {
+        sh.tick(&mut c, &mut m);
+    }
+    assert_eq!(c.take_outputs().beep, Some(Beep::Done));
 }

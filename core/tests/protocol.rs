@@ -212,7 +212,11 @@ fn soft_reset_while_moving_raises_alarm_3_and_unlock_clears_it() {
     send(&mut p, &mut m, "G1 X10 F600\nG1 X20\n");
     m.step();
     let out = send(&mut p, &mut m, "\x18");
-    assert_eq!(out, format!("ALARM:3\r\n\r\n{WELCOME}\r\n"));
+    assert_eq!(
+        out,
+        format!("ALARM:3\r\n\r\n{WELCOME}\r\n[MSG:'$H'|'$X' to unlock]\r\n"),
+        "the welcome line in alarm says how to unlock, as Grbl's"
+    );
     assert!(m.queue.is_empty());
     assert_eq!(send(&mut p, &mut m, "G0 X1\n"), "error:9\r\n");
     assert_eq!(
@@ -242,7 +246,12 @@ fn estop_stops_at_once_and_needs_release_reset_and_unlock() {
     let out = drain(&mut p);
     assert_eq!(out, "ALARM:10\r\n[MSG:Reset to continue]\r\n");
     assert!(send(&mut p, &mut m, "$X\n").ends_with("error:9\r\n"));
-    assert!(send(&mut p, &mut m, "\x18").contains(WELCOME));
+    let out = send(&mut p, &mut m, "\x18");
+    assert!(out.contains(WELCOME));
+    assert!(
+        !out.contains("to unlock"),
+        "$X cannot unlock it while pressed"
+    );
     assert!(
         send(&mut p, &mut m, "$X\n").ends_with("error:9\r\n"),
         "still pressed"
@@ -252,7 +261,7 @@ fn estop_stops_at_once_and_needs_release_reset_and_unlock() {
         send(&mut p, &mut m, "$X\n").ends_with("error:9\r\n"),
         "reset still needed"
     );
-    send(&mut p, &mut m, "\x18");
+    assert!(send(&mut p, &mut m, "\x18").ends_with("[MSG:'$H'|'$X' to unlock]\r\n"));
     assert_eq!(
         send(&mut p, &mut m, "$X\n"),
         "[MSG:Caution: Unlocked]\r\nok\r\n"
@@ -418,7 +427,10 @@ fn offsets_listing_names_every_slot() {
         &mut m,
         "G10 L2 P1 X5\nG10 L2 P6 Y-2.5\nG28.1\nG0 X1\nG30.1\nG92 X0\n",
     );
+    // G30.1 is a sync point: it (and the lines after it) run once G0 X1 has finished.
     m.run_all();
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "ok\r\nok\r\n");
     let out = send(&mut p, &mut m, "$#\n");
     let zero = "0.000,0.000,0.000";
     assert_eq!(
@@ -458,15 +470,26 @@ fn info_modal_state_offsets_and_startup_lines() {
 fn job_messages_pause_and_overrides() {
     let (mut p, mut m) = boot();
     let out = send(&mut p, &mut m, "G1 X1 F100\nM0\nG1 X2\n");
-    assert_eq!(out, "[MSG:Job started]\r\nok\r\nok\r\n");
+    assert_eq!(
+        out, "[MSG:Job started]\r\nok\r\n",
+        "M0 waits for the motion before it"
+    );
     m.run_all();
     p.poll(&mut m, 10);
+    assert_eq!(
+        drain(&mut p),
+        "ok\r\nok\r\n",
+        "M0 ran, the line after it queued"
+    );
     assert!(
         send(&mut p, &mut m, "?").starts_with("<Hold:0|"),
-        "M0 pauses once drained"
+        "M0 holds at rest"
     );
-    assert_eq!(moves(&m).len(), 1, "the line after M0 waits");
-    assert_eq!(send(&mut p, &mut m, "~"), "ok\r\n", "the waiting line runs");
+    assert_eq!(moves(&m).len(), 2);
+    m.run_all();
+    assert_eq!(m.pos[0], 80, "the queued line waits for cycle start");
+    assert_eq!(send(&mut p, &mut m, "~"), "");
+    assert!(send(&mut p, &mut m, "?").starts_with("<Run|"));
     p.receive(b"M2\n", &mut m, 0);
     p.poll(&mut m, 0);
     assert_eq!(drain(&mut p), "", "M2 waits for the motion before it");
@@ -538,7 +561,7 @@ fn ram_budget_of_the_protocol() {
         "RAM: Protocol {} B (Machine {} B, Interpreter {} B, Settings {} B)",
         sizes.0, sizes.1, sizes.2, sizes.3
     );
-    // DESIGN.md budgets 19 KB of RAM for statics and stacks; the protocol may take 2 KB.
+    // The product budgets 19 KB of RAM (README, Size budget) for statics and stacks; the protocol may take 2 KB.
     assert!(sizes.0 <= 2048, "{sizes:?}");
 }
 
@@ -594,8 +617,11 @@ fn keypad_moves_and_abort_keep_the_interpreter_in_step() {
     assert_eq!(m.queue.len(), 1);
     m.step();
     p.poll(&mut m, 0);
-    assert_eq!(drain(&mut p), "ok\r\n");
+    assert_eq!(drain(&mut p), "", "G4 runs: its ok waits for the dwell");
     assert_eq!(m.queue.len(), 1, "only the dwell is queued");
+    m.step();
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "ok\r\n");
     m.run_all();
     assert_eq!(m.pos, [16, 16, 0], "one step of deceleration");
     assert_eq!(p.machine().state(&m), RunState::Idle);
@@ -762,4 +788,153 @@ fn dollar_commands_while_running_are_refused_without_effect() {
         "$N0=\r\n$N1=\r\nok\r\n",
         "nothing was stored"
     );
+}
+
+#[test]
+fn g4_answers_after_the_motion_before_it_and_its_dwell() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "G1 X20 F600\n");
+    p.receive(b"G4 P0.5\nG0 Y[posx]\nG0 Y1\n", &mut m, 0);
+    p.poll(&mut m, 0);
+    assert_eq!(drain(&mut p), "", "G4 waits while the move runs");
+    assert_eq!(m.queue.len(), 1, "nothing after G4 is queued either");
+    m.step();
+    p.poll(&mut m, 0);
+    assert_eq!(
+        drain(&mut p),
+        "",
+        "the move ended: the dwell runs, no ok yet"
+    );
+    assert_eq!(m.queue.front(), Some(&Command::Dwell { ms: 500 }));
+    assert!(send(&mut p, &mut m, "?").starts_with("<Run|MPos:20.000,"));
+    m.step();
+    p.poll(&mut m, 0);
+    assert_eq!(
+        drain(&mut p),
+        "ok\r\nerror:2\r\nok\r\n",
+        "the dwell ended: ok, then the lines after it"
+    );
+}
+
+#[test]
+fn sync_points_wait_for_the_motion_before_them() {
+    // Grbl's documented sync points: dwell, program pause and end, and every command
+    // that writes stored data or changes the work coordinate offset.
+    let sync = [
+        "G4 P0",
+        "M0",
+        "M2",
+        "M30",
+        "G10 L2 P1 X1",
+        "G10 L20 P0 X0",
+        "G28.1",
+        "G30.1",
+        "G92 X0",
+        "G92.1",
+        "G55",
+    ];
+    for line in sync {
+        let (mut p, mut m) = boot();
+        send(&mut p, &mut m, "G1 X1 F100\n");
+        p.receive(format!("{line}\n").as_bytes(), &mut m, 0);
+        p.poll(&mut m, 0);
+        assert_eq!(drain(&mut p), "", "{line} waits for the move");
+        m.run_all();
+        p.poll(&mut m, 0);
+        m.step(); // a dwell
+        p.poll(&mut m, 0);
+        assert!(drain(&mut p).contains("ok\r\n"), "{line} runs after it");
+    }
+    // Queued like moves: G28/G30 (they move), the pen (M3/M5, the one deliberate
+    // difference: it is a motion in the queue), modes that change no offset.
+    let queued = [
+        "G28", "G30", "M3", "M5", "G54", "G20", "G91", "G17", "M8", "S100",
+    ];
+    for line in queued {
+        let (mut p, mut m) = boot();
+        send(&mut p, &mut m, "G1 X1 F100\n");
+        assert_eq!(
+            send(&mut p, &mut m, &format!("{line}\n")),
+            "ok\r\n",
+            "{line} is answered at once"
+        );
+    }
+}
+
+#[test]
+fn dynamic_tool_length_offset_g43_1_and_g49() {
+    let (mut p, mut m) = boot();
+    assert_eq!(send(&mut p, &mut m, "G43.1 Z2\n"), "ok\r\n");
+    let gc = send(&mut p, &mut m, "$G\n");
+    assert_eq!(
+        gc,
+        "[GC:G0 G54 G17 G21 G90 G94 G43.1 M5 M9 T0 F0 S0]\r\nok\r\n"
+    );
+    let params = send(&mut p, &mut m, "$#\n");
+    assert!(params.contains("[TLO:2.000]\r\n"), "{params}");
+    assert!(send(&mut p, &mut m, "?").contains("|WCO:0.000,0.000,2.000"));
+    // Z in work coordinates moves past the offset: Z0 is machine Z 2 (400 steps/mm).
+    send(&mut p, &mut m, "G1 Z0 F100\n");
+    assert_eq!(moves(&m).last().unwrap().target, [0, 0, 800]);
+    m.run_all();
+    // G92 and G10 L20 account for it: the current Z reads as the word.
+    send(&mut p, &mut m, "G92 Z1\n");
+    assert!(send(&mut p, &mut m, "?").contains("|WCO:0.000,0.000,1.000"));
+    send(&mut p, &mut m, "G92.1\nG10 L20 P1 Z0\n");
+    assert!(send(&mut p, &mut m, "?").contains("|WCO:0.000,0.000,2.000"));
+    send(&mut p, &mut m, "G10 L2 P1 Z0\n");
+    // Only Z, and not beside motion or another axis command (Grbl's errors 37, 24).
+    assert_eq!(
+        send(&mut p, &mut m, "G43.1 X1\nG1 G43.1 Z1\nG92 G43.1 Z1\n"),
+        "error:37\r\nerror:24\r\nerror:24\r\n"
+    );
+    // A bare G43.1 keeps the offset (bCNC replays the $G words, then sends G43.1 Z).
+    assert_eq!(
+        send(
+            &mut p,
+            &mut m,
+            "G0 G54 G17 G21 G90 G94 G43.1\nG43.1Z0.000\n"
+        ),
+        "ok\r\nok\r\n"
+    );
+    assert!(send(&mut p, &mut m, "$#\n").contains("[TLO:0.000]"));
+    send(&mut p, &mut m, "G43.1 Z3\n");
+    assert_eq!(send(&mut p, &mut m, "G49\n"), "ok\r\n");
+    assert!(send(&mut p, &mut m, "$#\n").contains("[TLO:0.000]"));
+    assert!(!send(&mut p, &mut m, "$G\n").contains("G43.1"));
+    // A soft reset clears it, as Grbl's non-persistent offsets.
+    send(&mut p, &mut m, "G43.1 Z3\n\x18");
+    assert!(send(&mut p, &mut m, "$#\n").contains("[TLO:0.000]"));
+    assert!(!send(&mut p, &mut m, "$G\n").contains("G43.1"));
+}
+
+#[test]
+fn a_start_or_reset_in_alarm_says_how_to_unlock() {
+    let mut settings = Settings::default();
+    settings.set(22, 1.0).unwrap(); // homing enabled: starts locked until $H or $X
+    let mut p = Protocol::new(settings);
+    let mut m = FakePlanner::new(16);
+    let unlock = format!("\r\n{WELCOME}\r\n[MSG:'$H'|'$X' to unlock]\r\n");
+    assert_eq!(drain(&mut p), unlock, "at power-up");
+    assert_eq!(send(&mut p, &mut m, "\x18"), unlock, "after a reset");
+    assert!(send(&mut p, &mut m, "$X\n").ends_with("ok\r\n"));
+    // Unlocked but not homed: a reset locks it again, and says so.
+    assert_eq!(send(&mut p, &mut m, "\x18"), unlock);
+}
+
+#[test]
+fn every_query_gets_its_own_report_even_while_the_output_is_busy() {
+    let (mut p, mut m) = boot();
+    // A `$$` listing fills the output buffer as fast as it drains; three `?` arrive
+    // together meanwhile (a sender whose reads were held up).
+    p.receive(b"$$\n", &mut m, 0);
+    p.poll(&mut m, 0);
+    assert_eq!(p.receive(b"???", &mut m, 0), 3);
+    let mut out = String::new();
+    for _ in 0..200 {
+        p.poll(&mut m, 0);
+        out.push_str(&drain(&mut p));
+    }
+    assert_eq!(out.matches("<Idle|").count(), 3, "{out}");
+    assert!(out.ends_with("ok\r\n") || out.contains("$215="), "{out}");
 }

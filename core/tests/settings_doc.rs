@@ -1,6 +1,6 @@
 //! README.md and docs/grbl.md carry the settings table; this test keeps both equal to
 //! the code.
-//! Regenerate with `INKSTEP_BLESS=1 cargo test -p inkstep-core --test settings_doc ...`.
+//! Regenerate with `UPDATE_SNAPSHOTS=1 cargo test -p inkstep-core --test settings_doc ...`.
 
 use inkstep_core::settings::{Kind, TABLE};
 
@@ -32,7 +32,7 @@ fn check(file: &str) {
     let start = doc.find(BEGIN).expect("begin marker") + BEGIN.len();
     let end = doc.find(END).expect("end marker");
     let want = table();
-    if std::env::var_os("INKSTEP_BLESS").is_some() {
+    if std::env::var_os("UPDATE_SNAPSHOTS").is_some_and(|v| v == "1") {
         let new = format!("{}{}{}", &doc[..start], want, &doc[end..]);
         std::fs::write(&path, new).expect(file);
         return;
@@ -40,7 +40,7 @@ fn check(file: &str) {
     assert_eq!(
         &doc[start..end],
         want,
-        "{file} is stale: rerun with INKSTEP_BLESS=1"
+        "{file} is stale: rerun with UPDATE_SNAPSHOTS=1"
     );
 }
 

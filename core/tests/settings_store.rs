@@ -2,182 +2,15 @@
 //! loads the old or the new value, never garbage; corrupt storage gives defaults and
 //! says so.
 
-use embedded_storage::nor_flash::{
-    ErrorType, NorFlash, NorFlashError, NorFlashErrorKind, ReadNorFlash,
-};
+mod common;
+
+use common::flash::{Cut, CutFlash, SIZE, STORE_RANGE};
 use inkstep_core::gcode::interpreter::Coords;
 use inkstep_core::settings::Settings;
-use inkstep_core::settings_store::{BlockingFlash, LoadStatus, SettingsStore};
-use std::ops::Range;
+use inkstep_core::settings_store::{LoadStatus, SettingsStore};
 
-/// The pages memory.x gives the store on the STM32F103CB (0x0801_F000..0x0802_0000), as
-/// flash offsets.
-const STORE_RANGE: Range<u32> = 0x1_F000..0x2_0000;
-const PAGE: usize = 1024;
-const BASE: u32 = STORE_RANGE.start;
-const SIZE: usize = (STORE_RANGE.end - STORE_RANGE.start) as usize;
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum MockError {
-    PowerCut,
-    OutOfBounds,
-}
-impl NorFlashError for MockError {
-    fn kind(&self) -> NorFlashErrorKind {
-        match self {
-            MockError::PowerCut => NorFlashErrorKind::Other,
-            MockError::OutOfBounds => NorFlashErrorKind::OutOfBounds,
-        }
-    }
-}
-
-/// How the operation that the power fails in is left.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Cut {
-    /// Not started.
-    Before,
-    /// The first half of its bytes done, in address order (the model
-    /// log-structured flash stores are usually tested against).
-    Prefix,
-    /// Writes: half the words done and the next one half-programmed (random bits of
-    /// it still 1). Erases: as `Prefix`.
-    TornWord,
-    /// Erases: every bit of the page in a random state (harsher than the crate's
-    /// model). Writes: as `TornWord`.
-    RandomErase,
-}
-
-/// STM32F1-like flash: 16-bit program unit that must be erased (0xFFFF) before it is
-/// programmed, 1 KB pages. Power fails in write/erase number `cut_at`.
-struct CutFlash {
-    mem: Vec<u8>,
-    ops: usize,
-    cut_at: Option<usize>,
-    mode: Cut,
-    dead: bool,
-    rng: u64,
-}
-
-impl CutFlash {
-    fn new() -> Self {
-        CutFlash {
-            mem: vec![0xFF; SIZE],
-            ops: 0,
-            cut_at: None,
-            mode: Cut::Before,
-            dead: false,
-            rng: 0x1234_5678,
-        }
-    }
-    fn rand(&mut self) -> u8 {
-        self.rng ^= self.rng << 13;
-        self.rng ^= self.rng >> 7;
-        self.rng ^= self.rng << 17;
-        self.rng as u8
-    }
-    fn range(&self, offset: u32, len: usize) -> Result<std::ops::Range<usize>, MockError> {
-        let start = offset.checked_sub(BASE).ok_or(MockError::OutOfBounds)? as usize;
-        if start + len > SIZE {
-            return Err(MockError::OutOfBounds);
-        }
-        Ok(start..start + len)
-    }
-    /// True if this operation is the one the power fails on.
-    fn cut_now(&mut self) -> Result<bool, MockError> {
-        if self.dead {
-            return Err(MockError::PowerCut);
-        }
-        let op = self.ops;
-        self.ops += 1;
-        Ok(self.cut_at == Some(op))
-    }
-    /// Power back on.
-    fn reboot(&mut self) {
-        self.dead = false;
-        self.cut_at = None;
-    }
-}
-
-impl ErrorType for CutFlash {
-    type Error = MockError;
-}
-impl ReadNorFlash for CutFlash {
-    const READ_SIZE: usize = 1;
-    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), MockError> {
-        let r = self.range(offset, bytes.len())?;
-        bytes.copy_from_slice(&self.mem[r]);
-        Ok(())
-    }
-    fn capacity(&self) -> usize {
-        SIZE
-    }
-}
-impl NorFlash for CutFlash {
-    const WRITE_SIZE: usize = 2;
-    const ERASE_SIZE: usize = PAGE;
-    fn erase(&mut self, from: u32, to: u32) -> Result<(), MockError> {
-        let r = self.range(from, (to - from) as usize)?;
-        assert!(r.start % PAGE == 0 && r.end % PAGE == 0, "unaligned erase");
-        if self.cut_now()? {
-            match self.mode {
-                Cut::Before => {}
-                Cut::Prefix | Cut::TornWord => self.mem[r.start..r.start + PAGE / 2].fill(0xFF),
-                Cut::RandomErase => {
-                    for i in r {
-                        self.mem[i] |= self.rand();
-                    }
-                }
-            }
-            self.dead = true;
-            return Err(MockError::PowerCut);
-        }
-        self.mem[r].fill(0xFF);
-        Ok(())
-    }
-    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), MockError> {
-        let r = self.range(offset, bytes.len())?;
-        assert!(
-            r.start.is_multiple_of(2) && bytes.len().is_multiple_of(2),
-            "unaligned write"
-        );
-        for (w, i) in bytes.chunks(2).zip(r.clone().step_by(2)) {
-            let old = [self.mem[i], self.mem[i + 1]];
-            assert!(
-                old == [0xFF, 0xFF] || w == [0, 0],
-                "programming a word that is not erased at {i:#x}"
-            );
-        }
-        let cut = self.cut_now()?;
-        let words = bytes.len() / 2;
-        let done = match (cut, self.mode) {
-            (false, _) => words,
-            (true, Cut::Before) => 0,
-            (true, _) => words / 2,
-        };
-        for k in 0..done {
-            self.mem[r.start + 2 * k] = bytes[2 * k];
-            self.mem[r.start + 2 * k + 1] = bytes[2 * k + 1];
-        }
-        if cut {
-            if self.mode == Cut::Prefix && !bytes.len().is_multiple_of(4) && words > 0 {
-                // Byte order: the odd byte of the middle word lands too.
-                self.mem[r.start + 2 * done] = bytes[2 * done];
-            } else if matches!(self.mode, Cut::TornWord | Cut::RandomErase) && done < words {
-                // Half-programmed word: some of its 0 bits did not make it.
-                for b in 0..2 {
-                    let i = r.start + 2 * done + b;
-                    self.mem[i] = bytes[2 * done + b] | self.rand();
-                }
-            }
-            self.dead = true;
-            return Err(MockError::PowerCut);
-        }
-        Ok(())
-    }
-}
-
-fn store(flash: CutFlash) -> SettingsStore<BlockingFlash<CutFlash>> {
-    SettingsStore::new(BlockingFlash(flash), STORE_RANGE).unwrap()
+fn store(flash: CutFlash) -> SettingsStore<CutFlash> {
+    SettingsStore::new(flash, STORE_RANGE).unwrap()
 }
 
 fn with(n: u16, v: f32) -> Settings {
@@ -200,11 +33,11 @@ fn round_trip_of_settings_coords_and_startup_lines() {
     let s = with(100, 123.5);
     st.save_settings(&s).unwrap();
     let mut c = Coords::default();
-    c.wcs[1] = [1.0, -2.0, 3.5];
-    c.g28 = [10.0, 20.0, 0.0];
+    c.wcs[1] = [1_000_000, -2_000_000, 3_500_000];
+    c.g28 = [10_000_000, 20_000_000, 0];
     st.save_coords(&c).unwrap();
     st.save_startup(1, "G21G90").unwrap();
-    let mut st = store(st.into_flash().0);
+    let mut st = store(st.into_flash());
     assert_eq!(st.load_settings(), (s, LoadStatus::Loaded));
     assert_eq!(st.load_coords(), (c, LoadStatus::Loaded));
     assert_eq!(st.load_startup(1).0.as_str(), "G21G90");
@@ -235,13 +68,13 @@ fn power_cut_at_every_write_and_erase_step_keeps_old_or_new() {
                     }
                 }
                 st.save_settings(&old).unwrap();
-                let mut flash = st.into_flash().0;
+                let mut flash = st.into_flash();
                 flash.ops = 0;
                 flash.cut_at = Some(cut);
                 flash.mode = mode;
                 let mut st = store(flash);
                 let result = st.save_settings(&new);
-                let mut flash = st.into_flash().0;
+                let mut flash = st.into_flash();
                 let was_cut = flash.dead;
                 if !was_cut {
                     assert!(result.is_ok());
@@ -292,11 +125,11 @@ fn power_cut_at_every_write_and_erase_step_keeps_old_or_new() {
 fn power_cut_while_saving_any_key_leaves_the_others_and_the_store_working() {
     let s = with(100, 70.0);
     let c_old = Coords {
-        g28: [1.0, 2.0, 3.0],
+        g28: [1_000_000, 2_000_000, 3_000_000],
         ..Coords::default()
     };
     let c_new = Coords {
-        g28: [4.0, 5.0, 6.0],
+        g28: [4_000_000, 5_000_000, 6_000_000],
         ..Coords::default()
     };
     let mut scenarios = 0;
@@ -311,7 +144,7 @@ fn power_cut_while_saving_any_key_leaves_the_others_and_the_store_working() {
                     for h in 0..history {
                         st.save_startup(0, &format!("G0X{h}")).unwrap();
                     }
-                    let mut flash = st.into_flash().0;
+                    let mut flash = st.into_flash();
                     flash.ops = 0;
                     flash.cut_at = Some(cut);
                     flash.mode = mode;
@@ -321,7 +154,7 @@ fn power_cut_while_saving_any_key_leaves_the_others_and_the_store_working() {
                     } else {
                         st.save_startup(1, "G90")
                     };
-                    let mut flash = st.into_flash().0;
+                    let mut flash = st.into_flash();
                     if !flash.dead {
                         break;
                     }
@@ -373,7 +206,7 @@ fn corrupt_storage_falls_back_to_defaults_and_reports_it() {
     // A value that the storage layer accepts but that is not a settings image.
     let mut st = store(CutFlash::new());
     st.save_settings(&with(100, 90.0)).unwrap();
-    let mut flash = st.into_flash().0;
+    let mut flash = st.into_flash();
     // Flip bits inside the stored image's values (0 bits set to 1 are what decay does).
     let pos = flash
         .mem

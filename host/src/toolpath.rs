@@ -52,7 +52,7 @@ fn blocks(text: &str) -> Result<Vec<Option<Block>>> {
 }
 
 fn value(b: &Block, letter: u8) -> Option<f64> {
-    b.get(letter).map(f64::from)
+    b.get(letter).map(|v| v.millionths() as f64 / 1e6)
 }
 
 /// The XY moves of a program, with pen state. With no M3 in the file the

@@ -102,6 +102,23 @@ impl Pty {
         }
     }
 
+    /// Waits until the client has sent something, at most `timeout`: true if bytes
+    /// are waiting. A server that has nothing else to do sleeps here, so that a byte
+    /// (a `?`) is read the moment it arrives rather than at the next tick.
+    pub fn wait_readable(&self, timeout: std::time::Duration) -> io::Result<bool> {
+        use rustix::event::{poll, PollFd, PollFlags, Timespec};
+        let mut fds = [PollFd::new(&self.master, PollFlags::IN)];
+        let timeout = Timespec {
+            tv_sec: timeout.as_secs() as _,
+            tv_nsec: timeout.subsec_nanos() as _,
+        };
+        match poll(&mut fds, Some(&timeout)) {
+            Ok(n) => Ok(n > 0 && fds[0].revents().contains(PollFlags::IN)),
+            Err(rustix::io::Errno::INTR) => Ok(false),
+            Err(e) => Err(e.into()),
+        }
+    }
+
     /// Queues bytes for the client and sends as many as it takes now.
     pub fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
         self.pending.extend_from_slice(bytes);
@@ -167,6 +184,12 @@ impl Pty {
     /// Clients that have the port open, as far as [`Pty::client_events`] has seen.
     pub fn clients(&self) -> usize {
         self.clients
+    }
+
+    /// Whether clients opening and closing the port are noticed at all (the system
+    /// gave an inotify watch); if not, [`Pty::clients`] says nothing.
+    pub fn notices_clients(&self) -> bool {
+        self.watch.is_some()
     }
 }
 

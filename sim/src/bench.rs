@@ -1,14 +1,14 @@
 //! Bench analysis: measures a step trace against the ideal path of a reference program.
 //!
-//! Owns the ideal-path JSON format of `shared/bench/*.json`, the figures we compare with
+//! Owns the ideal-path JSON format of `bench/*.json`, the figures we compare with
 //! Grbl (job time, max/rms deviation, steps per axis, final position; measured with the
-//! core's `analysis`) and the reading of Grbl's own figures from the bench README, so
+//! simulator's `analysis`) and the reading of Grbl's own figures from the bench README, so
 //! that no expected number is written into the code.
 
+use crate::analysis::{self, Analyzer};
 use crate::run::Flow;
 use crate::run::{run_gcode, RunResult};
 use crate::trace::Trace;
-use inkstep_core::analysis::{self, Analyzer};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -225,10 +225,19 @@ pub struct BenchRun {
 /// Runs the program `grbl.program` of `bench_dir` and measures it against its ideal
 /// path. The programs set 80 steps/mm on X and Y at their head.
 pub fn run_program(bench_dir: &Path, grbl: &GrblRow) -> Result<BenchRun, String> {
+    run_program_after(bench_dir, grbl, "")
+}
+
+/// [`run_program`] with `setup` lines (e.g. settings) sent before the program.
+pub fn run_program_after(
+    bench_dir: &Path,
+    grbl: &GrblRow,
+    setup: &str,
+) -> Result<BenchRun, String> {
     let nc = bench_dir.join(&grbl.program);
     let text = std::fs::read_to_string(&nc).map_err(|e| format!("{}: {e}", nc.display()))?;
     let ideal = Ideal::read_file(&nc.with_extension("json"))?;
-    let run = run_gcode(&text, Flow::SendResponse);
+    let run = run_gcode(&format!("{setup}{text}"), Flow::SendResponse);
     let spmm = f64::from(run.settings.steps_per_mm(0));
     let ours = analyse(&run.trace(), &ideal, spmm);
     Ok(BenchRun {
@@ -354,7 +363,7 @@ mod tests {
     }
 
     #[test]
-    fn reads_the_shared_bench_readme() {
+    fn reads_grbls_figures_of_the_bench() {
         let path = crate::paths::grbl_figures(&crate::paths::bench_dir());
         let text = std::fs::read_to_string(&path).expect("Grbl's figures of the bench");
         let rows = read_grbl_table(&text);

@@ -1,49 +1,61 @@
 //! The virtual board: the firmware's tasks run in virtual time.
 //!
-//! Owns only scheduling, the way RTIC runs the firmware: the step-timer interrupt
-//! (the core's executor) fires at the times it asks for, and between interrupts the
-//! lower-priority work runs to completion: USB bytes into the protocol, the protocol's
-//! lines, the HMI's timers, segment preparation (the core's [`Controller`] and [`Pipeline`]),
-//! and every 5 ms one keypad column scan of the simulated matrix. Nothing here decides
-//! anything about motion, G-code or menus.
+//! Owns only scheduling, the way RTIC runs the firmware (src/main.rs): the step-timer
+//! interrupt (the core's executor on the same step queue, with the same maximum reload,
+//! reversal guard and tail period) fires at the times it asks for; every millisecond
+//! tick runs segment preparation and then the protocol tick (the core's
+//! [`Controller::service`], with the host's bytes crossing the same byte rings as the
+//! USB task's), every 5 ms one keypad column scan of the simulated matrix, every
+//! 100 ms the LCD. Settings persist through the core's store on a flash in memory.
+//! Nothing here decides anything about motion, G-code, menus or persistence.
 
-use heapless::spsc::Queue;
-use inkstep_core::controller::Controller;
+use inkstep_core::controller::{
+    Controller, HostLink, HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS, TICK_MS,
+};
 use inkstep_core::keypad::{Key, KEYMAP};
+use inkstep_core::machine::{MotionControl, PinLevels};
 use inkstep_core::motion::StepPos;
 use inkstep_core::pipeline::{Pipeline, StepSide};
+use inkstep_core::protocol::RX_BUFFER_SIZE;
+use inkstep_core::ring::ByteRing;
 use inkstep_core::screens::framebuffer::FrameBuffer;
 use inkstep_core::screens::Screens;
 use inkstep_core::settings::Settings;
-use inkstep_core::stepper::drive::STEP_QUEUE;
+use inkstep_core::settings_store::SettingsStore;
 use inkstep_core::stepper::exec::Executor;
+use inkstep_core::stepper::output::OutputConfig;
 use inkstep_core::stepper::prep::PrepConfig;
-use inkstep_core::stepper::StepCmd;
+use inkstep_core::stepper::queue::StepCmdQueue;
+use inkstep_core::stepper::{tail_period, MAX_RELOAD, TIMER_HZ};
 
-/// The step timer's clock (the firmware's timer runs at the 72 MHz core clock).
-pub const TICK_HZ: u64 = 72_000_000;
-/// Keypad scan period: one column per tick.
-pub const SCAN_MS: u64 = 5;
-/// Longest stretch of virtual time without running the background tasks.
-const POLL_MS: u64 = 1;
-/// LCD refresh period (the firmware's lowest-priority task).
-pub const LCD_MS: u64 = 100;
+use crate::flash::{RamFlash, STORE_RANGE};
+
+/// The step timer's clock: the board's.
+pub const TICK_HZ: u64 = TIMER_HZ as u64;
+
+/// The input pins at rest with the board's wiring: switches closed (low), the
+/// feed-hold and cycle-start inputs released (high), no Z limit pin.
+pub const PINS_AT_REST: PinLevels = PinLevels {
+    estop: false,
+    limits: [Some(false), Some(false), None],
+    feed_hold: true,
+    cycle_start: true,
+};
 
 /// The LCD task's state: the core's retained screens and frame buffer.
 pub struct Lcd {
     pub screens: Screens,
     pub fb: FrameBuffer,
-    next: u64,
 }
 
 /// The executor and its queue: what the step-timer interrupt owns on the board.
 pub struct SimSide {
     pub exec: Executor,
-    pub queue: Queue<StepCmd, STEP_QUEUE>,
+    pub queue: StepCmdQueue,
 }
 
 impl StepSide for SimSide {
-    type Sink = Queue<StepCmd, STEP_QUEUE>;
+    type Sink = StepCmdQueue;
     fn sink(&mut self) -> &mut Self::Sink {
         &mut self.queue
     }
@@ -51,14 +63,14 @@ impl StepSide for SimSide {
         self.exec.position()
     }
     fn is_running(&self) -> bool {
-        self.exec.is_running() || !self.queue.is_empty()
+        self.exec.is_running() || self.queue.queued() > 0
     }
     fn queued(&self) -> usize {
-        self.queue.len()
+        self.queue.queued()
     }
     fn flush(&mut self) {
         self.exec.halt();
-        while self.queue.dequeue().is_some() {}
+        self.queue.clear();
         self.exec.reset();
     }
     fn set_position(&mut self, p: StepPos) {
@@ -79,38 +91,73 @@ pub struct StepEvent {
 pub struct Board {
     pub ctl: Controller,
     pub pipeline: Pipeline<SimSide>,
+    /// The settings store on the virtual flash.
+    pub store: SettingsStore<RamFlash>,
+    /// Host -> board and board -> host bytes (the USB task's rings).
+    host_rx: ByteRing<HOST_RX_RING>,
+    host_tx: ByteRing<HOST_TX_RING>,
+    /// The input pins' levels.
+    pub pins: PinLevels,
+    /// The host has the port open (CDC's DTR).
+    port_open: bool,
+    /// The step outputs' configuration, as the step interrupt applies it.
+    outputs: OutputConfig,
+    /// The pen servo's pulse width, as the protocol tick last set it.
+    pub servo_pulse_us: Option<u32>,
     now: u64,
+    /// Milliseconds since boot: the tick count.
+    ms: u32,
     next_irq: Option<u64>,
-    next_scan: u64,
     /// When the step timer first started (the trace's time origin).
     pub first_motion: Option<u64>,
     /// Keys held on the simulated matrix.
     pub held: Vec<Key>,
-    dir: [i8; 2],
     /// The LCD, when the session shows it (off for plain G-code runs).
     pub lcd: Option<Lcd>,
 }
 
 impl Board {
+    /// A board whose flash holds `settings` (and nothing else), just powered up.
     pub fn new(settings: Settings) -> Board {
+        let mut store = SettingsStore::new(RamFlash::default(), STORE_RANGE).expect("store range");
+        // A fresh flash with these settings: the firmware saves them the same way.
+        if settings != Settings::default() {
+            store
+                .save_settings(&settings)
+                .expect("settings into a fresh flash");
+        }
+        Board::boot(store)
+    }
+
+    /// Power-up from `store`, as the firmware's init does.
+    pub fn boot(mut store: SettingsStore<RamFlash>) -> Board {
+        let ctl = inkstep_core::in_place::build(|slot| Controller::boot_in(slot, &mut store, 0));
+        let settings = ctl.protocol().machine().settings();
         let side = SimSide {
-            exec: Executor::new([0; 3], 0xFFFF),
-            queue: Queue::new(),
+            exec: Executor::new([0; 3], MAX_RELOAD),
+            queue: StepCmdQueue::new(),
         };
         let prep = PrepConfig {
-            timer_hz: TICK_HZ as u32,
+            timer_hz: TIMER_HZ,
             ..PrepConfig::default()
         };
-        let pipeline = Pipeline::new(&settings, prep, side);
+        let pipeline = Pipeline::new(settings, prep, side);
+        let outputs = OutputConfig::from(settings);
         Board {
-            ctl: Controller::new(settings, 0),
+            ctl,
             pipeline,
+            store,
+            host_rx: ByteRing::new(),
+            host_tx: ByteRing::new(),
+            pins: PINS_AT_REST,
+            port_open: true,
+            outputs,
+            servo_pulse_us: None,
             now: 0,
+            ms: 0,
             next_irq: None,
-            next_scan: 0,
             first_motion: None,
             held: Vec::new(),
-            dir: [0, 0],
             lcd: None,
         }
     }
@@ -120,15 +167,21 @@ impl Board {
         self.lcd = Some(Lcd {
             screens: Screens::new(),
             fb: FrameBuffer::new(),
-            next: 0,
         });
         self
+    }
+
+    /// The host opens or closes the serial port (DTR on the board; `cargo sim serve`
+    /// follows the pty's clients). A board starts with the port open, as a run
+    /// without a pty has a host listening all along.
+    pub fn set_port_open(&mut self, open: bool) {
+        self.port_open = open;
     }
 
     /// Redraws the LCD now (as its task would), so the frame buffer is current.
     pub fn refresh_lcd(&mut self) {
         let now = self.now_ms();
-        let st = self.ctl.status(&self.pipeline);
+        let st = self.ctl.refresh_view(&self.pipeline);
         if let Some(l) = self.lcd.as_mut() {
             // Drawing into the frame buffer cannot fail (it is plain memory).
             let _ = l.screens.render(self.ctl.hmi(), &st, now, &mut l.fb);
@@ -145,55 +198,97 @@ impl Board {
         ms * TICK_HZ / 1000
     }
 
-    /// USB bytes from the host; returns how many the board took.
+    /// USB bytes from the host; returns how many the board took (the rest are NAKed:
+    /// the host offers them again).
     pub fn usb_write(&mut self, bytes: &[u8]) -> usize {
-        let now = self.now_ms();
-        let n = self.ctl.usb_rx(bytes, &mut self.pipeline, now);
-        self.background();
-        n
+        self.host_rx.split().0.push(bytes)
     }
 
-    /// USB bytes to the host.
+    /// USB bytes to the host: what the board has sent so far.
     pub fn usb_read(&mut self) -> Vec<u8> {
         let mut out = Vec::new();
-        let mut buf = [0u8; 256];
+        let mut buf = [0u8; HOST_TX_RING];
+        let (_, mut rx) = self.host_tx.split();
         loop {
-            let n = self.ctl.usb_tx(&mut buf);
+            let n = rx.pop(&mut buf);
             if n == 0 {
-                self.background();
-                let n = self.ctl.usb_tx(&mut buf);
-                if n == 0 {
-                    return out;
-                }
-                out.extend_from_slice(&buf[..n]);
-                continue;
+                return out;
             }
             out.extend_from_slice(&buf[..n]);
         }
     }
 
-    /// Nothing moving, nothing queued.
+    /// Nothing moving, nothing queued, every byte from the host taken and framed.
     pub fn is_idle(&self) -> bool {
-        use inkstep_core::machine::MotionControl;
-        self.next_irq.is_none() && self.pipeline.is_idle()
+        self.next_irq.is_none()
+            && self.pipeline.is_idle()
+            && self.host_rx.is_empty()
+            && self.ctl.protocol().rx_free() == RX_BUFFER_SIZE
     }
 
-    /// The lower-priority tasks, run to completion: protocol and HMI, settings
-    /// changes, segment preparation, and starting the step timer when it is idle.
-    fn background(&mut self) {
-        let now = self.now_ms();
-        self.ctl.poll(&mut self.pipeline, now);
-        // The planner took the new settings when they changed (MotionControl::configure).
-        if self.ctl.protocol_mut().machine_mut().take_settings_dirty() {
-            self.ctl.settings_changed();
+    /// Starts the step timer if it is stopped and commands wait (the preparation
+    /// task's kick and the interrupt's pend in the firmware).
+    fn kick(&mut self) {
+        if self.next_irq.is_some() || self.pipeline.side().queued() == 0 {
+            return;
         }
+        let side = self.pipeline.side_mut();
+        side.exec.set_turn_guard(self.outputs.turn_guard_ticks());
+        if let Some(o) = side.exec.start(&mut side.queue) {
+            self.first_motion.get_or_insert(self.now);
+            self.next_irq = Some(self.now + u64::from(o.reload));
+        }
+    }
+
+    /// The step-timer interrupt.
+    fn step_interrupt(&mut self, t: u64, on_step: &mut impl FnMut(StepEvent)) {
+        let side = self.pipeline.side_mut();
+        let o = side.exec.on_interrupt(&mut side.queue);
+        if o.step != 0 {
+            let pos = side.exec.position();
+            on_step(StepEvent {
+                t,
+                step: o.step,
+                pos,
+                servo_down: self.pipeline.pen_down(),
+            });
+        }
+        self.next_irq = if o.reload != 0 {
+            Some(t + u64::from(o.reload))
+        } else if o.step != 0 {
+            // The queue ran empty: one more short period so that the last pulse ends.
+            Some(t + u64::from(tail_period(self.outputs.pulse_ticks)))
+        } else {
+            None
+        };
+    }
+
+    /// The millisecond tick's tasks, in the firmware's priority order: segment
+    /// preparation, the protocol tick, a keypad column every 5 ms, the LCD every
+    /// 100 ms.
+    fn tick(&mut self) {
+        let now = self.ms;
         self.pipeline.fill();
-        if self.next_irq.is_none() {
-            let side = self.pipeline.side_mut();
-            if let Some(o) = side.exec.start(&mut side.queue) {
-                self.first_motion.get_or_insert(self.now);
-                self.next_irq = Some(self.now + u64::from(o.reload.max(1)));
-            }
+        self.kick();
+        let (_, mut rx) = self.host_rx.split();
+        let (mut tx, _) = self.host_tx.split();
+        let host = HostLink {
+            rx: &mut rx,
+            tx: &mut tx,
+            port_open: self.port_open,
+        };
+        let done = self
+            .ctl
+            .service(host, self.pins, &mut self.store, &mut self.pipeline, now);
+        if let Some(cfg) = done.outputs {
+            self.outputs = cfg;
+        }
+        self.servo_pulse_us = done.servo_pulse_us;
+        if now.is_multiple_of(KEYPAD_SCAN_MS) {
+            self.scan();
+        }
+        if now.is_multiple_of(LCD_REFRESH_MS) && self.lcd.is_some() {
+            self.refresh_lcd();
         }
     }
 
@@ -207,65 +302,33 @@ impl Board {
         }
         let now = self.now_ms();
         self.ctl.key_scan(rows, &mut self.pipeline, now);
+        // The keypad task takes the beep and the busy LED; the simulator has no
+        // buzzer to play them on.
+        let _ = self.ctl.take_outputs();
+    }
+
+    /// The time of the next millisecond tick.
+    fn next_tick(&self) -> u64 {
+        Self::ms_to_ticks(u64::from(self.ms) + u64::from(TICK_MS))
     }
 
     /// Runs virtual time up to `until` ticks, calling `on_step` for every step.
     pub fn run_until(&mut self, until: u64, on_step: &mut impl FnMut(StepEvent)) {
-        let poll_ticks = Self::ms_to_ticks(POLL_MS);
-        let scan_ticks = Self::ms_to_ticks(SCAN_MS);
         loop {
-            self.background();
-            let next_poll = self.now + poll_ticks;
-            let next_lcd = self.lcd.as_ref().map(|l| l.next);
-            let t = [
-                self.next_irq,
-                Some(self.next_scan),
-                Some(next_poll),
-                next_lcd,
-            ]
-            .into_iter()
-            .flatten()
-            .min()
-            .unwrap_or(next_poll);
+            let tick = self.next_tick();
+            let t = self.next_irq.map_or(tick, |irq| irq.min(tick));
             if t > until {
                 self.now = until;
                 return;
             }
             self.now = t;
+            // The step interrupt preempts the tasks the tick starts at the same time.
             if self.next_irq == Some(t) {
-                let side = self.pipeline.side_mut();
-                let o = side.exec.on_interrupt(&mut side.queue);
-                if o.step != 0 {
-                    let pos = side.exec.position();
-                    let servo_down = self.pipeline.pen_down();
-                    on_step(StepEvent {
-                        t,
-                        step: o.step,
-                        pos,
-                        servo_down,
-                    });
-                    for (a, d) in self.dir.iter_mut().enumerate() {
-                        if o.step & (1 << a) != 0 {
-                            *d = if o.dir & (1 << a) != 0 { -1 } else { 1 };
-                        }
-                    }
-                    self.ctl.note_direction(self.dir);
-                }
-                self.next_irq = if o.reload == 0 {
-                    None
-                } else {
-                    Some(t + u64::from(o.reload))
-                };
+                self.step_interrupt(t, on_step);
             }
-            if self.next_scan == t {
-                self.scan();
-                self.next_scan = t + scan_ticks;
-            }
-            if next_lcd == Some(t) {
-                self.refresh_lcd();
-                if let Some(l) = self.lcd.as_mut() {
-                    l.next = t + Self::ms_to_ticks(LCD_MS);
-                }
+            if t == tick {
+                self.ms += TICK_MS;
+                self.tick();
             }
         }
     }
@@ -275,7 +338,6 @@ impl Board {
         let end = self.now + limit;
         let step = Self::ms_to_ticks(10);
         while self.now < end {
-            self.background();
             if self.is_idle() {
                 return true;
             }

@@ -4,11 +4,14 @@
 //! `inkstep-core` code the firmware runs, and records what comes out (responses, step
 //! events, LCD frames). Everything that decides anything lives in the core.
 
+pub mod analysis;
 pub mod bench;
 pub mod board;
 pub mod demo;
+pub mod flash;
 pub mod keys;
 pub mod kinematics;
+pub mod latency;
 pub mod lcd;
 pub mod paths;
 pub mod plot;

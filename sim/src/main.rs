@@ -54,10 +54,10 @@ enum Cmd {
         #[arg(long)]
         char_count: bool,
     },
-    /// Run the reference programs of shared/bench and compare with Grbl's figures.
+    /// Run the reference programs of bench/ and compare with Grbl's figures.
     Bench {
-        /// Folder of the reference programs (default: ../shared/bench beside the
-        /// repository, else the repository's bench/).
+        /// Folder of the reference programs, their ideal paths and Grbl's figures
+        /// (default: the repository's bench/).
         #[arg(long)]
         dir: Option<PathBuf>,
     },
@@ -69,6 +69,23 @@ enum Cmd {
         /// Run virtual time this many times faster than real time.
         #[arg(long, default_value_t = 1.0)]
         speed: f64,
+    },
+    /// How long a `?` waits for its report during long character-counting streams (of
+    /// one-step moves and of ordinary moves), on fresh simulators at each speed, or on
+    /// the board behind --port (e.g. `cargo emu serve --link PATH`).
+    Latency {
+        /// Lines per stream.
+        #[arg(long, default_value_t = 100_000)]
+        lines: usize,
+        /// Virtual speeds of the simulators, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "1,10,100")]
+        speeds: Vec<f64>,
+        /// Measure the board behind this port instead of starting simulators.
+        #[arg(long)]
+        port: Option<PathBuf>,
+        /// Milliseconds between an answer and the next `?`.
+        #[arg(long, default_value_t = 10)]
+        interval_ms: u64,
     },
     /// The standalone demo: boot, menu, sine with preview, star, then a G-code program;
     /// writes LCD screens, the drawing (PNG, SVG) and prints a summary.
@@ -118,6 +135,18 @@ fn main() -> ExitCode {
         }
         Cmd::Bench { dir } => cmd_bench(dir),
         Cmd::Demo { out, keys } => cmd_demo(&out, keys.as_deref()),
+        Cmd::Latency {
+            lines,
+            speeds,
+            port,
+            interval_ms,
+        } => inkstep_sim::latency::run(
+            lines,
+            &speeds,
+            port.as_deref(),
+            std::time::Duration::from_millis(interval_ms),
+        )
+        .map(|()| ExitCode::SUCCESS),
         Cmd::Serve { link, speed } => {
             if !(speed > 0.0 && speed.is_finite()) {
                 return fail("--speed must be a positive number");

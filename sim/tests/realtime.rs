@@ -1,6 +1,7 @@
 //! Real-time commands through the virtual board: feed hold and resume keep every step,
 //! status reports follow the machine, soft reset at rest keeps the position.
 
+use inkstep_core::machine::MotionControl;
 use inkstep_core::settings::Settings;
 use inkstep_sim::board::{Board, StepEvent};
 
@@ -13,9 +14,11 @@ fn run_ms(b: &mut Board, ms: u64, ev: &mut Vec<StepEvent>) {
     b.run_until(until, &mut |e| ev.push(e));
 }
 
-fn status(b: &mut Board) -> String {
+/// The answer to `?`: the protocol tick takes the byte, the next one sends it.
+fn status(b: &mut Board, ev: &mut Vec<StepEvent>) -> String {
     text(b);
     b.usb_write(b"?");
+    run_ms(b, 2, ev);
     let t = text(b);
     t.lines()
         .find(|l| l.starts_with('<'))
@@ -30,11 +33,11 @@ fn feed_hold_and_resume_lose_no_step() {
     let g = b"G21 G90\nG1 X60 Y20 F3000\nG1 X0 Y40\n";
     assert_eq!(b.usb_write(g), g.len());
     run_ms(&mut b, 500, &mut ev);
-    assert!(status(&mut b).starts_with("<Run|"));
+    assert!(status(&mut b, &mut ev).starts_with("<Run|"));
     b.usb_write(b"!");
     run_ms(&mut b, 400, &mut ev);
     let held_at = b.pipeline.side().exec.position();
-    let st = status(&mut b);
+    let st = status(&mut b, &mut ev);
     assert!(st.starts_with("<Hold:0|"), "{st}");
     run_ms(&mut b, 500, &mut ev);
     assert_eq!(
@@ -48,7 +51,7 @@ fn feed_hold_and_resume_lose_no_step() {
     let x: u32 = ev.iter().filter(|e| e.step & 1 != 0).count() as u32;
     let y: u32 = ev.iter().filter(|e| e.step & 2 != 0).count() as u32;
     assert_eq!((x, y), (4800 + 4800, 1600 + 1600));
-    assert!(status(&mut b).starts_with("<Idle|MPos:0.000,40.000,0.000"));
+    assert!(status(&mut b, &mut ev).starts_with("<Idle|MPos:0.000,40.000,0.000"));
 }
 
 #[test]
@@ -71,10 +74,11 @@ fn soft_reset_at_rest_keeps_the_position() {
     b.usb_write(b"G21 G90\nG1 X5 Y5 F3000\n");
     assert!(b.run_to_idle(Board::ms_to_ticks(60_000), &mut |e| ev.push(e)));
     b.usb_write(&[0x18]);
+    run_ms(&mut b, 2, &mut ev);
     let t = text(&mut b);
     assert!(t.contains("Grbl 1.1h"), "{t}");
     assert!(!t.contains("ALARM"), "{t}");
-    assert!(status(&mut b).starts_with("<Idle|MPos:5.000,5.000,0.000"));
+    assert!(status(&mut b, &mut ev).starts_with("<Idle|MPos:5.000,5.000,0.000"));
 }
 
 #[test]

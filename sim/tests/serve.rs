@@ -101,6 +101,42 @@ fn a_sender_talks_to_the_simulated_port() {
 
 use std::os::unix::fs::OpenOptionsExt;
 
+/// Opening the port starts a session, as on the board (DTR): every client that opens
+/// it gets the welcome line first, even one that comes after another has gone.
+#[test]
+fn each_client_that_opens_the_port_gets_the_welcome() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("ttyINKSTEP");
+    let child = Command::new(env!("CARGO_BIN_EXE_inkstep-sim"))
+        .args(["serve", "--speed", "20", "--link"])
+        .arg(&link)
+        .stdout(Stdio::null())
+        .spawn()
+        .unwrap();
+    let _guard = Killed(child);
+    wait_for(&link);
+    let open = || {
+        std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32)
+            .open(&link)
+            .unwrap()
+    };
+    for _ in 0..2 {
+        let mut port = open();
+        let mut got = String::new();
+        assert!(
+            read_until(&mut port, &mut got, "Grbl 1.1h"),
+            "welcome: {got:?}"
+        );
+        port.write_all(b"$I\n").unwrap();
+        assert!(read_until(&mut port, &mut got, "ok\r\n"), "{got:?}");
+        drop(port);
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
 /// A killed simulator must not leave its `--link` symlink dangling: SIGTERM (what
 /// `kill` and service managers send) ends the serve loop normally, the exit status is
 /// success and the link is gone.

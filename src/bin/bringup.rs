@@ -11,6 +11,8 @@
 //! - USB: a CDC-ACM serial port that greets and echoes every byte back.
 //! - The watchdog is fed by the keypad task.
 #![no_std]
+// Every unsafe block says why it is sound (a `SAFETY:` comment).
+#![deny(clippy::undocumented_unsafe_blocks)]
 #![no_main]
 
 use defmt_rtt as _;
@@ -37,12 +39,14 @@ mod app {
         prelude::*,
         text::{Baseline, Text},
     };
-    use inkstep::steps::{self, StepCmdQueue, StepOutput, StepTx};
+    use inkstep::steps::{self, StepOutput, StepTx};
     use inkstep_core::interpolation::Tick;
     use inkstep_core::keypad::{KeyKind, Keypad, KeypadConfig};
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920};
     use inkstep_core::stepper::exec::Executor;
+    use inkstep_core::stepper::queue::StepCmdQueue;
     use inkstep_core::stepper::StepCmd;
+    use inkstep_core::stepper::MAX_RELOAD;
     use rtic_monotonics::systick::prelude::*;
 
     systick_monotonic!(Mono, 1_000);
@@ -65,7 +69,6 @@ mod app {
         step_out: StepOutput,
         steps_tx: StepTx,
         keypad: board::KeypadMatrix,
-        inputs: board::Inputs,
         indicators: board::Indicators,
         servo: board::PenServo,
         lcd_spi: board::LcdSpi,
@@ -84,7 +87,7 @@ mod app {
         let mut timer = b.step_timer;
         timer.set_pulse_ticks(10 * (board::STEP_TIMER_HZ / 1_000_000) as u16);
         port.set_drivers_enabled(true, true);
-        let step_out = steps::install(Executor::new([0; 3], 0x1_0000), steps_rx, port, timer);
+        let step_out = steps::install(Executor::new([0; 3], MAX_RELOAD), steps_rx, port, timer);
         defmt::info!("inkstep bring-up, sysclk {} Hz", b.sysclk_hz);
         jogger::spawn().ok();
         keypad_scan::spawn().ok();
@@ -101,7 +104,6 @@ mod app {
                 step_out,
                 steps_tx,
                 keypad: b.keypad,
-                inputs: b.inputs,
                 indicators: b.indicators,
                 servo: b.servo,
                 lcd_spi: b.lcd_spi,
@@ -164,7 +166,7 @@ mod app {
         }
     }
 
-    #[task(priority = 3, shared = [jog, last_key], local = [keypad, watchdog, indicators, servo, inputs])]
+    #[task(priority = 3, shared = [jog, last_key], local = [keypad, watchdog, indicators, servo])]
     async fn keypad_scan(mut cx: keypad_scan::Context) {
         let mut scanner = Keypad::new(KeypadConfig::default());
         let mut pen_down = false;
@@ -202,8 +204,7 @@ mod app {
             beep_ms = beep_ms.saturating_sub(5);
             if !moving {
                 // E-stop released and no key held: re-arm (the drivers come back on).
-                let inputs = &*cx.local.inputs;
-                steps::release_halt(|| !inputs.estop_open());
+                steps::release_halt(|| !board::Inputs::levels().estop);
             }
             cx.local.watchdog.feed();
         }
@@ -230,11 +231,11 @@ mod app {
             let _ = write!(
                 lines[3],
                 "E{} X{} Y{} H{} S{}",
-                u8::from(inputs.estop_open),
-                u8::from(inputs.limit_x_open),
-                u8::from(inputs.limit_y_open),
-                u8::from(inputs.feed_hold_low),
-                u8::from(inputs.cycle_start_low)
+                u8::from(inputs.estop),
+                u8::from(inputs.limits[0] == Some(true)),
+                u8::from(inputs.limits[1] == Some(true)),
+                u8::from(!inputs.feed_hold),
+                u8::from(!inputs.cycle_start)
             );
             let _ = write!(
                 lines[4],

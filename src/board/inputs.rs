@@ -1,61 +1,35 @@
 //! The safety and control inputs on EXTI lines (e-stop, limit switches, feed hold,
 //! cycle start): their raw levels and the pending flags of their interrupts.
 
-use super::pins::idr;
+use inkstep_core::machine::PinLevels;
+use stm32f1xx_hal::gpio::{Input, PullUp, PB0, PB1, PB3, PB4, PB5};
 use stm32f1xx_hal::pac;
 
-/// Raw input levels, read together.
-#[derive(Clone, Copy, Debug, defmt::Format)]
-pub struct InputLevels {
-    pub estop_open: bool,
-    pub limit_x_open: bool,
-    pub limit_y_open: bool,
-    pub feed_hold_low: bool,
-    pub cycle_start_low: bool,
-}
-
 /// Safety and control inputs on EXTI: e-stop PB0, limits PB1 and PB3, feed hold PB4,
-/// cycle start PB5 (pull-up inputs).
+/// cycle start PB5 (pull-up inputs). What a level means (and `$5`/`$215`'s inversion)
+/// is the core's: `inkstep_core::machine::InputPolarity`.
 pub struct Inputs {
-    pub(super) _owned: (),
+    // Owned so that nothing else reconfigures them; read together through GPIOB.
+    pub(super) _estop: PB0<Input<PullUp>>,
+    pub(super) _limit_x: PB1<Input<PullUp>>,
+    pub(super) _limit_y: PB3<Input<PullUp>>,
+    pub(super) _feed_hold: PB4<Input<PullUp>>,
+    pub(super) _cycle_start: PB5<Input<PullUp>>,
 }
 
 impl Inputs {
-    /// Raw levels: true = switch open / input high.
-    pub fn estop_open(&self) -> bool {
-        idr(pac::GPIOB::ptr()) & (1 << 0) != 0
-    }
-    pub fn limit_x_open(&self) -> bool {
-        idr(pac::GPIOB::ptr()) & (1 << 1) != 0
-    }
-    pub fn limit_y_open(&self) -> bool {
-        idr(pac::GPIOB::ptr()) & (1 << 3) != 0
-    }
-    pub fn feed_hold_low(&self) -> bool {
-        Self::read_feed_hold_low()
-    }
-    pub fn cycle_start_low(&self) -> bool {
-        Self::read_cycle_start_low()
-    }
-    /// All input levels in one read of GPIOB (usable from any context).
-    pub fn levels() -> InputLevels {
-        let idr = idr(pac::GPIOB::ptr());
-        InputLevels {
-            estop_open: idr & (1 << 0) != 0,
-            limit_x_open: idr & (1 << 1) != 0,
-            limit_y_open: idr & (1 << 3) != 0,
-            feed_hold_low: idr & (1 << 4) == 0,
-            cycle_start_low: idr & (1 << 5) == 0,
+    /// Every input's pin level in one read of GPIOB (true = high), usable from any
+    /// context (the input interrupts do not own the pins). The board has no Z limit.
+    pub fn levels() -> PinLevels {
+        // SAFETY: a read of GPIOB's input data register, which has no side effect.
+        let idr = unsafe { (*pac::GPIOB::ptr()).idr().read().bits() };
+        let high = |pin: u32| idr & (1 << pin) != 0;
+        PinLevels {
+            estop: high(0),
+            limits: [Some(high(1)), Some(high(3)), None],
+            feed_hold: high(4),
+            cycle_start: high(5),
         }
-    }
-    /// The feed-hold level read straight from GPIOB, for the EXTI handler (which does
-    /// not own the pins). Low = hold.
-    pub fn read_feed_hold_low() -> bool {
-        idr(pac::GPIOB::ptr()) & (1 << 4) == 0
-    }
-    /// The cycle-start level straight from GPIOB. Low = pressed.
-    pub fn read_cycle_start_low() -> bool {
-        idr(pac::GPIOB::ptr()) & (1 << 5) == 0
     }
 }
 

@@ -1,35 +1,35 @@
 //! The 4x4 keypad matrix: four open-drain columns driven low one at a time, four
-//! pull-up rows read together.
+//! pull-up rows.
 
-use super::pins::{bsrr, idr, pin_word};
-use stm32f1xx_hal::pac;
+use stm32f1xx_hal::gpio::{ErasedPin, Input, OpenDrain, Output, PinState, PullUp};
 
-/// The 4x4 keypad: rows PB6-PB9 (pull-up inputs), columns PB10, PB11, PA15, PC14 (open drain).
+/// The 4x4 keypad: rows PB6-PB9 (pull-up inputs), columns PB10, PB11, PA15, PC14 (open
+/// drain, released high).
 pub struct KeypadMatrix {
-    pub(super) _owned: (),
+    pub(super) columns: [ErasedPin<Output<OpenDrain>>; 4],
+    pub(super) rows: [ErasedPin<Input<PullUp>>; 4],
 }
 
 impl KeypadMatrix {
     pub const COLUMNS: usize = 4;
 
-    /// Drive column `col` low (all others released). The rows settle within a few µs,
+    /// Drive column `col` low and release the others. The rows settle within a few us,
     /// which is why the scan task reads them on its next tick rather than busy-waiting.
     pub fn select_column(&mut self, col: usize) {
-        // One BSRR word per port: the selected column low, the others released high
-        // (a pin is never named in both halves, where setting would win).
-        let (b, a, c) = match col {
-            0 => (pin_word(10, false) | pin_word(11, true), 1 << 15, 1 << 14),
-            1 => (pin_word(10, true) | pin_word(11, false), 1 << 15, 1 << 14),
-            2 => (3 << 10, pin_word(15, false), 1 << 14),
-            _ => (3 << 10, 1 << 15, pin_word(14, false)),
-        };
-        bsrr(pac::GPIOB::ptr(), b);
-        bsrr(pac::GPIOA::ptr(), a);
-        bsrr(pac::GPIOC::ptr(), c);
+        for (i, pin) in self.columns.iter_mut().enumerate() {
+            pin.set_state(if i == col {
+                PinState::Low
+            } else {
+                PinState::High
+            });
+        }
     }
 
     /// Row bits of the selected column: bit r set = key in row r pressed (active low).
     pub fn read_rows(&self) -> u8 {
-        (!(idr(pac::GPIOB::ptr()) >> 6) & 0x0F) as u8
+        self.rows
+            .iter()
+            .enumerate()
+            .fold(0, |bits, (r, pin)| bits | (u8::from(pin.is_low()) << r))
     }
 }

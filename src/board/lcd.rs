@@ -1,7 +1,7 @@
 //! The ST7920 LCD on SPI2: the transmit-only link and the controller's start-up.
 
-use super::pins::{bsrr, pin_word};
 use super::SYSCLK_HZ;
+use stm32f1xx_hal::gpio::{Output, PushPull, PB12};
 use stm32f1xx_hal::pac;
 use stm32f1xx_hal::spi::Spi;
 
@@ -14,14 +14,15 @@ pub const LCD_SPI_HZ: u32 = 300_000;
 /// and the controller's chip select on PB12, which is active high.
 pub struct LcdSpi {
     pub(super) spi: Spi<pac::SPI2, u8>,
+    pub(super) cs: PB12<Output<PushPull>>,
 }
 
 impl LcdSpi {
     /// Send `bytes` as one transaction: chip select raised around them.
     pub fn write(&mut self, bytes: &[u8]) -> Result<(), stm32f1xx_hal::spi::Error> {
-        bsrr(pac::GPIOB::ptr(), pin_word(12, true));
+        self.cs.set_high();
         let sent = self.spi.write(bytes);
-        bsrr(pac::GPIOB::ptr(), pin_word(12, false));
+        self.cs.set_low();
         sent
     }
 }

@@ -42,20 +42,17 @@ mod indicators;
 mod inputs;
 mod keypad;
 mod lcd;
-mod pins;
 mod servo;
 mod step_port;
 mod step_timer;
 mod usb;
 mod watchdog;
 
-use pins::{PA_CRH_USB, PORTS};
-
 pub use flash::{
     flash_size_kb, settings_pages, FlashError, SettingsFlash, FLASH_PAGE_SIZE, FLASH_SIZE,
 };
 pub use indicators::Indicators;
-pub use inputs::{exti_take_pending, InputLevels, Inputs};
+pub use inputs::{exti_take_pending, Inputs};
 pub use keypad::KeypadMatrix;
 pub use lcd::{lcd_init, LcdSpi, LCD_SPI_HZ};
 pub use servo::PenServo;
@@ -68,8 +65,9 @@ pub use usb::{Usb, UsbCells, UsbSerial};
 pub use watchdog::{Watchdog, WATCHDOG_MS};
 
 use stm32f1xx_hal::{
+    afio,
     flash::FlashExt,
-    gpio::{self, Input},
+    gpio::{self, Edge, ExtiPin, Input, PinState},
     pac,
     prelude::*,
     rcc,
@@ -83,7 +81,8 @@ use usb_device::{bus::UsbBusAllocator, prelude::*};
 pub const SYSCLK_HZ: u32 = 72_000_000;
 /// The step timer (TIM2) counts at the full timer clock (APB1 x2 = 72 MHz, prescaler 1):
 /// waits are exact to 14 ns; longer waits than 16 bits are split by the core's executor.
-pub const STEP_TIMER_HZ: u32 = 72_000_000;
+/// The core's step timing (and the simulator's) is computed for this clock.
+pub const STEP_TIMER_HZ: u32 = inkstep_core::stepper::TIMER_HZ;
 
 /// Everything `init` hands to the RTIC app.
 pub struct Board {
@@ -118,30 +117,34 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
     let sysclk_hz = rcc.clocks.sysclk().raw();
 
     let mut afio = dp.AFIO.constrain(&mut rcc);
-    // Clocks on and ports reset by the HAL; the pin modes are written below.
     let mut gpioa = dp.GPIOA.split(&mut rcc);
     let mut gpiob = dp.GPIOB.split(&mut rcc);
-    let _ = dp.GPIOC.split(&mut rcc);
-    let exti = dp.EXTI;
+    let mut gpioc = dp.GPIOC.split(&mut rcc);
+    let mut exti = dp.EXTI;
 
     // JTAG off, SWD on: frees PA15, PB3, PB4.
-    let _ = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
+    let (pa15, pb3, pb4) = afio.mapr.disable_jtag(gpioa.pa15, gpiob.pb3, gpiob.pb4);
 
-    // Every pin's mode in one store per configuration register, the output levels
-    // first (see the pin table above; `PORTS`). PA12 (USB D+) starts as an output
-    // driven low: the re-enumeration pulse below.
-    for (port, odr, crl, crh) in PORTS {
-        // SAFETY: the ports were just reset; these are their documented registers and
-        // the values configure only the pins in the table.
-        unsafe {
-            (*port).odr().write(|w| w.bits(odr));
-            (*port).crl().write(|w| w.bits(crl));
-            (*port).crh().write(|w| w.bits(crh));
-        }
-    }
-    let (step_port, step_timer) = (StepPort { _owned: () }, StepTimer::new(dp.TIM2));
+    // The motion outputs low, the drivers disabled (/EN high) until the settings say
+    // how to enable them.
+    let (crl, crh) = (&mut gpioa.crl, &mut gpioa.crh);
+    let step_pins = StepPins {
+        pins: [
+            gpioa.pa0.into_push_pull_output(crl).erase(),
+            gpioa.pa1.into_push_pull_output(crl).erase(),
+            gpioa.pa2.into_push_pull_output(crl).erase(),
+            gpioa.pa3.into_push_pull_output(crl).erase(),
+            gpioa.pa4.into_push_pull_output(crl).erase(),
+            gpioa.pa5.into_push_pull_output(crl).erase(),
+            gpioa.pa6.into_push_pull_output(crl).erase(),
+            gpioa.pa7.into_push_pull_output(crl).erase(),
+        ],
+        enable: gpioa
+            .pa9
+            .into_push_pull_output_with_state(crh, PinState::High),
+    };
+    let (step_port, step_timer) = step_outputs(step_pins, dp.TIM2);
 
-    // The peripherals' pins as the HAL's types (their nibbles are already set).
     let servo_pin = gpioa.pa8.into_alternate_push_pull(&mut gpioa.crh);
     let mut pwm = dp
         .TIM1
@@ -149,34 +152,63 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
     pwm.enable(Channel::C1);
     let servo = PenServo { pwm: pwm.split() };
 
-    let keypad = KeypadMatrix { _owned: () };
+    // Columns released (high), rows pulled up: a pressed key pulls its row low while
+    // its column is driven low.
+    let keypad = KeypadMatrix {
+        columns: [
+            gpiob
+                .pb10
+                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High)
+                .erase(),
+            gpiob
+                .pb11
+                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High)
+                .erase(),
+            pa15.into_open_drain_output_with_state(&mut gpioa.crh, PinState::High)
+                .erase(),
+            gpioc
+                .pc14
+                .into_open_drain_output_with_state(&mut gpioc.crh, PinState::High)
+                .erase(),
+        ],
+        rows: [
+            gpiob.pb6.into_pull_up_input(&mut gpiob.crl).erase(),
+            gpiob.pb7.into_pull_up_input(&mut gpiob.crl).erase(),
+            gpiob.pb8.into_pull_up_input(&mut gpiob.crh).erase(),
+            gpiob.pb9.into_pull_up_input(&mut gpiob.crh).erase(),
+        ],
+    };
 
-    // EXTI lines 0, 1, 3, 4, 5 from port B. E-stop and limits: NC switches to GND, so
-    // opening (rising edge) is the event; both edges are taken so that releasing is
-    // seen too, and feed hold likewise. Cycle start acts on pressing (falling edge).
-    // The same register values as the HAL's per-pin ExtiPin calls, in one write each.
-    const LINES: u32 = (1 << 0) | (1 << 1) | (1 << 3) | (1 << 4) | (1 << 5);
-    const PORT_B: u32 = 1;
-    // SAFETY: AFIO's clock is on (`constrain`); these EXTICR fields, trigger and mask
-    // bits belong to the lines above, which nothing else configures.
-    unsafe {
-        let afio_regs = &*pac::AFIO::ptr();
-        afio_regs
-            .exticr1()
-            .modify(|r, w| w.bits((r.bits() & !0xF0FF) | PORT_B | (PORT_B << 4) | (PORT_B << 12)));
-        afio_regs
-            .exticr2()
-            .modify(|r, w| w.bits((r.bits() & !0x00FF) | PORT_B | (PORT_B << 4)));
-    }
-    exti.rtsr()
-        .modify(|r, w| unsafe { w.bits((r.bits() | LINES) & !(1 << 5)) });
-    exti.ftsr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
-    exti.imr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | LINES) });
-    let inputs = Inputs { _owned: () };
-    // Not busy: the LED (active low) off and the busy output low, as in `PORTS`.
-    let indicators = Indicators { _owned: () };
+    // The safety and control inputs on EXTI lines 0, 1, 3, 4, 5. E-stop and limits:
+    // NC switches to GND, so opening (rising edge) is the event; both edges are taken
+    // so that releasing is seen too, and feed hold likewise. Cycle start acts on
+    // pressing (falling edge).
+    let mut estop = gpiob.pb0.into_pull_up_input(&mut gpiob.crl);
+    let mut limit_x = gpiob.pb1.into_pull_up_input(&mut gpiob.crl);
+    let mut limit_y = pb3.into_pull_up_input(&mut gpiob.crl);
+    let mut feed_hold = pb4.into_pull_up_input(&mut gpiob.crl);
+    let mut cycle_start = gpiob.pb5.into_pull_up_input(&mut gpiob.crl);
+    interrupt_on(&mut estop, Edge::RisingFalling, &mut afio, &mut exti);
+    interrupt_on(&mut limit_x, Edge::RisingFalling, &mut afio, &mut exti);
+    interrupt_on(&mut limit_y, Edge::RisingFalling, &mut afio, &mut exti);
+    interrupt_on(&mut feed_hold, Edge::RisingFalling, &mut afio, &mut exti);
+    interrupt_on(&mut cycle_start, Edge::Falling, &mut afio, &mut exti);
+    let inputs = Inputs {
+        _estop: estop,
+        _limit_x: limit_x,
+        _limit_y: limit_y,
+        _feed_hold: feed_hold,
+        _cycle_start: cycle_start,
+    };
+
+    // Not busy: the LED (active low) off, the busy output low, the buzzer quiet.
+    let indicators = Indicators {
+        led: gpioc
+            .pc13
+            .into_push_pull_output_with_state(&mut gpioc.crh, PinState::High),
+        busy_out: gpioc.pc15.into_push_pull_output(&mut gpioc.crh),
+        buzzer: gpioa.pa10.into_push_pull_output(&mut gpioa.crh),
+    };
 
     // LCD on SPI2. The ST7920 samples on the rising edge with the clock idle low.
     let sck = gpiob.pb13.into_alternate_push_pull(&mut gpiob.crh);
@@ -195,19 +227,20 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
         LCD_SPI_HZ.Hz(),
         &mut rcc,
     );
-    let lcd_spi = LcdSpi { spi };
+    let lcd_spi = LcdSpi {
+        spi,
+        cs: gpiob.pb12.into_push_pull_output(&mut gpiob.crh),
+    };
 
     // USB: force a re-enumeration by pulling D+ low briefly (the Blue Pill has a fixed
     // pull-up on D+), then hand the pins to the USB peripheral.
-    // PA12 has been driven low since the port setup.
+    let mut usb_dp = gpioa.pa12.into_push_pull_output(&mut gpioa.crh);
+    usb_dp.set_low();
     cortex_m::asm::delay(sysclk_hz / 100);
-    // SAFETY: GPIOA's CRH with PA12 back to the floating input the USB pins need
-    // (`PA_CRH_USB`); the other pins keep the modes written above.
-    unsafe { (*pac::GPIOA::ptr()).crh().write(|w| w.bits(PA_CRH_USB)) };
     let usb_periph = Peripheral {
         usb: dp.USB,
         pin_dm: gpioa.pa11,
-        pin_dp: gpioa.pa12,
+        pin_dp: usb_dp.into_floating_input(&mut gpioa.crh),
     };
     let bus: &'static UsbBusAllocator<UsbBusType> = usb.bus.write(UsbBus::new(usb_periph));
     let serial = usb.serial.write(usbd_serial::SerialPort::new_with_store(
@@ -245,4 +278,11 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
         flash,
         sysclk_hz,
     }
+}
+
+/// An input pin's EXTI line raises its interrupt on `edge`.
+fn interrupt_on(pin: &mut impl ExtiPin, edge: Edge, afio: &mut afio::Parts, exti: &mut pac::EXTI) {
+    pin.make_interrupt_source(afio);
+    pin.trigger_on_edge(exti, edge);
+    pin.enable_interrupt(exti);
 }

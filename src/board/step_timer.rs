@@ -2,6 +2,7 @@
 //! CH1-CH3, armed one period ahead) and raises one interrupt per step event.
 
 use super::{STEP_TIMER_HZ, SYSCLK_HZ};
+use inkstep_core::stepper::MAX_RELOAD;
 use stm32f1xx_hal::pac;
 
 /// The update event flag (UIF): a period has ended.
@@ -58,7 +59,8 @@ impl StepTimer {
             rcc.apb1rstr().modify(|_, w| w.tim2rst().clear_bit());
         }
         let psc = SYSCLK_HZ / STEP_TIMER_HZ - 1;
-        // SAFETY (all raw writes below): documented TIM2 register values.
+        // SAFETY: raw writes of documented TIM2 register values (RM0008 15.4) to the
+        // timer this struct owns, while it is stopped.
         unsafe {
             tim.psc().write(|w| w.bits(psc));
             tim.arr().write(|w| w.bits(0xFFFF));
@@ -134,17 +136,20 @@ impl StepTimer {
     /// core's executor guarantees (so no clamp costs the interrupt time here).
     #[inline(always)]
     pub fn set_period(&mut self, ticks: u32) {
-        debug_assert!((2..=0x1_0000).contains(&ticks));
+        debug_assert!((2..=MAX_RELOAD).contains(&ticks));
         let arr = ticks.wrapping_sub(1);
+        // SAFETY: any 16-bit auto-reload value is valid; `ticks` is 2..=0x10000.
         self.tim.arr().write(|w| unsafe { w.bits(arr) });
         // Interrupt latency already counted past the new end: end the period now
         // rather than wrapping through 65536 ticks.
         if self.tim.cnt().read().bits() >= arr {
+            // SAFETY: any 16-bit count is valid.
             self.tim.cnt().write(|w| unsafe { w.bits(arr) });
         }
     }
 
     pub fn start(&mut self) {
+        // SAFETY: any 16-bit count is valid.
         self.tim.cnt().write(|w| unsafe { w.bits(0) });
         self.tim.cr1().modify(|_, w| w.cen().set_bit());
     }
@@ -171,7 +176,8 @@ impl StepTimer {
     #[inline(always)]
     pub fn take_update(&mut self) -> bool {
         let seen = self.tim.sr().read().bits() & EVENT_UPDATE;
-        // rc_w0 flags: a 0 clears, a 1 leaves a flag alone (bits 15:0 only).
+        // SAFETY: SR's flags are rc_w0: a 0 clears, a 1 leaves a flag alone (bits
+        // 15:0 only), so this clears the update flag and nothing else.
         self.tim.sr().write(|w| unsafe { w.bits(!seen & 0xFFFF) });
         seen != 0
     }

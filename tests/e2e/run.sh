@@ -14,25 +14,10 @@ fi
 cargo build -q -p inkstep-sim --target host-tuple --profile host
 SIM=target/$(rustc -vV | awk '/^host:/ { print $2 }')/host/inkstep-sim
 
-dir=$(mktemp -d)
-server=
-cleanup() {
-  if [ -n "$server" ]; then kill "$server" 2>/dev/null || true; wait "$server" 2>/dev/null || true; fi
-  rm -rf "$dir"
-}
-trap cleanup EXIT
-
-"$SIM" serve --link "$dir/ttyINKSTEP" --speed "$SPEED" >"$dir/serve.log" 2>&1 &
-server=$!
-for _ in $(seq 100); do
-  [ -e "$dir/ttyINKSTEP" ] && break
-  kill -0 "$server" 2>/dev/null || { echo "FAIL: the simulator exited:"; cat "$dir/serve.log"; exit 1; }
-  sleep 0.1
-done
-[ -e "$dir/ttyINKSTEP" ] || { echo "FAIL: no pty link after 10 s"; cat "$dir/serve.log"; exit 1; }
-cat "$dir/serve.log"
+. tests/e2e/serve.sh
+start_board "$SIM" serve --speed "$SPEED"
 
 start=$SECONDS
-python3 tests/e2e/checks.py "$dir/ttyINKSTEP" "$PWD"
-kill -0 "$server" 2>/dev/null || { echo "FAIL: the simulator died during the checks"; cat "$dir/serve.log"; exit 1; }
+python3 tests/e2e/checks.py "$SERVE_PORT" "$PWD"
+board_alive
 echo "end-to-end checks: $((SECONDS - start)) s at --speed $SPEED"

@@ -14,12 +14,15 @@
 
 use defmt_rtt as _;
 use inkstep::board::{self, StepPins};
-use inkstep::steps::{self, BoardSide, StepCmdQueue, StepOutput};
+use inkstep::steps::{self, BoardSide, StepOutput};
 use inkstep_core::controller::Controller;
 use inkstep_core::pipeline::{Pipeline, StepSide};
 use inkstep_core::settings::Settings;
 use inkstep_core::stepper::exec::Executor;
+use inkstep_core::stepper::output::OutputConfig;
 use inkstep_core::stepper::prep::PrepConfig;
+use inkstep_core::stepper::queue::StepCmdQueue;
+use inkstep_core::stepper::MAX_RELOAD;
 use stm32f1xx_hal::{gpio::PinState, pac, prelude::*};
 
 const PROGRAMS: [&[u8]; 5] = [
@@ -135,11 +138,11 @@ fn main() -> ! {
     let (mut port, mut timer) = (Some(port), Some(timer));
     // The interrupt's configuration word is written at boot, as in the firmware (so
     // the bench pays its load like the firmware does).
-    steps::set_output_config(0, 0, false);
+    let settings = Settings::default();
+    steps::set_output_config(&OutputConfig::from(&settings));
 
     static mut QUEUES: [StepCmdQueue; PROGRAMS.len()] =
         [const { StepCmdQueue::new() }; PROGRAMS.len()];
-    let settings = Settings::default();
     let prep = PrepConfig {
         timer_hz: board::STEP_TIMER_HZ,
         ..PrepConfig::default()
@@ -153,7 +156,7 @@ fn main() -> ! {
         let (Some(pins), Some(tim)) = (port.take(), timer.take()) else {
             break;
         };
-        let mut out = steps::install(Executor::new([0; 3], 0x1_0000), rx, pins, tim);
+        let mut out = steps::install(Executor::new([0; 3], MAX_RELOAD), rx, pins, tim);
         let mut pipeline = Pipeline::new(&settings, prep, BoardSide { tx });
         let mut ctl = Controller::new(settings.clone(), 0);
         // SAFETY: single-threaded bench; measure.py charges each call to this program.

@@ -4,10 +4,12 @@
 //! and the points that bound its extent for the travel checks.
 
 use super::parser::Block;
-use super::units::{mm_to_steps, Reach};
+use super::units::{
+    mm_to_nm, nm_to_fine_steps, nm_to_mm, nm_to_steps, value_to_nm, Nm, NmPos, Reach,
+};
 use super::Status;
 use crate::fmath;
-use crate::motion::{Path, AXES};
+use crate::motion::Path;
 use crate::settings::Settings;
 use core::f32::consts::{FRAC_PI_2, TAU};
 
@@ -16,10 +18,11 @@ const ARC_ABS_TOL: f32 = 0.005;
 const ARC_MAX_ERR: f32 = 0.5;
 const ARC_REL_TOL: f32 = 0.001;
 
-/// A G2/G3 arc in the XY plane, machine mm.
+/// A G2/G3 arc in the XY plane.
 pub(super) struct ArcGeom {
-    /// Centre, absolute machine mm (X, Y).
-    pub(super) center: [f32; 2],
+    /// Centre, absolute machine nanometres (X, Y): exact for the I/J form.
+    pub(super) center: [Nm; 2],
+    /// Radius, mm.
     pub(super) radius: f32,
     pub(super) start_angle: f32,
     /// Swept angle, > 0, in the arc's direction.
@@ -40,15 +43,16 @@ fn positive_sweep(mut a: f32) -> f32 {
 /// Centre and sweep of a G2/G3 block from its I/J or R words (in block units).
 pub(super) fn arc_geometry(
     b: &mut Block,
-    start: &[f32; AXES],
-    target: &[f32; AXES],
+    start: &NmPos,
+    target: &NmPos,
     ccw: bool,
-    scale: f32,
+    inches: bool,
 ) -> Result<ArcGeom, Status> {
-    let dx = target[0] - start[0];
-    let dy = target[1] - start[1];
+    let dx = nm_to_mm(target[0].saturating_sub(start[0]));
+    let dy = nm_to_mm(target[1].saturating_sub(start[1]));
+    // The centre relative to the start, in nanometres.
     let (ci, cj) = if let Some(r) = b.take(b'R') {
-        let r = r * scale;
+        let r = nm_to_mm(value_to_nm(r, inches));
         if dx == 0.0 && dy == 0.0 {
             return Err(Status::InvalidTarget);
         }
@@ -70,21 +74,25 @@ pub(super) fn arc_geometry(
         if r < 0.0 {
             h = -h;
         }
-        (0.5 * (dx - dy * h), 0.5 * (dy + dx * h))
+        (mm_to_nm(0.5 * (dx - dy * h)), mm_to_nm(0.5 * (dy + dx * h)))
     } else {
-        let i = b.take(b'I').map(|v| v * scale);
-        let j = b.take(b'J').map(|v| v * scale);
+        let i = b.take(b'I').map(|v| value_to_nm(v, inches));
+        let j = b.take(b'J').map(|v| value_to_nm(v, inches));
         if i.is_none() && j.is_none() {
             return Err(Status::NoOffsetsInPlane);
         }
-        (i.unwrap_or(0.0), j.unwrap_or(0.0))
+        (i.unwrap_or(0), j.unwrap_or(0))
     };
     if b.get(b'K').is_some() {
         return Err(Status::UnusedWords);
     }
-    let center = [start[0] + ci, start[1] + cj];
+    let center = [start[0].saturating_add(ci), start[1].saturating_add(cj)];
+    let (ci, cj) = (nm_to_mm(ci), nm_to_mm(cj));
     let r_start = fmath::hypot(ci, cj);
-    let r_end = fmath::hypot(target[0] - center[0], target[1] - center[1]);
+    let r_end = fmath::hypot(
+        nm_to_mm(target[0].saturating_sub(center[0])),
+        nm_to_mm(target[1].saturating_sub(center[1])),
+    );
     let dr = fmath::abs(r_end - r_start);
     if !r_start.is_finite()
         || !r_end.is_finite()
@@ -94,7 +102,10 @@ pub(super) fn arc_geometry(
         return Err(Status::InvalidTarget);
     }
     let a0 = fmath::atan2(-cj, -ci);
-    let a1 = fmath::atan2(target[1] - center[1], target[0] - center[0]);
+    let a1 = fmath::atan2(
+        nm_to_mm(target[1].saturating_sub(center[1])),
+        nm_to_mm(target[0].saturating_sub(center[0])),
+    );
     let same_point = dx == 0.0 && dy == 0.0;
     let sweep = if same_point {
         TAU
@@ -114,50 +125,52 @@ pub(super) fn arc_geometry(
 /// The arc in step space: a circle if X and Y have the same resolution, else the
 /// ellipse the circle becomes. A circle keeps its exact start and centre in 1/256 step
 /// (`Path::ArcFine`: every step on the grid point nearest the programmed circle, wherever
-/// its centre falls between steps); beyond that range (2^23 steps) the centre is rounded
-/// to a step.
-pub(super) fn arc_path(g: &ArcGeom, start: &[f32; AXES], ccw: bool, s: &Settings) -> Path {
+/// its centre falls between steps); beyond that range (2^22 steps) the centre is rounded
+/// to a step. The caller has checked that start and extremes are in range, so the
+/// conversions to whole steps do not fail (0 if they did).
+pub(super) fn arc_path(g: &ArcGeom, start: &NmPos, ccw: bool, s: &Settings) -> Path {
     let sx = s.steps_per_mm(0);
     let sy = s.steps_per_mm(1);
-    let start_steps = [mm_to_steps(start[0], sx), mm_to_steps(start[1], sy)];
+    let steps = |nm, spm| nm_to_steps(nm, spm).unwrap_or(0);
     let center = [
-        mm_to_steps(g.center[0], sx).saturating_sub(start_steps[0]),
-        mm_to_steps(g.center[1], sy).saturating_sub(start_steps[1]),
+        steps(g.center[0], sx).saturating_sub(steps(start[0], sx)),
+        steps(g.center[1], sy).saturating_sub(steps(start[1], sy)),
     ];
     if sx != sy {
-        let a = mm_to_steps(g.radius, sx);
-        let b = mm_to_steps(g.radius, sy);
-        return Path::Ellipse { center, a, b, ccw };
+        let radius = mm_to_nm(g.radius);
+        return Path::Ellipse {
+            center,
+            a: steps(radius, sx),
+            b: steps(radius, sy),
+            ccw,
+        };
     }
-    // Scaling by 256 commutes with the rounding multiply; saturation starts at 2^31.
-    let q = sx * 256.0;
-    let fine = [
-        mm_to_steps(start[0], q),
-        mm_to_steps(start[1], q),
-        mm_to_steps(g.center[0], q),
-        mm_to_steps(g.center[1], q),
-    ];
-    if fine.iter().all(|v| v.unsigned_abs() < i32::MAX as u32) {
-        Path::ArcFine {
-            from: [fine[0], fine[1]],
-            center: [fine[2], fine[3]],
+    let fine = |nm| nm_to_fine_steps(nm, sx);
+    match (
+        fine(start[0]),
+        fine(start[1]),
+        fine(g.center[0]),
+        fine(g.center[1]),
+    ) {
+        (Some(fx), Some(fy), Some(cx), Some(cy)) => Path::ArcFine {
+            from: [fx, fy],
+            center: [cx, cy],
             ccw,
             turns: 0,
-        }
-    } else {
-        Path::Arc {
+        },
+        _ => Path::Arc {
             center,
             ccw,
             turns: 0,
-        }
+        },
     }
 }
 
 /// Check the points that bound the arc: its end and every axis extreme it passes.
 pub(super) fn arc_extremes(
     g: &ArcGeom,
-    start: &[f32; AXES],
-    target: &[f32; AXES],
+    start: &NmPos,
+    target: &NmPos,
     ccw: bool,
     pts: &mut Reach,
     s: &Settings,
@@ -178,9 +191,15 @@ pub(super) fn arc_extremes(
             } else {
                 0.0
             };
-            let z = start[2] + (target[2] - start[2]) * frac;
+            let z = start[2].saturating_add(mm_to_nm(
+                nm_to_mm(target[2].saturating_sub(start[2])) * frac,
+            ));
             pts.add(
-                &[g.center[0] + g.radius * cs, g.center[1] + g.radius * sn, z],
+                &[
+                    g.center[0].saturating_add(mm_to_nm(g.radius * cs)),
+                    g.center[1].saturating_add(mm_to_nm(g.radius * sn)),
+                    z,
+                ],
                 s,
             );
         }

@@ -4,8 +4,9 @@
 //! Each block is checked completely before anything changes (Grbl's rule: a rejected
 //! line has no effect), then applied in the NIST order (feed, pen, dwell, units,
 //! coordinate system, distance mode, non-modal commands, motion, program stop). The
-//! position is kept in machine millimetres and converted to steps per target with
-//! round-half-away-from-zero, so rounding never accumulates. Soft limits are checked
+//! position and the offsets are kept in whole machine nanometres, exact decimals
+//! ([`super::units`]), and converted to steps per target with round-half-away-from-zero,
+//! so that neither rounding nor a binary fraction ever accumulates. Soft limits are checked
 //! here, on every target of the block (for arcs, on their extent), before any command
 //! leaves.
 
@@ -14,10 +15,13 @@ use super::modal::{
     group_codes, Modal, MotionMode, NonModal, GROUPS, G_CODES, MOTION_MODES, M_CODES, NONE,
     NON_MODAL,
 };
-use super::parser::Block;
-use super::units::{in_step_range, mm_to_steps, to_mm, to_steps, within_travel, Reach};
+use super::parser::{Block, Value, ONE};
+use super::units::{
+    mm_to_nm, nm_to_fine_steps, nm_to_mm, to_nm, to_steps, value_to_ms, value_to_nm, within_travel,
+    Nm, NmPos, Reach,
+};
 use super::Status;
-use crate::decimal::{put_int, round_i32, to_u32, Sink};
+use crate::decimal::{put_int, round_i32, Sink};
 use crate::fmath;
 use crate::motion::Command;
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
@@ -28,22 +32,22 @@ use heapless::Vec;
 pub const MAX_COMMANDS: usize = 4;
 pub(super) const MM_PER_INCH: f32 = 25.4;
 /// Largest line number Grbl accepts.
-pub const MAX_LINE_NUMBER: f32 = 9_999_999.0;
+pub const MAX_LINE_NUMBER: i64 = 9_999_999;
 
-/// Coordinate data that Grbl keeps across resets (and inkstep in flash).
-#[derive(Clone, Copy, Debug, PartialEq, Default)]
+/// Coordinate data that Grbl keeps across resets (and inkstep in flash), nanometres.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct Coords {
-    /// G54..G59 offsets, mm.
-    pub wcs: [[f32; AXES]; 6],
-    /// G28 and G30 stored positions, machine mm.
-    pub g28: [f32; AXES],
-    pub g30: [f32; AXES],
+    /// G54..G59 offsets.
+    pub wcs: [NmPos; 6],
+    /// G28 and G30 stored positions, machine coordinates.
+    pub g28: NmPos,
+    pub g30: NmPos,
 }
 
 /// Program flow requested by a block.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stop {
-    /// M0: pause when the queue has run empty, until cycle start.
+    /// M0: pause (the motion before it has finished: a sync point) until cycle start.
     Pause,
     /// M2 / M30: end of program (modal state already reset).
     End,
@@ -56,6 +60,18 @@ pub struct Outcome {
     pub stop: Option<Stop>,
     /// G10, G28.1 or G30.1 changed the coordinate data (worth saving).
     pub coords_changed: bool,
+    /// The block is a sync point, as in Grbl: it runs only once every earlier motion
+    /// has finished (G4, M0, M2/M30, and whatever writes stored data or changes the
+    /// work coordinate offset: G10, G28.1, G30.1, G92, G92.1, G43.1, G49 and a new
+    /// G54-G59). A G4's answer also waits for its dwell ([`Outcome::has_dwell`]).
+    pub sync: bool,
+}
+
+impl Outcome {
+    /// The block queued a dwell (G4): its `ok` waits until the dwell has elapsed.
+    pub fn has_dwell(&self) -> bool {
+        self.cmds.iter().any(|c| matches!(c, Command::Dwell { .. }))
+    }
 }
 
 /// What the caller of [`Interpreter::execute_into`] can take now.
@@ -63,7 +79,7 @@ pub struct Outcome {
 pub struct Room {
     /// Commands that fit the planner queue.
     pub cmds: usize,
-    /// The queue has run empty (a program end may run).
+    /// The queue has run empty and the machine is at rest (a sync point may run).
     pub idle: bool,
 }
 
@@ -89,10 +105,12 @@ pub struct Interpreter {
     /// Programmed feed in mm/min (G94) or per-block inverse time; 0 = undefined.
     feed: f32,
     spindle: f32,
-    /// Position in machine mm, the end of the last queued block.
-    pos: [f32; AXES],
+    /// Position in machine nanometres, the end of the last queued block.
+    pos: NmPos,
     coords: Coords,
-    g92: [f32; AXES],
+    g92: NmPos,
+    /// Dynamic tool length offset (G43.1 Z), nanometres; 0 under G49.
+    tlo: Nm,
 }
 
 impl Default for Interpreter {
@@ -111,16 +129,18 @@ impl Interpreter {
                 inverse_time: false,
                 wcs: 0,
                 pen_down: false,
+                tool_length: false,
             },
             feed: 0.0,
             spindle: 0.0,
-            pos: [0.0; AXES],
+            pos: [0; AXES],
             coords: Coords {
-                wcs: [[0.0; AXES]; 6],
-                g28: [0.0; AXES],
-                g30: [0.0; AXES],
+                wcs: [[0; AXES]; 6],
+                g28: [0; AXES],
+                g30: [0; AXES],
             },
-            g92: [0.0; AXES],
+            g92: [0; AXES],
+            tlo: 0,
         }
     }
 
@@ -134,11 +154,15 @@ impl Interpreter {
     pub fn set_coords(&mut self, c: Coords) {
         self.coords = c;
     }
-    pub fn g92(&self) -> &[f32; AXES] {
+    pub fn g92(&self) -> &NmPos {
         &self.g92
     }
-    /// Position at the end of the queued program, machine mm.
-    pub fn position(&self) -> &[f32; AXES] {
+    /// The tool length offset (G43.1): `[TLO:]` in `$#`.
+    pub fn tool_length_offset(&self) -> Nm {
+        self.tlo
+    }
+    /// Position at the end of the queued program, machine nanometres.
+    pub fn position(&self) -> &NmPos {
         &self.pos
     }
     /// Last programmed S value.
@@ -149,17 +173,19 @@ impl Interpreter {
     pub fn feed(&self) -> f32 {
         self.feed
     }
-    /// The work coordinate offset (active system + G92), mm.
-    pub fn work_offset(&self) -> [f32; AXES] {
+    /// The work coordinate offset (active system + G92 + tool length offset).
+    pub fn work_offset(&self) -> NmPos {
         self.offset_of(self.modal.wcs)
     }
 
-    /// Offset of coordinate system `wcs` (0 = G54) plus G92, mm.
-    fn offset_of(&self, wcs: u8) -> [f32; AXES] {
+    /// Offset of coordinate system `wcs` (0 = G54) plus G92 and the tool length
+    /// offset on Z.
+    fn offset_of(&self, wcs: u8) -> NmPos {
         let mut o = self.g92;
+        o[2] = o[2].saturating_add(self.tlo);
         if let Some(w) = self.coords.wcs.get(usize::from(wcs)) {
             for (o, w) in o.iter_mut().zip(w.iter()) {
-                *o += w; // f32 addition commutes exactly: same as w + g92
+                *o = o.saturating_add(*w);
             }
         }
         o
@@ -167,17 +193,18 @@ impl Interpreter {
 
     /// Take the position from the planner after a stop that discarded the queue.
     pub fn sync_position(&mut self, steps: &StepPos, s: &Settings) {
-        self.pos = to_mm(steps, s);
+        self.pos = to_nm(steps, s);
     }
 
-    /// Soft reset: modal state back to defaults (G0 G54 G17 G21 G90 G94 M5, F0) and
-    /// the G92 offset cleared, as Grbl re-initialises its parser; the position and
-    /// the stored coordinate data stay.
+    /// Soft reset: modal state back to defaults (G0 G54 G17 G21 G90 G94 G49 M5, F0)
+    /// and the G92 and tool length offsets cleared, as Grbl re-initialises its
+    /// parser; the position and the stored coordinate data stay.
     pub fn reset_modal(&mut self) {
         self.modal = Modal::default();
         self.feed = 0.0;
         self.spindle = 0.0;
-        self.g92 = [0.0; AXES];
+        self.g92 = [0; AXES];
+        self.tlo = 0;
     }
 
     /// `[GC:...]` body for `$G` (without brackets).
@@ -191,12 +218,20 @@ impl Interpreter {
             MotionMode::Cancel => b"GC:G80",
         });
         // The defaults, with the digits that the modal state changes patched in.
-        let mut tail = *b" G54 G17 G21 G90 G94 M5 M9 T0 F";
-        tail[3] = b'4' + m.wcs.min(5); // G54..G59
-        tail[11] -= u8::from(m.inches); // G20
-        tail[15] += u8::from(m.incremental); // G91
-        tail[19] -= u8::from(m.inverse_time); // G93
-        tail[22] -= 2 * u8::from(m.pen_down); // M3
+        let mut modes = *b" G54 G17 G21 G90 G94";
+        modes[3] = b'4' + m.wcs.min(5); // G54..G59
+        modes[11] -= u8::from(m.inches); // G20
+        modes[15] += u8::from(m.incremental); // G91
+        modes[19] -= u8::from(m.inverse_time); // G93
+        w.put(&modes);
+        // The tool length offset group only while G43.1 is in effect: the default
+        // (G49) is left out like Grbl's other unprinted defaults, so that a sender
+        // replaying these words after a reset never sends a G43.1 without its Z.
+        if m.tool_length {
+            w.put(b" G43.1");
+        }
+        let mut tail = *b" M5 M9 T0 F";
+        tail[2] -= 2 * u8::from(m.pen_down); // M3
         w.put(&tail);
         let scale = if m.inches { MM_PER_INCH } else { 1.0 };
         put_int(w, round_i32(self.feed / scale));
@@ -235,7 +270,7 @@ impl Interpreter {
         let mut groups = [NONE; GROUPS];
         group_codes(&b.g, &G_CODES, &mut groups, true)?;
         group_codes(&b.m, &M_CODES, &mut groups, false)?;
-        let [motion, non_modal, units, distance, feed_mode, wcs, _, _, _, _, _, stop, m1, pen, _] =
+        let [motion, non_modal, units, distance, feed_mode, wcs, _, _, _, tool_length, _, stop, m1, pen, _] =
             groups;
         let motion = MOTION_MODES.get(usize::from(motion)).copied();
         let non_modal = NON_MODAL.get(usize::from(non_modal)).copied();
@@ -252,19 +287,19 @@ impl Interpreter {
 
         // --- Value words. ---
         for &letter in b"FNPSTL" {
-            if b.get(letter).is_some_and(|v| v < 0.0) {
+            if b.get(letter).is_some_and(Value::is_negative) {
                 return Err(Status::NegativeValue.into());
             }
         }
-        let n_word = b.take(b'N');
+        let n_word = b.take(b'N').map(Value::round);
         if n_word.is_some_and(|n| n > MAX_LINE_NUMBER) {
             return Err(Status::InvalidLineNumber.into());
         }
-        let line_tag = n_word.map_or(line_no, to_u32);
-        if b.take(b'T').is_some_and(|t| t > 255.0) {
+        let line_tag = n_word.map_or(line_no, |n| n as u32);
+        if b.take(b'T').is_some_and(|t| t.millionths() > 255 * ONE) {
             return Err(Status::MaxValueExceeded.into());
         }
-        let spindle = b.take(b'S');
+        let spindle = b.take(b'S').map(Value::to_f32);
 
         let mut modal = self.modal;
         if units != NONE {
@@ -286,34 +321,54 @@ impl Interpreter {
             }
             modal.inverse_time = inverse;
         }
-        let f_word = b.take(b'F');
+        let f_word = b.take(b'F').map(Value::to_f32);
         if modal.inverse_time {
             feed = f_word.unwrap_or(0.0); // per block, never modal
         } else if let Some(f) = f_word {
             feed = f * scale;
         }
 
-        // Axis words in mm, and the mask of the axes named.
-        let mut words = [0.0f32; AXES];
+        // Axis words in nanometres, and the mask of the axes named.
+        let mut words: NmPos = [0; AXES];
         let mut axes = 0u8;
         for (k, (w, &letter)) in words.iter_mut().zip(b"XYZ").enumerate() {
             if let Some(v) = b.take(letter) {
-                *w = v * scale;
+                *w = value_to_nm(v, modal.inches);
                 axes |= 1 << k;
             }
         }
         let has_axis = axes != 0;
 
-        // Which command uses the axis words.
-        let nm_uses_axes = matches!(
+        // Which command uses the axis words: a non-modal one, G43.1 (its Z word is the
+        // offset, and Z is the only axis it may name: error 37), or else motion.
+        let dynamic_tlo = tool_length == 1;
+        if dynamic_tlo && axes & !(1 << 2) != 0 {
+            return Err(Status::G43DynamicAxisError.into());
+        }
+        let non_modal_axes = matches!(
             non_modal,
             Some(NonModal::SetCoord | NonModal::Home28 | NonModal::Home30 | NonModal::SetG92)
         );
-        if nm_uses_axes && motion.is_some_and(|m| m != MotionMode::Cancel) {
+        let nm_uses_axes = non_modal_axes || dynamic_tlo;
+        // A motion mode beside G43.1 only conflicts if there are axis words to fight
+        // over: a bare `G0 ... G43.1` (bCNC replaying the `$G` words) just sets modes.
+        let motion_conflict =
+            motion.is_some_and(|m| m != MotionMode::Cancel) && (non_modal_axes || has_axis);
+        if (nm_uses_axes && motion_conflict) || (non_modal_axes && dynamic_tlo) {
             return Err(Status::AxisCommandConflict.into());
         }
         if let Some(m) = motion {
             modal.motion = m;
+        }
+        // G43.1 Z sets the offset (a bare G43.1 keeps the one in effect); G49 clears it.
+        let mut tlo = self.tlo;
+        if tool_length != NONE {
+            modal.tool_length = dynamic_tlo;
+            tlo = match (dynamic_tlo, axes & 1 << 2 != 0) {
+                (true, true) => words[2],
+                (true, false) => tlo,
+                (false, _) => 0,
+            };
         }
         // Motion runs if it was named in the block, or implicitly for axis words.
         let motion_cmd = !nm_uses_axes && (motion.is_some() || has_axis);
@@ -352,7 +407,7 @@ impl Interpreter {
             modal.pen_down = down;
         }
 
-        // --- Targets, in machine mm. ---
+        // --- Targets, in machine nanometres. ---
         let offset = self.offset_of(modal.wcs);
         let mut target = pos;
         for (k, ((t, &v), (&p, &o))) in target
@@ -365,9 +420,9 @@ impl Interpreter {
                 *t = if absolute_override {
                     v
                 } else if modal.incremental {
-                    p + v
+                    p.saturating_add(v)
                 } else {
-                    v + o
+                    v.saturating_add(o)
                 };
             }
         }
@@ -375,30 +430,31 @@ impl Interpreter {
         match non_modal {
             Some(NonModal::Dwell) => {
                 let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
-                // Saturates at u32::MAX ms (the value is finite: P has at most 19 digits).
-                let ms = to_u32(fmath::round(p * 1000.0));
-                push(out, Command::Dwell { ms })?;
+                push(out, Command::Dwell { ms: value_to_ms(p) })?;
             }
             Some(NonModal::SetCoord) => {
                 let l = b.take(b'L').ok_or(Status::ValueWordMissing)?;
                 let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
-                if p != fmath::trunc(p) || l != fmath::trunc(l) {
+                let (Some(l), Some(p)) = (l.whole(), p.whole()) else {
                     return Err(Status::CommandValueNotInteger.into());
-                }
-                if p > 6.0 {
+                };
+                if p > 6 {
                     return Err(Status::UnsupportedCoordSys.into());
                 }
                 if !has_axis {
                     return Err(Status::NoAxisWords.into());
                 }
-                let idx = if p == 0.0 {
+                let idx = if p == 0 {
                     usize::from(modal.wcs)
                 } else {
-                    to_u32(p) as usize - 1
+                    p as usize - 1
                 };
-                let from = match to_u32(l) {
+                // L20: the offset that makes the current position read as the words,
+                // past G92 and the tool length offset.
+                let others = [g92[0], g92[1], g92[2].saturating_add(tlo)];
+                let from = match l {
                     2 => None,
-                    20 => Some(&g92),
+                    20 => Some(&others),
                     _ => return Err(Status::UnsupportedCommand.into()),
                 };
                 if let Some(sys) = coords.wcs.get_mut(idx) {
@@ -430,13 +486,11 @@ impl Interpreter {
                 if !has_axis {
                     return Err(Status::NoAxisWords.into());
                 }
-                let w = coords
-                    .wcs
-                    .get(usize::from(modal.wcs))
-                    .unwrap_or(&[0.0; AXES]);
-                set_axes(&mut g92, axes, &words, &pos, Some(w));
+                let w = coords.wcs.get(usize::from(modal.wcs)).unwrap_or(&[0; AXES]);
+                let others = [w[0], w[1], w[2].saturating_add(tlo)];
+                set_axes(&mut g92, axes, &words, &pos, Some(&others));
             }
-            Some(NonModal::ResetG92) => g92 = [0.0; AXES],
+            Some(NonModal::ResetG92) => g92 = [0; AXES],
             Some(NonModal::Absolute) | None => {}
         }
 
@@ -451,9 +505,10 @@ impl Interpreter {
                     if axes & 3 == 0 {
                         return Err(Status::NoAxisWordsInPlane.into());
                     }
-                    let g = arc_geometry(&mut b, &pos, &target, ccw, scale)?;
+                    let g = arc_geometry(&mut b, &pos, &target, ccw, modal.inches)?;
                     arc_extremes(&g, &pos, &target, ccw, &mut planned, s);
-                    let arc_len = fmath::hypot(g.radius * g.sweep, target[2] - pos[2]);
+                    let rise = nm_to_mm(target[2].saturating_sub(pos[2]));
+                    let arc_len = fmath::hypot(g.radius * g.sweep, rise);
                     (arc_len, arc_path(&g, &pos, ccw, s))
                 } else {
                     planned.add(&target, s);
@@ -466,12 +521,13 @@ impl Interpreter {
                 } else {
                     Feed::MmPerMin(feed)
                 };
+                // Out of range is refused below (`planned`), before anything commits.
                 let steps = to_steps(&target, s);
                 if arc || steps != to_steps(&pos, s) {
                     push(
                         out,
                         Command::Move(Move {
-                            target: steps,
+                            target: steps.unwrap_or([0; AXES]),
                             path,
                             feed: f,
                             line: line_tag,
@@ -504,16 +560,29 @@ impl Interpreter {
             }
             modal = Modal {
                 inches: modal.inches,
+                tool_length: modal.tool_length,
                 motion: MotionMode::Linear,
                 ..Modal::default()
             };
         }
 
         out.stop = stop;
-        // M2/M30 is a sync point, as in Grbl: it runs (and is answered) once the
-        // motion before it has finished, so its `ok` means "program done".
-        let fits =
-            room.is_some_and(|r| out.cmds.len() <= r.cmds && (r.idle || stop != Some(Stop::End)));
+        let wcs_changed = modal.wcs != self.modal.wcs;
+        out.sync = stop.is_some()
+            || wcs_changed
+            || tool_length != NONE
+            || matches!(
+                non_modal,
+                Some(
+                    NonModal::Dwell
+                        | NonModal::SetCoord
+                        | NonModal::Set28
+                        | NonModal::Set30
+                        | NonModal::SetG92
+                        | NonModal::ResetG92
+                )
+            );
+        let fits = room.is_some_and(|r| out.cmds.len() <= r.cmds && (r.idle || !out.sync));
         if !fits {
             return Ok(false);
         }
@@ -527,6 +596,7 @@ impl Interpreter {
         self.pos = pos;
         self.coords = coords;
         self.g92 = g92;
+        self.tlo = tlo;
         Ok(true)
     }
 
@@ -555,8 +625,8 @@ impl Interpreter {
         let _ = b.take(b'N');
         let scale = if inches { MM_PER_INCH } else { 1.0 };
         let f = b.take(b'F').ok_or(Status::UndefinedFeedRate)?;
-        if f <= 0.0 {
-            return Err(if f < 0.0 {
+        if f.millionths() <= 0 {
+            return Err(if f.is_negative() {
                 Status::NegativeValue
             } else {
                 Status::UndefinedFeedRate
@@ -568,16 +638,16 @@ impl Interpreter {
         for (axis, &letter) in b"XYZ".iter().enumerate() {
             if let Some(v) = b.take(letter) {
                 any = true;
-                let v = v * scale;
+                let v = value_to_nm(v, inches);
                 if let (Some(t), Some(&p), Some(&o)) =
                     (target.get_mut(axis), self.pos.get(axis), offset.get(axis))
                 {
                     *t = if absolute_override {
                         v
                     } else if incremental {
-                        p + v
+                        p.saturating_add(v)
                     } else {
-                        v + o
+                        v.saturating_add(o)
                     };
                 }
             }
@@ -588,17 +658,15 @@ impl Interpreter {
         if !any {
             return Err(Status::NoAxisWords);
         }
-        if !in_step_range(&target, s) {
-            return Err(Status::InvalidTarget);
-        }
+        let steps = to_steps(&target, s).ok_or(Status::InvalidTarget)?;
         if s.soft_limits() && !within_travel(&target, s) {
             return Err(Status::TravelExceeded);
         }
         self.pos = target;
         Ok(Move {
-            target: to_steps(&target, s),
+            target: steps,
             path: Path::Line,
-            feed: Feed::MmPerMin(f * scale),
+            feed: Feed::MmPerMin(f.to_f32() * scale),
             line: 0,
         })
     }
@@ -607,23 +675,19 @@ impl Interpreter {
 /// A straight move's path: XY lines carry their exact end points (1/256 step) so the
 /// steps follow the programmed line, not the line between rounded ends; moves that
 /// change Z (or lie outside the fine range) stay plain lines.
-fn line_path(pos: &[f32; AXES], target: &[f32; AXES], s: &Settings) -> Path {
-    // Exact: scaling by 256 commutes with the rounding multiply.
-    let (sx, sy) = (s.steps_per_mm(0) * 256.0, s.steps_per_mm(1) * 256.0);
-    let v = [
-        mm_to_steps(pos[0], sx),
-        mm_to_steps(pos[1], sy),
-        mm_to_steps(target[0], sx),
-        mm_to_steps(target[1], sy),
-    ];
-    // Saturation starts at 2^31, beyond the fine range's bound.
-    if pos[2] == target[2] && v.iter().all(|c| c.unsigned_abs() < 2_000_000_000) {
-        Path::LineFine {
-            from: [v[0], v[1]],
-            to: [v[2], v[3]],
-        }
-    } else {
-        Path::Line
+fn line_path(pos: &NmPos, target: &NmPos, s: &Settings) -> Path {
+    let (sx, sy) = (s.steps_per_mm(0), s.steps_per_mm(1));
+    match (
+        nm_to_fine_steps(pos[0], sx),
+        nm_to_fine_steps(pos[1], sy),
+        nm_to_fine_steps(target[0], sx),
+        nm_to_fine_steps(target[1], sy),
+    ) {
+        (Some(x0), Some(y0), Some(x1), Some(y1)) if pos[2] == target[2] => Path::LineFine {
+            from: [x0, y0],
+            to: [x1, y1],
+        },
+        _ => Path::Line,
     }
 }
 
@@ -631,10 +695,11 @@ fn push(out: &mut Outcome, c: Command) -> Result<(), Status> {
     out.cmds.push(c).map_err(|_| Status::Overflow)
 }
 
-/// A rapid straight move to `p` (checked as planned).
+/// A rapid straight move to `p` (checked as planned; out of range is refused before
+/// anything commits).
 fn push_rapid(
     out: &mut Outcome,
-    p: &[f32; AXES],
+    p: &NmPos,
     s: &Settings,
     line: u32,
     planned: &mut Reach,
@@ -643,7 +708,7 @@ fn push_rapid(
     push(
         out,
         Command::Move(Move {
-            target: to_steps(p, s),
+            target: to_steps(p, s).unwrap_or([0; AXES]),
             path: Path::Line,
             feed: Feed::Rapid,
             line,
@@ -654,7 +719,7 @@ fn push_rapid(
 /// Lift or drop the pen: a servo command, or a rapid Z move to $205 / $206.
 fn pen_move(
     out: &mut Outcome,
-    pos: &mut [f32; AXES],
+    pos: &mut NmPos,
     down: bool,
     s: &Settings,
     line: u32,
@@ -663,7 +728,7 @@ fn pen_move(
     match s.pen_mode() {
         PenMode::Servo => push(out, Command::Pen { down }),
         PenMode::ZAxis => {
-            pos[2] = if down { s.pen_z_down() } else { s.pen_z_up() };
+            pos[2] = mm_to_nm(if down { s.pen_z_down() } else { s.pen_z_up() });
             push_rapid(out, pos, s, line, planned)
         }
     }
@@ -671,14 +736,8 @@ fn pen_move(
 
 /// G10 / G92: each named axis of `dst` becomes its word (`from` None), or the offset
 /// that makes the current position read as the word (`pos - from - word`).
-fn set_axes(
-    dst: &mut [f32; AXES],
-    axes: u8,
-    words: &[f32; AXES],
-    pos: &[f32; AXES],
-    from: Option<&[f32; AXES]>,
-) {
-    let zero = [0.0; AXES];
+fn set_axes(dst: &mut NmPos, axes: u8, words: &NmPos, pos: &NmPos, from: Option<&NmPos>) {
+    let zero = [0; AXES];
     let base = from.unwrap_or(&zero);
     for (k, ((d, &v), (&p, &b))) in dst
         .iter_mut()
@@ -687,15 +746,21 @@ fn set_axes(
         .enumerate()
     {
         if axes >> k & 1 != 0 {
-            *d = if from.is_some() { p - b - v } else { v };
+            *d = if from.is_some() {
+                p.saturating_sub(b).saturating_sub(v)
+            } else {
+                v
+            };
         }
     }
 }
 
-fn path_length(a: &[f32; AXES], b: &[f32; AXES]) -> f32 {
+/// Straight-line length between two points, mm.
+fn path_length(a: &NmPos, b: &NmPos) -> f32 {
     let mut sum = 0.0;
     for (x, y) in a.iter().zip(b.iter()) {
-        sum += (y - x) * (y - x);
+        let d = nm_to_mm(y.saturating_sub(*x));
+        sum += d * d;
     }
     fmath::sqrt(sum)
 }
@@ -730,14 +795,15 @@ mod tests {
         let mut it = Interpreter::new();
         let o = run(&mut it, &s, "G1 X10.0031 Y-0.00624 F600").unwrap();
         // The rounded target, and the exact ends in 1/256 step for the interpolator:
-        // 10.0031 mm = 800.248 steps, -0.00624 mm = -0.4992 steps.
+        // 10.0031 mm = 800.248 steps = 204,863.488 / 256, -0.00624 mm = -0.4992 steps
+        // = -127.7952 / 256 (f32 mm had made the first 204,864).
         assert_eq!(
             moves(&o),
             [Move {
                 target: [800, 0, 0],
                 path: Path::LineFine {
                     from: [0, 0],
-                    to: [204864, -128]
+                    to: [204863, -128]
                 },
                 feed: Feed::MmPerMin(600.0),
                 line: 7
@@ -852,12 +918,7 @@ mod tests {
             for (b, gb) in codes {
                 let r = run(&mut Interpreter::new(), &s, &std::format!("{a} {b}"));
                 let violation = r == err(Status::ModalGroupViolation);
-                if a == "G43.1" || b == "G43.1" {
-                    // Dynamic tool length offset is not supported.
-                    assert!(r.is_err(), "{a} {b}");
-                } else {
-                    assert_eq!(violation, ga == gb, "{a} {b}: {r:?}");
-                }
+                assert_eq!(violation, ga == gb, "{a} {b}: {r:?}");
             }
         }
         let modal = |line: &str| {
@@ -907,7 +968,9 @@ mod tests {
         let short = moves(&run(&mut it, &s, "G2 X10 Y0 R7.0710678 F300").unwrap())[0];
         let mut it = Interpreter::new();
         let long = moves(&run(&mut it, &s, "G2 X10 Y0 R-7.0710678 F300").unwrap())[0];
-        let near = |c: [i32; 2], want: [i32; 2]| (c[0] - want[0]).abs() <= 2 && (c[1] - want[1]).abs() <= 2;
+        let near = |c: [i32; 2], want: [i32; 2]| {
+            (c[0] - want[0]).abs() <= 2 && (c[1] - want[1]).abs() <= 2
+        };
         assert!(near(fine_arc(&short).1, [102_400, -102_400]), "{short:?}");
         assert!(near(fine_arc(&long).1, [102_400, 102_400]), "{long:?}");
         // End point 0.004 mm off the circle (CAM rounding) is accepted, 0.1 mm is not.
@@ -927,7 +990,10 @@ mod tests {
         let mut it = Interpreter::new();
         let inch = moves(&run(&mut it, &s, "G20 G3 X0 Y0 I0.123 J0.0457 F10").unwrap())[0];
         let q = |mm: f32| (mm * 80.0 * 256.0).round() as i32;
-        assert!(near(fine_arc(&inch).1, [q(0.123 * 25.4), q(0.0457 * 25.4)]), "{inch:?}");
+        assert!(
+            near(fine_arc(&inch).1, [q(0.123 * 25.4), q(0.0457 * 25.4)]),
+            "{inch:?}"
+        );
     }
 
     #[test]
@@ -963,7 +1029,7 @@ mod tests {
             let s = Settings::default();
             let mut it = Interpreter::new();
             run(&mut it, &s, &std::format!("G0 X{x0:.4} Y{y0:.4}")).unwrap();
-            let start = *it.position();
+            let start = it.position().map(nm_to_mm);
             let line = std::format!("G{} X{:.4} Y{:.4} R{}{:.4} F100", if ccw { 3 } else { 2 }, x0 + dx, y0 + dy, if neg { "-" } else { "" }, r);
             let o = run(&mut it, &s, &line).unwrap();
             let m = moves(&o)[0];
@@ -972,7 +1038,7 @@ mod tests {
             let spm = s.steps_per_mm(0);
             // The exact centre, in 1/256 step.
             let c = [center[0] as f32 / (256.0 * spm), center[1] as f32 / (256.0 * spm)];
-            let end = it.position();
+            let end = it.position().map(nm_to_mm);
             let r0 = libm::hypotf(start[0] - c[0], start[1] - c[1]);
             let r1 = libm::hypotf(end[0] - c[0], end[1] - c[1]);
             proptest::prop_assert!((r0 - r1).abs() < 0.1 / spm, "r0 {} r1 {}", r0, r1);
@@ -995,8 +1061,17 @@ mod tests {
         let o = run(&mut it, &s, "G2 X84.4295 Y-30.6952 R24.8752 F100").unwrap();
         let (from, center, _) = fine_arc(&moves(&o)[0]);
         // Exact centre (65.28043, -46.57250) mm = (5222.43, -3725.80) steps.
-        assert!((center[0] - 1_336_943).abs() <= 64 && (center[1] + 953_805).abs() <= 64, "{center:?}");
-        assert_eq!(from, [(40.4444f32 * 80.0 * 256.0).round() as i32, (-47.968f32 * 80.0 * 256.0).round() as i32]);
+        assert!(
+            (center[0] - 1_336_943).abs() <= 64 && (center[1] + 953_805).abs() <= 64,
+            "{center:?}"
+        );
+        assert_eq!(
+            from,
+            [
+                (40.4444f32 * 80.0 * 256.0).round() as i32,
+                (-47.968f32 * 80.0 * 256.0).round() as i32
+            ]
+        );
     }
 
     #[test]
@@ -1014,7 +1089,7 @@ mod tests {
         let mut it = Interpreter::new();
         run(&mut it, &s, "G10 L2 P2 X10 Y20").unwrap();
         run(&mut it, &s, "G55 G0 X1 Y1").unwrap();
-        assert_eq!(it.position(), &[11.0, 21.0, 0.0]);
+        assert_eq!(it.position(), &[11_000_000, 21_000_000, 0]);
         run(&mut it, &s, "G92 X0 Y0").unwrap();
         let o = run(&mut it, &s, "G0 X1").unwrap();
         assert_eq!(moves(&o)[0].target, [12 * 80, 21 * 80, 0]);
@@ -1023,7 +1098,7 @@ mod tests {
         assert_eq!(moves(&o)[0].target, [0, 0, 0]);
         run(&mut it, &s, "G0 X5 Y5").unwrap(); // G55: machine 15, 25
         run(&mut it, &s, "G28.1").unwrap();
-        assert_eq!(it.coords().g28, [15.0, 25.0, 0.0]);
+        assert_eq!(it.coords().g28, [15_000_000, 25_000_000, 0]);
         run(&mut it, &s, "G53 G0 X0 Y0").unwrap();
         let o = run(&mut it, &s, "G28 G91 X1").unwrap();
         let ms = moves(&o);
@@ -1031,7 +1106,7 @@ mod tests {
         assert_eq!(ms[0].target, [80, 0, 0]);
         assert_eq!(ms[1].target, [15 * 80, 25 * 80, 0]);
         run(&mut it, &s, "G90 G10 L20 P0 X0").unwrap();
-        assert_eq!(it.work_offset()[0], 15.0);
+        assert_eq!(it.work_offset()[0], 15_000_000);
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! G-code: the line cleaner and word parser ([`parser`]), the modal groups
 //! ([`modal`]), the interpreter ([`interpreter`]) that turns blocks into queued motion
-//! in steps, the arc geometry of G2/G3 ([`arcs`]), and millimetres to steps with the
+//! in steps, the arc geometry of G2/G3 (`arcs`), and millimetres to steps with the
 //! travel limits ([`units`]).
 //!
 //! Errors use Grbl 1.1's status numbers ([`Status`]) so that senders show the right
@@ -60,6 +60,7 @@ pub enum Status {
     ArcRadiusError = 34,
     NoOffsetsInPlane = 35,
     UnusedWords = 36,
+    G43DynamicAxisError = 37,
     MaxValueExceeded = 38,
 }
 

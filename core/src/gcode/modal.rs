@@ -26,6 +26,8 @@ pub struct Modal {
     /// Active work coordinate system, 0 = G54 .. 5 = G59.
     pub wcs: u8,
     pub pen_down: bool,
+    /// G43.1 (dynamic tool length offset) in effect; G49 (the default) cancels it.
+    pub tool_length: bool,
 }
 
 impl Default for Modal {
@@ -37,6 +39,7 @@ impl Default for Modal {
             inverse_time: false,
             wcs: 0,
             pen_down: false,
+            tool_length: false,
         }
     }
 }
@@ -72,17 +75,17 @@ pub(super) const NON_MODAL: [NonModal; 9] = [
     NonModal::SetG92,
     NonModal::ResetG92,
 ];
-// Modal groups of the G codes; the plane, arc distance, cutter compensation, tool
-// length offset and path mode groups are accepted (only their default exists) and
-// checked for repeats.
+// Modal groups of the G codes; the plane, arc distance, cutter compensation and path
+// mode groups are accepted (only their default exists) and checked for repeats.
 // Groups 0-10 are the G groups (motion, non-modal, units, distance, feed mode,
 // coordinate system, then the accepted defaults); 11-14 the M groups (stop, M1, pen,
 // coolant). A group not named in the block holds NONE.
 pub(super) const GROUPS: usize = 15;
 pub(super) const NONE: u8 = u8::MAX;
 /// G code (x10), its group and its value in the group (an index into MOTION_MODES
-/// or NON_MODAL; 1 = inches / incremental / inverse time; the coordinate system).
-pub(super) const G_CODES: [(u16, u8, u8); 31] = [
+/// or NON_MODAL; 1 = inches / incremental / inverse time / G43.1; the coordinate
+/// system).
+pub(super) const G_CODES: [(u16, u8, u8); 32] = [
     (0, 0, 0),
     (10, 0, 1),
     (20, 0, 2),
@@ -112,6 +115,7 @@ pub(super) const G_CODES: [(u16, u8, u8); 31] = [
     (170, 6, 0),
     (911, 7, 0),
     (400, 8, 0),
+    (431, 9, 1),
     (490, 9, 0),
     (610, 10, 0),
 ];

@@ -7,6 +7,7 @@
 //! cleaning). The parser only checks syntax and repeats; meaning is the interpreter's.
 
 use super::Status;
+use crate::decimal::{div_rem, round_div};
 use heapless::Vec;
 
 /// Streaming comment/space stripper. Feed bytes of one line; [`LineCleaner::reset`]
@@ -73,42 +74,76 @@ pub const MAX_CODES: usize = 8;
 /// A G or M code as value x 10 (so G28.1 is 281).
 pub type Code = u16;
 
+/// A G-code number, exact: the decimal as written, in millionths. Six decimals are
+/// kept, a seventh rounds (half away from zero) and further digits are dropped, so
+/// lengths stay exact decimals (a millionth of a mm is a nanometre, the interpreter's
+/// unit) and so do G and M codes and integer words. Feeds, times and settings, which
+/// never accumulate, go to `f32` with [`Value::to_f32`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Value(i64);
+
+/// One in millionths.
+pub const ONE: i64 = 1_000_000;
+
+impl Value {
+    pub const fn from_millionths(v: i64) -> Value {
+        Value(v)
+    }
+    pub fn millionths(self) -> i64 {
+        self.0
+    }
+    pub fn to_f32(self) -> f32 {
+        self.0 as f32 / ONE as f32
+    }
+    pub fn is_negative(self) -> bool {
+        self.0 < 0
+    }
+    /// The value if it is a whole number.
+    pub fn whole(self) -> Option<i64> {
+        let (q, r) = div_rem(u128::from(self.0.unsigned_abs()), ONE as u32);
+        let q = q as i64; // below 2^63 / 10^6
+        (r == 0).then_some(if self.0 < 0 { -q } else { q })
+    }
+    /// Rounded to a whole number (half away from zero).
+    pub fn round(self) -> i64 {
+        round_div(i128::from(self.0), ONE as u32) as i64
+    }
+}
+
+/// Letters that carry values (everything else except G and M is unsupported), each
+/// with its slot in [`Block`].
+const VALUE_LETTERS: &[u8; 13] = b"FIJKLNPRSTXYZ";
+
+/// The slot of a value letter.
+fn slot(letter: u8) -> Option<usize> {
+    VALUE_LETTERS.iter().position(|&l| l == letter)
+}
+
 /// One parsed block: the G and M codes in order, and the value words by letter.
-/// A value word is present while its bit (A = bit 0) is set in `present`: a mask and
-/// plain floats are smaller to test and clear than 26 `Option<f32>`s.
+/// A value word is present while its slot's bit is set in `present`: a mask and plain
+/// numbers are smaller to test and clear than 13 `Option`s.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Block {
     pub g: Vec<Code, MAX_CODES>,
     pub m: Vec<Code, MAX_CODES>,
-    present: u32,
-    values: [f32; 26],
+    present: u16,
+    values: [Value; 13],
 }
-
-/// Letters that carry values (everything else except G and M is unsupported), as a
-/// mask with A = bit 0.
-const VALUE_LETTERS: u32 = {
-    let letters = b"FIJKLNPRSTXYZ";
-    let mut mask = 0;
-    let mut i = 0;
-    while i < letters.len() {
-        mask |= 1 << (letters[i] - b'A');
-        i += 1;
-    }
-    mask
-};
 
 impl Block {
     /// Value word for `letter` (upper case), if present.
-    pub fn get(&self, letter: u8) -> Option<f32> {
-        let i = usize::from(letter.wrapping_sub(b'A'));
+    pub fn get(&self, letter: u8) -> Option<Value> {
+        let i = slot(letter)?;
         let v = *self.values.get(i)?;
         (self.present >> i & 1 != 0).then_some(v)
     }
 
     /// Remove and return the value word for `letter` (used to track unused words).
-    pub fn take(&mut self, letter: u8) -> Option<f32> {
+    pub fn take(&mut self, letter: u8) -> Option<Value> {
         let v = self.get(letter)?;
-        self.present &= !(1 << (letter - b'A'));
+        if let Some(i) = slot(letter) {
+            self.present &= !(1 << i);
+        }
         Some(v)
     }
 
@@ -136,24 +171,23 @@ impl Block {
             rest = tail.get(used..).unwrap_or(&[]);
             match letter {
                 b'G' | b'M' => {
-                    if value < 0.0 {
+                    if value.is_negative() {
                         return Err(Status::CommandValueNotInteger);
                     }
                     let code = code_of(value)?;
                     let list = if letter == b'G' { &mut b.g } else { &mut b.m };
                     list.push(code).map_err(|_| Status::ModalGroupViolation)?;
                 }
-                _ if VALUE_LETTERS >> (letter - b'A') & 1 != 0 => {
-                    let i = letter - b'A';
+                _ => {
+                    let i = slot(letter).ok_or(Status::UnsupportedCommand)?;
                     if b.present & (1 << i) != 0 {
                         return Err(Status::WordRepeated);
                     }
                     b.present |= 1 << i;
-                    if let Some(slot) = b.values.get_mut(usize::from(i)) {
-                        *slot = value;
+                    if let Some(v) = b.values.get_mut(i) {
+                        *v = value;
                     }
                 }
-                _ => return Err(Status::UnsupportedCommand),
             }
         }
         Ok(())
@@ -161,24 +195,22 @@ impl Block {
 }
 
 /// G/M value to code x 10; only whole numbers and one decimal (G28.1) are codes.
-fn code_of(value: f32) -> Result<Code, Status> {
-    if value > 999.0 {
+fn code_of(value: Value) -> Result<Code, Status> {
+    let v = value.millionths();
+    if v > 999 * ONE {
         return Err(Status::UnsupportedCommand);
     }
-    let hundredths = crate::decimal::to_u32(crate::fmath::round(value * 100.0));
-    if !hundredths.is_multiple_of(10) {
-        return Err(Status::CommandValueNotInteger);
+    // Tenths: 0 ..= 9990 (the value is not negative here).
+    match div_rem(u128::from(v.unsigned_abs()), (ONE / 10) as u32) {
+        (tenths, 0) => Ok(tenths as Code),
+        _ => Err(Status::CommandValueNotInteger),
     }
-    Ok((hundredths / 10) as Code)
 }
 
-const POW10: [f32; 11] = [1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10];
-/// Significant digits kept; further digits only scale (integer part) or are dropped.
-const MAX_DIGITS: u32 = 9;
-
 /// Read a number as Grbl does: optional sign, digits with at most one decimal point,
-/// no exponent. Returns the value and the bytes used.
-pub fn read_number(s: &[u8]) -> Result<(f32, usize), Status> {
+/// no exponent; exactly, in millionths (see [`Value`]). Returns the value and the
+/// bytes used. Integer parts of 9,223,372,036,854 and more are `error:2`.
+pub fn read_number(s: &[u8]) -> Result<(Value, usize), Status> {
     let mut i = 0;
     let mut negative = false;
     if let Some(&c) = s.first() {
@@ -187,27 +219,29 @@ pub fn read_number(s: &[u8]) -> Result<(f32, usize), Status> {
             i = 1;
         }
     }
-    let mut mantissa: u32 = 0;
-    let mut sig = 0u32; // significant digits taken into the mantissa
+    let mut whole: i64 = 0;
+    let mut frac: i64 = 0; // the first six decimals
+    let mut frac_digits = 0u32;
+    let mut round_up = false; // the seventh decimal is 5 or more
     let mut any_digit = false;
     let mut seen_point = false;
-    let mut frac_digits = 0usize; // decimals inside the mantissa
-    let mut int_extra = 0usize; // integer digits beyond MAX_DIGITS
     while let Some(&c) = s.get(i) {
         match c {
             b'0'..=b'9' => {
                 any_digit = true;
-                let digit = u32::from(c - b'0');
-                if sig < MAX_DIGITS && !(seen_point && frac_digits + 1 >= POW10.len()) {
-                    mantissa = mantissa * 10 + digit;
-                    if mantissa > 0 {
-                        sig += 1;
-                    }
-                    if seen_point {
-                        frac_digits += 1;
-                    }
-                } else if !seen_point {
-                    int_extra += 1;
+                let digit = i64::from(c - b'0');
+                if !seen_point {
+                    whole = whole
+                        .checked_mul(10)
+                        .and_then(|w| w.checked_add(digit))
+                        .filter(|&w| w < i64::MAX / ONE)
+                        .ok_or(Status::BadNumberFormat)?;
+                } else if frac_digits < 6 {
+                    frac = frac * 10 + digit;
+                    frac_digits += 1;
+                } else if frac_digits == 6 {
+                    round_up = digit >= 5;
+                    frac_digits += 1;
                 }
             }
             b'.' if !seen_point => seen_point = true,
@@ -218,10 +252,11 @@ pub fn read_number(s: &[u8]) -> Result<(f32, usize), Status> {
     if !any_digit {
         return Err(Status::BadNumberFormat);
     }
-    let scale_up = POW10.get(int_extra).ok_or(Status::BadNumberFormat)?;
-    let scale_down = POW10.get(frac_digits).ok_or(Status::BadNumberFormat)?;
-    let v = mantissa as f32 * scale_up / scale_down;
-    Ok((if negative { -v } else { v }, i))
+    for _ in frac_digits..6 {
+        frac *= 10;
+    }
+    let v = whole * ONE + frac + i64::from(round_up);
+    Ok((Value(if negative { -v } else { v }), i))
 }
 
 #[cfg(test)]
@@ -241,16 +276,28 @@ mod tests {
         assert_eq!(&cleaned("/G0\tX1\r")[..], b"G0X1");
     }
 
+    fn v(millionths: i64) -> Value {
+        Value::from_millionths(millionths)
+    }
+
     #[test]
-    fn numbers_follow_grbl_rules() {
-        assert_eq!(read_number(b"12.5X"), Ok((12.5, 4)));
-        assert_eq!(read_number(b"-.5"), Ok((-0.5, 3)));
-        assert_eq!(read_number(b"+3"), Ok((3.0, 2)));
-        assert_eq!(read_number(b"1.2.3"), Ok((1.2, 3)));
-        let (tiny, used) = read_number(b"0.000123456789").unwrap();
-        assert_eq!(used, 14);
-        assert!((tiny - 0.000_123_456_7).abs() < 1e-12);
-        assert_eq!(read_number(b"0.000000000000001"), Ok((0.0, 17)));
+    fn numbers_follow_grbl_rules_exactly() {
+        assert_eq!(read_number(b"12.5X"), Ok((v(12_500_000), 4)));
+        assert_eq!(read_number(b"-.5"), Ok((v(-500_000), 3)));
+        assert_eq!(read_number(b"+3"), Ok((v(3_000_000), 2)));
+        assert_eq!(read_number(b"1.2.3"), Ok((v(1_200_000), 3)));
+        // Six decimals kept, the seventh rounds half away from zero, the rest dropped.
+        assert_eq!(read_number(b"0.000123456789"), Ok((v(123), 14)));
+        assert_eq!(read_number(b"-0.0000125"), Ok((v(-13), 10)));
+        assert_eq!(read_number(b"0.9999995"), Ok((v(1_000_000), 9)));
+        assert_eq!(read_number(b"0.000000000000001"), Ok((v(0), 17)));
+        // 0.1 and 0.0125 are exact (no binary fraction in between).
+        assert_eq!(read_number(b"0.1"), Ok((v(100_000), 3)));
+        assert_eq!(read_number(b"0.0125"), Ok((v(12_500), 6)));
+        assert_eq!(
+            read_number(b"9223372.036854"),
+            Ok((v(9_223_372_036_854), 14))
+        );
         assert_eq!(read_number(b"-"), Err(Status::BadNumberFormat));
         assert_eq!(read_number(b"."), Err(Status::BadNumberFormat));
         assert_eq!(read_number(b"X"), Err(Status::BadNumberFormat));
@@ -258,6 +305,11 @@ mod tests {
             read_number(b"99999999999999999999999"),
             Err(Status::BadNumberFormat)
         );
+        assert_eq!(read_number(b"9223372036855"), Err(Status::BadNumberFormat));
+        assert_eq!(v(2_500_000).to_f32(), 2.5);
+        assert_eq!(v(3_000_000).whole(), Some(3));
+        assert_eq!(v(3_000_001).whole(), None);
+        assert_eq!((v(-2_500_000).round(), v(2_499_999).round()), (-3, 2));
     }
 
     #[test]
@@ -265,8 +317,8 @@ mod tests {
         let b = Block::parse(b"G1G91.1X10Y-2F300M3").unwrap();
         assert_eq!(&b.g[..], &[10, 911]);
         assert_eq!(&b.m[..], &[30]);
-        assert_eq!(b.get(b'X'), Some(10.0));
-        assert_eq!(b.get(b'F'), Some(300.0));
+        assert_eq!(b.get(b'X'), Some(v(10_000_000)));
+        assert_eq!(b.get(b'F'), Some(v(300_000_000)));
         assert_eq!(b.get(b'Z'), None);
         assert_eq!(Block::parse(b"X1X2"), Err(Status::WordRepeated));
         assert_eq!(Block::parse(b"1"), Err(Status::ExpectedCommandLetter));

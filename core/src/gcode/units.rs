@@ -1,87 +1,248 @@
-//! Machine millimetres and steps: the conversions (rounded half away from zero, so
-//! rounding never accumulates), the step range a target must stay in, and the travel
-//! limits that soft limits check.
+//! Lengths, exactly: the interpreter keeps every position and offset in whole
+//! nanometres (`i64`), so that G90 and G91 programs in mm or inches end exactly where
+//! decimal arithmetic says, whatever the number of moves (a millionth of a mm is a
+//! nanometre; a hundred-thousandth of an inch is 254 nm). Here: G-code numbers to
+//! nanometres, nanometres to steps (rounded half away from zero from the exact product
+//! with the steps/mm setting's exact binary value, so rounding never accumulates),
+//! steps back to nanometres after a stop, the step range a target must stay in, and
+//! the travel limits that soft limits check. `f32` only appears for what never
+//! accumulates: a block's geometry (lengths, arcs) and the settings' own values.
 
-use crate::decimal::round_i32;
-use crate::fmath;
+use super::parser::{Value, ONE};
+use crate::decimal::{div_rem, round_div};
 use crate::motion::{StepPos, AXES};
 use crate::settings::Settings;
 
-/// mm to steps for one axis, rounding half away from zero (saturating).
-#[inline(never)]
-pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
-    round_i32(mm * steps_per_mm)
-}
+/// A length in nanometres.
+pub type Nm = i64;
+/// A point in machine nanometres.
+pub type NmPos = [Nm; AXES];
 
-/// Machine mm to a step position.
-pub fn to_steps(mm: &[f32; AXES], s: &Settings) -> StepPos {
-    let mut out = [0; AXES];
-    for (axis, o) in out.iter_mut().enumerate() {
-        *o = mm_to_steps(mm.get(axis).copied().unwrap_or(0.0), s.steps_per_mm(axis));
-    }
-    out
-}
-
-/// Step position to machine mm.
-pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
-    let mut out = [0.0; AXES];
-    for (axis, o) in out.iter_mut().enumerate() {
-        *o = steps.get(axis).copied().unwrap_or(0) as f32 / s.steps_per_mm(axis);
-    }
-    out
-}
+/// Nanometres per mm.
+pub const NM_PER_MM: Nm = 1_000_000;
 
 /// Largest step coordinate accepted (2^30): leaves headroom for the planner's
 /// differences and sums in `i32`.
-pub const MAX_STEPS: f32 = 1_073_741_824.0;
+pub const MAX_STEPS: u32 = 1 << 30;
 
-/// True if `p` (machine mm) converts to steps without leaving the safe range.
-pub fn in_step_range(p: &[f32; AXES], s: &Settings) -> bool {
-    p.iter()
-        .enumerate()
-        .all(|(axis, &v)| fmath::abs(v * s.steps_per_mm(axis)) < MAX_STEPS)
+/// A G-code length word in nanometres: millionths of a mm are nanometres; inches are
+/// exact to five decimals (254 nm), the sixth rounds.
+pub fn value_to_nm(v: Value, inches: bool) -> Nm {
+    let m = v.millionths();
+    if inches {
+        // 25.4 nm per millionth of an inch.
+        let nm = round_div(i128::from(m) * 127, 5);
+        Nm::try_from(nm).unwrap_or(if m < 0 { Nm::MIN } else { Nm::MAX })
+    } else {
+        m
+    }
 }
 
-/// Allowed machine range of `axis` with soft limits, or `None` if unchecked.
-/// Axes homed toward - live in [0, travel], axes homed toward + in [-travel, 0]
-/// (Grbl's convention); axes without a switch ($214) are not checked.
-pub fn travel_range(axis: usize, s: &Settings) -> Option<(f32, f32)> {
+/// A setting in mm (pen heights, travel) in nanometres.
+pub fn mm_to_nm(mm: f32) -> Nm {
+    // f32 to i64 saturates; the settings' ranges are far inside it.
+    crate::fmath::round(mm * NM_PER_MM as f32) as Nm
+}
+
+/// Nanometres as mm, for geometry and reports (not exact: never summed).
+pub fn nm_to_mm(nm: Nm) -> f32 {
+    nm as f32 / NM_PER_MM as f32
+}
+
+/// A distance in mm to steps for what never accumulates (homing's search and
+/// pull-off distances), rounded half away from zero (saturating).
+pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
+    crate::decimal::round_i32(mm * steps_per_mm)
+}
+
+/// A step position in mm, for reports.
+pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
+    let mut out = [0.0; AXES];
+    for (axis, (o, &v)) in out.iter_mut().zip(steps.iter()).enumerate() {
+        *o = v as f32 / s.steps_per_mm(axis);
+    }
+    out
+}
+
+/// `steps_per_mm` as `m * 2^e` exactly (an `f32` is a 24-bit integer times a power of
+/// two), with `m` odd; None unless it lies in the settings' range (0.001 ..= 10,000,
+/// so that `m * 2^e < 2^14`, `e > -60`).
+fn exact_parts(steps_per_mm: f32) -> Option<(u32, i32)> {
+    if !(0.0009..=10_000.0).contains(&steps_per_mm) {
+        return None;
+    }
+    let bits = steps_per_mm.to_bits();
+    let mut m = (bits & 0x7F_FFFF) | 0x80_0000; // normal: not below 2^-126
+    let mut e = ((bits >> 23) & 0xFF) as i32 - 150;
+    let zeros = m.trailing_zeros();
+    m >>= zeros;
+    e += zeros as i32;
+    Some((m, e))
+}
+
+/// 10^6 = 15,625 * 2^6.
+const FIVES: u32 = 15_625;
+
+/// Nanometres to steps: the exact product with `steps_per_mm`, rounded half away from
+/// zero. None if the result lies outside +-[`MAX_STEPS`] (or the setting is out of its
+/// range).
+pub fn nm_to_steps(nm: Nm, steps_per_mm: f32) -> Option<i32> {
+    scaled_steps(nm, steps_per_mm, 0)
+}
+
+/// [`nm_to_steps`] in 1/256 step (the exact line ends of [`crate::motion::Path::LineFine`]),
+/// within the same +-2^30 range.
+pub fn nm_to_fine_steps(nm: Nm, steps_per_mm: f32) -> Option<i32> {
+    scaled_steps(nm, steps_per_mm, 8)
+}
+
+/// `nm * steps_per_mm * 2^scale_log2 / 10^6`, rounded half away from zero.
+fn scaled_steps(nm: Nm, steps_per_mm: f32, scale_log2: i32) -> Option<i32> {
+    let (m, e) = exact_parts(steps_per_mm)?;
+    // round(n * 2^k / 15,625) with n = |nm| * m (at most 63 + 24 bits) and
+    // k = e - 6 + scale, as floor((2n * 2^k + 15,625) / 31,250); for k < 0 the power
+    // of two is divided out first (floor of a floor is the floor of the quotient).
+    let n = u128::from(nm.unsigned_abs()) * u128::from(m);
+    let k = e - 6 + scale_log2;
+    let steps = if k >= 0 {
+        // k <= 15: spm < 2^14.
+        div_rem((n << (k + 1)) + u128::from(FIVES), 2 * FIVES).0
+    } else {
+        let j = k.unsigned_abs(); // <= 40: spm >= 0.0009
+        div_rem(((2 * n) + (u128::from(FIVES) << j)) >> (j + 1), FIVES).0
+    };
+    if steps >= u128::from(MAX_STEPS) {
+        return None;
+    }
+    let steps = steps as i32;
+    Some(if nm < 0 { -steps } else { steps })
+}
+
+/// Steps back to nanometres (after a stop, a jog or a keypad move, the step position
+/// is the truth). Rounded to the nearest nanometre: converting back gives the same
+/// steps (a step is at least 100 nm, $100-$102 being at most 10,000 steps/mm).
+pub fn steps_to_nm(steps: i32, steps_per_mm: f32) -> Nm {
+    let Some((m, e)) = exact_parts(steps_per_mm) else {
+        return 0;
+    };
+    // |steps| * 15,625 * 2^(6 - e) / m, the power of two on the side where it is
+    // positive: the divisor stays below 2^14.
+    let num = u128::from(steps.unsigned_abs()) * u128::from(FIVES);
+    let (num, den) = if e <= 6 {
+        (num << (6 - e) as u32, m)
+    } else {
+        (num, m << (e - 6) as u32)
+    };
+    let nm = round_div(num as i128, den) as Nm; // below 2^31 * 10^9
+    if steps < 0 {
+        -nm
+    } else {
+        nm
+    }
+}
+
+/// Machine nanometres to a step position; None if any axis is out of range.
+pub fn to_steps(p: &NmPos, s: &Settings) -> Option<StepPos> {
+    let mut out = [0; AXES];
+    for (axis, (o, &v)) in out.iter_mut().zip(p.iter()).enumerate() {
+        *o = nm_to_steps(v, s.steps_per_mm(axis))?;
+    }
+    Some(out)
+}
+
+/// A step position in machine nanometres.
+pub fn to_nm(steps: &StepPos, s: &Settings) -> NmPos {
+    let mut out = [0; AXES];
+    for (axis, (o, &v)) in out.iter_mut().zip(steps.iter()).enumerate() {
+        *o = steps_to_nm(v, s.steps_per_mm(axis));
+    }
+    out
+}
+
+/// Allowed machine range of `axis` with soft limits, in nanometres, or `None` if
+/// unchecked. Axes homed toward - live in [0, travel], axes homed toward + in
+/// [-travel, 0] (Grbl's convention); axes without a switch ($214) are not checked.
+pub fn travel_range(axis: usize, s: &Settings) -> Option<(Nm, Nm)> {
     let bit = 1u8 << axis;
     if s.switch_mask() & bit == 0 {
         return None;
     }
-    let t = s.max_travel(axis);
+    let t = mm_to_nm(s.max_travel(axis));
     Some(if s.homing_dir_mask() & bit != 0 {
-        (0.0, t)
+        (0, t)
     } else {
-        (-t, 0.0)
+        (-t, 0)
     })
 }
 
-/// True if `p` (machine mm) lies within travel on every checked axis.
-pub fn within_travel(p: &[f32; AXES], s: &Settings) -> bool {
-    const EPS: f32 = 1e-4;
-    let (switches, toward_minus) = (s.switch_mask(), s.homing_dir_mask());
+/// True if `p` (machine nanometres) lies within travel on every checked axis, give or
+/// take 100 nm (the travel settings have three decimals).
+pub fn within_travel(p: &NmPos, s: &Settings) -> bool {
+    const SLACK: Nm = 100;
     p.iter().enumerate().all(|(axis, &v)| {
-        let bit = 1u8 << axis;
-        // Mirrored onto [0, travel] (negation is exact, so the bounds are the same).
-        let v = if toward_minus & bit != 0 { v } else { -v };
-        switches & bit == 0 || (v >= -EPS && v <= s.max_travel(axis) + EPS)
+        travel_range(axis, s).is_none_or(|(lo, hi)| v >= lo - SLACK && v <= hi + SLACK)
     })
 }
 
 /// Every point a block moves to, checked as it is planned; the verdicts are reported
 /// after the block's word checks, in Grbl's order.
 pub(super) struct Reach {
-    /// All points convert to steps ([`in_step_range`]).
+    /// All points convert to steps within range ([`to_steps`]).
     pub(super) in_range: bool,
     /// All points lie within travel ([`within_travel`]).
     pub(super) in_travel: bool,
 }
 
 impl Reach {
-    pub(super) fn add(&mut self, p: &[f32; AXES], s: &Settings) {
-        self.in_range &= in_step_range(p, s);
+    pub(super) fn add(&mut self, p: &NmPos, s: &Settings) {
+        self.in_range &= to_steps(p, s).is_some();
         self.in_travel &= within_travel(p, s);
+    }
+}
+
+/// Milliseconds from a dwell's P (seconds), rounded.
+pub fn value_to_ms(v: Value) -> u32 {
+    let ms = round_div(i128::from(v.millionths()), (ONE / 1000) as u32);
+    u32::try_from(ms.max(0)).unwrap_or(u32::MAX)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lengths_convert_exactly() {
+        let v = Value::from_millionths;
+        assert_eq!(value_to_nm(v(12_500), false), 12_500);
+        assert_eq!(value_to_nm(v(1_000), true), 25_400, "0.001 in");
+        assert_eq!(value_to_nm(v(-10), true), -254, "0.00001 in");
+        assert_eq!(value_to_nm(v(1), true), 25, "0.000001 in rounds");
+        assert_eq!(nm_to_steps(12_500, 80.0), Some(1));
+        assert_eq!(nm_to_steps(6_250, 80.0), Some(1), "half a step rounds away");
+        assert_eq!(nm_to_steps(-6_250, 80.0), Some(-1));
+        assert_eq!(nm_to_steps(6_249, 80.0), Some(0));
+        assert_eq!(nm_to_fine_steps(12_500, 80.0), Some(256));
+        assert_eq!(nm_to_fine_steps(-49, 80.0), Some(-1), "0.98 / 256 step");
+        assert_eq!(nm_to_steps(12_500_000_000, 80.0), Some(1_000_000));
+        assert_eq!(nm_to_steps(25_400_000_000, 80.0), Some(2_032_000));
+        // 78.74 is 78.73999786376953125 in f32: 1 m is 78,739.99786 steps.
+        assert_eq!(nm_to_steps(1_000_000_000, 78.74), Some(78_740));
+        assert_eq!(nm_to_steps(1_000_000_000_000, 78.74), Some(78_739_998));
+        assert_eq!(nm_to_steps(1 << 40, 0.001), Some(1_100));
+        assert_eq!(
+            nm_to_steps(14_000_000_000_000, 80.0),
+            None,
+            "beyond 2^30 steps"
+        );
+        assert_eq!(nm_to_steps(i64::MAX, 10_000.0), None);
+        assert_eq!(nm_to_steps(1, f32::NAN), None);
+        for spm in [80.0, 78.74, 0.001, 3.3, 400.0, 10_000.0, 1234.567] {
+            for steps in [0, 1, -1, 7, 12_345, -1_000_000, (1 << 30) - 1] {
+                let nm = steps_to_nm(steps, spm);
+                assert_eq!(nm_to_steps(nm, spm), Some(steps), "{spm} {steps}");
+            }
+        }
+        assert_eq!(value_to_ms(v(500_000)), 500);
+        assert_eq!(value_to_ms(v(1_234_567)), 1_235);
     }
 }

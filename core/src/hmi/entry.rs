@@ -50,8 +50,6 @@ impl Field {
         f
     }
 
-    #[inline(never)]
-    // (A call: inlined at its callers it costs more flash.)
     fn spec(&self) -> &'static FieldSpec {
         FIELD_SPECS.get(usize::from(self.spec)).unwrap_or(&NO_SPEC)
     }
@@ -78,8 +76,6 @@ impl Field {
     }
 
     /// What the field shows: the text being typed, or the committed value.
-    #[inline(never)]
-    // (A call: inlined at its callers it costs more flash.)
     pub fn display(&self) -> Text<12> {
         let mut s = Text::new();
         if self.editing {
@@ -178,8 +174,6 @@ impl Field {
     }
 
     /// "R: 0.50..100.00 mm"
-    #[inline(never)]
-    // (A call: inlined at its callers it costs more flash.)
     pub fn range_message(&self) -> Text<28> {
         let (label, unit, min, max, decimals) = *self.spec();
         let mut s: Text<28> = Text::new();
@@ -362,8 +356,6 @@ impl Form {
     }
 
     /// The committed values, in field order (unused slots 0).
-    #[inline(always)]
-    // (Inlined: smaller than the call and its argument moves, measured.)
     pub fn values(&self) -> [f32; 4] {
         let mut v = [0.0; 4];
         for (slot, f) in v.iter_mut().zip(self.fields()) {
@@ -373,8 +365,6 @@ impl Form {
     }
 
     /// The job described by the committed values.
-    #[inline(never)]
-    // (A call: inlined at its callers it costs more flash.)
     pub fn job(&self) -> Job {
         let v = self.values();
         match self.kind {

@@ -2,44 +2,14 @@
 //!
 //! core's `{:.2}` float formatting pulls several KB of flash into the firmware; the
 //! screens only ever need a few decimals of a bounded value, so it is done here with
-//! integer formatting. Values too large for the requested width print as "----".
+//! integer formatting, through the same decimal writer as the protocol's replies
+//! ([`crate::decimal`]). Values too large for the requested width print as "----".
 
 use super::text::Text;
+use crate::decimal::{decimal, round_i32, DECIMAL_MAX};
 
 /// Longest text produced: "-999999999.999".
 pub type Fixed = Text<16>;
-
-/// `v` rounded to the nearest integer, halves away from zero, saturating (NaN gives 0):
-/// exactly `fmath::round(v) as i32`, from the bits alone (no soft-float calls).
-#[inline(never)]
-pub fn round_i32(v: f32) -> i32 {
-    let bits = v.to_bits();
-    let exp = (bits >> 23 & 0xff) as i32;
-    let mant = bits & 0x7f_ffff | 0x80_0000;
-    // v = ±mant * 2^shift.
-    let shift = exp - 150;
-    let mag = if exp < 126 {
-        // |v| < 0.5 (and zeros, subnormals).
-        0
-    } else if bits & 0x7fff_ffff > 0x7f80_0000 {
-        // NaN.
-        return 0;
-    } else if shift >= 8 {
-        // |v| >= 2^31 (and infinities): saturate.
-        return if bits >> 31 != 0 { i32::MIN } else { i32::MAX };
-    } else if shift >= 0 {
-        mant << shift
-    } else {
-        // Add half of the last kept place, then drop the fraction.
-        let k = -shift as u32;
-        (mant + (1 << (k - 1))) >> k
-    };
-    if bits >> 31 != 0 {
-        -(mag as i32)
-    } else {
-        mag as i32
-    }
-}
 
 /// `v` rounded to an integer ([`round_i32`]) if finite and below 10^9 in magnitude.
 pub fn round_checked(v: f32) -> Option<i32> {
@@ -61,9 +31,8 @@ pub fn scaled(v: f32, decimals: u8) -> Number {
 /// Append `num` with `decimals` digits after the point ("-" first if negative and not
 /// 0, at least one integer digit: "0.05", "----" for None), right-aligned in `width`
 /// characters, to the text `buf[..*len]`: whole, or nothing and false if it does not
-/// fit. Built from the end in u32 (no core::fmt, no 64-bit division); one routine for
-/// every text capacity.
-#[inline(never)]
+/// fit. The digits come from the protocol's writer, [`decimal`]; one routine for every
+/// text capacity.
 pub(super) fn append_number(
     buf: &mut [u8],
     len: &mut u8,
@@ -71,42 +40,19 @@ pub(super) fn append_number(
     decimals: u8,
     width: usize,
 ) -> bool {
-    // Spaces for the padding, the characters written backwards from the end (at
-    // most 12: the index wraps within the array, so it needs no bounds check).
-    let mut tmp = [b' '; 32];
-    let mut at = tmp.len();
-    let mut put = |c: u8| {
-        at = at.wrapping_sub(1);
-        tmp[at & 31] = c;
-    };
-    match num {
+    // The number at the end of `text`, padded with spaces in front to `width`.
+    let mut text = [b' '; DECIMAL_MAX];
+    let n = match num {
         None => {
-            for _ in 0..4 {
-                put(b'-');
+            if let Some(dashes) = text.get_mut(DECIMAL_MAX - 4..) {
+                dashes.fill(b'-');
             }
+            4
         }
-        Some((neg, n)) => {
-            let d = u32::from(decimals);
-            let mut rest = n;
-            let mut k = 0;
-            loop {
-                if k == d && d > 0 {
-                    put(b'.');
-                }
-                put(b'0' + (rest % 10) as u8);
-                rest /= 10;
-                k += 1;
-                if rest == 0 && k > d {
-                    break;
-                }
-            }
-            if neg && n != 0 {
-                put(b'-');
-            }
-        }
-    }
-    let start = at.min(32usize.saturating_sub(width));
-    super::text::append(buf, len, tmp.get(start..).unwrap_or(&[]))
+        Some((neg, n)) => decimal(&mut text, u64::from(n), neg && n != 0, decimals.into()),
+    };
+    let shown = n.max(width.min(DECIMAL_MAX));
+    super::text::append(buf, len, text.get(DECIMAL_MAX - shown..).unwrap_or(&[]))
 }
 
 /// `v` with exactly `decimals` (0..=3) digits after the point; "----" if not finite
@@ -158,7 +104,7 @@ mod tests {
     }
 
     #[test]
-    fn round_i32_is_round_then_cast() {
+    fn round_checked_is_round_then_cast_below_a_billion() {
         let mut cases = std::vec![
             0.0f32,
             -0.0,

@@ -91,8 +91,6 @@ fn star_point(r: f32, k: usize) -> [f32; 2] {
 
 /// A point of the ellipse with semi-axes (a, b) at `angle` (radians) from its 0° point,
 /// relative to that point.
-#[inline(always)]
-// (Inlined: smaller than the call and its argument moves, measured.)
 fn conic_point(a: f32, b: f32, angle: f32) -> [f32; 2] {
     [a * fmath::cos(angle) - a, b * fmath::sin(angle)]
 }
@@ -167,8 +165,6 @@ impl Job {
 
     /// Path length in mm (chords of 160 samples, a multiple of the star's 5 sides, so
     /// exact for lines and the star).
-    #[inline(always)]
-    // (Inlined: smaller than the call and its argument moves, measured.)
     pub fn length_mm(&self) -> f32 {
         self.sweep().2
     }
@@ -307,7 +303,6 @@ impl Job {
 }
 
 /// Append a move (no room: the job is too complex, which the fixed jobs never are).
-#[inline(never)]
 fn add(out: &mut Actions, target: StepPos, path: Path, feed: Feed) -> Result<(), JobError> {
     let m = Move {
         target,

@@ -28,8 +28,6 @@ impl<const N: usize> Text<N> {
     }
 
     /// The longest prefix of `s` that fits, cut at a character boundary.
-    #[inline(always)]
-    // (Inlined: smaller than the call and its argument moves, measured.)
     pub fn truncated(s: &str) -> Self {
         let mut end = s.len().min(N);
         while !s.is_char_boundary(end) {
@@ -68,8 +66,6 @@ impl<const N: usize> Text<N> {
     }
 
     /// The text's bytes (UTF-8), without re-checking them.
-    #[inline(never)]
-    // (A call: inlined at its callers it costs more flash.)
     pub fn bytes(&self) -> &[u8] {
         self.buf.get(..usize::from(self.len)).unwrap_or(&[])
     }
@@ -130,7 +126,6 @@ impl<const N: usize> Text<N> {
 
 /// The work of [`Text::push_str`] for every capacity: append `s` whole to the first
 /// `len` bytes of `buf`, or change nothing.
-#[inline(never)]
 pub(super) fn append(buf: &mut [u8], len: &mut u8, s: &[u8]) -> bool {
     let at = usize::from(*len);
     let end = at + s.len();

@@ -129,7 +129,8 @@ fn small_angle(cross: f32, dot: f32) -> f32 {
         scale *= 2.0;
     }
     let z = x * x;
-    let series = 1.0 - z * (1.0 / 3.0 - z * (0.2 - z * (1.0 / 7.0 - z * (1.0 / 9.0 - z * (1.0 / 11.0)))));
+    let series =
+        1.0 - z * (1.0 / 3.0 - z * (0.2 - z * (1.0 / 7.0 - z * (1.0 / 9.0 - z * (1.0 / 11.0)))));
     scale * x * series
 }
 
@@ -170,7 +171,10 @@ impl Circle {
         method: Method,
     ) -> Result<Self, InterpError> {
         let rel = |v: i32, c: i64| (i64::from(v) * i64::from(ONE)).wrapping_sub(c);
-        let exact = [from[0].wrapping_sub(center[0]), from[1].wrapping_sub(center[1])];
+        let exact = [
+            from[0].wrapping_sub(center[0]),
+            from[1].wrapping_sub(center[1]),
+        ];
         let p = [rel(start[X], center[0]), rel(start[Y], center[1])];
         let t = [rel(target[X], center[0]), rel(target[Y], center[1])];
         if exact.iter().chain(&p).chain(&t).any(|v| v.abs() > LIMIT) {
@@ -337,7 +341,11 @@ impl Circle {
     /// smaller |coordinate| (the circle is flatter than 45 degrees along it).
     fn begin_first_octant(&mut self) {
         let p = self.p;
-        let major = if p[0].unsigned_abs() <= p[1].unsigned_abs() { 0 } else { 1 };
+        let major = if p[0].unsigned_abs() <= p[1].unsigned_abs() {
+            0
+        } else {
+            1
+        };
         let minor = 1 - major;
         let t = self.tangent(p);
         // On the minor's axis line the tangent is along the major: it moves on away.
@@ -391,7 +399,11 @@ impl Circle {
         }
         self.set_dirs(t);
         // The axis moving inward: its |coordinate| falls.
-        let major = if i64::from(t[0]) * i64::from(p[0]) < 0 { 0 } else { 1 };
+        let major = if i64::from(t[0]) * i64::from(p[0]) < 0 {
+            0
+        } else {
+            1
+        };
         self.piece = Piece {
             major,
             inward: true,
@@ -439,7 +451,8 @@ impl Circle {
             Some(_) => true,
             None => false,
         };
-        self.hit_at_end = self.method == Method::Dda && hit == Some(self.piece.left) && hit.is_some();
+        self.hit_at_end =
+            self.method == Method::Dda && hit == Some(self.piece.left) && hit.is_some();
         if counts {
             if self.skip == 0 {
                 self.piece.last = true;
@@ -597,7 +610,8 @@ impl Circle {
             minor(m0)
         };
         let n1 = minor(m1);
-        self.last_end.set((m, self.p[m] + k as i32 * self.dir[m], n1));
+        self.last_end
+            .set((m, self.p[m] + k as i32 * self.dir[m], n1));
         // Angle between the two circle points (small: one piece is an octant). The
         // cross product from the differences, without cancellation: dm is k, and
         // dn = n1 - n0 = (m0 - m1)(m0 + m1) / (n0 + n1) on the circle.
@@ -661,7 +675,11 @@ impl Circle {
             1 - self.piece.major
         };
         // On an axis only the other axis makes progress.
-        let i = if self.p[1 - i] == 0 && self.p[i] != 0 { 1 - i } else { i };
+        let i = if self.p[1 - i] == 0 && self.p[i] != 0 {
+            1 - i
+        } else {
+            i
+        };
         if self.piece.last {
             // Do not pass the target's coordinate on this axis: the tail finishes.
             let past = (i64::from(self.target[i]) - i64::from(self.p[i])) * i64::from(self.dir[i]);
@@ -758,7 +776,12 @@ impl Circle {
             let (dx, dy) = ((b[0] - a[0]) as f32 * s, (b[1] - a[1]) as f32 * s);
             return crate::fmath::sqrt(dx * dx + dy * dy);
         }
-        let (ax, ay, bx, by) = (a[0] as f32 * s, a[1] as f32 * s, b[0] as f32 * s, b[1] as f32 * s);
+        let (ax, ay, bx, by) = (
+            a[0] as f32 * s,
+            a[1] as f32 * s,
+            b[0] as f32 * s,
+            b[1] as f32 * s,
+        );
         let cross = ax * by - bx * ay;
         let dot = ax * bx + ay * by;
         self.radius * crate::fmath::abs(crate::fmath::atan2(cross, dot))
@@ -855,17 +878,31 @@ mod tests {
     #[test]
     fn extra_turns_add_whole_revolutions() {
         let start = [50, 0, 0];
-        let one = run(Circle::new(start, [12_800, 0], [0, 0], start, true, 0, Method::Dda).unwrap(), start).len();
-        let three = run(Circle::new(start, [12_800, 0], [0, 0], start, true, 2, Method::Dda).unwrap(), start).len();
+        let one = run(
+            Circle::new(start, [12_800, 0], [0, 0], start, true, 0, Method::Dda).unwrap(),
+            start,
+        )
+        .len();
+        let three = run(
+            Circle::new(start, [12_800, 0], [0, 0], start, true, 2, Method::Dda).unwrap(),
+            start,
+        )
+        .len();
         assert_eq!(three - 1, 3 * (one - 1));
     }
 
     #[test]
     fn quarter_arcs_go_the_requested_way() {
         let start = [10, 0, 0];
-        let short = run(Circle::new(start, [2560, 0], [0, 0], [0, 10, 0], true, 0, Method::Dda).unwrap(), start);
+        let short = run(
+            Circle::new(start, [2560, 0], [0, 0], [0, 10, 0], true, 0, Method::Dda).unwrap(),
+            start,
+        );
         assert!(short.iter().all(|p| p[0] >= 0 && p[1] >= 0), "{short:?}");
-        let long = run(Circle::new(start, [2560, 0], [0, 0], [0, 10, 0], false, 0, Method::Dda).unwrap(), start);
+        let long = run(
+            Circle::new(start, [2560, 0], [0, 0], [0, 10, 0], false, 0, Method::Dda).unwrap(),
+            start,
+        );
         assert!(long.iter().any(|p| p[0] < 0) && long.iter().any(|p| p[1] < 0));
         assert_eq!(*long.last().unwrap(), [0, 10, 0]);
     }
@@ -885,15 +922,26 @@ mod tests {
     /// An arc as G-code gives it: a centre anywhere (between steps), an exact start on
     /// its circle at angle `a0`, the end at angle `a1` (rounded to the grid for the
     /// target; the start rounded for the machine position).
-    fn arc(cx: f64, cy: f64, r: f64, a0: f64, a1: f64) -> (StepPos, [i64; 2], [i64; 2], StepPos, [f64; 2], f64) {
+    fn arc(
+        cx: f64,
+        cy: f64,
+        r: f64,
+        a0: f64,
+        a1: f64,
+    ) -> (StepPos, [i64; 2], [i64; 2], StepPos, [f64; 2], f64) {
         let from = [cx + r * a0.cos(), cy + r * a0.sin()];
         let from_q = [q8(from[0]), q8(from[1])];
         let center_q = [q8(cx), q8(cy)];
         // The circle the interpolator traces: through the Q8 start around the Q8 centre.
         let c = [center_q[0] as f64 / 256.0, center_q[1] as f64 / 256.0];
-        let rr = ((from_q[0] - center_q[0]) as f64 / 256.0).hypot((from_q[1] - center_q[1]) as f64 / 256.0);
+        let rr = ((from_q[0] - center_q[0]) as f64 / 256.0)
+            .hypot((from_q[1] - center_q[1]) as f64 / 256.0);
         let start = [from[0].round() as i32, from[1].round() as i32, 0];
-        let target = [(c[0] + rr * a1.cos()).round() as i32, (c[1] + rr * a1.sin()).round() as i32, 0];
+        let target = [
+            (c[0] + rr * a1.cos()).round() as i32,
+            (c[1] + rr * a1.sin()).round() as i32,
+            0,
+        ];
         (start, from_q, center_q, target, c, rr)
     }
 

@@ -68,7 +68,16 @@ impl Conic {
         if a > ELLIPSE_LIMIT || b > ELLIPSE_LIMIT {
             return Err(InterpError::TooLarge);
         }
-        Self::build(start, center, target, b * b, a * a, a * a * b * b, ccw, method)
+        Self::build(
+            start,
+            center,
+            target,
+            b * b,
+            a * a,
+            a * a * b * b,
+            ccw,
+            method,
+        )
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -155,13 +164,11 @@ impl Conic {
         dt * crate::fmath::sqrt(vx * vx + vy * vy)
     }
 
-    #[inline(never)]
     fn f(&self, x: i64, y: i64) -> i64 {
         self.a * x * x + self.b * y * y - self.c
     }
 
     /// Tangent direction (not normalised) at (x, y) in the feed direction.
-    #[inline(never)]
     fn tangent(&self, x: i64, y: i64) -> (i64, i64) {
         let (tx, ty) = (-self.b * y, self.a * x);
         if self.ccw {
@@ -175,7 +182,6 @@ impl Conic {
     /// target x p, oriented so that it grows in the feed direction. i64 is enough:
     /// every coordinate is within 2^30.5 of the centre (the limits checked in
     /// [`Conic::build`]), so each product is below 2^61.
-    #[inline(never)]
     fn side(&self, x: i64, y: i64) -> i64 {
         let cr = self.tx * y - self.ty * x;
         if self.ccw {
@@ -185,7 +191,6 @@ impl Conic {
         }
     }
 
-    #[inline(never)]
     fn ahead(&self, x: i64, y: i64) -> bool {
         self.tx * x + self.ty * y > 0
     }
@@ -323,7 +328,6 @@ impl Conic {
 }
 
 impl Interpolate for Conic {
-    #[inline(never)]
     fn next_tick(&mut self) -> Option<Tick> {
         if self.finished {
             return None;
@@ -382,7 +386,7 @@ mod tests {
         fmin <= 0.0 && fmax >= 0.0
     }
 
-        #[test]
+    #[test]
     fn rejects_degenerate_and_oversized_input() {
         assert_eq!(
             Conic::ellipse([0; 3], [-70000, 0], 70000, 10, [0; 3], true, Method::Dda).err(),
@@ -394,7 +398,7 @@ mod tests {
         );
     }
 
-        #[test]
+    #[test]
     fn dda_thin_ellipse_does_not_step_past_its_vertex() {
         // Found by the property test below: a = 41, b = 1682, from the rounded point
         // at 1.5585 rad counter-clockwise to angle 0. The start (1, 1682) lies half a

@@ -268,8 +268,7 @@ fn planar(start: StepPos, target: StepPos) -> Result<(), InterpError> {
     }
 }
 
-/// Sign of an i64 as -1, 0 or 1 (out of line: a dozen callers).
-#[inline(never)]
+/// Sign of an i64 as -1, 0 or 1.
 pub(crate) fn sgn(v: i64) -> i8 {
     i8::from(v > 0) - i8::from(v < 0)
 }

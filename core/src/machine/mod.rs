@@ -14,8 +14,8 @@ pub mod state;
 
 use crate::motion::{Command, StepPos};
 
-pub use safety::{Alarm, Inputs};
-pub use state::{Machine, RunState};
+pub use safety::{Alarm, InputPolarity, Inputs, PinLevels};
+pub use state::{Machine, RunState, Taken};
 
 /// The planner queue has no room for another command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +62,11 @@ pub trait MotionControl {
     /// limits must apply to every move queued after the change, and nothing queued
     /// may be lost. Fakes that plan nothing may keep the default.
     fn configure(&mut self, _settings: &crate::settings::Settings) {}
+    /// The servo pen's commanded state (true = down), as far as the queue has run:
+    /// what the pen servo output shows. Fakes without a servo pen may keep the default.
+    fn pen_down(&self) -> bool {
+        false
+    }
 
     /// Nothing queued and at rest.
     fn is_idle(&self) -> bool {

@@ -11,13 +11,12 @@ use super::homing::{Homing, HomingError, Progress};
 use super::safety::{Alarm, Inputs};
 use super::MotionControl;
 use crate::gcode::interpreter::Room;
-use crate::gcode::units::to_mm;
+use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
 use crate::motion::Command;
 use crate::motion::{Move, AXES};
 use crate::settings::Settings;
 use core::mem::MaybeUninit;
-use core::ptr::addr_of_mut;
 use heapless::Deque;
 
 /// The state shown in status reports.
@@ -40,6 +39,16 @@ pub enum RunState {
     Alarm,
     Home,
     Check,
+}
+
+/// A line the machine took, and when its `ok` may go out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Taken {
+    /// Answer it now.
+    Now,
+    /// Answer once the queue has run empty: a G4's `ok` comes after its dwell, as in
+    /// Grbl, so that senders can wait for the motion before it with `G4 P0.01`.
+    WhenIdle,
 }
 
 /// Something the protocol should tell the host.
@@ -87,8 +96,7 @@ pub struct Machine {
     door: bool,
     /// The hold came from the feed-hold pin and ends when it is released.
     hold_by_pin: bool,
-    /// M0 seen: hold once the queue has run empty.
-    pause_pending: bool,
+    /// M0 ran: held at rest until cycle start (the lines after it queue meanwhile).
     paused: bool,
     /// Soft-limit alarm: bring motion to rest, then drop the queue.
     stop_then_clear: bool,
@@ -114,76 +122,49 @@ impl Machine {
     /// so that no whole machine is built on the stack and copied.
     #[allow(unsafe_code)]
     pub fn init_in<'a>(slot: &'a mut MaybeUninit<Machine>, settings: &Settings) -> &'a mut Machine {
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        const _: fn(&Machine) = |Machine {
-                                     settings: _,
-                                     interp: _,
-                                     locked: _,
-                                     alarm: _,
-                                     needs_reset: _,
-                                     check_mode: _,
-                                     jogging: _,
-                                     jog_cancel: _,
-                                     homing: _,
-                                     homed: _,
-                                     hold: _,
-                                     door: _,
-                                     hold_by_pin: _,
-                                     pause_pending: _,
-                                     paused: _,
-                                     stop_then_clear: _,
-                                     feed_ovr: _,
-                                     rapid_ovr: _,
-                                     ovr_changed: _,
-                                     inputs: _,
-                                     job: _,
-                                     events: _,
-                                     settings_dirty: _,
-                                     coords_dirty: _,
-                                 }| {};
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (no reference to the uninitialised
-        // machine is made) and the list below names every field, so the machine is
-        // initialised when `assume_init_mut` runs.
-        let m = unsafe {
-            addr_of_mut!((*p).settings).write(settings.clone());
-            // A const template (copied from flash) instead of field-by-field stores.
-            addr_of_mut!((*p).interp).write(const { Interpreter::new() });
-            addr_of_mut!((*p).locked).write(false);
-            addr_of_mut!((*p).alarm).write(None);
-            addr_of_mut!((*p).needs_reset).write(false);
-            addr_of_mut!((*p).check_mode).write(false);
-            addr_of_mut!((*p).jogging).write(false);
-            addr_of_mut!((*p).jog_cancel).write(false);
-            addr_of_mut!((*p).homing).write(None);
-            addr_of_mut!((*p).homed).write(false);
-            addr_of_mut!((*p).hold).write(false);
-            addr_of_mut!((*p).door).write(false);
-            addr_of_mut!((*p).hold_by_pin).write(false);
-            addr_of_mut!((*p).pause_pending).write(false);
-            addr_of_mut!((*p).paused).write(false);
-            addr_of_mut!((*p).stop_then_clear).write(false);
-            addr_of_mut!((*p).feed_ovr).write(100);
-            addr_of_mut!((*p).rapid_ovr).write(100);
-            addr_of_mut!((*p).ovr_changed).write(false);
-            addr_of_mut!((*p).inputs).write(Inputs::default());
-            addr_of_mut!((*p).job).write(Job::default());
-            addr_of_mut!((*p).events).write(Deque::new());
-            addr_of_mut!((*p).settings_dirty).write(false);
-            addr_of_mut!((*p).coords_dirty).write(false);
-            slot.assume_init_mut()
-        };
+        // The interpreter from a const template (copied from flash) instead of field by
+        // field.
+        const FRESH: Interpreter = Interpreter::new();
+        let m = crate::init_fields!(slot => Machine {
+            settings = settings.clone(),
+            interp = FRESH,
+            locked = false,
+            alarm = None,
+            needs_reset = false,
+            check_mode = false,
+            jogging = false,
+            jog_cancel = false,
+            homing = None,
+            homed = false,
+            hold = false,
+            door = false,
+            hold_by_pin = false,
+            paused = false,
+            stop_then_clear = false,
+            feed_ovr = 100,
+            rapid_ovr = 100,
+            ovr_changed = false,
+            inputs = Inputs::default(),
+            job = Job::default(),
+            events = Deque::new(),
+            settings_dirty = false,
+            coords_dirty = false,
+        });
         m.lock_if_unhomed();
         m
     }
 
+    /// With homing enabled the machine starts (and resets) locked until `$H` or `$X`.
     fn lock_if_unhomed(&mut self) {
-        if self.settings.homing_enabled() && !self.homed && !self.locked {
+        if self.settings.homing_enabled() && !self.homed {
             self.locked = true;
-            self.event(Event::Msg("'$H'|'$X' to unlock"));
         }
+    }
+
+    /// In alarm and `$H` or `$X` would unlock it (not while an e-stop is held): the
+    /// welcome line is then followed by Grbl's `[MSG:'$H'|'$X' to unlock]`.
+    pub fn needs_unlock(&self) -> bool {
+        self.locked && !self.needs_reset
     }
 
     fn event(&mut self, e: Event) {
@@ -267,11 +248,11 @@ impl Machine {
         self.homing.is_some() || m.is_moving()
     }
 
-    /// G-code lines are taken only when this holds: after M0 they wait for cycle
-    /// start, and during a stop that will drop the queue they wait until it is done
-    /// (otherwise they would be answered `ok` and then dropped).
+    /// G-code lines are taken only when this holds: during a stop that will drop the
+    /// queue they wait until it is done (otherwise they would be answered `ok` and
+    /// then dropped).
     pub fn can_accept(&self) -> bool {
-        !self.pause_pending && !self.paused && !self.stop_then_clear && !self.jog_cancel
+        !self.stop_then_clear && !self.jog_cancel
     }
 
     fn idle_or_alarm<M: MotionControl>(&self, m: &M) -> bool {
@@ -316,15 +297,16 @@ impl Machine {
     }
 
     /// Execute one cleaned G-code line. `None` means "not now": the block needs more
-    /// free planner entries than there are, or an M0 pause is pending. Nothing has
-    /// changed then; the caller keeps the line and retries (back-pressure).
+    /// free planner entries than there are, or it is a sync point (G4, M0, M2, G10,
+    /// G92, ...) and motion before it has not finished. Nothing has changed then; the
+    /// caller keeps the line and retries (back-pressure).
     pub fn execute<M: MotionControl>(
         &mut self,
         line: &[u8],
         line_no: u32,
         m: &mut M,
         now_ms: u32,
-    ) -> Option<Result<(), Status>> {
+    ) -> Option<Result<Taken, Status>> {
         if self.locked || self.homing.is_some() {
             return Some(Err(Status::SystemLocked));
         }
@@ -335,7 +317,7 @@ impl Machine {
             return None;
         }
         // Committed only if the planner has room for the result (check mode queues
-        // nothing); M2/M30 also waits for the queue to run empty.
+        // nothing); a sync point also waits for the queue to run empty.
         let room = if self.check_mode {
             Room {
                 cmds: usize::MAX,
@@ -358,7 +340,7 @@ impl Machine {
             Err(Reject::SoftLimit) => {
                 // Grbl: the line is answered ok, motion stops, alarm 2 (no reset needed).
                 self.raise(Alarm::SoftLimit, m);
-                return Some(Ok(()));
+                return Some(Ok(Taken::Now));
             }
         }
         if out.stop == Some(Stop::End) {
@@ -368,25 +350,35 @@ impl Machine {
             self.coords_dirty = true;
         }
         if self.check_mode {
-            return Some(Ok(()));
+            // Dwells and pauses are skipped in check mode, as in Grbl.
+            return Some(Ok(Taken::Now));
         }
         for cmd in out.cmds.iter() {
             if m.push(*cmd).is_err() {
                 // free() promised room; if a planner disagrees, stop rather than
                 // lose a move silently.
                 self.raise(Alarm::AbortCycle, m);
-                return Some(Ok(()));
+                return Some(Ok(Taken::Now));
             }
             if let Command::Move(_) = cmd {
                 self.count_move(now_ms);
             }
         }
         match out.stop {
-            Some(Stop::Pause) => self.pause_pending = true,
+            Some(Stop::Pause) => {
+                // At rest (M0 is a sync point): hold until cycle start; the lines after
+                // it are planned meanwhile and wait in the held queue.
+                self.paused = true;
+                m.hold();
+            }
             Some(Stop::End) => self.job.ending = self.job.running,
             None => {}
         }
-        Some(Ok(()))
+        Some(Ok(if out.has_dwell() {
+            Taken::WhenIdle
+        } else {
+            Taken::Now
+        }))
     }
 
     /// Check a line (for `$N`) without running it or changing any state.
@@ -514,7 +506,6 @@ impl Machine {
         self.door = false;
         self.hold_by_pin = false;
         self.job = Job::default();
-        self.pause_pending = false;
         self.paused = false;
     }
 
@@ -581,7 +572,7 @@ impl Machine {
             self.jog_cancel(m);
             return;
         }
-        if !m.is_idle() || self.pause_pending {
+        if !m.is_idle() {
             self.hold = true;
             m.hold();
         }
@@ -639,7 +630,7 @@ impl Machine {
             return Err(Status::IdleError);
         }
         if let Command::Move(mv) = &cmd {
-            let end = to_mm(&mv.target, &self.settings);
+            let end = to_nm(&mv.target, &self.settings);
             if self.settings.soft_limits()
                 && !crate::gcode::units::within_travel(&end, &self.settings)
             {
@@ -671,7 +662,6 @@ impl Machine {
     /// Stop cleanly and forget the rest (the keypad's abort): decelerate to rest, then
     /// drop the queue; the position stays exact.
     pub fn stop_and_clear<M: MotionControl>(&mut self, m: &mut M) {
-        self.pause_pending = false;
         self.paused = false;
         self.hold = false;
         self.door = false;
@@ -782,7 +772,7 @@ impl Machine {
         }
     }
 
-    /// Make progress: homing, pauses, job end, jog cancel, soft-limit stop.
+    /// Make progress: homing, job end, jog cancel, soft-limit stop.
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         if self.homing.is_some() {
             self.step_homing(m, now_ms);
@@ -801,10 +791,6 @@ impl Machine {
         }
         if self.jogging && m.is_idle() && !self.jog_cancel {
             self.jogging = false;
-        }
-        if self.pause_pending && m.is_idle() {
-            self.pause_pending = false;
-            self.paused = true;
         }
         if self.job.ending && m.is_idle() {
             let ms = now_ms.wrapping_sub(self.job.start_ms);

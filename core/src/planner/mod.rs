@@ -145,35 +145,16 @@ impl Planner {
         cfg: PlannerConfig,
         position: StepPos,
     ) -> &mut Planner {
-        use core::ptr::addr_of_mut;
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        const _: fn(&Planner) = |Planner {
-                                     cfg: _,
-                                     blocks: _,
-                                     next_start: _,
-                                     prev: _,
-                                     feed_override: _,
-                                     rapid_override: _,
-                                     head_cap: _,
-                                     generation: _,
-                                 }| {};
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (no reference to the uninitialised
-        // planner is made), and every field is written (see
-        // the pattern above), so the planner is initialised when `assume_init_mut` runs.
-        unsafe {
-            addr_of_mut!((*p).cfg).write(cfg);
-            addr_of_mut!((*p).blocks).write(Deque::new());
-            addr_of_mut!((*p).next_start).write(position);
-            addr_of_mut!((*p).prev).write(None);
-            addr_of_mut!((*p).feed_override).write(1.0);
-            addr_of_mut!((*p).rapid_override).write(1.0);
-            addr_of_mut!((*p).head_cap).write(cfg.start_speed);
-            addr_of_mut!((*p).generation).write(0);
-            slot.assume_init_mut()
-        }
+        crate::init_fields!(slot => Planner {
+            cfg = cfg,
+            blocks = Deque::new(),
+            next_start = position,
+            prev = None,
+            feed_override = 1.0,
+            rapid_override = 1.0,
+            head_cap = cfg.start_speed,
+            generation = 0,
+        })
     }
 
     pub fn config(&self) -> &PlannerConfig {

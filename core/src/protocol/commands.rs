@@ -4,7 +4,8 @@
 
 use super::report::axis_triplet;
 use super::{OutWriter, Protocol, RX_BUFFER_SIZE, VERSION};
-use crate::decimal::{put_int, Sink};
+use crate::decimal::{put_int, write_fixed3, Sink};
+use crate::gcode::units::nm_to_mm;
 use crate::gcode::Status;
 use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::machine::{Machine, MotionControl, RunState};
@@ -77,7 +78,7 @@ fn set_setting<M: MotionControl>(
     if used != val.len() {
         return Err(Status::BadNumberFormat);
     }
-    machine.set_setting(n, v, m)
+    machine.set_setting(n, v.to_f32(), m)
 }
 
 /// `$Nx=line`: check the line and store it in slot x.
@@ -246,7 +247,8 @@ impl Protocol {
         w.put(b">");
         w.put(text);
         match r {
-            Ok(()) => w.put(b":ok"),
+            // A startup line's dwell is not waited for: nothing is counted against it.
+            Ok(_) => w.put(b":ok"),
             Err(e) => {
                 w.put(b":error:");
                 put_int(&mut w, i32::from(e.code()));
@@ -285,7 +287,11 @@ impl Protocol {
                     7 => Some(&c.g30),
                     8 => Some(interp.g92()),
                     9 => {
-                        w.put(b"[TLO:0.000]");
+                        w.put(b"[TLO:");
+                        let inches = machine.settings().report_inches();
+                        let tlo = nm_to_mm(interp.tool_length_offset());
+                        write_fixed3(&mut w, if inches { tlo / 25.4 } else { tlo });
+                        w.put(b"]");
                         None
                     }
                     10 => {
@@ -309,7 +315,7 @@ impl Protocol {
                     } else {
                         1.0
                     };
-                    axis_triplet(&mut w, v, scale);
+                    axis_triplet(&mut w, &v.map(nm_to_mm), scale);
                     w.put(b"]");
                 }
                 Listing::Coords(i + 1)

@@ -12,36 +12,26 @@
 //! output buffer drained with [`Protocol::read_output`]; work that produces output
 //! only starts when the buffer has room for it, so responses are never truncated.
 //!
-//! Driving it (firmware protocol task, simulator loop), all from one context:
-//! ```text
-//! boot:  (settings, st) = store.load_settings().await
-//!        p = Protocol::new(settings); if let Some(t) = st.message() { p.notify(t) }
-//!        p.machine_mut().set_coords(store.load_coords().await.0)
-//!        for i in 0..STARTUP_LINES { p.set_startup_line(i, &store.load_startup(i).await.0) }
-//! loop:  n = p.receive(&usb_rx[..], &mut planner, now_ms)   // drain only n bytes
-//!        p.poll(&mut planner, now_ms)            // also every ms or so when idle:
-//!                                                  // homing and debounce run on time
-//!        usb_tx.write(&buf[..p.read_output(&mut buf)])
-//!        p.set_inputs(levels, &mut planner, now_ms)          // on any input change
-//!        busy_led.set(p.machine().busy(&planner))
-//!        when !busy: save what take_settings_dirty / take_coords_dirty /
-//!                    take_startup_dirty report (flash writes stall the CPU)
-//! ```
-//! The e-stop interrupt stops the step engine itself before the protocol task
-//! learns of it through `set_inputs`.
+//! It is driven from one context, the protocol tick: [`crate::controller::Controller`]
+//! boots it from the settings store, hands it the host's bytes ([`Protocol::take_byte`]
+//! on each byte the host ring holds, until one is refused), polls it, moves its output
+//! to the host ring ([`Protocol::read_output`]), gives it the input levels
+//! ([`Protocol::set_inputs`]) and saves what its `take_*_dirty` report at rest. The
+//! e-stop interrupt stops the step engine itself before the tick learns of it through
+//! `set_inputs`. docs/architecture.md shows the whole path.
 
 mod commands;
 mod report;
 mod stream;
 
 use crate::decimal::{put_int, Sink};
+use crate::gcode::units::{Nm, NmPos};
 use crate::gcode::{LineCleaner, StartupLine, Status, LINE_MAX, STARTUP_LINES};
-use crate::machine::{Inputs, Machine, MotionControl};
+use crate::machine::{Inputs, Machine, MotionControl, Taken};
 use crate::motion::AXES;
 use crate::settings::Settings;
 use commands::Listing;
 use core::mem::MaybeUninit;
-use core::ptr::addr_of_mut;
 use heapless::{Deque, String, Vec};
 
 /// Receive buffer size advertised to character-counting senders (`Bf:` and `$I`).
@@ -53,6 +43,9 @@ pub const OUT_CAP: usize = 384;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
 const OUT_RESERVE: usize = 256;
+/// Most `?`s remembered while the output buffer is too full for their reports (a
+/// sender waits for each answer; this only bounds a flood).
+const STATUS_PENDING_MAX: u8 = 8;
 /// Status reports between repeated `WCO:` / `Ov:` fields.
 const REFRESH_EVERY: u8 = 10;
 
@@ -72,17 +65,22 @@ pub struct Protocol {
     /// The last line ended with CR: a following LF belongs to it.
     after_cr: bool,
     out: Deque<u8, OUT_CAP>,
-    status_requested: bool,
+    /// `?`s waiting for room in the output buffer (each gets its own report).
+    status_requested: u8,
     listing: Option<Listing>,
     lines_received: u32,
     reports: u8,
     startup: [StartupLine; STARTUP_LINES],
     startup_next: Option<usize>,
     startup_dirty: bool,
-    wco_shown: [f32; AXES],
+    /// The work offset last shown (`WCO:` repeats when it changes).
+    wco_shown: NmPos,
     truncated: u32,
     /// Leaving check mode resets; the welcome line follows the `ok`.
     pending_welcome: bool,
+    /// The last line's `ok` goes out once the queue has run empty (a G4 after its
+    /// dwell); no other line runs before it.
+    ok_when_idle: bool,
 }
 
 struct OutWriter<'a> {
@@ -114,58 +112,27 @@ impl Protocol {
         slot: &'a mut MaybeUninit<Protocol>,
         settings: &Settings,
     ) -> &'a mut Protocol {
-        // Lists every field (no `..`): a new field fails to compile here until it is
-        // written below too.
-        const _: fn(&Protocol) = |Protocol {
-                                      machine: _,
-                                      rx: _,
-                                      line: _,
-                                      cleaner: _,
-                                      line_too_long: _,
-                                      line_ready: _,
-                                      after_cr: _,
-                                      out: _,
-                                      status_requested: _,
-                                      listing: _,
-                                      lines_received: _,
-                                      reports: _,
-                                      startup: _,
-                                      startup_next: _,
-                                      startup_dirty: _,
-                                      wco_shown: _,
-                                      truncated: _,
-                                      pending_welcome: _,
-                                  }| {};
-        let p = slot.as_mut_ptr();
-        // SAFETY: `p` points to `slot`, valid for writes and properly aligned; each field
-        // is written once through a raw field pointer (the machine through its own
-        // `init_in`, on its field viewed as `MaybeUninit`, which has the same layout)
-        // and the list below names every field, so the protocol is initialised when
-        // `assume_init_mut` runs.
-        let proto = unsafe {
-            Machine::init_in(
-                &mut *addr_of_mut!((*p).machine).cast::<MaybeUninit<Machine>>(),
-                settings,
-            );
-            addr_of_mut!((*p).rx).write(Deque::new());
-            addr_of_mut!((*p).line).write(Vec::new());
-            addr_of_mut!((*p).cleaner).write(LineCleaner::new());
-            addr_of_mut!((*p).line_too_long).write(false);
-            addr_of_mut!((*p).line_ready).write(false);
-            addr_of_mut!((*p).after_cr).write(false);
-            addr_of_mut!((*p).out).write(Deque::new());
-            addr_of_mut!((*p).status_requested).write(false);
-            addr_of_mut!((*p).listing).write(None);
-            addr_of_mut!((*p).lines_received).write(0);
-            addr_of_mut!((*p).reports).write(0);
-            addr_of_mut!((*p).startup).write([String::new(), String::new()]);
-            addr_of_mut!((*p).startup_next).write(Some(0));
-            addr_of_mut!((*p).startup_dirty).write(false);
-            addr_of_mut!((*p).wco_shown).write([f32::NAN; AXES]);
-            addr_of_mut!((*p).truncated).write(0);
-            addr_of_mut!((*p).pending_welcome).write(false);
-            slot.assume_init_mut()
-        };
+        let proto = crate::init_fields!(slot => Protocol {
+            machine in |cell| Machine::init_in(cell, settings),
+            rx = Deque::new(),
+            line = Vec::new(),
+            cleaner = LineCleaner::new(),
+            line_too_long = false,
+            line_ready = false,
+            after_cr = false,
+            out = Deque::new(),
+            status_requested = 0,
+            listing = None,
+            lines_received = 0,
+            reports = 0,
+            startup = [String::new(), String::new()],
+            startup_next = Some(0),
+            startup_dirty = false,
+            wco_shown = [Nm::MIN; AXES],
+            truncated = 0,
+            pending_welcome = false,
+            ok_when_idle = false,
+        });
         proto.welcome();
         proto
     }
@@ -249,6 +216,19 @@ impl Protocol {
         self.say(&[b"[MSG:", text.as_bytes(), b"]"]);
     }
 
+    /// The host opened the port: what was said while nobody listened is dropped, and
+    /// the session starts with the welcome line (and how to unlock, in alarm), as a
+    /// Grbl board that the opening of its port resets.
+    pub fn start_session(&mut self) {
+        self.out.clear();
+        self.welcome();
+    }
+
+    /// Drop the waiting output (the port is closed: nobody reads it).
+    pub fn discard_output(&mut self) {
+        self.out.clear();
+    }
+
     /// Update the input levels (e-stop, limits, feed hold, cycle start).
     pub fn set_inputs<M: MotionControl>(&mut self, inputs: Inputs, m: &mut M, now_ms: u32) {
         self.machine.set_inputs(inputs, m, now_ms);
@@ -265,7 +245,7 @@ impl Protocol {
                 return;
             }
             self.flush_events();
-            if self.status_requested {
+            if self.status_requested > 0 {
                 self.status_report(m);
                 continue;
             }
@@ -277,6 +257,14 @@ impl Protocol {
                 if !self.run_startup(i, m, now_ms) {
                     return;
                 }
+                continue;
+            }
+            if self.ok_when_idle {
+                if !m.is_idle() {
+                    return;
+                }
+                self.ok_when_idle = false;
+                self.respond(Ok(()));
                 continue;
             }
             if !self.line_ready && !self.frame_line() {
@@ -310,7 +298,13 @@ impl Protocol {
                 if r.is_some() {
                     self.lines_received = line_no;
                 }
-                r
+                if r == Some(Ok(Taken::WhenIdle)) {
+                    self.flush_events();
+                    self.finish_frame();
+                    self.ok_when_idle = true;
+                    return true;
+                }
+                r.map(|r| r.map(|_| ()))
             }
         };
         let Some(r) = r else {

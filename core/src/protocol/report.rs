@@ -4,6 +4,7 @@
 
 use super::{OutWriter, Protocol, REFRESH_EVERY, RX_BUFFER_SIZE, WELCOME};
 use crate::decimal::{put_decimal, put_int, round_i32, write_fixed3, Sink};
+use crate::gcode::units::nm_to_mm;
 use crate::gcode::Status;
 use crate::machine::state::Event;
 use crate::machine::{MotionControl, RunState};
@@ -19,8 +20,14 @@ pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
 }
 
 impl Protocol {
+    /// The welcome line (power-up, reset, leaving check mode, the host opening the
+    /// port), followed, as in Grbl, by how to unlock whenever the machine starts in
+    /// alarm.
     pub(super) fn welcome(&mut self) {
         self.say(&[b"\r\n", WELCOME.as_bytes()]);
+        if self.machine.needs_unlock() {
+            self.say(&[b"[MSG:'$H'|'$X' to unlock]"]);
+        }
     }
 
     pub(super) fn respond(&mut self, r: Result<(), Status>) {
@@ -52,7 +59,7 @@ impl Protocol {
 
     /// `<State|MPos:...|FS:...|Bf:...|...>`.
     pub(super) fn status_report<M: MotionControl>(&mut self, m: &M) {
-        self.status_requested = false;
+        self.status_requested = self.status_requested.saturating_sub(1);
         self.reports = self.reports.wrapping_add(1);
         let reports = self.reports;
         // Each value is fetched where it is written: fewer live values to spill. The
@@ -78,7 +85,8 @@ impl Protocol {
         let scale = if settings.report_inches() { 25.4 } else { 1.0 };
         let mask = settings.status_mask();
         let mut pos = machine.machine_position(m);
-        let wco = machine.interp().work_offset();
+        let wco_nm = machine.interp().work_offset();
+        let wco = wco_nm.map(nm_to_mm);
         if mask & 1 != 0 {
             w.put(b"|MPos:");
         } else {
@@ -124,10 +132,10 @@ impl Protocol {
                 }
             }
         }
-        if reports % REFRESH_EVERY == 1 || wco != self.wco_shown {
+        if reports % REFRESH_EVERY == 1 || wco_nm != self.wco_shown {
             w.put(b"|WCO:");
             axis_triplet(&mut w, &wco, scale);
-            self.wco_shown = wco;
+            self.wco_shown = wco_nm;
         }
         if machine.take_overrides_changed() || reports % REFRESH_EVERY == 6 {
             let (fo, ro) = machine.overrides();

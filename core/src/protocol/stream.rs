@@ -4,7 +4,7 @@
 //! the framing of lines (CR, LF or CR LF end a line; the cleaner strips spaces and
 //! comments).
 
-use super::{Protocol, OUT_RESERVE, RX_BUFFER_SIZE};
+use super::{Protocol, OUT_RESERVE, RX_BUFFER_SIZE, STATUS_PENDING_MAX};
 use crate::machine::MotionControl;
 
 impl Protocol {
@@ -16,23 +16,29 @@ impl Protocol {
     /// Feed received bytes; returns how many were consumed. Bytes not consumed must be
     /// offered again later (the receive buffer was full).
     pub fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
-        let mut used = 0;
-        for &b in bytes {
-            if !self.realtime(b, m, now_ms) && self.rx.push_back(b).is_err() {
-                break;
-            }
-            used += 1;
-        }
-        used
+        bytes
+            .iter()
+            .take_while(|&&b| self.take_byte(b, m, now_ms))
+            .count()
+    }
+
+    /// One received byte: a real-time command acts at once, any other byte goes into
+    /// the receive buffer. False if the buffer is full: the byte was not taken and must
+    /// be offered again later (back-pressure).
+    pub fn take_byte<M: MotionControl>(&mut self, b: u8, m: &mut M, now_ms: u32) -> bool {
+        self.realtime(b, m, now_ms) || self.rx.push_back(b).is_ok()
     }
 
     /// Handle `b` if it is a real-time command.
     fn realtime<M: MotionControl>(&mut self, b: u8, m: &mut M, now_ms: u32) -> bool {
         match b {
+            // Every `?` gets its own report: now, or as soon as the output buffer has
+            // room (Grbl drops a `?` that comes before the last one was answered).
             b'?' => {
-                self.status_requested = true;
                 if self.room() >= OUT_RESERVE {
                     self.status_report(m);
+                } else if self.status_requested < STATUS_PENDING_MAX {
+                    self.status_requested += 1;
                 }
             }
             b'!' => self.machine.feed_hold(m),
@@ -57,6 +63,7 @@ impl Protocol {
         self.cleaner.reset();
         self.line_too_long = false;
         self.line_ready = false;
+        self.ok_when_idle = false;
         self.after_cr = false;
         self.listing = None;
         self.lines_received = 0;

@@ -40,7 +40,6 @@ const USED_BEFORE: [u32; 3] = [
 /// The bitmap number (in [`BODY_BITS`] and [`SMALL_BITS`]) of the character whose UTF-8
 /// encoding starts with byte `lead`: its rank among the [`USED`] characters, or '?''s
 /// for anything not stored (other ASCII, non-ASCII).
-#[inline(never)]
 pub fn glyph(lead: u8) -> u32 {
     let stored = |g: u32| {
         USED.get(g as usize / 32)

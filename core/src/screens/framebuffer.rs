@@ -84,8 +84,6 @@ impl FrameBuffer {
     }
 
     /// The 16 bytes of pixel row `y` (empty if out of range).
-    #[inline(never)]
-    // (A call: inlined at its callers it costs more flash.)
     pub fn row(&self, y: usize) -> &[u8] {
         self.buf
             .get(y * ROW_BYTES..(y + 1) * ROW_BYTES)

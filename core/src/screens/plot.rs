@@ -9,7 +9,7 @@
 
 use super::framebuffer::FrameBuffer;
 use super::widgets::{line, Px};
-use crate::hmi::fixed::round_i32;
+use crate::decimal::round_i32;
 use crate::hmi::job::Job;
 
 /// A screen box: x, y, width, height in pixels.

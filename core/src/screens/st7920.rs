@@ -21,6 +21,13 @@
 //! (2 address commands + 32 data bytes) = 1088 frames = 3264 SPI bytes = 92.8 ms, so a
 //! full refresh still fits a 10 Hz frame (100 ms). Typical drawing-screen updates are a
 //! small fraction of that (see the tests and the README).
+//!
+//! Why not the st7920 crate (0.4): it owns the SPI, the chip select and a reset pin
+//! through embedded-hal, keeps its own 1 KB buffer and sends it whole on `flush`
+//! (92.8 ms at this clock). Here the core's [`FrameBuffer`] tracks which words changed
+//! and this module encodes only those spans into plain bytes, so the partial update
+//! is tested on the host (the tests below, the snapshot tests) and the board only
+//! moves bytes. Its start-up sequence is the crate's (`board::lcd_init`).
 
 use super::framebuffer::{FrameBuffer, HEIGHT, ROW_WORDS};
 

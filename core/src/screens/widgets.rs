@@ -147,7 +147,7 @@ pub fn progress(fb: &mut FrameBuffer, x: i32, y: i32, w: i32, h: i32, frac: f32)
     } else {
         0.0
     };
-    let filled = crate::hmi::fixed::round_i32(inner_w as f32 * f);
+    let filled = crate::decimal::round_i32(inner_w as f32 * f);
     fb.fill(x + 2, y + 2, filled, h - 4, true);
     fb.fill(x + 2 + filled, y + 2, inner_w - filled, h - 4, false);
     // The 1-pixel gap between frame and bar.

@@ -307,13 +307,14 @@ impl Executor {
 mod tests {
     use super::*;
     use crate::interpolation::Tick;
-    use heapless::spsc::Queue;
+    use crate::stepper::queue::StepQueue;
+    use crate::stepper::CmdSink;
 
     /// A queue holding one command per `(axis deltas, wait)` pair, in order.
-    fn queue_of(cmds: &[([i8; 3], u32)]) -> Queue<StepCmd, 8> {
-        let mut q = Queue::new();
+    fn queue_of(cmds: &[([i8; 3], u32)]) -> StepQueue<8> {
+        let mut q = StepQueue::new();
         for &(d, w) in cmds {
-            q.enqueue(StepCmd::new(Tick::from_deltas(d), w)).unwrap();
+            assert_eq!(q.push_slice(&[StepCmd::new(Tick::from_deltas(d), w)]), 1);
         }
         q
     }

@@ -2,19 +2,35 @@
 //! commands ([`prep`]), an SPSC queue carries them, and the step-timer interrupt
 //! executes them ([`exec`]) with a handful of integer operations per step.
 //!
-//! Owns the command format shared by both sides and the queue traits that let the
-//! same code run on the firmware's lock-free `heapless::spsc` halves and on a plain
-//! queue in the simulator and tests; [`queue`] is the lean ring the firmware uses. [`phase4`] maps steps to the 28BYJ-48 half-step
-//! sequence; [`drive`] runs the whole chain in virtual time.
+//! Owns the command format shared by both sides, the step timer's constants that the
+//! board and the simulator share, and the queue traits; [`queue`] is the ring between
+//! preparation and interrupt (the firmware and the simulator run the same one),
+//! [`output`] the output configuration both derive from the settings, and [`phase4`]
+//! maps steps to the 28BYJ-48 half-step sequence.
 
-pub mod drive;
 pub mod exec;
+pub mod output;
 pub mod phase4;
 pub mod prep;
 pub mod queue;
 
 use crate::interpolation::Tick;
-use heapless::spsc::{Consumer, Producer, Queue};
+
+/// The step timer's clock: the board's TIM2 counts at the 72 MHz core clock, and the
+/// simulator's virtual timer at the same rate, so waits are the same numbers of ticks.
+pub const TIMER_HZ: u32 = 72_000_000;
+/// The longest timer period one reload can program: the board's 16-bit TIM2 is written
+/// with `reload - 1`, so 0x10000 ticks (910 us). Longer waits are split by the
+/// [`exec::Executor`]; the simulator uses the same limit so that it splits them alike.
+pub const MAX_RELOAD: u32 = 0x1_0000;
+
+/// The period the timer runs after the last queued command's steps, so that their
+/// pulses (`pulse_ticks` long) end before it stops; the board and the simulator stop
+/// their timer when it is over.
+#[inline(always)]
+pub fn tail_period(pulse_ticks: u32) -> u32 {
+    (2 * pulse_ticks + 16).min(MAX_RELOAD)
+}
 
 /// Largest wait one command can carry (24 bits of timer ticks).
 pub const MAX_WAIT: u32 = (1 << 24) - 1;
@@ -56,37 +72,6 @@ pub trait CmdSink {
 /// Where the interrupt takes commands from.
 pub trait CmdSource {
     fn pop(&mut self) -> Option<StepCmd>;
-}
-
-impl<const N: usize> CmdSink for Queue<StepCmd, N> {
-    fn room(&self) -> usize {
-        self.capacity() - self.len()
-    }
-    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
-        cmds.iter().take_while(|&&c| self.enqueue(c).is_ok()).count()
-    }
-}
-
-impl<const N: usize> CmdSource for Queue<StepCmd, N> {
-    fn pop(&mut self) -> Option<StepCmd> {
-        self.dequeue()
-    }
-}
-
-impl CmdSink for Producer<'_, StepCmd> {
-    fn room(&self) -> usize {
-        self.capacity() - self.len()
-    }
-    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
-        cmds.iter().take_while(|&&c| self.enqueue(c).is_ok()).count()
-    }
-}
-
-impl CmdSource for Consumer<'_, StepCmd> {
-    #[inline(always)]
-    fn pop(&mut self) -> Option<StepCmd> {
-        self.dequeue()
-    }
 }
 
 #[cfg(test)]

@@ -733,7 +733,12 @@ impl Prep {
     /// a run's tick beyond the profile's end). The commands used (pure waits first for
     /// a slow one; 0 when the block ended), `None` when nothing more can be done now
     /// (the queue is full, or a hold came to rest).
-    fn single(&mut self, cfg: &PlannerConfig, sink: &mut dyn CmdSink, room: usize) -> Option<usize> {
+    fn single(
+        &mut self,
+        cfg: &PlannerConfig,
+        sink: &mut dyn CmdSink,
+        room: usize,
+    ) -> Option<usize> {
         let hz = self.cfg.timer_hz as f32;
         let spm = [cfg.axes[X].steps_per_mm, cfg.axes[Y].steps_per_mm];
         let a = self.active.as_mut()?;
@@ -804,7 +809,10 @@ impl Prep {
         self.last_wait = push_waited(sink, tick, wait);
         self.t_last += wait;
         if let Some(c) = cursor {
-            a.at = Cursor { rate: a.at.rate, ..c };
+            a.at = Cursor {
+                rate: a.at.rate,
+                ..c
+            };
             self.v_last = c.v;
         }
         Some(needed)
@@ -976,7 +984,9 @@ impl Active {
         };
         // The next tick's phase, from the rate (near the end exactly: a curve's last
         // tick lands on the profile's end).
-        let near = self.phase_of(at.s + step_q).or_else(|| self.phase_of(self.ahead(1).0));
+        let near = self
+            .phase_of(at.s + step_q)
+            .or_else(|| self.phase_of(self.ahead(1).0));
         let Some(mut p) = near else {
             return false;
         };
@@ -1175,13 +1185,7 @@ impl Active {
     /// ([`Ramp`]): a line's up to the ramp's end; a curve's as far as its path position
     /// stays within the error bound of a cubic in the tick count. `None` for anything
     /// else (or a ramp so long that its times leave 2^30 timer ticks).
-    fn ramp_segment(
-        &self,
-        p: Phase,
-        eps: f32,
-        hz: f32,
-        t_last: u64,
-    ) -> Option<(Segment, Cursor)> {
+    fn ramp_segment(&self, p: Phase, eps: f32, hz: f32, t_last: u64) -> Option<(Segment, Cursor)> {
         let [acc, jerk, _] = self.prof.derivative_bounds(p);
         if p == Phase::Cruise || !(acc > 0.0) || jerk != 0.0 {
             return None;
@@ -1221,12 +1225,24 @@ impl Active {
                 _ => square(v1).0 + d,
             };
             let s1 = at.s + q * u64::from(n);
-            (n, w, if grows { dw } else { dw.wrapping_neg() }, 0, 0, s1, 1.0)
+            (
+                n,
+                w,
+                if grows { dw } else { dw.wrapping_neg() },
+                0,
+                0,
+                s1,
+                1.0,
+            )
         } else {
             // A curve: as many ticks as a cubic of the path position follows within
             // the bound (the time error is the position error over the speed).
             let to_end = from_q(end.saturating_sub(at.s)) / (at.rate * self.scale);
-            let mut n = self.run_left.min(MAX_SEGMENT).min(to_end.max(1.0) as u32).max(1);
+            let mut n = self
+                .run_left
+                .min(MAX_SEGMENT)
+                .min(to_end.max(1.0) as u32)
+                .max(1);
             let s4 = self.interp.fourth_bound(n) * self.scale;
             // Halving until the bound holds at the segment's slowest point (its start
             // when speeding up, its end when slowing down).
@@ -1276,14 +1292,22 @@ impl Active {
             // W along the segment: the Hermite cubic of the path position (run units),
             // scaled to W, as forward differences; the start is set back from the end
             // by their exact sum.
-            let kk = if grows { k * self.scale } else { -k * self.scale };
+            let kk = if grows {
+                k * self.scale
+            } else {
+                -k * self.scale
+            };
             let nf = n as f32;
             let inv = 1.0 / nf;
             let (m0, m1) = (at.rate, rate1);
             let c3 = ((m0 + m1) * nf - 2.0 * ds) * inv * inv * inv;
             let c2 = (3.0 * ds - (2.0 * m0 + m1) * nf) * inv * inv;
             let as_w = |v: f32| (kk * v) as i64;
-            let (e1, e2, e3) = (as_w(c3 + c2 + m0), as_w(6.0 * c3 + 2.0 * c2), as_w(6.0 * c3));
+            let (e1, e2, e3) = (
+                as_w(c3 + c2 + m0),
+                as_w(6.0 * c3 + 2.0 * c2),
+                as_w(6.0 * c3),
+            );
             let n64 = i64::from(n);
             let sum = n64 * e1 + n64 * (n64 - 1) / 2 * e2 + n64 * (n64 - 1) * (n64 - 2) / 6 * e3;
             (
@@ -1359,7 +1383,10 @@ impl Active {
         };
         let to_end = from_q(end.saturating_sub(at.s)) / per_tick;
         let by_time = MAX_SEGMENT_TICKS * at.v / (per_tick * hz);
-        let mut n = cap.min(to_end.max(1.0) as u32).min(by_time.max(1.0) as u32).max(1);
+        let mut n = cap
+            .min(to_end.max(1.0) as u32)
+            .min(by_time.max(1.0) as u32)
+            .max(1);
         let [acc, jerk, djerk] = self.prof.derivative_bounds(p);
         let [r1, r2, r3, r4] = self.interp.run_bounds(n);
         let sc = self.scale;
@@ -1558,7 +1585,12 @@ mod tests {
         };
         let g = geometry::of_move(&cfg, [0; 3], &mv).unwrap();
         let v_max = (feed / 60.0).min(g.speed_limit);
-        let ideal = Ideal::new(cfg.shape, f64::from(v_max), f64::from(g.accel), f64::from(g.length));
+        let ideal = Ideal::new(
+            cfg.shape,
+            f64::from(v_max),
+            f64::from(g.accel),
+            f64::from(g.length),
+        );
         let times = step_times(cfg, &mv);
         let ticks = target.iter().map(|v| v.unsigned_abs()).max().unwrap();
         assert_eq!(times.len(), ticks as usize);
@@ -1573,7 +1605,11 @@ mod tests {
 
     #[test]
     fn a_trapezoid_line_is_timed_to_the_timer_tick() {
-        let (err, _) = line_error(config(Shape::Trapezoid, 80.0, 3000.0, 500.0), [8000, 3000, 0], 3000.0);
+        let (err, _) = line_error(
+            config(Shape::Trapezoid, 80.0, 3000.0, 500.0),
+            [8000, 3000, 0],
+            3000.0,
+        );
         assert!(err < 0.3e-6, "{err}");
     }
 

@@ -11,7 +11,15 @@
 
 use super::{CmdSink, CmdSource, StepCmd};
 use crate::ring::{load_acquire, store_release};
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicU32, AtomicU8, Ordering};
+
+/// Step commands the queue holds (4 bytes each): 256 is several milliseconds of
+/// stepping at the highest rates, enough to ride out the lower-priority tasks. The
+/// firmware and the simulator both use this length.
+pub const STEP_QUEUE_LEN: usize = 256;
+
+/// The queue the firmware and the simulator run.
+pub type StepCmdQueue = StepQueue<STEP_QUEUE_LEN>;
 
 /// The ring. `N` must be a power of two (checked at compile time).
 pub struct StepQueue<const N: usize> {
@@ -20,6 +28,10 @@ pub struct StepQueue<const N: usize> {
     head: AtomicU32,
     /// Next slot the producer writes (written by the producer only).
     tail: AtomicU32,
+    /// Direction bits as of the last command pushed (bit i = axis i negative; written
+    /// by the producer only). Kept in the ring, not in the producer's end, so that an
+    /// owner of the whole ring (the simulator) may take the ends anew at each use.
+    dirs: AtomicU8,
 }
 
 impl<const N: usize> Default for StepQueue<N> {
@@ -43,12 +55,13 @@ impl<const N: usize> StepQueue<N> {
             slots: [const { AtomicU32::new(0) }; N],
             head: AtomicU32::new(0),
             tail: AtomicU32::new(0),
+            dirs: AtomicU8::new(0),
         }
     }
 
-    /// The two ends. Taking `&mut` once guarantees one producer and one consumer.
+    /// The two ends. Taking `&mut` guarantees one producer and one consumer.
     pub fn split(&mut self) -> (QueueTx<'_, N>, QueueRx<'_, N>) {
-        (QueueTx { q: self, dirs: 0 }, QueueRx { q: self })
+        (QueueTx { q: self }, QueueRx { q: self })
     }
 
     #[inline(always)]
@@ -62,8 +75,6 @@ impl<const N: usize> StepQueue<N> {
 /// The producer end (the preparation task).
 pub struct QueueTx<'a, const N: usize> {
     q: &'a StepQueue<N>,
-    /// Direction bits as of the last command pushed (bit i = axis i negative).
-    dirs: u8,
 }
 
 impl<const N: usize> QueueTx<'_, N> {
@@ -94,7 +105,7 @@ impl<const N: usize> QueueTx<'_, N> {
         let used = tail.wrapping_sub(load_acquire(&self.q.head));
         let free = (StepQueue::<N>::MASK + 1).saturating_sub(used) as usize;
         let taken = cmds.get(..free).unwrap_or(cmds);
-        let mut dirs = self.dirs;
+        let mut dirs = self.q.dirs.load(Ordering::Relaxed);
         let mut at = tail;
         for c in taken {
             let bits = (c.0 >> 24) as u8;
@@ -104,7 +115,7 @@ impl<const N: usize> QueueTx<'_, N> {
             self.q.slots[(at & StepQueue::<N>::MASK) as usize].store(word, Ordering::Relaxed);
             at = at.wrapping_add(1);
         }
-        self.dirs = dirs;
+        self.q.dirs.store(dirs, Ordering::Relaxed);
         store_release(&self.q.tail, at);
         taken.len()
     }
@@ -149,6 +160,35 @@ impl<const N: usize> CmdSource for QueueRx<'_, N> {
     #[inline(always)]
     fn pop(&mut self) -> Option<StepCmd> {
         QueueRx::pop(self)
+    }
+}
+
+/// The whole ring as a sink, for an owner of both ends on one thread (the simulator,
+/// tests): the same push as the producer's end.
+impl<const N: usize> CmdSink for StepQueue<N> {
+    fn room(&self) -> usize {
+        N - self.len() as usize
+    }
+    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
+        self.split().0.push_slice(cmds)
+    }
+}
+
+/// The whole ring as a source, likewise: the same pop as the interrupt's end.
+impl<const N: usize> CmdSource for StepQueue<N> {
+    fn pop(&mut self) -> Option<StepCmd> {
+        self.split().1.pop()
+    }
+}
+
+impl<const N: usize> StepQueue<N> {
+    /// Commands waiting.
+    pub fn queued(&self) -> usize {
+        self.len() as usize
+    }
+    /// Drops everything queued (abort), as the interrupt's end does.
+    pub fn clear(&mut self) {
+        self.split().1.clear();
     }
 }
 

@@ -3,6 +3,8 @@
 //! so switches can be hit part-way and holds stop between steps.
 #![allow(dead_code)]
 
+pub mod flash;
+
 use inkstep_core::machine::{MotionControl, QueueFull};
 use inkstep_core::motion::Command;
 use inkstep_core::motion::StepPos;

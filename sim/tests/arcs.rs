@@ -2,16 +2,16 @@
 //! (I/J offsets that are not whole steps, the R form with positive and negative R, inch
 //! units, full circles by I/J) go through the G-code interpreter and the DDA
 //! interpolator, and every step is measured against the programmed circle (computed
-//! here in f64 from the G-code's numbers) by the core's analysis: each must be on the
+//! here in f64 from the G-code's numbers) by the simulator's analysis: each must be on the
 //! grid point nearest the circle, at most 0.71 step from it (issue 14).
 
-use inkstep_core::analysis::{Analyzer, Ideal};
 use inkstep_core::gcode::parser::clean_line;
 use inkstep_core::gcode::Interpreter;
 use inkstep_core::interpolation::{Interpolate, Interpolator, Method};
 use inkstep_core::motion::Command;
 use inkstep_core::motion::Move;
 use inkstep_core::settings::Settings;
+use inkstep_sim::analysis::{Analyzer, Ideal};
 use proptest::prelude::*;
 
 /// The arc's move from running `lines` (a G0 to the start, then the arc).

@@ -1,11 +1,11 @@
 //! Step-trace analysis: job time, deviation of every step position from the ideal
 //! path, and the end position, the figures the motion benchmark compares with Grbl.
 //!
-//! Owns only measurement; it is fed step events one at a time (from the virtual-time
-//! driver, the simulator's trace file or anything else), keeps O(1) state besides the
-//! ideal path it is given, and allocates nothing, so the same code can run anywhere.
+//! Owns only measurement; it is fed step events one at a time (from a run or a trace
+//! file) and keeps O(1) state besides the ideal path it is given. Bench-only, so it
+//! lives in the simulator, not in the firmware's core.
 
-use crate::motion::{StepPos, AXES};
+use inkstep_core::motion::{StepPos, AXES};
 
 /// The ideal path, in mm.
 #[derive(Clone, Copy, Debug)]
@@ -20,11 +20,11 @@ impl Ideal<'_> {
     /// Distance in mm from `p` (mm) to the path.
     pub fn distance(&self, p: [f64; 2]) -> f64 {
         match *self {
-            Ideal::Circle { c, r } => (libm::hypot(p[0] - c[0], p[1] - c[1]) - r).abs(),
+            Ideal::Circle { c, r } => (f64::hypot(p[0] - c[0], p[1] - c[1]) - r).abs(),
             Ideal::Poly(pts) => {
                 let mut best = f64::INFINITY;
                 if let [only] = pts {
-                    return libm::hypot(p[0] - only[0], p[1] - only[1]);
+                    return f64::hypot(p[0] - only[0], p[1] - only[1]);
                 }
                 for w in pts.windows(2) {
                     best = best.min(seg_distance(w[0], w[1], p));
@@ -43,7 +43,7 @@ fn seg_distance(a: [f64; 2], b: [f64; 2], p: [f64; 2]) -> f64 {
     } else {
         0.0
     };
-    libm::hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
+    f64::hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy)
 }
 
 /// Figures of one run.
@@ -124,7 +124,7 @@ impl<'a> Analyzer<'a> {
             last_step: self.last_t,
             max_dev: self.max_dev,
             rms_dev: if self.events > 0 {
-                libm::sqrt(self.sum_sq / self.events as f64)
+                f64::sqrt(self.sum_sq / self.events as f64)
             } else {
                 0.0
             },
