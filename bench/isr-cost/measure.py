@@ -36,6 +36,9 @@ def main():
     ap.add_argument('elf')
     ap.add_argument('--json')
     ap.add_argument('--names', default='bench_isr,bench_prepare')
+    ap.add_argument('--callers-prog', type=int, help='with --callers: only in this program')
+    ap.add_argument('--callers', help='with --profile: count the callers of functions whose name contains this')
+    ap.add_argument('--profile', help='charge the instructions inside calls of NAME to the functions executing them')
     ap.add_argument('--split', action='append', default=['bench_isr=0x40000010:1:update:pend'],
                     help='NAME=REG:MASK:YES:NO charges NAME to NAME_YES if (*REG & MASK) at entry, else NAME_NO')
     args = ap.parse_args()
@@ -69,7 +72,35 @@ def main():
             split[name] = (int(reg, 0), int(mask, 0), f'{name}_{yes}', f'{name}_{no}')
     counted = [n for n in names if n not in split] + [x for v in split.values() for x in v[2:]]
     stats = {n: {'calls': 0, 'total': 0, 'worst': 0, 'hist': {}} for n in counted}
-    state = {'fn': None, 'ret': None, 'count': 0, 'all': 0}
+    state = {'fn': None, 'ret': None, 'count': 0, 'all': 0, 'prog': 0}
+    # Every call is also charged to the program running (the bench's BENCH_PROGRAM).
+    prog_addr = syms.get('BENCH_PROGRAM', (None, 0))[0]
+    per_prog = {}
+    # Function (symbol) containing each address, for --profile.
+    funcs = sorted((v[0] & ~1, v[0] & ~1 + 0, v[1], k) for k, v in syms.items() if v[1] > 0)
+    import bisect
+    starts = [f[0] for f in funcs]
+    prof = {}
+    prof_of = {}
+    # Calls of each function inside the profiled calls (blocks at its entry).
+    entry_of = {a: name for a, _, size, name in funcs}
+    entered = {}
+    callers = {}
+    prof_prog = {}
+    entered_prog = {}
+
+    def owner(addr):
+        i = bisect.bisect_right(starts, addr) - 1
+        while i >= 0:
+            a, _, size, name = funcs[i]
+            if a <= addr < a + size:
+                return name
+            i -= 1
+            if i >= 0 and funcs[i][0] + 4096 < addr:
+                break
+        # No sized symbol covers it: the nearest symbol before it.
+        near = max(((a, n) for n, (a, _) in syms.items() if (a & ~1) <= addr), default=(0, '?'))
+        return '~' + near[1]
 
     def on_block(uc, addr, size, _):
         n = block_len.get((addr, size))
@@ -85,6 +116,10 @@ def main():
             s['total'] += c
             s['worst'] = max(s['worst'], c)
             s['hist'][c] = s['hist'].get(c, 0) + 1
+            pp = per_prog.setdefault(state['prog'], {}).setdefault(state['fn'], {'calls': 0, 'total': 0, 'worst': 0})
+            pp['calls'] += 1
+            pp['total'] += c
+            pp['worst'] = max(pp['worst'], c)
             state['fn'] = None
         if state['fn'] is None and addr in entries:
             state['fn'] = entries[addr]
@@ -94,9 +129,28 @@ def main():
                 flags = struct.unpack('<I', bytes(uc.mem_read(reg, 4)))[0]
                 state['fn'] = yes if flags & bit else no
             state['ret'] = uc.reg_read(UC_ARM_REG_LR) & ~1
+            if prog_addr is not None:
+                state['prog'] = struct.unpack('<I', bytes(uc.mem_read(prog_addr, 4)))[0]
             state['count'] = 0
         if state['fn'] is not None:
             state['count'] += n
+            if args.profile and state['fn'].startswith(args.profile):
+                o = prof_of.get(addr)
+                if o is None:
+                    o = prof_of[addr] = owner(addr)
+                prof[o] = prof.get(o, 0) + n
+                pp = prof_prog.setdefault(state['prog'], {})
+                pp[o] = pp.get(o, 0) + n
+                if addr in entry_of:
+                    entered[entry_of[addr]] = entered.get(entry_of[addr], 0) + 1
+                    if args.callers and args.callers in entry_of[addr] and (args.callers_prog is None or state['prog'] == args.callers_prog):
+                        lr = uc.reg_read(UC_ARM_REG_LR) & ~1
+                        c = owner(lr)
+                        if c.startswith('OUTLINED'):
+                            c = c + ' (outlined)'
+                        callers[c] = callers.get(c, 0) + 1
+                    ep = entered_prog.setdefault(state['prog'], {})
+                    ep[entry_of[addr]] = ep.get(entry_of[addr], 0) + 1
 
     def on_intr(uc, intno, _):
         uc.emu_stop()  # bkpt: the bench's main is done
@@ -111,6 +165,7 @@ def main():
         mean = s['total'] / s['calls'] if s['calls'] else 0.0
         result['functions'][n] = {'calls': s['calls'], 'worst': s['worst'], 'mean': round(mean, 2), 'total': s['total'],
                                   'histogram': {str(k): v for k, v in sorted(s['hist'].items())}}
+    result['per_program'] = {str(k): v for k, v in sorted(per_prog.items())}
     if 'BENCH_RESULT' in syms:
         addr, size = syms['BENCH_RESULT']
         words = struct.unpack(f'<{size // 4}I', bytes(uc.mem_read(addr, size)))
@@ -118,6 +173,12 @@ def main():
     if 'BENCH_LOG' in syms:
         addr, size = syms['BENCH_LOG']
         result['protocol_log_tail'] = bytes(uc.mem_read(addr, size)).rstrip(b'\0').decode('ascii', 'replace')
+    if args.profile:
+        result['profile'] = dict(sorted(prof.items(), key=lambda kv: -kv[1]))
+        result['profile_calls'] = entered
+        result['callers'] = dict(sorted(callers.items(), key=lambda kv: -kv[1]))
+        result['profile_calls_by_program'] = {str(k): v for k, v in entered_prog.items()}
+        result['profile_by_program'] = {str(k): dict(sorted(v.items(), key=lambda kv: -kv[1])) for k, v in prof_prog.items()}
     if args.json:
         with open(args.json, 'w') as f:
             json.dump(result, f, indent=1)

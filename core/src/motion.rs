@@ -44,6 +44,17 @@ pub enum Path {
         ccw: bool,
         turns: u16,
     },
+    /// A circular arc in the XY plane around a centre that may lie between steps (G-code
+    /// I/J in mm, the R form, inch units): `from` is the exact start and `center` the
+    /// centre, absolute, in 1/256 step; the arc runs on the circle around `center`
+    /// through `from`, to `target` (the exact end rounded). `turns` as for [`Path::Arc`].
+    /// Every step lands on the grid point nearest this circle.
+    ArcFine {
+        from: [i32; 2],
+        center: [i32; 2],
+        ccw: bool,
+        turns: u16,
+    },
     /// An axis-aligned elliptical arc in the XY plane: semi-axes `a` (X) and `b` (Y) in
     /// steps, `center` relative to the start point (which must lie on the ellipse).
     Ellipse {

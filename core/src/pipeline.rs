@@ -42,30 +42,20 @@ pub trait StepSide {
 
 /// Non-move commands waiting behind moves, and moves behind them.
 const PENDING: usize = 32;
-/// How far ahead of the interrupt steps are prepared, seconds. Prepared steps are
-/// committed: what a block arriving later changes only applies to steps not yet
-/// prepared. Measured on the sine benchmark streamed line by line: 3.375 s with the
-/// whole 256-step queue prepared, 3.271 s at 20 ms, 3.231 s at 10 ms, 3.220 s at 5 ms
-/// (Grbl 3.224 s). 5 ms leaves the firmware's 1 ms preparation task a 5x margin.
-const HORIZON_S: f32 = 0.005;
+/// How far ahead of the interrupt steps are prepared, in 1/1000 of the timer's
+/// frequency (milliseconds). Prepared steps are committed: what a block arriving later
+/// changes only applies to steps not yet prepared. Measured on the sine benchmark
+/// streamed line by line: 3.375 s with the whole 256-step queue prepared, 3.271 s at
+/// 20 ms, 3.231 s at 10 ms, 3.220 s at 5 ms (Grbl 3.224 s). 5 ms leaves the firmware's
+/// 1 ms preparation task a 5x margin (the queue's length caps it at high step rates).
+const HORIZON_MS: u32 = 5;
 /// Fewest steps kept prepared (starting from rest, and at low speed).
 const MIN_AHEAD: usize = 16;
-
-/// A sink that takes at most `left` more commands.
-struct Bounded<'a, K: CmdSink> {
-    inner: &'a mut K,
-    left: usize,
-}
-
-impl<K: CmdSink> CmdSink for Bounded<'_, K> {
-    fn has_room(&self) -> bool {
-        self.left > 0 && self.inner.has_room()
-    }
-    fn push(&mut self, c: StepCmd) -> bool {
-        self.left = self.left.saturating_sub(1);
-        self.inner.push(c)
-    }
-}
+/// Longest wait at rest for a second move before the first starts, in calls of
+/// [`Pipeline::fill`] (milliseconds in the firmware). Measured on the zigzag benchmark
+/// (1,000 moves of 4 steps, streamed line by line): without it the first two moves
+/// stop at their ends (the planner had nothing behind them yet).
+const START_GATHER_MS: u8 = 8;
 
 /// The planner's configuration from the machine settings.
 pub fn planner_config(s: &Settings) -> PlannerConfig {
@@ -104,6 +94,8 @@ pub struct Pipeline<S: StepSide> {
     pen_down: bool,
     pen_lift_ms: u32,
     held: bool,
+    /// Calls of [`Pipeline::fill`] spent waiting at rest for a second move.
+    gather: u8,
 }
 
 impl<S: StepSide> Pipeline<S> {
@@ -133,6 +125,7 @@ impl<S: StepSide> Pipeline<S> {
             pen_down = false,
             pen_lift_ms = s.pen_lift_ms(),
             held = false,
+            gather = 0,
         })
     }
 
@@ -177,20 +170,35 @@ impl<S: StepSide> Pipeline<S> {
             // Hold asked between blocks: start nothing new until resumed.
             return;
         }
+        let horizon = self.timer_hz / 1000 * HORIZON_MS;
+        let queued = self.side.queued();
+        if queued == 0
+            && self.prep.is_idle_block()
+            && self.planner.len() == 1
+            && self.pending.is_empty()
+        {
+            // At rest with one move planned: the next ones of a stream are usually a
+            // millisecond or two behind it. Waiting that long for them (at most
+            // START_GATHER_MS) lets the first move run into the second instead of
+            // stopping at its end; the job still starts with its first step.
+            if self.gather < START_GATHER_MS {
+                self.gather += 1;
+                return;
+            }
+        }
+        self.gather = 0;
+        if queued > 0 && 2 * queued >= self.prep.commands_for(horizon).max(MIN_AHEAD) {
+            // More than half the horizon is still queued: refill later, in one go.
+            return;
+        }
         loop {
-            let cfg = self.planner.config();
-            let spmm = cfg.axes.iter().fold(0.0f32, |m, a| m.max(a.steps_per_mm));
-            let ahead = ((self.prep.speed() * spmm * HORIZON_S) as usize).max(MIN_AHEAD);
+            let ahead = self.prep.commands_for(horizon).max(MIN_AHEAD);
             let left = ahead.saturating_sub(self.side.queued());
-            let mut sink = Bounded {
-                inner: self.side.sink(),
-                left,
-            };
-            self.prep.fill(&mut self.planner, &mut sink);
+            self.prep.fill(&mut self.planner, self.side.sink(), left);
             if self.wait_left > 0 {
-                while self.wait_left > 0 && self.side.sink().has_room() {
+                while self.wait_left > 0 && self.side.sink().room() > 0 {
                     let w = self.wait_left.min(u64::from(MAX_WAIT)) as u32;
-                    self.side.sink().push(StepCmd::new(Tick(0), w));
+                    self.side.sink().push_slice(&[StepCmd::new(Tick(0), w)]);
                     self.wait_left -= u64::from(w);
                 }
                 if self.wait_left > 0 {
@@ -238,21 +246,34 @@ impl<S: StepSide> Pipeline<S> {
         }
     }
 
-    /// Hands a move to the planner. A fine line whose exact start is not where the
-    /// machine will be (the interpreter's position went stale, e.g. after keypad moves)
-    /// runs as a plain line from where the machine really is.
+    /// Hands a move to the planner. A fine line or arc whose exact start is not where
+    /// the machine will be (the interpreter's position went stale, e.g. after keypad
+    /// moves) runs from where the machine really is: a plain line, or the arc around
+    /// the same centre (rounded to a step).
     fn plan(&mut self, mv: &Move) -> Result<(), PlanError> {
-        if let Path::LineFine { from, .. } = mv.path {
-            let start = self.planner.end_position();
-            let round = |q: i32| q.saturating_add(128).div_euclid(256);
-            if (round(from[0]) - start[0]).abs() > 1 || (round(from[1]) - start[1]).abs() > 1 {
-                return self.planner.push(&Move {
-                    path: Path::Line,
-                    ..*mv
-                });
-            }
-        }
-        self.planner.push(mv)
+        let start = self.planner.end_position();
+        let round = |q: i32| q.saturating_add(128).div_euclid(256);
+        let stale = |from: [i32; 2]| {
+            (round(from[0]) - start[0]).abs() > 1 || (round(from[1]) - start[1]).abs() > 1
+        };
+        let path = match mv.path {
+            Path::LineFine { from, .. } if stale(from) => Path::Line,
+            Path::ArcFine {
+                from,
+                center,
+                ccw,
+                turns,
+            } if stale(from) => Path::Arc {
+                center: [
+                    round(center[0]).wrapping_sub(start[0]),
+                    round(center[1]).wrapping_sub(start[1]),
+                ],
+                ccw,
+                turns,
+            },
+            path => path,
+        };
+        self.planner.push(&Move { path, ..*mv })
     }
 
     fn executing(&self) -> bool {
@@ -398,10 +419,10 @@ mod tests {
         let mut fastest = u32::MAX;
         for _ in 0..1_000_000 {
             pipeline.fill();
-            let side = pipeline.side_mut();
-            if side.queue.queued() == 0 {
+            if MotionControl::queued(pipeline) == 0 {
                 break;
             }
+            let side = pipeline.side_mut();
             while let Some(c) = side.queue.pop() {
                 c.tick().apply(&mut side.pos);
                 if c.tick().steps() & (1 << axis) != 0 {

@@ -45,8 +45,8 @@ mod app {
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920};
     use inkstep_core::stepper::exec::Executor;
     use inkstep_core::stepper::queue::StepCmdQueue;
+    use inkstep_core::stepper::StepCmd;
     use inkstep_core::stepper::MAX_RELOAD;
-    use inkstep_core::stepper::{CmdSink, StepCmd};
     use rtic_monotonics::systick::prelude::*;
 
     systick_monotonic!(Mono, 1_000);
@@ -155,7 +155,7 @@ mod app {
         loop {
             if let Some([dx, dy]) = cx.shared.jog.lock(|j| *j) {
                 let tx = &mut *cx.local.steps_tx;
-                while tx.len() < 4 && tx.has_room() {
+                while tx.len() < 4 && !tx.is_full() {
                     let step = u8::from(dx != 0) | (u8::from(dy != 0) << 1);
                     let neg = u8::from(dx < 0) | (u8::from(dy < 0) << 1);
                     tx.push(StepCmd::new(Tick(step | (neg << 3)), JOG_WAIT_TICKS));

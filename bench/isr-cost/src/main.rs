@@ -25,17 +25,23 @@ use inkstep_core::stepper::queue::StepCmdQueue;
 use inkstep_core::stepper::MAX_RELOAD;
 use stm32f1xx_hal::{gpio::PinState, pac, prelude::*};
 
-const PROGRAMS: [&[u8]; 4] = [
+const PROGRAMS: [&[u8]; 5] = [
     include_bytes!("../../star.nc"),
     include_bytes!("../../circle.nc"),
     include_bytes!("../../sine.nc"),
     include_bytes!("../../spiral.nc"),
+    include_bytes!("../../fast.nc"),
 ];
 
-/// Per program: step events, interrupts, final X, final Y; then per program the steps
-/// summed over the axes (read by measure.py).
+/// Per program: step events, interrupts, final X, final Y, the steps summed over the
+/// axes, the interrupts that found the queue empty before the job was done, and the
+/// virtual milliseconds the program took (read by measure.py).
 #[no_mangle]
-pub static mut BENCH_RESULT: [u32; 20] = [0; 20];
+pub static mut BENCH_RESULT: [[u32; 8]; PROGRAMS.len()] = [[0; 8]; PROGRAMS.len()];
+
+/// The program running now (measure.py charges every call to it).
+#[no_mangle]
+pub static mut BENCH_PROGRAM: u32 = 0;
 
 /// The protocol's replies (last 1 KB), for measure.py to show when a program fails.
 #[no_mangle]
@@ -58,6 +64,7 @@ fn log(bytes: &[u8]) {
 
 const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
 const UIF: u32 = 1;
+const TIM2_ARR: *const u32 = 0x4000_002C as *const u32;
 
 /// The TIM2 interrupt handler exactly as RTIC generates it for the firmware's priority-6
 /// `step` task (`rtic::export::run` saves and restores BASEPRI around the body), compiled
@@ -94,6 +101,12 @@ pub extern "C" fn bench_prepare(pipeline: &mut Pipeline<BoardSide>) {
     pipeline.fill();
 }
 
+/// The period the step interrupt just programmed (TIM2 ARR + 1), timer ticks.
+fn period() -> u64 {
+    // SAFETY: the emulator maps the timer registers as plain memory.
+    u64::from(unsafe { core::ptr::read_volatile(TIM2_ARR) }) + 1
+}
+
 fn raise(flags: u32) {
     // SAFETY: the emulator maps the timer registers as plain memory.
     unsafe { core::ptr::write_volatile(TIM2_SR, flags) }
@@ -128,7 +141,8 @@ fn main() -> ! {
     let settings = Settings::default();
     steps::set_output_config(&OutputConfig::from(&settings));
 
-    static mut QUEUES: [StepCmdQueue; 4] = [const { StepCmdQueue::new() }; 4];
+    static mut QUEUES: [StepCmdQueue; PROGRAMS.len()] =
+        [const { StepCmdQueue::new() }; PROGRAMS.len()];
     let prep = PrepConfig {
         timer_hz: board::STEP_TIMER_HZ,
         ..PrepConfig::default()
@@ -145,11 +159,34 @@ fn main() -> ! {
         let mut out = steps::install(Executor::new([0; 3], MAX_RELOAD), rx, pins, tim);
         let mut pipeline = Pipeline::new(&settings, prep, BoardSide { tx });
         let mut ctl = Controller::new(settings.clone(), 0);
-        let (mut sent, mut ticks, mut events, mut irqs) = (0usize, 0u64, 0u32, 0u32);
+        // SAFETY: single-threaded bench; measure.py charges each call to this program.
+        unsafe { core::ptr::write_volatile(core::ptr::addr_of_mut!(BENCH_PROGRAM), p as u32) };
+        let (mut sent, mut events, mut irqs, mut dry) = (0usize, 0u32, 0u32, 0u32);
         let mut axis_steps = 0u32;
         let mut sink = [0u8; 128];
+        // Virtual time in timer ticks: the step interrupts happen when the periods the
+        // interrupt programs end; the protocol and the preparation run every
+        // millisecond, as the firmware's SysTick pends them.
+        let (mut next_ms, mut next_irq) = (0u64, None::<u64>);
         loop {
-            let now = (ticks / 72_000) as u32;
+            if let Some(at) = next_irq.filter(|&at| at < next_ms) {
+                let before = steps::position();
+                bench_tick(&mut out);
+                irqs += 1;
+                let after = steps::position();
+                if after != before {
+                    events += 1;
+                    axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
+                }
+                next_irq = out.timer.is_running().then(|| at + period());
+                if next_irq.is_none() && !inkstep_core::machine::MotionControl::is_idle(&pipeline) {
+                    // The queue ran dry while the job still had steps to make.
+                    dry += 1;
+                }
+                continue;
+            }
+            let now = (next_ms / 72_000) as u32;
+            next_ms += 72_000;
             if sent < prog.len() {
                 sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut pipeline, now);
             }
@@ -162,29 +199,17 @@ fn main() -> ! {
             }
             ctl.poll(&mut pipeline, now);
             bench_prepare(&mut pipeline);
-            // Start the timer as the firmware's kick does (a pend with no flags).
-            bench_kick(&mut out);
-            // Run interrupts until the prepared commands are used up.
-            while out.timer.is_running() {
-                let before = steps::position();
-                bench_tick(&mut out);
-                irqs += 1;
-                let after = steps::position();
-                if after != before {
-                    events += 1;
-                    axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
-                }
-                ticks += 2000;
-                if pipeline.side().queued() < 32 {
-                    break;
-                }
+            if next_irq.is_none() && pipeline.side().queued() > 0 {
+                // Start the timer as the firmware's kick does (a pend with no flags).
+                bench_kick(&mut out);
+                next_irq = out.timer.is_running().then(|| next_ms - 72_000 + period());
             }
             // Done when every byte was taken AND executed (nothing left in the protocol's
             // receive buffer), and the machine is at rest.
             let drained = ctl.protocol().rx_free() == inkstep_core::protocol::RX_BUFFER_SIZE;
             let done = sent >= prog.len()
                 && drained
-                && !out.timer.is_running()
+                && next_irq.is_none()
                 && pipeline.side().queued() == 0;
             if done && inkstep_core::machine::MotionControl::is_idle(&pipeline) {
                 break;
@@ -195,12 +220,17 @@ fn main() -> ! {
         timer = Some(out.timer);
         // SAFETY: single-threaded bench; measure.py reads this after the run.
         unsafe {
-            let r = &mut *core::ptr::addr_of_mut!(BENCH_RESULT);
-            r[4 * p] = events;
-            r[4 * p + 1] = irqs;
-            r[4 * p + 2] = pos[0] as u32;
-            r[4 * p + 3] = pos[1] as u32;
-            r[16 + p] = axis_steps;
+            let r = &mut (*core::ptr::addr_of_mut!(BENCH_RESULT))[p];
+            *r = [
+                events,
+                irqs,
+                pos[0] as u32,
+                pos[1] as u32,
+                axis_steps,
+                dry,
+                (next_ms / 72_000) as u32,
+                0,
+            ];
         }
     }
     loop {

@@ -4,7 +4,9 @@
 //! and the points that bound its extent for the travel checks.
 
 use super::parser::Block;
-use super::units::{mm_to_nm, nm_to_mm, nm_to_steps, value_to_nm, Nm, NmPos, Reach};
+use super::units::{
+    mm_to_nm, nm_to_fine_steps, nm_to_mm, nm_to_steps, value_to_nm, Nm, NmPos, Reach,
+};
 use super::Status;
 use crate::fmath;
 use crate::motion::Path;
@@ -121,8 +123,11 @@ pub(super) fn arc_geometry(
 }
 
 /// The arc in step space: a circle if X and Y have the same resolution, else the
-/// ellipse the circle becomes. The caller has checked that start and extremes are in
-/// range, so the conversions here do not fail (0 if they did).
+/// ellipse the circle becomes. A circle keeps its exact start and centre in 1/256 step
+/// (`Path::ArcFine`: every step on the grid point nearest the programmed circle, wherever
+/// its centre falls between steps); beyond that range (2^22 steps) the centre is rounded
+/// to a step. The caller has checked that start and extremes are in range, so the
+/// conversions to whole steps do not fail (0 if they did).
 pub(super) fn arc_path(g: &ArcGeom, start: &NmPos, ccw: bool, s: &Settings) -> Path {
     let sx = s.steps_per_mm(0);
     let sy = s.steps_per_mm(1);
@@ -131,20 +136,33 @@ pub(super) fn arc_path(g: &ArcGeom, start: &NmPos, ccw: bool, s: &Settings) -> P
         steps(g.center[0], sx).saturating_sub(steps(start[0], sx)),
         steps(g.center[1], sy).saturating_sub(steps(start[1], sy)),
     ];
-    if sx == sy {
-        Path::Arc {
-            center,
-            ccw,
-            turns: 0,
-        }
-    } else {
+    if sx != sy {
         let radius = mm_to_nm(g.radius);
-        Path::Ellipse {
+        return Path::Ellipse {
             center,
             a: steps(radius, sx),
             b: steps(radius, sy),
             ccw,
-        }
+        };
+    }
+    let fine = |nm| nm_to_fine_steps(nm, sx);
+    match (
+        fine(start[0]),
+        fine(start[1]),
+        fine(g.center[0]),
+        fine(g.center[1]),
+    ) {
+        (Some(fx), Some(fy), Some(cx), Some(cy)) => Path::ArcFine {
+            from: [fx, fy],
+            center: [cx, cy],
+            ccw,
+            turns: 0,
+        },
+        _ => Path::Arc {
+            center,
+            ccw,
+            turns: 0,
+        },
     }
 }
 

@@ -943,6 +943,17 @@ mod tests {
         assert_eq!(modal("G61 G17 G91.1 G40 G49 G94").motion, MotionMode::Rapid);
     }
 
+    /// The exact start and centre of an arc, in 1/256 step, and its direction.
+    fn fine_arc(m: &Move) -> ([i32; 2], [i32; 2], bool) {
+        let Path::ArcFine {
+            from, center, ccw, ..
+        } = m.path
+        else {
+            panic!("not a fine arc: {:?}", m.path)
+        };
+        (from, center, ccw)
+    }
+
     #[test]
     fn arcs_in_ij_and_r_form_with_cam_tolerance() {
         let s = Settings::default();
@@ -950,35 +961,18 @@ mod tests {
         let o = run(&mut it, &s, "G2 X10 Y0 I5 J0 F300").unwrap();
         let m = moves(&o)[0];
         assert_eq!(m.target, [800, 0, 0]);
-        assert_eq!(
-            m.path,
-            Path::Arc {
-                center: [400, 0],
-                ccw: false,
-                turns: 0
-            }
-        );
+        // Exact start and centre in 1/256 step (5 mm = 400 steps).
+        assert_eq!(fine_arc(&m), ([0, 0], [102_400, 0], false));
         // Negative R: the long way round (centre on the other side).
         let mut it = Interpreter::new();
         let short = moves(&run(&mut it, &s, "G2 X10 Y0 R7.0710678 F300").unwrap())[0];
         let mut it = Interpreter::new();
         let long = moves(&run(&mut it, &s, "G2 X10 Y0 R-7.0710678 F300").unwrap())[0];
-        assert_eq!(
-            short.path,
-            Path::Arc {
-                center: [400, -400],
-                ccw: false,
-                turns: 0
-            }
-        );
-        assert_eq!(
-            long.path,
-            Path::Arc {
-                center: [400, 400],
-                ccw: false,
-                turns: 0
-            }
-        );
+        let near = |c: [i32; 2], want: [i32; 2]| {
+            (c[0] - want[0]).abs() <= 2 && (c[1] - want[1]).abs() <= 2
+        };
+        assert!(near(fine_arc(&short).1, [102_400, -102_400]), "{short:?}");
+        assert!(near(fine_arc(&long).1, [102_400, 102_400]), "{long:?}");
         // End point 0.004 mm off the circle (CAM rounding) is accepted, 0.1 mm is not.
         let mut it = Interpreter::new();
         assert!(run(&mut it, &s, "G3 X10.004 Y0 I5 F300").is_ok());
@@ -991,13 +985,14 @@ mod tests {
         let mut it = Interpreter::new();
         let full = moves(&run(&mut it, &s, "G3 X0 Y0 I5 F300").unwrap())[0];
         assert_eq!(full.target, [0, 0, 0]);
-        assert_eq!(
-            full.path,
-            Path::Arc {
-                center: [400, 0],
-                ccw: true,
-                turns: 0
-            }
+        assert_eq!(fine_arc(&full), ([0, 0], [102_400, 0], true));
+        // Inch units and offsets between steps: the centre keeps its fraction of a step.
+        let mut it = Interpreter::new();
+        let inch = moves(&run(&mut it, &s, "G20 G3 X0 Y0 I0.123 J0.0457 F10").unwrap())[0];
+        let q = |mm: f32| (mm * 80.0 * 256.0).round() as i32;
+        assert!(
+            near(fine_arc(&inch).1, [q(0.123 * 25.4), q(0.0457 * 25.4)]),
+            "{inch:?}"
         );
     }
 
@@ -1038,19 +1033,15 @@ mod tests {
             let line = std::format!("G{} X{:.4} Y{:.4} R{}{:.4} F100", if ccw { 3 } else { 2 }, x0 + dx, y0 + dy, if neg { "-" } else { "" }, r);
             let o = run(&mut it, &s, &line).unwrap();
             let m = moves(&o)[0];
-            let Path::Arc { center, ccw: dir, .. } = m.path else { panic!("not an arc") };
+            let (_, center, dir) = fine_arc(&m);
             proptest::prop_assert_eq!(dir, ccw);
             let spm = s.steps_per_mm(0);
-            // The centre is relative to the start's step position (the rounded start),
-            // which is where the machine is when the arc begins.
-            let c = [
-                (libm::roundf(start[0] * spm) + center[0] as f32) / spm,
-                (libm::roundf(start[1] * spm) + center[1] as f32) / spm,
-            ];
+            // The exact centre, in 1/256 step.
+            let c = [center[0] as f32 / (256.0 * spm), center[1] as f32 / (256.0 * spm)];
             let end = it.position().map(nm_to_mm);
             let r0 = libm::hypotf(start[0] - c[0], start[1] - c[1]);
             let r1 = libm::hypotf(end[0] - c[0], end[1] - c[1]);
-            proptest::prop_assert!((r0 - r1).abs() < 2.0 / spm, "r0 {} r1 {}", r0, r1);
+            proptest::prop_assert!((r0 - r1).abs() < 0.1 / spm, "r0 {} r1 {}", r0, r1);
             // Which side: cross product of chord and centre offset.
             let cross = dx * (c[1] - start[1]) - dy * (c[0] - start[0]);
             let short = (cross > 0.0) == ccw; // centre left of travel for a short CCW arc
@@ -1060,20 +1051,27 @@ mod tests {
         }
     }
 
-    /// A near-semicircle whose centre lies close to the chord: the centre must be the
-    /// grid point nearest the exact one, relative to the start's step position.
+    /// A near-semicircle whose centre lies close to the chord (where the R form is most
+    /// sensitive): the centre is the exact one, to the 1/256 step.
     #[test]
-    fn r_form_near_semicircle_centre_is_the_nearest_grid_point() {
+    fn r_form_near_semicircle_centre_is_exact() {
         let s = Settings::default();
         let mut it = Interpreter::new();
         run(&mut it, &s, "G0 X40.4444 Y-47.9680").unwrap();
         let o = run(&mut it, &s, "G2 X84.4295 Y-30.6952 R24.8752 F100").unwrap();
-        let Path::Arc { center, .. } = moves(&o)[0].path else {
-            panic!("not an arc")
-        };
-        // Exact centre (65.28043, -46.57250) mm = (5222.43, -3725.80) steps, nearest grid
-        // point (5222, -3726); the start is at step (3236, -3837).
-        assert_eq!(center, [5222 - 3236, -3726 + 3837]);
+        let (from, center, _) = fine_arc(&moves(&o)[0]);
+        // Exact centre (65.28043, -46.57250) mm = (5222.43, -3725.80) steps.
+        assert!(
+            (center[0] - 1_336_943).abs() <= 64 && (center[1] + 953_805).abs() <= 64,
+            "{center:?}"
+        );
+        assert_eq!(
+            from,
+            [
+                (40.4444f32 * 80.0 * 256.0).round() as i32,
+                (-47.968f32 * 80.0 * 256.0).round() as i32
+            ]
+        );
     }
 
     #[test]

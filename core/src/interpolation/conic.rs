@@ -1,6 +1,6 @@
-//! Circles, circular arcs, ellipses and elliptical arcs (axis-aligned), traced on the
-//! implicit function F(x, y) = A x^2 + B y^2 - C relative to the centre
-//! (circle: A = B = 1, C = R^2; ellipse: A = b^2, B = a^2, C = a^2 b^2).
+//! Ellipses and elliptical arcs (axis-aligned), traced on the implicit function
+//! F(x, y) = A x^2 + B y^2 - C relative to the centre (A = b^2, B = a^2, C = a^2 b^2).
+//! Circles have their own exact interpolator around any centre ([`super::circle`]).
 //!
 //! The feed direction at each point comes from the tangent (-B y, A x) (CCW) or its
 //! negation (CW), which replaces the lab report's per-quadrant direction table and works
@@ -12,8 +12,8 @@
 //!   lowers F, otherwise the one that raises it. Within 1 step of the curve.
 //!
 //! The move ends when the trace reaches the target, or passes the ray from the centre
-//! through the target, for the required number of times (1 + extra turns; a full
-//! circle is target == start); if it passes the ray without meeting the target, a short
+//! through the target (a full ellipse is target == start); if it passes the ray
+//! without meeting the target, a short
 //! straight tail goes to the integer target, so the end is exact even when rounding
 //! put the target a step off the traced curve. A tick budget bounds every
 //! trace, so hostile input cannot loop forever.
@@ -22,11 +22,9 @@ use super::line::Line;
 use super::{sgn, tick_xy, InterpError, Interpolate, Method, Tick};
 use crate::motion::{StepPos, X, Y};
 
-/// Largest |coordinate| relative to the centre and largest semi-axis for ellipses, so
-/// that A x^2 + B y^2 and C fit comfortably in i64 (2^15^4 = 2^60).
+/// Largest |coordinate| relative to the centre and largest semi-axis, so that
+/// A x^2 + B y^2 and C fit comfortably in i64 (2^15^4 = 2^60).
 const ELLIPSE_LIMIT: i64 = 1 << 15;
-/// Largest radius for circles (R^2 well inside i64).
-const CIRCLE_LIMIT: i64 = 1 << 29;
 
 /// A conic arc interpolator.
 #[derive(Clone, Debug)]
@@ -42,8 +40,6 @@ pub struct Conic {
     ty: i64,
     ccw: bool,
     method: Method,
-    /// Ray crossings still needed before the end.
-    crossings: u32,
     budget: u64,
     /// Final straight piece to the exact target once the trace has arrived.
     tail: Option<Line>,
@@ -55,27 +51,6 @@ pub struct Conic {
 }
 
 impl Conic {
-    /// Circular arc from `start` around `start + center` to `target`.
-    pub fn circle(
-        start: StepPos,
-        center: [i32; 2],
-        target: StepPos,
-        ccw: bool,
-        turns: u16,
-        method: Method,
-    ) -> Result<Self, InterpError> {
-        let x = -i64::from(center[0]);
-        let y = -i64::from(center[1]);
-        if x == 0 && y == 0 {
-            return Err(InterpError::Degenerate);
-        }
-        if x.abs() > CIRCLE_LIMIT || y.abs() > CIRCLE_LIMIT {
-            return Err(InterpError::TooLarge);
-        }
-        let c = x * x + y * y;
-        Self::build(start, center, target, 1, 1, c, ccw, turns, method)
-    }
-
     /// Elliptical arc with semi-axes `a` (X) and `b` (Y) around `start + center`.
     pub fn ellipse(
         start: StepPos,
@@ -101,7 +76,6 @@ impl Conic {
             a * a,
             a * a * b * b,
             ccw,
-            0,
             method,
         )
     }
@@ -115,7 +89,6 @@ impl Conic {
         b: i64,
         c: i64,
         ccw: bool,
-        turns: u16,
         method: Method,
     ) -> Result<Self, InterpError> {
         let cx = i64::from(start[X]) + i64::from(center[0]);
@@ -124,9 +97,8 @@ impl Conic {
         let (tx, ty) = (i64::from(target[X]) - cx, i64::from(target[Y]) - cy);
         // Coordinates must stay small enough for the squared terms (any point of the
         // trace stays within the conic's bounding box, which this bounds too).
-        let lim = if a == b { CIRCLE_LIMIT } else { ELLIPSE_LIMIT };
         for v in [x, y, tx, ty] {
-            if v.abs() > 2 * lim {
+            if v.abs() > 2 * ELLIPSE_LIMIT {
                 return Err(InterpError::TooLarge);
             }
         }
@@ -136,7 +108,7 @@ impl Conic {
         // Budget: a generous multiple of the perimeter bound, per turn (f32: no 64-bit
         // division in the firmware).
         let r = crate::fmath::sqrt(c as f32 / a.min(b) as f32) as u64 + 2;
-        let budget = (16 * r + 64) * (u64::from(turns) + 1);
+        let budget = 16 * r + 64;
         Ok(Conic {
             a,
             b,
@@ -147,7 +119,6 @@ impl Conic {
             ty,
             ccw,
             method,
-            crossings: u32::from(turns) + 1,
             budget,
             tail: None,
             on_ray: false,
@@ -160,34 +131,6 @@ impl Conic {
     pub fn direction(&self) -> [f32; 2] {
         let (tx, ty) = self.tangent(self.x, self.y);
         [tx as f32, ty as f32]
-    }
-
-    /// Radius in steps if this is a circle.
-    pub fn circle_radius(&self) -> Option<f32> {
-        // A circle is built as x^2 + y^2 = R^2 (A = 1, C = R^2), an ellipse with equal
-        // semi-axes r as r^2 x^2 + r^2 y^2 = r^4 (A = r^2): R^2 is C for the one, A for
-        // the other (and both are 1 when r = 1). No 64-bit division.
-        let r2 = if self.a == 1 { self.c } else { self.a };
-        (self.a == self.b).then(|| crate::fmath::sqrt(r2 as f32))
-    }
-
-    /// The last tick is part of the straight tail to the target.
-    pub fn in_tail(&self) -> bool {
-        self.tail.is_some()
-    }
-
-    /// Cross product of the points before and after the last tick (relative to the
-    /// centre): R^2 times the angle it turned, for a circle.
-    pub fn last_cross(&self) -> i64 {
-        let (x1, y1) = self.prev;
-        x1 * self.y - self.x * y1
-    }
-
-    /// Dot product of the points before and after the last tick (relative to the
-    /// centre): R^2 cos(angle turned), for a circle.
-    pub fn last_dot(&self) -> i64 {
-        let (x1, y1) = self.prev;
-        x1 * self.x + y1 * self.y
     }
 
     /// Ideal path length of the last tick in mm (`spx`, `spy`: steps per mm): the
@@ -365,7 +308,7 @@ impl Conic {
         // Does this tick reach or pass the target ray on the last lap?
         let before = self.side(self.x, self.y);
         let after = self.side(nx, ny);
-        if self.crossings == 1 && (nx, ny) == (self.tx, self.ty) {
+        if (nx, ny) == (self.tx, self.ty) {
             self.finished = true;
         } else if self.on_ray {
             // Tracing along the ray (a flat stretch): leave for the target once the
@@ -374,9 +317,7 @@ impl Conic {
                 return None;
             }
         } else if before < 0 && after >= 0 && self.ahead(nx, ny) {
-            if self.crossings > 1 {
-                self.crossings -= 1;
-            } else if after > 0 {
+            if after > 0 {
                 return None;
             } else {
                 self.on_ray = true;
@@ -445,81 +386,8 @@ mod tests {
         fmin <= 0.0 && fmax >= 0.0
     }
 
-    fn dist_circle(x: f64, y: f64, r: f64) -> f64 {
-        ((x * x + y * y).sqrt() - r).abs()
-    }
-
-    #[test]
-    fn an_ellipse_with_equal_axes_has_its_circle_radius() {
-        let start = [100, 0, 0];
-        let circle = Conic::circle(start, [-100, 0], start, true, 0, Method::Dda).unwrap();
-        let ellipse = Conic::ellipse(start, [-100, 0], 100, 100, start, true, Method::Dda).unwrap();
-        assert_eq!(circle.circle_radius(), Some(100.0));
-        assert_eq!(ellipse.circle_radius(), Some(100.0));
-        let flat = Conic::ellipse(start, [-100, 0], 100, 50, start, true, Method::Dda).unwrap();
-        assert_eq!(flat.circle_radius(), None);
-    }
-
-    #[test]
-    fn full_circle_returns_to_start_in_both_directions() {
-        for &ccw in &[true, false] {
-            for method in [Method::Dda, Method::Classic] {
-                let start = [100, 0, 0];
-                let c = Conic::circle(start, [-100, 0], start, ccw, 0, method).unwrap();
-                let pts = run(c, start);
-                assert_eq!(*pts.last().unwrap(), start);
-                // Visits all four quadrants: extremes of x and y reached.
-                assert_eq!(pts.iter().map(|p| p[1]).max(), Some(100));
-                assert_eq!(pts.iter().map(|p| p[1]).min(), Some(-100));
-                assert_eq!(pts.iter().map(|p| p[0]).min(), Some(-100));
-                if method == Method::Classic {
-                    // One axis per tick: 8 R ticks for a full circle.
-                    assert_eq!(pts.len() - 1, 800);
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn quarter_arc_goes_the_requested_way() {
-        // From (10,0) around the origin to (0,10): CCW is the short way (first
-        // quadrant only), CW is the long way through the other three quadrants.
-        let start = [10, 0, 0];
-        let short = run(
-            Conic::circle(start, [-10, 0], [0, 10, 0], true, 0, Method::Dda).unwrap(),
-            start,
-        );
-        assert!(short.iter().all(|p| p[0] >= 0 && p[1] >= 0));
-        let long = run(
-            Conic::circle(start, [-10, 0], [0, 10, 0], false, 0, Method::Dda).unwrap(),
-            start,
-        );
-        assert!(long.iter().any(|p| p[0] < 0) && long.iter().any(|p| p[1] < 0));
-        assert_eq!(*long.last().unwrap(), [0, 10, 0]);
-    }
-
-    #[test]
-    fn extra_turns_add_whole_revolutions() {
-        let start = [50, 0, 0];
-        let one = run(
-            Conic::circle(start, [-50, 0], start, true, 0, Method::Dda).unwrap(),
-            start,
-        )
-        .len();
-        let three = run(
-            Conic::circle(start, [-50, 0], start, true, 2, Method::Dda).unwrap(),
-            start,
-        )
-        .len();
-        assert_eq!(three - 1, 3 * (one - 1));
-    }
-
     #[test]
     fn rejects_degenerate_and_oversized_input() {
-        assert_eq!(
-            Conic::circle([0; 3], [0, 0], [0; 3], true, 0, Method::Dda).err(),
-            Some(InterpError::Degenerate)
-        );
         assert_eq!(
             Conic::ellipse([0; 3], [-70000, 0], 70000, 10, [0; 3], true, Method::Dda).err(),
             Some(InterpError::TooLarge)
@@ -528,17 +396,6 @@ mod tests {
             Conic::ellipse([0; 3], [-5, 0], 5, 0, [0; 3], true, Method::Dda).err(),
             Some(InterpError::Degenerate)
         );
-    }
-
-    fn arc_case() -> impl Strategy<Value = (i32, i32, i32, f64, bool)> {
-        // centre offset (cx, cy) from the start, start angle comes from it; end angle.
-        (
-            1i32..3000,
-            -3000i32..3000,
-            -3000i32..3000,
-            0.0f64..std::f64::consts::TAU,
-            any::<bool>(),
-        )
     }
 
     #[test]
@@ -573,43 +430,8 @@ mod tests {
 
     proptest! {
         #[test]
-        fn dda_arcs_stay_within_half_a_step_per_axis((_, cx, cy, end, ccw) in arc_case(), sx in -5000i32..5000, sy in -5000i32..5000) {
-            prop_assume!(cx != 0 || cy != 0);
-            let start = [sx, sy, 0];
-            let r = f64::from(cx).hypot(f64::from(cy));
-            let ox = f64::from(sx) + f64::from(cx);
-            let oy = f64::from(sy) + f64::from(cy);
-            let target = [(ox + r * end.cos()).round() as i32, (oy + r * end.sin()).round() as i32, 0];
-            let pts = run(Conic::circle(start, [cx, cy], target, ccw, 0, Method::Dda).unwrap(), start);
-            prop_assert_eq!(*pts.last().unwrap(), target);
-            for p in &pts {
-                let (x, y) = (f64::from(p[0]) - ox, f64::from(p[1]) - oy);
-                prop_assert!(cell_meets(1.0, 1.0, r * r, x, y, 0.5 + 1e-9), "{:?} r={}", p, r);
-            }
-            // Consecutive positions differ by at most one step per axis.
-            for w in pts.windows(2) {
-                prop_assert!((w[0][0] - w[1][0]).abs() <= 1 && (w[0][1] - w[1][1]).abs() <= 1);
-            }
-        }
-
-        #[test]
-        fn classic_arcs_stay_within_one_step((_, cx, cy, end, ccw) in arc_case()) {
-            prop_assume!(cx != 0 || cy != 0);
-            let start = [0, 0, 0];
-            let r = f64::from(cx).hypot(f64::from(cy));
-            let (ox, oy) = (f64::from(cx), f64::from(cy));
-            let target = [(ox + r * end.cos()).round() as i32, (oy + r * end.sin()).round() as i32, 0];
-            let mut c = Conic::circle(start, [cx, cy], target, ccw, 0, Method::Classic).unwrap();
-            let mut p = start;
-            while let Some(t) = c.next_tick() {
-                prop_assert_eq!(t.steps().count_ones(), 1);
-                t.apply(&mut p);
-                prop_assert!(dist_circle(f64::from(p[0]) - ox, f64::from(p[1]) - oy, r) < 1.0, "{:?}", p);
-            }
-            prop_assert_eq!(p, target);
-        }
-
-        #[test]
+                #[test]
+                #[test]
         fn dda_ellipses_stay_within_half_a_step_per_axis(a in 1i32..4000, b in 1i32..4000, t0 in 0.0f64..std::f64::consts::TAU, t1 in 0.0f64..std::f64::consts::TAU, ccw in any::<bool>(), classic in any::<bool>()) {
             let (af, bf) = (f64::from(a), f64::from(b));
             // Start: the ideal point at angle t0, rounded; centre at the origin.

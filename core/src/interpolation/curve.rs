@@ -128,6 +128,24 @@ impl<C: Curve> CurveTrace<C> {
         [self.dir as f32, self.dir as f32 * self.curve.slope(u)]
     }
 
+    /// Ideal path length per tick at the present column, mm (`spx`, `spy`: steps per
+    /// mm): the tangent's length over the ticks it takes (DDA: one per step of the
+    /// larger component; classic: one per step of either).
+    pub fn tick_len(&self, spx: f32, spy: f32) -> f32 {
+        let [tx, ty] = self.direction();
+        let (tx, ty) = (crate::fmath::abs(tx), crate::fmath::abs(ty));
+        let (mx, my) = (tx / spx, ty / spy);
+        let per = match self.method {
+            Method::Dda => tx.max(ty),
+            Method::Classic => tx + ty,
+        };
+        if per > 0.0 {
+            crate::fmath::sqrt(mx * mx + my * my) / per
+        } else {
+            0.0
+        }
+    }
+
     fn at(&self, k2: i64) -> i32 {
         // f at u = dir * k2 / 2.
         nearest(self.curve.eval((i64::from(self.dir) * k2) as f32 * 0.5))

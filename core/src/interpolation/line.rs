@@ -164,6 +164,11 @@ pub struct FineLine {
     r: i64,
     inc: i64,
     den: i64,
+    /// Minor-only steps before the first column (signed): a start more than a step off
+    /// the line's first column catches up first.
+    catch_up: i32,
+    /// The ticks of a column whose minor moves by -1, 0 and +1.
+    column: [Tick; 3],
 }
 
 impl FineLine {
@@ -218,7 +223,7 @@ impl FineLine {
             -1
         };
         let inc = 256 * d_min * s * dir_maj;
-        Some(FineLine {
+        let mut line = FineLine {
             major,
             dir_maj: dir_maj as i32,
             pos: (start[major], start[minor]),
@@ -227,7 +232,58 @@ impl FineLine {
             r,
             inc,
             den: q,
-        })
+            catch_up: 0,
+            column: [Tick(0); 3],
+        };
+        line.column = [-1, 0, 1].map(|g| line.tick(line.dir_maj, g));
+        if line.pos.0 != line.end.0 {
+            let gap = line.next_minor().0 - line.pos.1;
+            line.catch_up = gap - gap.signum();
+        }
+        Some(line)
+    }
+
+    /// Desired minor at the next major coordinate, and the remainder there (|inc| <=
+    /// den: the minor moves at most one step per column).
+    #[inline(always)]
+    fn next_minor(&self) -> (i32, i64) {
+        let r = self.r + self.inc;
+        if r >= self.den {
+            (self.n + 1, r - self.den)
+        } else if r < 0 {
+            (self.n - 1, r + self.den)
+        } else {
+            (self.n, r)
+        }
+    }
+
+    /// Up to `out.len()` ticks of the main run (no catch-up step pending, and at most
+    /// the columns left): one remainder update per tick, in locals (the fields are
+    /// written back once).
+    fn run_into(&mut self, out: &mut [Tick]) -> usize {
+        let (mut n, mut r, mut minor) = (self.n, self.r, self.pos.1);
+        let (inc, den, column) = (self.inc, self.den, self.column);
+        for slot in out.iter_mut() {
+            r += inc;
+            if r >= den {
+                r -= den;
+                n += 1;
+            } else if r < 0 {
+                r += den;
+                n -= 1;
+            }
+            // After the catch-up the minor moves by at most one: the index is 0..=2.
+            *slot = column[((n - minor + 1) as usize).min(2)];
+            minor = n;
+        }
+        (self.n, self.r, self.pos.1) = (n, r, minor);
+        self.pos.0 += self.dir_maj * out.len() as i32;
+        out.len()
+    }
+
+    /// Minor-only steps still to come before the first column or after the last.
+    fn extra_ticks(&self) -> bool {
+        self.catch_up != 0 || (self.pos.0 == self.end.0 && self.pos.1 != self.end.1)
     }
 
     fn tick(&self, d_maj: i32, d_min: i32) -> Tick {
@@ -242,25 +298,16 @@ impl FineLine {
 
 impl Interpolate for FineLine {
     fn next_tick(&mut self) -> Option<Tick> {
+        if self.catch_up != 0 {
+            // Steeper than one step per column right at the start: catch up first.
+            let s = self.catch_up.signum();
+            self.catch_up -= s;
+            self.pos.1 += s;
+            return Some(self.tick(0, s));
+        }
         if self.pos.0 != self.end.0 {
-            // Desired minor at the next major coordinate.
-            let mut n = self.n;
-            let mut r = self.r + self.inc;
-            while r >= self.den {
-                r -= self.den;
-                n += 1;
-            }
-            while r < 0 {
-                r += self.den;
-                n -= 1;
-            }
+            let (n, r) = self.next_minor();
             let gap = n - self.pos.1;
-            if gap.abs() > 1 {
-                // Steeper than one step per column right at the start: catch up first.
-                let s = gap.signum();
-                self.pos.1 += s;
-                return Some(self.tick(0, s));
-            }
             self.n = n;
             self.r = r;
             self.pos.0 += self.dir_maj;
@@ -296,7 +343,8 @@ impl Line {
 
 impl Line {
     /// Ticks that advance along the line (the major-axis count for DDA, every step for
-    /// classic). A fine line may add a catch-up step at either end.
+    /// classic), each by the same length. A fine line may add a catch-up step at either
+    /// end.
     pub fn ticks(&self) -> u64 {
         match self {
             Line::Dda(l) => u64::from(l.major),
@@ -304,6 +352,48 @@ impl Line {
             Line::Fine(l) => u64::from((l.end.0 - l.pos.0).unsigned_abs()),
         }
     }
+
+    /// What comes next: a run of equal ticks, a catch-up step, or nothing.
+    pub fn next(&self) -> super::Next {
+        let left = match self {
+            Line::Dda(l) => l.major - l.done,
+            Line::Classic(l) => l.len.iter().zip(&l.taken).map(|(&n, &t)| n - t).sum(),
+            Line::Fine(l) if l.extra_ticks() => return super::Next::Extra,
+            Line::Fine(l) => (l.end.0 - l.pos.0).unsigned_abs(),
+        };
+        if left == 0 {
+            super::Next::Done
+        } else {
+            super::Next::Run(left)
+        }
+    }
+
+    /// Up to `out.len()` ticks of the present run (or the one catch-up step).
+    pub fn ticks_into(&mut self, out: &mut [Tick]) -> usize {
+        match self {
+            Line::Dda(l) => fill(l, out),
+            Line::Classic(l) => fill(l, out),
+            Line::Fine(l) if l.extra_ticks() => fill(l, out.get_mut(..1).unwrap_or(&mut [])),
+            Line::Fine(l) => {
+                let left = (l.end.0 - l.pos.0).unsigned_abs() as usize;
+                l.run_into(out.get_mut(..left.min(out.len())).unwrap_or(&mut []))
+            }
+        }
+    }
+}
+
+/// Fills `out` from `it` (one monomorphic loop per interpolator): the count written.
+#[inline(always)]
+pub(crate) fn fill(it: &mut impl Interpolate, out: &mut [Tick]) -> usize {
+    let mut n = 0;
+    for slot in out.iter_mut() {
+        match it.next_tick() {
+            Some(t) => *slot = t,
+            None => break,
+        }
+        n += 1;
+    }
+    n
 }
 
 impl Interpolate for Line {

@@ -11,9 +11,18 @@
 //! - [`Method::Dda`]: axes may step together; every tick lands on the grid point
 //!   nearest the ideal path (per-axis error <= 0.5 step).
 //!
-//! Submodules: [`line`] (straight lines), [`conic`] (circles and axis-aligned
-//! ellipses), [`curve`] (y = f(x), e.g. the sine), [`shapes`] (polylines such as the star).
+//! Submodules: [`line`] (straight lines), [`circle`] (circles and arcs around any
+//! centre), [`conic`] (axis-aligned ellipses), [`curve`] (y = f(x), e.g. the sine),
+//! [`shapes`] (polylines such as the star).
+//!
+//! For the step timing, each interpolator tells what comes next ([`Next`]): a run of
+//! ticks along which the path position is a smooth function of the tick count (lines,
+//! DDA circle octants: [`Interpolator::path_ahead`]), which the segment preparation times with
+//! a few polynomials; a tick whose length is known once it is made (ellipses, sines,
+//! classic circles: [`Interpolator::tick_len`]); or an extra step onto the grid point nearest
+//! the path (a rounded start or end), which takes no path length.
 
+pub mod circle;
 pub mod conic;
 pub mod curve;
 pub mod line;
@@ -87,6 +96,20 @@ pub enum InterpError {
     NotPlanar,
 }
 
+/// What an interpolator makes next (see the module comment).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Next {
+    /// This many ticks, each advancing the run's parameter by one: the path position is
+    /// [`Interpolator::path_ahead`] of the tick count.
+    Run(u32),
+    /// One tick whose path length [`Interpolator::tick_len`] gives after it is made.
+    Tick,
+    /// One tick onto the grid point nearest the path or onto the target: no path length.
+    Extra,
+    /// The move is complete.
+    Done,
+}
+
 /// Something that yields ticks until the move is complete.
 pub trait Interpolate {
     /// The next tick, or `None` when the end position has been reached.
@@ -97,6 +120,7 @@ pub trait Interpolate {
 #[derive(Clone, Debug)]
 pub enum Interpolator {
     Line(line::Line),
+    Circle(circle::Circle),
     Conic(conic::Conic),
     Sine(curve::CurveTrace<curve::Sine>),
 }
@@ -108,6 +132,7 @@ impl Interpolator {
         if !matches!(mv.path, Path::Line) {
             planar(start, mv.target)?;
         }
+        let at = |v: i32| i64::from(v) * 256;
         match mv.path {
             Path::Line => Ok(Interpolator::Line(line::Line::new(
                 start, mv.target, method,
@@ -119,8 +144,21 @@ impl Interpolator {
                 },
             )),
             Path::Arc { center, ccw, turns } => {
-                conic::Conic::circle(start, center, mv.target, ccw, turns, method)
-                    .map(Interpolator::Conic)
+                let from = [at(start[X]), at(start[Y])];
+                let c = [at(start[X] + center[0]), at(start[Y] + center[1])];
+                circle::Circle::new(start, from, c, mv.target, ccw, turns, method)
+                    .map(Interpolator::Circle)
+            }
+            Path::ArcFine {
+                from,
+                center,
+                ccw,
+                turns,
+            } => {
+                let from = [i64::from(from[0]), i64::from(from[1])];
+                let c = [i64::from(center[0]), i64::from(center[1])];
+                circle::Circle::new(start, from, c, mv.target, ccw, turns, method)
+                    .map(Interpolator::Circle)
             }
             Path::Ellipse { center, a, b, ccw } => {
                 conic::Conic::ellipse(start, center, a, b, mv.target, ccw, method)
@@ -134,27 +172,91 @@ impl Interpolator {
             }
         }
     }
-}
 
-impl Interpolator {
-    /// Feed direction (step space, XY) for curves; `None` for straight lines, whose
-    /// direction never changes.
-    pub fn direction(&self) -> Option<[f32; 2]> {
+    /// What comes next (moving a circle on to its next piece when one is used up).
+    pub fn next(&mut self) -> Next {
         match self {
-            Interpolator::Line(_) => None,
-            Interpolator::Conic(c) => Some(c.direction()),
-            Interpolator::Sine(c) => Some(c.direction()),
+            Interpolator::Line(l) => l.next(),
+            Interpolator::Circle(c) => c.next(),
+            // Known only once tried: `ticks_into` returns 0 at the end.
+            Interpolator::Conic(_) | Interpolator::Sine(_) => Next::Tick,
+        }
+    }
+
+    /// Up to `out.len()` ticks of what [`Interpolator::next`] announced (one for a single
+    /// tick); the count written, 0 when the move is complete.
+    pub fn ticks_into(&mut self, out: &mut [Tick]) -> usize {
+        match self {
+            Interpolator::Line(l) => l.ticks_into(out),
+            Interpolator::Circle(c) => c.ticks(out),
+            Interpolator::Conic(c) => line::fill(c, out.get_mut(..1).unwrap_or(&mut [])),
+            Interpolator::Sine(c) => line::fill(c, out.get_mut(..1).unwrap_or(&mut [])),
+        }
+    }
+
+    /// Path position `k` ticks ahead in the present run, relative to the present point,
+    /// and its rate per tick there, in run units (a line's tick; a circle's step).
+    pub fn path_ahead(&self, k: u32) -> (f32, f32) {
+        match self {
+            Interpolator::Circle(c) => c.path_ahead(k),
+            _ => (k as f32, 1.0),
+        }
+    }
+
+    /// Largest |d^n s / dk^n| (n = 1..4) of the path position over the next `k` ticks
+    /// of the present run, in run units: what bounds the timing polynomials' error.
+    pub fn run_bounds(&self, k: u32) -> [f32; 4] {
+        match self {
+            Interpolator::Circle(c) => c.run_bounds(k),
+            _ => [1.0, 0.0, 0.0, 0.0],
+        }
+    }
+
+    /// Path position where the present run (just begun) starts, less where the run
+    /// before it ended, in run units: a circle's pieces measure the same point by
+    /// different coordinates ([`circle::Circle::entry_shift`]).
+    pub fn entry_shift(&self) -> f32 {
+        match self {
+            Interpolator::Circle(c) => c.entry_shift(),
+            _ => 0.0,
+        }
+    }
+
+    /// The present run ends the path (whose length is then known exactly): an arc's
+    /// last piece. A line is one run from the start.
+    pub fn in_last_run(&self) -> bool {
+        match self {
+            Interpolator::Circle(c) => c.in_last_piece(),
+            _ => false,
+        }
+    }
+
+    /// The fourth of [`Interpolator::run_bounds`] alone (a cruise, or a ramp of
+    /// constant acceleration).
+    pub fn fourth_bound(&self, k: u32) -> f32 {
+        match self {
+            Interpolator::Circle(c) => c.fourth_bound(k),
+            _ => 0.0,
+        }
+    }
+
+    /// Path length of the last tick (after [`Next::Tick`]), mm, from the axes'
+    /// steps per mm.
+    pub fn tick_len(&self, steps_per_mm: [f32; 2]) -> f32 {
+        let [spx, spy] = steps_per_mm;
+        match self {
+            Interpolator::Circle(c) => c.last_tick_len() / spx,
+            Interpolator::Conic(c) => c.last_tick_len(spx, spy),
+            Interpolator::Sine(c) => c.tick_len(spx, spy),
+            Interpolator::Line(_) => 0.0,
         }
     }
 }
 
 impl Interpolate for Interpolator {
     fn next_tick(&mut self) -> Option<Tick> {
-        match self {
-            Interpolator::Line(i) => i.next_tick(),
-            Interpolator::Conic(i) => i.next_tick(),
-            Interpolator::Sine(i) => i.next_tick(),
-        }
+        let mut one = [Tick(0)];
+        (self.ticks_into(&mut one) == 1).then_some(one[0])
     }
 }
 

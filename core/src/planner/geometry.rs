@@ -85,11 +85,33 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
         }
         Path::Arc { center, ccw, turns } => {
             // A circle is the ellipse a = b = R (in steps, as the interpolator traces it).
-            let r = crate::fmath::hypot(center[0] as f32, center[1] as f32);
-            conic(cfg, start, mv, center, r, r, ccw, turns)
+            let p0 = (-center[0] as f32, -center[1] as f32);
+            let r = crate::fmath::hypot(p0.0, p0.1);
+            conic(cfg, start, mv, p0, r, r, ccw, turns)
+        }
+        Path::ArcFine {
+            from,
+            center,
+            ccw,
+            turns,
+        } => {
+            // The circle through the exact start; the start position is where the
+            // machine is (the exact start rounded).
+            let q = 1.0 / 256.0;
+            let exact = (
+                from[0].wrapping_sub(center[0]) as f32 * q,
+                from[1].wrapping_sub(center[1]) as f32 * q,
+            );
+            let r = crate::fmath::hypot(exact.0, exact.1);
+            let p0 = (
+                (i64::from(start[X]) * 256 - i64::from(center[0])) as f32 * q,
+                (i64::from(start[Y]) * 256 - i64::from(center[1])) as f32 * q,
+            );
+            conic(cfg, start, mv, p0, r, r, ccw, turns)
         }
         Path::Ellipse { center, a, b, ccw } => {
-            conic(cfg, start, mv, center, a as f32, b as f32, ccw, 0)
+            let p0 = (-center[0] as f32, -center[1] as f32);
+            conic(cfg, start, mv, p0, a as f32, b as f32, ccw, 0)
         }
         Path::Sine { amp, omega, phase } => {
             planar(start, mv)?;
@@ -123,7 +145,8 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
 }
 
 /// Geometry of a circular (`a == b`) or elliptical arc with semi-axes `a`, `b` (steps)
-/// around `start + center`, through the same sampler as the sine: an exact circle
+/// from `p0` (the start relative to the centre, steps), through the same sampler as
+/// the sine: an exact circle
 /// needs only its two ends and middle (its speed is constant), an ellipse 128 samples.
 /// On both, the tangent is axis-aligned at parameter angles k * pi/2: where the sweep
 /// passes one, that axis' tangent component reaches 1.
@@ -132,7 +155,7 @@ fn conic(
     cfg: &PlannerConfig,
     start: StepPos,
     mv: &Move,
-    center: [i32; 2],
+    p0: (f32, f32),
     af: f32,
     bf: f32,
     ccw: bool,
@@ -142,7 +165,6 @@ fn conic(
     if !(af > 0.0 && bf > 0.0) {
         return Err(GeometryError::Invalid);
     }
-    let p0 = (-center[0] as f32, -center[1] as f32);
     let p1 = (
         p0.0 + (mv.target[X] - start[X]) as f32,
         p0.1 + (mv.target[Y] - start[Y]) as f32,

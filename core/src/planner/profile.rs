@@ -30,7 +30,7 @@ impl Shape {
     pub fn effective_accel(self, a: f32) -> f32 {
         match self {
             Shape::Trapezoid => a,
-            Shape::Cosine => a * 2.0 / PI,
+            Shape::Cosine => a * (2.0 / PI),
         }
     }
 }
@@ -44,10 +44,11 @@ struct Ramp {
 }
 
 impl Ramp {
-    fn new(shape: Shape, v0: f32, v1: f32, a: f32) -> Self {
+    /// A ramp from `v0` to `v1` at peak acceleration `1 / inv_a`.
+    fn new(shape: Shape, v0: f32, v1: f32, inv_a: f32) -> Self {
         let t = match shape {
-            Shape::Trapezoid => (v1 - v0).abs() / a,
-            Shape::Cosine => PI * (v1 - v0).abs() / (2.0 * a),
+            Shape::Trapezoid => (v1 - v0).abs() * inv_a,
+            Shape::Cosine => 0.5 * PI * (v1 - v0).abs() * inv_a,
         };
         Ramp { v0, v1, t }
     }
@@ -90,10 +91,86 @@ impl Ramp {
     }
 }
 
+impl Ramp {
+    /// Time into the ramp at which it has covered `d` (0 <= d <= dist), and the speed
+    /// there; `hint` is a guess of the time (the last answer on this ramp).
+    ///
+    /// Trapezoid: closed form, t = 2 d / (v0 + v) with v^2 = v0^2 + 2 a d (no
+    /// cancellation at any speed). Cosine: the distance law has no inverse in closed
+    /// form, so Newton's method on it, kept inside a shrinking bracket.
+    fn time_for(&self, shape: Shape, d: f32, hint: f32) -> (f32, f32) {
+        if self.t <= 0.0 || d <= 0.0 {
+            return (0.0, self.v0);
+        }
+        match shape {
+            Shape::Trapezoid => {
+                let acc = (self.v1 - self.v0) / self.t;
+                let v = crate::fmath::sqrt((self.v0 * self.v0 + 2.0 * acc * d).max(0.0));
+                let sum = self.v0 + v;
+                let t = if sum > 0.0 { 2.0 * d / sum } else { 0.0 };
+                (t.min(self.t), v)
+            }
+            Shape::Cosine => {
+                let (mut lo, mut hi) = (0.0f32, self.t);
+                let mut t = hint.max(0.0).min(self.t);
+                for _ in 0..40 {
+                    let (s, v) = self.forward(shape, t);
+                    let f = s - d;
+                    if f > 0.0 {
+                        hi = t;
+                    } else {
+                        lo = t;
+                    }
+                    if crate::fmath::abs(f) <= 1e-7 * d.max(1e-3) || hi - lo <= 1e-9 * self.t {
+                        return (t, v);
+                    }
+                    let next = if v > 0.0 { t - f / v } else { -1.0 };
+                    t = if next > lo && next < hi {
+                        next
+                    } else {
+                        0.5 * (lo + hi)
+                    };
+                }
+                (t, self.forward(shape, t).1)
+            }
+        }
+    }
+
+    /// Bounds of |acceleration|, |jerk| and |d jerk/dt| along the ramp (mm/s^2, /s^3,
+    /// /s^4): what the step timing's error bound needs.
+    fn derivative_bounds(&self, shape: Shape) -> [f32; 3] {
+        if self.t <= 0.0 {
+            return [0.0; 3];
+        }
+        let dv = crate::fmath::abs(self.v1 - self.v0);
+        match shape {
+            Shape::Trapezoid => [dv / self.t, 0.0, 0.0],
+            Shape::Cosine => {
+                let w = PI / self.t;
+                let a = 0.5 * dv * w;
+                [a, a * w, a * w * w]
+            }
+        }
+    }
+}
+
+/// One of a profile's three phases.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// The first ramp (to the peak speed; down if the speed was above it).
+    Up,
+    Cruise,
+    /// The last ramp, timed back from the profile's end.
+    Down,
+}
+
 /// A ramp-cruise-ramp profile over a known distance.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Profile {
     shape: Shape,
+    /// Peak acceleration of the ramps.
+    accel: f32,
     up: Ramp,
     cruise_v: f32,
     cruise_t: f32,
@@ -110,19 +187,33 @@ impl Profile {
         let dist = dist.max(0.0);
         let v0 = v0.max(0.0);
         let v_max = v_max.max(0.0);
-        // Exit speeds reachable over `dist` from v0 lie in [lo, hi].
-        let hi = crate::fmath::sqrt(v0 * v0 + 2.0 * ae * dist);
-        let lo = crate::fmath::sqrt((v0 * v0 - 2.0 * ae * dist).max(0.0));
-        let ve = v_exit.max(0.0).min(hi).max(lo);
+        // Exit speeds reachable over `dist` from v0 lie in [lo, hi] (compared as squares:
+        // a root only where the bound applies; this runs once per block).
+        let hi2 = v0 * v0 + 2.0 * ae * dist;
+        let lo2 = v0 * v0 - 2.0 * ae * dist;
+        let ve = v_exit.max(0.0);
+        let ve = if ve * ve > hi2 {
+            crate::fmath::sqrt(hi2)
+        } else if ve * ve < lo2 {
+            crate::fmath::sqrt(lo2)
+        } else {
+            ve
+        };
         // Where an acceleration from v0 meets a deceleration to ve (>= both of them).
-        let meet = crate::fmath::sqrt(ae * dist + 0.5 * (v0 * v0 + ve * ve));
-        let peak = if meet <= v_max { meet } else { v_max.max(ve) };
-        let up = Ramp::new(shape, v0, peak, a);
-        let down = Ramp::new(shape, peak, ve, a);
+        let meet2 = ae * dist + 0.5 * (v0 * v0 + ve * ve);
+        let peak = if meet2 <= v_max * v_max {
+            crate::fmath::sqrt(meet2)
+        } else {
+            v_max.max(ve)
+        };
+        let inv_a = 1.0 / a;
+        let up = Ramp::new(shape, v0, peak, inv_a);
+        let down = Ramp::new(shape, peak, ve, inv_a);
         let cruise_d = (dist - up.dist() - down.dist()).max(0.0);
         let cruise_t = if peak > 0.0 { cruise_d / peak } else { 0.0 };
         Profile {
             shape,
+            accel: a,
             up,
             cruise_v: peak,
             cruise_t,
@@ -131,7 +222,7 @@ impl Profile {
     }
 
     /// At rest with nothing to cover: what [`Profile::new`] gives for no distance and
-    /// no speed (a placeholder until the first real profile).
+    /// no speed at an acceleration of 1 (a placeholder until the first real profile).
     pub fn rest(shape: Shape) -> Self {
         let r = Ramp {
             v0: 0.0,
@@ -140,10 +231,95 @@ impl Profile {
         };
         Profile {
             shape,
+            accel: 1.0,
             up: r,
             cruise_v: 0.0,
             cruise_t: 0.0,
             down: r,
+        }
+    }
+
+    /// Distance covered when the first ramp ends and when the cruise ends.
+    pub fn phase_ends(&self) -> (f32, f32) {
+        let up = self.up.dist();
+        (up, up + self.cruise_v * self.cruise_t)
+    }
+
+    /// [`Profile::phase_ends`] and [`Profile::distance`] at once (each ramp's distance
+    /// evaluated once).
+    pub fn phase_ends_and_distance(&self) -> (f32, f32, f32) {
+        let (e0, e1) = self.phase_ends();
+        (e0, e1, e1 + self.down.dist())
+    }
+
+    /// Duration of each phase, seconds.
+    pub fn phase_durations(&self) -> [f32; 3] {
+        [self.up.t, self.cruise_t, self.down.t]
+    }
+
+    /// Phase-local time and the speed there: for [`Phase::Up`] the time from the
+    /// profile's start at which it has covered `d` (mm from the start); for
+    /// [`Phase::Cruise`] the time from the cruise's start at `d` mm into the cruise; for
+    /// [`Phase::Down`] the time left to the end when `d` mm are left. Each is computed
+    /// from its own end of the phase so that small distances near a slow end keep their
+    /// precision. `hint`: a guess of the answer (the last one in this phase).
+    pub fn phase_time(&self, phase: Phase, d: f32, hint: f32) -> (f32, f32) {
+        let d = d.max(0.0);
+        match phase {
+            Phase::Up => self.up.time_for(self.shape, d.min(self.up.dist()), hint),
+            Phase::Cruise => {
+                let t = if self.cruise_v > 0.0 {
+                    d / self.cruise_v
+                } else {
+                    0.0
+                };
+                (t, self.cruise_v)
+            }
+            Phase::Down => {
+                let rev = Ramp {
+                    v0: self.down.v1,
+                    v1: self.down.v0,
+                    t: self.down.t,
+                };
+                rev.time_for(self.shape, d.min(rev.dist()), hint)
+            }
+        }
+    }
+
+    /// Bounds of |acceleration|, |jerk| and |d jerk/dt| within `phase`.
+    pub fn derivative_bounds(&self, phase: Phase) -> [f32; 3] {
+        let ramp = match phase {
+            Phase::Up => self.up,
+            Phase::Cruise => return [0.0; 3],
+            Phase::Down => self.down,
+        };
+        match self.shape {
+            // A trapezoid's ramps run at the acceleration itself (no division).
+            Shape::Trapezoid if ramp.t > 0.0 => [self.accel, 0.0, 0.0],
+            _ => ramp.derivative_bounds(self.shape),
+        }
+    }
+
+    /// The ramps' shape.
+    pub fn shape(&self) -> Shape {
+        self.shape
+    }
+
+    /// Speed at the start and at the end of `phase`.
+    pub fn phase_speeds(&self, phase: Phase) -> (f32, f32) {
+        match phase {
+            Phase::Up => (self.up.v0, self.up.v1),
+            Phase::Cruise => (self.cruise_v, self.cruise_v),
+            Phase::Down => (self.down.v0, self.down.v1),
+        }
+    }
+
+    /// Whether the speed rises (or stays) through `phase`.
+    pub fn phase_rises(&self, phase: Phase) -> bool {
+        match phase {
+            Phase::Up => self.up.v1 >= self.up.v0,
+            Phase::Cruise => true,
+            Phase::Down => self.down.v1 >= self.down.v0,
         }
     }
 

@@ -314,7 +314,7 @@ mod tests {
     fn queue_of(cmds: &[([i8; 3], u32)]) -> StepQueue<8> {
         let mut q = StepQueue::new();
         for &(d, w) in cmds {
-            assert!(q.push(StepCmd::new(Tick::from_deltas(d), w)));
+            assert_eq!(q.push_slice(&[StepCmd::new(Tick::from_deltas(d), w)]), 1);
         }
         q
     }

@@ -63,9 +63,10 @@ impl StepCmd {
 
 /// Where prepared commands go.
 pub trait CmdSink {
-    fn has_room(&self) -> bool;
-    /// Returns false if full (the command is dropped; call `has_room` first).
-    fn push(&mut self, c: StepCmd) -> bool;
+    /// Commands that fit now.
+    fn room(&self) -> usize;
+    /// Appends `cmds` in order, as many as fit (call `room` first): the count taken.
+    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize;
 }
 
 /// Where the interrupt takes commands from.

@@ -89,24 +89,35 @@ impl<const N: usize> QueueTx<'_, N> {
         self.q.len() > StepQueue::<N>::MASK
     }
     /// Appends `c`; false (and nothing written) if the ring is full.
-    ///
-    /// Direction bits become sticky on the way in: an axis that does not step in `c`
-    /// gets the direction it had in the previous command (a tick's direction bit of a
-    /// non-stepping axis means nothing), so the interrupt can output the three bits as
-    /// they are and a pin still only changes where a step needs it.
     pub fn push(&mut self, c: StepCmd) -> bool {
+        self.push_slice(&[c]) == 1
+    }
+
+    /// Appends as many of `cmds` as fit, in order, and publishes them at once: the count
+    /// taken.
+    ///
+    /// Direction bits become sticky on the way in: an axis that does not step in a
+    /// command gets the direction it had in the previous one (a tick's direction bit of
+    /// a non-stepping axis means nothing), so the interrupt can output the three bits as
+    /// they are and a pin still only changes where a step needs it.
+    pub fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
         let tail = self.q.tail.load(Ordering::Relaxed);
-        if tail.wrapping_sub(load_acquire(&self.q.head)) > StepQueue::<N>::MASK {
-            return false;
+        let used = tail.wrapping_sub(load_acquire(&self.q.head));
+        let free = (StepQueue::<N>::MASK + 1).saturating_sub(used) as usize;
+        let taken = cmds.get(..free).unwrap_or(cmds);
+        let mut dirs = self.q.dirs.load(Ordering::Relaxed);
+        let mut at = tail;
+        for c in taken {
+            let bits = (c.0 >> 24) as u8;
+            let mask = bits & 0b111;
+            dirs = (dirs & !mask) | ((bits >> 3) & mask);
+            let word = (c.0 & !(0b111 << 27)) | (u32::from(dirs) << 27);
+            self.q.slots[(at & StepQueue::<N>::MASK) as usize].store(word, Ordering::Relaxed);
+            at = at.wrapping_add(1);
         }
-        let bits = c.tick().0;
-        let mask = bits & 0b111;
-        let dirs = (self.q.dirs.load(Ordering::Relaxed) & !mask) | ((bits >> 3) & mask);
         self.q.dirs.store(dirs, Ordering::Relaxed);
-        let word = (c.0 & !(0b111 << 27)) | (u32::from(dirs) << 27);
-        self.q.slots[(tail & StepQueue::<N>::MASK) as usize].store(word, Ordering::Relaxed);
-        store_release(&self.q.tail, tail.wrapping_add(1));
-        true
+        store_release(&self.q.tail, at);
+        taken.len()
     }
 }
 
@@ -137,11 +148,11 @@ impl<const N: usize> QueueRx<'_, N> {
 }
 
 impl<const N: usize> CmdSink for QueueTx<'_, N> {
-    fn has_room(&self) -> bool {
-        !self.is_full()
+    fn room(&self) -> usize {
+        N - self.len()
     }
-    fn push(&mut self, c: StepCmd) -> bool {
-        QueueTx::push(self, c)
+    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
+        QueueTx::push_slice(self, cmds)
     }
 }
 
@@ -155,11 +166,11 @@ impl<const N: usize> CmdSource for QueueRx<'_, N> {
 /// The whole ring as a sink, for an owner of both ends on one thread (the simulator,
 /// tests): the same push as the producer's end.
 impl<const N: usize> CmdSink for StepQueue<N> {
-    fn has_room(&self) -> bool {
-        self.len() <= Self::MASK
+    fn room(&self) -> usize {
+        N - self.len() as usize
     }
-    fn push(&mut self, c: StepCmd) -> bool {
-        self.split().0.push(c)
+    fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
+        self.split().0.push_slice(cmds)
     }
 }
 
@@ -240,7 +251,7 @@ mod tests {
         for w in 2..20 {
             assert!(tx.push(StepCmd::new(Tick(0), w)));
             assert!(tx.push(StepCmd::new(Tick(0), w + 100)));
-            assert!(!tx.has_room());
+            assert_eq!(CmdSink::room(&tx), 0);
             assert_eq!(rx.pop().map(StepCmd::wait), Some(w));
             assert_eq!(rx.pop().map(StepCmd::wait), Some(w + 100));
         }

@@ -1,0 +1,126 @@
+//! Exact arcs for any centre, end to end: G-code arcs whose centre is off the step grid
+//! (I/J offsets that are not whole steps, the R form with positive and negative R, inch
+//! units, full circles by I/J) go through the G-code interpreter and the DDA
+//! interpolator, and every step is measured against the programmed circle (computed
+//! here in f64 from the G-code's numbers) by the simulator's analysis: each must be on the
+//! grid point nearest the circle, at most 0.71 step from it (issue 14).
+
+use inkstep_core::gcode::parser::clean_line;
+use inkstep_core::gcode::Interpreter;
+use inkstep_core::interpolation::{Interpolate, Interpolator, Method};
+use inkstep_core::motion::Command;
+use inkstep_core::motion::Move;
+use inkstep_core::settings::Settings;
+use inkstep_sim::analysis::{Analyzer, Ideal};
+use proptest::prelude::*;
+
+/// The arc's move from running `lines` (a G0 to the start, then the arc).
+fn arc_move(lines: &[String], s: &Settings) -> (Move, [i32; 3]) {
+    let mut it = Interpreter::new();
+    let mut start = [0; 3];
+    let mut arc = None;
+    for line in lines {
+        let mut buf: heapless::Vec<u8, 128> = heapless::Vec::new();
+        clean_line(line.as_bytes(), &mut buf).expect("clean");
+        let o = it.execute(&buf, s, 0).expect("accepted");
+        for c in o.cmds.iter() {
+            if let Command::Move(m) = c {
+                if arc.is_none() && line.contains("G0") {
+                    start = m.target;
+                } else {
+                    arc = Some(*m);
+                }
+            }
+        }
+    }
+    (arc.expect("an arc"), start)
+}
+
+/// Largest distance (steps) of the trace's steps from the circle around `c` with radius
+/// `r` (mm), and whether it ended at the move's target.
+fn deviation(mv: &Move, start: [i32; 3], c: [f64; 2], r: f64, spm: f64) -> (f64, bool) {
+    let mut it = Interpolator::new(start, mv, Method::Dda).expect("an arc");
+    let mut a = Analyzer::new(Ideal::Circle { c, r }, [spm, spm], start);
+    let mut p = start;
+    let mut n = 0u64;
+    while let Some(t) = it.next_tick() {
+        t.apply(&mut p);
+        a.step(n as f64, t.steps(), p);
+        n += 1;
+        assert!(n < 10_000_000);
+    }
+    (a.finish().max_dev, p == mv.target)
+}
+
+fn settings(spm: f32) -> Settings {
+    let mut s = Settings::default();
+    s.set(100, spm).unwrap();
+    s.set(101, spm).unwrap();
+    s
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// I/J arcs (and full circles) around centres anywhere, in mm or inches.
+    #[test]
+    fn ij_arcs_around_off_grid_centres_stay_within_0_71_step(
+        x0 in -60.0f64..60.0, y0 in -60.0f64..60.0, i in -40.0f64..40.0, j in -40.0f64..40.0,
+        sweep in 0.0f64..std::f64::consts::TAU, full in any::<bool>(), ccw in any::<bool>(),
+        inch in any::<bool>(), spm in prop::sample::select(vec![80.0f32, 100.0, 157.48, 1280.0])) {
+        let unit = if inch { 25.4 } else { 1.0 };
+        let (x0, y0, i, j) = (x0 / unit, y0 / unit, i / unit, j / unit);
+        let r = i.hypot(j);
+        prop_assume!(r * unit * f64::from(spm) > 2.0);
+        let (cx, cy) = (x0 + i, y0 + j);
+        let a0 = (-j).atan2(-i);
+        let a1 = if ccw { a0 + sweep } else { a0 - sweep };
+        let (x1, y1) = if full { (x0, y0) } else { (cx + r * a1.cos(), cy + r * a1.sin()) };
+        let g = if inch { "G20" } else { "G21" };
+        // Printed as a CAM program would, to a hundred-thousandth of a mm or a
+        // millionth of an inch (f32 holds no more).
+        let f = |v: f64| if inch { format!("{v:.6}") } else { format!("{v:.5}") };
+        let lines = vec![
+            format!("{g} G90 G0 X{} Y{}", f(x0), f(y0)),
+            format!("{g} G{} X{} Y{} I{} J{} F1000", if ccw { 3 } else { 2 }, f(x1), f(y1), f(i), f(j)),
+        ];
+        let s = settings(spm);
+        let (mv, start) = arc_move(&lines, &s);
+        // The circle the program describes (the printed start and offsets), in mm.
+        let p = |v: &str| -> f64 { v.parse().unwrap() };
+        let (x0, y0, i, j) = (p(&f(x0)), p(&f(y0)), p(&f(i)), p(&f(j)));
+        let c = [(x0 + i) * unit, (y0 + j) * unit];
+        let (dev, ended) = deviation(&mv, start, c, i.hypot(j) * unit, f64::from(spm));
+        prop_assert!(ended, "did not end at the target");
+        prop_assert!(dev <= 0.71, "deviation {} steps", dev);
+    }
+
+    /// R-form arcs, positive R (at most half a turn) and negative R (more than half).
+    #[test]
+    fn r_form_arcs_stay_within_0_71_step(
+        x0 in -60.0f64..60.0, y0 in -60.0f64..60.0, dx in -50.0f64..50.0, dy in -50.0f64..50.0,
+        extra in 0.01f64..30.0, neg in any::<bool>(), ccw in any::<bool>()) {
+        let chord = dx.hypot(dy);
+        prop_assume!(chord > 0.5);
+        let r = chord / 2.0 + extra;
+        let (x1, y1) = (x0 + dx, y0 + dy);
+        let lines = vec![
+            format!("G21 G90 G0 X{x0:.4} Y{y0:.4}"),
+            format!("G{} X{x1:.4} Y{y1:.4} R{}{r:.4} F1000", if ccw { 3 } else { 2 }, if neg { "-" } else { "" }),
+        ];
+        let s = settings(80.0);
+        let (mv, start) = arc_move(&lines, &s);
+        // The centre in f64: on the chord's bisector, on the side the sign of R and the
+        // direction pick.
+        let p = |v: &str| -> f64 { v.parse().unwrap() };
+        let (x0, y0, x1, y1, r) = (p(&format!("{x0:.4}")), p(&format!("{y0:.4}")), p(&format!("{x1:.4}")), p(&format!("{y1:.4}")), p(&format!("{r:.4}")));
+        let (dx, dy) = (x1 - x0, y1 - y0);
+        let d = dx.hypot(dy);
+        let h = ((r * r - d * d / 4.0).max(0.0)).sqrt() / d;
+        let side = if ccw != neg { 1.0 } else { -1.0 };
+        let c = [x0 + dx / 2.0 - side * h * dy, y0 + dy / 2.0 + side * h * dx];
+        let (dev, ended) = deviation(&mv, start, c, r, 80.0);
+        prop_assert!(ended, "did not end at the target");
+        prop_assert!(dev <= 0.71, "deviation {} steps", dev);
+    }
+}
