@@ -8,7 +8,7 @@
 //! - look-ahead planning, junctions and velocity profiles: [`planner`]
 //! - step generation (segment preparation, the step queue, the step interrupt's work,
 //!   the output configuration): [`stepper`]
-//! - task-to-interrupt rings (the USB byte stream; their shared index ordering): [`ring`]
+//! - the one task-to-interrupt ring (the USB byte stream, and under the step queue): [`ring`]
 //! - libm-free f32 math (sine, cosine, arctangent, square root): [`fmath`]
 //! - decimal text without `core::fmt` (replies, listings): [`decimal`]; the stores'
 //!   checksum: [`crc`]
