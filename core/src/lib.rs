@@ -31,6 +31,7 @@
 // protocol, machine, pipeline and planner, and `in_place::build`) allow it locally to
 // build the firmware's static cells field by field instead of on init's stack.
 #![deny(unsafe_code)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 
 pub mod controller;
 pub mod crc;
