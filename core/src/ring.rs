@@ -54,31 +54,25 @@ pub trait Slot {
     fn set(&self, v: Self::Item);
 }
 
-impl Slot for AtomicU8 {
-    type Item = u8;
-    const EMPTY: Self = AtomicU8::new(0);
-    #[inline(always)]
-    fn get(&self) -> u8 {
-        self.load(Ordering::Relaxed)
-    }
-    #[inline(always)]
-    fn set(&self, v: u8) {
-        self.store(v, Ordering::Relaxed);
-    }
+/// `Slot` for an atomic integer type and the integer it holds.
+macro_rules! atomic_slot {
+    ($($atomic:ident => $item:ty),*) => {$(
+        impl Slot for $atomic {
+            type Item = $item;
+            const EMPTY: Self = $atomic::new(0);
+            #[inline(always)]
+            fn get(&self) -> $item {
+                self.load(Ordering::Relaxed)
+            }
+            #[inline(always)]
+            fn set(&self, v: $item) {
+                self.store(v, Ordering::Relaxed);
+            }
+        }
+    )*};
 }
 
-impl Slot for AtomicU32 {
-    type Item = u32;
-    const EMPTY: Self = AtomicU32::new(0);
-    #[inline(always)]
-    fn get(&self) -> u32 {
-        self.load(Ordering::Relaxed)
-    }
-    #[inline(always)]
-    fn set(&self, v: u32) {
-        self.store(v, Ordering::Relaxed);
-    }
-}
+atomic_slot!(AtomicU8 => u8, AtomicU32 => u32);
 
 /// A FIFO of `N` slots (`N` a power of two, checked at compile time).
 pub struct Ring<S: Slot, const N: usize> {
