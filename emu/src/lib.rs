@@ -11,6 +11,7 @@ pub mod elf;
 pub mod machine;
 pub mod nvic;
 pub mod periph;
+pub mod profiler;
 pub mod rtt;
 pub mod session;
 pub mod soak;

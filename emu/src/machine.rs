@@ -16,6 +16,7 @@ use crate::elf::Image;
 use crate::nvic::{ENTRY_CYCLES, HARDFAULT, RETURN_CYCLES, SVCALL, TAIL_CHAIN_CYCLES};
 use crate::periph::flash::{Flash, SIZE as FLASH_SIZE};
 use crate::periph::BusError;
+use crate::profiler::Profiler;
 use crate::rtt::{self, Log};
 use std::collections::HashMap;
 use unicorn_engine::unicorn_const::{uc_error, Arch, HookType, Mode, Prot};
@@ -118,6 +119,8 @@ pub struct State {
     exc_return: Option<u32>,
     /// Read the RTT channel when the CPU reaches this address (a log frame ended).
     drain_at: Option<u32>,
+    /// Instructions per function, when asked for (`cargo emu run --profile`).
+    pub profiler: Option<Profiler>,
 }
 
 pub struct Machine<'a> {
@@ -223,6 +226,7 @@ impl<'a> Machine<'a> {
             delay_loops_skipped: 0,
             exc_return: None,
             drain_at: None,
+            profiler: None,
         };
         let mut uc = Unicorn::new_with_data(Arch::ARM, Mode::THUMB | Mode::MCLASS, state)
             .map_err(|e| format!("unicorn: {e:?}"))?;
@@ -538,6 +542,14 @@ impl<'a> Machine<'a> {
         if uc.get_data().drain_at == Some(addr as u32) {
             uc.get_data_mut().drain_at = None;
             Machine::drain_rtt(uc);
+        }
+        if uc.get_data().profiler.is_some() {
+            let lr = uc.reg_read(RegisterARM::LR).unwrap_or(0) as u32;
+            let s = uc.get_data_mut();
+            let exc = s.board.nvic.current();
+            if let Some(p) = s.profiler.as_mut() {
+                p.block(exc, addr as u32, n, lr);
+            }
         }
         let s = uc.get_data_mut();
         s.block = Block {

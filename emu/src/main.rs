@@ -47,6 +47,11 @@ enum Cmd {
         /// (or the current directory).
         #[arg(long)]
         keys: Option<String>,
+        /// Count the instructions each function executes while the file is streamed
+        /// (after boot) and print the top N per exception, inclusive and self, per
+        /// G-code line.
+        #[arg(long, value_name = "N")]
+        profile: Option<usize>,
     },
     /// Put the board's USB serial port on a pseudo-terminal any Grbl sender can open
     /// (DTR rises when it is opened); runs until killed.
@@ -151,6 +156,7 @@ fn cmd_run(
     log: Option<&Path>,
     flash: Option<&Path>,
     keys: Option<&str>,
+    profile: Option<usize>,
 ) -> Result<ExitCode, String> {
     let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
     let elf = elf_or_build(elf)?;
@@ -159,6 +165,13 @@ fn cmd_run(
     s.boot()?;
     if let Some(script) = keys {
         inkstep_emu::demo::play(&mut s, script, lcd.unwrap_or(Path::new(".")))?;
+    }
+    if profile.is_some() {
+        let image = inkstep_emu::elf::Image::read(&elf)?;
+        s.m.state_mut().profiler = Some(inkstep_emu::profiler::Profiler::new(
+            &image,
+            inkstep_emu::nvic::EXC_COUNT,
+        )?);
     }
     let flow = if char_count {
         Flow::CharCount(128)
@@ -214,6 +227,9 @@ fn cmd_run(
     );
     for e in done.errors.iter().chain(&done.alarms) {
         println!("{e}");
+    }
+    if let (Some(top), Some(p)) = (profile, s.m.state().profiler.as_ref()) {
+        print!("{}", p.report(top, done.lines.max(1) as f64, "line"));
     }
     Ok(if done.errors.is_empty() && done.alarms.is_empty() {
         ExitCode::SUCCESS
@@ -400,6 +416,7 @@ fn main() -> ExitCode {
             log,
             flash,
             keys,
+            profile,
         } => cmd_run(
             &file,
             elf,
@@ -409,6 +426,7 @@ fn main() -> ExitCode {
             log.as_deref(),
             flash.as_deref(),
             keys.as_deref(),
+            profile,
         ),
         Cmd::Serve {
             elf,
