@@ -65,20 +65,20 @@ pub fn round(x: f32) -> f32 {
     }
 }
 
-/// Correctly rounded square root (NaN for negative input): the root's 25 bits (24 and
-/// a rounding bit) digit by digit in 32-bit integers, no table, no division, no u64
-/// (checked against the hardware's square root on every f32: the ignored test
-/// `sqrt_on_every_f32_is_the_hardware_root`).
-/// `!(x >= 0.0)` on purpose: one comparison is false for NaN and negatives alike.
-#[allow(clippy::neg_cmp_op_on_partial_ord)]
+/// Correctly rounded square root (NaN for negative input), in integers only: the
+/// 24-bit root of the significand by Newton steps on the M3's 32-bit hardware divide,
+/// then an exact remainder check (one `umull`) for the rounding (checked against the
+/// hardware's square root on every f32: the ignored test
+/// `sqrt_on_every_f32_is_the_hardware_root`). About 60 instructions on the M3, where
+/// bit-by-bit digits took 400: the planner takes several roots per G-code line.
 pub fn sqrt(x: f32) -> f32 {
-    if !(x >= 0.0) {
-        return f32::NAN;
-    }
-    if x == 0.0 || x == f32::INFINITY {
-        return x;
-    }
     let bits = x.to_bits();
+    if bits & 0x7FFF_FFFF == 0 || bits == 0x7F80_0000 {
+        return x; // +-0 and +infinity
+    }
+    if bits > 0x7F80_0000 {
+        return f32::NAN; // negative (sign bit set) or NaN
+    }
     let mut e = (bits >> 23) as i32 - 127;
     let mut m = bits & 0x007f_ffff;
     if e == -127 {
@@ -92,23 +92,40 @@ pub fn sqrt(x: f32) -> f32 {
     if e & 1 != 0 {
         m <<= 1;
     }
-    // Root bit by bit from 2^24 (the leading 1) down: `rem` is the remainder, doubled
-    // at every step so it stays aligned with the next bit; `s` is twice the root so far.
-    let mut rem = m << 1;
-    let (mut q, mut s, mut bit) = (0u32, 0u32, 0x0100_0000u32);
-    while bit != 0 {
-        let t = s + bit;
-        if t <= rem {
-            s = t + bit;
-            rem -= t;
-            q += bit;
-        }
-        rem <<= 1;
-        bit >>= 1;
+    // n = m * 2^23 lies in [2^46, 2^48): its root, in [2^23, 2^24), is the result's
+    // significand. First the 16-bit root of n's top 32 bits `a`, by Newton steps from
+    // the tangent of the root at 2^32 (above it everywhere, by 25 % at most: three
+    // steps reach it), then one Newton step at full width, then the exact floor.
+    let n = u64::from(m) << 23;
+    let a = (n >> 16) as u32;
+    let mut s = (a >> 17) + 0x8000;
+    for _ in 0..3 {
+        s = (s + a / s) >> 1;
     }
-    // Round to nearest on the extra bit (a square root is never exactly halfway).
-    q += q & 1;
-    f32::from_bits(((q >> 1) + 0x3f00_0000).wrapping_add(((e >> 1) << 23) as u32))
+    let q0 = s << 8;
+    let mut r = (q0 + div_48_by_24(n, q0)) >> 1;
+    while u64::from(r) * u64::from(r) > n {
+        r -= 1;
+    }
+    while u64::from(r + 1) * u64::from(r + 1) <= n {
+        r += 1;
+    }
+    // Round to nearest: up when n - r^2 > r (the root is then above r + 1/2; a square
+    // root is never exactly halfway).
+    r += u32::from(n - u64::from(r) * u64::from(r) > u64::from(r));
+    f32::from_bits((r + 0x3f00_0000).wrapping_add(((e >> 1) << 23) as u32))
+}
+
+/// `n / d` for `n` below 2^48 and `d` in [2^23, 2^24], with 32-bit divides only (a
+/// u64 division is a long software routine on the M3): the top 32 bits, then two more
+/// bytes, each with the remainder (below 2^24) in front.
+fn div_48_by_24(n: u64, d: u32) -> u32 {
+    let top = (n >> 16) as u32;
+    let (q1, r1) = (top / d, top % d);
+    let mid = (r1 << 8) | ((n >> 8) as u32 & 0xFF);
+    let (q2, r2) = (mid / d, mid % d);
+    let low = (r2 << 8) | (n as u32 & 0xFF);
+    (q1 << 16) | (q2 << 8) | (low / d)
 }
 
 /// sqrt(x² + y²).

@@ -96,11 +96,48 @@ pub struct Block {
     pub max_entry: f32,
     /// Planned entry speed, mm/s.
     pub entry: f32,
+    /// What the planning passes last computed for this block (see [`Planner::replan`]).
+    passes: Passes,
+}
+
+/// The planning passes' results for one block, kept so that a pass stops where
+/// nothing changes instead of taking two soft-float square roots per queued block
+/// every time a move is added (on the M3 that was most of a G-code line's cost).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Passes {
+    /// Reverse pass: the fastest entry from which the rest of the queue can still
+    /// stop, mm/s. It depends only on this block and those after it.
+    reverse: f32,
+    /// Forward pass: the fastest exit reachable from `entry` (its exact bits), mm/s;
+    /// NaN until computed. (Exact bits because these passes must give exactly what
+    /// full passes give: the simulator's figures and golden tests depend on them.)
+    exit: f32,
+}
+
+/// How much of the reverse pass a replan needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Reverse {
+    /// A block was added at the tail: from there back only as far as results can
+    /// change (see [`Planner::replan`]).
+    FromTail,
+    /// Speed limits of every block changed (an override).
+    All,
+    /// Nothing after the executing block changed (a new head cap).
+    None,
 }
 
 impl Block {
     pub fn is_rapid(&self) -> bool {
         self.mv.feed == Feed::Rapid
+    }
+
+    /// [`Planner::max_speed`] with these overrides (fractions of 1).
+    fn max_speed(&self, feed_override: f32, rapid_override: f32) -> f32 {
+        if self.is_rapid() {
+            self.limit * rapid_override
+        } else {
+            (self.nominal * feed_override).min(self.limit)
+        }
     }
 }
 
@@ -128,6 +165,11 @@ pub struct Planner {
     rapid_override: f32,
     /// Highest exit speed the block in execution can still reach (mm/s).
     head_cap: f32,
+    /// Leading blocks whose entry the last forward pass set to its cap.
+    capped: usize,
+    /// Leading blocks whose stored reverse result is only a lower bound (at most
+    /// `capped`; see [`Planner::replan`]).
+    stale: usize,
     generation: u32,
 }
 
@@ -153,6 +195,8 @@ impl Planner {
             feed_override = 1.0,
             rapid_override = 1.0,
             head_cap = cfg.start_speed,
+            capped = 0,
+            stale = 0,
             generation = 0,
         })
     }
@@ -225,12 +269,16 @@ impl Planner {
             limit: g.speed_limit,
             max_entry,
             entry: floor,
+            passes: Passes {
+                reverse: floor,
+                exit: f32::NAN,
+            },
         };
         self.prev = Some((g.unit_end, g.speed_limit.min(nominal)));
         self.next_start = mv.target;
         // Cannot fail: checked for room above.
         let _ = self.blocks.push_back(block);
-        self.replan();
+        self.replan(Reverse::FromTail);
         Ok(())
     }
 
@@ -238,6 +286,8 @@ impl Planner {
     pub fn pop(&mut self) -> Option<Block> {
         let b = self.blocks.pop_front();
         if b.is_some() {
+            self.capped = self.capped.saturating_sub(1);
+            self.stale = self.stale.saturating_sub(1);
             self.generation = self.generation.wrapping_add(1);
         }
         b
@@ -270,29 +320,25 @@ impl Planner {
         let binds = entry >= self.head_cap - 1e-3 || entry > cap;
         self.head_cap = cap;
         if binds {
-            self.replan();
+            self.replan(Reverse::None);
         }
     }
 
     /// Maximum speed of `b` with the overrides applied (mm/s). A rapid's nominal speed
     /// is unbounded (as fast as the axes allow): its override scales the axis limit.
     pub fn max_speed(&self, b: &Block) -> f32 {
-        if b.is_rapid() {
-            b.limit * self.rapid_override
-        } else {
-            (b.nominal * self.feed_override).min(b.limit)
-        }
+        b.max_speed(self.feed_override, self.rapid_override)
     }
 
     /// Feed override in percent (Grbl: 10..200).
     pub fn set_feed_override(&mut self, percent: u16) {
         self.feed_override = f32::from(percent.clamp(10, 200)) / 100.0;
-        self.replan();
+        self.replan(Reverse::All);
     }
     /// Rapid override in percent (Grbl: 25, 50, 100).
     pub fn set_rapid_override(&mut self, percent: u16) {
         self.rapid_override = f32::from(percent.clamp(1, 100)) / 100.0;
-        self.replan();
+        self.replan(Reverse::All);
     }
     pub fn feed_override(&self) -> u16 {
         (self.feed_override * 100.0 + 0.5) as u16
@@ -318,41 +364,118 @@ impl Planner {
         self.next_start = position;
         self.prev = None;
         self.head_cap = self.cfg.start_speed;
+        self.capped = 0;
+        self.stale = 0;
         self.generation = self.generation.wrapping_add(1);
     }
 
     /// Reverse pass (every block must be able to slow to the next one's entry), then
     /// forward pass (and to reach it from the previous one's).
-    fn replan(&mut self) {
-        let floor = self.cfg.start_speed;
-        let n = self.blocks.len();
-        let mut next_entry = floor;
-        for i in (0..n).rev() {
-            let (ovr_max, ae) = match self.blocks.get(i) {
-                Some(b) => (self.max_speed(b), self.plan_accel(b)),
-                None => continue,
-            };
-            if let Some(b) = self.blocks.get_mut(i) {
-                let reach = crate::fmath::sqrt(next_entry * next_entry + 2.0 * ae * b.length);
-                b.entry = b.max_entry.min(ovr_max).min(reach);
-                next_entry = b.entry;
-            }
+    ///
+    /// The result is bit for bit that of full passes over the queue, at a fraction of
+    /// the cost (two soft-float square roots per queued block were most of a G-code
+    /// line's CPU time on the M3):
+    /// - the reverse pass stops at the first block whose result comes out as before
+    ///   (the blocks before it depend only on it and on themselves);
+    /// - when a block was added and every result so far rose or stayed, it also stops
+    ///   at the prefix of blocks whose entry the forward pass capped (reverse result
+    ///   at or above the cap): their true reverse results can only have risen, so
+    ///   those entries stay the cap. Their stored results are then lower bounds
+    ///   (`stale`), brought up to date only when a forward pass needs them (a lower
+    ///   head cap, after pops);
+    /// - the forward pass reuses a block's exit speed while its entry is unchanged.
+    fn replan(&mut self, reverse: Reverse) {
+        if reverse != Reverse::None {
+            self.reverse_pass(reverse == Reverse::FromTail);
         }
-        let mut cap = self.head_cap.max(floor);
-        for i in 0..n {
-            let ae = match self.blocks.get(i) {
-                Some(b) => self.plan_accel(b),
-                None => continue,
-            };
-            if let Some(b) = self.blocks.get_mut(i) {
-                if b.entry > cap {
-                    b.entry = cap;
-                }
-                cap = crate::fmath::sqrt(b.entry * b.entry + 2.0 * ae * b.length);
-            }
+        if !self.forward_pass() {
+            self.refresh_stale();
+            let _ = self.forward_pass();
         }
         self.generation = self.generation.wrapping_add(1);
     }
+
+    /// The fastest entry into `b` from which it can still slow to `next_entry`.
+    fn reverse_of(&self, b: &Block, next_entry: f32) -> f32 {
+        let ae = self.plan_accel(b);
+        let reach = crate::fmath::sqrt(next_entry * next_entry + 2.0 * ae * b.length);
+        b.max_entry.min(self.max_speed(b)).min(reach)
+    }
+
+    /// Reverse results from the tail down; after a push (`added`) only as far as
+    /// [`Planner::replan`] says they can change.
+    fn reverse_pass(&mut self, added: bool) {
+        let mut next_entry = self.cfg.start_speed;
+        let mut rising = added;
+        for i in (0..self.blocks.len()).rev() {
+            if rising && i < self.capped {
+                self.stale = self.stale.max(i + 1);
+                return;
+            }
+            let Some(b) = self.blocks.get(i) else { return };
+            let r = self.reverse_of(b, next_entry);
+            let Some(b) = self.blocks.get_mut(i) else { return };
+            let old = b.passes.reverse;
+            b.passes.reverse = r;
+            next_entry = r;
+            if rising {
+                if r.to_bits() == old.to_bits() {
+                    return; // i >= capped >= stale: `old` was exact
+                }
+                rising = !(r < old);
+            }
+        }
+        self.stale = 0;
+    }
+
+    /// Exact reverse results for the `stale` front blocks.
+    fn refresh_stale(&mut self) {
+        let stale = core::mem::take(&mut self.stale);
+        let mut next_entry = match self.blocks.get(stale) {
+            Some(b) => b.passes.reverse,
+            None => self.cfg.start_speed,
+        };
+        for i in (0..stale).rev() {
+            let Some(b) = self.blocks.get(i) else { continue };
+            next_entry = self.reverse_of(b, next_entry);
+            if let Some(b) = self.blocks.get_mut(i) {
+                b.passes.reverse = next_entry;
+            }
+        }
+    }
+
+    /// Entries from the head cap forward; false (and to be run again after
+    /// [`Planner::refresh_stale`]) when a stale reverse result would bind.
+    fn forward_pass(&mut self) -> bool {
+        let mut cap = self.head_cap.max(self.cfg.start_speed);
+        let shape = self.cfg.shape;
+        let mut capped = 0;
+        for (i, b) in self.blocks.iter_mut().enumerate() {
+            let r = b.passes.reverse;
+            let at_cap = !(r < cap);
+            if i < self.stale && !at_cap {
+                return false;
+            }
+            if at_cap && capped == i {
+                capped = i + 1;
+            }
+            let entry = if r > cap { cap } else { r };
+            let known = entry.to_bits() == b.entry.to_bits() && !is_nan(b.passes.exit);
+            if !known {
+                let ae = shape.effective_accel(b.accel);
+                b.entry = entry;
+                b.passes.exit = crate::fmath::sqrt(entry * entry + 2.0 * ae * b.length);
+            }
+            cap = b.passes.exit;
+        }
+        self.capped = capped;
+        true
+    }
+}
+
+/// NaN, by its bits (no soft-float comparison).
+fn is_nan(x: f32) -> bool {
+    x.to_bits() & 0x7FFF_FFFF > 0x7F80_0000
 }
 
 /// Junction speed limit (mm/s) between direction `u1` (end of the previous move) and
@@ -394,6 +517,93 @@ mod tests {
             path: Path::Line,
             feed: Feed::MmPerMin(f),
             line: 0,
+        }
+    }
+
+    /// Entry speeds from full reverse and forward passes over the whole queue (what
+    /// `replan` computed before it learnt to stop where nothing changes).
+    fn full_passes(p: &Planner) -> std::vec::Vec<f32> {
+        let floor = p.cfg.start_speed;
+        let mut entries: std::vec::Vec<f32> = std::vec::Vec::new();
+        let mut next_entry = floor;
+        for b in p.blocks.iter().rev() {
+            let ae = p.plan_accel(b);
+            let reach = crate::fmath::sqrt(next_entry * next_entry + 2.0 * ae * b.length);
+            next_entry = b.max_entry.min(p.max_speed(b)).min(reach);
+            entries.push(next_entry);
+        }
+        entries.reverse();
+        let mut cap = p.head_cap.max(floor);
+        for (e, b) in entries.iter_mut().zip(p.blocks.iter()) {
+            if *e > cap {
+                *e = cap;
+            }
+            cap = crate::fmath::sqrt(*e * *e + 2.0 * p.plan_accel(b) * b.length);
+        }
+        entries
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
+        /// Incremental replanning gives bit for bit the entry speeds of full passes
+        /// whenever it replans, through pushes, pops, head caps and overrides.
+        #[test]
+        fn incremental_replan_equals_full_passes(
+            ops in proptest::collection::vec((0u8..8, -400i32..400, -400i32..400, 1u16..200), 1..200),
+            start_speed in proptest::prop_oneof![proptest::strategy::Just(0.0f32), 0.1f32..5.0],
+            cosine: bool,
+        ) {
+            let cfg = PlannerConfig {
+                start_speed,
+                shape: if cosine { Shape::Cosine } else { Shape::Trapezoid },
+                ..PlannerConfig::default()
+            };
+            let mut p = Planner::new(cfg, [0; 3]);
+            let mut at = [0i32; 2];
+            let mut dir = [1i32, 0];
+            for (op, dx, dy, k) in ops {
+                let generation = p.generation();
+                match op {
+                    0..=3 => {
+                        // Mostly short collinear runs (whose speeds the reverse pass
+                        // raises all along the queue), some turns and long moves,
+                        // some rapids.
+                        if op == 3 {
+                            dir = [dx.signum(), dy.signum()];
+                        }
+                        let len = if op == 2 { dx.abs() * 10 } else { dy.abs() % 8 + 1 };
+                        at = [at[0] + dir[0] * len, at[1] + dir[1] * len];
+                        let mv = Move {
+                            // Some feeds below the start speed (entries then fall
+                            // back along the queue).
+                            feed: match k % 7 {
+                                0 => Feed::Rapid,
+                                1 => Feed::MmPerMin(f32::from(k % 16 + 1) * 10.0),
+                                _ => Feed::MmPerMin(f32::from(k) * 25.0),
+                            },
+                            ..line(at[0], at[1], 1.0)
+                        };
+                        if p.push(&mv) == Err(PlanError::Full) {
+                            p.pop();
+                            continue;
+                        }
+                    }
+                    // A pop replans nothing (the step engine's head cap follows).
+                    4 => {
+                        p.pop();
+                        continue;
+                    }
+                    5 => p.set_head_cap(f32::from(k) / 4.0),
+                    6 => p.set_feed_override(k),
+                    _ => p.set_rapid_override(k / 2),
+                }
+                if p.generation() == generation {
+                    continue; // nothing replanned
+                }
+                let got: std::vec::Vec<u32> = p.blocks.iter().map(|b| b.entry.to_bits()).collect();
+                let want: std::vec::Vec<u32> = full_passes(&p).iter().map(|e| e.to_bits()).collect();
+                proptest::prop_assert_eq!(got, want);
+            }
         }
     }
 
