@@ -105,13 +105,19 @@ pub struct Block {
 /// every time a move is added (on the M3 that was most of a G-code line's cost).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Passes {
+    /// `2 a L`: the change of squared speed this block allows (its planning
+    /// acceleration a, its length L), mm^2/s^2.
+    reach: f32,
+    /// The entry limit: junction limit and maximum speed with the overrides, mm/s.
+    limit: f32,
     /// Reverse pass: the fastest entry from which the rest of the queue can still
     /// stop, mm/s. It depends only on this block and those after it.
     reverse: f32,
-    /// Forward pass: the fastest exit reachable from `entry` (its exact bits), mm/s;
-    /// NaN until computed. (Exact bits because these passes must give exactly what
-    /// full passes give: the simulator's figures and golden tests depend on them.)
-    exit: f32,
+    /// Forward pass: the square of the fastest exit reachable from `entry` (its exact
+    /// bits), mm^2/s^2; NaN until computed. (Exact bits because these passes must give
+    /// exactly what full passes give: the simulator's figures and golden tests depend
+    /// on them.)
+    exit_sq: f32,
 }
 
 /// How much of the reverse pass a replan needs.
@@ -261,7 +267,7 @@ impl Planner {
             }
         };
         let accel = g.accel;
-        let block = Block {
+        let mut block = Block {
             mv: *mv,
             length: g.length,
             accel,
@@ -270,10 +276,14 @@ impl Planner {
             max_entry,
             entry: floor,
             passes: Passes {
+                reach: 0.0,
+                limit: 0.0,
                 reverse: floor,
-                exit: f32::NAN,
+                exit_sq: f32::NAN,
             },
         };
+        block.passes.reach = 2.0 * self.plan_accel(&block) * block.length;
+        block.passes.limit = block.max_entry.min(self.max_speed(&block));
         self.prev = Some((g.unit_end, g.speed_limit.min(nominal)));
         self.next_start = mv.target;
         // Cannot fail: checked for room above.
@@ -384,6 +394,9 @@ impl Planner {
     ///   (`stale`), brought up to date only when a forward pass needs them (a lower
     ///   head cap, after pops);
     /// - the forward pass reuses a block's exit speed while its entry is unchanged.
+    ///
+    /// Squares are compared exactly in integers (`square_at_most`), so a root is taken
+    /// only where its value is the result.
     fn replan(&mut self, reverse: Reverse) {
         if reverse != Reverse::None {
             self.reverse_pass(reverse == Reverse::FromTail);
@@ -395,26 +408,31 @@ impl Planner {
         self.generation = self.generation.wrapping_add(1);
     }
 
-    /// The fastest entry into `b` from which it can still slow to `next_entry`.
-    fn reverse_of(&self, b: &Block, next_entry: f32) -> f32 {
-        let ae = self.plan_accel(b);
-        let reach = crate::fmath::sqrt(next_entry * next_entry + 2.0 * ae * b.length);
-        b.max_entry.min(self.max_speed(b)).min(reach)
+    /// The fastest entry into `b` from which it can still slow to `next_entry`:
+    /// min(limit, sqrt(next^2 + 2 a L)), the root taken only when it is the smaller.
+    fn reverse_of(b: &Block, next_entry: f32) -> f32 {
+        min_root(b.passes.limit, next_entry * next_entry + b.passes.reach)
     }
 
     /// Reverse results from the tail down; after a push (`added`) only as far as
-    /// [`Planner::replan`] says they can change.
+    /// [`Planner::replan`] says they can change; `all` first brings every block's
+    /// entry limit to the overrides.
     fn reverse_pass(&mut self, added: bool) {
+        if !added {
+            let (feed, rapid) = (self.feed_override, self.rapid_override);
+            for b in self.blocks.iter_mut() {
+                b.passes.limit = b.max_entry.min(b.max_speed(feed, rapid));
+            }
+        }
         let mut next_entry = self.cfg.start_speed;
         let mut rising = added;
-        for i in (0..self.blocks.len()).rev() {
-            if rising && i < self.capped {
+        let capped = self.capped;
+        for (i, b) in self.blocks.iter_mut().enumerate().rev() {
+            if rising && i < capped {
                 self.stale = self.stale.max(i + 1);
                 return;
             }
-            let Some(b) = self.blocks.get(i) else { return };
-            let r = self.reverse_of(b, next_entry);
-            let Some(b) = self.blocks.get_mut(i) else { return };
+            let r = Planner::reverse_of(b, next_entry);
             let old = b.passes.reverse;
             b.passes.reverse = r;
             next_entry = r;
@@ -435,42 +453,88 @@ impl Planner {
             Some(b) => b.passes.reverse,
             None => self.cfg.start_speed,
         };
-        for i in (0..stale).rev() {
-            let Some(b) = self.blocks.get(i) else { continue };
-            next_entry = self.reverse_of(b, next_entry);
-            if let Some(b) = self.blocks.get_mut(i) {
-                b.passes.reverse = next_entry;
-            }
+        for b in self.blocks.iter_mut().take(stale).rev() {
+            next_entry = Planner::reverse_of(b, next_entry);
+            b.passes.reverse = next_entry;
         }
     }
 
     /// Entries from the head cap forward; false (and to be run again after
     /// [`Planner::refresh_stale`]) when a stale reverse result would bind.
     fn forward_pass(&mut self) -> bool {
-        let mut cap = self.head_cap.max(self.cfg.start_speed);
-        let shape = self.cfg.shape;
+        // The cap on the next entry: a speed at the head, then the square of the
+        // previous block's exit (its root taken only when it binds).
+        let head = self.head_cap.max(self.cfg.start_speed);
+        let mut cap_sq = None;
         let mut capped = 0;
         for (i, b) in self.blocks.iter_mut().enumerate() {
             let r = b.passes.reverse;
-            let at_cap = !(r < cap);
+            // entry = min(r, cap), with cap = sqrt(cap_sq) after the first block.
+            let (entry, at_cap) = match cap_sq {
+                None => (if r > head { head } else { r }, !(r < head)),
+                Some(y) => match square_at_most(r, y) {
+                    // r^2 <= y exactly: the rounded root is at least r. (It may
+                    // equal r; counting the block as not capped then only makes
+                    // the next reverse pass go further, or refreshes stale blocks.)
+                    Some(true) => (r, false),
+                    // r^2 > y: the rounded root is at most r, and is the entry.
+                    Some(false) => (crate::fmath::sqrt(y), true),
+                    None => {
+                        let cap = crate::fmath::sqrt(y);
+                        (if r > cap { cap } else { r }, !(r < cap))
+                    }
+                },
+            };
             if i < self.stale && !at_cap {
                 return false;
             }
             if at_cap && capped == i {
                 capped = i + 1;
             }
-            let entry = if r > cap { cap } else { r };
-            let known = entry.to_bits() == b.entry.to_bits() && !is_nan(b.passes.exit);
-            if !known {
-                let ae = shape.effective_accel(b.accel);
+            if entry.to_bits() != b.entry.to_bits() || is_nan(b.passes.exit_sq) {
                 b.entry = entry;
-                b.passes.exit = crate::fmath::sqrt(entry * entry + 2.0 * ae * b.length);
+                b.passes.exit_sq = entry * entry + b.passes.reach;
             }
-            cap = b.passes.exit;
+            cap_sq = Some(b.passes.exit_sq);
         }
         self.capped = capped;
         true
     }
+}
+
+/// min(limit, sqrt(y)) with the root taken only when it is the smaller (exactly what
+/// `limit.min(sqrt(y))` gives, root correctly rounded).
+fn min_root(limit: f32, y: f32) -> f32 {
+    match square_at_most(limit, y) {
+        Some(true) => limit,
+        Some(false) => crate::fmath::sqrt(y),
+        None => limit.min(crate::fmath::sqrt(y)),
+    }
+}
+
+/// Whether r^2 <= y exactly (not in rounded f32), for r zero or positive normal and
+/// y positive normal, in integers; None for anything else (subnormal, infinite, NaN,
+/// negative), which callers take the plain way. With r^2 <= y the correctly rounded
+/// sqrt(y) is at least r; with r^2 > y it is at most r.
+fn square_at_most(r: f32, y: f32) -> Option<bool> {
+    let (rb, yb) = (r.to_bits(), y.to_bits());
+    let normal = |b: u32| (0x0080_0000..0x7F80_0000).contains(&b);
+    if !normal(yb) || !(rb == 0 || normal(rb)) {
+        return None;
+    }
+    if rb == 0 {
+        return Some(true);
+    }
+    let mant = |b: u32| u64::from(b & 0x007F_FFFF | 0x0080_0000);
+    let (er, ey) = ((rb >> 23) as i32, (yb >> 23) as i32);
+    // r^2 = mr^2 * 2^(2 er - 2 bias - 46), y = my * 2^(ey - bias - 23): compare
+    // mr^2 (in [2^46, 2^48)) with my * 2^d (my in [2^23, 2^24)).
+    let d = ey - 2 * er + 127 + 23;
+    Some(match d {
+        ..=22 => false,     // my * 2^d < 2^46 <= mr^2
+        25.. => true,       // my * 2^d >= 2^48 > mr^2
+        _ => mant(rb) * mant(rb) <= mant(yb) << d,
+    })
 }
 
 /// NaN, by its bits (no soft-float comparison).
@@ -541,6 +605,30 @@ mod tests {
             cap = crate::fmath::sqrt(*e * *e + 2.0 * p.plan_accel(b) * b.length);
         }
         entries
+    }
+
+    proptest::proptest! {
+        /// The exact square comparison agrees with f64 (where r^2 is exact).
+        #[test]
+        fn square_comparison_is_exact(rb in 0u32..0x7F80_0000, yb in 0u32..0x7F80_0000, near: bool) {
+            let r = f32::from_bits(rb);
+            // Near: y within a few ulps of r^2, where rounding would decide.
+            let y = if near {
+                let sq = (f64::from(r) * f64::from(r)) as f32;
+                f32::from_bits(sq.to_bits().wrapping_add(yb % 5).wrapping_sub(2))
+            } else {
+                f32::from_bits(yb)
+            };
+            if let Some(le) = square_at_most(r, y) {
+                proptest::prop_assert_eq!(le, f64::from(r) * f64::from(r) <= f64::from(y));
+            }
+            if r.is_finite() && y.is_finite() && y > 0.0 {
+                proptest::prop_assert_eq!(
+                    min_root(r, y).to_bits(),
+                    r.min(crate::fmath::sqrt(y)).to_bits()
+                );
+            }
+        }
     }
 
     proptest::proptest! {
