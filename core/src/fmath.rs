@@ -103,12 +103,11 @@ pub fn sqrt(x: f32) -> f32 {
         s = (s + a / s) >> 1;
     }
     let q0 = s << 8;
+    // An integer Newton step never lands below the floor of the root, and from q0
+    // (within about 2^9 of the root) at most one above it.
     let mut r = (q0 + div_48_by_24(n, q0)) >> 1;
-    while u64::from(r) * u64::from(r) > n {
+    if u64::from(r) * u64::from(r) > n {
         r -= 1;
-    }
-    while u64::from(r + 1) * u64::from(r + 1) <= n {
-        r += 1;
     }
     // Round to nearest: up when n - r^2 > r (the root is then above r + 1/2; a square
     // root is never exactly halfway).
