@@ -42,6 +42,9 @@ use inkstep_core::stepper::MAX_RELOAD;
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
 /// The host has the serial port open (CDC's DTR), as the USB task last saw it.
 static PORT_OPEN: AtomicBool = AtomicBool::new(false);
+/// The USB task queued bytes from the host (or the port opened or closed) since the
+/// protocol task last looked: the protocol task runs at once, not at the next tick.
+static HOST_BYTES: AtomicBool = AtomicBool::new(false);
 
 /// A fault or panic must leave every motor driver disabled (see `inkstep::fault`).
 #[cortex_m_rt::exception]
@@ -280,11 +283,12 @@ mod app {
         let tx = cx.local.usb_tx_out;
         let serial = &mut **cx.local.serial;
         cx.local.usb.poll(&mut [&mut *serial]);
-        PORT_OPEN.store(serial.dtr(), Ordering::Relaxed);
+        let open = serial.dtr();
+        let mut arrived = PORT_OPEN.swap(open, Ordering::Relaxed) != open;
         let mut buf = [0u8; 64];
         if rx.free() >= buf.len() {
             if let Ok(n) = serial.read(&mut buf) {
-                rx.push(buf.get(..n).unwrap_or(&[]));
+                arrived |= rx.push(buf.get(..n).unwrap_or(&[])) > 0;
             }
         } else {
             // A packet left in the endpoint keeps the peripheral's transfer flag set,
@@ -300,6 +304,11 @@ mod app {
             // The CDC class buffers what the endpoint cannot take yet; bytes it refuses
             // are dropped only if the host stopped reading.
             let _ = serial.write(buf.get(..n).unwrap_or(&[]));
+        }
+        if arrived {
+            // Real-time bytes act when they arrive, not at the next tick.
+            HOST_BYTES.store(true, Ordering::Relaxed);
+            rtic::pend(Interrupt::SPI1);
         }
     }
 
@@ -341,41 +350,56 @@ mod app {
     /// the release of a halt.
     #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, servo, store, servo_us: Option<u32> = None])]
     fn protocol(mut cx: protocol::Context) {
-        let now = now_ms();
-        let pins = board::Inputs::levels();
-        let host = HostLink {
-            rx: cx.local.usb_rx_out,
-            tx: cx.local.usb_tx_in,
-            port_open: PORT_OPEN.load(Ordering::Relaxed),
-        };
-        let store = &mut *cx.local.store;
-        let done = cx.shared.core.lock(|c| {
-            let (ctl, pipeline) = c.parts();
-            ctl.service(host, pins, store, pipeline, now)
-        });
-        // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes the
-        // USB task's own back-pressure mask (see `usb_lp`).
-        unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
-        rtic::pend(Interrupt::USB_LP_CAN_RX0);
-        if let Some(cfg) = done.outputs {
-            apply_output_config(&cfg);
+        let started = now_ms();
+        loop {
+            HOST_BYTES.store(false, Ordering::Relaxed);
+            let now = now_ms();
+            let pins = board::Inputs::levels();
+            let host = HostLink {
+                rx: &mut *cx.local.usb_rx_out,
+                tx: &mut *cx.local.usb_tx_in,
+                port_open: PORT_OPEN.load(Ordering::Relaxed),
+            };
+            let store = &mut *cx.local.store;
+            let done = cx.shared.core.lock(|c| {
+                let (ctl, pipeline) = c.parts();
+                ctl.service(host, pins, store, pipeline, now)
+            });
+            // The replies out now (the USB task preempts this one as soon as the lock
+            // is released), and the receive side open again.
+            // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes
+            // the USB task's own back-pressure mask (see `usb_lp`).
+            unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
+            rtic::pend(Interrupt::USB_LP_CAN_RX0);
+            if let Some(cfg) = done.outputs {
+                apply_output_config(&cfg);
+            }
+            if let Some(us) = done
+                .servo_pulse_us
+                .filter(|&us| *cx.local.servo_us != Some(us))
+            {
+                cx.local.servo.set_pulse_us(us);
+                *cx.local.servo_us = Some(us);
+            }
+            // A reset from the alarm (soft reset / $X) releases the latched halt, only
+            // while the e-stop input is released now: an e-stop pressed after the
+            // inputs were read above must not be undone.
+            steps::release_halt(|| {
+                !done.alarmed && !done.polarity.decode(board::Inputs::levels()).estop
+            });
+            // One line per run, the lock released in between (so the USB task and the
+            // step preparation get in, and a `?` that arrives meanwhile is answered
+            // before the next line); more lines until the next tick.
+            if !done.more || now_ms() != started {
+                break;
+            }
         }
-        if let Some(us) = done
-            .servo_pulse_us
-            .filter(|&us| *cx.local.servo_us != Some(us))
-        {
-            cx.local.servo.set_pulse_us(us);
-            *cx.local.servo_us = Some(us);
-        }
-        // A reset from the alarm (soft reset / $X) releases the latched halt, only while
-        // the e-stop input is released now: an e-stop pressed after the inputs were
-        // read above must not be undone.
-        steps::release_halt(|| {
-            !done.alarmed && !done.polarity.decode(board::Inputs::levels()).estop
-        });
-        // A tick that came while this ran is dropped: the next run starts at the next
-        // tick, so the tasks below always get a turn between two runs.
+        // A tick that came while this ran is dropped, so the tasks below always get a
+        // turn between two runs; bytes that came after the last look start a new run.
         cortex_m::peripheral::NVIC::unpend(Interrupt::SPI1);
+        if HOST_BYTES.load(Ordering::Relaxed) {
+            rtic::pend(Interrupt::SPI1);
+        }
     }
 
     /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.

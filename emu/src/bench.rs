@@ -37,7 +37,7 @@ const IRQ_NAMES: [(usize, &str); 12] = [
 
 /// The name of exception `e`: its vector, and the RTIC task bound to it in
 /// src/main.rs when there is one (`#[task(binds = X, ..)] fn name`).
-fn task_name(e: usize, tasks: &[(String, String)]) -> String {
+pub fn task_name(e: usize, tasks: &[(String, String)]) -> String {
     let vector = match e {
         0 => return "thread mode (init, idle)".into(),
         15 => "SysTick".to_string(),
@@ -55,7 +55,7 @@ fn task_name(e: usize, tasks: &[(String, String)]) -> String {
 }
 
 /// (vector, task) pairs from the product's source.
-fn rtic_tasks() -> Vec<(String, String)> {
+pub fn rtic_tasks() -> Vec<(String, String)> {
     let src = std::fs::read_to_string(repo_root().join("src/main.rs")).unwrap_or_default();
     let mut out = Vec::new();
     let mut binds: Option<String> = None;

@@ -46,8 +46,9 @@ const TOAST_MS: u32 = 2500;
 const SETTLE_MS: u32 = 1000;
 
 /// The HMI state machine. The LCD task draws from a clone taken under a short lock;
-/// not `Copy`, as a clone is deliberate.
-#[derive(Clone, Debug)]
+/// not `Copy`, as a clone is deliberate. Compared with the last one drawn, so that an
+/// unchanged screen is not drawn again.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Hmi {
     cfg: Config,
     page: Page,

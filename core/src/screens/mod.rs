@@ -147,6 +147,8 @@ pub struct Screens {
     trace_run: Option<u32>,
     ticks: Option<Px>,
     arrow: Option<([i8; 2], bool)>,
+    /// What the last render drew from (see [`Screens::render`]).
+    drawn: Option<(Hmi, Status)>,
 }
 
 impl Screens {
@@ -166,6 +168,13 @@ impl Screens {
 
     /// Draw the current page of `hmi` for machine status `st` (never fails: the result
     /// is kept for the callers written against a fallible drawing target).
+    ///
+    /// Quiet when nothing changed: painting a page's text cells pixel by pixel costs
+    /// the firmware milliseconds of CPU even when no pixel changes (emu/README.md has
+    /// the measured load), so a render from the same HMI
+    /// state and machine status as the last one is skipped; the frame buffer already
+    /// holds exactly that picture. The drawing page is the exception (its clock runs
+    /// with `now_ms`), and is always drawn.
     pub fn render(
         &mut self,
         hmi: &Hmi,
@@ -173,7 +182,13 @@ impl Screens {
         now_ms: u32,
         fb: &mut FrameBuffer,
     ) -> Result<(), Infallible> {
+        let same = |(h, s): &(Hmi, Status)| h == hmi && s == st;
+        let timed = matches!(hmi.page(), Page::Run(_));
+        if self.key.is_some() && !timed && self.drawn.as_ref().is_some_and(same) {
+            return Ok(());
+        }
         self.draw(hmi, st, now_ms, fb);
+        self.drawn = Some((hmi.clone(), *st));
         Ok(())
     }
 
@@ -618,6 +633,35 @@ mod tests {
             screens.render(&hmi, &st, 2200, &mut fb).unwrap();
             assert!(!fb.is_dirty(), "page {:?} repainted", hmi.page());
         }
+    }
+
+    /// A render from an unchanged state is skipped, and the picture is the one a full
+    /// render of that state gives; a changed status is drawn.
+    #[test]
+    fn an_unchanged_state_is_not_drawn_again() {
+        let mut hmi = Hmi::new(Config::default(), 0);
+        let mut st = Status::idle_at([0, 0, 500]);
+        hmi.tick(&st, 2000);
+        let mut fb = FrameBuffer::new();
+        let mut screens = Screens::new();
+        screens.render(&hmi, &st, 2000, &mut fb).unwrap();
+        fb.mark_clean();
+        // Scribble on the buffer: a skipped render leaves it alone.
+        let mut scribbled = fb.clone();
+        scribbled.set(0, 0, !fb.pixel(0, 0));
+        scribbled.mark_clean();
+        screens.render(&hmi, &st, 2100, &mut scribbled).unwrap();
+        assert!(!scribbled.is_dirty(), "the unchanged menu was drawn again");
+        let mut fresh = FrameBuffer::new();
+        Screens::new().render(&hmi, &st, 2100, &mut fresh).unwrap();
+        assert!(fresh.bytes() == fb.bytes());
+        // The position on the menu's bottom line changed: drawn.
+        st.pos[X] = 800;
+        screens.render(&hmi, &st, 2200, &mut fb).unwrap();
+        assert!(fb.is_dirty());
+        let mut fresh = FrameBuffer::new();
+        Screens::new().render(&hmi, &st, 2200, &mut fresh).unwrap();
+        assert!(fresh.bytes() == fb.bytes());
     }
 
     /// Rebuilding the drawing page (after an LCD reset) restores exactly what the
