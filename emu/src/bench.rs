@@ -340,18 +340,6 @@ pub fn run(elf: &Path) -> Result<String, String> {
         mean / T_PER_US as f64,
         us(*a.iter().max().unwrap_or(&0)),
     );
-    let _ = writeln!(
-        out,
-        "\n`?` answer time during character-counting streams (OUT packet to IN packet, a `?` every 10 ms; `cargo emu latency --lines N` for longer ones):\n\n{}",
-        crate::latency::TABLE_HEAD
-    );
-    for (load, lines) in [
-        (crate::latency::Load::OneStep, 3_000),
-        (crate::latency::Load::Ordinary, 1_000),
-    ] {
-        let l = crate::latency::measure(elf, load, lines, 10 * T_PER_MS, false)?;
-        let _ = writeln!(out, "{}", l.row(load));
-    }
     let (off, after) = estop_latency(elf, 8)?;
     let _ = writeln!(
         out,
@@ -367,6 +355,18 @@ pub fn run(elf: &Path) -> Result<String, String> {
         us(l.max),
         l.longest_block
     );
+    let _ = writeln!(
+        out,
+        "\n`?` answer time during character-counting streams (OUT packet to IN packet, a `?` every 10 ms; `cargo emu latency --lines N` for longer ones):\n\n{}",
+        crate::latency::TABLE_HEAD
+    );
+    for (load, lines) in [
+        (crate::latency::Load::OneStep, 3_000),
+        (crate::latency::Load::Ordinary, 1_000),
+    ] {
+        let l = crate::latency::measure(elf, load, lines, 10 * T_PER_MS, false)?;
+        let _ = writeln!(out, "{}", l.row(load));
+    }
     let _ = writeln!(
         out,
         "\nSustained step-event rate (X moves in 2 mm segments streamed with character counting, `?` every 100 ms, LCD running):\n\n| requested events/s | at cruise | worst interval / median | sustained |\n|---:|---:|---:|---|"

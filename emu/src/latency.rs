@@ -62,7 +62,11 @@ impl Load {
                         seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
                         let dy = (seed >> 16) as i32 % 1200 - 600;
                         // At least 0.3 mm in X: no zero-length moves.
-                        let dx = if dx.abs() < 300 { dx.signum() * 300 + dx } else { dx };
+                        let dx = if dx.abs() < 300 {
+                            dx.signum() * 300 + dx
+                        } else {
+                            dx
+                        };
                         let dx = if dx == 0 { 300 } else { dx };
                         segs.push((dx, dy));
                         (dx, dy)
@@ -70,7 +74,11 @@ impl Load {
                         let (dx, dy) = segs.pop().unwrap_or((300, 0));
                         (-dx, -dy)
                     };
-                    p.push_str(&format!("G1 X{:.3} Y{:.3}\n", dx as f64 / 1000.0, dy as f64 / 1000.0));
+                    p.push_str(&format!(
+                        "G1 X{:.3} Y{:.3}\n",
+                        dx as f64 / 1000.0,
+                        dy as f64 / 1000.0
+                    ));
                 }
             }
         }
@@ -187,9 +195,9 @@ pub fn measure(
                 }
                 Some((Some(t), w)) if !p.out && p.data.contains(&b'<') => {
                     answers.push(p.t - t);
-                if explain && p.t - t > BOUND {
-                    diag.push((t, p.t));
-                }
+                    if explain && p.t - t > BOUND {
+                        diag.push((t, p.t));
+                    }
                     max_from_write = max_from_write.max(p.t - w);
                     asked = None;
                 }
@@ -240,7 +248,11 @@ pub fn measure(
 fn explain_answer(runs: &[(u64, usize)], from: u64, to: u64) {
     let tasks = crate::bench::rtic_tasks();
     let ms = |t: u64| t as f64 / T_PER_MS as f64;
-    eprintln!("? at {:.3} ms answered after {:.3} ms:", ms(from), ms(to - from));
+    eprintln!(
+        "? at {:.3} ms answered after {:.3} ms:",
+        ms(from),
+        ms(to - from)
+    );
     let mut prev = 0;
     for &(t, e) in runs {
         if t >= from && t <= to {
