@@ -77,6 +77,10 @@ pub struct Serviced {
     /// A line ran and another may run at once: call again (the shell lets other
     /// work in between, see [`Controller::service`]).
     pub more: bool,
+    /// Nothing changes until an outside event: a byte or the port's opening from the
+    /// host, an input pin's edge, a key. The shell need not call again before one
+    /// (the firmware's protocol task sleeps at idle); calling anyway is harmless.
+    pub quiet: bool,
 }
 
 /// What waits to be written to flash, at rest.
@@ -268,6 +272,11 @@ impl Controller {
             alarmed: self.protocol.machine().alarm().is_some(),
             polarity: InputPolarity::from(s),
             more,
+            quiet: !more
+                && host.rx.is_empty()
+                && self.saves == Saves::default()
+                && !self.hmi.waiting()
+                && self.protocol.settled(m),
         }
     }
 
@@ -358,13 +367,18 @@ impl Controller {
     }
 
     /// One keypad column scan: `rows` read while [`Keypad::column`] was driven; each
-    /// key event goes through the HMI and its actions through the machine.
-    pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) {
+    /// key event goes through the HMI and its actions through the machine. True when
+    /// a key event came (a quiet protocol task has to look again, see
+    /// [`Serviced::quiet`]).
+    pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) -> bool {
+        let mut any = false;
         for ev in self.keypad.feed(rows, now_ms) {
             let st = self.status(m);
             let actions = self.hmi.key(ev, &st, now_ms);
             self.apply(&actions, m, now_ms);
+            any = true;
         }
+        any
     }
 
     /// Background work: the protocol's lines and messages, then the HMI's timers (the

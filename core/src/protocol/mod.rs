@@ -237,6 +237,21 @@ impl Protocol {
         }
     }
 
+    /// Nothing to do until a byte arrives or an input changes: the machine is settled
+    /// ([`Machine::settled`]), no complete line, report, listing, startup line or
+    /// delayed `ok` waits, and every reply has been read out.
+    pub fn settled<M: MotionControl>(&self, m: &M) -> bool {
+        self.machine.settled(m)
+            && self.out.is_empty()
+            && !self.line_ready
+            && !self.rx.iter().any(|&b| b == b'\n' || b == b'\r')
+            && self.status_requested == 0
+            && self.listing.is_none()
+            && self.startup_next.is_none()
+            && !self.pending_welcome
+            && !self.ok_when_idle
+    }
+
     /// Make progress: run every buffered line that can run now, continue listings,
     /// emit messages.
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
