@@ -51,6 +51,13 @@ const PENDING: usize = 32;
 const HORIZON_MS: u32 = 5;
 /// Fewest steps kept prepared (starting from rest, and at low speed).
 const MIN_AHEAD: usize = 16;
+/// Most step commands one call of [`Pipeline::fill`] prepares beyond the horizon
+/// (toward [`MIN_AHEAD`]). At low step rates a command can be a whole block (a stream
+/// of one-step moves): starting one costs about 0.1 ms on the board, and sixteen in one
+/// go held the preparation task, and with it the USB task and a `?`, for 1.8 ms. The
+/// horizon itself is always filled at once; the rest comes a few per millisecond, which
+/// is 4,000 steps/s, more than any rate at which the horizon needs fewer commands.
+const BEYOND_HORIZON_PER_FILL: usize = 4;
 /// Longest wait at rest for a second move before the first starts, in calls of
 /// [`Pipeline::fill`] (milliseconds in the firmware). Measured on the zigzag benchmark
 /// (1,000 moves of 4 steps, streamed line by line): without it the first two moves
@@ -192,8 +199,12 @@ impl<S: StepSide> Pipeline<S> {
             return;
         }
         loop {
-            let ahead = self.prep.commands_for(horizon).max(MIN_AHEAD);
-            let left = ahead.saturating_sub(self.side.queued());
+            let urgent = self.prep.commands_for(horizon);
+            let queued = self.side.queued();
+            let left = urgent
+                .max(MIN_AHEAD)
+                .saturating_sub(queued)
+                .min(urgent.saturating_sub(queued).max(BEYOND_HORIZON_PER_FILL));
             self.prep.fill(&mut self.planner, self.side.sink(), left);
             if self.wait_left > 0 {
                 while self.wait_left > 0 && self.side.sink().room() > 0 {

@@ -33,12 +33,11 @@ fn status_answered_within_2_ms_during_a_stream_of_ordinary_moves() {
     assert_bound(Load::Ordinary, 600);
 }
 
-/// Fails today: at one step per block the segment preparation task (priority 5,
-/// above the protocol) runs up to 1.8 ms at a stretch every ~150 ms, and a `?` that
-/// comes just before waits for it (`cargo emu latency --lines 3000 --explain`
-/// shows it: 2.125 ms). The cost is in core::stepper::prep (issue 14, point 1).
+/// At one step per block every step command is a block start (about 0.1 ms on the
+/// board); the preparation task (priority 5, with the USB task, above the protocol)
+/// starts a few per run beyond its horizon (`pipeline::BEYOND_HORIZON_PER_FILL`), so
+/// a `?` never waits for a long stretch of them (`cargo emu latency --explain`).
 #[test]
-#[ignore = "prepare runs up to 1.8 ms at once on one-step blocks (issue 14)"]
 fn status_answered_within_2_ms_during_a_stream_of_one_step_moves() {
     assert_bound(Load::OneStep, 3_000);
 }
