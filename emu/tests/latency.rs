@@ -35,8 +35,8 @@ fn status_answered_within_2_ms_during_a_stream_of_ordinary_moves() {
 
 /// At one step per block every step command is a block start (about 0.1 ms on the
 /// board); the preparation task (priority 5, with the USB task, above the protocol)
-/// starts a few per run beyond its horizon (`pipeline::BEYOND_HORIZON_PER_FILL`), so
-/// a `?` never waits for a long stretch of them (`cargo emu latency --explain`).
+/// prepares only `pipeline::MIN_AHEAD` (2) commands beyond its 5 ms horizon, so a
+/// `?` never waits for a long stretch of them (`cargo emu latency --explain`).
 #[test]
 fn status_answered_within_2_ms_during_a_stream_of_one_step_moves() {
     assert_bound(Load::OneStep, 3_000);
