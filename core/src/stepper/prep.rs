@@ -1308,8 +1308,11 @@ impl Active {
                 as_w(6.0 * c3 + 2.0 * c2),
                 as_w(6.0 * c3),
             );
-            let n64 = i64::from(n);
-            let sum = n64 * e1 + n64 * (n64 - 1) / 2 * e2 + n64 * (n64 - 1) * (n64 - 2) / 6 * e3;
+            // The sums of 1, k and k(k-1)/2 over the ticks: n <= MAX_SEGMENT, so they
+            // fit in 32 bits (a 64-bit division would link a kilobyte of library code).
+            let pairs = n * (n - 1) / 2;
+            let triples = pairs * n.saturating_sub(2) / 3;
+            let sum = i64::from(n) * e1 + i64::from(pairs) * e2 + i64::from(triples) * e3;
             (
                 n,
                 (w_end as i64).wrapping_sub(sum).max(0) as u64,
