@@ -295,7 +295,7 @@ mod app {
             // the host is NAKed (back-pressure) and output still flows.
             cortex_m::peripheral::NVIC::mask(Interrupt::USB_LP_CAN_RX0);
         }
-        let n = tx.pop(&mut buf);
+        let n = tx.pop_into(&mut buf);
         if n > 0 {
             // The CDC class buffers what the endpoint cannot take yet; bytes it refuses
             // are dropped only if the host stopped reading.

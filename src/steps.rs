@@ -15,7 +15,7 @@
 //! The executor and the queue's consumer are shared with the preparation side: the
 //! interrupt uses them without a lock (it is their highest-priority user), the tasks
 //! through short critical sections (position reads, flush on abort, re-zeroing at
-//! rest). The command queue is the core's lean [`StepQueue`] ring.
+//! rest). The command queue is the core's `StepQueue` (on its one SPSC ring).
 
 use crate::board::{self, StepPort, StepTimer};
 use core::cell::UnsafeCell;
@@ -203,7 +203,7 @@ unsafe impl Send for StepOutput {}
 
 impl StepOutput {
     /// The whole TIM2 interrupt. Call it only from the step interrupt (see
-    /// [`StepperCell`]'s access rule): it reads the stepper state without a lock.
+    /// `StepperCell`'s access rule): it reads the stepper state without a lock.
     ///
     /// Update event (a period ends): in step/dir mode the timer has just started the
     /// pulses armed for this moment by the previous interrupt; the executor counts

@@ -5,6 +5,7 @@
 //! polarities, the keypad matrix at rest, and the settings flash.
 #![no_std]
 #![no_main]
+#![deny(clippy::undocumented_unsafe_blocks)]
 
 use defmt_rtt as _;
 use panic_probe as _;
@@ -60,6 +61,7 @@ mod tests {
         // Interrupts stay masked in the NVIC: the test polls the update flag the step
         // interrupt would see, arms X for the next N - 1 periods and then nothing,
         // and samples the pin to time every pulse with the cycle counter.
+        // SAFETY: read-only register reads (the input data register).
         let gpioa = unsafe { &*pac::GPIOA::ptr() };
         let pin_high = || gpioa.idr().read().bits() & board::STEP_MASK_X != 0;
         let (mut armed, mut rises, mut widths_ok) = (1u32, 0u32, true);

@@ -294,7 +294,7 @@ impl Controller {
         let saves = core::mem::take(&mut self.saves);
         let machine = self.protocol.machine();
         let settings_ok = !saves.settings || store.save_settings(machine.settings()).is_ok();
-        let coords_ok = !saves.coords || store.save_coords(machine.interp().coords()).is_ok();
+        let coords_ok = !saves.coords || store.save_coords(machine.interpreter().coords()).is_ok();
         let mut startup_ok = true;
         if saves.startup {
             for i in 0..STARTUP_LINES {

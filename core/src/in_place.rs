@@ -30,7 +30,7 @@ pub fn build<T>(init: impl for<'a> FnOnce(&'a mut MaybeUninit<T>) -> &'a mut T) 
 /// ```ignore
 /// init_fields!(slot => Machine {
 ///     settings = settings.clone(),           // the value, written in place
-///     interp in |cell| Interpreter::init_in(cell), // a struct built in its own field
+///     interpreter in |cell| Interpreter::init_in(cell), // a struct built in its own field
 ///     ...
 /// })
 /// ```

@@ -8,7 +8,7 @@
 //! - look-ahead planning, junctions and velocity profiles: [`planner`]
 //! - step generation (segment preparation, the step queue, the step interrupt's work,
 //!   the output configuration): [`stepper`]
-//! - task-to-interrupt rings (the USB byte stream; their shared index ordering): [`ring`]
+//! - the one task-to-interrupt ring (the USB byte stream, and under the step queue): [`ring`]
 //! - libm-free f32 math (sine, cosine, arctangent, square root): [`fmath`]
 //! - decimal text without `core::fmt` (replies, listings): [`decimal`]; the stores'
 //!   checksum: [`crc`]
@@ -31,6 +31,7 @@
 // protocol, machine, pipeline and planner, and `in_place::build`) allow it locally to
 // build the firmware's static cells field by field instead of on init's stack.
 #![deny(unsafe_code)]
+#![deny(clippy::undocumented_unsafe_blocks)]
 
 pub mod controller;
 pub mod crc;

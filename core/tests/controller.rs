@@ -78,7 +78,7 @@ impl Shell {
     /// What the host has received.
     fn read(&mut self) -> String {
         let mut buf = [0u8; HOST_TX_RING];
-        let n = self.tx.split().1.pop(&mut buf);
+        let n = self.tx.split().1.pop_into(&mut buf);
         String::from_utf8(buf[..n].to_vec()).unwrap()
     }
 }

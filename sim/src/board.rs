@@ -210,7 +210,7 @@ impl Board {
         let mut buf = [0u8; HOST_TX_RING];
         let (_, mut rx) = self.host_tx.split();
         loop {
-            let n = rx.pop(&mut buf);
+            let n = rx.pop_into(&mut buf);
             if n == 0 {
                 return out;
             }

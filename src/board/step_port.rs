@@ -85,14 +85,14 @@ pub fn drivers_enabled(enabled: bool) {
     });
 }
 
-/// The motion output pins, configured as push-pull outputs (by [`init`], and by the
+/// The motion output pins, configured as push-pull outputs (by [`init`](super::init), and by the
 /// interrupt-cost bench, which builds the same parts).
 pub struct StepPins {
     pub pins: [ErasedPin<Output<PushPull>>; 8],
     pub enable: gpio::PA9<Output<PushPull>>,
 }
 
-/// The step port and step timer from their pins and TIM2. Separate from [`init`] so
+/// The step port and step timer from their pins and TIM2. Separate from [`init`](super::init) so
 /// that the interrupt-cost bench (bench/isr-cost) builds the very same parts.
 pub fn step_outputs(pins: StepPins, tim2: pac::TIM2) -> (StepPort, StepTimer) {
     // The pins are configured and moved in here, so nothing else can take them; the

@@ -5,7 +5,7 @@ use stm32f1xx_hal::pac;
 /// Watchdog timeout: long enough for the slowest task period, short enough to matter.
 pub const WATCHDOG_MS: u32 = 500;
 
-/// The independent watchdog (IWDG, 40 kHz LSI), started by [`init`] with a
+/// The independent watchdog (IWDG, 40 kHz LSI), started by [`init`](super::init) with a
 /// [`WATCHDOG_MS`] timeout; the keypad task feeds it.
 ///
 /// Register writes instead of the HAL's `IndependentWatchdog`, whose prescaler search

@@ -11,6 +11,7 @@
 //! and `bench_prepare` to that call.
 #![no_std]
 #![no_main]
+#![deny(clippy::undocumented_unsafe_blocks)]
 
 use defmt_rtt as _;
 use inkstep::board::{self, StepPins};

@@ -122,15 +122,7 @@ impl Default for Interpreter {
 impl Interpreter {
     pub const fn new() -> Self {
         Interpreter {
-            modal: Modal {
-                motion: MotionMode::Rapid,
-                inches: false,
-                incremental: false,
-                inverse_time: false,
-                wcs: 0,
-                pen_down: false,
-                tool_length: false,
-            },
+            modal: Modal::INITIAL,
             feed: 0.0,
             spindle: 0.0,
             pos: [0; AXES],

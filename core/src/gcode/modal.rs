@@ -30,17 +30,22 @@ pub struct Modal {
     pub tool_length: bool,
 }
 
+impl Modal {
+    /// The state at power-on and after a soft reset: G0 G54 G21 G90 G94 G49, pen up.
+    pub const INITIAL: Modal = Modal {
+        motion: MotionMode::Rapid,
+        inches: false,
+        incremental: false,
+        inverse_time: false,
+        wcs: 0,
+        pen_down: false,
+        tool_length: false,
+    };
+}
+
 impl Default for Modal {
     fn default() -> Self {
-        Modal {
-            motion: MotionMode::Rapid,
-            inches: false,
-            incremental: false,
-            inverse_time: false,
-            wcs: 0,
-            pen_down: false,
-            tool_length: false,
-        }
+        Modal::INITIAL
     }
 }
 

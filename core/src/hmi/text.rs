@@ -101,8 +101,9 @@ impl<const N: usize> Text<N> {
         self.push_number(Some((false, n)), 0, width)
     }
 
-    /// Append `num` with `decimals` digits, right-aligned in `width` characters (see
-    /// [`super::fixed::append_number`]); false (and unchanged) if it does not fit.
+    /// Append `num` with `decimals` digits, right-aligned in `width` characters (the
+    /// screens' number format, `hmi::fixed::append_number`); false (and unchanged) if
+    /// it does not fit.
     pub fn push_number(&mut self, num: super::fixed::Number, decimals: u8, width: usize) -> bool {
         super::fixed::append_number(&mut self.buf, &mut self.len, num, decimals, width)
     }

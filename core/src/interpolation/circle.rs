@@ -516,7 +516,7 @@ impl Circle {
     }
 
     /// Path position of the present run's start less the end of the run before it,
-    /// steps (see [`Circle::param_shift`]; 0 unless the major axis changed).
+    /// steps (see `Circle::param_shift`; 0 unless the major axis changed).
     pub fn entry_shift(&self) -> f32 {
         self.entry
     }

@@ -11,7 +11,7 @@
 //! - [`Method::Dda`]: axes may step together; every tick lands on the grid point
 //!   nearest the ideal path (per-axis error <= 0.5 step).
 //!
-//! Submodules: [`line`] (straight lines), [`circle`] (circles and arcs around any
+//! Submodules: [`line`](mod@line) (straight lines), [`circle`] (circles and arcs around any
 //! centre), [`conic`] (axis-aligned ellipses), [`curve`] (y = f(x), e.g. the sine),
 //! [`shapes`] (polylines such as the star).
 //!

@@ -78,7 +78,7 @@ struct Job {
 /// The machine.
 pub struct Machine {
     settings: Settings,
-    interp: Interpreter,
+    interpreter: Interpreter,
     /// In the alarm state (G-code locked out until `$X`, `$H` or a cleared alarm).
     locked: bool,
     /// The alarm that caused the lock, if any (the power-up lock has none).
@@ -127,7 +127,7 @@ impl Machine {
         const FRESH: Interpreter = Interpreter::new();
         let m = crate::init_fields!(slot => Machine {
             settings = settings.clone(),
-            interp = FRESH,
+            interpreter = FRESH,
             locked = false,
             alarm = None,
             needs_reset = false,
@@ -183,12 +183,12 @@ impl Machine {
     pub fn settings(&self) -> &Settings {
         &self.settings
     }
-    pub fn interp(&self) -> &Interpreter {
-        &self.interp
+    pub fn interpreter(&self) -> &Interpreter {
+        &self.interpreter
     }
     /// Replace the coordinate data (loaded from flash at boot).
     pub fn set_coords(&mut self, c: crate::gcode::interpreter::Coords) {
-        self.interp.set_coords(c);
+        self.interpreter.set_coords(c);
     }
     /// The alarm that locked the machine, while locked.
     pub fn alarm(&self) -> Option<Alarm> {
@@ -283,7 +283,7 @@ impl Machine {
 
     /// `$RST=#`: zero the work offsets and stored positions.
     pub fn clear_coords(&mut self) {
-        self.interp
+        self.interpreter
             .set_coords(crate::gcode::interpreter::Coords::default());
         self.coords_dirty = true;
     }
@@ -331,7 +331,7 @@ impl Machine {
         };
         let mut out = Outcome::default();
         match self
-            .interp
+            .interpreter
             .execute_into(line, &self.settings, line_no, &mut out, Some(room))
         {
             Ok(true) => {}
@@ -386,7 +386,7 @@ impl Machine {
         // `room: None`: checked, never committed.
         let mut out = Outcome::default();
         match self
-            .interp
+            .interpreter
             .execute_into(line, &self.settings, 0, &mut out, None)
         {
             Err(Reject::Error(e)) => Err(e),
@@ -406,7 +406,7 @@ impl Machine {
         if m.free() == 0 {
             return Err(Status::Overflow);
         }
-        let mv: Move = self.interp.jog(body, &self.settings)?;
+        let mv: Move = self.interpreter.jog(body, &self.settings)?;
         if m.push(Command::Move(mv)).is_ok() {
             self.jogging = true;
         }
@@ -510,7 +510,8 @@ impl Machine {
     }
 
     fn resync<M: MotionControl>(&mut self, m: &M) {
-        self.interp.sync_position(&m.position(), &self.settings);
+        self.interpreter
+            .sync_position(&m.position(), &self.settings);
     }
 
     /// The keypad's "set origin": at rest, the current X/Y become zero and the G-code
@@ -534,7 +535,7 @@ impl Machine {
         m.clear();
         m.set_overrides(100, 100);
         self.resync(m);
-        self.interp.reset_modal();
+        self.interpreter.reset_modal();
         self.drop_activity();
         self.stop_then_clear = false;
         self.check_mode = false;
@@ -639,7 +640,7 @@ impl Machine {
         }
         m.push(cmd).map_err(|_| Status::Overflow)?;
         if let Command::Move(mv) = cmd {
-            self.interp.sync_position(&mv.target, &self.settings);
+            self.interpreter.sync_position(&mv.target, &self.settings);
             self.count_move(now_ms);
         }
         Ok(())

@@ -147,7 +147,7 @@ impl Protocol {
                     truncated: &mut self.truncated,
                 };
                 w.put(b"[");
-                self.machine.interp().write_modal(&mut w);
+                self.machine.interpreter().write_modal(&mut w);
                 w.put(b"]\r\n");
                 Ok(())
             }
@@ -284,17 +284,17 @@ impl Protocol {
                 Listing::Settings(i + 1)
             }
             Listing::Coords(i) => {
-                let interp = machine.interp();
-                let c = interp.coords();
+                let interpreter = machine.interpreter();
+                let c = interpreter.coords();
                 let v = match i {
                     0..=5 => c.wcs.get(i),
                     6 => Some(&c.g28),
                     7 => Some(&c.g30),
-                    8 => Some(interp.g92()),
+                    8 => Some(interpreter.g92()),
                     9 => {
                         w.put(b"[TLO:");
                         let inches = machine.settings().report_inches();
-                        let tlo = nm_to_mm(interp.tool_length_offset());
+                        let tlo = nm_to_mm(interpreter.tool_length_offset());
                         write_fixed3(&mut w, if inches { tlo / 25.4 } else { tlo });
                         w.put(b"]");
                         None

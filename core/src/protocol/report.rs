@@ -85,7 +85,7 @@ impl Protocol {
         let scale = if settings.report_inches() { 25.4 } else { 1.0 };
         let mask = settings.status_mask();
         let mut pos = machine.machine_position(m);
-        let wco_nm = machine.interp().work_offset();
+        let wco_nm = machine.interpreter().work_offset();
         let wco = wco_nm.map(nm_to_mm);
         if mask & 1 != 0 {
             w.put(b"|MPos:");
@@ -106,11 +106,11 @@ impl Protocol {
         put_int(&mut w, round_i32(m.speed() / scale));
         w.put(b",");
         // The pen is the spindle: report S while it is down.
-        let interp = machine.interp();
+        let interpreter = machine.interpreter();
         put_int(
             &mut w,
-            if interp.modal().pen_down {
-                round_i32(interp.spindle())
+            if interpreter.modal().pen_down {
+                round_i32(interpreter.spindle())
             } else {
                 0
             },

@@ -1,6 +1,7 @@
 //! Step generation: the segment-preparation task turns planned blocks into timed step
-//! commands ([`prep`]), an SPSC queue carries them, and the step-timer interrupt
-//! executes them ([`exec`]) with a handful of integer operations per step.
+//! commands ([`prep`]), a queue on the crate's SPSC ring carries them, and the
+//! step-timer interrupt executes them ([`exec`]) with a handful of integer operations
+//! per step.
 //!
 //! Owns the command format shared by both sides, the step timer's constants that the
 //! board and the simulator share, and the queue traits; [`queue`] is the ring between

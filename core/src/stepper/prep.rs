@@ -11,7 +11,7 @@
 //! the ideal time and its slope (speed, and the path's rate per tick) exactly at both
 //! ends (f32, phase-local so that rounding stays far below a microsecond), and times the
 //! ticks in between by the cubic Hermite polynomial through them, evaluated by forward
-//! differences: per tick three 64-bit additions ([`Segment`]). A segment is as long as
+//! differences: per tick three 64-bit additions (`Segment`). A segment is as long as
 //! the polynomial's error bound allows: `max_error_s` (0.5 µs) over h^4/384 times the
 //! largest fourth derivative of the tick time, which follows from the profile's
 //! acceleration and jerk, the speed and the path's curvature (at most 256 ticks, never

@@ -1,16 +1,11 @@
 //! The step-command queue between the segment-preparation task (producer) and the
-//! step-timer interrupt (consumer): a single-producer single-consumer ring of packed
-//! [`StepCmd`] words.
-//!
-//! Why not `heapless::spsc`: its dequeue is an out-of-line generic with two `dmb`
-//! barriers, a large share of a step interrupt that must stay under 100 instructions.
-//! This ring is specialised for the job: a power-of-two capacity (the index mask is
-//! one `and`, and the compiler drops the bounds check), free-running `u32` indices, and
-//! atomics everywhere (no `unsafe`). Index publication is [`crate::ring`]'s: compiler
-//! fences on the single-core microcontroller, acquire/release elsewhere.
+//! step-timer interrupt (consumer): the crate's one SPSC [`Ring`] of packed
+//! [`StepCmd`] words, plus the one thing the step path adds on the way in, sticky
+//! direction bits. The interrupt's `pop` is the ring's, inlined: a handful of
+//! instructions of a step interrupt that must stay under 100 (bench/isr-cost).
 
 use super::{CmdSink, CmdSource, StepCmd};
-use crate::ring::{load_acquire, store_release};
+use crate::ring::{Ring, Rx, Tx};
 use core::sync::atomic::{AtomicU32, AtomicU8, Ordering};
 
 /// Step commands the queue holds (4 bytes each): 256 is several milliseconds of
@@ -21,16 +16,12 @@ pub const STEP_QUEUE_LEN: usize = 256;
 /// The queue the firmware and the simulator run.
 pub type StepCmdQueue = StepQueue<STEP_QUEUE_LEN>;
 
-/// The ring. `N` must be a power of two (checked at compile time).
+/// The queue. `N` must be a power of two (checked at compile time by the ring).
 pub struct StepQueue<const N: usize> {
-    slots: [AtomicU32; N],
-    /// Next slot the consumer reads (written by the consumer only).
-    head: AtomicU32,
-    /// Next slot the producer writes (written by the producer only).
-    tail: AtomicU32,
+    ring: Ring<AtomicU32, N>,
     /// Direction bits as of the last command pushed (bit i = axis i negative; written
-    /// by the producer only). Kept in the ring, not in the producer's end, so that an
-    /// owner of the whole ring (the simulator) may take the ends anew at each use.
+    /// by the producer only). Kept in the queue, not in the producer's end, so that an
+    /// owner of the whole queue (the simulator) may take the ends anew at each use.
     dirs: AtomicU8,
 }
 
@@ -41,20 +32,9 @@ impl<const N: usize> Default for StepQueue<N> {
 }
 
 impl<const N: usize> StepQueue<N> {
-    const MASK: u32 = {
-        assert!(
-            N.is_power_of_two() && N <= 1 << 16,
-            "StepQueue capacity must be a power of two"
-        );
-        N as u32 - 1
-    };
-
     pub const fn new() -> Self {
-        let _ = Self::MASK;
         StepQueue {
-            slots: [const { AtomicU32::new(0) }; N],
-            head: AtomicU32::new(0),
-            tail: AtomicU32::new(0),
+            ring: Ring::new(),
             dirs: AtomicU8::new(0),
         }
     }
@@ -64,11 +44,14 @@ impl<const N: usize> StepQueue<N> {
         (QueueTx { q: self }, QueueRx { q: self })
     }
 
-    #[inline(always)]
-    fn len(&self) -> u32 {
-        self.tail
-            .load(Ordering::Relaxed)
-            .wrapping_sub(self.head.load(Ordering::Relaxed))
+    /// Commands waiting.
+    pub fn queued(&self) -> usize {
+        self.ring.len()
+    }
+
+    /// Drops everything queued (abort), as the interrupt's end does.
+    pub fn clear(&mut self) {
+        self.split().1.clear();
     }
 }
 
@@ -78,17 +61,22 @@ pub struct QueueTx<'a, const N: usize> {
 }
 
 impl<const N: usize> QueueTx<'_, N> {
+    /// The ring's producing end (this is the queue's only producer).
+    #[inline(always)]
+    fn tx(&self) -> Tx<'_, AtomicU32, N> {
+        self.q.ring.producer()
+    }
     /// Commands waiting (the consumer may take some meanwhile).
     pub fn len(&self) -> usize {
-        self.q.len() as usize
+        N - self.tx().free()
     }
     pub fn is_empty(&self) -> bool {
-        self.q.len() == 0
+        self.len() == 0
     }
     pub fn is_full(&self) -> bool {
-        self.q.len() > StepQueue::<N>::MASK
+        self.tx().free() == 0
     }
-    /// Appends `c`; false (and nothing written) if the ring is full.
+    /// Appends `c`; false (and nothing written) if the queue is full.
     pub fn push(&mut self, c: StepCmd) -> bool {
         self.push_slice(&[c]) == 1
     }
@@ -101,23 +89,15 @@ impl<const N: usize> QueueTx<'_, N> {
     /// a non-stepping axis means nothing), so the interrupt can output the three bits as
     /// they are and a pin still only changes where a step needs it.
     pub fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
-        let tail = self.q.tail.load(Ordering::Relaxed);
-        let used = tail.wrapping_sub(load_acquire(&self.q.head));
-        let free = (StepQueue::<N>::MASK + 1).saturating_sub(used) as usize;
-        let taken = cmds.get(..free).unwrap_or(cmds);
         let mut dirs = self.q.dirs.load(Ordering::Relaxed);
-        let mut at = tail;
-        for c in taken {
+        let taken = self.tx().push_map(cmds, |c| {
             let bits = (c.0 >> 24) as u8;
             let mask = bits & 0b111;
             dirs = (dirs & !mask) | ((bits >> 3) & mask);
-            let word = (c.0 & !(0b111 << 27)) | (u32::from(dirs) << 27);
-            self.q.slots[(at & StepQueue::<N>::MASK) as usize].store(word, Ordering::Relaxed);
-            at = at.wrapping_add(1);
-        }
+            (c.0 & !(0b111 << 27)) | (u32::from(dirs) << 27)
+        });
         self.q.dirs.store(dirs, Ordering::Relaxed);
-        store_release(&self.q.tail, at);
-        taken.len()
+        taken
     }
 }
 
@@ -127,29 +107,25 @@ pub struct QueueRx<'a, const N: usize> {
 }
 
 impl<const N: usize> QueueRx<'_, N> {
+    /// The ring's consuming end (this is the queue's only consumer).
+    #[inline(always)]
+    fn rx(&self) -> Rx<'_, AtomicU32, N> {
+        self.q.ring.consumer()
+    }
     /// Takes the oldest command.
     #[inline(always)]
     pub fn pop(&mut self) -> Option<StepCmd> {
-        // A local copy of the reference: the fences below would make the compiler load
-        // `self.q` again after each of them.
-        let q = self.q;
-        let head = q.head.load(Ordering::Relaxed);
-        if head == load_acquire(&q.tail) {
-            return None;
-        }
-        let c = q.slots[(head & StepQueue::<N>::MASK) as usize].load(Ordering::Relaxed);
-        store_release(&q.head, head.wrapping_add(1));
-        Some(StepCmd(c))
+        self.rx().pop().map(StepCmd)
     }
     /// Drops everything queued (abort); the producer may keep pushing afterwards.
     pub fn clear(&mut self) {
-        store_release(&self.q.head, load_acquire(&self.q.tail));
+        self.rx().clear();
     }
 }
 
 impl<const N: usize> CmdSink for QueueTx<'_, N> {
     fn room(&self) -> usize {
-        N - self.len()
+        self.tx().free()
     }
     fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
         QueueTx::push_slice(self, cmds)
@@ -163,32 +139,21 @@ impl<const N: usize> CmdSource for QueueRx<'_, N> {
     }
 }
 
-/// The whole ring as a sink, for an owner of both ends on one thread (the simulator,
+/// The whole queue as a sink, for an owner of both ends on one thread (the simulator,
 /// tests): the same push as the producer's end.
 impl<const N: usize> CmdSink for StepQueue<N> {
     fn room(&self) -> usize {
-        N - self.len() as usize
+        N - self.queued()
     }
     fn push_slice(&mut self, cmds: &[StepCmd]) -> usize {
         self.split().0.push_slice(cmds)
     }
 }
 
-/// The whole ring as a source, likewise: the same pop as the interrupt's end.
+/// The whole queue as a source, likewise: the same pop as the interrupt's end.
 impl<const N: usize> CmdSource for StepQueue<N> {
     fn pop(&mut self) -> Option<StepCmd> {
         self.split().1.pop()
-    }
-}
-
-impl<const N: usize> StepQueue<N> {
-    /// Commands waiting.
-    pub fn queued(&self) -> usize {
-        self.len() as usize
-    }
-    /// Drops everything queued (abort), as the interrupt's end does.
-    pub fn clear(&mut self) {
-        self.split().1.clear();
     }
 }
 
@@ -240,20 +205,5 @@ mod tests {
         // X keeps -X while it does not step, Y and Z keep theirs.
         assert_eq!(dirs, [0b001, 0b001, 0b111, 0b110, 0b110]);
         // The steps (and so the position deltas) are unchanged.
-    }
-
-    #[test]
-    fn indices_survive_u32_wrap() {
-        let mut q: StepQueue<2> = StepQueue::new();
-        q.head.store(u32::MAX - 1, Ordering::Relaxed);
-        q.tail.store(u32::MAX - 1, Ordering::Relaxed);
-        let (mut tx, mut rx) = q.split();
-        for w in 2..20 {
-            assert!(tx.push(StepCmd::new(Tick(0), w)));
-            assert!(tx.push(StepCmd::new(Tick(0), w + 100)));
-            assert_eq!(CmdSink::room(&tx), 0);
-            assert_eq!(rx.pop().map(StepCmd::wait), Some(w));
-            assert_eq!(rx.pop().map(StepCmd::wait), Some(w + 100));
-        }
     }
 }

@@ -26,7 +26,7 @@ impl Port {
         }
     }
 
-    /// The 4-bit configuration of `pin`: CNF[1:0] MODE[1:0].
+    /// The 4-bit configuration of `pin`: `CNF[1:0] MODE[1:0]`.
     pub fn config(&self, pin: usize) -> u32 {
         let reg = if pin < 8 { self.crl } else { self.crh };
         (reg >> (4 * (pin % 8))) & 0xF
