@@ -26,6 +26,9 @@
 //! possibly over several blocks) and resume. Hold keeps the rest of the path, so no
 //! step is lost.
 
+// `!(x > 0.0)` is meant throughout: a NaN must fail the test, not pass it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::{CmdSink, StepCmd, MAX_WAIT};
 use crate::interpolation::{Interpolator, Next, Tick};
 use crate::motion::{StepPos, X, Y};
@@ -148,7 +151,7 @@ impl Ramp {
             // W fell below 0 (a curve's cubic just past rest): at rest.
             return 0;
         }
-        let g = g.max(1).min((1 << 30) - 1);
+        let g = g.clamp(1, (1 << 30) - 1);
         let e = w as i64 - (u64::from(g) * u64::from(g)) as i64;
         if e.unsigned_abs() < 1 << 31 {
             let r = (g as i32 + (e as i32) / (2 * g as i32)).max(1) as u64;
@@ -233,7 +236,7 @@ impl Segment {
         let mut emit = |at: u32, tick: Tick, cmd: &mut StepCmd| {
             // At least 2 ticks apart (the executor's promise); the 24-bit bound holds
             // for every segment (a tick that may wait longer is timed on its own).
-            let wait = at.wrapping_sub(prev).max(2).min(MAX_WAIT);
+            let wait = at.wrapping_sub(prev).clamp(2, MAX_WAIT);
             prev = prev.wrapping_add(wait);
             *cmd = StepCmd((u32::from(tick.0) << 24) | wait);
         };
