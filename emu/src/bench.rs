@@ -11,7 +11,7 @@
 //!   event is one X step, so the settings' 100 kHz per axis bound it; diagonals traced
 //!   point by point ($212=0: one axis per event) reach twice that, up to and beyond the
 //!   planner's cap ([`inkstep_core::stepper::MAX_STEP_RATE`]): above it the cruise
-//!   runs at the cap, without gaps;
+//!   runs at the cap, without gaps (the bench fails when a trial does not);
 //! - e-stop latency: from the e-stop pin's edge to the drivers' enable pin turning off,
 //!   and to the last step edge.
 
@@ -438,5 +438,11 @@ pub fn run(elf: &Path) -> Result<String, String> {
         "\nHighest sustained: {best:.0} step events/s; every trial {}. The planner caps every move at {cap:.0} events/s (inkstep_core::stepper::MAX_STEP_RATE), so a request above the cap runs at the cap, without gaps (worst interval / median at most 1.5); along one axis the settings allow at most 100 kHz.",
         if all { "sustained its planned rate" } else { "NOT sustained: see the table" }
     );
+    if !all {
+        // The table is the evidence: print it, and fail.
+        return Err(format!(
+            "{out}\na rate trial left gaps or fell short of its planned rate"
+        ));
+    }
     Ok(out)
 }
