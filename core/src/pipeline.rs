@@ -49,12 +49,21 @@ const PENDING: usize = 32;
 /// 20 ms, 3.231 s at 10 ms, 3.220 s at 5 ms (Grbl 3.224 s). 5 ms leaves the firmware's
 /// 1 ms preparation task a 5x margin (the queue's length caps it at high step rates).
 const HORIZON_MS: u32 = 5;
-/// Fewest steps kept prepared (starting from rest, and at low speed).
-const MIN_AHEAD: usize = 16;
-/// Longest wait at rest for a second move before the first starts, in calls of
-/// [`Pipeline::fill`] (milliseconds in the firmware). Measured on the zigzag benchmark
-/// (1,000 moves of 4 steps, streamed line by line): without it the first two moves
-/// stop at their ends (the planner had nothing behind them yet).
+/// Fewest steps kept prepared (starting from rest, and at low speed, where the horizon
+/// holds less than this): the step in progress and the next, so the interrupt never
+/// waits for one. No more: at low speed a step is milliseconds long, and every step
+/// prepared beyond the horizon is committed before the moves streaming in behind it
+/// can shape it. Measured on programs of tiny moves streamed line by line (bench/
+/// zigzag.nc, 4 steps a move): 16 made the second and third moves stop at their ends
+/// (12.4717 s); 2 runs them at their junction speeds (12.4619 s, the time-optimal
+/// bound of the planner's limits).
+const MIN_AHEAD: usize = 2;
+/// Longest wait at rest for more moves before the first starts, in calls of
+/// [`Pipeline::fill`] (milliseconds in the firmware): it waits while the planner holds
+/// no more moves than [`MIN_AHEAD`] (each has a step at least), so the steps prepared
+/// at the start never reach the end of what is queued. Measured on the zigzag
+/// benchmark: without it the first moves stop at their ends (the planner had nothing
+/// behind them yet).
 const START_GATHER_MS: u8 = 8;
 
 /// The planner's configuration from the machine settings.
@@ -179,13 +188,13 @@ impl<S: StepSide> Pipeline<S> {
         let queued = self.side.queued();
         if queued == 0
             && self.prep.is_idle_block()
-            && self.planner.len() == 1
+            && (1..=MIN_AHEAD).contains(&self.planner.len())
             && self.pending.is_empty()
         {
-            // At rest with one move planned: the next ones of a stream are usually a
-            // millisecond or two behind it. Waiting that long for them (at most
-            // START_GATHER_MS) lets the first move run into the second instead of
-            // stopping at its end; the job still starts with its first step.
+            // At rest with a move or two planned: the next ones of a stream are
+            // usually a millisecond or two behind. Waiting that long for them (at most
+            // START_GATHER_MS) lets the first moves run into the next instead of
+            // stopping at their ends; the job still starts with its first step.
             if self.gather < START_GATHER_MS {
                 self.gather += 1;
                 return;

@@ -3,9 +3,12 @@
 //! Owns the ideal-path JSON format of `bench/*.json`, the figures we compare with
 //! Grbl (job time, max/rms deviation, steps per axis, final position; measured with the
 //! simulator's `analysis`) and the reading of Grbl's own figures from the bench README, so
-//! that no expected number is written into the code.
+//! that no expected number is written into the code. Grbl's figures come from grbl-sim,
+//! or, for the programs of tiny moves it was not run on, from the model of Grbl's
+//! planner ([`crate::grbl_model`]); those rows have no deviation figures.
 
 use crate::analysis::{self, Analyzer};
+use crate::grbl_model::{self, ModelTimes};
 use crate::run::Flow;
 use crate::run::{run_gcode, RunResult};
 use crate::trace::Trace;
@@ -106,8 +109,10 @@ pub struct GrblRow {
     /// The description after the file name.
     pub what: String,
     pub job_time_s: f64,
-    pub max_dev: f64,
-    pub rms_dev: f64,
+    /// Deviations as grbl-sim measured them; `None` (`-` in the table) for the figures
+    /// of the planner model, which makes no steps.
+    pub max_dev: Option<f64>,
+    pub rms_dev: Option<f64>,
     pub steps: [u64; 2],
     pub final_pos: [i32; 2],
 }
@@ -129,14 +134,22 @@ pub fn read_grbl_table(readme: &str) -> Vec<GrblRow> {
             .split_once(char::is_whitespace)
             .unwrap_or((cells[0], ""));
         let num = |s: &str| s.parse::<f64>().ok();
+        // A deviation is a number, or `-` where there is none.
+        let dev = |s: &str| {
+            if s == "-" {
+                Some(None)
+            } else {
+                num(s).map(Some)
+            }
+        };
         let fin: Vec<i32> = cells[6]
             .split(',')
             .filter_map(|s| s.trim().parse().ok())
             .collect();
         let (Some(t), Some(mx), Some(rms), Some(sx), Some(sy)) = (
             num(cells[1]),
-            num(cells[2]),
-            num(cells[3]),
+            dev(cells[2]),
+            dev(cells[3]),
             num(cells[4]),
             num(cells[5]),
         ) else {
@@ -186,6 +199,11 @@ pub fn goal_failures(ours: &Figures, grbl: &GrblRow) -> Vec<String> {
     f
 }
 
+/// `(Grbl's)` figure of a deviation, `(-)` where it has none.
+fn grbl_dev(d: Option<f64>) -> String {
+    d.map_or("-".to_string(), |d| format!("{d:.3}"))
+}
+
 /// One markdown table with our figures beside Grbl's.
 pub fn markdown_table(rows: &[(GrblRow, Figures)]) -> String {
     let mut s = String::from(
@@ -195,21 +213,57 @@ pub fn markdown_table(rows: &[(GrblRow, Figures)]) -> String {
     for (g, o) in rows {
         let fails = goal_failures(o, g);
         s.push_str(&format!(
-            "| {} | {:.4} ({:.4}) | {:.3} ({:.3}) | {:.3} ({:.3}) | {} ({}) | {} ({}) | {},{} | {} |\n",
+            "| {} | {:.4} ({:.4}) | {:.3} ({}) | {:.3} ({}) | {} ({}) | {} ({}) | {},{} | {} |\n",
             g.program,
             o.job_time_s,
             g.job_time_s,
             o.max_dev,
-            g.max_dev,
+            grbl_dev(g.max_dev),
             o.rms_dev,
-            g.rms_dev,
+            grbl_dev(g.rms_dev),
             o.steps[0],
             g.steps[0],
             o.steps[1],
             g.steps[1],
             o.final_pos[0],
             o.final_pos[1],
-            if fails.is_empty() { "met".to_string() } else { fails.join("; ") }
+            if fails.is_empty() {
+                "met".to_string()
+            } else {
+                fails.join("; ")
+            }
+        ));
+    }
+    s
+}
+
+/// Our job times beside the planner model's: Grbl's (15 blocks of look-ahead) and the
+/// time-optimal bound of the same limits at our start speed (whole-program look-ahead;
+/// `-` for programs with arcs, which the model cuts into chords as Grbl does and
+/// inkstep does not). With grbl-sim's figure where it was measured.
+pub fn model_table(runs: &[BenchRun]) -> String {
+    let mut s = String::from(
+        "| program | blocks | job time s | Grbl: grbl-sim s | Grbl: model s | time-optimal s | job time / optimal |\n\
+         |---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for b in runs {
+        let measured = b
+            .grbl
+            .max_dev
+            .map_or("-".to_string(), |_| format!("{:.4}", b.grbl.job_time_s));
+        let (optimal, ratio) = match b.model.optimal {
+            Some(o) => (format!("{o:.4}"), format!("{:.4}", b.ours.job_time_s / o)),
+            None => ("-".to_string(), "-".to_string()),
+        };
+        s.push_str(&format!(
+            "| {} | {} | {:.4} | {} | {:.4} | {} | {} |\n",
+            b.grbl.program,
+            b.model.blocks,
+            b.ours.job_time_s,
+            measured,
+            b.model.grbl,
+            optimal,
+            ratio
         ));
     }
     s
@@ -220,6 +274,9 @@ pub struct BenchRun {
     pub grbl: GrblRow,
     pub ours: Figures,
     pub run: RunResult,
+    /// The planner model's times for the program (Grbl's, and the time-optimal bound at
+    /// inkstep's start speed).
+    pub model: ModelTimes,
 }
 
 /// Runs the program `grbl.program` of `bench_dir` and measures it against its ideal
@@ -240,10 +297,14 @@ pub fn run_program_after(
     let run = run_gcode(&format!("{setup}{text}"), Flow::SendResponse);
     let spmm = f64::from(run.settings.steps_per_mm(0));
     let ours = analyse(&run.trace(), &ideal, spmm);
+    let start_speed = f64::from(run.settings.start_rate()) / 60.0;
+    let model =
+        grbl_model::times(&text, start_speed).map_err(|e| format!("{}: {e}", nc.display()))?;
     Ok(BenchRun {
         grbl: grbl.clone(),
         ours,
         run,
+        model,
     })
 }
 
@@ -332,12 +393,17 @@ mod tests {
 |---|---|---|---|---|---|---|
 | star.nc   {5/2} star, R 40 mm, F3000 | 8.0403 | 1.029 | 0.351 | 19696 | 18734 | 0,0 |
 | sine.nc   y = 10 sin(x/5), 0.5 mm segments, F2000 | 3.2240 | 1.024 | 0.395 | 5024 | 6393 | 5024,-5 |
+| zigzag.nc | 12.4645 | - | - | 4000 | 4000 | 4000,0 |
+| bad.nc | 1.0 | x | - | 1 | 1 | 0,0 |
 ";
 
     #[test]
     fn reads_grbl_table_and_checks_goals() {
         let rows = read_grbl_table(README);
-        assert_eq!(rows.len(), 2);
+        assert_eq!(rows.len(), 3);
+        assert_eq!((rows[2].max_dev, rows[2].rms_dev), (None, None));
+        assert_eq!(rows[2].steps, [4000, 4000]);
+        assert_eq!(rows[1].max_dev, Some(1.024));
         assert_eq!(rows[1].program, "sine.nc");
         assert_eq!(rows[1].final_pos, [5024, -5]);
         assert_eq!(rows[0].steps, [19696, 18734]);
@@ -368,6 +434,24 @@ mod tests {
         let text = std::fs::read_to_string(&path).expect("Grbl's figures of the bench");
         let rows = read_grbl_table(&text);
         let names: Vec<&str> = rows.iter().map(|r| r.program.as_str()).collect();
-        assert_eq!(names, ["star.nc", "circle.nc", "sine.nc", "spiral.nc"]);
+        assert_eq!(
+            names,
+            [
+                "star.nc",
+                "circle.nc",
+                "sine.nc",
+                "spiral.nc",
+                "zigzag.nc",
+                "zigzag-fine.nc",
+                "zigzag-shallow.nc",
+                "polygon.nc",
+                "dashes.nc"
+            ]
+        );
+        // grbl-sim's rows carry deviations, the model's do not.
+        assert!(rows[..4].iter().all(|r| r.max_dev.is_some()));
+        assert!(rows[4..]
+            .iter()
+            .all(|r| r.max_dev.is_none() && r.rms_dev.is_none()));
     }
 }

@@ -9,6 +9,7 @@ pub mod bench;
 pub mod board;
 pub mod demo;
 pub mod flash;
+pub mod grbl_model;
 pub mod keys;
 pub mod kinematics;
 pub mod latency;

@@ -6,7 +6,7 @@ use inkstep_core::settings::Settings;
 use inkstep_sim::board::{Board, TICK_HZ};
 use inkstep_sim::run::Flow;
 use inkstep_sim::trace::{Trace, TraceWriter};
-use inkstep_sim::{bench, demo, kinematics, paths, plot, profiles, run};
+use inkstep_sim::{bench, demo, grbl_model, kinematics, paths, plot, profiles, run};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -61,6 +61,9 @@ enum Cmd {
         #[arg(long)]
         dir: Option<PathBuf>,
     },
+    /// Grbl's job time for G-code files from the model of Grbl 1.1's planner (15 blocks
+    /// of look-ahead, trapezoids), as rows of bench/GRBL.md's model table.
+    GrblModel { files: Vec<PathBuf> },
     /// Open a pseudo-terminal that behaves like the board's USB serial port; runs until killed.
     Serve {
         /// Also make this path a symlink to the port.
@@ -134,6 +137,7 @@ fn main() -> ExitCode {
             cmd_run(&file, outs, lcd_every.max(1), char_count)
         }
         Cmd::Bench { dir } => cmd_bench(dir),
+        Cmd::GrblModel { files } => cmd_grbl_model(&files),
         Cmd::Demo { out, keys } => cmd_demo(&out, keys.as_deref()),
         Cmd::Latency {
             lines,
@@ -330,6 +334,7 @@ fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {
         .map(|b| (b.grbl.clone(), b.ours.clone()))
         .collect();
     say!("{}", bench::markdown_table(&rows));
+    say!("{}", bench::model_table(&runs));
     let failed = runs
         .iter()
         .any(|b| !b.run.ok() || !bench::goal_failures(&b.ours, &b.grbl).is_empty());
@@ -338,6 +343,27 @@ fn cmd_bench(dir: Option<PathBuf>) -> Result<ExitCode, String> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+fn cmd_grbl_model(files: &[PathBuf]) -> Result<ExitCode, String> {
+    let start_speed = f64::from(Settings::default().start_rate()) / 60.0;
+    for f in files {
+        let text = std::fs::read_to_string(f).map_err(|e| format!("{}: {e}", f.display()))?;
+        let m =
+            grbl_model::times(&text, start_speed).map_err(|e| format!("{}: {e}", f.display()))?;
+        let name = f
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+        say!(
+            "| {name} | {:.4} | - | - | {} | {} | {},{} |",
+            m.grbl,
+            m.steps[0],
+            m.steps[1],
+            m.end[0],
+            m.end[1]
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn plot_trace(path: &Path, out: &Path, spm: f64) -> Result<ExitCode, String> {
