@@ -11,7 +11,8 @@
 //!   6  step timer (TIM2): the core's `Executor`, integer work only
 //!   5  USB (endpoint <-> byte queues) and segment preparation (`Pipeline::fill`, every
 //!      tick)
-//!   4  protocol / G-code / machine state (`Controller::service`, every tick),
+//!   4  protocol / G-code / machine state (`Controller::service`, every tick while
+//!      it has work; at idle only when bytes, an input edge or a key wake it),
 //!      feed-hold and cycle-start inputs
 //!   3  keypad scan (one column every 5 ms), buzzer, the watchdog
 //!   1  LCD refresh (every 100 ms): the only task that waits (on its SPI); everything
@@ -42,6 +43,20 @@ use inkstep_core::stepper::MAX_RELOAD;
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
 /// The host has the serial port open (CDC's DTR), as the USB task last saw it.
 static PORT_OPEN: AtomicBool = AtomicBool::new(false);
+/// Something the protocol task must see happened since it last looked (bytes from the
+/// host, the port opened or closed, an input pin's edge, a key): it runs at once, not
+/// at the next tick, and again if this came while it ran (see `wake_protocol`).
+static PROTOCOL_WAKE: AtomicBool = AtomicBool::new(false);
+/// The protocol task has periodic work (a line, motion to follow, a timer): the tick
+/// starts it every millisecond. Otherwise it sleeps until `wake_protocol`.
+static PROTOCOL_BUSY: AtomicBool = AtomicBool::new(true);
+
+/// Run the protocol task now: what just happened (bytes, an input, a key) is
+/// answered at once, and a sleeping protocol task wakes up.
+fn wake_protocol() {
+    PROTOCOL_WAKE.store(true, Ordering::Relaxed);
+    rtic::pend(stm32f1xx_hal::pac::Interrupt::SPI1);
+}
 
 /// A fault or panic must leave every motor driver disabled (see `inkstep::fault`).
 #[cortex_m_rt::exception]
@@ -243,6 +258,7 @@ mod app {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
             steps::halt();
+            wake_protocol();
         }
     }
 
@@ -260,8 +276,12 @@ mod app {
 
     /// A limit switch on EXTI line `line` changed (one body for both axes).
     fn limit_switch(line: u8) {
-        if board::exti_take_pending(line) && HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
-            steps::halt();
+        if board::exti_take_pending(line) {
+            if HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
+                steps::halt();
+            }
+            // The machine reads the switch (alarm, homing, the `?` report's pins).
+            wake_protocol();
         }
     }
 
@@ -280,11 +300,12 @@ mod app {
         let tx = cx.local.usb_tx_out;
         let serial = &mut **cx.local.serial;
         cx.local.usb.poll(&mut [&mut *serial]);
-        PORT_OPEN.store(serial.dtr(), Ordering::Relaxed);
+        let open = serial.dtr();
+        let mut arrived = PORT_OPEN.swap(open, Ordering::Relaxed) != open;
         let mut buf = [0u8; 64];
         if rx.free() >= buf.len() {
             if let Ok(n) = serial.read(&mut buf) {
-                rx.push(buf.get(..n).unwrap_or(&[]));
+                arrived |= rx.push(buf.get(..n).unwrap_or(&[])) > 0;
             }
         } else {
             // A packet left in the endpoint keeps the peripheral's transfer flag set,
@@ -301,6 +322,10 @@ mod app {
             // are dropped only if the host stopped reading.
             let _ = serial.write(buf.get(..n).unwrap_or(&[]));
         }
+        if arrived {
+            // Real-time bytes act when they arrive, not at the next tick.
+            wake_protocol();
+        }
     }
 
     /// The 1 ms tick: the clock, and the periodic tasks started at their periods
@@ -312,7 +337,9 @@ mod app {
         let now = NOW_MS.load(Ordering::Relaxed).wrapping_add(1);
         NOW_MS.store(now, Ordering::Relaxed);
         rtic::pend(Interrupt::I2C1_EV);
-        rtic::pend(Interrupt::SPI1);
+        if PROTOCOL_BUSY.load(Ordering::Relaxed) {
+            rtic::pend(Interrupt::SPI1);
+        }
         if now.is_multiple_of(KEYPAD_SCAN_MS) {
             rtic::pend(Interrupt::USART3);
         }
@@ -341,41 +368,58 @@ mod app {
     /// the release of a halt.
     #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, servo, store, servo_us: Option<u32> = None])]
     fn protocol(mut cx: protocol::Context) {
-        let now = now_ms();
-        let pins = board::Inputs::levels();
-        let host = HostLink {
-            rx: cx.local.usb_rx_out,
-            tx: cx.local.usb_tx_in,
-            port_open: PORT_OPEN.load(Ordering::Relaxed),
+        let started = now_ms();
+        let quiet = loop {
+            PROTOCOL_WAKE.store(false, Ordering::Relaxed);
+            let now = now_ms();
+            let pins = board::Inputs::levels();
+            let host = HostLink {
+                rx: &mut *cx.local.usb_rx_out,
+                tx: &mut *cx.local.usb_tx_in,
+                port_open: PORT_OPEN.load(Ordering::Relaxed),
+            };
+            let store = &mut *cx.local.store;
+            let done = cx.shared.core.lock(|c| {
+                let (ctl, pipeline) = c.parts();
+                ctl.service(host, pins, store, pipeline, now)
+            });
+            // The replies out now (the USB task preempts this one as soon as the lock
+            // is released), and the receive side open again.
+            // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes
+            // the USB task's own back-pressure mask (see `usb_lp`).
+            unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
+            rtic::pend(Interrupt::USB_LP_CAN_RX0);
+            if let Some(cfg) = done.outputs {
+                apply_output_config(&cfg);
+            }
+            if let Some(us) = done
+                .servo_pulse_us
+                .filter(|&us| *cx.local.servo_us != Some(us))
+            {
+                cx.local.servo.set_pulse_us(us);
+                *cx.local.servo_us = Some(us);
+            }
+            // A reset from the alarm (soft reset / $X) releases the latched halt, only
+            // while the e-stop input is released now: an e-stop pressed after the
+            // inputs were read above must not be undone.
+            steps::release_halt(|| {
+                !done.alarmed && !done.polarity.decode(board::Inputs::levels()).estop
+            });
+            // One line per run, the lock released in between (so the USB task and the
+            // step preparation get in, and a `?` that arrives meanwhile is answered
+            // before the next line); more lines until the next tick.
+            if !done.more || now_ms() != started {
+                break done.quiet;
+            }
         };
-        let store = &mut *cx.local.store;
-        let done = cx.shared.core.lock(|c| {
-            let (ctl, pipeline) = c.parts();
-            ctl.service(host, pins, store, pipeline, now)
-        });
-        // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes the
-        // USB task's own back-pressure mask (see `usb_lp`).
-        unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
-        rtic::pend(Interrupt::USB_LP_CAN_RX0);
-        if let Some(cfg) = done.outputs {
-            apply_output_config(&cfg);
-        }
-        if let Some(us) = done
-            .servo_pulse_us
-            .filter(|&us| *cx.local.servo_us != Some(us))
-        {
-            cx.local.servo.set_pulse_us(us);
-            *cx.local.servo_us = Some(us);
-        }
-        // A reset from the alarm (soft reset / $X) releases the latched halt, only while
-        // the e-stop input is released now: an e-stop pressed after the inputs were
-        // read above must not be undone.
-        steps::release_halt(|| {
-            !done.alarmed && !done.polarity.decode(board::Inputs::levels()).estop
-        });
-        // A tick that came while this ran is dropped: the next run starts at the next
-        // tick, so the tasks below always get a turn between two runs.
+        // Quiet: no tick starts this task again until something wakes it.
+        PROTOCOL_BUSY.store(!quiet, Ordering::Relaxed);
+        // A tick that came while this ran is dropped, so the tasks below always get a
+        // turn between two runs; a wake that came after the last look starts a new run.
         cortex_m::peripheral::NVIC::unpend(Interrupt::SPI1);
+        if PROTOCOL_WAKE.load(Ordering::Relaxed) {
+            rtic::pend(Interrupt::SPI1);
+        }
     }
 
     /// Feed hold / SYNC and cycle start act at once, like `!` and `~`.
@@ -383,6 +427,7 @@ mod app {
     fn feed_hold(mut cx: feed_hold::Context) {
         if board::exti_take_pending(4) {
             input_edge(&mut cx.shared.core);
+            wake_protocol();
         }
     }
 
@@ -390,6 +435,7 @@ mod app {
     fn cycle_start(mut cx: cycle_start::Context) {
         if board::exti_take_pending(5) {
             input_edge(&mut cx.shared.core);
+            wake_protocol();
         }
     }
 
@@ -411,11 +457,15 @@ mod app {
         // The rows of the column selected one scan period ago.
         let rows = cx.local.keypad.read_rows();
         let now = now_ms();
-        let (out, col) = cx.shared.core.lock(|c| {
+        let (out, col, keyed) = cx.shared.core.lock(|c| {
             let (ctl, pipeline) = c.parts();
-            ctl.key_scan(rows, pipeline, now);
-            (ctl.take_outputs(), ctl.keypad().column())
+            let keyed = ctl.key_scan(rows, pipeline, now);
+            (ctl.take_outputs(), ctl.keypad().column(), keyed)
         });
+        if keyed {
+            // A key's job, jog or menu change: the protocol task follows it.
+            wake_protocol();
+        }
         cx.local.keypad.select_column(col);
         let buzzer = cx.local.buzzer;
         cx.local.indicators.set_busy(out.busy_led);

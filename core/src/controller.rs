@@ -74,6 +74,13 @@ pub struct Serviced {
     /// How the input pins are read now (the shell's halt release checks the e-stop
     /// pin with it).
     pub polarity: InputPolarity,
+    /// A line ran and another may run at once: call again (the shell lets other
+    /// work in between, see [`Controller::service`]).
+    pub more: bool,
+    /// Nothing changes until an outside event: a byte or the port's opening from the
+    /// host, an input pin's edge, a key. The shell need not call again before one
+    /// (the firmware's protocol task sleeps at idle); calling anyway is harmless.
+    pub quiet: bool,
 }
 
 /// What waits to be written to flash, at rest.
@@ -219,11 +226,14 @@ impl Controller {
         self.protocol.set_inputs(polarity.decode(pins), m, now_ms);
     }
 
-    /// One protocol tick: the port's opening (the session starts with the welcome
+    /// One protocol run: the port's opening (the session starts with the welcome
     /// line; while it is closed, output is dropped), the input pins, the host's bytes
-    /// (only those the protocol takes), the protocol's and the HMI's periodic work,
-    /// the replies, the settings' effects on the HMI and the outputs, and what changed
-    /// to flash at rest.
+    /// (only those the protocol takes; real-time bytes act at once), at most one line
+    /// with the protocol's and the HMI's periodic work, the replies, the settings'
+    /// effects on the HMI and the outputs, and what changed to flash at rest. While
+    /// [`Serviced::more`] says so, the shell calls it again (in the same tick),
+    /// giving the USB and the step preparation their turn in between: so a `?` waits
+    /// for one line at most, never for a whole receive window of them.
     pub fn service<M: MotionControl, F: NorFlash>(
         &mut self,
         host: HostLink<'_, '_>,
@@ -234,8 +244,12 @@ impl Controller {
     ) -> Serviced {
         self.port(host.port_open);
         self.set_pins(pins, m, now_ms);
+        let said = self.protocol.output_len();
         host.rx.pop_while(|b| self.protocol.take_byte(b, m, now_ms));
-        self.poll(m, now_ms);
+        // A real-time byte that answered (a `?`'s report) goes out before the next
+        // line runs: this call ends here and the shell calls again.
+        let answered = self.protocol.output_len() > said;
+        let more = answered || self.poll_one(m, now_ms);
         if !host.port_open {
             self.protocol.discard_output();
         }
@@ -257,6 +271,12 @@ impl Controller {
                 .then(|| s.pen_servo_pulse_us(m.pen_down())),
             alarmed: self.protocol.machine().alarm().is_some(),
             polarity: InputPolarity::from(s),
+            more,
+            quiet: !more
+                && host.rx.is_empty()
+                && self.saves == Saves::default()
+                && !self.hmi.waiting()
+                && self.protocol.settled(m),
         }
     }
 
@@ -347,22 +367,33 @@ impl Controller {
     }
 
     /// One keypad column scan: `rows` read while [`Keypad::column`] was driven; each
-    /// key event goes through the HMI and its actions through the machine.
-    pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) {
+    /// key event goes through the HMI and its actions through the machine. True when
+    /// a key event came (a quiet protocol task has to look again, see
+    /// [`Serviced::quiet`]).
+    pub fn key_scan<M: MotionControl>(&mut self, rows: u8, m: &mut M, now_ms: u32) -> bool {
+        let mut any = false;
         for ev in self.keypad.feed(rows, now_ms) {
             let st = self.status(m);
             let actions = self.hmi.key(ev, &st, now_ms);
             self.apply(&actions, m, now_ms);
+            any = true;
         }
+        any
     }
 
     /// Background work: the protocol's lines and messages, then the HMI's timers (the
     /// completion of a keypad abort, the busy LED).
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
-        self.protocol.poll(m, now_ms);
+        while self.poll_one(m, now_ms) {}
+    }
+
+    /// [`Controller::poll`] with at most one line; true when another may run now.
+    fn poll_one<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) -> bool {
+        let more = self.protocol.poll_one(m, now_ms);
         let st = self.status(m);
         let actions = self.hmi.tick(&st, now_ms);
         self.apply(&actions, m, now_ms);
+        more
     }
 
     fn apply<M: MotionControl>(&mut self, actions: &[Action], m: &mut M, now_ms: u32) {

@@ -157,6 +157,11 @@ impl<S: StepSide> Pipeline<S> {
         self.planner.reconfigure(&planner_config(s), pos);
         self.pen_lift_ms = s.pen_lift_ms();
     }
+    /// A move is being prepared or waits in the planner (dwells and pen moves are not
+    /// moves): the step queue running dry now would be a stall.
+    pub fn in_move(&self) -> bool {
+        !self.prep.is_idle(&self.planner)
+    }
     /// Source line of the block in execution.
     pub fn line(&self) -> Option<u32> {
         self.prep.line()

@@ -403,3 +403,39 @@ fn the_completion_beep_survives_the_protocol_tick() {
     }
     assert_eq!(c.take_outputs().beep, Some(Beep::Done));
 }
+
+/// The firmware's protocol task sleeps while `quiet` holds: only once the boot screen,
+/// the replies and the motion are done, never while a line waits or the machine moves;
+/// bytes from the host end it.
+#[test]
+fn quiet_only_when_nothing_waits() {
+    let mut m = FakePlanner::new(16);
+    m.rate = 10;
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    assert!(
+        !sh.tick(&mut c, &mut m).quiet,
+        "the welcome and the boot screen"
+    );
+    let mut t = 0;
+    while !sh.tick(&mut c, &mut m).quiet {
+        sh.read();
+        t += 1;
+        assert!(t < 3_000, "never quiet at rest");
+    }
+    assert!(sh.read().is_empty() || c.protocol_mut().output_len() == 0);
+    sh.rx.split().0.push(b"G1 X1 F600\n");
+    let mut busy = 0;
+    loop {
+        let done = sh.tick(&mut c, &mut m);
+        sh.read();
+        m.step();
+        if done.quiet {
+            break;
+        }
+        busy += 1;
+        assert!(busy < 3_000, "never quiet after the move");
+    }
+    assert!(busy > 5, "quiet while the move ran ({busy} ticks)");
+    assert!(m.queue.is_empty(), "quiet with a move queued");
+    assert_eq!(m.pos[X], Settings::default().steps_per_mm(X) as i32);
+}

@@ -451,7 +451,10 @@ fn info_modal_state_offsets_and_startup_lines() {
     assert_eq!(out, "[GC:G0 G54 G17 G21 G90 G94 M5 M9 T0 F0 S0]\r\nok\r\n");
     let out = send(&mut p, &mut m, "$I\n");
     assert!(out.starts_with("[VER:1.1h.inkstep"), "{out}");
-    assert!(out.contains("[OPT:NL,16,128]"));
+    assert!(
+        out.contains("[OPT:NL,16,128]\r\n[MSG:Max step rate "),
+        "{out}"
+    );
     send(&mut p, &mut m, "G10 L2 P1 X5\n");
     let out = send(&mut p, &mut m, "$#\n");
     assert!(out.starts_with("[G54:5.000,0.000,0.000]\r\n[G55:"), "{out}");

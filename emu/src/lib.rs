@@ -8,6 +8,7 @@ pub mod clock;
 pub mod debug;
 pub mod demo;
 pub mod elf;
+pub mod latency;
 pub mod machine;
 pub mod nvic;
 pub mod periph;

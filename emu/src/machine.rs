@@ -105,6 +105,8 @@ pub struct State {
     rtt: Option<u32>,
     pub profile: Profile,
     profile_mark: u64,
+    /// When recording: (end time, exception) of each stretch of execution.
+    pub runs: Option<Vec<(u64, usize)>>,
     pub instructions: u64,
     /// Watchdog resets so far.
     pub watchdog_resets: u32,
@@ -218,6 +220,7 @@ impl<'a> Machine<'a> {
                 sleep: 0,
             },
             profile_mark: 0,
+            runs: None,
             instructions: 0,
             watchdog_resets: 0,
             hardfaults: 0,
@@ -1213,6 +1216,11 @@ impl State {
     /// Charge the time since the last mark to the exception running now.
     fn account(&mut self, now: u64) {
         let cur = self.board.nvic.current();
+        if let Some(r) = &mut self.runs {
+            if now > self.profile_mark {
+                r.push((now, cur));
+            }
+        }
         self.profile.busy[cur] += now.saturating_sub(self.profile_mark);
         self.profile_mark = now;
     }

@@ -104,6 +104,21 @@ enum Cmd {
         #[arg(long)]
         elf: Option<PathBuf>,
     },
+    /// The `?` answer time during long character-counting streams (one-step moves and
+    /// ordinary moves): median, p99 and max; exits 1 if any answer took over 2 ms.
+    Latency {
+        /// Lines per stream.
+        #[arg(long, default_value_t = 100_000)]
+        lines: usize,
+        /// A `?` every this many ms (the next only once the last is answered).
+        #[arg(long, default_value_t = 10)]
+        every_ms: u64,
+        /// Print what the CPU ran during every answer over 2 ms.
+        #[arg(long)]
+        explain: bool,
+        #[arg(long)]
+        elf: Option<PathBuf>,
+    },
     /// Run the on-target tests (tests/on_target.rs, defmt-test) on the emulated board;
     /// exits with the tests' status.
     Test {
@@ -380,6 +395,35 @@ fn cmd_bench(elf: Option<PathBuf>) -> Result<ExitCode, String> {
     Ok(ExitCode::SUCCESS)
 }
 
+fn cmd_latency(
+    lines: usize,
+    every_ms: u64,
+    explain: bool,
+    elf: Option<PathBuf>,
+) -> Result<ExitCode, String> {
+    use inkstep_emu::latency::{measure, Load, TABLE_HEAD};
+    let elf = elf_or_build(elf)?;
+    println!("{TABLE_HEAD}");
+    let mut ok = true;
+    for load in [Load::OneStep, Load::Ordinary] {
+        let l = measure(&elf, load, lines, every_ms * T_PER_MS, explain)?;
+        println!("{}", l.row(load));
+        eprintln!(
+            "  from the sender's write: max {:.0} µs",
+            l.max_from_write as f64 / T_PER_MS as f64 * 1000.0
+        );
+        for c in l.complaints.iter().take(5) {
+            eprintln!("  {c}");
+        }
+        ok &= l.within_bound();
+    }
+    Ok(if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
 fn cmd_test(elf: Option<PathBuf>, log: Option<&Path>) -> Result<ExitCode, String> {
     use inkstep_emu::target_tests;
     let elf = match elf {
@@ -454,6 +498,12 @@ fn main() -> ExitCode {
         } => cmd_demo(&out, keys.as_deref(), elf, log.as_deref(), flash.as_deref()),
         Cmd::Soak { minutes, elf, log } => cmd_soak(minutes, elf, log.as_deref()),
         Cmd::Bench { elf } => cmd_bench(elf),
+        Cmd::Latency {
+            lines,
+            every_ms,
+            explain,
+            elf,
+        } => cmd_latency(lines, every_ms, explain, elf),
         Cmd::Test { elf, log } => cmd_test(elf, log.as_deref()),
     };
     match r {

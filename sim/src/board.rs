@@ -270,20 +270,27 @@ impl Board {
         let now = self.ms;
         self.pipeline.fill();
         self.kick();
-        let (_, mut rx) = self.host_rx.split();
-        let (mut tx, _) = self.host_tx.split();
-        let host = HostLink {
-            rx: &mut rx,
-            tx: &mut tx,
-            port_open: self.port_open,
-        };
-        let done = self
-            .ctl
-            .service(host, self.pins, &mut self.store, &mut self.pipeline, now);
-        if let Some(cfg) = done.outputs {
-            self.outputs = cfg;
+        // As the firmware's protocol task: one line a call, called again while
+        // another may run (the firmware stops at the next tick; here it costs no time).
+        loop {
+            let (_, mut rx) = self.host_rx.split();
+            let (mut tx, _) = self.host_tx.split();
+            let host = HostLink {
+                rx: &mut rx,
+                tx: &mut tx,
+                port_open: self.port_open,
+            };
+            let done = self
+                .ctl
+                .service(host, self.pins, &mut self.store, &mut self.pipeline, now);
+            if let Some(cfg) = done.outputs {
+                self.outputs = cfg;
+            }
+            self.servo_pulse_us = done.servo_pulse_us;
+            if !done.more {
+                break;
+            }
         }
-        self.servo_pulse_us = done.servo_pulse_us;
         if now.is_multiple_of(KEYPAD_SCAN_MS) {
             self.scan();
         }

@@ -180,8 +180,9 @@ fn main() -> ! {
                     axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
                 }
                 next_irq = out.timer.is_running().then(|| at + period());
-                if next_irq.is_none() && !inkstep_core::machine::MotionControl::is_idle(&pipeline) {
-                    // The queue ran dry while the job still had steps to make.
+                if next_irq.is_none() && pipeline.in_move() {
+                    // The queue ran dry while a move still had steps to make (a dwell or
+                    // a pen move stops the timer on purpose).
                     dry += 1;
                 }
                 continue;

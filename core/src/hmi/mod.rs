@@ -62,6 +62,13 @@ pub struct Hmi {
     busy: bool,
     alarm_latched: bool,
     toast: Option<Toast>,
+    /// Bumped whenever what the screens show of the HMI may have changed (every key
+    /// event, new settings, and each change [`Hmi::tick`] makes to the page or the
+    /// message): the LCD skips a refresh when neither this nor the machine status
+    /// changed (`screens::Screens::render`). A counter rather than a comparison of
+    /// the whole state, which costs the image over a kilobyte of flash and a second
+    /// copy of the state in RAM.
+    revision: u32,
 }
 
 fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
@@ -102,7 +109,26 @@ impl Hmi {
             busy: false,
             alarm_latched: false,
             toast: None,
+            revision: 0,
         }
+    }
+
+    /// [`Hmi::tick`] has timed work: the boot screen or a message to take down, a job
+    /// to follow. Otherwise it only follows the machine, which a settled machine does
+    /// not change.
+    pub fn waiting(&self) -> bool {
+        let following = |run: &RunPage| !matches!(run.phase, RunPhase::Done { .. });
+        self.toast.is_some()
+            || matches!(&self.page, Page::Boot)
+            || matches!(&self.page, Page::Run(run) if following(run))
+    }
+
+    /// Changes whenever what the screens show of the HMI may have changed.
+    pub fn revision(&self) -> u32 {
+        self.revision
+    }
+    fn changed(&mut self) {
+        self.revision = self.revision.wrapping_add(1);
     }
 
     pub fn page(&self) -> &Page {
@@ -114,6 +140,7 @@ impl Hmi {
     /// New machine settings (e.g. after `$100=`); also resets the draw speed to the
     /// configured one. Takes effect for the next job.
     pub fn set_config(&mut self, cfg: Config) {
+        self.changed();
         self.cfg = cfg;
         self.draw_feed = cfg.draw_feed_mm_min;
     }
@@ -151,6 +178,7 @@ impl Hmi {
     }
 
     fn say(&mut self, text: &str, now_ms: u32) {
+        self.changed();
         self.toast = Some(Toast {
             text: Text::truncated(text),
             until_ms: now_ms.wrapping_add(TOAST_MS),
@@ -189,6 +217,8 @@ impl Hmi {
     /// RAM is otherwise within a few hundred bytes of its budget (.ci/stack-depth).
     #[inline(never)]
     pub fn key(&mut self, ev: KeyEvent, st: &Status, now_ms: u32) -> Actions {
+        // Keys are rare: any of them counts as a change.
+        self.changed();
         let mut out = Actions::new();
         let press = ev.kind == KeyKind::Press;
         let repeat = ev.kind == KeyKind::Repeat;
@@ -579,6 +609,7 @@ impl Hmi {
         if let Some(t) = &self.toast {
             if (now_ms.wrapping_sub(t.until_ms) as i32) >= 0 {
                 self.toast = None;
+                self.changed();
             }
         }
         // Alarms take over the screen once per occurrence.
@@ -587,6 +618,7 @@ impl Hmi {
                 if !self.alarm_latched {
                     self.alarm_latched = true;
                     self.page = Page::Alarm { code };
+                    self.changed();
                     push(&mut out, Action::Beep(Beep::Alarm));
                 }
             }
@@ -603,6 +635,7 @@ impl Hmi {
         match &mut self.page {
             Page::Boot if now_ms.wrapping_sub(self.boot_ms) >= BOOT_MS => {
                 self.page = Page::Menu { sel: 0 };
+                self.changed();
             }
             // A jog ended by something else (alarm, reset) is no longer held.
             Page::Jog(jog)
@@ -610,6 +643,7 @@ impl Hmi {
                     && !matches!(st.state, MachineState::Jog | MachineState::Idle) =>
             {
                 jog.active = None;
+                self.changed();
             }
             Page::Run(run) => {
                 let settled = st.state == MachineState::Idle && st.queue_empty;

@@ -118,6 +118,7 @@ fn sgn(v: i32) -> i32 {
 /// below, then the series to t^11, whose error (< 1e-10) is far below the general
 /// arctangent's 3e-7 rad (which, over a long arc, would shift a step's position by a
 /// thousandth of a step and its time near a stop by microseconds).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // a NaN takes the general arctangent
 fn small_angle(cross: f32, dot: f32) -> f32 {
     if !(dot > 0.0) {
         return crate::fmath::abs(crate::fmath::atan2(cross, dot));
@@ -254,8 +255,8 @@ impl Circle {
     /// Points the axis directions along the feed at the present point and sets their
     /// increments.
     fn set_dirs(&mut self, d: [i32; 2]) {
-        for i in 0..2 {
-            self.dir[i] = d[i] * ONE;
+        for (i, d) in d.into_iter().enumerate() {
+            self.dir[i] = d * ONE;
             let s = i64::from(self.dir[i]);
             self.e[i] = 2 * s * i64::from(self.p[i]) + s * s;
         }
@@ -532,7 +533,8 @@ impl Circle {
 
     /// What comes next (moving on to the next piece when this one is used up): a DDA
     /// piece is a run; a classic tick is timed on its own; settle and tail steps are
-    /// extra steps.
+    /// extra steps. (Not an iterator: it never ends, it says `Done`.)
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> Next {
         loop {
             match (&self.stage, self.method) {

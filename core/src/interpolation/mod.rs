@@ -174,6 +174,8 @@ impl Interpolator {
     }
 
     /// What comes next (moving a circle on to its next piece when one is used up).
+    /// Not an iterator: it never ends, it says [`Next::Done`].
+    #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> Next {
         match self {
             Interpolator::Line(l) => l.next(),

@@ -248,6 +248,19 @@ impl Machine {
         self.homing.is_some() || m.is_moving()
     }
 
+    /// Nothing changes without an outside event (a byte, an input, a key): nothing
+    /// queued or moving, no homing, no stop or job end waiting for rest, no message
+    /// unsaid. [`Machine::poll`] has nothing to do then.
+    pub fn settled<M: MotionControl>(&self, m: &M) -> bool {
+        m.is_idle()
+            && self.homing.is_none()
+            && !self.stop_then_clear
+            && !self.jog_cancel
+            && !self.jogging
+            && !self.job.ending
+            && self.events.is_empty()
+    }
+
     /// G-code lines are taken only when this holds: during a stop that will drop the
     /// queue they wait until it is done (otherwise they would be answered `ok` and
     /// then dropped).

@@ -2,14 +2,17 @@
 //! the tangent where it starts and ends (for junctions), the path acceleration and
 //! speed that every axis can follow along it (Grbl's per-axis semantics: a path
 //! direction u limits acceleration to min_i a_i / |u_i| and speed to min_i v_i / |u_i|),
-//! and for curves the centripetal limit v^2 <= a * r_min.
+//! and for curves the centripetal limit v^2 <= a * r_min; and the speed at which its
+//! step events come no faster than the step pipeline sustains ([`MAX_STEP_RATE`]).
 //!
 //! Lengths of curves are integrated numerically (Simpson); floating point is fine
 //! here because this runs once per move in the planning task.
 
 use super::PlannerConfig;
+use crate::interpolation::Method;
 use crate::motion::{Move, Path, StepPos, AXES, X, Y, Z};
-use core::f32::consts::{PI, TAU};
+use crate::stepper::MAX_STEP_RATE;
+use core::f32::consts::{PI, SQRT_2, TAU};
 
 /// The planner's view of one move.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,7 +24,8 @@ pub struct Geometry {
     pub unit_end: [f32; AXES],
     /// Largest path acceleration every axis can follow along the whole move, mm/s^2.
     pub accel: f32,
-    /// Largest path speed every axis can follow (axis max rates, centripetal), mm/s.
+    /// Largest path speed every axis can follow (axis max rates, centripetal) and the
+    /// step pipeline can time ([`MAX_STEP_RATE`]), mm/s.
     pub speed_limit: f32,
 }
 
@@ -63,6 +67,37 @@ fn sp(cfg: &PlannerConfig, axis: usize) -> f32 {
 
 /// Geometry of `mv` starting at `start`.
 pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometry, GeometryError> {
+    let mut g = shape_of(cfg, start, mv)?;
+    g.speed_limit = g
+        .speed_limit
+        .min(MAX_STEP_RATE / events_per_mm(cfg, start, mv, g.length));
+    Ok(g)
+}
+
+/// Step events (interpolation ticks) per mm of path along `mv` (of `length` mm), at
+/// most: a line's ticks over its length (DDA: its longest axis travel; point by point:
+/// every axis' travel); a curve's bound (DDA: a tick moves at least one step of some
+/// axis, so at most the largest steps per mm; point by point, one axis per tick, at
+/// most sqrt 2 times that).
+fn events_per_mm(cfg: &PlannerConfig, start: StepPos, mv: &Move, length: f32) -> f32 {
+    let classic = cfg.method == Method::Classic;
+    match mv.path {
+        Path::Line | Path::LineFine { .. } => {
+            let travel = |i: usize| mv.target[i].wrapping_sub(start[i]).unsigned_abs() as f32;
+            let ticks = if classic {
+                travel(X) + travel(Y) + travel(Z)
+            } else {
+                travel(X).max(travel(Y)).max(travel(Z))
+            };
+            ticks / length
+        }
+        _ => sp(cfg, X).max(sp(cfg, Y)) * if classic { SQRT_2 } else { 1.0 },
+    }
+}
+
+/// The shape of `mv` starting at `start`: its length, tangents, and the limits the
+/// axes set.
+fn shape_of(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometry, GeometryError> {
     // Travels below 2^31 (both ends within motion::POS_LIMIT, checked by the planner
     // first): i32 differences, the same f32 as through i64.
     let d: [f32; AXES] =

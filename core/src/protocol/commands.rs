@@ -10,6 +10,7 @@ use crate::gcode::Status;
 use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::machine::{Machine, MotionControl, RunState};
 use crate::settings::Settings;
+use crate::stepper::MAX_STEP_RATE;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Listing {
@@ -162,7 +163,11 @@ impl Protocol {
                 put_int(&mut w, cap as i32);
                 w.put(b",");
                 put_int(&mut w, RX_BUFFER_SIZE as i32);
-                w.put(b"]\r\n");
+                // The step-event rate the planner caps moves at: a feedback message,
+                // which Grbl 1.1 senders show (or skip) wherever it comes.
+                w.put(b"]\r\n[MSG:Max step rate ");
+                put_int(&mut w, MAX_STEP_RATE as i32);
+                w.put(b"/s]\r\n");
                 Ok(())
             }
             SysCommand::Check => {

@@ -237,12 +237,43 @@ impl Protocol {
         }
     }
 
-    /// Make progress: run buffered lines, continue listings, emit messages.
+    /// Nothing to do until a byte arrives or an input changes: the machine is settled
+    /// ([`Machine::settled`]), no complete line, report, listing, startup line or
+    /// delayed `ok` waits, and every reply has been read out.
+    pub fn settled<M: MotionControl>(&self, m: &M) -> bool {
+        self.machine.settled(m)
+            && self.out.is_empty()
+            && !self.line_ready
+            && !self.rx.iter().any(|&b| b == b'\n' || b == b'\r')
+            && self.status_requested == 0
+            && self.listing.is_none()
+            && self.startup_next.is_none()
+            && !self.pending_welcome
+            && !self.ok_when_idle
+    }
+
+    /// Make progress: run every buffered line that can run now, continue listings,
+    /// emit messages.
     pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
         self.machine.poll(m, now_ms);
+        while self.work(m, now_ms) {}
+    }
+
+    /// [`Protocol::poll`] that runs at most one line (a buffered or a startup line):
+    /// the shell's protocol task calls it in a loop and lets other work in between
+    /// lines (a line with its planning can take a millisecond on the board, and a
+    /// `?` must not wait for a whole window of them). True when it ran a line and
+    /// another may follow at once.
+    pub fn poll_one<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) -> bool {
+        self.machine.poll(m, now_ms);
+        self.work(m, now_ms)
+    }
+
+    /// Replies, listings and messages, then at most one line; true when it ran one.
+    fn work<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) -> bool {
         loop {
             if self.room() < OUT_RESERVE {
-                return;
+                return false;
             }
             self.flush_events();
             if self.status_requested > 0 {
@@ -254,25 +285,20 @@ impl Protocol {
                 continue;
             }
             if let Some(i) = self.startup_next {
-                if !self.run_startup(i, m, now_ms) {
-                    return;
-                }
-                continue;
+                return self.run_startup(i, m, now_ms);
             }
             if self.ok_when_idle {
                 if !m.is_idle() {
-                    return;
+                    return false;
                 }
                 self.ok_when_idle = false;
                 self.respond(Ok(()));
                 continue;
             }
             if !self.line_ready && !self.frame_line() {
-                return;
+                return false;
             }
-            if !self.run_line(m, now_ms) {
-                return;
-            }
+            return self.run_line(m, now_ms);
         }
     }
 

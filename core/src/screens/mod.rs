@@ -147,6 +147,9 @@ pub struct Screens {
     trace_run: Option<u32>,
     ticks: Option<Px>,
     arrow: Option<([i8; 2], bool)>,
+    /// What the last render drew from: the HMI's revision and the machine status
+    /// (see [`Screens::render`]).
+    drawn: Option<(u32, Status)>,
 }
 
 impl Screens {
@@ -166,6 +169,13 @@ impl Screens {
 
     /// Draw the current page of `hmi` for machine status `st` (never fails: the result
     /// is kept for the callers written against a fallible drawing target).
+    ///
+    /// Quiet when nothing changed: painting a page's text cells pixel by pixel costs
+    /// the firmware milliseconds of CPU even when no pixel changes (emu/README.md has
+    /// the measured load), so a render from the same HMI revision ([`Hmi::revision`])
+    /// and machine status as the last one is skipped; the frame buffer already holds
+    /// exactly that picture. The drawing page is the exception (its clock runs with
+    /// `now_ms`), and is always drawn. One `Screens` draws one HMI.
     pub fn render(
         &mut self,
         hmi: &Hmi,
@@ -173,7 +183,13 @@ impl Screens {
         now_ms: u32,
         fb: &mut FrameBuffer,
     ) -> Result<(), Infallible> {
+        let now = (hmi.revision(), *st);
+        let timed = matches!(hmi.page(), Page::Run(_));
+        if self.key.is_some() && !timed && self.drawn == Some(now) {
+            return Ok(());
+        }
         self.draw(hmi, st, now_ms, fb);
+        self.drawn = Some(now);
         Ok(())
     }
 
@@ -618,6 +634,80 @@ mod tests {
             screens.render(&hmi, &st, 2200, &mut fb).unwrap();
             assert!(!fb.is_dirty(), "page {:?} repainted", hmi.page());
         }
+    }
+
+    /// A render from an unchanged state is skipped, and the picture is the one a full
+    /// render of that state gives; a changed status is drawn.
+    #[test]
+    fn an_unchanged_state_is_not_drawn_again() {
+        let mut hmi = Hmi::new(Config::default(), 0);
+        let mut st = Status::idle_at([0, 0, 500]);
+        hmi.tick(&st, 2000);
+        let mut fb = FrameBuffer::new();
+        let mut screens = Screens::new();
+        screens.render(&hmi, &st, 2000, &mut fb).unwrap();
+        fb.mark_clean();
+        // Scribble on the buffer: a skipped render leaves it alone.
+        let mut scribbled = fb.clone();
+        scribbled.set(0, 0, !fb.pixel(0, 0));
+        scribbled.mark_clean();
+        screens.render(&hmi, &st, 2100, &mut scribbled).unwrap();
+        assert!(!scribbled.is_dirty(), "the unchanged menu was drawn again");
+        let mut fresh = FrameBuffer::new();
+        Screens::new().render(&hmi, &st, 2100, &mut fresh).unwrap();
+        assert!(fresh.bytes() == fb.bytes());
+        // The position on the menu's bottom line changed: drawn.
+        st.pos[X] = 800;
+        screens.render(&hmi, &st, 2200, &mut fb).unwrap();
+        assert!(fb.is_dirty());
+        let mut fresh = FrameBuffer::new();
+        Screens::new().render(&hmi, &st, 2200, &mut fresh).unwrap();
+        assert!(fresh.bytes() == fb.bytes());
+    }
+
+    /// Whatever the keys, the time and the machine do, the picture after a render (drawn
+    /// or skipped) is exactly what a full render of the same state draws: every change
+    /// the screens show bumps the HMI's revision or is in the status.
+    #[test]
+    fn skipped_renders_never_leave_a_stale_picture() {
+        use proptest::prelude::*;
+        let keys = [
+            Key::Digit(1),
+            Key::Digit(2),
+            Key::Digit(5),
+            Key::Digit(8),
+            Key::Up,
+            Key::Down,
+            Key::Back,
+            Key::Enter,
+            Key::Dot,
+            Key::Sign,
+        ];
+        // (what happens: 0-9 a key, 10 an alarm, 11 idle again, 12 a move, else time
+        // passes; how long it takes in ms)
+        let steps = proptest::collection::vec((0u8..16, 0u32..1500), 1..60);
+        proptest!(ProptestConfig::with_cases(200), |(steps in steps)| {
+            let mut hmi = Hmi::new(Config::default(), 0);
+            let mut st = Status::idle_at([0, 0, 500]);
+            let mut screens = Screens::new();
+            let mut fb = FrameBuffer::new();
+            let mut now = 0u32;
+            for (what, dt) in steps {
+                now += dt;
+                match what {
+                    0..=9 => press(&mut hmi, &st, keys[usize::from(what)], now),
+                    10 => st.state = MachineState::Alarm(1),
+                    11 => st.state = MachineState::Idle,
+                    12 => st.pos[X] += 80,
+                    _ => {}
+                }
+                hmi.tick(&st, now);
+                screens.render(&hmi, &st, now, &mut fb).unwrap();
+                let mut fresh = FrameBuffer::new();
+                Screens::new().render(&hmi, &st, now, &mut fresh).unwrap();
+                prop_assert!(fresh.bytes() == fb.bytes(), "stale picture on {:?}", hmi.page());
+            }
+        });
     }
 
     /// Rebuilding the drawing page (after an LCD reset) restores exactly what the

@@ -33,6 +33,16 @@ pub fn tail_period(pulse_ticks: u32) -> u32 {
     (2 * pulse_ticks + 16).min(MAX_RELOAD)
 }
 
+/// The step-event rate (interpolation ticks per second) the planner lets a move ask
+/// for: every block's speed is capped so that its events come no faster
+/// ([`crate::planner::geometry`]), so a program that asks for more runs slower, and the
+/// step queue never runs dry. Measured on the product image in the emulator (`cargo
+/// emu bench`, README "Speed"): with a job streaming over USB, `?` polling and the LCD
+/// refreshing, it sustains 99,000 events/s along one axis (the settings' limit) and
+/// 95,000 traced point by point (one axis per event, the costlier tracing), and
+/// leaves gaps at 100,000 point by point; the cap keeps a margin below that.
+pub const MAX_STEP_RATE: f32 = 90_000.0;
+
 /// Largest wait one command can carry (24 bits of timer ticks).
 pub const MAX_WAIT: u32 = (1 << 24) - 1;
 

@@ -26,6 +26,9 @@
 //! possibly over several blocks) and resume. Hold keeps the rest of the path, so no
 //! step is lost.
 
+// `!(x > 0.0)` is meant throughout: a NaN must fail the test, not pass it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::{CmdSink, StepCmd, MAX_WAIT};
 use crate::interpolation::{Interpolator, Next, Tick};
 use crate::motion::{StepPos, X, Y};
@@ -81,8 +84,6 @@ const MAX_SEGMENT_TICKS: f32 = 1.0e9;
 struct Segment {
     left: u32,
     timing: Timing,
-    /// Some wait may exceed a command's 24 bits: ticks go one by one ([`Prep::slow_tick`]).
-    slow: bool,
     base: u64,
     at: u32,
 }
@@ -150,7 +151,7 @@ impl Ramp {
             // W fell below 0 (a curve's cubic just past rest): at rest.
             return 0;
         }
-        let g = g.max(1).min((1 << 30) - 1);
+        let g = g.clamp(1, (1 << 30) - 1);
         let e = w as i64 - (u64::from(g) * u64::from(g)) as i64;
         if e.unsigned_abs() < 1 << 31 {
             let r = (g as i32 + (e as i32) / (2 * g as i32)).max(1) as u64;
@@ -208,6 +209,24 @@ impl Ramp {
 }
 
 impl Segment {
+    /// `n` ticks timed by a polynomial with the forward differences `d` (timer ticks,
+    /// see [`fixed`]) from the cursor's time `base`; `t_last` is the last queued tick's.
+    fn poly(n: u32, d: [i64; 3], base: u64, t_last: u64) -> Self {
+        let [d1, d2, d3] = d.map(|d| d as u64);
+        Segment {
+            left: n,
+            timing: Timing::Poly {
+                acc: 0,
+                d1,
+                d2,
+                d3,
+                linear: d2 == 0 && d3 == 0,
+            },
+            base,
+            at: t_last.wrapping_sub(base) as u32,
+        }
+    }
+
     /// Times `ticks` and packs them into `cmds` (the same length): per tick two
     /// (linear) or six (cubic) 32-bit additions, or a ramp's integer root, and the wait
     /// since the last one.
@@ -216,8 +235,8 @@ impl Segment {
         let mut prev = self.at;
         let mut emit = |at: u32, tick: Tick, cmd: &mut StepCmd| {
             // At least 2 ticks apart (the executor's promise); the 24-bit bound holds
-            // for every segment not marked slow.
-            let wait = at.wrapping_sub(prev).max(2).min(MAX_WAIT);
+            // for every segment (a tick that may wait longer is timed on its own).
+            let wait = at.wrapping_sub(prev).clamp(2, MAX_WAIT);
             prev = prev.wrapping_add(wait);
             *cmd = StepCmd((u32::from(tick.0) << 24) | wait);
         };
@@ -255,21 +274,6 @@ impl Segment {
         }
         self.at = prev;
         self.left -= ticks.len() as u32;
-    }
-
-    /// The next tick's time since the segment's start (one tick on its own).
-    fn next_at(&mut self) -> u32 {
-        match &mut self.timing {
-            Timing::Poly {
-                acc, d1, d2, d3, ..
-            } => {
-                *acc = acc.wrapping_add(*d1);
-                *d1 = d1.wrapping_add(*d2);
-                *d2 = d2.wrapping_add(*d3);
-                (*acc >> 32) as u32
-            }
-            Timing::Ramp(ramp) => ramp.next(),
-        }
     }
 }
 
@@ -372,6 +376,16 @@ fn from_q(q: u64) -> f32 {
 /// f32 timer ticks (at most 2^31) in i64 with 32 fractional bits.
 fn fixed(ticks: f32) -> i64 {
     (ticks * Q) as i64
+}
+
+/// The forward differences of the cubic Hermite polynomial through (0, 0) and
+/// (n, span) with the slopes `m0` and `m1` at its ends (per tick).
+fn hermite(n: u32, span: f32, m0: f32, m1: f32) -> [f32; 3] {
+    let nf = n as f32;
+    let inv = 1.0 / nf;
+    let c3 = ((m0 + m1) * nf - 2.0 * span) * inv * inv * inv;
+    let c2 = (3.0 * span - (2.0 * m0 + m1) * nf) * inv * inv;
+    [c3 + c2 + m0, 6.0 * c3 + 2.0 * c2, 6.0 * c3]
 }
 
 /// What [`Prep::advance`] set up.
@@ -492,13 +506,6 @@ impl Prep {
                         Some(used) => room -= used,
                         None => return,
                     },
-                }
-                continue;
-            }
-            if a.seg.slow {
-                match self.slow_tick(sink, room) {
-                    0 => return,
-                    used => room -= used,
                 }
                 continue;
             }
@@ -817,34 +824,6 @@ impl Prep {
         }
         Some(needed)
     }
-
-    /// The present segment's next tick waits longer than a command holds: pure waits
-    /// first, then the tick. The commands used (0 if they do not fit now).
-    fn slow_tick(&mut self, sink: &mut dyn CmdSink, room: usize) -> usize {
-        let Some(a) = self.active.as_mut() else {
-            return 0;
-        };
-        let mut seg = a.seg;
-        let at = seg.base.wrapping_add(u64::from(seg.next_at()));
-        let wait = at.saturating_sub(self.t_last).max(2);
-        let needed = commands_for_wait(wait);
-        if needed > room {
-            return 0;
-        }
-        let mut one = [Tick(0)];
-        if a.interp.ticks_into(&mut one) == 0 {
-            a.seg.left = 0;
-            a.run_left = 0;
-            return 0;
-        }
-        self.last_wait = push_waited(sink, one[0], wait);
-        self.t_last += wait;
-        seg.left -= 1;
-        seg.at = self.t_last.wrapping_sub(seg.base) as u32;
-        a.seg = seg;
-        a.run_left -= 1;
-        needed
-    }
 }
 
 /// Whole ticks of `q` in `len` (Q units): the division in f32, checked exactly.
@@ -1032,42 +1011,24 @@ impl Active {
         };
         let end = self.exact(p, s1, hz);
         let span = end.at.saturating_sub(at.at) as f32;
-        let (d1, d2, d3, longest) = if n == 1 {
-            (fixed(span), 0, 0, span)
+        let (d, longest) = if n == 1 {
+            ([fixed(span), 0, 0], span)
         } else if linear {
             let d1 = span / n as f32;
-            (fixed(d1), 0, 0, d1)
+            ([fixed(d1), 0, 0], d1)
         } else {
-            // Cubic Hermite through (0, 0) and (n, span) with the slopes (ticks per
-            // tick) at both ends, as forward differences.
-            let nf = n as f32;
+            // The slopes (timer ticks per tick) at both ends.
             let per = self.scale * hz;
             let m0 = at.rate * per / at.v;
             let m1 = rate1 * per / end.v.max(1e-9);
-            let inv = 1.0 / nf;
-            let c3 = ((m0 + m1) * nf - 2.0 * span) * inv * inv * inv;
-            let c2 = (3.0 * span - (2.0 * m0 + m1) * nf) * inv * inv;
-            let d1 = c3 + c2 + m0;
-            (
-                fixed(d1),
-                fixed(6.0 * c3 + 2.0 * c2),
-                fixed(6.0 * c3),
-                m0.max(m1).max(d1),
-            )
+            let d = hermite(n, span, m0, m1);
+            (d.map(fixed), m0.max(m1).max(d[0]))
         };
-        self.seg = Segment {
-            left: n,
-            timing: Timing::Poly {
-                acc: 0,
-                d1: d1 as u64,
-                d2: d2 as u64,
-                d3: d3 as u64,
-                linear: d2 == 0 && d3 == 0,
-            },
-            slow: longest > (MAX_WAIT / 2) as f32,
-            base: at.at,
-            at: t_last.wrapping_sub(at.at) as u32,
-        };
+        if longest > (MAX_WAIT / 2) as f32 {
+            // A wait may exceed a command's 24 bits: this tick goes on its own.
+            return false;
+        }
+        self.seg = Segment::poly(n, d, at.at, t_last);
         self.at = Cursor { rate: rate1, ..end };
         true
     }
@@ -1087,32 +1048,23 @@ impl Active {
         if n == 0 {
             return None;
         }
-        let first = self.exact(p, at.s + q, hz).at;
+        let first = self.exact(p, at.s + q, hz).at.saturating_sub(at.at);
         let end = Cursor {
             rate: 1.0,
             ..self.exact(p, at.s + q * u64::from(n), hz)
         };
-        let last = end.at;
-        let d1 = if n > 1 {
-            fixed(last.saturating_sub(first) as f32 / (n - 1) as f32)
-        } else {
-            0
-        } as u64;
-        let to_first = (first.wrapping_sub(at.at) << 32).wrapping_sub(d1);
-        let seg = Segment {
-            left: n,
-            timing: Timing::Poly {
-                acc: to_first,
-                d1,
-                d2: 0,
-                d3: 0,
-                linear: true,
-            },
-            slow: (d1 >> 32) > u64::from(MAX_WAIT / 2)
-                || first.saturating_sub(at.at) > u64::from(MAX_WAIT / 2),
-            base: at.at,
-            at: t_last.wrapping_sub(at.at) as u32,
+        let d1 = match n {
+            1 => 0.0,
+            _ => end.at.saturating_sub(at.at + first) as f32 / (n - 1) as f32,
         };
+        if d1.max(first as f32) > (MAX_WAIT / 2) as f32 {
+            return None;
+        }
+        let mut seg = Segment::poly(n, [fixed(d1), 0, 0], at.at, t_last);
+        // The first tick at its exact time: the sum starts a tick's interval before it.
+        if let Timing::Poly { acc, d1, .. } = &mut seg.timing {
+            *acc = (first << 32).wrapping_sub(*d1);
+        }
         Some((seg, end))
     }
 
@@ -1155,30 +1107,17 @@ impl Active {
             }
             n /= 2;
         };
+        let (m0, m1) = (at.rate * q, rate1 * q);
+        if m0.max(m1) > (MAX_WAIT / 2) as f32 {
+            return None;
+        }
         let end = Cursor {
             rate: rate1,
             ..self.exact(p, s1, hz)
         };
         let span = end.at.saturating_sub(at.at) as f32;
-        let (m0, m1) = (at.rate * q, rate1 * q);
-        let inv = 1.0 / n as f32;
-        let nf = n as f32;
-        let c3 = ((m0 + m1) * nf - 2.0 * span) * inv * inv * inv;
-        let c2 = (3.0 * span - (2.0 * m0 + m1) * nf) * inv * inv;
-        let seg = Segment {
-            left: n,
-            timing: Timing::Poly {
-                acc: 0,
-                d1: fixed(c3 + c2 + m0) as u64,
-                d2: fixed(6.0 * c3 + 2.0 * c2) as u64,
-                d3: fixed(6.0 * c3) as u64,
-                linear: false,
-            },
-            slow: m0.max(m1) > (MAX_WAIT / 2) as f32,
-            base: at.at,
-            at: t_last.wrapping_sub(at.at) as u32,
-        };
-        Some((seg, end))
+        let d = hermite(n, span, m0, m1).map(fixed);
+        Some((Segment::poly(n, d, at.at, t_last), end))
     }
 
     /// Ticks in a ramp of constant acceleration (trapezoid), timed exactly
@@ -1297,19 +1236,12 @@ impl Active {
             } else {
                 -k * self.scale
             };
-            let nf = n as f32;
-            let inv = 1.0 / nf;
-            let (m0, m1) = (at.rate, rate1);
-            let c3 = ((m0 + m1) * nf - 2.0 * ds) * inv * inv * inv;
-            let c2 = (3.0 * ds - (2.0 * m0 + m1) * nf) * inv * inv;
-            let as_w = |v: f32| (kk * v) as i64;
-            let (e1, e2, e3) = (
-                as_w(c3 + c2 + m0),
-                as_w(6.0 * c3 + 2.0 * c2),
-                as_w(6.0 * c3),
-            );
-            let n64 = i64::from(n);
-            let sum = n64 * e1 + n64 * (n64 - 1) / 2 * e2 + n64 * (n64 - 1) * (n64 - 2) / 6 * e3;
+            let [e1, e2, e3] = hermite(n, ds, at.rate, rate1).map(|d| (kk * d) as i64);
+            // The sums of 1, k and k(k-1)/2 over the ticks: n <= MAX_SEGMENT, so they
+            // fit in 32 bits (a 64-bit division would link a kilobyte of library code).
+            let pairs = n * (n - 1) / 2;
+            let triples = pairs * n.saturating_sub(2) / 3;
+            let sum = i64::from(n) * e1 + i64::from(pairs) * e2 + i64::from(triples) * e3;
             (
                 n,
                 (w_end as i64).wrapping_sub(sum).max(0) as u64,
@@ -1320,7 +1252,9 @@ impl Active {
                 rate1,
             )
         };
-        if n == 0 {
+        if n == 0 || (dw1 as i64).unsigned_abs() > 1 << 46 {
+            // None, or a first or last step slower than half a command's wait: that
+            // one goes on its own.
             return None;
         }
         let (anchor, r_ref, rising_t) = match p {
@@ -1353,8 +1287,6 @@ impl Active {
         let seg = Segment {
             left: n,
             timing: Timing::Ramp(ramp),
-            // A first or last step slower than half a command's wait: one by one.
-            slow: (dw1 as i64).unsigned_abs() > 1 << 46,
             base: at.at,
             at: t_last.wrapping_sub(at.at) as u32,
         };

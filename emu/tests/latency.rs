@@ -1,0 +1,43 @@
+//! Issue 16, point 5, on the firmware: every `?` answered within 2 ms of emulated time
+//! (OUT packet to IN packet) while a character-counting stream keeps the planner and
+//! the receive buffer full. `cargo emu latency` prints the distribution over longer
+//! streams (emu/README.md).
+
+mod common;
+
+use inkstep_emu::clock::{T_PER_MS, T_PER_US};
+use inkstep_emu::latency::{measure, Load, BOUND};
+
+fn assert_bound(load: Load, lines: usize) {
+    let l = measure(common::elf(), load, lines, 10 * T_PER_MS, false).expect("stream");
+    let over: Vec<f64> = l
+        .answers
+        .iter()
+        .filter(|&&a| a > BOUND)
+        .map(|&a| a as f64 / T_PER_US as f64)
+        .collect();
+    assert!(
+        l.within_bound(),
+        "{}: {} questions, median {:.0} µs, max {:.0} µs; over 2 ms: {over:?}; unanswered {}; complaints {:?}",
+        load.name(),
+        l.answers.len(),
+        l.quantile_us(0.5),
+        l.max_us(),
+        l.unanswered,
+        l.complaints
+    );
+}
+
+#[test]
+fn status_answered_within_2_ms_during_a_stream_of_ordinary_moves() {
+    assert_bound(Load::Ordinary, 600);
+}
+
+/// At one step per block every step command is a block start (about 0.1 ms on the
+/// board); the preparation task (priority 5, with the USB task, above the protocol)
+/// prepares only `pipeline::MIN_AHEAD` (2) commands beyond its 5 ms horizon, so a
+/// `?` never waits for a long stretch of them (`cargo emu latency --explain`).
+#[test]
+fn status_answered_within_2_ms_during_a_stream_of_one_step_moves() {
+    assert_bound(Load::OneStep, 3_000);
+}

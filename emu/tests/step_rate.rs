@@ -1,0 +1,148 @@
+//! The step queue never runs dry mid-move (issue 14, point 2), on the real product
+//! image: at 16x microstepping ($100=$101=1280, $110=$111=4000 mm/min) a long diagonal
+//! and an R20 circle at F4000 are streamed over USB with `?` polling while the LCD
+//! refreshes, and the pulse train read off the step pins is checked for gaps; and a
+//! move that asks for more step events per second than the planner's cap
+//! ([`MAX_STEP_RATE`]) runs at the cap, smoothly.
+//!
+//! What a gap looks like: planned step intervals change smoothly (along a ramp by a
+//! few percent from one step to the next, along a circle with its tangent), while a
+//! queue that ran dry stops the step timer until the next preparation, up to a
+//! millisecond later: an interval far longer than both its neighbours.
+
+mod common;
+
+use common::booted;
+use inkstep_core::stepper::MAX_STEP_RATE;
+use inkstep_emu::clock::{T_PER_MS, T_PER_S, T_PER_US};
+use inkstep_serial::sender::Flow;
+
+/// The largest ratio of a step interval to the longer of its two neighbours that the
+/// planned profiles make (the first steps from rest come closest: 1 against 1/(sqrt 2
+/// - 1) of the next is below 1, so a ramp never comes near).
+const MAX_JUMP: f64 = 1.5;
+
+/// What the pins showed for one job.
+struct Train {
+    /// Step times, emulator ticks.
+    t: Vec<u64>,
+    /// Position after the last step.
+    end: [i32; 3],
+}
+
+impl Train {
+    /// The largest interval over the longer of its neighbours, and its length (µs).
+    fn worst_jump(&self) -> (f64, f64) {
+        let iv: Vec<u64> = self.t.windows(2).map(|w| w[1] - w[0]).collect();
+        iv.windows(3)
+            .map(|w| {
+                let ratio = w[1] as f64 / w[0].max(w[2]).max(1) as f64;
+                (ratio, w[1] as f64 / T_PER_US as f64)
+            })
+            .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a })
+    }
+
+    /// Step events per second at cruise: the median interval of the middle half.
+    fn cruise_rate(&self) -> f64 {
+        let n = self.t.len();
+        let mut iv: Vec<u64> = self.t[n / 4..3 * n / 4]
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .collect();
+        iv.sort_unstable();
+        T_PER_S as f64 / iv[iv.len() / 2].max(1) as f64
+    }
+}
+
+/// Streams `settings` and `job` (character counting, `?` every 100 ms, the LCD
+/// running) and reads the step pins until the machine is at rest.
+fn run(settings: &[&str], job: &str) -> Train {
+    let mut s = booted(None);
+    for c in settings {
+        let got = s.command(c, T_PER_S).expect("answer");
+        assert!(!got.contains("error"), "{c}: {got}");
+    }
+    let first = s.m.state().board.steps.len();
+    let mut next_q = s.now();
+    let r = s
+        .stream(job, Flow::CharCount(128), 120 * T_PER_S, |s| {
+            if s.now() >= next_q {
+                s.send(b"?");
+                next_q = s.now() + 100 * T_PER_MS;
+            }
+            Ok(())
+        })
+        .expect("streamed");
+    assert!(
+        r.errors.is_empty() && r.alarms.is_empty(),
+        "{:?} {:?}",
+        r.errors,
+        r.alarms
+    );
+    s.wait_idle(120 * T_PER_S).expect("at rest");
+    let steps = &s.m.state().board.steps[first..];
+    Train {
+        t: steps.iter().map(|st| st.t).collect(),
+        end: steps.last().map_or([0; 3], |st| st.pos),
+    }
+}
+
+const FINE: [&str; 4] = ["$100=1280", "$101=1280", "$110=4000", "$111=4000"];
+
+#[test]
+fn a_long_diagonal_at_f4000_and_16x_microstepping_has_no_gap() {
+    let train = run(&FINE, "G21 G90\nG1 X80 Y80 F4000\n");
+    let (jump, at) = train.worst_jump();
+    eprintln!(
+        "diagonal: {} steps, cruise {:.0} events/s, worst interval {jump:.2} x its neighbours ({at:.1} us)",
+        train.t.len(),
+        train.cruise_rate()
+    );
+    assert_eq!(train.end, [102_400, 102_400, 0]);
+    assert!(
+        jump <= MAX_JUMP,
+        "a gap: interval {at:.1} us, {jump:.2} x its neighbours"
+    );
+}
+
+#[test]
+fn an_r20_circle_at_f4000_and_16x_microstepping_has_no_gap() {
+    // To the circle's start, then a full circle around (20, 40) through it.
+    let train = run(&FINE, "G21 G90\nG1 X40 Y40 F4000\nG2 X40 Y40 I-20 J0\n");
+    let (jump, at) = train.worst_jump();
+    eprintln!(
+        "circle: {} steps, worst interval {jump:.2} x its neighbours ({at:.1} us)",
+        train.t.len()
+    );
+    assert_eq!(train.end, [51_200, 51_200, 0]);
+    assert!(
+        jump <= MAX_JUMP,
+        "a gap: interval {at:.1} us, {jump:.2} x its neighbours"
+    );
+}
+
+#[test]
+fn a_move_asking_for_more_than_the_step_rate_cap_runs_at_the_cap_without_gaps() {
+    // Point by point ($212=0) every event steps one axis: a diagonal at F6600 asks for
+    // 2 x 1280 x 6600 / 60 / sqrt 2 = 199,000 events/s (99.6 kHz per axis, within the
+    // settings' 100 kHz).
+    let requested = 2.0 * 1280.0 * 6600.0 / 60.0 / std::f64::consts::SQRT_2;
+    let cap = f64::from(MAX_STEP_RATE);
+    assert!(requested > cap, "the cap ({cap}) must bind for this test");
+    let settings = ["$100=1280", "$101=1280", "$110=4680", "$111=4680", "$212=0"];
+    let train = run(&settings, "G21 G90\nG1 X40 Y40 F6600\n");
+    let (jump, at) = train.worst_jump();
+    let rate = train.cruise_rate();
+    eprintln!(
+        "capped diagonal: asked {requested:.0} events/s, cruise {rate:.0} (cap {cap:.0}), worst interval {jump:.2} x its neighbours ({at:.1} us)"
+    );
+    assert_eq!(train.end, [51_200, 51_200, 0]);
+    assert!(
+        jump <= MAX_JUMP,
+        "a gap: interval {at:.1} us, {jump:.2} x its neighbours"
+    );
+    assert!(
+        rate <= cap * 1.01 && rate >= cap * 0.95,
+        "cruise {rate:.0} events/s, cap {cap:.0}"
+    );
+}
