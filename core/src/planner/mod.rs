@@ -420,18 +420,21 @@ impl Planner {
     fn reverse_pass(&mut self, added: bool) {
         if !added {
             let (feed, rapid) = (self.feed_override, self.rapid_override);
-            for b in self.blocks.iter_mut() {
-                b.passes.limit = b.max_entry.min(b.max_speed(feed, rapid));
+            for i in 0..self.blocks.len() {
+                if let Some(b) = self.blocks.get_mut(i) {
+                    b.passes.limit = b.max_entry.min(b.max_speed(feed, rapid));
+                }
             }
         }
         let mut next_entry = self.cfg.start_speed;
         let mut rising = added;
         let capped = self.capped;
-        for (i, b) in self.blocks.iter_mut().enumerate().rev() {
+        for i in (0..self.blocks.len()).rev() {
             if rising && i < capped {
                 self.stale = self.stale.max(i + 1);
                 return;
             }
+            let Some(b) = self.blocks.get_mut(i) else { return };
             let r = Planner::reverse_of(b, next_entry);
             let old = b.passes.reverse;
             b.passes.reverse = r;
@@ -453,9 +456,11 @@ impl Planner {
             Some(b) => b.passes.reverse,
             None => self.cfg.start_speed,
         };
-        for b in self.blocks.iter_mut().take(stale).rev() {
-            next_entry = Planner::reverse_of(b, next_entry);
-            b.passes.reverse = next_entry;
+        for i in (0..stale).rev() {
+            if let Some(b) = self.blocks.get_mut(i) {
+                next_entry = Planner::reverse_of(b, next_entry);
+                b.passes.reverse = next_entry;
+            }
         }
     }
 
@@ -467,23 +472,24 @@ impl Planner {
         let head = self.head_cap.max(self.cfg.start_speed);
         let mut cap_sq = None;
         let mut capped = 0;
-        for (i, b) in self.blocks.iter_mut().enumerate() {
+        for i in 0..self.blocks.len() {
+            let Some(b) = self.blocks.get_mut(i) else { break };
             let r = b.passes.reverse;
             // entry = min(r, cap), with cap = sqrt(cap_sq) after the first block.
-            let (entry, at_cap) = match cap_sq {
-                None => (if r > head { head } else { r }, !(r < head)),
-                Some(y) => match square_at_most(r, y) {
-                    // r^2 <= y exactly: the rounded root is at least r. (It may
-                    // equal r; counting the block as not capped then only makes
-                    // the next reverse pass go further, or refreshes stale blocks.)
-                    Some(true) => (r, false),
-                    // r^2 > y: the rounded root is at most r, and is the entry.
-                    Some(false) => (crate::fmath::sqrt(y), true),
-                    None => {
-                        let cap = crate::fmath::sqrt(y);
-                        (if r > cap { cap } else { r }, !(r < cap))
-                    }
-                },
+            let (entry, at_cap) = match cap_sq.map(|y| (y, square_at_most(r, y))) {
+                // r^2 <= y exactly: the rounded root is at least r. (It may equal r;
+                // counting the block as not capped then only makes the next reverse
+                // pass go further, or refreshes stale blocks.)
+                Some((_, Some(true))) => (r, false),
+                // r^2 > y: the rounded root is at most r, and is the entry.
+                Some((y, Some(false))) => (crate::fmath::sqrt(y), true),
+                other => {
+                    let cap = match other {
+                        Some((y, _)) => crate::fmath::sqrt(y),
+                        None => head,
+                    };
+                    (if r > cap { cap } else { r }, !(r < cap))
+                }
             };
             if i < self.stale && !at_cap {
                 return false;
