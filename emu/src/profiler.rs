@@ -32,6 +32,8 @@ pub struct Profiler {
     /// (exception, function) -> instructions.
     self_count: HashMap<(usize, usize), u64>,
     inclusive: HashMap<(usize, usize), u64>,
+    /// (exception, function) -> calls (entries at its first instruction).
+    calls: HashMap<(usize, usize), u64>,
     /// Instructions per exception.
     total: Vec<u64>,
 }
@@ -65,6 +67,7 @@ impl Profiler {
             stacks: vec![Vec::new(); exceptions],
             self_count: HashMap::new(),
             inclusive: HashMap::new(),
+            calls: HashMap::new(),
             total: vec![0; exceptions],
         })
     }
@@ -92,6 +95,7 @@ impl Profiler {
             let top = stack.last().copied();
             if !top.is_some_and(|t| t.func == func && t.ret == ret) {
                 stack.push(Frame { func, ret });
+                *self.calls.entry((exc, func)).or_default() += 1;
             }
         } else if let Some(k) = stack.iter().rposition(|t| t.ret == addr) {
             // A return: to this frame's caller. Frames above it that never saw their
@@ -129,10 +133,12 @@ impl Profiler {
                 format!("exception {exc}")
             };
             out += &format!(
-                "\n{what}: {total} instructions, {:.0} per {per_what}\n{:>12} {:>12}  function (per {per_what})\n",
+                "\n{what}: {total} instructions, {:.0} per {per_what}\n{:>12} {:>12} {:>9} {:>10}  function (per {per_what}; calls; inclusive per call)\n",
                 total as f64 / per,
                 "inclusive",
-                "self"
+                "self",
+                "calls",
+                "per call"
             );
             let mut rows: Vec<(u64, usize)> = self
                 .inclusive
@@ -151,10 +157,13 @@ impl Profiler {
                 for (_, f) in list.into_iter().take(top) {
                     let all = self.inclusive.get(&(exc, f)).copied().unwrap_or(0);
                     let own = self.self_count.get(&(exc, f)).copied().unwrap_or(0);
+                    let calls = self.calls.get(&(exc, f)).copied().unwrap_or(0);
                     out += &format!(
-                        "{:>12.0} {:>12.0}  {}\n",
+                        "{:>12.0} {:>12.0} {:>9.2} {:>10.0}  {}\n",
                         all as f64 / per,
                         own as f64 / per,
+                        calls as f64 / per,
+                        all as f64 / calls.max(1) as f64,
                         self.names[f]
                     );
                 }
