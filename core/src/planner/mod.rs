@@ -434,7 +434,9 @@ impl Planner {
                 self.stale = self.stale.max(i + 1);
                 return;
             }
-            let Some(b) = self.blocks.get_mut(i) else { return };
+            let Some(b) = self.blocks.get_mut(i) else {
+                return;
+            };
             let r = Planner::reverse_of(b, next_entry);
             let old = b.passes.reverse;
             b.passes.reverse = r;
@@ -443,7 +445,7 @@ impl Planner {
                 if r.to_bits() == old.to_bits() {
                     return; // i >= capped >= stale: `old` was exact
                 }
-                rising = !(r < old);
+                rising = r >= old;
             }
         }
         self.stale = 0;
@@ -473,7 +475,9 @@ impl Planner {
         let mut cap_sq = None;
         let mut capped = 0;
         for i in 0..self.blocks.len() {
-            let Some(b) = self.blocks.get_mut(i) else { break };
+            let Some(b) = self.blocks.get_mut(i) else {
+                break;
+            };
             let r = b.passes.reverse;
             // entry = min(r, cap), with cap = sqrt(cap_sq) after the first block.
             let (entry, at_cap) = match cap_sq.map(|y| (y, square_at_most(r, y))) {
@@ -488,7 +492,7 @@ impl Planner {
                         Some((y, _)) => crate::fmath::sqrt(y),
                         None => head,
                     };
-                    (if r > cap { cap } else { r }, !(r < cap))
+                    (if r > cap { cap } else { r }, r >= cap)
                 }
             };
             if i < self.stale && !at_cap {
@@ -537,8 +541,8 @@ fn square_at_most(r: f32, y: f32) -> Option<bool> {
     // mr^2 (in [2^46, 2^48)) with my * 2^d (my in [2^23, 2^24)).
     let d = ey - 2 * er + 127 + 23;
     Some(match d {
-        ..=22 => false,     // my * 2^d < 2^46 <= mr^2
-        25.. => true,       // my * 2^d >= 2^48 > mr^2
+        ..=22 => false, // my * 2^d < 2^46 <= mr^2
+        25.. => true,   // my * 2^d >= 2^48 > mr^2
         _ => mant(rb) * mant(rb) <= mant(yb) << d,
     })
 }
