@@ -941,3 +941,64 @@ fn every_query_gets_its_own_report_even_while_the_output_is_busy() {
     assert_eq!(out.matches("<Idle|").count(), 3, "{out}");
     assert!(out.ends_with("ok\r\n") || out.contains("$215="), "{out}");
 }
+
+#[test]
+fn a_line_refused_for_planner_room_is_interpreted_once() {
+    use inkstep_core::machine::{Machine, Taken};
+    let mut machine = Machine::new(Settings::default());
+    let mut m = FakePlanner::new(1);
+    assert_eq!(
+        machine.execute(b"G1X1F1000", 1, &mut m, 0),
+        Some(Ok(Taken::Now))
+    );
+    // The planner is full: the relative move is interpreted (G91 is in force at once,
+    // as for any line already taken) and its move waits, however often it is retried.
+    for _ in 0..5 {
+        assert_eq!(machine.execute(b"G91G1X2", 2, &mut m, 0), None);
+    }
+    assert!(machine.interpreter().modal().incremental);
+    m.run_all();
+    // The retry that finds room pushes the kept move without reading the line again
+    // (a caller always passes the same line; this one is not even G-code).
+    assert_eq!(
+        machine.execute(b"not read", 2, &mut m, 0),
+        Some(Ok(Taken::Now))
+    );
+    m.run_all();
+    // G91 and X2 applied once: the next relative move starts at X3.
+    assert_eq!(machine.execute(b"X1", 3, &mut m, 0), Some(Ok(Taken::Now)));
+    let xs: Vec<i32> = moves(&m).iter().map(|mv| mv.target[0]).collect();
+    assert_eq!(xs, [80, 240, 320]);
+}
+
+#[test]
+fn a_waiting_line_is_dropped_by_a_soft_reset_and_refused_in_alarm() {
+    // The second line waits for room behind the first.
+    let queue_two = |p: &mut Protocol, m: &mut FakePlanner| {
+        m.cap = 1;
+        p.receive(b"G1 X1 F1000\nG1 X5\n", m, 0);
+        p.poll(m, 0);
+        assert!(drain(p).ends_with("]\r\nok\r\n"));
+    };
+    // A soft reset drops it (unanswered, as every buffered line).
+    let (mut p, mut m) = boot();
+    queue_two(&mut p, &mut m);
+    p.receive(&[0x18], &mut m, 0);
+    m.run_all();
+    p.poll(&mut m, 0);
+    let out = drain(&mut p);
+    assert!(!out.contains("ok"), "{out}");
+    assert_eq!(moves(&m).len(), 1, "the waiting move never reaches the planner");
+    // An alarm while it waits: it is answered error:9 and never pushed.
+    let (mut p, mut m) = boot();
+    queue_two(&mut p, &mut m);
+    let estop = Inputs {
+        estop: true,
+        ..Inputs::default()
+    };
+    p.set_inputs(estop, &mut m, 0);
+    p.poll(&mut m, 0);
+    let out = drain(&mut p);
+    assert!(out.contains("error:9"), "{out}");
+    assert_eq!(moves(&m).len(), 1);
+}

@@ -74,11 +74,11 @@ impl Outcome {
     }
 }
 
-/// What the caller of [`Interpreter::execute_into`] can take now.
+/// What the caller of [`Interpreter::execute_into`] can take now. Planner room is not
+/// asked: a block that does not fit yet is committed all the same, and its commands
+/// wait with the caller ([`crate::machine::Machine::execute`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Room {
-    /// Commands that fit the planner queue.
-    pub cmds: usize,
     /// The queue has run empty and the machine is at rest (a sync point may run).
     pub idle: bool,
 }
@@ -235,18 +235,15 @@ impl Interpreter {
     /// `line_no` is used for the queued moves when the block has no N word.
     pub fn execute(&mut self, line: &[u8], s: &Settings, line_no: u32) -> Result<Outcome, Reject> {
         let mut out = Outcome::default();
-        let all = Room {
-            cmds: usize::MAX,
-            idle: true,
-        };
-        self.execute_into(line, s, line_no, &mut out, Some(all))?;
+        self.execute_into(line, s, line_no, &mut out, Some(Room { idle: true }))?;
         Ok(out)
     }
 
-    /// [`Interpreter::execute`] into `out` (which must be empty), committing the block only
-    /// if the caller has `room` for it: `Ok(false)` leaves the interpreter unchanged
-    /// (the outcome is still filled in), and `room: None` only checks the block. The
-    /// machine needs no trial copy of the interpreter that way.
+    /// [`Interpreter::execute`] into `out` (which must be empty), committing the block
+    /// unless it is a sync point and the machine is not at rest (`room`): `Ok(false)`
+    /// leaves the interpreter unchanged (the outcome is still filled in), and `room:
+    /// None` only checks the block. The machine needs no trial copy of the interpreter
+    /// that way.
     pub fn execute_into(
         &mut self,
         line: &[u8],
@@ -574,7 +571,7 @@ impl Interpreter {
                         | NonModal::ResetG92
                 )
             );
-        let fits = room.is_some_and(|r| out.cmds.len() <= r.cmds && (r.idle || !out.sync));
+        let fits = room.is_some_and(|r| r.idle || !out.sync);
         if !fits {
             return Ok(false);
         }

@@ -108,6 +108,12 @@ pub struct Machine {
     events: Deque<Event, 8>,
     settings_dirty: bool,
     coords_dirty: bool,
+    /// The commands of the line being taken, already interpreted, that wait for
+    /// planner room (see [`Machine::execute`]).
+    waiting: Option<Outcome>,
+    /// The line being taken is a sync point that waits for the machine to come to
+    /// rest before it is interpreted again.
+    sync_waiting: bool,
 }
 
 impl Machine {
@@ -149,6 +155,8 @@ impl Machine {
             events = Deque::new(),
             settings_dirty = false,
             coords_dirty = false,
+            waiting = None,
+            sync_waiting = false,
         });
         m.lock_if_unhomed();
         m
@@ -309,10 +317,15 @@ impl Machine {
         self.resync(m);
     }
 
-    /// Execute one cleaned G-code line. `None` means "not now": the block needs more
-    /// free planner entries than there are, or it is a sync point (G4, M0, M2, G10,
-    /// G92, ...) and motion before it has not finished. Nothing has changed then; the
-    /// caller keeps the line and retries (back-pressure).
+    /// Execute one cleaned G-code line. `None` means "not now", and the caller keeps
+    /// the line and calls again with it (back-pressure):
+    /// - the block's commands need more free planner entries than there are: the
+    ///   interpreter has taken the block, and its commands wait here
+    ///   ([`Machine::waiting`]) and go to the planner as room appears; the line is
+    ///   not interpreted again;
+    /// - it is a sync point (G4, M0, M2, G10, G92, ...) and motion before it has not
+    ///   finished: nothing has changed (its offsets must change only at rest), and it
+    ///   is interpreted again once the machine is at rest.
     pub fn execute<M: MotionControl>(
         &mut self,
         line: &[u8],
@@ -321,40 +334,53 @@ impl Machine {
         now_ms: u32,
     ) -> Option<Result<Taken, Status>> {
         if self.locked || self.homing.is_some() {
+            self.forget_line();
             return Some(Err(Status::SystemLocked));
         }
         if self.jogging {
+            self.forget_line();
             return Some(Err(Status::IdleError));
         }
         if !self.can_accept() {
             return None;
         }
-        // Committed only if the planner has room for the result (check mode queues
-        // nothing); a sync point also waits for the queue to run empty.
-        let room = if self.check_mode {
-            Room {
-                cmds: usize::MAX,
-                idle: true,
-            }
-        } else {
-            Room {
-                cmds: m.free(),
-                idle: m.is_idle(),
+        let out = match self.waiting.take() {
+            Some(out) => out,
+            None => {
+                if self.sync_waiting && !m.is_idle() {
+                    return None;
+                }
+                // Check mode queues nothing, so a sync point need not wait.
+                let room = Room {
+                    idle: self.check_mode || m.is_idle(),
+                };
+                let mut out = Outcome::default();
+                match self.interpreter.execute_into(
+                    line,
+                    &self.settings,
+                    line_no,
+                    &mut out,
+                    Some(room),
+                ) {
+                    Ok(true) => self.sync_waiting = false,
+                    Ok(false) => {
+                        self.sync_waiting = true;
+                        return None;
+                    }
+                    Err(Reject::Error(e)) => return Some(Err(e)),
+                    Err(Reject::SoftLimit) => {
+                        // Grbl: the line is answered ok, motion stops, alarm 2 (no
+                        // reset needed).
+                        self.raise(Alarm::SoftLimit, m);
+                        return Some(Ok(Taken::Now));
+                    }
+                }
+                out
             }
         };
-        let mut out = Outcome::default();
-        match self
-            .interpreter
-            .execute_into(line, &self.settings, line_no, &mut out, Some(room))
-        {
-            Ok(true) => {}
-            Ok(false) => return None,
-            Err(Reject::Error(e)) => return Some(Err(e)),
-            Err(Reject::SoftLimit) => {
-                // Grbl: the line is answered ok, motion stops, alarm 2 (no reset needed).
-                self.raise(Alarm::SoftLimit, m);
-                return Some(Ok(Taken::Now));
-            }
+        if !self.check_mode && out.cmds.len() > m.free() {
+            self.waiting = Some(out);
+            return None;
         }
         if out.stop == Some(Stop::End) {
             self.event(Event::Msg("Pgm End"));
@@ -522,9 +548,19 @@ impl Machine {
         self.paused = false;
     }
 
+    /// The interpreter continues from where the machine is. Commands still waiting
+    /// for room were planned from the old position: they are dropped, and their line
+    /// (if it is still to be answered) is interpreted again from the new one.
     fn resync<M: MotionControl>(&mut self, m: &M) {
         self.interpreter
             .sync_position(&m.position(), &self.settings);
+        self.forget_line();
+    }
+
+    /// The line being taken is answered or dropped: nothing of it waits any more.
+    fn forget_line(&mut self) {
+        self.waiting = None;
+        self.sync_waiting = false;
     }
 
     /// The keypad's "set origin": at rest, the current X/Y become zero and the G-code
@@ -642,6 +678,10 @@ impl Machine {
         }
         if self.jogging || self.check_mode {
             return Err(Status::IdleError);
+        }
+        if self.waiting.is_some() {
+            // A G-code line came first and waits for room: no overtaking.
+            return Err(Status::Overflow);
         }
         if let Command::Move(mv) = &cmd {
             let end = to_nm(&mv.target, &self.settings);
