@@ -988,7 +988,11 @@ fn a_waiting_line_is_dropped_by_a_soft_reset_and_refused_in_alarm() {
     p.poll(&mut m, 0);
     let out = drain(&mut p);
     assert!(!out.contains("ok"), "{out}");
-    assert_eq!(moves(&m).len(), 1, "the waiting move never reaches the planner");
+    assert_eq!(
+        moves(&m).len(),
+        1,
+        "the waiting move never reaches the planner"
+    );
     // An alarm while it waits: it is answered error:9 and never pushed.
     let (mut p, mut m) = boot();
     queue_two(&mut p, &mut m);
