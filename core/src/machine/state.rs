@@ -108,9 +108,12 @@ pub struct Machine {
     events: Deque<Event, 8>,
     settings_dirty: bool,
     coords_dirty: bool,
-    /// The commands of the line being taken, already interpreted, that wait for
-    /// planner room (see [`Machine::execute`]).
-    waiting: Option<Outcome>,
+    /// The outcome of the last line interpreted (kept here, not on the stack of
+    /// [`Machine::execute`], so that it can wait without a copy).
+    outcome: Outcome,
+    /// `outcome`'s commands wait for planner room: the line being taken is
+    /// interpreted already (see [`Machine::execute`]).
+    waiting: bool,
     /// The line being taken is a sync point that waits for the machine to come to
     /// rest before it is interpreted again.
     sync_waiting: bool,
@@ -155,7 +158,8 @@ impl Machine {
             events = Deque::new(),
             settings_dirty = false,
             coords_dirty = false,
-            waiting = None,
+            outcome = Outcome::default(),
+            waiting = false,
             sync_waiting = false,
         });
         m.lock_if_unhomed();
@@ -321,7 +325,7 @@ impl Machine {
     /// the line and calls again with it (back-pressure):
     /// - the block's commands need more free planner entries than there are: the
     ///   interpreter has taken the block, and its commands wait here
-    ///   ([`Machine::waiting`]) and go to the planner as room appears; the line is
+    ///   (`Machine::waiting`) and go to the planner as room appears; the line is
     ///   not interpreted again;
     /// - it is a sync point (G4, M0, M2, G10, G92, ...) and motion before it has not
     ///   finished: nothing has changed (its offsets must change only at rest), and it
@@ -344,56 +348,55 @@ impl Machine {
         if !self.can_accept() {
             return None;
         }
-        let out = match self.waiting.take() {
-            Some(out) => out,
-            None => {
-                if self.sync_waiting && !m.is_idle() {
+        if !self.waiting {
+            if self.sync_waiting && !m.is_idle() {
+                return None;
+            }
+            // Check mode queues nothing, so a sync point need not wait.
+            let room = Room {
+                idle: self.check_mode || m.is_idle(),
+            };
+            self.outcome = Outcome::default();
+            match self.interpreter.execute_into(
+                line,
+                &self.settings,
+                line_no,
+                &mut self.outcome,
+                Some(room),
+            ) {
+                Ok(true) => self.sync_waiting = false,
+                Ok(false) => {
+                    self.sync_waiting = true;
                     return None;
                 }
-                // Check mode queues nothing, so a sync point need not wait.
-                let room = Room {
-                    idle: self.check_mode || m.is_idle(),
-                };
-                let mut out = Outcome::default();
-                match self.interpreter.execute_into(
-                    line,
-                    &self.settings,
-                    line_no,
-                    &mut out,
-                    Some(room),
-                ) {
-                    Ok(true) => self.sync_waiting = false,
-                    Ok(false) => {
-                        self.sync_waiting = true;
-                        return None;
-                    }
-                    Err(Reject::Error(e)) => return Some(Err(e)),
-                    Err(Reject::SoftLimit) => {
-                        // Grbl: the line is answered ok, motion stops, alarm 2 (no
-                        // reset needed).
-                        self.raise(Alarm::SoftLimit, m);
-                        return Some(Ok(Taken::Now));
-                    }
+                Err(Reject::Error(e)) => return Some(Err(e)),
+                Err(Reject::SoftLimit) => {
+                    // Grbl: the line is answered ok, motion stops, alarm 2 (no reset
+                    // needed).
+                    self.raise(Alarm::SoftLimit, m);
+                    return Some(Ok(Taken::Now));
                 }
-                out
             }
-        };
-        if !self.check_mode && out.cmds.len() > m.free() {
-            self.waiting = Some(out);
+        }
+        self.waiting = !self.check_mode && self.outcome.cmds.len() > m.free();
+        if self.waiting {
             return None;
         }
-        if out.stop == Some(Stop::End) {
+        let stop = self.outcome.stop;
+        if stop == Some(Stop::End) {
             self.event(Event::Msg("Pgm End"));
         }
-        if out.coords_changed {
+        if self.outcome.coords_changed {
             self.coords_dirty = true;
         }
         if self.check_mode {
             // Dwells and pauses are skipped in check mode, as in Grbl.
             return Some(Ok(Taken::Now));
         }
-        for cmd in out.cmds.iter() {
-            if m.push(*cmd).is_err() {
+        let mut next = 0;
+        while let Some(&cmd) = self.outcome.cmds.get(next) {
+            next += 1;
+            if m.push(cmd).is_err() {
                 // free() promised room; if a planner disagrees, stop rather than
                 // lose a move silently.
                 self.raise(Alarm::AbortCycle, m);
@@ -403,7 +406,7 @@ impl Machine {
                 self.count_move(now_ms);
             }
         }
-        match out.stop {
+        match stop {
             Some(Stop::Pause) => {
                 // At rest (M0 is a sync point): hold until cycle start; the lines after
                 // it are planned meanwhile and wait in the held queue.
@@ -413,7 +416,7 @@ impl Machine {
             Some(Stop::End) => self.job.ending = self.job.running,
             None => {}
         }
-        Some(Ok(if out.has_dwell() {
+        Some(Ok(if self.outcome.has_dwell() {
             Taken::WhenIdle
         } else {
             Taken::Now
@@ -559,7 +562,7 @@ impl Machine {
 
     /// The line being taken is answered or dropped: nothing of it waits any more.
     fn forget_line(&mut self) {
-        self.waiting = None;
+        self.waiting = false;
         self.sync_waiting = false;
     }
 
@@ -679,7 +682,7 @@ impl Machine {
         if self.jogging || self.check_mode {
             return Err(Status::IdleError);
         }
-        if self.waiting.is_some() {
+        if self.waiting {
             // A G-code line came first and waits for room: no overtaking.
             return Err(Status::Overflow);
         }
