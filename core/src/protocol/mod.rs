@@ -8,7 +8,8 @@
 //! bytes it took, so the caller leaves the rest in its endpoint (back-pressure, no
 //! byte is ever dropped). [`Protocol::poll`] frames lines, runs them through the
 //! [`Machine`] and answers `ok` / `error:N`; a line whose motion does not fit the
-//! planner queue waits, and so does everything behind it. Responses collect in an
+//! planner queue waits, and so does everything behind it (the machine interprets it
+//! once and keeps its commands until they fit). Responses collect in an
 //! output buffer drained with [`Protocol::read_output`]; work that produces output
 //! only starts when the buffer has room for it, so responses are never truncated.
 //!
