@@ -290,22 +290,17 @@ impl<'a> Machine<'a> {
             0x24000 * 32,
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize| {
                 Machine::mmio_time(uc);
-                let (addr, bit) = ((0x4000_0000 + off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let (addr, bit) = bit_band(0x4000_0000, off);
                 let r = uc.get_data_mut().board.read(addr, 4);
                 Machine::mmio_done(uc, r.map(|v| u64::from((v >> bit) & 1)), addr)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, v: u64| {
                 Machine::mmio_time(uc);
-                let (addr, bit) = ((0x4000_0000 + off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let (addr, bit) = bit_band(0x4000_0000, off);
                 let b = &mut uc.get_data_mut().board;
-                let r = b.read(addr, 4).and_then(|w| {
-                    let w = if v & 1 != 0 {
-                        w | 1 << bit
-                    } else {
-                        w & !(1 << bit)
-                    };
-                    b.write(addr, 4, w)
-                });
+                let r = b
+                    .read(addr, 4)
+                    .and_then(|w| b.write(addr, 4, with_bit(w, bit, v)));
                 Machine::mmio_done(uc, r.map(|()| 0), addr);
             }),
         )
@@ -314,21 +309,16 @@ impl<'a> Machine<'a> {
             0x2200_0000,
             u64::from(RAM_SIZE) * 32,
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize| {
-                let (addr, bit) = ((RAM_BASE + off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let (addr, bit) = bit_band(RAM_BASE, off);
                 let mut w = [0u8; 4];
                 let _ = uc.mem_read(u64::from(addr), &mut w);
                 u64::from((u32::from_le_bytes(w) >> bit) & 1)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, v: u64| {
-                let (addr, bit) = ((RAM_BASE + off as u32 / 32) & !3, (off as u32 / 4) % 32);
+                let (addr, bit) = bit_band(RAM_BASE, off);
                 let mut w = [0u8; 4];
                 let _ = uc.mem_read(u64::from(addr), &mut w);
-                let mut x = u32::from_le_bytes(w);
-                x = if v & 1 != 0 {
-                    x | 1 << bit
-                } else {
-                    x & !(1 << bit)
-                };
+                let x = with_bit(u32::from_le_bytes(w), bit, v);
                 let _ = uc.mem_write(u64::from(addr), &x.to_le_bytes());
             }),
         )
@@ -1230,5 +1220,20 @@ impl State {
         let now = self.board.now;
         self.account(now);
         &self.profile
+    }
+}
+
+/// The word and bit a bit-band alias offset `off` stands for, in the region at `base`
+/// (ARMv7-M A3.7: each alias word is one bit, 32 alias bytes per byte of the region).
+fn bit_band(base: u32, off: u64) -> (u32, u32) {
+    ((base + off as u32 / 32) & !3, (off as u32 / 4) % 32)
+}
+
+/// `word` with `bit` set to the lowest bit of `v` (a bit-band alias write).
+fn with_bit(word: u32, bit: u32, v: u64) -> u32 {
+    if v & 1 != 0 {
+        word | 1 << bit
+    } else {
+        word & !(1 << bit)
     }
 }
