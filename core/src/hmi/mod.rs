@@ -144,8 +144,8 @@ impl Hmi {
         self.cfg = cfg;
         self.draw_feed = cfg.draw_feed_mm_min;
     }
-    pub fn toast(&self) -> Option<&str> {
-        self.toast.as_ref().map(|t| t.text.as_str())
+    pub fn toast(&self) -> Option<&Text<28>> {
+        self.toast.as_ref().map(|t| &t.text)
     }
     pub fn jog_speed(&self) -> f32 {
         JOG_SPEEDS.get(self.jog_speed).copied().unwrap_or(100.0)
@@ -178,9 +178,15 @@ impl Hmi {
     }
 
     fn say(&mut self, text: &str, now_ms: u32) {
+        self.show(Text::truncated(text), now_ms);
+    }
+
+    /// [`Hmi::say`] for a message built at run time: taken as it is, not through
+    /// `&str` (which would check its UTF-8 again).
+    fn show(&mut self, text: Text<28>, now_ms: u32) {
         self.changed();
         self.toast = Some(Toast {
-            text: Text::truncated(text),
+            text,
             until_ms: now_ms.wrapping_add(TOAST_MS),
         });
     }
@@ -517,7 +523,7 @@ impl Hmi {
             _ => return,
         };
         if let Err(msg) = field.commit() {
-            self.say(&msg, now_ms);
+            self.show(msg, now_ms);
             push(out, Action::Beep(Beep::Error));
             return;
         }
@@ -688,13 +694,13 @@ impl Hmi {
                 }
             }
             let p = self.pos_mm(st);
-            let mut msg: Text<28> = Text::new();
+            let mut msg = Text::new();
             msg.push_str("Stopped X");
             msg.push_fixed(p[X], 1);
             msg.push_str(" Y");
             msg.push_fixed(p[Y], 1);
             self.page = Page::Menu { sel: 0 };
-            self.say(&msg, now_ms);
+            self.show(msg, now_ms);
         }
         out
     }
