@@ -61,7 +61,7 @@ pub use step_port::{
     StepPort, DIR_SHIFT, MOTION_PINS, STEP_MASK_X, STEP_MASK_Y, STEP_MASK_Z,
 };
 pub use step_timer::{disarm_step_pulses, stop_step_timer, StepTimer};
-pub use usb::{Usb, UsbCells, UsbSerial};
+pub use usb::{Usb, UsbCells, UsbSerial, USB_PACKET};
 pub use watchdog::{Watchdog, WATCHDOG_MS};
 
 use stm32f1xx_hal::{
@@ -243,11 +243,7 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
         pin_dp: usb_dp.into_floating_input(&mut gpioa.crh),
     };
     let bus: &'static UsbBusAllocator<UsbBusType> = usb.bus.write(UsbBus::new(usb_periph));
-    let serial = usb.serial.write(usbd_serial::SerialPort::new_with_store(
-        bus,
-        [0; 64],
-        usbd_serial::DefaultBufferStore::default(),
-    ));
+    let serial = usb.serial.write(UsbSerial::new(bus));
     let usb = usb.dev.write(
         UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
             .device_class(usbd_serial::USB_CLASS_CDC)
