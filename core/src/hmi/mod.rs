@@ -603,13 +603,14 @@ impl Hmi {
         // Teaching view: remember each new feed direction.
         if st.dir != [0, 0] && self.feed_dirs().next_back() != Some(&st.dir) {
             let n = usize::from(self.ndirs);
-            if n < DIR_HISTORY {
+            if let Some(next) = self.dirs.get_mut(n) {
+                *next = st.dir;
                 self.ndirs += 1;
             } else {
-                self.dirs.copy_within(1.., 0);
-            }
-            if let Some(last) = self.dirs.get_mut(n.min(DIR_HISTORY - 1)) {
-                *last = st.dir;
+                // Full: the oldest drops out. Built whole, not `copy_within`, which
+                // would be the image's only call of the general `memmove` (1.6 KB).
+                let dirs = self.dirs;
+                self.dirs = core::array::from_fn(|i| dirs.get(i + 1).copied().unwrap_or(st.dir));
             }
         }
         if let Some(t) = &self.toast {
