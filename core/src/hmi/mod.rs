@@ -88,6 +88,9 @@ fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
     }))
 }
 
+/// Out of line: one copy of the list's capacity check and slot write for the dozens of
+/// places that answer a key or a tick.
+#[inline(never)]
 fn push(out: &mut Actions, a: Action) {
     // Capacity covers the largest single response (a job start); never silently
     // exceeded by construction, checked here rather than panicking.
