@@ -57,12 +57,13 @@ impl UsbSerial {
     /// the next USB interrupt, which this packet's completion raises). Bytes leave
     /// `tx` only once the endpoint took them.
     pub fn send<const N: usize>(&mut self, tx: &mut ByteRx<'_, N>) {
-        let mut buf = [0u8; USB_PACKET];
-        let max = USB_PACKET - usize::from(self.full_run >= FULL_RUN_MAX);
-        let n = tx.peek_into(buf.get_mut(..max).unwrap_or(&mut []));
-        if n == 0 && self.full_run == 0 {
+        if tx.is_empty() && self.full_run == 0 {
             return;
         }
+        let mut buf = [0u8; USB_PACKET];
+        let max = USB_PACKET - usize::from(self.full_run >= FULL_RUN_MAX);
+        // Nothing queued after full packets: a zero-length packet ends the transfer.
+        let n = tx.peek_into(buf.get_mut(..max).unwrap_or(&mut []));
         if self.class.write_packet(buf.get(..n).unwrap_or(&[])).is_ok() {
             tx.skip(n);
             self.full_run = if n == USB_PACKET {
