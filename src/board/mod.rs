@@ -155,28 +155,24 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
     // Columns released (high), rows pulled up: a pressed key pulls its row low while
     // its column is driven low.
     let keypad = KeypadMatrix {
-        columns: [
+        columns: (
             gpiob
                 .pb10
-                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High)
-                .erase(),
+                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High),
             gpiob
                 .pb11
-                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High)
-                .erase(),
-            pa15.into_open_drain_output_with_state(&mut gpioa.crh, PinState::High)
-                .erase(),
+                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High),
+            pa15.into_open_drain_output_with_state(&mut gpioa.crh, PinState::High),
             gpioc
                 .pc14
-                .into_open_drain_output_with_state(&mut gpioc.crh, PinState::High)
-                .erase(),
-        ],
-        rows: [
-            gpiob.pb6.into_pull_up_input(&mut gpiob.crl).erase(),
-            gpiob.pb7.into_pull_up_input(&mut gpiob.crl).erase(),
-            gpiob.pb8.into_pull_up_input(&mut gpiob.crh).erase(),
-            gpiob.pb9.into_pull_up_input(&mut gpiob.crh).erase(),
-        ],
+                .into_open_drain_output_with_state(&mut gpioc.crh, PinState::High),
+        ),
+        rows: (
+            gpiob.pb6.into_pull_up_input(&mut gpiob.crl),
+            gpiob.pb7.into_pull_up_input(&mut gpiob.crl),
+            gpiob.pb8.into_pull_up_input(&mut gpiob.crh),
+            gpiob.pb9.into_pull_up_input(&mut gpiob.crh),
+        ),
     };
 
     // The safety and control inputs on EXTI lines 0, 1, 3, 4, 5. E-stop and limits:
