@@ -315,7 +315,12 @@ mod app {
             // the host is NAKed (back-pressure) and output still flows.
             cortex_m::peripheral::NVIC::mask(Interrupt::USB_LP_CAN_RX0);
         }
-        // Output waits in its ring until the endpoint takes it.
+        // Output waits in its ring until the endpoint takes it; with the port closed
+        // nobody will read it (the protocol discards its own output then too), and a
+        // host that opens the port later must see its session start, not stale lines.
+        if !open {
+            tx.clear();
+        }
         serial.send(tx);
         if arrived {
             // Real-time bytes act when they arrive, not at the next tick.
