@@ -501,7 +501,7 @@ mod app {
         let (hmi, status) = cx.shared.core.lock(|c| {
             let (ctl, pipeline) = c.parts();
             let status = ctl.refresh_view(pipeline);
-            (ctl.hmi().clone(), status)
+            (*ctl.hmi(), status)
         });
         let _ = screens.render(&hmi, &status, now, fb);
         if st7920::flush(fb, |bytes| spi.write(bytes)).is_err() {
