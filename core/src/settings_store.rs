@@ -255,12 +255,11 @@ impl<F: NorFlash> SettingsStore<F> {
         if let Some(h) = buf.get_mut(..REC_HEAD) {
             h.copy_from_slice(&[key, n, !key, !n]);
         }
-        let crc = crc32(buf.get(..body).unwrap_or(&[]));
-        if let Some(t) = buf.get_mut(body..size) {
-            t.fill(0xFF);
-            if let Some(c) = t.get_mut(..4) {
-                c.copy_from_slice(&crc.to_le_bytes());
-            }
+        // The CRC, then erased flash (0xFF) up to the word boundary.
+        let crc = crc32(buf.get(..body).unwrap_or(&[])).to_le_bytes();
+        let tail = crc.into_iter().chain(core::iter::repeat(0xFF));
+        for (d, b) in buf.iter_mut().take(size).skip(body).zip(tail) {
+            *d = b;
         }
         self.flash.write(at, buf.get(..size).unwrap_or(&[]))?;
         Ok(size as u32)
