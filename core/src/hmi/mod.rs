@@ -186,7 +186,9 @@ impl Hmi {
     }
 
     /// [`Hmi::say`] for a message built at run time: taken as it is, not through
-    /// `&str` (which would check its UTF-8 again).
+    /// `&str` (which would check its UTF-8 again). Out of line: one copy of the
+    /// message's move into the toast for every place that shows one.
+    #[inline(never)]
     fn show(&mut self, text: Text<28>, now_ms: u32) {
         self.changed();
         self.toast = Some(Toast {
