@@ -171,7 +171,7 @@ impl Controller {
         ctl.protocol.machine_mut().set_coords(coords);
         for i in 0..STARTUP_LINES {
             let (line, _) = store.load_startup(i);
-            ctl.protocol.set_startup_line(i, line.as_str());
+            ctl.protocol.set_startup_line(i, line);
         }
         ctl
     }

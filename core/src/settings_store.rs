@@ -26,7 +26,7 @@
 
 use crate::crc::crc32;
 use crate::gcode::interpreter::Coords;
-use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
+use crate::gcode::{startup_line, StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::motion::AXES;
 use crate::settings::{Settings, IMAGE_LEN};
 use core::ops::Range;
@@ -384,27 +384,18 @@ impl<F: NorFlash> SettingsStore<F> {
 
     /// Load startup line `i` (empty if none or unusable).
     pub fn load_startup(&mut self, i: usize) -> (StartupLine, LoadStatus) {
-        let mut line = StartupLine::new();
         if i >= STARTUP_LINES {
-            return (line, LoadStatus::Empty);
+            return (StartupLine::new(), LoadStatus::Empty);
         }
         let mut buf: Buf = [0; BUF_LEN];
         let mut raw = [0u8; LINE_MAX + 1];
-        let status = match self.fetch(&mut buf, KEY_STARTUP + i as u8, &mut raw) {
-            // Startup lines are ASCII (cleaned G-code), copied byte-wise.
-            (len, LoadStatus::Loaded) => match raw.get(..len) {
-                Some(text) if len <= LINE_MAX && text.is_ascii() => {
-                    for &b in text {
-                        // Masked (no-op): a one-byte char, no UTF-8 encoder.
-                        let _ = line.push(char::from(b & 0x7F));
-                    }
-                    LoadStatus::Loaded
-                }
-                _ => LoadStatus::Corrupt,
+        match self.fetch(&mut buf, KEY_STARTUP + i as u8, &mut raw) {
+            (len, LoadStatus::Loaded) => match raw.get(..len).and_then(startup_line) {
+                Some(line) => (line, LoadStatus::Loaded),
+                None => (StartupLine::new(), LoadStatus::Corrupt),
             },
-            (_, status) => status,
-        };
-        (line, status)
+            (_, status) => (StartupLine::new(), status),
+        }
     }
 
     pub fn save_startup(&mut self, i: usize, text: &str) -> Result<(), StoreError<F::Error>> {

@@ -22,6 +22,20 @@ pub const STARTUP_LINES: usize = 2;
 /// A startup line as stored.
 pub type StartupLine = heapless::String<LINE_MAX>;
 
+/// `text` as a startup line; None unless it is ASCII (cleaned G-code is) and at most
+/// [`LINE_MAX`] bytes. The one way in for the `$N` command, the store and boot; built
+/// byte by byte, with no UTF-8 validation in the image.
+pub fn startup_line(text: &[u8]) -> Option<StartupLine> {
+    let mut line = StartupLine::new();
+    for &b in text {
+        // A one-byte char for ASCII; the sign bit makes the whole line unusable.
+        if b >= 0x80 || line.push(char::from(b)).is_err() {
+            return None;
+        }
+    }
+    Some(line)
+}
+
 /// Grbl 1.1 status codes, sent as `error:N`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -81,5 +95,20 @@ impl From<crate::settings::SettingError> for Status {
             E::SoftLimitsNeedHoming => Status::SoftLimitError,
             E::StepRateTooHigh => Status::MaxStepRateExceeded,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn startup_lines_are_ascii_and_fit() {
+        assert_eq!(startup_line(b"G21G90").as_deref(), Some("G21G90"));
+        assert_eq!(startup_line(b"").as_deref(), Some(""));
+        assert_eq!(startup_line(b"G0X\xc3\xa9"), None);
+        let longest = [b'X'; LINE_MAX];
+        assert_eq!(startup_line(&longest).map(|l| l.len()), Some(LINE_MAX));
+        assert_eq!(startup_line(&[b'X'; LINE_MAX + 1]), None);
     }
 }

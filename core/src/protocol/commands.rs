@@ -7,7 +7,7 @@ use super::{OutWriter, Protocol, RX_BUFFER_SIZE, VERSION};
 use crate::decimal::{put_int, write_fixed3, Sink};
 use crate::gcode::units::nm_to_mm;
 use crate::gcode::Status;
-use crate::gcode::{StartupLine, LINE_MAX, STARTUP_LINES};
+use crate::gcode::{startup_line, StartupLine, STARTUP_LINES};
 use crate::machine::{Machine, MotionControl, RunState};
 use crate::settings::Settings;
 use crate::stepper::MAX_STEP_RATE;
@@ -97,17 +97,9 @@ fn store_startup(
         return Err(Status::InvalidStatement);
     }
     machine.validate(line)?;
-    // Cleaned lines are ASCII (the cleaner drops bytes >= 0x7F); byte-wise copy
-    // keeps UTF-8 validation out of the image.
-    if !line.is_ascii() {
-        return Err(Status::InvalidStatement);
-    }
+    let line = startup_line(line).ok_or(Status::InvalidStatement)?;
     if let Some(slot) = startup.get_mut(idx) {
-        slot.clear();
-        for &b in line.iter().take(LINE_MAX) {
-            // Masked: the compiler then knows the char is one UTF-8 byte.
-            let _ = slot.push(char::from(b & 0x7F));
-        }
+        *slot = line;
     }
     Ok(())
 }

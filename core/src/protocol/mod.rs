@@ -157,10 +157,9 @@ impl Protocol {
         self.startup.get(i).map(|s| s.as_str())
     }
     /// Load a stored `$N` line at boot.
-    pub fn set_startup_line(&mut self, i: usize, line: &str) {
+    pub fn set_startup_line(&mut self, i: usize, line: StartupLine) {
         if let Some(slot) = self.startup.get_mut(i) {
-            slot.clear();
-            let _ = slot.push_str(line.get(..LINE_MAX.min(line.len())).unwrap_or(""));
+            *slot = line;
         }
     }
     /// A `$N` line changed and should be saved (cleared by reading).
