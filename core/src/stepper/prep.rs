@@ -16,8 +16,9 @@
 //! largest fourth derivative of the tick time, which follows from the profile's
 //! acceleration and jerk, the speed and the path's curvature (at most 256 ticks, never
 //! across a phase of the profile). Cruising along a line the time is linear, so one
-//! segment takes 256 ticks; ramps take shorter ones, and the first tick from rest its
-//! own. Every segment starts on the exact time of its first point, so errors never add
+//! segment takes up to 2048 ticks; ramps of constant acceleration are timed exactly
+//! in integers ([`Ramp`]), other ramps take shorter segments, and the first tick of a
+//! phase (or from rest) its own. Every segment starts on the exact time of its first point, so errors never add
 //! up. The resulting accuracy is asserted by the tests below against the ideal profile
 //! computed in f64.
 //!
@@ -969,11 +970,7 @@ impl Active {
         let Some(mut p) = near else {
             return false;
         };
-        if let Some((seg, end)) = self
-            .ramp_segment(p, eps, hz, t_last)
-            .or_else(|| self.cruise_segment(p, hz, t_last))
-            .or_else(|| self.arc_cruise_segment(p, eps, hz, t_last))
-        {
+        if let Some((seg, end)) = self.ramp_segment(p, eps, hz, t_last) {
             // The cursor moves to the segment's last tick (its exact time).
             self.seg = seg;
             self.at = end;
@@ -1031,93 +1028,6 @@ impl Active {
         self.seg = Segment::poly(n, d, at.at, t_last);
         self.at = Cursor { rate: rate1, ..end };
         true
-    }
-
-    /// A line's ticks in the cruise (at most [`MAX_LINEAR`]): evenly spaced between the
-    /// exact times of the first and the last (the cursor before them may still lie in
-    /// the ramp before).
-    fn cruise_segment(&self, p: Phase, hz: f32, t_last: u64) -> Option<(Segment, Cursor)> {
-        let q = self.line_tick_q?;
-        if p != Phase::Cruise {
-            return None;
-        }
-        let at = self.at;
-        let n = (ticks_in(self.ends_q[1].saturating_sub(at.s), q) as u32)
-            .min(self.run_left)
-            .min(MAX_LINEAR);
-        if n == 0 {
-            return None;
-        }
-        let first = self.exact(p, at.s + q, hz).at.saturating_sub(at.at);
-        let end = Cursor {
-            rate: 1.0,
-            ..self.exact(p, at.s + q * u64::from(n), hz)
-        };
-        let d1 = match n {
-            1 => 0.0,
-            _ => end.at.saturating_sub(at.at + first) as f32 / (n - 1) as f32,
-        };
-        if d1.max(first as f32) > (MAX_WAIT / 2) as f32 {
-            return None;
-        }
-        let mut seg = Segment::poly(n, [fixed(d1), 0, 0], at.at, t_last);
-        // The first tick at its exact time: the sum starts a tick's interval before it.
-        if let Timing::Poly { acc, d1, .. } = &mut seg.timing {
-            *acc = (first << 32).wrapping_sub(*d1);
-        }
-        Some((seg, end))
-    }
-
-    /// A curve's ticks in the cruise (at most [`MAX_SEGMENT`]): the time is the path
-    /// position over the speed, a cubic in the tick count as far as the bound on the
-    /// path's fourth derivative allows. The first tick of the cruise is timed on its
-    /// own (the generic path), so the cursor lies in the cruise.
-    fn arc_cruise_segment(
-        &self,
-        p: Phase,
-        eps: f32,
-        hz: f32,
-        t_last: u64,
-    ) -> Option<(Segment, Cursor)> {
-        let at = self.at;
-        if p != Phase::Cruise || at.phase != p || self.line_tick_q.is_some() || !(at.v > 0.0) {
-            return None;
-        }
-        let end = self.ends_q[1];
-        // mm per run unit over the speed, in timer ticks: the run's rate times this is
-        // a tick's interval.
-        let q = self.scale * hz / at.v;
-        let to_end = from_q(end.saturating_sub(at.s)) * hz / (at.v * at.rate * q);
-        let mut n = self.run_left.min(MAX_SEGMENT).min(to_end as u32).max(1);
-        let b = self.interp.fourth_bound(n) * q;
-        let limit = 384.0 * eps * hz;
-        let nf = n as f32;
-        let mut x = b * nf * nf * nf * nf;
-        while n > 1 && !(x <= limit) {
-            x *= 1.0 / 16.0;
-            n /= 2;
-        }
-        let (rate1, s1) = loop {
-            let (s1, r) = self.ahead(n);
-            if s1 <= end {
-                break (r, s1);
-            }
-            if n == 1 {
-                return None;
-            }
-            n /= 2;
-        };
-        let (m0, m1) = (at.rate * q, rate1 * q);
-        if m0.max(m1) > (MAX_WAIT / 2) as f32 {
-            return None;
-        }
-        let end = Cursor {
-            rate: rate1,
-            ..self.exact(p, s1, hz)
-        };
-        let span = end.at.saturating_sub(at.at) as f32;
-        let d = hermite(n, span, m0, m1).map(fixed);
-        Some((Segment::poly(n, d, at.at, t_last), end))
     }
 
     /// Ticks in a ramp of constant acceleration (trapezoid), timed exactly
