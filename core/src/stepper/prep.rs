@@ -16,10 +16,11 @@
 //! largest fourth derivative of the tick time, which follows from the profile's
 //! acceleration and jerk, the speed and the path's curvature (at most 256 ticks, never
 //! across a phase of the profile). Cruising along a line the time is linear, so one
-//! segment takes up to 2048 ticks; ramps take shorter ones (the slower, the shorter),
-//! and the first tick of a phase (or from rest) its own. Every segment starts on the
-//! exact time of its first point, so errors never add up. The resulting accuracy is
-//! asserted by the tests below against the ideal profile computed in f64.
+//! segment takes up to 2048 ticks; ramps of constant acceleration are timed exactly
+//! in integers ([`Ramp`]), other ramps take shorter segments, and the first tick of a
+//! phase (or from rest) its own. Every segment starts on the exact time of its first point, so errors never add
+//! up. The resulting accuracy is asserted by the tests below against the ideal profile
+//! computed in f64.
 //!
 //! The profile is rebuilt from the present state when the planner's plan for the block
 //! changes (a new block behind it, an override), and for feed hold (brake to rest,
@@ -77,21 +78,135 @@ const BATCH: usize = 32;
 /// fractional bits).
 const MAX_SEGMENT_TICKS: f32 = 1.0e9;
 
-/// The ticks of one segment and their times: a polynomial in the tick count, whose
-/// value `acc` is the time since the segment's start and `d1..d3` its forward
-/// differences, in timer ticks with 32 fractional bits (`linear` when d2 = d3 = 0);
-/// `base` is the timer tick of the segment's start and `at` the last queued tick's
-/// time since it (a segment lasts less than 2^30 timer ticks, so 32 bits hold it).
+/// The ticks of one segment and how they are timed; `base` is the timer tick of the
+/// segment's start and `at` the last queued tick's time since it (a segment lasts less
+/// than 2^30 timer ticks, so 32 bits hold it).
 #[derive(Clone, Copy, Debug, Default)]
 struct Segment {
     left: u32,
-    acc: u64,
-    d1: u64,
-    d2: u64,
-    d3: u64,
-    linear: bool,
+    timing: Timing,
     base: u64,
     at: u32,
+}
+
+/// How a segment's ticks get their times.
+#[derive(Clone, Copy, Debug)]
+enum Timing {
+    /// A polynomial in the tick count: `acc` is the time since the segment's start and
+    /// `d1..d3` its forward differences, in timer ticks with 32 fractional bits;
+    /// `linear` when d2 = d3 = 0.
+    Poly {
+        acc: u64,
+        d1: u64,
+        d2: u64,
+        d3: u64,
+        linear: bool,
+    },
+    /// A constant acceleration along a line, exact: see [`Ramp`].
+    Ramp(Ramp),
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Timing::Poly {
+            acc: 0,
+            d1: 0,
+            d2: 0,
+            d3: 0,
+            linear: true,
+        }
+    }
+}
+
+/// Tick times under constant acceleration, in integers. With R = v / a in
+/// timer ticks (the time the speed would take to reach 0), R^2 = W grows or falls by
+/// 2 ds / a (ticks^2) per tick of length ds, and the tick's time is a fixed tick plus
+/// or minus R (the ramp's anchor: its start, or the profile's end for the last ramp). Each tick updates W by one addition and takes R = floor(sqrt W) from the
+/// last two differences of R (quadratic extrapolation) and one Newton correction with a
+/// 32-bit division, then checks it exactly (one 32x32 multiply each way). Near rest the
+/// guess can be far off: an f32 correction there. Every time is the exact one rounded
+/// down to the timer tick (up to f32 rounding of W's start and step).
+#[derive(Clone, Copy, Debug)]
+struct Ramp {
+    /// W and its forward differences per tick (wrapping: the differences may be
+    /// negative). A line's ticks are equal, so W moves by a constant; along a curve the
+    /// path position is a cubic in the tick count (within the error bound), so W is too.
+    w: u64,
+    dw1: u64,
+    dw2: u64,
+    dw3: u64,
+    /// The tick's time since the segment's start is r0 + R (rising) or r0 - R.
+    rising_t: bool,
+    r0: u32,
+    r: u32,
+    dr: i32,
+    ddr: i32,
+}
+
+impl Ramp {
+    /// floor(sqrt(w)) near the guess `g` (below 2^30): one Newton step from the guess
+    /// with a 32-bit division, checked exactly; far from it (near rest), from f32.
+    #[inline(always)]
+    fn root_near(w: u64, g: u32) -> u32 {
+        if (w as i64) < 0 {
+            // W fell below 0 (a curve's cubic just past rest): at rest.
+            return 0;
+        }
+        let g = g.clamp(1, (1 << 30) - 1);
+        let e = w as i64 - (u64::from(g) * u64::from(g)) as i64;
+        if e.unsigned_abs() < 1 << 31 {
+            let r = (g as i32 + (e as i32) / (2 * g as i32)).max(1) as u64;
+            // r^2 <= w < (r + 1)^2, or one step either way.
+            let sq = r * r;
+            if sq <= w {
+                if sq + 2 * r + 1 > w {
+                    return r as u32;
+                }
+                if sq + 4 * r + 4 > w {
+                    return r as u32 + 1;
+                }
+            } else if (r - 1) * (r - 1) <= w {
+                return r as u32 - 1;
+            }
+        }
+        Self::root_far(w)
+    }
+
+    /// floor(sqrt(w)) from the f32 root and one Newton step (also in f32), checked
+    /// exactly.
+    #[inline(never)]
+    fn root_far(w: u64) -> u32 {
+        let w = if (w as i64) < 0 { 0 } else { w };
+        let g = crate::fmath::sqrt(w as f32).max(1.0);
+        let e = w as i64 - ((g as u64) * (g as u64)) as i64;
+        let mut r = (g + e as f32 / (2.0 * g)).max(0.0) as u64;
+        while r * r > w {
+            r -= 1;
+        }
+        while (r + 1) * (r + 1) <= w {
+            r += 1;
+        }
+        r as u32
+    }
+
+    /// The next tick's time since the segment's start (32 bits, wrapping).
+    #[inline(always)]
+    fn next(&mut self) -> u32 {
+        self.w = self.w.wrapping_add(self.dw1);
+        self.dw1 = self.dw1.wrapping_add(self.dw2);
+        self.dw2 = self.dw2.wrapping_add(self.dw3);
+        let guess = (self.r as i32).wrapping_add(self.dr).wrapping_add(self.ddr);
+        let r = Self::root_near(self.w, guess.max(1) as u32);
+        let dr = r.wrapping_sub(self.r) as i32;
+        self.ddr = dr.wrapping_sub(self.dr);
+        self.dr = dr;
+        self.r = r;
+        if self.rising_t {
+            self.r0.wrapping_add(r)
+        } else {
+            self.r0.wrapping_sub(r)
+        }
+    }
 }
 
 impl Segment {
@@ -101,18 +216,21 @@ impl Segment {
         let [d1, d2, d3] = d.map(|d| d as u64);
         Segment {
             left: n,
-            acc: 0,
-            d1,
-            d2,
-            d3,
-            linear: d2 == 0 && d3 == 0,
+            timing: Timing::Poly {
+                acc: 0,
+                d1,
+                d2,
+                d3,
+                linear: d2 == 0 && d3 == 0,
+            },
             base,
             at: t_last.wrapping_sub(base) as u32,
         }
     }
 
     /// Times `ticks` and packs them into `cmds` (the same length): per tick two
-    /// (linear) or six (cubic) 32-bit additions, and the wait since the last one.
+    /// (linear) or six (cubic) 32-bit additions, or a ramp's integer root, and the wait
+    /// since the last one.
     #[inline(always)]
     fn time(&mut self, ticks: &[Tick], cmds: &mut [StepCmd]) {
         let mut prev = self.at;
@@ -123,22 +241,37 @@ impl Segment {
             prev = prev.wrapping_add(wait);
             *cmd = StepCmd((u32::from(tick.0) << 24) | wait);
         };
-        if self.linear {
-            let (mut a, d) = (self.acc, self.d1);
-            for (tick, cmd) in ticks.iter().zip(cmds.iter_mut()) {
-                a = a.wrapping_add(d);
-                emit((a >> 32) as u32, *tick, cmd);
+        match &mut self.timing {
+            Timing::Poly {
+                acc,
+                d1,
+                linear: true,
+                ..
+            } => {
+                let (mut a, d) = (*acc, *d1);
+                for (tick, cmd) in ticks.iter().zip(cmds.iter_mut()) {
+                    a = a.wrapping_add(d);
+                    emit((a >> 32) as u32, *tick, cmd);
+                }
+                *acc = a;
             }
-            self.acc = a;
-        } else {
-            let (mut a, mut b, mut c, d) = (self.acc, self.d1, self.d2, self.d3);
-            for (tick, cmd) in ticks.iter().zip(cmds.iter_mut()) {
-                a = a.wrapping_add(b);
-                b = b.wrapping_add(c);
-                c = c.wrapping_add(d);
-                emit((a >> 32) as u32, *tick, cmd);
+            Timing::Poly {
+                acc, d1, d2, d3, ..
+            } => {
+                let (mut a, mut b, mut c, d) = (*acc, *d1, *d2, *d3);
+                for (tick, cmd) in ticks.iter().zip(cmds.iter_mut()) {
+                    a = a.wrapping_add(b);
+                    b = b.wrapping_add(c);
+                    c = c.wrapping_add(d);
+                    emit((a >> 32) as u32, *tick, cmd);
+                }
+                (*acc, *d1, *d2) = (a, b, c);
             }
-            (self.acc, self.d1, self.d2) = (a, b, c);
+            Timing::Ramp(ramp) => {
+                for (tick, cmd) in ticks.iter().zip(cmds.iter_mut()) {
+                    emit(ramp.next(), *tick, cmd);
+                }
+            }
         }
         self.at = prev;
         self.left -= ticks.len() as u32;
@@ -824,6 +957,12 @@ impl Active {
         let Some(mut p) = near else {
             return false;
         };
+        if let Some((seg, end)) = self.ramp_segment(p, eps, hz, t_last) {
+            // The cursor moves to the segment's last tick (its exact time).
+            self.seg = seg;
+            self.at = end;
+            return true;
+        }
         let cap = self.run_left;
         let (mut n, linear) = if p != at.phase || at.v <= 0.0 || cap <= 1 {
             // The first tick of a phase (or from rest) is timed exactly on its own.
@@ -876,6 +1015,154 @@ impl Active {
         self.seg = Segment::poly(n, d, at.at, t_last);
         self.at = Cursor { rate: rate1, ..end };
         true
+    }
+
+    /// Ticks in a ramp of constant acceleration (trapezoid), timed exactly
+    /// ([`Ramp`]), at most [`MAX_SEGMENT`]: as far as the path position stays within the
+    /// error bound of a cubic in the tick count (a line's is linear: the whole ramp, in
+    /// pieces of that length). `None` for anything else (or a ramp so long that its
+    /// times leave 2^30 timer ticks).
+    fn ramp_segment(&self, p: Phase, eps: f32, hz: f32, t_last: u64) -> Option<(Segment, Cursor)> {
+        let [acc, jerk, _] = self.prof.derivative_bounds(p);
+        if p == Phase::Cruise || !(acc > 0.0) || jerk != 0.0 {
+            return None;
+        }
+        let at = self.at;
+        let end = match p {
+            Phase::Up => self.ends_q[0],
+            _ => self.ends_q[2],
+        };
+        let (v0, v1) = self.prof.phase_speeds(p);
+        let per_s = hz / acc; // R per mm/s, timer ticks
+        if v0.max(v1) * per_s >= (1u32 << 30) as f32 {
+            return None;
+        }
+        let k = 2.0 * hz * per_s; // W per mm, ticks^2
+        let square = |v: f32| {
+            let r = (v * per_s + 0.5) as u64;
+            (r * r, r as u32)
+        };
+        // W grows along the path in the first ramp (if it speeds up), falls otherwise.
+        let grows = p == Phase::Up && v1 >= v0;
+        // As many ticks as a cubic of the path position follows within the bound (the
+        // time error is the position error over the speed; a line's position is linear).
+        let to_end = from_q(end.saturating_sub(at.s)) / (at.rate * self.scale);
+        let mut n = self
+            .run_left
+            .min(MAX_SEGMENT)
+            .min(to_end.max(1.0) as u32)
+            .max(1);
+        let s4 = self.interp.fourth_bound(n) * self.scale;
+        // Halving until the bound holds at the segment's slowest point (its start when
+        // speeding up, its end when slowing down).
+        loop {
+            let nf = n as f32;
+            let v2 = if grows {
+                at.v * at.v
+            } else {
+                at.v * at.v - 2.0 * acc * nf * self.scale * 1.415
+            };
+            let room = 384.0 * eps * crate::fmath::sqrt(v2.max(0.0));
+            if n == 1 || s4 * nf * nf * nf * nf <= room {
+                break;
+            }
+            n /= 2;
+        }
+        let (s1, rate1) = loop {
+            let (s1, r) = self.ahead(n);
+            if s1 <= end || n == 1 {
+                break (s1, r);
+            }
+            n = (n / 2).max(1);
+        };
+        if s1 > end {
+            return None;
+        }
+        let ds = from_q(s1 - at.s) / self.scale;
+        // W at the segment's last tick (exactly the anchor's at the end of a ramp to
+        // rest, where the time is most sensitive to it).
+        let d1 = match p {
+            Phase::Up => from_q(s1),
+            _ => from_q(end.saturating_sub(s1)),
+        };
+        let w_end = match p {
+            Phase::Up if grows => square(v0).0 as f32 + k * d1,
+            Phase::Up => square(v0).0 as f32 - k * d1,
+            _ => square(v1).0 as f32 + k * d1,
+        };
+        let w_end = if d1 == 0.0 {
+            match p {
+                Phase::Up => square(v0).0,
+                _ => square(v1).0,
+            }
+        } else {
+            w_end.max(0.0) as u64
+        };
+        // W along the segment: the Hermite cubic of the path position (run units),
+        // scaled to W, as forward differences; the start is set back from the end by
+        // their exact sum.
+        let kk = if grows {
+            k * self.scale
+        } else {
+            -k * self.scale
+        };
+        let [e1, e2, e3] = hermite(n, ds, at.rate, rate1).map(|d| (kk * d) as i64);
+        // The sums of 1, k and k(k-1)/2 over the ticks: n <= MAX_SEGMENT, so they fit
+        // in 32 bits (a 64-bit division would link a kilobyte of library code).
+        let pairs = n * (n - 1) / 2;
+        let triples = pairs * n.saturating_sub(2) / 3;
+        let sum = i64::from(n) * e1 + i64::from(pairs) * e2 + i64::from(triples) * e3;
+        let (w, dw1, dw2, dw3) = (
+            (w_end as i64).wrapping_sub(sum).max(0) as u64,
+            e1 as u64,
+            e2 as u64,
+            e3 as u64,
+        );
+        if n == 0 || (dw1 as i64).unsigned_abs() > 1 << 46 {
+            // None, or a first or last step slower than half a command's wait: that
+            // one goes on its own.
+            return None;
+        }
+        let (anchor, r_ref, rising_t) = match p {
+            Phase::Up => (self.anchors[0], square(v0).1, grows),
+            _ => (self.anchors[2], square(v1).1, false),
+        };
+        // The tick's time: anchor + (R - R_ref) (rising) or anchor - (R - R_ref).
+        let off = if rising_t {
+            anchor.wrapping_sub(u64::from(r_ref))
+        } else {
+            anchor.wrapping_add(u64::from(r_ref))
+        };
+        let r = Ramp::root_near(w, (at.v * per_s) as u32);
+        let dr = if r > 0 {
+            (dw1 as i64 as f32 / (2 * r) as f32) as i32
+        } else {
+            0
+        };
+        let ramp = Ramp {
+            w,
+            dw1,
+            dw2,
+            dw3,
+            rising_t,
+            r0: off.wrapping_sub(at.at) as u32,
+            r,
+            dr,
+            ddr: 0,
+        };
+        let seg = Segment {
+            left: n,
+            timing: Timing::Ramp(ramp),
+            base: at.at,
+            at: t_last.wrapping_sub(at.at) as u32,
+        };
+        Some((
+            seg,
+            Cursor {
+                rate: rate1,
+                ..self.exact(p, s1, hz)
+            },
+        ))
     }
 
     /// The longest segment (at most `cap` ticks, and where the time is not linear in
