@@ -135,27 +135,6 @@ fn small_angle(cross: f32, dot: f32) -> f32 {
     scale * x * series
 }
 
-/// floor(sqrt(v)) for v >= 0 (no division; runs once per arc).
-fn isqrt(v: i64) -> i64 {
-    if v <= 0 {
-        return 0;
-    }
-    let v = v as u64;
-    let mut r = 0u64;
-    let mut bit = 1u64 << ((63 - v.leading_zeros()) & !1);
-    let mut rem = v;
-    while bit != 0 {
-        if rem >= r + bit {
-            rem -= r + bit;
-            r = (r >> 1) + bit;
-        } else {
-            r >>= 1;
-        }
-        bit >>= 2;
-    }
-    r as i64
-}
-
 impl Circle {
     /// Arc from the integer `start` to the integer `target`, on the circle around
     /// `center` through `from` (both absolute, 1/256 step, i64 so that a whole-step
@@ -194,7 +173,7 @@ impl Circle {
             r2,
             radius,
             inv_r: 1.0 / radius.max(1.0),
-            diag: isqrt(r2 >> 1) as i32,
+            diag: crate::fmath::isqrt((r2 >> 1) as u64) as i32,
             ccw,
             method,
             piece: Piece {

@@ -118,14 +118,15 @@ impl Default for Timing {
     }
 }
 
-/// Tick times under constant acceleration, in integers. With R = v / a in
-/// timer ticks (the time the speed would take to reach 0), R^2 = W grows or falls by
-/// 2 ds / a (ticks^2) per tick of length ds, and the tick's time is a fixed tick plus
-/// or minus R (the ramp's anchor: its start, or the profile's end for the last ramp). Each tick updates W by one addition and takes R = floor(sqrt W) from the
-/// last two differences of R (quadratic extrapolation) and one Newton correction with a
-/// 32-bit division, then checks it exactly (one 32x32 multiply each way). Near rest the
-/// guess can be far off: an f32 correction there. Every time is the exact one rounded
-/// down to the timer tick (up to f32 rounding of W's start and step).
+/// Tick times under constant acceleration, in integers. With R = v / a in timer ticks
+/// (the time the speed would take to reach 0), R^2 = W grows or falls by 2 ds / a
+/// (ticks^2) per tick of length ds, and the tick's time is a fixed tick plus or minus R
+/// (the ramp's anchor: its start, or the profile's end for the last ramp). Each tick
+/// updates W by one addition and takes R = floor(sqrt W) from the last two differences
+/// of R (quadratic extrapolation) and one Newton correction with a 32-bit division, then
+/// checks it exactly (one 32x32 multiply each way). Near rest the guess can be far off:
+/// the exact digit-by-digit root there. Every time is the exact one rounded down to the
+/// timer tick (up to f32 rounding of W's start and step).
 #[derive(Clone, Copy, Debug)]
 struct Ramp {
     /// W and its forward differences per tick (wrapping: the differences may be
@@ -145,7 +146,7 @@ struct Ramp {
 
 impl Ramp {
     /// floor(sqrt(w)) near the guess `g` (below 2^30): one Newton step from the guess
-    /// with a 32-bit division, checked exactly; far from it (near rest), from f32.
+    /// with a 32-bit division, checked exactly; far from it (near rest), digit by digit.
     #[inline(always)]
     fn root_near(w: u64, g: u32) -> u32 {
         if (w as i64) < 0 {
@@ -169,24 +170,7 @@ impl Ramp {
                 return r as u32 - 1;
             }
         }
-        Self::root_far(w)
-    }
-
-    /// floor(sqrt(w)) from the f32 root and one Newton step (also in f32), checked
-    /// exactly.
-    #[inline(never)]
-    fn root_far(w: u64) -> u32 {
-        let w = if (w as i64) < 0 { 0 } else { w };
-        let g = crate::fmath::sqrt(w as f32).max(1.0);
-        let e = w as i64 - ((g as u64) * (g as u64)) as i64;
-        let mut r = (g + e as f32 / (2.0 * g)).max(0.0) as u64;
-        while r * r > w {
-            r -= 1;
-        }
-        while (r + 1) * (r + 1) <= w {
-            r += 1;
-        }
-        r as u32
+        crate::fmath::isqrt(w) as u32
     }
 
     /// The next tick's time since the segment's start (32 bits, wrapping).
