@@ -78,9 +78,8 @@ pub struct Circle {
     /// Per axis: its present direction, +-256.
     dir: [i32; 2],
     r2: i64,
-    /// Radius and its inverse, steps (f32: path positions and their bounds only).
+    /// Radius, steps (f32: path positions and their bounds only).
     radius: f32,
-    inv_r: f32,
     /// floor(sqrt(R^2 / 2)): the largest |major| of a DDA octant piece.
     diag: i32,
     ccw: bool,
@@ -172,7 +171,6 @@ impl Circle {
             dir: [0; 2],
             r2,
             radius,
-            inv_r: 1.0 / radius.max(1.0),
             diag: crate::fmath::isqrt((r2 >> 1) as u64) as i32,
             ccw,
             method,
@@ -556,18 +554,6 @@ impl Circle {
     /// position follows.
     pub fn major(&self) -> usize {
         self.piece.major
-    }
-
-    /// The fourth of [`Circle::run_bounds`] alone (what a cruise or a ramp of constant
-    /// acceleration needs).
-    pub fn fourth_bound(&self, k: u32) -> f32 {
-        let m = self.piece.major;
-        let m0 = crate::fmath::abs(self.p[m] as f32) * (1.0 / ONE as f32);
-        let u = ((m0 + k as f32) * self.inv_r).min(0.7072);
-        let u2 = u * u;
-        let c = 1.0 / (1.0 - u2);
-        let ir = self.inv_r;
-        (9.0 + 6.0 * u2) * u * (c * c) * (c * c) * (ir * ir * ir)
     }
 
     /// Path position `k` ticks ahead in the present DDA piece (k <= its run),

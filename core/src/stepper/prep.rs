@@ -1036,7 +1036,7 @@ impl Active {
             .min(MAX_SEGMENT)
             .min(to_end.max(1.0) as u32)
             .max(1);
-        let s4 = self.interp.fourth_bound(n) * self.scale;
+        let s4 = self.interp.run_bounds(n)[3] * self.scale;
         // Halving until the bound holds at the segment's slowest point (its start when
         // speeding up, its end when slowing down).
         loop {
