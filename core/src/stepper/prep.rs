@@ -17,10 +17,10 @@
 //! acceleration and jerk, the speed and the path's curvature (at most 256 ticks, never
 //! across a phase of the profile). Cruising along a line the time is linear, so one
 //! segment takes up to 2048 ticks; ramps of constant acceleration are timed exactly
-//! in integers ([`Ramp`]), other ramps take shorter segments, and the first tick of a
-//! phase (or from rest) its own. Every segment starts on the exact time of its first point, so errors never add
-//! up. The resulting accuracy is asserted by the tests below against the ideal profile
-//! computed in f64.
+//! in integers (`Ramp`), other ramps take shorter segments, and the first tick of a
+//! phase (or from rest) its own. Every segment starts on the exact time of its first
+//! point, so errors never add up. The resulting accuracy is asserted by the tests below
+//! against the ideal profile computed in f64.
 //!
 //! The profile is rebuilt from the present state when the planner's plan for the block
 //! changes (a new block behind it, an override), and for feed hold (brake to rest,
