@@ -811,6 +811,19 @@ impl Prep {
     }
 }
 
+/// Whole ticks of `q` in `len` (Q units): the division in f32, checked exactly.
+fn ticks_in(len: u64, q: u64) -> u64 {
+    let q = q.max(1);
+    let mut n = (len as f32 / q as f32) as u64;
+    while n > 0 && n.wrapping_mul(q) > len {
+        n -= 1;
+    }
+    while (n + 1).wrapping_mul(q) <= len {
+        n += 1;
+    }
+    n
+}
+
 /// Pure waits before a step whose wait is longer than a command holds: each this long
 /// (a power of two, so that counting them is a shift, not a 64-bit division).
 const PURE_WAIT: u64 = 1 << 23;
@@ -1002,10 +1015,9 @@ impl Active {
     }
 
     /// Ticks in a ramp of constant acceleration (trapezoid), timed exactly
-    /// ([`Ramp`]), at most [`MAX_SEGMENT`]: as far as the path position stays within the
-    /// error bound of a cubic in the tick count (a line's is linear: the whole ramp, in
-    /// pieces of that length). `None` for anything else (or a ramp so long that its
-    /// times leave 2^30 timer ticks).
+    /// ([`Ramp`]): a line's up to the ramp's end; a curve's as far as its path position
+    /// stays within the error bound of a cubic in the tick count. `None` for anything
+    /// else (or a ramp so long that its times leave 2^30 timer ticks).
     fn ramp_segment(&self, p: Phase, eps: f32, hz: f32, t_last: u64) -> Option<(Segment, Cursor)> {
         let [acc, jerk, _] = self.prof.derivative_bounds(p);
         if p == Phase::Cruise || !(acc > 0.0) || jerk != 0.0 {
@@ -1028,80 +1040,112 @@ impl Active {
         };
         // W grows along the path in the first ramp (if it speeds up), falls otherwise.
         let grows = p == Phase::Up && v1 >= v0;
-        // As many ticks as a cubic of the path position follows within the bound (the
-        // time error is the position error over the speed; a line's position is linear).
-        let to_end = from_q(end.saturating_sub(at.s)) / (at.rate * self.scale);
-        let mut n = self
-            .run_left
-            .min(MAX_SEGMENT)
-            .min(to_end.max(1.0) as u32)
-            .max(1);
-        let s4 = self.interp.run_bounds(n)[3] * self.scale;
-        // Halving until the bound holds at the segment's slowest point (its start when
-        // speeding up, its end when slowing down).
-        loop {
-            let nf = n as f32;
-            let v2 = if grows {
-                at.v * at.v
+        let (n, w, dw1, dw2, dw3, s1, rate1) = if let Some(q) = self.line_tick_q {
+            // A line: whole ticks up to the ramp's end, W from whole ticks from its
+            // anchor, so that a ramp to rest ends exactly at W = 0 (where time is most
+            // sensitive to it).
+            let n = (ticks_in(end.saturating_sub(at.s), q) as u32).min(self.run_left);
+            let dw = (k * from_q(q)) as u64;
+            let ticks = if p == Phase::Up {
+                ticks_in(at.s, q)
             } else {
-                at.v * at.v - 2.0 * acc * nf * self.scale * 1.415
+                u64::from(n)
             };
-            let room = 384.0 * eps * crate::fmath::sqrt(v2.max(0.0));
-            if n == 1 || s4 * nf * nf * nf * nf <= room {
-                break;
-            }
-            n /= 2;
-        }
-        let (s1, rate1) = loop {
-            let (s1, r) = self.ahead(n);
-            if s1 <= end || n == 1 {
-                break (s1, r);
-            }
-            n = (n / 2).max(1);
-        };
-        if s1 > end {
-            return None;
-        }
-        let ds = from_q(s1 - at.s) / self.scale;
-        // W at the segment's last tick (exactly the anchor's at the end of a ramp to
-        // rest, where the time is most sensitive to it).
-        let d1 = match p {
-            Phase::Up => from_q(s1),
-            _ => from_q(end.saturating_sub(s1)),
-        };
-        let w_end = match p {
-            Phase::Up if grows => square(v0).0 as f32 + k * d1,
-            Phase::Up => square(v0).0 as f32 - k * d1,
-            _ => square(v1).0 as f32 + k * d1,
-        };
-        let w_end = if d1 == 0.0 {
-            match p {
-                Phase::Up => square(v0).0,
-                _ => square(v1).0,
-            }
+            let d = ticks.wrapping_mul(dw);
+            let w = match p {
+                Phase::Up if grows => square(v0).0 + d,
+                Phase::Up => square(v0).0.saturating_sub(d),
+                _ => square(v1).0 + d,
+            };
+            let s1 = at.s + q * u64::from(n);
+            (
+                n,
+                w,
+                if grows { dw } else { dw.wrapping_neg() },
+                0,
+                0,
+                s1,
+                1.0,
+            )
         } else {
-            w_end.max(0.0) as u64
+            // A curve: as many ticks as a cubic of the path position follows within
+            // the bound (the time error is the position error over the speed).
+            let to_end = from_q(end.saturating_sub(at.s)) / (at.rate * self.scale);
+            let mut n = self
+                .run_left
+                .min(MAX_SEGMENT)
+                .min(to_end.max(1.0) as u32)
+                .max(1);
+            let s4 = self.interp.run_bounds(n)[3] * self.scale;
+            // Halving until the bound holds at the segment's slowest point (its start
+            // when speeding up, its end when slowing down).
+            loop {
+                let nf = n as f32;
+                let v2 = if grows {
+                    at.v * at.v
+                } else {
+                    at.v * at.v - 2.0 * acc * nf * self.scale * 1.415
+                };
+                let room = 384.0 * eps * crate::fmath::sqrt(v2.max(0.0));
+                if n == 1 || s4 * nf * nf * nf * nf <= room {
+                    break;
+                }
+                n /= 2;
+            }
+            let (s1, rate1) = loop {
+                let (s1, r) = self.ahead(n);
+                if s1 <= end || n == 1 {
+                    break (s1, r);
+                }
+                n = (n / 2).max(1);
+            };
+            if s1 > end {
+                return None;
+            }
+            let ds = from_q(s1 - at.s) / self.scale;
+            // W at the segment's last tick (exactly the anchor's at the end of a ramp to
+            // rest, where the time is most sensitive to it).
+            let d1 = match p {
+                Phase::Up => from_q(s1),
+                _ => from_q(end.saturating_sub(s1)),
+            };
+            let w_end = match p {
+                Phase::Up if grows => square(v0).0 as f32 + k * d1,
+                Phase::Up => square(v0).0 as f32 - k * d1,
+                _ => square(v1).0 as f32 + k * d1,
+            };
+            let w_end = if d1 == 0.0 {
+                match p {
+                    Phase::Up => square(v0).0,
+                    _ => square(v1).0,
+                }
+            } else {
+                w_end.max(0.0) as u64
+            };
+            // W along the segment: the Hermite cubic of the path position (run units),
+            // scaled to W, as forward differences; the start is set back from the end
+            // by their exact sum.
+            let kk = if grows {
+                k * self.scale
+            } else {
+                -k * self.scale
+            };
+            let [e1, e2, e3] = hermite(n, ds, at.rate, rate1).map(|d| (kk * d) as i64);
+            // The sums of 1, k and k(k-1)/2 over the ticks: n <= MAX_SEGMENT, so they
+            // fit in 32 bits (a 64-bit division would link a kilobyte of library code).
+            let pairs = n * (n - 1) / 2;
+            let triples = pairs * n.saturating_sub(2) / 3;
+            let sum = i64::from(n) * e1 + i64::from(pairs) * e2 + i64::from(triples) * e3;
+            (
+                n,
+                (w_end as i64).wrapping_sub(sum).max(0) as u64,
+                e1 as u64,
+                e2 as u64,
+                e3 as u64,
+                s1,
+                rate1,
+            )
         };
-        // W along the segment: the Hermite cubic of the path position (run units),
-        // scaled to W, as forward differences; the start is set back from the end by
-        // their exact sum.
-        let kk = if grows {
-            k * self.scale
-        } else {
-            -k * self.scale
-        };
-        let [e1, e2, e3] = hermite(n, ds, at.rate, rate1).map(|d| (kk * d) as i64);
-        // The sums of 1, k and k(k-1)/2 over the ticks: n <= MAX_SEGMENT, so they fit
-        // in 32 bits (a 64-bit division would link a kilobyte of library code).
-        let pairs = n * (n - 1) / 2;
-        let triples = pairs * n.saturating_sub(2) / 3;
-        let sum = i64::from(n) * e1 + i64::from(pairs) * e2 + i64::from(triples) * e3;
-        let (w, dw1, dw2, dw3) = (
-            (w_end as i64).wrapping_sub(sum).max(0) as u64,
-            e1 as u64,
-            e2 as u64,
-            e3 as u64,
-        );
         if n == 0 || (dw1 as i64).unsigned_abs() > 1 << 46 {
             // None, or a first or last step slower than half a command's wait: that
             // one goes on its own.
