@@ -299,14 +299,13 @@ mod app {
         let rx = cx.local.usb_rx_in;
         let tx = cx.local.usb_tx_out;
         let serial = &mut **cx.local.serial;
-        cx.local.usb.poll(&mut [&mut *serial]);
+        cx.local.usb.poll(&mut [serial.class()]);
         let open = serial.dtr();
         let mut arrived = PORT_OPEN.swap(open, Ordering::Relaxed) != open;
-        let mut buf = [0u8; 64];
-        if rx.free() >= buf.len() {
-            if let Ok(n) = serial.read(&mut buf) {
-                arrived |= rx.push(buf.get(..n).unwrap_or(&[])) > 0;
-            }
+        if rx.free() >= board::USB_PACKET {
+            let mut buf = [0u8; board::USB_PACKET];
+            let n = serial.read_packet(&mut buf);
+            arrived |= rx.push(buf.get(..n).unwrap_or(&[])) > 0;
         } else {
             // A packet left in the endpoint keeps the peripheral's transfer flag set,
             // and with it this interrupt: it would fire again at once, forever, and
@@ -316,12 +315,13 @@ mod app {
             // the host is NAKed (back-pressure) and output still flows.
             cortex_m::peripheral::NVIC::mask(Interrupt::USB_LP_CAN_RX0);
         }
-        let n = tx.pop_into(&mut buf);
-        if n > 0 {
-            // The CDC class buffers what the endpoint cannot take yet; bytes it refuses
-            // are dropped only if the host stopped reading.
-            let _ = serial.write(buf.get(..n).unwrap_or(&[]));
+        // Output waits in its ring until the endpoint takes it; with the port closed
+        // nobody will read it (the protocol discards its own output then too), and a
+        // host that opens the port later must see its session start, not stale lines.
+        if !open {
+            tx.clear();
         }
+        serial.send(tx);
         if arrived {
             // Real-time bytes act when they arrive, not at the next tick.
             wake_protocol();

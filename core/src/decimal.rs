@@ -110,7 +110,10 @@ pub fn round_i32(x: f32) -> i32 {
     fmath::round(x) as i32
 }
 
-/// `x` truncated to a `u32` (saturating, NaN = 0).
+/// `x` truncated to a `u32` (saturating, NaN = 0). Out of line, as `round_i32`: the
+/// soft-float conversion and its range checks are some 40 bytes, which the settings'
+/// accessors would otherwise repeat at every use.
+#[inline(never)]
 pub fn to_u32(x: f32) -> u32 {
     x as u32
 }

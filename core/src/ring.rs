@@ -223,6 +223,27 @@ impl<S: Slot, const N: usize> Rx<'_, S, N> {
         })
     }
 
+    /// Copies up to `out.len()` items, oldest first, without taking them: for a
+    /// consumer that hands them on in one piece or not at all (the USB endpoint), which
+    /// then takes what went out with [`Rx::skip`]. Returns how many.
+    pub fn peek_into(&self, out: &mut [S::Item]) -> usize {
+        let ring = self.ring;
+        let head = ring.head.load(Ordering::Relaxed);
+        let n = self.len().min(out.len());
+        for (i, o) in out.iter_mut().take(n).enumerate() {
+            *o = ring.slot(head.wrapping_add(i as u32)).get();
+        }
+        n
+    }
+
+    /// Drops the oldest `n` items (at most what is queued), e.g. those [`Rx::peek_into`]
+    /// copied and the consumer passed on.
+    pub fn skip(&mut self, n: usize) {
+        let head = self.ring.head.load(Ordering::Relaxed);
+        let n = n.min(self.len()) as u32;
+        store_release(&self.ring.head, head.wrapping_add(n));
+    }
+
     /// Hands items to `take`, oldest first, while it accepts them: an item it refuses
     /// stays at the head for the next call (the protocol's back-pressure). Returns how
     /// many were taken.
@@ -279,6 +300,26 @@ mod tests {
         assert_eq!(rx.pop_into(&mut all), 8);
         assert_eq!(&all[..8], b"fghklmno");
         assert_eq!(rx.pop_into(&mut all), 0);
+        assert_eq!(tx.free(), 8);
+    }
+
+    #[test]
+    fn peek_leaves_the_items_until_skipped() {
+        let mut ring: ByteRing<8> = ByteRing::new();
+        let (mut tx, mut rx) = ring.split();
+        tx.push(b"abcdef");
+        rx.skip(4);
+        tx.push(b"ghijkl");
+        let mut out = [0u8; 5];
+        assert_eq!(rx.peek_into(&mut out), 5);
+        assert_eq!(&out, b"efghi", "across the end of the buffer");
+        assert_eq!(rx.len(), 8, "nothing taken");
+        rx.skip(3);
+        let mut all = [0u8; 16];
+        assert_eq!(rx.peek_into(&mut all), 5);
+        assert_eq!(&all[..5], b"hijkl");
+        rx.skip(99);
+        assert!(rx.is_empty(), "at most what is queued");
         assert_eq!(tx.free(), 8);
     }
 

@@ -677,8 +677,8 @@ impl Settings {
         let mut out = [0u8; IMAGE_LEN];
         let (head, rest) = out.split_at_mut(4);
         head.copy_from_slice(&[MAGIC[0], MAGIC[1], FORMAT_VERSION, COUNT as u8]);
-        for (chunk, v) in rest.chunks_exact_mut(4).zip(self.vals.iter()) {
-            chunk.copy_from_slice(&v.to_le_bytes());
+        for (chunk, v) in rest.as_chunks_mut::<4>().0.iter_mut().zip(self.vals.iter()) {
+            *chunk = v.to_le_bytes();
         }
         let body = IMAGE_LEN - 4;
         let crc = crc32(out.get(..body).unwrap_or(&[]));

@@ -280,8 +280,11 @@ impl<F: NorFlash> SettingsStore<F> {
             None
         };
         let stage = |buf: &mut Buf| {
-            if let Some(d) = buf.get_mut(REC_HEAD..REC_HEAD + bytes.len()) {
-                d.copy_from_slice(bytes);
+            // Past the header (a record always fits the buffer: `rec_size`), byte by
+            // byte: no length-mismatch panic for the compiler to keep.
+            let data = buf.iter_mut().skip(REC_HEAD);
+            for (d, &b) in data.zip(bytes) {
+                *d = b;
             }
         };
         if let Some(s) = scan {
@@ -323,10 +326,11 @@ impl<F: NorFlash> SettingsStore<F> {
         }
         // The header last: only now does the new page take over.
         let seq = seq.wrapping_add(1);
-        let mut head = [0u8; PAGE_HEAD as usize];
-        head[..4].copy_from_slice(&seq.to_le_bytes());
-        head[4..].copy_from_slice(&(crc32(&seq.to_le_bytes()) ^ PAGE_TAG).to_le_bytes());
-        self.flash.write(target, &head)?;
+        let head = [
+            seq.to_le_bytes(),
+            (crc32(&seq.to_le_bytes()) ^ PAGE_TAG).to_le_bytes(),
+        ];
+        self.flash.write(target, head.as_flattened())?;
         // Everything live is in the new page: vacate the old one.
         if let Some(s) = scan {
             self.flash.erase(s.page, s.page + self.page_size)?;

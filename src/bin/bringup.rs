@@ -42,6 +42,7 @@ mod app {
     use inkstep::steps::{self, StepOutput, StepTx};
     use inkstep_core::interpolation::Tick;
     use inkstep_core::keypad::{KeyKind, Keypad, KeypadConfig};
+    use inkstep_core::ring::ByteRing;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920};
     use inkstep_core::stepper::exec::Executor;
     use inkstep_core::stepper::queue::StepCmdQueue;
@@ -132,20 +133,26 @@ mod app {
         cx.local.step_out.on_interrupt();
     }
 
-    /// Echo every byte; greet on the first.
-    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial, usb_bytes])]
+    /// Echo every byte (what the output ring has no room for is dropped); greet on
+    /// the first.
+    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [usb, serial, usb_bytes], local = [
+        echo: ByteRing<128> = ByteRing::new(),
+    ])]
     fn usb_lp(cx: usb_lp::Context) {
+        let (mut out, mut queued) = cx.local.echo.split();
         (cx.shared.usb, cx.shared.serial, cx.shared.usb_bytes).lock(|usb, serial, count| {
-            if usb.poll(&mut [&mut **serial]) {
-                let mut buf = [0u8; 64];
-                if let Ok(n) = serial.read(&mut buf) {
+            if usb.poll(&mut [serial.class()]) {
+                let mut buf = [0u8; board::USB_PACKET];
+                let n = serial.read_packet(&mut buf);
+                if n > 0 {
                     if *count == 0 {
-                        let _ = serial.write(b"inkstep bring-up: echo\r\n");
+                        out.push(b"inkstep bring-up: echo\r\n");
                     }
                     *count = count.wrapping_add(n as u32);
-                    let _ = serial.write(buf.get(..n).unwrap_or(&[]));
+                    out.push(buf.get(..n).unwrap_or(&[]));
                 }
             }
+            serial.send(&mut queued);
         });
     }
 

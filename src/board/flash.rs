@@ -97,7 +97,11 @@ impl embedded_storage::nor_flash::ReadNorFlash for SettingsFlash {
         let data = writer
             .read(offset, bytes.len())
             .map_err(|_| FlashError::Failed)?;
-        bytes.copy_from_slice(data);
+        // The HAL hands back `bytes.len()` bytes; copied pairwise, so that no
+        // length-mismatch panic stays in the image.
+        for (b, &d) in bytes.iter_mut().zip(data) {
+            *b = d;
+        }
         Ok(())
     }
     fn capacity(&self) -> usize {

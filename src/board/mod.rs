@@ -61,7 +61,7 @@ pub use step_port::{
     StepPort, DIR_SHIFT, MOTION_PINS, STEP_MASK_X, STEP_MASK_Y, STEP_MASK_Z,
 };
 pub use step_timer::{disarm_step_pulses, stop_step_timer, StepTimer};
-pub use usb::{Usb, UsbCells, UsbSerial};
+pub use usb::{Usb, UsbCells, UsbSerial, USB_PACKET};
 pub use watchdog::{Watchdog, WATCHDOG_MS};
 
 use stm32f1xx_hal::{
@@ -155,28 +155,24 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
     // Columns released (high), rows pulled up: a pressed key pulls its row low while
     // its column is driven low.
     let keypad = KeypadMatrix {
-        columns: [
+        columns: (
             gpiob
                 .pb10
-                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High)
-                .erase(),
+                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High),
             gpiob
                 .pb11
-                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High)
-                .erase(),
-            pa15.into_open_drain_output_with_state(&mut gpioa.crh, PinState::High)
-                .erase(),
+                .into_open_drain_output_with_state(&mut gpiob.crh, PinState::High),
+            pa15.into_open_drain_output_with_state(&mut gpioa.crh, PinState::High),
             gpioc
                 .pc14
-                .into_open_drain_output_with_state(&mut gpioc.crh, PinState::High)
-                .erase(),
-        ],
-        rows: [
-            gpiob.pb6.into_pull_up_input(&mut gpiob.crl).erase(),
-            gpiob.pb7.into_pull_up_input(&mut gpiob.crl).erase(),
-            gpiob.pb8.into_pull_up_input(&mut gpiob.crh).erase(),
-            gpiob.pb9.into_pull_up_input(&mut gpiob.crh).erase(),
-        ],
+                .into_open_drain_output_with_state(&mut gpioc.crh, PinState::High),
+        ),
+        rows: (
+            gpiob.pb6.into_pull_up_input(&mut gpiob.crl),
+            gpiob.pb7.into_pull_up_input(&mut gpiob.crl),
+            gpiob.pb8.into_pull_up_input(&mut gpiob.crh),
+            gpiob.pb9.into_pull_up_input(&mut gpiob.crh),
+        ),
     };
 
     // The safety and control inputs on EXTI lines 0, 1, 3, 4, 5. E-stop and limits:
@@ -243,11 +239,7 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
         pin_dp: usb_dp.into_floating_input(&mut gpioa.crh),
     };
     let bus: &'static UsbBusAllocator<UsbBusType> = usb.bus.write(UsbBus::new(usb_periph));
-    let serial = usb.serial.write(usbd_serial::SerialPort::new_with_store(
-        bus,
-        [0; 64],
-        usbd_serial::DefaultBufferStore::default(),
-    ));
+    let serial = usb.serial.write(UsbSerial::new(bus));
     let usb = usb.dev.write(
         UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))
             .device_class(usbd_serial::USB_CLASS_CDC)

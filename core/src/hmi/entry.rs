@@ -161,7 +161,7 @@ impl Field {
         if !self.editing {
             return Ok(self.value);
         }
-        let parsed = parse_decimal(&self.text);
+        let parsed = parse_decimal(self.text.bytes());
         match parsed {
             Some(v) if v >= self.min() && v <= self.max() => {
                 self.value = v;
@@ -191,9 +191,9 @@ impl Field {
 /// Parse what a field can hold: optional '-', digits, optional '.' and digits.
 /// Done by hand because core's float parser costs kilobytes of flash for input that is
 /// at most 8 characters; None for empty, lone "-" or "." and anything else.
-pub fn parse_decimal(text: &str) -> Option<f32> {
+pub fn parse_decimal(text: &[u8]) -> Option<f32> {
     // Byte-wise: anything but ASCII digits and one '.' is refused anyway.
-    let (neg, body) = match text.as_bytes() {
+    let (neg, body) = match text {
         [b'-', rest @ ..] => (true, rest),
         all => (false, all),
     };
@@ -415,12 +415,12 @@ mod tests {
 
     #[test]
     fn decimal_parser_accepts_field_text_only() {
-        assert_eq!(parse_decimal("12.5"), Some(12.5));
-        assert_eq!(parse_decimal("-0.25"), Some(-0.25));
-        assert_eq!(parse_decimal("7."), Some(7.0));
-        assert_eq!(parse_decimal(".5"), Some(0.5));
+        assert_eq!(parse_decimal(b"12.5"), Some(12.5));
+        assert_eq!(parse_decimal(b"-0.25"), Some(-0.25));
+        assert_eq!(parse_decimal(b"7."), Some(7.0));
+        assert_eq!(parse_decimal(b".5"), Some(0.5));
         for bad in ["", "-", ".", "-.", "1.2.3", "1-2", "+3", "1e5"] {
-            assert_eq!(parse_decimal(bad), None, "{bad:?}");
+            assert_eq!(parse_decimal(bad.as_bytes()), None, "{bad:?}");
         }
     }
 

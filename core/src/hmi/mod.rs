@@ -88,6 +88,9 @@ fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
     }))
 }
 
+/// Out of line: one copy of the list's capacity check and slot write for the dozens of
+/// places that answer a key or a tick.
+#[inline(never)]
 fn push(out: &mut Actions, a: Action) {
     // Capacity covers the largest single response (a job start); never silently
     // exceeded by construction, checked here rather than panicking.
@@ -144,8 +147,8 @@ impl Hmi {
         self.cfg = cfg;
         self.draw_feed = cfg.draw_feed_mm_min;
     }
-    pub fn toast(&self) -> Option<&str> {
-        self.toast.as_ref().map(|t| t.text.as_str())
+    pub fn toast(&self) -> Option<&Text<28>> {
+        self.toast.as_ref().map(|t| &t.text)
     }
     pub fn jog_speed(&self) -> f32 {
         JOG_SPEEDS.get(self.jog_speed).copied().unwrap_or(100.0)
@@ -178,9 +181,15 @@ impl Hmi {
     }
 
     fn say(&mut self, text: &str, now_ms: u32) {
+        self.show(Text::truncated(text), now_ms);
+    }
+
+    /// [`Hmi::say`] for a message built at run time: taken as it is, not through
+    /// `&str` (which would check its UTF-8 again).
+    fn show(&mut self, text: Text<28>, now_ms: u32) {
         self.changed();
         self.toast = Some(Toast {
-            text: Text::truncated(text),
+            text,
             until_ms: now_ms.wrapping_add(TOAST_MS),
         });
     }
@@ -517,7 +526,7 @@ impl Hmi {
             _ => return,
         };
         if let Err(msg) = field.commit() {
-            self.say(&msg, now_ms);
+            self.show(msg, now_ms);
             push(out, Action::Beep(Beep::Error));
             return;
         }
@@ -597,13 +606,14 @@ impl Hmi {
         // Teaching view: remember each new feed direction.
         if st.dir != [0, 0] && self.feed_dirs().next_back() != Some(&st.dir) {
             let n = usize::from(self.ndirs);
-            if n < DIR_HISTORY {
+            if let Some(next) = self.dirs.get_mut(n) {
+                *next = st.dir;
                 self.ndirs += 1;
             } else {
-                self.dirs.copy_within(1.., 0);
-            }
-            if let Some(last) = self.dirs.get_mut(n.min(DIR_HISTORY - 1)) {
-                *last = st.dir;
+                // Full: the oldest drops out. Built whole, not `copy_within`, which
+                // would be the image's only call of the general `memmove` (1.6 KB).
+                let dirs = self.dirs;
+                self.dirs = core::array::from_fn(|i| dirs.get(i + 1).copied().unwrap_or(st.dir));
             }
         }
         if let Some(t) = &self.toast {
@@ -688,13 +698,13 @@ impl Hmi {
                 }
             }
             let p = self.pos_mm(st);
-            let mut msg: Text<28> = Text::new();
+            let mut msg = Text::new();
             msg.push_str("Stopped X");
             msg.push_fixed(p[X], 1);
             msg.push_str(" Y");
             msg.push_fixed(p[Y], 1);
             self.page = Page::Menu { sel: 0 };
-            self.say(&msg, now_ms);
+            self.show(msg, now_ms);
         }
         out
     }

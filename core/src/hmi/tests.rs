@@ -209,7 +209,10 @@ fn out_of_range_value_is_refused_with_a_message_and_a_beep() {
     b.keys(&[d(3)]);
     let a = b.number("500");
     assert_eq!(a, [Action::Beep(Beep::Error)]);
-    assert_eq!(b.hmi.toast(), Some("R: 0.50..100.00 mm"));
+    assert_eq!(
+        b.hmi.toast().map(|t| t.as_str()),
+        Some("R: 0.50..100.00 mm")
+    );
     let Page::Form(f) = b.hmi.page() else {
         panic!()
     };
@@ -365,7 +368,10 @@ fn abort_mid_drawing_holds_clears_then_lifts_the_pen_where_it_stopped() {
     assert_eq!(m.len(), 1);
     assert_eq!(m[0].target, [320, -960, 500]);
     assert_eq!(b.hmi.page(), &Page::Menu { sel: 0 });
-    assert_eq!(b.hmi.toast(), Some("Stopped X4.0 Y-12.0"));
+    assert_eq!(
+        b.hmi.toast().map(|t| t.as_str()),
+        Some("Stopped X4.0 Y-12.0")
+    );
 }
 
 #[test]
@@ -481,7 +487,7 @@ fn pen_toggle_origin_and_homing() {
     b.st.pos = [800, 1600, 500];
     let m = moves(&b.keys(&[d(7)]));
     assert_eq!(m[0].target, [800, 1600, 0]);
-    assert_eq!(b.hmi.toast(), Some("Pen down"));
+    assert_eq!(b.hmi.toast().map(|t| t.as_str()), Some("Pen down"));
     b.st.pos[2] = 0;
     assert_eq!(moves(&b.keys(&[d(7)]))[0].target, [800, 1600, 500]);
     b.st.pos[2] = 500;

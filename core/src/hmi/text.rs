@@ -132,7 +132,11 @@ pub(super) fn append(buf: &mut [u8], len: &mut u8, s: &[u8]) -> bool {
     let end = at + s.len();
     match buf.get_mut(at..end) {
         Some(dst) if end <= usize::from(u8::MAX) => {
-            dst.copy_from_slice(s);
+            // Byte by byte: `copy_from_slice` would keep a length-mismatch panic the
+            // compiler cannot rule out.
+            for (d, &b) in dst.iter_mut().zip(s) {
+                *d = b;
+            }
             *len = end as u8;
             true
         }

@@ -212,7 +212,7 @@ impl Screens {
             }
             self.key = Some(key);
         }
-        let toast = hmi.toast();
+        let toast = hmi.toast().map(|t| t.bytes());
         let p = hmi.pos_mm(st);
         let pen_down = hmi.pen_is_down(st);
         let state = st.state.name().as_bytes();

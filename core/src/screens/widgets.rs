@@ -124,14 +124,11 @@ pub fn title_bar(fb: &mut FrameBuffer, title: &[u8], right: &[u8]) {
 }
 
 /// The bottom line (rows 54..=63): a hint, or a message shown inverted.
-pub fn bottom_line(fb: &mut FrameBuffer, hint: &[u8], message: Option<&str>) {
+pub fn bottom_line(fb: &mut FrameBuffer, hint: &[u8], message: Option<&[u8]>) {
     let inverse = message.is_some();
     fb.fill(0, 54, 128, 1, false);
     fb.fill(0, 55, 3, 9, inverse);
-    let text = match message {
-        Some(m) => m.as_bytes(),
-        None => hint,
-    };
+    let text = message.unwrap_or(hint);
     put(fb, Cell::at(3, 55, 25).small().inverse(inverse), text);
     // 5x8 leaves the last row of the line free: keep it painted.
     fb.fill(0, 63, 128, 1, inverse);
