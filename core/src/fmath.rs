@@ -11,6 +11,8 @@
 //!   polynomials (classic Cephes-style coefficients), absolute error below 3e-7 for
 //!   |x| < 1e4 rad: far below one step of any drawing.
 //!
+//! And one integer function, `isqrt` (exact, digit by digit: no division, no float).
+//!
 //! No interrupt code uses floats at all; this is for planning and HMI tasks.
 
 use core::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
@@ -19,6 +21,27 @@ use core::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 #[inline]
 pub fn abs(x: f32) -> f32 {
     f32::from_bits(x.to_bits() & 0x7fff_ffff)
+}
+
+/// floor(sqrt(v)), exact: one bit of the root per step, by subtraction only (about
+/// 32 steps; for the rare roots far from any guess, and once per arc).
+pub fn isqrt(v: u64) -> u64 {
+    if v == 0 {
+        return 0;
+    }
+    let mut r = 0u64;
+    let mut bit = 1u64 << ((63 - v.leading_zeros()) & !1);
+    let mut rem = v;
+    while bit != 0 {
+        if rem >= r + bit {
+            rem -= r + bit;
+            r = (r >> 1) + bit;
+        } else {
+            r >>= 1;
+        }
+        bit >>= 2;
+    }
+    r
 }
 
 /// x rounded toward zero.

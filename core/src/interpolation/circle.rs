@@ -78,9 +78,8 @@ pub struct Circle {
     /// Per axis: its present direction, +-256.
     dir: [i32; 2],
     r2: i64,
-    /// Radius and its inverse, steps (f32: path positions and their bounds only).
+    /// Radius, steps (f32: path positions and their bounds only).
     radius: f32,
-    inv_r: f32,
     /// floor(sqrt(R^2 / 2)): the largest |major| of a DDA octant piece.
     diag: i32,
     ccw: bool,
@@ -135,27 +134,6 @@ fn small_angle(cross: f32, dot: f32) -> f32 {
     scale * x * series
 }
 
-/// floor(sqrt(v)) for v >= 0 (no division; runs once per arc).
-fn isqrt(v: i64) -> i64 {
-    if v <= 0 {
-        return 0;
-    }
-    let v = v as u64;
-    let mut r = 0u64;
-    let mut bit = 1u64 << ((63 - v.leading_zeros()) & !1);
-    let mut rem = v;
-    while bit != 0 {
-        if rem >= r + bit {
-            rem -= r + bit;
-            r = (r >> 1) + bit;
-        } else {
-            r >>= 1;
-        }
-        bit >>= 2;
-    }
-    r as i64
-}
-
 impl Circle {
     /// Arc from the integer `start` to the integer `target`, on the circle around
     /// `center` through `from` (both absolute, 1/256 step, i64 so that a whole-step
@@ -193,8 +171,7 @@ impl Circle {
             dir: [0; 2],
             r2,
             radius,
-            inv_r: 1.0 / radius.max(1.0),
-            diag: isqrt(r2 >> 1) as i32,
+            diag: crate::fmath::isqrt((r2 >> 1) as u64) as i32,
             ccw,
             method,
             piece: Piece {
@@ -577,18 +554,6 @@ impl Circle {
     /// position follows.
     pub fn major(&self) -> usize {
         self.piece.major
-    }
-
-    /// The fourth of [`Circle::run_bounds`] alone (what a cruise or a ramp of constant
-    /// acceleration needs).
-    pub fn fourth_bound(&self, k: u32) -> f32 {
-        let m = self.piece.major;
-        let m0 = crate::fmath::abs(self.p[m] as f32) * (1.0 / ONE as f32);
-        let u = ((m0 + k as f32) * self.inv_r).min(0.7072);
-        let u2 = u * u;
-        let c = 1.0 / (1.0 - u2);
-        let ir = self.inv_r;
-        (9.0 + 6.0 * u2) * u * (c * c) * (c * c) * (ir * ir * ir)
     }
 
     /// Path position `k` ticks ahead in the present DDA piece (k <= its run),

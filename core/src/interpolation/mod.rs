@@ -233,15 +233,6 @@ impl Interpolator {
         }
     }
 
-    /// The fourth of [`Interpolator::run_bounds`] alone (a cruise, or a ramp of
-    /// constant acceleration).
-    pub fn fourth_bound(&self, k: u32) -> f32 {
-        match self {
-            Interpolator::Circle(c) => c.fourth_bound(k),
-            _ => 0.0,
-        }
-    }
-
     /// Path length of the last tick (after [`Next::Tick`]), mm, from the axes'
     /// steps per mm.
     pub fn tick_len(&self, steps_per_mm: [f32; 2]) -> f32 {

@@ -38,23 +38,37 @@ pub struct IsrOut {
     pub reload: u32,
 }
 
-/// Position change of each 6-bit tick (steps in bits 0-2, negative directions in bits
-/// 3-5): X and Y packed as one 64-bit value `dx + dy * 2^32` (see [`Executor`]'s `xy`),
-/// Z apart. Two loads and three adds instead of three branches in the interrupt.
-static STEP_DELTA: [(i64, i32); 64] = {
-    const fn d(bits: usize, axis: usize) -> i64 {
-        if bits >> axis & 1 == 0 {
-            0
-        } else if bits >> (axis + 3) & 1 != 0 {
-            -1
-        } else {
-            1
-        }
+/// Position change of a 6-bit tick (steps in bits 0-2, negative directions in bits
+/// 3-5) along one axis.
+const fn step_delta(bits: usize, axis: usize) -> i8 {
+    if bits >> axis & 1 == 0 {
+        0
+    } else if bits >> (axis + 3) & 1 != 0 {
+        -1
+    } else {
+        1
     }
-    let mut t = [(0i64, 0i32); 64];
+}
+
+/// X and Y change of each tick, packed as one 64-bit value `dx + dy * 2^32` (see
+/// [`Executor`]'s `xy`); Z's in [`STEP_DZ`]. Two loads and three adds instead of three
+/// branches in the interrupt.
+static STEP_DXY: [i64; 64] = {
+    let mut t = [0i64; 64];
     let mut bits = 0;
     while bits < 64 {
-        t[bits] = (d(bits, 0) + (d(bits, 1) << 32), d(bits, 2) as i32);
+        t[bits] = step_delta(bits, 0) as i64 + ((step_delta(bits, 1) as i64) << 32);
+        bits += 1;
+    }
+    t
+};
+
+/// Z change of each tick.
+static STEP_DZ: [i8; 64] = {
+    let mut t = [0i8; 64];
+    let mut bits = 0;
+    while bits < 64 {
+        t[bits] = step_delta(bits, 2);
         bits += 1;
     }
     t
@@ -211,9 +225,9 @@ impl Executor {
         }
         // The pending command's wait is over: its steps happen now.
         let bits = self.pending;
-        let (dxy, dz) = STEP_DELTA[usize::from(bits & 0x3f)];
-        self.xy = self.xy.wrapping_add(dxy);
-        self.z = self.z.wrapping_add(dz);
+        let i = usize::from(bits & 0x3f);
+        self.xy = self.xy.wrapping_add(STEP_DXY[i]);
+        self.z = self.z.wrapping_add(i32::from(STEP_DZ[i]));
         let step = bits & 0b111;
         match q.pop() {
             Some(c) => self.load(c, step, bits),
@@ -475,10 +489,10 @@ mod tests {
             }
         }
         for bits in 0..64u8 {
-            let (dxy, dz) = STEP_DELTA[usize::from(bits)];
+            let i = usize::from(bits);
             let d = Tick(bits).deltas();
-            assert_eq!(unpack_xy(dxy), (i32::from(d[0]), i32::from(d[1])));
-            assert_eq!(dz, i32::from(d[2]));
+            assert_eq!(unpack_xy(STEP_DXY[i]), (i32::from(d[0]), i32::from(d[1])));
+            assert_eq!(STEP_DZ[i], d[2]);
         }
     }
 

@@ -16,10 +16,11 @@
 //! largest fourth derivative of the tick time, which follows from the profile's
 //! acceleration and jerk, the speed and the path's curvature (at most 256 ticks, never
 //! across a phase of the profile). Cruising along a line the time is linear, so one
-//! segment takes 256 ticks; ramps take shorter ones, and the first tick from rest its
-//! own. Every segment starts on the exact time of its first point, so errors never add
-//! up. The resulting accuracy is asserted by the tests below against the ideal profile
-//! computed in f64.
+//! segment takes up to 2048 ticks; ramps of constant acceleration are timed exactly
+//! in integers (`Ramp`), other ramps take shorter segments, and the first tick of a
+//! phase (or from rest) its own. Every segment starts on the exact time of its first
+//! point, so errors never add up. The resulting accuracy is asserted by the tests below
+//! against the ideal profile computed in f64.
 //!
 //! The profile is rebuilt from the present state when the planner's plan for the block
 //! changes (a new block behind it, an override), and for feed hold (brake to rest,
@@ -117,14 +118,15 @@ impl Default for Timing {
     }
 }
 
-/// A line's tick times under constant acceleration, in integers. With R = v / a in
-/// timer ticks (the time the speed would take to reach 0), R^2 = W grows or falls by
-/// 2 ds / a (ticks^2) per tick of length ds, and the tick's time is a fixed tick plus
-/// or minus R (the ramp's anchor: its start, or the profile's end for the last ramp). Each tick updates W by one addition and takes R = floor(sqrt W) from the
-/// last two differences of R (quadratic extrapolation) and one Newton correction with a
-/// 32-bit division, then checks it exactly (one 32x32 multiply each way). Near rest the
-/// guess can be far off: an f32 correction there. Every time is the exact one rounded
-/// down to the timer tick (up to f32 rounding of W's start and step).
+/// Tick times under constant acceleration, in integers. With R = v / a in timer ticks
+/// (the time the speed would take to reach 0), R^2 = W grows or falls by 2 ds / a
+/// (ticks^2) per tick of length ds, and the tick's time is a fixed tick plus or minus R
+/// (the ramp's anchor: its start, or the profile's end for the last ramp). Each tick
+/// updates W by one addition and takes R = floor(sqrt W) from the last two differences
+/// of R (quadratic extrapolation) and one Newton correction with a 32-bit division, then
+/// checks it exactly (one 32x32 multiply each way). Near rest the guess can be far off:
+/// the exact digit-by-digit root there. Every time is the exact one rounded down to the
+/// timer tick (up to f32 rounding of W's start and step).
 #[derive(Clone, Copy, Debug)]
 struct Ramp {
     /// W and its forward differences per tick (wrapping: the differences may be
@@ -144,7 +146,7 @@ struct Ramp {
 
 impl Ramp {
     /// floor(sqrt(w)) near the guess `g` (below 2^30): one Newton step from the guess
-    /// with a 32-bit division, checked exactly; far from it (near rest), from f32.
+    /// with a 32-bit division, checked exactly; far from it (near rest), digit by digit.
     #[inline(always)]
     fn root_near(w: u64, g: u32) -> u32 {
         if (w as i64) < 0 {
@@ -168,24 +170,7 @@ impl Ramp {
                 return r as u32 - 1;
             }
         }
-        Self::root_far(w)
-    }
-
-    /// floor(sqrt(w)) from the f32 root and one Newton step (also in f32), checked
-    /// exactly.
-    #[inline(never)]
-    fn root_far(w: u64) -> u32 {
-        let w = if (w as i64) < 0 { 0 } else { w };
-        let g = crate::fmath::sqrt(w as f32).max(1.0);
-        let e = w as i64 - ((g as u64) * (g as u64)) as i64;
-        let mut r = (g + e as f32 / (2.0 * g)).max(0.0) as u64;
-        while r * r > w {
-            r -= 1;
-        }
-        while (r + 1) * (r + 1) <= w {
-            r += 1;
-        }
-        r as u32
+        crate::fmath::isqrt(w) as u32
     }
 
     /// The next tick's time since the segment's start (32 bits, wrapping).
@@ -969,11 +954,7 @@ impl Active {
         let Some(mut p) = near else {
             return false;
         };
-        if let Some((seg, end)) = self
-            .ramp_segment(p, eps, hz, t_last)
-            .or_else(|| self.cruise_segment(p, hz, t_last))
-            .or_else(|| self.arc_cruise_segment(p, eps, hz, t_last))
-        {
+        if let Some((seg, end)) = self.ramp_segment(p, eps, hz, t_last) {
             // The cursor moves to the segment's last tick (its exact time).
             self.seg = seg;
             self.at = end;
@@ -1031,93 +1012,6 @@ impl Active {
         self.seg = Segment::poly(n, d, at.at, t_last);
         self.at = Cursor { rate: rate1, ..end };
         true
-    }
-
-    /// A line's ticks in the cruise (at most [`MAX_LINEAR`]): evenly spaced between the
-    /// exact times of the first and the last (the cursor before them may still lie in
-    /// the ramp before).
-    fn cruise_segment(&self, p: Phase, hz: f32, t_last: u64) -> Option<(Segment, Cursor)> {
-        let q = self.line_tick_q?;
-        if p != Phase::Cruise {
-            return None;
-        }
-        let at = self.at;
-        let n = (ticks_in(self.ends_q[1].saturating_sub(at.s), q) as u32)
-            .min(self.run_left)
-            .min(MAX_LINEAR);
-        if n == 0 {
-            return None;
-        }
-        let first = self.exact(p, at.s + q, hz).at.saturating_sub(at.at);
-        let end = Cursor {
-            rate: 1.0,
-            ..self.exact(p, at.s + q * u64::from(n), hz)
-        };
-        let d1 = match n {
-            1 => 0.0,
-            _ => end.at.saturating_sub(at.at + first) as f32 / (n - 1) as f32,
-        };
-        if d1.max(first as f32) > (MAX_WAIT / 2) as f32 {
-            return None;
-        }
-        let mut seg = Segment::poly(n, [fixed(d1), 0, 0], at.at, t_last);
-        // The first tick at its exact time: the sum starts a tick's interval before it.
-        if let Timing::Poly { acc, d1, .. } = &mut seg.timing {
-            *acc = (first << 32).wrapping_sub(*d1);
-        }
-        Some((seg, end))
-    }
-
-    /// A curve's ticks in the cruise (at most [`MAX_SEGMENT`]): the time is the path
-    /// position over the speed, a cubic in the tick count as far as the bound on the
-    /// path's fourth derivative allows. The first tick of the cruise is timed on its
-    /// own (the generic path), so the cursor lies in the cruise.
-    fn arc_cruise_segment(
-        &self,
-        p: Phase,
-        eps: f32,
-        hz: f32,
-        t_last: u64,
-    ) -> Option<(Segment, Cursor)> {
-        let at = self.at;
-        if p != Phase::Cruise || at.phase != p || self.line_tick_q.is_some() || !(at.v > 0.0) {
-            return None;
-        }
-        let end = self.ends_q[1];
-        // mm per run unit over the speed, in timer ticks: the run's rate times this is
-        // a tick's interval.
-        let q = self.scale * hz / at.v;
-        let to_end = from_q(end.saturating_sub(at.s)) * hz / (at.v * at.rate * q);
-        let mut n = self.run_left.min(MAX_SEGMENT).min(to_end as u32).max(1);
-        let b = self.interp.fourth_bound(n) * q;
-        let limit = 384.0 * eps * hz;
-        let nf = n as f32;
-        let mut x = b * nf * nf * nf * nf;
-        while n > 1 && !(x <= limit) {
-            x *= 1.0 / 16.0;
-            n /= 2;
-        }
-        let (rate1, s1) = loop {
-            let (s1, r) = self.ahead(n);
-            if s1 <= end {
-                break (r, s1);
-            }
-            if n == 1 {
-                return None;
-            }
-            n /= 2;
-        };
-        let (m0, m1) = (at.rate * q, rate1 * q);
-        if m0.max(m1) > (MAX_WAIT / 2) as f32 {
-            return None;
-        }
-        let end = Cursor {
-            rate: rate1,
-            ..self.exact(p, s1, hz)
-        };
-        let span = end.at.saturating_sub(at.at) as f32;
-        let d = hermite(n, span, m0, m1).map(fixed);
-        Some((Segment::poly(n, d, at.at, t_last), end))
     }
 
     /// Ticks in a ramp of constant acceleration (trapezoid), timed exactly
@@ -1182,7 +1076,7 @@ impl Active {
                 .min(MAX_SEGMENT)
                 .min(to_end.max(1.0) as u32)
                 .max(1);
-            let s4 = self.interp.fourth_bound(n) * self.scale;
+            let s4 = self.interp.run_bounds(n)[3] * self.scale;
             // Halving until the bound holds at the segment's slowest point (its start
             // when speeding up, its end when slowing down).
             loop {
