@@ -212,7 +212,7 @@ impl Controller {
     pub fn refresh_view<M: MotionControl>(&mut self, m: &M) -> hmi::Status {
         let pos = m.position();
         if pos != self.view_pos {
-            let sign = |a: usize| (i64::from(pos[a]) - i64::from(self.view_pos[a])).signum() as i8;
+            let sign = |a: usize| pos[a].cmp(&self.view_pos[a]) as i8;
             self.dir = [sign(X), sign(Y)];
             self.view_pos = pos;
         }
