@@ -1,6 +1,6 @@
 //! [`Text`]: a short string in a fixed array, `Copy` so that the pages and the whole
-//! [`super::Hmi`] are plain data: the firmware clones the HMI out of its lock on every
-//! LCD refresh, and a clone of plain data is a copy instead of a clone per field.
+//! [`super::Hmi`] are plain data: the firmware copies the HMI out of its lock on every
+//! LCD refresh, one block copy instead of a clone per field.
 
 use core::fmt;
 use core::ops::Deref;
