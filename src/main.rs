@@ -498,12 +498,14 @@ mod app {
         }
         let (screens, fb) = (&mut **cx.local.screens, &mut **cx.local.fb);
         let now = now_ms();
-        let (hmi, status) = cx.shared.core.lock(|c| {
+        // Bound by reference: the snapshot stays where the lock returned it, rather
+        // than being moved again into locals of this task's stack.
+        let (ref hmi, ref status) = cx.shared.core.lock(|c| {
             let (ctl, pipeline) = c.parts();
             let status = ctl.refresh_view(pipeline);
             (*ctl.hmi(), status)
         });
-        let _ = screens.render(&hmi, &status, now, fb);
+        let _ = screens.render(hmi, status, now, fb);
         if st7920::flush(fb, |bytes| spi.write(bytes)).is_err() {
             defmt::warn!("LCD write failed");
         }
