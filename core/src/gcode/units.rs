@@ -64,22 +64,6 @@ pub fn to_mm(steps: &StepPos, s: &Settings) -> [f32; AXES] {
     out
 }
 
-/// `steps_per_mm` as `m * 2^e` exactly (an `f32` is a 24-bit integer times a power of
-/// two), with `m` odd; None unless it lies in the settings' range (0.001 ..= 10,000,
-/// so that `m * 2^e < 2^14`, `e > -60`).
-fn exact_parts(steps_per_mm: f32) -> Option<(u32, i32)> {
-    if !(0.0009..=10_000.0).contains(&steps_per_mm) {
-        return None;
-    }
-    let bits = steps_per_mm.to_bits();
-    let mut m = (bits & 0x7F_FFFF) | 0x80_0000; // normal: not below 2^-126
-    let mut e = ((bits >> 23) & 0xFF) as i32 - 150;
-    let zeros = m.trailing_zeros();
-    m >>= zeros;
-    e += zeros as i32;
-    Some((m, e))
-}
-
 /// 10^6 = 15,625 * 2^6.
 const FIVES: u32 = 15_625;
 
@@ -87,42 +71,48 @@ const FIVES: u32 = 15_625;
 /// zero. None if the result lies outside +-[`MAX_STEPS`] (or the setting is out of its
 /// range).
 pub fn nm_to_steps(nm: Nm, steps_per_mm: f32) -> Option<i32> {
-    scaled_steps(nm, steps_per_mm, 0)
+    scaled_steps(nm, steps_per_mm, false)
 }
 
 /// [`nm_to_steps`] in 1/256 step (the exact line ends of [`crate::motion::Path::LineFine`]),
 /// within the same +-2^30 range.
 pub fn nm_to_fine_steps(nm: Nm, steps_per_mm: f32) -> Option<i32> {
-    scaled_steps(nm, steps_per_mm, 8)
+    scaled_steps(nm, steps_per_mm, true)
 }
 
-/// `nm * steps_per_mm * 2^scale_log2 / 10^6`, rounded half away from zero.
-fn scaled_steps(nm: Nm, steps_per_mm: f32, scale_log2: i32) -> Option<i32> {
-    let (m, e) = exact_parts(steps_per_mm)?;
-    // round(n * 2^k / 15,625) with n = |nm| * m (at most 63 + 24 bits) and
-    // k = e - 6 + scale, as floor((2n * 2^k + 15,625) / 31,250); for k < 0 the power
-    // of two is divided out first (floor of a floor is the floor of the quotient).
-    let n = u128::from(nm.unsigned_abs()) * u128::from(m);
-    let k = e - 6 + scale_log2;
-    let steps = if k >= 0 {
-        // k <= 15: spm < 2^14.
-        steps_quotient((n << (k + 1)) + u128::from(FIVES), 2 * FIVES)?
-    } else {
-        let j = k.unsigned_abs(); // <= 40: spm >= 0.0009
-        steps_quotient(((2 * n) + (u128::from(FIVES) << j)) >> (j + 1), FIVES)?
-    };
-    let steps = steps as i32;
+/// `steps_per_mm * 2^40`, exactly, from the `f32`'s bits (a 24-bit integer `m` times
+/// 2^(exponent - 150)); None unless it lies in the settings' range (0.001 ..= 10,000):
+/// then the exponent is at least 116, so the result is a whole number below 2^54.
+fn scale_2_40(steps_per_mm: f32) -> Option<u64> {
+    let bits = steps_per_mm.to_bits();
+    // Positive floats order as their bits; NaN and negative values fall outside.
+    if !(0.0009f32.to_bits()..=10_000f32.to_bits()).contains(&bits) {
+        return None;
+    }
+    let m = u64::from((bits & 0x7F_FFFF) | 0x80_0000); // normal: not below 2^-126
+    Some(m << ((bits >> 23) - 110))
+}
+
+/// `nm * steps_per_mm / 10^6` in whole steps, or in 1/256 step if `fine`, rounded half
+/// away from zero.
+fn scaled_steps(nm: Nm, steps_per_mm: f32, fine: bool) -> Option<i32> {
+    // n = |nm| * spm * 2^40 (below 2^117), so steps = round(n / (2^46 * 15,625)), as
+    // floor((floor(n / 2^45) + 15,625) / 31,250); fine steps shift by 8 less. Beyond
+    // 2^64 after the shift, the quotient is far beyond MAX_STEPS.
+    let n = u128::from(nm.unsigned_abs()) * u128::from(scale_2_40(steps_per_mm)?);
+    let n = u64::try_from(n >> 37).ok()?;
+    let n = if fine { n } else { n >> 8 };
+    let steps = steps_quotient(n + u64::from(FIVES), 2 * FIVES)? as i32;
     Some(if nm < 0 { -steps } else { steps })
 }
 
 /// floor(num / d) for `d` below 2^16, if below [`MAX_STEPS`]: then `num` is below
-/// 2^46 and two 32-bit hardware divides do it (a general long division of the u128
-/// was a fifth of a G-code line's CPU time on the M3).
-fn steps_quotient(num: u128, d: u32) -> Option<u32> {
-    if num >= u128::from(d) << 30 {
+/// 2^46 and two 32-bit hardware divides do it (a general long division of a wide
+/// integer was a fifth of a G-code line's CPU time on the M3).
+fn steps_quotient(num: u64, d: u32) -> Option<u32> {
+    if num >= u64::from(d) << 30 {
         return None;
     }
-    let num = num as u64; // below 2^46
     let high = (num >> 16) as u32; // below 2^30
     let low = ((high % d) << 16) | (num as u32 & 0xFFFF); // below 2^32: high % d < 2^16
     Some(((high / d) << 16) | (low / d))
@@ -132,16 +122,19 @@ fn steps_quotient(num: u128, d: u32) -> Option<u32> {
 /// is the truth). Rounded to the nearest nanometre: converting back gives the same
 /// steps (a step is at least 100 nm, $100-$102 being at most 10,000 steps/mm).
 pub fn steps_to_nm(steps: i32, steps_per_mm: f32) -> Nm {
-    let Some((m, e)) = exact_parts(steps_per_mm) else {
+    let Some(scale) = scale_2_40(steps_per_mm) else {
         return 0;
     };
-    // |steps| * 15,625 * 2^(6 - e) / m, the power of two on the side where it is
-    // positive: the divisor stays below 2^14.
+    // |steps| * 10^6 * 2^40 / scale = |steps| * 15,625 * 2^(46 - t) / m with scale =
+    // m * 2^t (m odd, below 2^24; t >= 6), the power of two on the side where it is
+    // positive (beyond 46, the divisor stays below 2^14).
+    let t = scale.trailing_zeros();
+    let m = (scale >> t) as u32;
     let num = u128::from(steps.unsigned_abs()) * u128::from(FIVES);
-    let (num, den) = if e <= 6 {
-        (num << (6 - e) as u32, m)
+    let (num, den) = if t <= 46 {
+        (num << (46 - t), m)
     } else {
-        (num, m << (e - 6) as u32)
+        (num, m << (t - 46))
     };
     let nm = round_div(num as i128, den) as Nm; // below 2^31 * 10^9
     if steps < 0 {
@@ -223,16 +216,77 @@ mod tests {
     proptest::proptest! {
         /// The two-divide quotient is the u128 one, and None exactly from MAX_STEPS.
         #[test]
-        fn steps_quotient_is_the_wide_division(num in 0u128..(1u128 << 50), big: bool, five: bool) {
+        fn steps_quotient_is_the_wide_division(num in 0u64..(1u64 << 50), big: bool, five: bool) {
             let d = if five { FIVES } else { 2 * FIVES };
-            let num = if big { num << 60 } else { num };
-            let want = num / u128::from(d);
+            let num = if big { num << 13 } else { num };
+            let want = num / u64::from(d);
             let got = steps_quotient(num, d);
-            if want < u128::from(MAX_STEPS) {
+            if want < u64::from(MAX_STEPS) {
                 proptest::prop_assert_eq!(got, Some(want as u32));
             } else {
                 proptest::prop_assert_eq!(got, None);
             }
+        }
+    }
+
+    /// round(|nm| * spm * scale / 10^6) from the f32's own bits with the u128 division,
+    /// signed, if below MAX_STEPS.
+    fn exact_steps(nm: Nm, spm: f32, fine: bool) -> Option<i32> {
+        let bits = spm.to_bits();
+        let m = u128::from((bits & 0x7F_FFFF) | 0x80_0000);
+        let e = ((bits >> 23) & 0xFF) as i32 - 150; // below -9 in the settings' range
+        let num = u128::from(nm.unsigned_abs()) * m * if fine { 256 } else { 1 };
+        let den = 1_000_000u128 << -e;
+        let q = (2 * num + den) / (2 * den);
+        let q = i32::try_from(q).ok().filter(|&q| q < MAX_STEPS as i32)?;
+        Some(if nm < 0 { -q } else { q })
+    }
+
+    proptest::proptest! {
+        /// Whole and fine steps are the exactly rounded product, over every length and
+        /// every steps/mm the settings allow.
+        #[test]
+        fn steps_are_the_rounded_exact_product(
+            nm: i64,
+            shift in 0u32..64,
+            spm_bits in 0.0009f32.to_bits()..=10_000f32.to_bits(),
+            fine: bool,
+        ) {
+            let (nm, spm) = (nm >> shift, f32::from_bits(spm_bits));
+            proptest::prop_assert_eq!(scaled_steps(nm, spm, fine), exact_steps(nm, spm, fine));
+        }
+
+        /// Steps back to the nearest nanometre, and to the same steps again.
+        #[test]
+        fn steps_return_to_the_nearest_nanometre(
+            steps in -(1i32 << 30) + 1..(1i32 << 30),
+            spm_bits in 0.0009f32.to_bits()..=10_000f32.to_bits(),
+        ) {
+            let spm = f32::from_bits(spm_bits);
+            let bits = spm.to_bits();
+            let m = u128::from((bits & 0x7F_FFFF) | 0x80_0000);
+            let e = ((bits >> 23) & 0xFF) as i32 - 150;
+            let num = u128::from(steps.unsigned_abs()) * 1_000_000 << -e;
+            let nm = ((2 * num + m) / (2 * m)) as Nm;
+            let nm = if steps < 0 { -nm } else { nm };
+            proptest::prop_assert_eq!(steps_to_nm(steps, spm), nm);
+            proptest::prop_assert_eq!(nm_to_steps(nm, spm), Some(steps));
+        }
+
+        /// The same next to the half-step boundaries, where whole steps/mm (and their
+        /// 64ths) put exact ties.
+        #[test]
+        fn half_steps_round_away_from_zero(
+            q in -(1i64 << 20)..(1i64 << 20),
+            spm_64ths in 1u32..=640_000,
+            delta in -2i64..=2,
+            fine: bool,
+        ) {
+            let spm = spm_64ths as f32 / 64.0;
+            let scale = if fine { 256.0 } else { 1.0 };
+            let tie = (q as f64 + 0.5) * 1e6 / (f64::from(spm) * scale);
+            let nm = tie.round() as i64 + delta;
+            proptest::prop_assert_eq!(scaled_steps(nm, spm, fine), exact_steps(nm, spm, fine));
         }
     }
 
