@@ -107,9 +107,10 @@ impl Homing {
         };
         match self.phase {
             Phase::Seek | Phase::Locate => {
+                let seeking = matches!(self.phase, Phase::Seek);
                 if pressed {
                     m.clear();
-                    let next = if self.phase == Phase::Seek {
+                    let next = if seeking {
                         After::Backoff
                     } else {
                         After::PullOff
@@ -120,7 +121,7 @@ impl Homing {
                     };
                     self.issued = false;
                 } else if !self.issued {
-                    let (dist, rate) = if self.phase == Phase::Seek {
+                    let (dist, rate) = if seeking {
                         (
                             SEEK_TRAVEL_FACTOR * s.max_travel(axis).max(s.homing_pulloff()),
                             s.homing_seek(),
@@ -145,8 +146,9 @@ impl Homing {
                 }
             }
             Phase::Backoff | Phase::PullOff => {
+                let backing_off = matches!(self.phase, Phase::Backoff);
                 if !self.issued {
-                    let rate = if self.phase == Phase::Backoff {
+                    let rate = if backing_off {
                         s.homing_seek()
                     } else {
                         s.homing_feed()
@@ -156,7 +158,7 @@ impl Homing {
                     if pressed {
                         return Progress::Failed(HomingError::PullOff);
                     }
-                    if self.phase == Phase::Backoff {
+                    if backing_off {
                         self.phase = Phase::Locate;
                         self.issued = false;
                     } else {
