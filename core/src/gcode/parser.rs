@@ -220,28 +220,26 @@ pub fn read_number(s: &[u8]) -> Result<(Value, usize), Status> {
         }
     }
     let mut whole: i64 = 0;
-    let mut frac: i64 = 0; // the first six decimals
-    let mut frac_digits = 0u32;
-    let mut round_up = false; // the seventh decimal is 5 or more
+    // The first seven decimals in units of 10^-7 (each digit at its place's weight;
+    // further digits weigh 0), so that the seventh rounds the sixth.
+    let mut frac = 0u32;
+    let mut place = 10_000_000u32;
     let mut any_digit = false;
     let mut seen_point = false;
     while let Some(&c) = s.get(i) {
         match c {
             b'0'..=b'9' => {
                 any_digit = true;
-                let digit = i64::from(c - b'0');
+                let digit = c - b'0';
                 if !seen_point {
-                    whole = whole
-                        .checked_mul(10)
-                        .and_then(|w| w.checked_add(digit))
-                        .filter(|&w| w < i64::MAX / ONE)
-                        .ok_or(Status::BadNumberFormat)?;
-                } else if frac_digits < 6 {
-                    frac = frac * 10 + digit;
-                    frac_digits += 1;
-                } else if frac_digits == 6 {
-                    round_up = digit >= 5;
-                    frac_digits += 1;
+                    // No overflow: `whole` stays below i64::MAX / ONE (< 2^44).
+                    whole = whole * 10 + i64::from(digit);
+                    if whole >= i64::MAX / ONE {
+                        return Err(Status::BadNumberFormat);
+                    }
+                } else {
+                    place /= 10;
+                    frac += u32::from(digit) * place;
                 }
             }
             b'.' if !seen_point => seen_point = true,
@@ -252,10 +250,7 @@ pub fn read_number(s: &[u8]) -> Result<(Value, usize), Status> {
     if !any_digit {
         return Err(Status::BadNumberFormat);
     }
-    for _ in frac_digits..6 {
-        frac *= 10;
-    }
-    let v = whole * ONE + frac + i64::from(round_up);
+    let v = whole * ONE + i64::from((frac + 5) / 10);
     Ok((Value(if negative { -v } else { v }), i))
 }
 
@@ -310,6 +305,39 @@ mod tests {
         assert_eq!(v(3_000_000).whole(), Some(3));
         assert_eq!(v(3_000_001).whole(), None);
         assert_eq!((v(-2_500_000).round(), v(2_499_999).round()), (-3, 2));
+    }
+
+    proptest::proptest! {
+        /// Any sign, whole part and decimals: the whole part and six decimals exactly,
+        /// the seventh decimal rounding, the rest dropped; up to the first byte that
+        /// is not part of the number.
+        #[test]
+        fn numbers_are_exact_millionths(
+            sign in 0usize..3,
+            whole in proptest::option::of(0u64..9_223_372_036_854),
+            decimals in proptest::option::of("[0-9]{0,12}"),
+        ) {
+            let mut text = ["", "-", "+"][sign].to_string();
+            if let Some(w) = whole {
+                text += &w.to_string();
+            }
+            if let Some(d) = &decimals {
+                text += ".";
+                text += d;
+            }
+            let used = text.len();
+            text += "X1";
+            let digits = decimals.as_deref().unwrap_or("");
+            let want = if whole.is_none() && digits.is_empty() {
+                Err(Status::BadNumberFormat)
+            } else {
+                let six: std::string::String = digits.chars().chain("000000".chars()).take(6).collect();
+                let seventh = digits.as_bytes().get(6).is_some_and(|&d| d >= b'5');
+                let v = whole.unwrap_or(0) as i64 * ONE + six.parse::<i64>().unwrap() + i64::from(seventh);
+                Ok((Value(if sign == 1 { -v } else { v }), used))
+            };
+            proptest::prop_assert_eq!(read_number(text.as_bytes()), want);
+        }
     }
 
     #[test]
