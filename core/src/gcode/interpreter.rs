@@ -440,10 +440,9 @@ impl Interpreter {
                 };
                 // L20: the offset that makes the current position read as the words,
                 // past G92 and the tool length offset.
-                let others = [g92[0], g92[1], g92[2].saturating_add(tlo)];
                 let from = match l {
                     2 => None,
-                    20 => Some(&others),
+                    20 => Some((&g92, tlo)),
                     _ => return Err(Status::UnsupportedCommand.into()),
                 };
                 if let Some(sys) = coords.wcs.get_mut(idx) {
@@ -476,8 +475,7 @@ impl Interpreter {
                     return Err(Status::NoAxisWords.into());
                 }
                 let w = coords.wcs.get(usize::from(modal.wcs)).unwrap_or(&[0; AXES]);
-                let others = [w[0], w[1], w[2].saturating_add(tlo)];
-                set_axes(&mut g92, axes, &words, &pos, Some(&others));
+                set_axes(&mut g92, axes, &words, &pos, Some((w, tlo)));
             }
             Some(NonModal::ResetG92) => g92 = [0; AXES],
             Some(NonModal::Absolute) | None => {}
@@ -724,21 +722,21 @@ fn pen_move(
 }
 
 /// G10 / G92: each named axis of `dst` becomes its word (`from` None), or the offset
-/// that makes the current position read as the word (`pos - from - word`).
-fn set_axes(dst: &mut NmPos, axes: u8, words: &NmPos, pos: &NmPos, from: Option<&NmPos>) {
-    let zero = [0; AXES];
-    let base = from.unwrap_or(&zero);
-    for (k, ((d, &v), (&p, &b))) in dst
-        .iter_mut()
-        .zip(words.iter())
-        .zip(pos.iter().zip(base.iter()))
-        .enumerate()
-    {
+/// that makes the current position read as the word past the other offsets `from`
+/// (an offset and the tool length offset on Z): `pos - other - word`.
+fn set_axes(dst: &mut NmPos, axes: u8, words: &NmPos, pos: &NmPos, from: Option<(&NmPos, Nm)>) {
+    for (k, ((d, &v), &p)) in dst.iter_mut().zip(words.iter()).zip(pos.iter()).enumerate() {
         if axes >> k & 1 != 0 {
-            *d = if from.is_some() {
-                p.saturating_sub(b).saturating_sub(v)
-            } else {
-                v
+            *d = match from {
+                Some((offset, tlo)) => {
+                    // The other offsets on this axis (the tool length offset is Z's).
+                    let mut other = offset.get(k).copied().unwrap_or(0);
+                    if k == 2 {
+                        other = other.saturating_add(tlo);
+                    }
+                    p.saturating_sub(other).saturating_sub(v)
+                }
+                None => v,
             };
         }
     }
@@ -1096,6 +1094,17 @@ mod tests {
         assert_eq!(ms[1].target, [15 * 80, 25 * 80, 0]);
         run(&mut it, &s, "G90 G10 L20 P0 X0").unwrap();
         assert_eq!(it.work_offset()[0], 15_000_000);
+        // G92 and G10 L20 on Z look past the other offsets and the tool length offset.
+        let mut it = Interpreter::new();
+        run(&mut it, &s, "G10 L2 P1 Z5").unwrap();
+        run(&mut it, &s, "G43.1 Z2").unwrap();
+        run(&mut it, &s, "G0 Z0").unwrap();
+        assert_eq!(it.position()[2], 7_000_000);
+        run(&mut it, &s, "G92 Z1").unwrap();
+        assert_eq!(it.g92()[2], -1_000_000, "7 - (5 + 2) - 1");
+        run(&mut it, &s, "G10 L20 P1 Z0").unwrap();
+        assert_eq!(it.coords().wcs[0][2], 6_000_000, "7 - (-1 + 2) - 0");
+        assert_eq!(it.work_offset()[2], 7_000_000, "Z reads 0");
     }
 
     #[test]
