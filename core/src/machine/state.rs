@@ -510,21 +510,12 @@ impl Machine {
     }
 
     fn raise<M: MotionControl>(&mut self, a: Alarm, m: &mut M) {
-        match a {
-            Alarm::SoftLimit => {
-                // Position stays exact: decelerate, then drop the rest.
-                if m.is_idle() {
-                    m.clear();
-                    self.resync(m);
-                } else {
-                    m.hold();
-                    self.stop_then_clear = true;
-                }
-            }
-            _ => {
-                m.clear();
-                self.resync(m);
-            }
+        if a == Alarm::SoftLimit && !m.is_idle() {
+            // Position stays exact: decelerate, then drop the rest.
+            m.hold();
+            self.stop_then_clear = true;
+        } else {
+            self.drop_queue(m);
         }
         if a.critical() {
             self.needs_reset = true;
@@ -549,6 +540,13 @@ impl Machine {
         self.hold_by_pin = false;
         self.job = Job::default();
         self.paused = false;
+    }
+
+    /// Stop at once and drop everything queued; the interpreter continues from where
+    /// the machine stopped.
+    fn drop_queue<M: MotionControl>(&mut self, m: &mut M) {
+        m.clear();
+        self.resync(m);
     }
 
     /// The interpreter continues from where the machine is. Commands still waiting
@@ -837,13 +835,11 @@ impl Machine {
         let at_rest = !m.is_moving();
         if self.stop_then_clear && at_rest {
             self.stop_then_clear = false;
-            m.clear();
-            self.resync(m);
+            self.drop_queue(m);
         }
         if self.jog_cancel && at_rest {
             self.jog_cancel = false;
-            m.clear();
-            self.resync(m);
+            self.drop_queue(m);
             self.jogging = false;
         }
         if self.jogging && m.is_idle() && !self.jog_cancel {
