@@ -5,7 +5,7 @@
 
 use super::parser::Block;
 use super::units::{
-    mm_to_nm, nm_to_fine_steps, nm_to_mm, nm_to_steps, value_to_nm, Nm, NmPos, Reach,
+    mm_between, mm_to_nm, nm_to_fine_steps, nm_to_mm, nm_to_steps, value_to_nm, Nm, NmPos, Reach,
 };
 use super::Status;
 use crate::fmath;
@@ -48,8 +48,8 @@ pub(super) fn arc_geometry(
     ccw: bool,
     inches: bool,
 ) -> Result<ArcGeom, Status> {
-    let dx = nm_to_mm(target[0].saturating_sub(start[0]));
-    let dy = nm_to_mm(target[1].saturating_sub(start[1]));
+    let dx = mm_between(start[0], target[0]);
+    let dy = mm_between(start[1], target[1]);
     // The centre relative to the start, in nanometres.
     let (ci, cj) = if let Some(r) = b.take(b'R') {
         let r = nm_to_mm(value_to_nm(r, inches));
@@ -90,8 +90,8 @@ pub(super) fn arc_geometry(
     let (ci, cj) = (nm_to_mm(ci), nm_to_mm(cj));
     let r_start = fmath::hypot(ci, cj);
     let r_end = fmath::hypot(
-        nm_to_mm(target[0].saturating_sub(center[0])),
-        nm_to_mm(target[1].saturating_sub(center[1])),
+        mm_between(center[0], target[0]),
+        mm_between(center[1], target[1]),
     );
     let dr = fmath::abs(r_end - r_start);
     if !r_start.is_finite()
@@ -103,8 +103,8 @@ pub(super) fn arc_geometry(
     }
     let a0 = fmath::atan2(-cj, -ci);
     let a1 = fmath::atan2(
-        nm_to_mm(target[1].saturating_sub(center[1])),
-        nm_to_mm(target[0].saturating_sub(center[0])),
+        mm_between(center[1], target[1]),
+        mm_between(center[0], target[0]),
     );
     let same_point = dx == 0.0 && dy == 0.0;
     let sweep = if same_point {
@@ -191,9 +191,7 @@ pub(super) fn arc_extremes(
             } else {
                 0.0
             };
-            let z = start[2].saturating_add(mm_to_nm(
-                nm_to_mm(target[2].saturating_sub(start[2])) * frac,
-            ));
+            let z = start[2].saturating_add(mm_to_nm(mm_between(start[2], target[2]) * frac));
             pts.add(
                 &[
                     g.center[0].saturating_add(mm_to_nm(g.radius * cs)),

@@ -17,8 +17,8 @@ use super::modal::{
 };
 use super::parser::{Block, Value, ONE};
 use super::units::{
-    mm_to_nm, nm_to_fine_steps, nm_to_mm, to_nm, to_steps, value_to_ms, value_to_nm, within_travel,
-    Nm, NmPos, Reach,
+    mm_between, mm_to_nm, nm_to_fine_steps, to_nm, to_steps, value_to_ms, value_to_nm,
+    within_travel, Nm, NmPos, Reach,
 };
 use super::Status;
 use crate::decimal::{put_int, round_i32, Sink};
@@ -494,7 +494,7 @@ impl Interpreter {
                     }
                     let g = arc_geometry(&mut b, &pos, &target, ccw, modal.inches)?;
                     arc_extremes(&g, &pos, &target, ccw, &mut planned, s);
-                    let rise = nm_to_mm(target[2].saturating_sub(pos[2]));
+                    let rise = mm_between(pos[2], target[2]);
                     let arc_len = fmath::hypot(g.radius * g.sweep, rise);
                     (arc_len, arc_path(&g, &pos, ccw, s))
                 } else {
@@ -746,7 +746,7 @@ fn set_axes(dst: &mut NmPos, axes: u8, words: &NmPos, pos: &NmPos, from: Option<
 fn path_length(a: &NmPos, b: &NmPos) -> f32 {
     let mut sum = 0.0;
     for (x, y) in a.iter().zip(b.iter()) {
-        let d = nm_to_mm(y.saturating_sub(*x));
+        let d = mm_between(*x, *y);
         sum += d * d;
     }
     fmath::sqrt(sum)
@@ -755,6 +755,7 @@ fn path_length(a: &NmPos, b: &NmPos) -> f32 {
 mod tests {
     use super::*;
     use crate::gcode::parser::clean_line;
+    use crate::gcode::units::nm_to_mm;
 
     fn run(it: &mut Interpreter, s: &Settings, line: &str) -> Result<Outcome, Reject> {
         let mut buf: heapless::Vec<u8, 128> = heapless::Vec::new();

@@ -49,6 +49,13 @@ pub fn nm_to_mm(nm: Nm) -> f32 {
     nm as f32 / NM_PER_MM as f32
 }
 
+/// The distance from `a` to `b` in mm (saturating), for geometry. Out of line: one copy
+/// of the saturating difference for the arc geometry's and the lengths' many uses.
+#[inline(never)]
+pub fn mm_between(a: Nm, b: Nm) -> f32 {
+    nm_to_mm(b.saturating_sub(a))
+}
+
 /// A distance in mm to steps for what never accumulates (homing's search and
 /// pull-off distances), rounded half away from zero (saturating).
 pub fn mm_to_steps(mm: f32, steps_per_mm: f32) -> i32 {
