@@ -535,10 +535,15 @@ impl Machine {
         self.homing = None;
         self.jogging = false;
         self.jog_cancel = false;
+        self.release_holds();
+        self.job = Job::default();
+    }
+
+    /// Forget every reason to hold (`!`, the pin, the door, M0).
+    fn release_holds(&mut self) {
         self.hold = false;
         self.door = false;
         self.hold_by_pin = false;
-        self.job = Job::default();
         self.paused = false;
     }
 
@@ -655,10 +660,7 @@ impl Machine {
             return;
         }
         if self.hold || self.paused || self.door || m.is_holding() {
-            self.hold = false;
-            self.door = false;
-            self.hold_by_pin = false;
-            self.paused = false;
+            self.release_holds();
             m.resume();
         }
     }
@@ -717,10 +719,7 @@ impl Machine {
     /// Stop cleanly and forget the rest (the keypad's abort): decelerate to rest, then
     /// drop the queue; the position stays exact.
     pub fn stop_and_clear<M: MotionControl>(&mut self, m: &mut M) {
-        self.paused = false;
-        self.hold = false;
-        self.door = false;
-        self.hold_by_pin = false;
+        self.release_holds();
         self.job = Job::default();
         if m.is_idle() && !m.is_holding() {
             return;
