@@ -645,12 +645,7 @@ impl Machine {
             return;
         }
         self.door = true;
-        if self.jogging {
-            self.jog_cancel(m);
-        } else if !m.is_idle() {
-            self.hold = true;
-            m.hold();
-        }
+        self.feed_hold(m);
     }
 
     /// `~` or the cycle-start pin.
