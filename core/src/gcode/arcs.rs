@@ -186,11 +186,8 @@ pub(super) fn arc_extremes(
             positive_sweep(g.start_angle - angle)
         };
         if from_start <= g.sweep || g.sweep >= TAU - 1e-6 {
-            let frac = if g.sweep > 0.0 {
-                (from_start / g.sweep).min(1.0)
-            } else {
-                0.0
-            };
+            // The sweep is positive (`positive_sweep`, or a full turn).
+            let frac = (from_start / g.sweep).min(1.0);
             let z = start[2].saturating_add(mm_to_nm(mm_between(start[2], target[2]) * frac));
             pts.add(
                 &[
