@@ -207,17 +207,22 @@ impl Hmi {
 
     /// Can a new motion command start now? Otherwise shows why.
     fn ready(&mut self, st: &Status, out: &mut Actions) -> bool {
-        match st.state {
-            MachineState::Alarm(_) => {
-                self.error("Alarm", "Unlock or home first", out);
-                false
-            }
-            MachineState::Idle if st.queue_empty => true,
-            _ => {
-                self.error("Busy", "Machine is moving", out);
-                false
-            }
-        }
+        let settled = st.state == MachineState::Idle && st.queue_empty;
+        self.allowed(st, !settled, out)
+    }
+
+    /// Unless the machine is in alarm or `busy`, true; otherwise shows why (the alarm
+    /// first) and false. The one place that words a refused command.
+    fn allowed(&mut self, st: &Status, busy: bool, out: &mut Actions) -> bool {
+        let (title, text) = if matches!(st.state, MachineState::Alarm(_)) {
+            ("Alarm", "Unlock or home first")
+        } else if busy {
+            ("Busy", "Machine is moving")
+        } else {
+            return true;
+        };
+        self.error(title, text, out);
+        false
     }
 
     /// Handle one keypad event.
@@ -358,11 +363,8 @@ impl Hmi {
         };
         match item {
             MenuItem::Jog => {
-                if matches!(st.state, MachineState::Alarm(_)) {
-                    self.error("Alarm", "Unlock or home first", out);
-                } else if st.state.moving() && st.state != MachineState::Jog {
-                    self.error("Busy", "Machine is moving", out);
-                } else {
+                let busy = st.state.moving() && st.state != MachineState::Jog;
+                if self.allowed(st, busy, out) {
                     self.page = Page::Jog(JogPage {
                         active: None,
                         last_dir: [0, 0],
@@ -440,8 +442,7 @@ impl Hmi {
         match (ev.kind, ev.key) {
             (KeyKind::Press, k) if k.jog_dir().is_some() => {
                 if let Some(dir) = k.jog_dir() {
-                    if matches!(st.state, MachineState::Alarm(_)) {
-                        self.error("Alarm", "Unlock or home first", out);
+                    if !self.allowed(st, false, out) {
                         return;
                     }
                     if jog.active.is_some() {
