@@ -439,25 +439,20 @@ impl Hmi {
             return;
         };
         let mut jog = *jog;
+        // Jogging (re)starts in this direction at the current speed, after the match.
+        let mut start = None;
         match (ev.kind, ev.key) {
             (KeyKind::Press, k) if k.jog_dir().is_some() => {
-                if let Some(dir) = k.jog_dir() {
-                    if !self.allowed(st, false, out) {
-                        return;
-                    }
-                    if jog.active.is_some() {
-                        push(out, Action::JogStop);
-                    }
-                    push(
-                        out,
-                        Action::JogStart {
-                            dir,
-                            feed_mm_min: self.jog_speed(),
-                        },
-                    );
-                    jog.active = Some((k, dir));
-                    jog.last_dir = dir;
+                let Some(dir) = k.jog_dir() else { return };
+                if !self.allowed(st, false, out) {
+                    return;
                 }
+                if jog.active.is_some() {
+                    push(out, Action::JogStop);
+                }
+                jog.active = Some((k, dir));
+                jog.last_dir = dir;
+                start = Some(dir);
             }
             (KeyKind::Release, k) if jog.active.map(|(held, _)| held) == Some(k) => {
                 push(out, Action::JogStop);
@@ -470,15 +465,7 @@ impl Hmi {
                 } else {
                     self.jog_speed.saturating_sub(1)
                 };
-                if let Some((_, dir)) = jog.active {
-                    push(
-                        out,
-                        Action::JogStart {
-                            dir,
-                            feed_mm_min: self.jog_speed(),
-                        },
-                    );
-                }
+                start = jog.active.map(|(_, dir)| dir);
             }
             (KeyKind::Press, Key::Digit(5)) => {
                 if jog.active.is_none() && self.ready(st, out) {
@@ -496,6 +483,10 @@ impl Hmi {
                 return;
             }
             _ => {}
+        }
+        if let Some(dir) = start {
+            let feed_mm_min = self.jog_speed();
+            push(out, Action::JogStart { dir, feed_mm_min });
         }
         self.page = Page::Jog(jog);
     }
