@@ -197,11 +197,8 @@ impl Hmi {
         });
     }
 
-    fn error(&mut self, title: &'static str, text: &str, out: &mut Actions) {
-        self.page = Page::Error {
-            title,
-            text: Text::truncated(text),
-        };
+    fn error(&mut self, title: &'static str, text: &'static str, out: &mut Actions) {
+        self.page = Page::Error { title, text };
         push(out, Action::Beep(Beep::Error));
     }
 

@@ -339,7 +339,7 @@ impl Screens {
             Page::Error { title, text } => {
                 title_bar(fb, title.as_bytes(), b"!");
                 if fresh {
-                    put(fb, Cell::at(0, 21, 21), text.bytes());
+                    put(fb, Cell::at(0, 21, 21), text.as_bytes());
                 }
                 bottom_line(fb, b"any key: back to menu", None);
                 return;
