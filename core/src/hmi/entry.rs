@@ -81,12 +81,18 @@ impl Field {
     /// What the field shows: the text being typed, or the committed value.
     pub fn display(&self) -> Text<12> {
         let mut s = Text::new();
-        if self.editing {
-            s.push_text(&self.text);
-        } else {
-            s.push_fixed(self.value, self.decimals());
-        }
+        self.push_display(&mut s);
         s
+    }
+
+    /// Append [`Field::display`] to `out` (the form page's line, built in place);
+    /// false if it does not fit.
+    pub fn push_display<const N: usize>(&self, out: &mut Text<N>) -> bool {
+        if self.editing {
+            out.push_text(&self.text)
+        } else {
+            out.push_fixed(self.value, self.decimals())
+        }
     }
 
     /// Apply a key press (or a backspace repeat, `repeat = true`).

@@ -262,7 +262,7 @@ impl Screens {
                     let (y, current) = (row_y(i), i == form.cur);
                     put(fb, Cell::at(0, y, 6), f.label().as_bytes());
                     l.clear();
-                    l.push_text(&f.display());
+                    f.push_display(&mut l);
                     l.push_str(if current && f.editing() { "_" } else { " " });
                     put(fb, Cell::at(36, y, 9).inverse(current).right(), l.bytes());
                     put(fb, Cell::at(93, y + 1, 7).small(), f.unit().as_bytes());
