@@ -28,7 +28,7 @@ pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
 use crate::fmath;
 use crate::keypad::{Key, KeyEvent, KeyKind};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
-use entry::{FieldInput, Form, FormMemory, DEFAULT_PARAMS};
+use entry::{FieldInput, Form, FormKind, FormMemory, DEFAULT_PARAMS};
 use job::Job;
 use text::Text;
 
@@ -288,14 +288,10 @@ impl Hmi {
                 if press {
                     match ev.key {
                         Key::Enter => self.start(job, st, now_ms, &mut out),
-                        Key::Back => {
-                            self.page = match form {
-                                Some(kind) => {
-                                    Page::Form(Form::new(kind, &self.params[kind.index()]))
-                                }
-                                None => Page::Menu { sel: 0 },
-                            }
-                        }
+                        Key::Back => match form {
+                            Some(kind) => self.open_form(kind),
+                            None => self.page = Page::Menu { sel: 0 },
+                        },
                         _ => {}
                     }
                 }
@@ -368,9 +364,7 @@ impl Hmi {
                     });
                 }
             }
-            MenuItem::Draw(kind) => {
-                self.page = Page::Form(Form::new(kind, &self.params[kind.index()]));
-            }
+            MenuItem::Draw(kind) => self.open_form(kind),
             MenuItem::Pen => {
                 if self.ready(st, out) {
                     self.toggle_pen(st, now_ms, out);
@@ -383,6 +377,11 @@ impl Hmi {
             MenuItem::Machine => self.page = Page::Machine { sel: 0 },
             MenuItem::Status => self.page = Page::Status,
         }
+    }
+
+    /// The parameter form of `kind`, filled with the values last drawn (or the defaults).
+    fn open_form(&mut self, kind: FormKind) {
+        self.page = Page::Form(Form::new(kind, &self.params[kind.index()]));
     }
 
     fn machine(&mut self, i: usize, st: &Status, now_ms: u32, out: &mut Actions) {
