@@ -78,15 +78,20 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
     fmath::hypot(dx, dy)
 }
 
-/// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
-fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
-    let z = fixed::round_checked(z_mm * steps_per_mm)?;
-    Some(Action::Queue(Move {
+/// Queue a rapid pen-axis move to `z_mm` where X and Y stand; false (and nothing
+/// queued) if out of step range.
+fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32, out: &mut Actions) -> bool {
+    let Some(z) = fixed::round_checked(z_mm * steps_per_mm) else {
+        return false;
+    };
+    let lift = Move {
         target: [st.pos[X], st.pos[Y], z],
         path: Path::Line,
         feed: Feed::Rapid,
         line: 0,
-    }))
+    };
+    push(out, Action::Queue(lift));
+    true
 }
 
 /// Out of line: one copy of the list's capacity check and slot write for the dozens of
@@ -423,10 +428,9 @@ impl Hmi {
         } else {
             self.cfg.pen_up_mm
         };
-        let Some(lift) = pen_move(st, z_mm, self.cfg.steps_per_mm[Z]) else {
+        if !pen_move(st, z_mm, self.cfg.steps_per_mm[Z], out) {
             return;
-        };
-        push(out, lift);
+        }
         self.say(if down { "Pen down" } else { "Pen up" }, now_ms);
     }
 
@@ -684,9 +688,7 @@ impl Hmi {
         if let Some(draws) = stopped_at {
             // Stopped cleanly: lift the pen where it stands, report the position.
             if draws {
-                if let Some(lift) = pen_move(st, self.cfg.pen_up_mm, spmm[Z]) {
-                    push(&mut out, lift);
-                }
+                pen_move(st, self.cfg.pen_up_mm, spmm[Z], &mut out);
             }
             let p = self.pos_mm(st);
             let mut msg = Text::new();
