@@ -253,10 +253,7 @@ impl Controller {
         if !host.port_open {
             self.protocol.discard_output();
         }
-        let mut out = [0u8; TX_PER_TICK];
-        let room = host.tx.free().min(out.len());
-        let n = out.get_mut(..room).map_or(0, |b| self.usb_tx(b));
-        host.tx.push(out.get(..n).unwrap_or(&[]));
+        host.tx.push_from(TX_PER_TICK, || self.protocol.pop_output());
         // The planner took new settings when they changed (at rest, before the next
         // line); what is left is the HMI, the outputs and the save.
         let changed = self.protocol.machine_mut().take_settings_dirty();

@@ -16,7 +16,7 @@
 //! It is driven from one context, the protocol tick: [`crate::controller::Controller`]
 //! boots it from the settings store, hands it the host's bytes ([`Protocol::take_byte`]
 //! on each byte the host ring holds, until one is refused), polls it, moves its output
-//! to the host ring ([`Protocol::read_output`]), gives it the input levels
+//! to the host ring ([`Protocol::pop_output`]), gives it the input levels
 //! ([`Protocol::set_inputs`]) and saves what its `take_*_dirty` report at rest. The
 //! e-stop interrupt stops the step engine itself before the tick learns of it through
 //! `set_inputs`. docs/architecture.md shows the whole path.
@@ -167,11 +167,17 @@ impl Protocol {
         core::mem::take(&mut self.startup_dirty)
     }
 
+    /// Take the oldest byte of the responses (the controller moves them straight
+    /// into the host ring).
+    pub fn pop_output(&mut self) -> Option<u8> {
+        self.out.pop_front()
+    }
+
     /// Take up to `buf.len()` bytes of responses.
     pub fn read_output(&mut self, buf: &mut [u8]) -> usize {
         let mut n = 0;
         for slot in buf.iter_mut() {
-            match self.out.pop_front() {
+            match self.pop_output() {
                 Some(b) => {
                     *slot = b;
                     n += 1;
