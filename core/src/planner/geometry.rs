@@ -39,7 +39,7 @@ pub enum GeometryError {
 }
 
 /// Per-axis limits along direction `u` (unit, mm space): (accel, speed).
-fn axis_limits(cfg: &PlannerConfig, u: [f32; AXES]) -> (f32, f32) {
+pub(super) fn axis_limits(cfg: &PlannerConfig, u: [f32; AXES]) -> (f32, f32) {
     let mut acc = f32::INFINITY;
     let mut spd = f32::INFINITY;
     for (ax, &c) in cfg.axes.iter().zip(u.iter()) {
@@ -52,7 +52,8 @@ fn axis_limits(cfg: &PlannerConfig, u: [f32; AXES]) -> (f32, f32) {
     (acc, spd)
 }
 
-fn normalize(v: [f32; AXES]) -> [f32; AXES] {
+/// `v` scaled to unit length (zero stays zero).
+pub(super) fn normalize(v: [f32; AXES]) -> [f32; AXES] {
     let n = crate::fmath::sqrt(v.iter().map(|c| c * c).sum());
     if n > 0.0 {
         [v[0] / n, v[1] / n, v[2] / n]

@@ -564,18 +564,9 @@ pub fn junction_speed(cfg: &PlannerConfig, u1: [f32; AXES], u2: [f32; AXES], sha
     }
     // theta: angle between the reversed incoming and the outgoing direction.
     let sin_half = crate::fmath::sqrt(0.5 * (1.0 + dot));
-    let mut j = [0.0f32; AXES];
-    for (k, v) in j.iter_mut().enumerate() {
-        *v = u2[k] - u1[k];
-    }
-    let n = crate::fmath::sqrt(j.iter().map(|c| c * c).sum());
-    let mut a = f32::INFINITY;
-    for (ax, c) in cfg.axes.iter().zip(j.iter()) {
-        let c = (c / n).abs();
-        if c > 1e-9 {
-            a = a.min(ax.accel / c);
-        }
-    }
+    // The per-axis acceleration limit along the change of direction, as along a move.
+    let change = core::array::from_fn(|k| u2[k] - u1[k]);
+    let (a, _) = geometry::axis_limits(cfg, geometry::normalize(change));
     let a = shape.effective_accel(a);
     crate::fmath::sqrt(a * cfg.junction_deviation * sin_half / (1.0 - sin_half))
 }
