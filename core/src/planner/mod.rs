@@ -566,7 +566,7 @@ pub fn junction_speed(cfg: &PlannerConfig, u1: [f32; AXES], u2: [f32; AXES], sha
     let sin_half = crate::fmath::sqrt(0.5 * (1.0 + dot));
     // The per-axis acceleration limit along the change of direction, as along a move.
     let change = core::array::from_fn(|k| u2[k] - u1[k]);
-    let (a, _) = geometry::axis_limits(cfg, geometry::normalize(change));
+    let (a, _) = geometry::axis_limits(cfg, geometry::length_and_unit(change).1);
     let a = shape.effective_accel(a);
     crate::fmath::sqrt(a * cfg.junction_deviation * sin_half / (1.0 - sin_half))
 }
