@@ -245,12 +245,15 @@ impl Protocol {
 
     /// Nothing to do until a byte arrives or an input changes: the machine is settled
     /// ([`Machine::settled`]), no complete line, report, listing, startup line or
-    /// delayed `ok` waits, and every reply has been read out.
+    /// delayed `ok` waits, and every reply has been read out. A poll frames every
+    /// received byte of a partial line into the line at once, so bytes wait in the
+    /// receive buffer only behind a complete line or until the next poll: an empty
+    /// buffer is the test (and, before a poll, the cautious answer).
     pub fn settled<M: MotionControl>(&self, m: &M) -> bool {
         self.machine.settled(m)
             && self.out.is_empty()
             && !self.line_ready
-            && !self.rx.iter().any(|&b| b == b'\n' || b == b'\r')
+            && self.rx.is_empty()
             && self.status_requested == 0
             && self.listing.is_none()
             && self.startup_next.is_none()
