@@ -15,7 +15,7 @@
 //! Kept small on purpose: no decision of the protocol, the planner or the HMI is made
 //! here, only their wiring and the shell's own rules (what to save, and when).
 
-use crate::decimal::{put_int, Sink};
+use crate::decimal::{put_int, round_i32, Sink};
 use crate::gcode::STARTUP_LINES;
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
 use crate::keypad::{Keypad, KeypadConfig};
@@ -418,7 +418,7 @@ impl Controller {
                     }
                 }
                 body.put(b"F");
-                put_int(&mut body, crate::fmath::round(feed_mm_min) as i32);
+                put_int(&mut body, round_i32(feed_mm_min));
                 machine.jog(&body, m).is_err()
             }
             Action::JogStop => {
