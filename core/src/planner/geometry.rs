@@ -157,7 +157,7 @@ fn shape_of(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometry, 
             }
             let dx = mv.target[X].wrapping_sub(start[X]) as f32;
             let dir = dx.signum();
-            let periods = (omega.abs() * dx.abs() / TAU) as u32;
+            let periods = crate::decimal::to_u32(omega.abs() * dx.abs() / TAU);
             let curv = (amp * omega * omega).abs();
             let c = Curve {
                 sx: sp(cfg, X),
