@@ -2,7 +2,7 @@
 //! as output room frees up), `$G`, `$I`, `$C`, `$X`, `$H`, `$RST=`, `$J=`, `$Nx=` and
 //! `$n=v`, and the startup lines run after a reset.
 
-use super::report::axis_triplet;
+use super::report::{axis_triplet, report_scale};
 use super::{OutWriter, Protocol, RX_BUFFER_SIZE, VERSION};
 use crate::decimal::{put_int, write_fixed3, Sink};
 use crate::gcode::units::nm_to_mm;
@@ -270,6 +270,7 @@ impl Protocol {
             out: &mut self.out,
             truncated: &mut self.truncated,
         };
+        let scale = report_scale(machine.settings());
         let next = match l {
             Listing::Settings(i) => {
                 machine.settings().write_entry(i, &mut w)?;
@@ -285,9 +286,7 @@ impl Protocol {
                     8 => Some(interpreter.g92()),
                     9 => {
                         w.put(b"[TLO:");
-                        let inches = machine.settings().report_inches();
-                        let tlo = nm_to_mm(interpreter.tool_length_offset());
-                        write_fixed3(&mut w, if inches { tlo / 25.4 } else { tlo });
+                        write_fixed3(&mut w, nm_to_mm(interpreter.tool_length_offset()) / scale);
                         w.put(b"]");
                         None
                     }
@@ -307,11 +306,6 @@ impl Protocol {
                         d.copy_from_slice(code);
                     }
                     w.put(&head);
-                    let scale = if machine.settings().report_inches() {
-                        25.4
-                    } else {
-                        1.0
-                    };
                     axis_triplet(&mut w, &v.map(nm_to_mm), scale);
                     w.put(b"]");
                 }

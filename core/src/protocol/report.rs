@@ -9,6 +9,17 @@ use crate::gcode::Status;
 use crate::machine::state::Event;
 use crate::machine::{MotionControl, RunState};
 use crate::motion::AXES;
+use crate::settings::Settings;
+
+/// Millimetres per reported unit: 25.4 when reports are in inches ($13), else 1
+/// (dividing by it is then exact).
+pub(super) fn report_scale(settings: &Settings) -> f32 {
+    if settings.report_inches() {
+        25.4
+    } else {
+        1.0
+    }
+}
 
 pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
     for (i, x) in v.iter().enumerate() {
@@ -82,7 +93,7 @@ impl Protocol {
             RunState::Check => b"<Check",
         });
         let settings = machine.settings();
-        let scale = if settings.report_inches() { 25.4 } else { 1.0 };
+        let scale = report_scale(settings);
         let mask = settings.status_mask();
         let mut pos = machine.machine_position(m);
         let wco_nm = machine.interpreter().work_offset();
