@@ -30,6 +30,14 @@ pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
     }
 }
 
+/// A status field of two whole numbers: `head`, `a`, a comma, `b`.
+fn field_pair(w: &mut dyn Sink, head: &[u8], a: i32, b: i32) {
+    w.put(head);
+    put_int(w, a);
+    w.put(b",");
+    put_int(w, b);
+}
+
 impl Protocol {
     /// The welcome line (power-up, reset, leaving check mode, the host opening the
     /// port), followed, as in Grbl, by how to unlock whenever the machine starts in
@@ -108,24 +116,17 @@ impl Protocol {
         }
         axis_triplet(&mut w, &pos, scale);
         if mask & 2 != 0 {
-            w.put(b"|Bf:");
-            put_int(&mut w, m.free() as i32);
-            w.put(b",");
-            put_int(&mut w, (RX_BUFFER_SIZE - self.rx.len()) as i32);
+            let rx_free = RX_BUFFER_SIZE - self.rx.len();
+            field_pair(&mut w, b"|Bf:", m.free() as i32, rx_free as i32);
         }
-        w.put(b"|FS:");
-        put_int(&mut w, round_i32(m.speed() / scale));
-        w.put(b",");
         // The pen is the spindle: report S while it is down.
         let interpreter = machine.interpreter();
-        put_int(
-            &mut w,
-            if interpreter.modal().pen_down {
-                round_i32(interpreter.spindle())
-            } else {
-                0
-            },
-        );
+        let spindle = if interpreter.modal().pen_down {
+            round_i32(interpreter.spindle())
+        } else {
+            0
+        };
+        field_pair(&mut w, b"|FS:", round_i32(m.speed() / scale), spindle);
         let inputs = machine.inputs();
         let pins = [
             inputs.limits[0],
@@ -150,10 +151,7 @@ impl Protocol {
         }
         if machine.take_overrides_changed() || reports % REFRESH_EVERY == 6 {
             let (fo, ro) = machine.overrides();
-            w.put(b"|Ov:");
-            put_int(&mut w, i32::from(fo));
-            w.put(b",");
-            put_int(&mut w, i32::from(ro));
+            field_pair(&mut w, b"|Ov:", i32::from(fo), i32::from(ro));
             w.put(b",100");
         }
         w.put(b">\r\n");
