@@ -253,7 +253,8 @@ impl Controller {
         if !host.port_open {
             self.protocol.discard_output();
         }
-        host.tx.push_from(TX_PER_TICK, || self.protocol.pop_output());
+        host.tx
+            .push_from(TX_PER_TICK, || self.protocol.pop_output());
         // The planner took new settings when they changed (at rest, before the next
         // line); what is left is the HMI, the outputs and the save.
         let changed = self.protocol.machine_mut().take_settings_dirty();

@@ -363,8 +363,8 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     }
 
     fn set_overrides(&mut self, feed_percent: u8, rapid_percent: u8) {
-        self.planner.set_feed_override(u16::from(feed_percent));
-        self.planner.set_rapid_override(u16::from(rapid_percent));
+        self.planner
+            .set_overrides(u16::from(feed_percent), u16::from(rapid_percent));
     }
 
     fn position(&self) -> StepPos {

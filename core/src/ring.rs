@@ -329,12 +329,20 @@ mod tests {
         let (mut tx, mut rx) = ring.split();
         let mut source: VecDeque<u8> = b"abcdefghijkl".iter().copied().collect();
         assert_eq!(tx.push_from(3, || source.pop_front()), 3, "at most max");
-        assert_eq!(tx.push_from(64, || source.pop_front()), 5, "at most the room");
+        assert_eq!(
+            tx.push_from(64, || source.pop_front()),
+            5,
+            "at most the room"
+        );
         assert_eq!(source.len(), 4, "nothing taken that did not fit");
         let mut out = [0u8; 6];
         assert_eq!(rx.pop_into(&mut out), 6);
         assert_eq!(&out, b"abcdef");
-        assert_eq!(tx.push_from(64, || source.pop_front()), 4, "until the source is dry");
+        assert_eq!(
+            tx.push_from(64, || source.pop_front()),
+            4,
+            "until the source is dry"
+        );
         let mut all = [0u8; 8];
         assert_eq!(rx.pop_into(&mut all), 6);
         assert_eq!(&all[..6], b"ghijkl");

@@ -340,14 +340,11 @@ impl Planner {
         b.max_speed(self.feed_override, self.rapid_override)
     }
 
-    /// Feed override in percent (Grbl: 10..200).
-    pub fn set_feed_override(&mut self, percent: u16) {
-        self.feed_override = f32::from(percent.clamp(10, 200)) / 100.0;
-        self.replan(Reverse::All);
-    }
-    /// Rapid override in percent (Grbl: 25, 50, 100).
-    pub fn set_rapid_override(&mut self, percent: u16) {
-        self.rapid_override = f32::from(percent.clamp(1, 100)) / 100.0;
+    /// Feed and rapid overrides in percent (Grbl: feed 10..200, rapid 25, 50, 100),
+    /// set together: one replan for both.
+    pub fn set_overrides(&mut self, feed_percent: u16, rapid_percent: u16) {
+        self.feed_override = f32::from(feed_percent.clamp(10, 200)) / 100.0;
+        self.rapid_override = f32::from(rapid_percent.clamp(1, 100)) / 100.0;
         self.replan(Reverse::All);
     }
     pub fn feed_override(&self) -> u16 {
@@ -648,6 +645,7 @@ mod tests {
                 ..PlannerConfig::default()
             };
             let mut p = Planner::new(cfg, [0; 3]);
+            let mut overrides = [100u16, 100];
             let mut at = [0i32; 2];
             let mut dir = [1i32, 0];
             for (op, dx, dy, k) in ops {
@@ -683,8 +681,14 @@ mod tests {
                         continue;
                     }
                     5 => p.set_head_cap(f32::from(k) / 4.0),
-                    6 => p.set_feed_override(k),
-                    _ => p.set_rapid_override(k / 2),
+                    6 => {
+                        overrides[0] = k;
+                        p.set_overrides(overrides[0], overrides[1]);
+                    }
+                    _ => {
+                        overrides[1] = k / 2;
+                        p.set_overrides(overrides[0], overrides[1]);
+                    }
                 }
                 if p.generation() == generation {
                     continue; // nothing replanned
@@ -752,11 +756,11 @@ mod tests {
         p.push(&line(8000, 0, 3000.0)).unwrap();
         let b = *p.blocks.front().unwrap();
         assert!((p.max_speed(&b) - 50.0).abs() < 1e-4);
-        p.set_feed_override(150);
+        p.set_overrides(150, 100);
         assert!((p.max_speed(&b) - 75.0).abs() < 1e-4);
-        p.set_feed_override(200);
+        p.set_overrides(200, 100);
         assert!((p.max_speed(&b) - 5000.0 / 60.0).abs() < 1e-3);
-        p.set_feed_override(10);
+        p.set_overrides(10, 100);
         assert!((p.max_speed(&b) - 5.0).abs() < 1e-4);
         assert_eq!(p.feed_override(), 10);
         // A rapid runs at the axis limit (5000 mm/min); its override scales that.
@@ -768,7 +772,7 @@ mod tests {
         .unwrap();
         let b = *p.blocks.front().unwrap();
         assert!((p.max_speed(&b) - 5000.0 / 60.0).abs() < 1e-3);
-        p.set_rapid_override(25);
+        p.set_overrides(100, 25);
         assert!((p.max_speed(&b) - 1250.0 / 60.0).abs() < 1e-3);
     }
 
