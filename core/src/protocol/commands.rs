@@ -92,15 +92,9 @@ fn store_startup(
         [d @ b'0'..=b'9', b'=', line @ ..] => (usize::from(d - b'0'), line),
         _ => return Err(Status::InvalidStatement),
     };
-    let slot_exists = idx < STARTUP_LINES;
-    if !slot_exists {
-        return Err(Status::InvalidStatement);
-    }
+    let slot = startup.get_mut(idx).ok_or(Status::InvalidStatement)?;
     machine.validate(line)?;
-    let line = startup_line(line).ok_or(Status::InvalidStatement)?;
-    if let Some(slot) = startup.get_mut(idx) {
-        *slot = line;
-    }
+    *slot = startup_line(line).ok_or(Status::InvalidStatement)?;
     Ok(())
 }
 
