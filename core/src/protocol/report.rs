@@ -45,7 +45,7 @@ impl Protocol {
     pub(super) fn welcome(&mut self) {
         self.say(&[b"\r\n", WELCOME.as_bytes()]);
         if self.machine.needs_unlock() {
-            self.say(&[b"[MSG:'$H'|'$X' to unlock]"]);
+            self.notify("'$H'|'$X' to unlock");
         }
     }
 
@@ -60,8 +60,8 @@ impl Protocol {
         while let Some(e) = self.machine.next_event() {
             match e {
                 Event::Alarm(a) => self.say_n(b"ALARM:", a.code(), b""),
-                Event::Msg(t) => self.say(&[b"[MSG:", t.as_bytes(), b"]"]),
-                Event::JobStarted => self.say(&[b"[MSG:Job started]"]),
+                Event::Msg(t) => self.notify(t),
+                Event::JobStarted => self.notify("Job started"),
                 Event::JobFinished { ms, moves } => {
                     let mut w = self.w();
                     w.put(b"[MSG:Job finished: ");
