@@ -253,7 +253,8 @@ impl Protocol {
         let next = self.listing_line(l);
         self.listing = next;
         if next.is_none() {
-            self.say(&[b"ok"]);
+            // The listing's end answers its line.
+            self.respond(Ok(()));
         }
     }
 

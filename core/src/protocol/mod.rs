@@ -208,12 +208,11 @@ impl Protocol {
         w.put(b"\r\n");
     }
 
-    /// A line of `head`, a number and `tail`.
-    fn say_n(&mut self, head: &[u8], n: u8, tail: &[u8]) {
+    /// A line of `head` and a number (`error:N`, `ALARM:N`).
+    fn say_n(&mut self, head: &[u8], n: u8) {
         let mut w = self.w();
         w.put(head);
         put_int(&mut w, i32::from(n));
-        w.put(tail);
         w.put(b"\r\n");
     }
 

@@ -52,14 +52,14 @@ impl Protocol {
     pub(super) fn respond(&mut self, r: Result<(), Status>) {
         match r {
             Ok(()) => self.say(&[b"ok"]),
-            Err(e) => self.say_n(b"error:", e.code(), b""),
+            Err(e) => self.say_n(b"error:", e.code()),
         }
     }
 
     pub(super) fn flush_events(&mut self) {
         while let Some(e) = self.machine.next_event() {
             match e {
-                Event::Alarm(a) => self.say_n(b"ALARM:", a.code(), b""),
+                Event::Alarm(a) => self.say_n(b"ALARM:", a.code()),
                 Event::Msg(t) => self.notify(t),
                 Event::JobStarted => self.notify("Job started"),
                 Event::JobFinished { ms, moves } => {
