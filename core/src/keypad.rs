@@ -98,17 +98,13 @@ impl Key {
     /// The jog direction of this key as (dx, dy) signs, if it is one of the eight
     /// keys around `5`. +Y is "up" on the pad (away from the user).
     pub fn jog_dir(self) -> Option<[i8; 2]> {
-        match self {
-            Key::Digit(1) => Some([-1, 1]),
-            Key::Digit(2) => Some([0, 1]),
-            Key::Digit(3) => Some([1, 1]),
-            Key::Digit(4) => Some([-1, 0]),
-            Key::Digit(6) => Some([1, 0]),
-            Key::Digit(7) => Some([-1, -1]),
-            Key::Digit(8) => Some([0, -1]),
-            Key::Digit(9) => Some([1, -1]),
-            _ => None,
-        }
+        // Digits 1-9 as laid out on the pad: columns -X, 0, +X; rows +Y, 0, -Y.
+        let Key::Digit(d @ 1..=9) = self else {
+            return None;
+        };
+        let (col, row) = ((d - 1) % 3, (d - 1) / 3);
+        let dir = [col as i8 - 1, 1 - row as i8];
+        (dir != [0, 0]).then_some(dir)
     }
 }
 
@@ -475,5 +471,28 @@ mod tests {
             }
         }
         assert_eq!(dirs.len(), 8);
+        // Each key moves the way it sits around 5 on the pad (the module's keymap).
+        let around_five = [
+            (1, [-1, 1]),
+            (2, [0, 1]),
+            (3, [1, 1]),
+            (4, [-1, 0]),
+            (6, [1, 0]),
+            (7, [-1, -1]),
+            (8, [0, -1]),
+            (9, [1, -1]),
+        ];
+        for (d, dir) in around_five {
+            assert_eq!(Key::Digit(d).jog_dir(), Some(dir), "key {d}");
+        }
+        for key in [
+            Key::Digit(0),
+            Key::Digit(5),
+            Key::Digit(10),
+            Key::Up,
+            Key::Sign,
+        ] {
+            assert_eq!(key.jog_dir(), None, "{key:?}");
+        }
     }
 }

@@ -81,12 +81,18 @@ impl Field {
     /// What the field shows: the text being typed, or the committed value.
     pub fn display(&self) -> Text<12> {
         let mut s = Text::new();
-        if self.editing {
-            s.push_text(&self.text);
-        } else {
-            s.push_fixed(self.value, self.decimals());
-        }
+        self.push_display(&mut s);
         s
+    }
+
+    /// Append [`Field::display`] to `out` (the form page's line, built in place);
+    /// false if it does not fit.
+    pub fn push_display<const N: usize>(&self, out: &mut Text<N>) -> bool {
+        if self.editing {
+            out.push_text(&self.text)
+        } else {
+            out.push_fixed(self.value, self.decimals())
+        }
     }
 
     /// Apply a key press (or a backspace repeat, `repeat = true`).
@@ -94,12 +100,9 @@ impl Field {
         match key {
             Key::Digit(d) if !repeat && d <= 9 => {
                 self.start_editing();
-                // Byte-wise (the text is ASCII): str's pattern search costs far more.
-                let t = self.text.as_bytes();
-                let full = t
-                    .iter()
-                    .position(|&c| c == b'.')
-                    .is_some_and(|dot| t.len() - dot > usize::from(self.decimals()));
+                let full = self
+                    .typed_decimals()
+                    .is_some_and(|n| n >= usize::from(self.decimals()));
                 if !full {
                     self.text.push_ascii(b'0' + d);
                 }
@@ -107,8 +110,8 @@ impl Field {
             }
             Key::Dot if !repeat => {
                 self.start_editing();
-                let t = self.text.as_bytes();
-                if self.decimals() > 0 && !t.contains(&b'.') {
+                if self.decimals() > 0 && self.typed_decimals().is_none() {
+                    let t = self.text.as_bytes();
                     if t.is_empty() || t == b"-" {
                         self.text.push_ascii(b'0');
                     }
@@ -150,6 +153,16 @@ impl Field {
             }
             _ => FieldInput::Ignored,
         }
+    }
+
+    /// How many digits follow the decimal point typed so far; None before the point.
+    /// One byte-wise scan for the digit and the point keys (the text is ASCII; str's
+    /// pattern search and slice `contains`, which goes through `memchr`, cost more).
+    fn typed_decimals(&self) -> Option<usize> {
+        let t = self.text.as_bytes();
+        t.iter()
+            .position(|&c| c == b'.')
+            .map(|dot| t.len() - dot - 1)
     }
 
     fn start_editing(&mut self) {

@@ -28,7 +28,7 @@ pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
 use crate::fmath;
 use crate::keypad::{Key, KeyEvent, KeyKind};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
-use entry::{FieldInput, Form, FormMemory, DEFAULT_PARAMS};
+use entry::{FieldInput, Form, FormKind, FormMemory, DEFAULT_PARAMS};
 use job::Job;
 use text::Text;
 
@@ -78,15 +78,20 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
     fmath::hypot(dx, dy)
 }
 
-/// A rapid pen-axis move to `z_mm` where X and Y stand; None if out of step range.
-fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32) -> Option<Action> {
-    let z = fixed::round_checked(z_mm * steps_per_mm)?;
-    Some(Action::Queue(Move {
+/// Queue a rapid pen-axis move to `z_mm` where X and Y stand; false (and nothing
+/// queued) if out of step range.
+fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32, out: &mut Actions) -> bool {
+    let Some(z) = fixed::round_checked(z_mm * steps_per_mm) else {
+        return false;
+    };
+    let lift = Move {
         target: [st.pos[X], st.pos[Y], z],
         path: Path::Line,
         feed: Feed::Rapid,
         line: 0,
-    }))
+    };
+    push(out, Action::Queue(lift));
+    true
 }
 
 /// Out of line: one copy of the list's capacity check and slot write for the dozens of
@@ -197,27 +202,29 @@ impl Hmi {
         });
     }
 
-    fn error(&mut self, title: &'static str, text: &str, out: &mut Actions) {
-        self.page = Page::Error {
-            title,
-            text: Text::truncated(text),
-        };
+    fn error(&mut self, title: &'static str, text: &'static str, out: &mut Actions) {
+        self.page = Page::Error { title, text };
         push(out, Action::Beep(Beep::Error));
     }
 
     /// Can a new motion command start now? Otherwise shows why.
     fn ready(&mut self, st: &Status, out: &mut Actions) -> bool {
-        match st.state {
-            MachineState::Alarm(_) => {
-                self.error("Alarm", "Unlock or home first", out);
-                false
-            }
-            MachineState::Idle if st.queue_empty => true,
-            _ => {
-                self.error("Busy", "Machine is moving", out);
-                false
-            }
-        }
+        let settled = st.state == MachineState::Idle && st.queue_empty;
+        self.allowed(st, !settled, out)
+    }
+
+    /// Unless the machine is in alarm or `busy`, true; otherwise shows why (the alarm
+    /// first) and false. The one place that words a refused command.
+    fn allowed(&mut self, st: &Status, busy: bool, out: &mut Actions) -> bool {
+        let (title, text) = if matches!(st.state, MachineState::Alarm(_)) {
+            ("Alarm", "Unlock or home first")
+        } else if busy {
+            ("Busy", "Machine is moving")
+        } else {
+            return true;
+        };
+        self.error(title, text, out);
+        false
     }
 
     /// Handle one keypad event.
@@ -286,14 +293,10 @@ impl Hmi {
                 if press {
                     match ev.key {
                         Key::Enter => self.start(job, st, now_ms, &mut out),
-                        Key::Back => {
-                            self.page = match form {
-                                Some(kind) => {
-                                    Page::Form(Form::new(kind, &self.params[kind.index()]))
-                                }
-                                None => Page::Menu { sel: 0 },
-                            }
-                        }
+                        Key::Back => match form {
+                            Some(kind) => self.open_form(kind),
+                            None => self.page = Page::Menu { sel: 0 },
+                        },
                         _ => {}
                     }
                 }
@@ -358,20 +361,15 @@ impl Hmi {
         };
         match item {
             MenuItem::Jog => {
-                if matches!(st.state, MachineState::Alarm(_)) {
-                    self.error("Alarm", "Unlock or home first", out);
-                } else if st.state.moving() && st.state != MachineState::Jog {
-                    self.error("Busy", "Machine is moving", out);
-                } else {
+                let busy = st.state.moving() && st.state != MachineState::Jog;
+                if self.allowed(st, busy, out) {
                     self.page = Page::Jog(JogPage {
                         active: None,
                         last_dir: [0, 0],
                     });
                 }
             }
-            MenuItem::Draw(kind) => {
-                self.page = Page::Form(Form::new(kind, &self.params[kind.index()]));
-            }
+            MenuItem::Draw(kind) => self.open_form(kind),
             MenuItem::Pen => {
                 if self.ready(st, out) {
                     self.toggle_pen(st, now_ms, out);
@@ -384,6 +382,11 @@ impl Hmi {
             MenuItem::Machine => self.page = Page::Machine { sel: 0 },
             MenuItem::Status => self.page = Page::Status,
         }
+    }
+
+    /// The parameter form of `kind`, filled with the values last drawn (or the defaults).
+    fn open_form(&mut self, kind: FormKind) {
+        self.page = Page::Form(Form::new(kind, &self.params[kind.index()]));
     }
 
     fn machine(&mut self, i: usize, st: &Status, now_ms: u32, out: &mut Actions) {
@@ -425,10 +428,9 @@ impl Hmi {
         } else {
             self.cfg.pen_up_mm
         };
-        let Some(lift) = pen_move(st, z_mm, self.cfg.steps_per_mm[Z]) else {
+        if !pen_move(st, z_mm, self.cfg.steps_per_mm[Z], out) {
             return;
-        };
-        push(out, lift);
+        }
         self.say(if down { "Pen down" } else { "Pen up" }, now_ms);
     }
 
@@ -437,26 +439,20 @@ impl Hmi {
             return;
         };
         let mut jog = *jog;
+        // Jogging (re)starts in this direction at the current speed, after the match.
+        let mut start = None;
         match (ev.kind, ev.key) {
             (KeyKind::Press, k) if k.jog_dir().is_some() => {
-                if let Some(dir) = k.jog_dir() {
-                    if matches!(st.state, MachineState::Alarm(_)) {
-                        self.error("Alarm", "Unlock or home first", out);
-                        return;
-                    }
-                    if jog.active.is_some() {
-                        push(out, Action::JogStop);
-                    }
-                    push(
-                        out,
-                        Action::JogStart {
-                            dir,
-                            feed_mm_min: self.jog_speed(),
-                        },
-                    );
-                    jog.active = Some((k, dir));
-                    jog.last_dir = dir;
+                let Some(dir) = k.jog_dir() else { return };
+                if !self.allowed(st, false, out) {
+                    return;
                 }
+                if jog.active.is_some() {
+                    push(out, Action::JogStop);
+                }
+                jog.active = Some((k, dir));
+                jog.last_dir = dir;
+                start = Some(dir);
             }
             (KeyKind::Release, k) if jog.active.map(|(held, _)| held) == Some(k) => {
                 push(out, Action::JogStop);
@@ -469,15 +465,7 @@ impl Hmi {
                 } else {
                     self.jog_speed.saturating_sub(1)
                 };
-                if let Some((_, dir)) = jog.active {
-                    push(
-                        out,
-                        Action::JogStart {
-                            dir,
-                            feed_mm_min: self.jog_speed(),
-                        },
-                    );
-                }
+                start = jog.active.map(|(_, dir)| dir);
             }
             (KeyKind::Press, Key::Digit(5)) => {
                 if jog.active.is_none() && self.ready(st, out) {
@@ -495,6 +483,10 @@ impl Hmi {
                 return;
             }
             _ => {}
+        }
+        if let Some(dir) = start {
+            let feed_mm_min = self.jog_speed();
+            push(out, Action::JogStart { dir, feed_mm_min });
         }
         self.page = Page::Jog(jog);
     }
@@ -696,9 +688,7 @@ impl Hmi {
         if let Some(draws) = stopped_at {
             // Stopped cleanly: lift the pen where it stands, report the position.
             if draws {
-                if let Some(lift) = pen_move(st, self.cfg.pen_up_mm, spmm[Z]) {
-                    push(&mut out, lift);
-                }
+                pen_move(st, self.cfg.pen_up_mm, spmm[Z], &mut out);
             }
             let p = self.pos_mm(st);
             let mut msg = Text::new();

@@ -81,9 +81,10 @@ pub enum Page {
     Alarm {
         code: u8,
     },
+    /// A refused command: one of the HMI's fixed messages.
     Error {
         title: &'static str,
-        text: Text<28>,
+        text: &'static str,
     },
 }
 

@@ -262,7 +262,7 @@ impl Screens {
                     let (y, current) = (row_y(i), i == form.cur);
                     put(fb, Cell::at(0, y, 6), f.label().as_bytes());
                     l.clear();
-                    l.push_text(&f.display());
+                    f.push_display(&mut l);
                     l.push_str(if current && f.editing() { "_" } else { " " });
                     put(fb, Cell::at(36, y, 9).inverse(current).right(), l.bytes());
                     put(fb, Cell::at(93, y + 1, 7).small(), f.unit().as_bytes());
@@ -339,7 +339,7 @@ impl Screens {
             Page::Error { title, text } => {
                 title_bar(fb, title.as_bytes(), b"!");
                 if fresh {
-                    put(fb, Cell::at(0, 21, 21), text.bytes());
+                    put(fb, Cell::at(0, 21, 21), text.as_bytes());
                 }
                 bottom_line(fb, b"any key: back to menu", None);
                 return;

@@ -87,8 +87,8 @@ pub fn put(fb: &mut FrameBuffer, c: Cell, s: &[u8]) {
         .skip(if right { count - n } else { 0 });
     let mut x = x0;
     for slot in 0..chars {
-        let blank = if right { slot < pad } else { slot >= n };
-        let lead = if blank {
+        // Right-aligned: the padding first; otherwise it follows the text.
+        let lead = if right && slot < pad {
             b' '
         } else {
             text.next().unwrap_or(b' ')
