@@ -15,7 +15,7 @@
 //! Kept small on purpose: no decision of the protocol, the planner or the HMI is made
 //! here, only their wiring and the shell's own rules (what to save, and when).
 
-use crate::decimal::{put_int, Sink};
+use crate::decimal::{put_int, round_i32, Sink};
 use crate::gcode::STARTUP_LINES;
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
 use crate::keypad::{Keypad, KeypadConfig};
@@ -253,10 +253,8 @@ impl Controller {
         if !host.port_open {
             self.protocol.discard_output();
         }
-        let mut out = [0u8; TX_PER_TICK];
-        let room = host.tx.free().min(out.len());
-        let n = out.get_mut(..room).map_or(0, |b| self.usb_tx(b));
-        host.tx.push(out.get(..n).unwrap_or(&[]));
+        host.tx
+            .push_from(TX_PER_TICK, || self.protocol.pop_output());
         // The planner took new settings when they changed (at rest, before the next
         // line); what is left is the HMI, the outputs and the save.
         let changed = self.protocol.machine_mut().take_settings_dirty();
@@ -421,7 +419,7 @@ impl Controller {
                     }
                 }
                 body.put(b"F");
-                put_int(&mut body, crate::fmath::round(feed_mm_min) as i32);
+                put_int(&mut body, round_i32(feed_mm_min));
                 machine.jog(&body, m).is_err()
             }
             Action::JogStop => {

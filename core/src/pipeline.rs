@@ -270,24 +270,27 @@ impl<S: StepSide> Pipeline<S> {
         let stale = |from: [i32; 2]| {
             (round(from[0]) - start[0]).abs() > 1 || (round(from[1]) - start[1]).abs() > 1
         };
-        let path = match mv.path {
-            Path::LineFine { from, .. } if stale(from) => Path::Line,
+        let mut mv = *mv;
+        match mv.path {
+            Path::LineFine { from, .. } if stale(from) => mv.path = Path::Line,
             Path::ArcFine {
                 from,
                 center,
                 ccw,
                 turns,
-            } if stale(from) => Path::Arc {
-                center: [
-                    round(center[0]).wrapping_sub(start[0]),
-                    round(center[1]).wrapping_sub(start[1]),
-                ],
-                ccw,
-                turns,
-            },
-            path => path,
-        };
-        self.planner.push(&Move { path, ..*mv })
+            } if stale(from) => {
+                mv.path = Path::Arc {
+                    center: [
+                        round(center[0]).wrapping_sub(start[0]),
+                        round(center[1]).wrapping_sub(start[1]),
+                    ],
+                    ccw,
+                    turns,
+                }
+            }
+            _ => {}
+        }
+        self.planner.push(&mv)
     }
 
     fn executing(&self) -> bool {
@@ -363,8 +366,8 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     }
 
     fn set_overrides(&mut self, feed_percent: u8, rapid_percent: u8) {
-        self.planner.set_feed_override(u16::from(feed_percent));
-        self.planner.set_rapid_override(u16::from(rapid_percent));
+        self.planner
+            .set_overrides(u16::from(feed_percent), u16::from(rapid_percent));
     }
 
     fn position(&self) -> StepPos {

@@ -187,6 +187,26 @@ impl<S: Slot, const N: usize> Tx<'_, S, N> {
     pub fn push(&mut self, data: &[S::Item]) -> usize {
         self.push_map(data, |&v| v)
     }
+
+    /// Appends items taken from `next` while it gives them, up to `max` and the room
+    /// there is, and publishes them at once; returns how many it took (`next` is not
+    /// asked for more than fit). For a producer whose items wait in a queue of its
+    /// own (the protocol's replies): they move straight across, with no staging copy.
+    pub fn push_from(&mut self, max: usize, mut next: impl FnMut() -> Option<S::Item>) -> usize {
+        let ring = self.ring;
+        let start = ring.tail.load(Ordering::Relaxed);
+        let n = self.free().min(max) as u32;
+        let mut tail = start;
+        while tail.wrapping_sub(start) < n {
+            let Some(v) = next() else {
+                break;
+            };
+            ring.slot(tail).set(v);
+            tail = tail.wrapping_add(1);
+        }
+        store_release(&ring.tail, tail);
+        tail.wrapping_sub(start) as usize
+    }
 }
 
 /// The consuming end.
@@ -301,6 +321,31 @@ mod tests {
         assert_eq!(&all[..8], b"fghklmno");
         assert_eq!(rx.pop_into(&mut all), 0);
         assert_eq!(tx.free(), 8);
+    }
+
+    #[test]
+    fn push_from_takes_only_what_fits_and_asks_for_no_more() {
+        let mut ring: ByteRing<8> = ByteRing::new();
+        let (mut tx, mut rx) = ring.split();
+        let mut source: VecDeque<u8> = b"abcdefghijkl".iter().copied().collect();
+        assert_eq!(tx.push_from(3, || source.pop_front()), 3, "at most max");
+        assert_eq!(
+            tx.push_from(64, || source.pop_front()),
+            5,
+            "at most the room"
+        );
+        assert_eq!(source.len(), 4, "nothing taken that did not fit");
+        let mut out = [0u8; 6];
+        assert_eq!(rx.pop_into(&mut out), 6);
+        assert_eq!(&out, b"abcdef");
+        assert_eq!(
+            tx.push_from(64, || source.pop_front()),
+            4,
+            "until the source is dry"
+        );
+        let mut all = [0u8; 8];
+        assert_eq!(rx.pop_into(&mut all), 6);
+        assert_eq!(&all[..6], b"ghijkl");
     }
 
     #[test]

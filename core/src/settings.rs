@@ -708,11 +708,11 @@ impl Settings {
             return Err(ImageError::Version);
         }
         let mut s = Settings::default();
-        let values = body.get(4..).unwrap_or(&[]);
-        for (i, (slot, chunk)) in s.vals.iter_mut().zip(values.chunks_exact(4)).enumerate() {
-            let Entry { min, max, .. } = *ENTRIES.get(i).ok_or(ImageError::Range)?;
-            let v = f32::from_le_bytes(chunk.try_into().map_err(|_| ImageError::Length)?);
-            if !v.is_finite() || v < min || v > max {
+        let values = body.get(4..).unwrap_or(&[]).as_chunks::<4>().0;
+        for ((slot, chunk), entry) in s.vals.iter_mut().zip(values).zip(ENTRIES.iter()) {
+            let v = f32::from_le_bytes(*chunk);
+            // NaN fails both comparisons; every range is finite.
+            if !(v >= entry.min && v <= entry.max) {
                 return Err(ImageError::Range);
             }
             *slot = v;
@@ -729,6 +729,8 @@ mod tests {
     fn table_numbers_are_unique_and_defaults_in_range() {
         for (i, a) in TABLE.iter().enumerate() {
             assert!(a.default >= a.min && a.default <= a.max, "${}", a.number);
+            // from_image's range check also refuses infinities by this.
+            assert!(a.min.is_finite() && a.max.is_finite(), "${}", a.number);
             for b in TABLE.iter().skip(i + 1) {
                 assert_ne!(a.number, b.number);
             }
@@ -810,5 +812,19 @@ mod tests {
         let loaded = Settings::from_image(&old).unwrap();
         assert_eq!(loaded.steps_per_mm(0), 42.0);
         assert_eq!(loaded, s, "the rest are defaults, as in s");
+    }
+
+    #[test]
+    fn an_image_with_a_value_out_of_range_nan_or_infinite_is_refused() {
+        let img = Settings::default().to_image();
+        // $100 (steps per mm) is the value at this table index.
+        let at = 4 + 4 * index_of(100).unwrap();
+        for bad in [-1.0, 1e9, f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let mut v = img;
+            v[at..at + 4].copy_from_slice(&f32::to_le_bytes(bad));
+            let crc = crc32(&v[..IMAGE_LEN - 4]);
+            v[IMAGE_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+            assert_eq!(Settings::from_image(&v), Err(ImageError::Range), "{bad}");
+        }
     }
 }

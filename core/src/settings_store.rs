@@ -415,10 +415,14 @@ fn le32(b: &[u8], at: usize) -> u32 {
 fn coords_to_image(c: &Coords) -> [u8; COORDS_LEN] {
     let mut out = [0u8; COORDS_LEN];
     out[0] = COORDS_VERSION;
-    let all = c.wcs.iter().chain([&c.g28, &c.g30]).flat_map(|p| p.iter());
     if let Some(body) = out.get_mut(1..COORDS_LEN - 4) {
-        for (chunk, v) in body.chunks_exact_mut(8).zip(all) {
-            chunk.copy_from_slice(&v.to_le_bytes());
+        // Point by point, then axis by axis (one flattened iterator kept more state
+        // than the loop does work).
+        let mut chunks = body.chunks_exact_mut(8);
+        for p in c.wcs.iter().chain([&c.g28, &c.g30]) {
+            for (v, chunk) in p.iter().zip(chunks.by_ref()) {
+                chunk.copy_from_slice(&v.to_le_bytes());
+            }
         }
     }
     let crc = crc32(out.get(..COORDS_LEN - 4).unwrap_or(&[]));
@@ -435,9 +439,10 @@ fn coords_from_image(img: &[u8; COORDS_LEN]) -> Option<Coords> {
     }
     let mut c = Coords::default();
     let mut chunks = body.get(1..)?.chunks_exact(8);
-    let points = c.wcs.iter_mut().chain([&mut c.g28, &mut c.g30]);
-    for v in points.flat_map(|p| p.iter_mut()) {
-        *v = i64::from_le_bytes(chunks.next()?.try_into().ok()?);
+    for p in c.wcs.iter_mut().chain([&mut c.g28, &mut c.g30]) {
+        for v in p.iter_mut() {
+            *v = i64::from_le_bytes(chunks.next()?.try_into().ok()?);
+        }
     }
     Some(c)
 }

@@ -438,4 +438,20 @@ fn quiet_only_when_nothing_waits() {
     assert!(busy > 5, "quiet while the move ran ({busy} ticks)");
     assert!(m.queue.is_empty(), "quiet with a move queued");
     assert_eq!(m.pos[X], Settings::default().steps_per_mm(X) as i32);
+    // Half a line is framed and waits for the rest: quiet, nothing runs.
+    sh.rx.split().0.push(b"G1 X2");
+    let mut t = 0;
+    while !sh.tick(&mut c, &mut m).quiet {
+        t += 1;
+        assert!(t < 10, "never quiet with half a line");
+    }
+    assert!(m.queue.is_empty() && sh.read().is_empty());
+    // Its end runs it.
+    sh.rx.split().0.push(b" F600\n");
+    assert!(!sh.tick(&mut c, &mut m).quiet, "quiet with a whole line");
+    while !m.queue.is_empty() || !sh.tick(&mut c, &mut m).quiet {
+        sh.read();
+        m.step();
+    }
+    assert_eq!(m.pos[X], 2 * Settings::default().steps_per_mm(X) as i32);
 }

@@ -39,7 +39,7 @@ pub enum GeometryError {
 }
 
 /// Per-axis limits along direction `u` (unit, mm space): (accel, speed).
-fn axis_limits(cfg: &PlannerConfig, u: [f32; AXES]) -> (f32, f32) {
+pub(super) fn axis_limits(cfg: &PlannerConfig, u: [f32; AXES]) -> (f32, f32) {
     let mut acc = f32::INFINITY;
     let mut spd = f32::INFINITY;
     for (ax, &c) in cfg.axes.iter().zip(u.iter()) {
@@ -52,13 +52,16 @@ fn axis_limits(cfg: &PlannerConfig, u: [f32; AXES]) -> (f32, f32) {
     (acc, spd)
 }
 
-fn normalize(v: [f32; AXES]) -> [f32; AXES] {
+/// The length of `v` and `v` scaled to unit length (zero when the length is not
+/// positive): one root for both, which every caller needs.
+pub(super) fn length_and_unit(v: [f32; AXES]) -> (f32, [f32; AXES]) {
     let n = crate::fmath::sqrt(v.iter().map(|c| c * c).sum());
-    if n > 0.0 {
+    let unit = if n > 0.0 {
         [v[0] / n, v[1] / n, v[2] / n]
     } else {
         [0.0; AXES]
-    }
+    };
+    (n, unit)
 }
 
 fn sp(cfg: &PlannerConfig, axis: usize) -> f32 {
@@ -104,11 +107,10 @@ fn shape_of(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometry, 
         core::array::from_fn(|i| mv.target[i].wrapping_sub(start[i]) as f32 / sp(cfg, i));
     match mv.path {
         Path::Line | Path::LineFine { .. } => {
-            let length = crate::fmath::sqrt(d.iter().map(|c| c * c).sum());
+            let (length, u) = length_and_unit(d);
             if length <= 0.0 {
                 return Err(GeometryError::Empty);
             }
-            let u = [d[X] / length, d[Y] / length, d[Z] / length];
             let (accel, speed_limit) = axis_limits(cfg, u);
             Ok(Geometry {
                 length,
@@ -155,7 +157,7 @@ fn shape_of(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometry, 
             }
             let dx = mv.target[X].wrapping_sub(start[X]) as f32;
             let dir = dx.signum();
-            let periods = (omega.abs() * dx.abs() / TAU) as u32;
+            let periods = crate::decimal::to_u32(omega.abs() * dx.abs() / TAU);
             let curv = (amp * omega * omega).abs();
             let c = Curve {
                 sx: sp(cfg, X),
@@ -310,7 +312,7 @@ impl Curve {
         let mut most = [axis[0], axis[1], 0.0];
         for i in 0..=n {
             let v = self.vel(i, n);
-            let m = crate::fmath::sqrt(v.iter().map(|c| c * c).sum());
+            let (m, u) = length_and_unit(v);
             let w = if i == 0 || i == n {
                 1.0
             } else if i % 2 == 1 {
@@ -320,7 +322,6 @@ impl Curve {
             };
             sum += w * m;
             // min over samples of min_i a_i / |u_i| is min_i a_i / max over samples |u_i|.
-            let u = normalize(v);
             most = [
                 most[X].max(u[X].abs()),
                 most[Y].max(u[Y].abs()),
@@ -331,8 +332,8 @@ impl Curve {
         let r_min = r_min / self.sx.max(self.sy);
         Geometry {
             length: sum * span / (3.0 * n as f32),
-            unit_start: normalize(self.vel(0, 1)),
-            unit_end: normalize(self.vel(1, 1)),
+            unit_start: length_and_unit(self.vel(0, 1)).1,
+            unit_end: length_and_unit(self.vel(1, 1)).1,
             accel,
             speed_limit: speed.min(crate::fmath::sqrt(accel * r_min)),
         }

@@ -340,14 +340,11 @@ impl Planner {
         b.max_speed(self.feed_override, self.rapid_override)
     }
 
-    /// Feed override in percent (Grbl: 10..200).
-    pub fn set_feed_override(&mut self, percent: u16) {
-        self.feed_override = f32::from(percent.clamp(10, 200)) / 100.0;
-        self.replan(Reverse::All);
-    }
-    /// Rapid override in percent (Grbl: 25, 50, 100).
-    pub fn set_rapid_override(&mut self, percent: u16) {
-        self.rapid_override = f32::from(percent.clamp(1, 100)) / 100.0;
+    /// Feed and rapid overrides in percent (Grbl: feed 10..200, rapid 25, 50, 100),
+    /// set together: one replan for both.
+    pub fn set_overrides(&mut self, feed_percent: u16, rapid_percent: u16) {
+        self.feed_override = f32::from(feed_percent.clamp(10, 200)) / 100.0;
+        self.rapid_override = f32::from(rapid_percent.clamp(1, 100)) / 100.0;
         self.replan(Reverse::All);
     }
     pub fn feed_override(&self) -> u16 {
@@ -564,18 +561,9 @@ pub fn junction_speed(cfg: &PlannerConfig, u1: [f32; AXES], u2: [f32; AXES], sha
     }
     // theta: angle between the reversed incoming and the outgoing direction.
     let sin_half = crate::fmath::sqrt(0.5 * (1.0 + dot));
-    let mut j = [0.0f32; AXES];
-    for (k, v) in j.iter_mut().enumerate() {
-        *v = u2[k] - u1[k];
-    }
-    let n = crate::fmath::sqrt(j.iter().map(|c| c * c).sum());
-    let mut a = f32::INFINITY;
-    for (ax, c) in cfg.axes.iter().zip(j.iter()) {
-        let c = (c / n).abs();
-        if c > 1e-9 {
-            a = a.min(ax.accel / c);
-        }
-    }
+    // The per-axis acceleration limit along the change of direction, as along a move.
+    let change = core::array::from_fn(|k| u2[k] - u1[k]);
+    let (a, _) = geometry::axis_limits(cfg, geometry::length_and_unit(change).1);
     let a = shape.effective_accel(a);
     crate::fmath::sqrt(a * cfg.junction_deviation * sin_half / (1.0 - sin_half))
 }
@@ -657,6 +645,7 @@ mod tests {
                 ..PlannerConfig::default()
             };
             let mut p = Planner::new(cfg, [0; 3]);
+            let mut overrides = [100u16, 100];
             let mut at = [0i32; 2];
             let mut dir = [1i32, 0];
             for (op, dx, dy, k) in ops {
@@ -692,8 +681,14 @@ mod tests {
                         continue;
                     }
                     5 => p.set_head_cap(f32::from(k) / 4.0),
-                    6 => p.set_feed_override(k),
-                    _ => p.set_rapid_override(k / 2),
+                    6 => {
+                        overrides[0] = k;
+                        p.set_overrides(overrides[0], overrides[1]);
+                    }
+                    _ => {
+                        overrides[1] = k / 2;
+                        p.set_overrides(overrides[0], overrides[1]);
+                    }
                 }
                 if p.generation() == generation {
                     continue; // nothing replanned
@@ -761,11 +756,11 @@ mod tests {
         p.push(&line(8000, 0, 3000.0)).unwrap();
         let b = *p.blocks.front().unwrap();
         assert!((p.max_speed(&b) - 50.0).abs() < 1e-4);
-        p.set_feed_override(150);
+        p.set_overrides(150, 100);
         assert!((p.max_speed(&b) - 75.0).abs() < 1e-4);
-        p.set_feed_override(200);
+        p.set_overrides(200, 100);
         assert!((p.max_speed(&b) - 5000.0 / 60.0).abs() < 1e-3);
-        p.set_feed_override(10);
+        p.set_overrides(10, 100);
         assert!((p.max_speed(&b) - 5.0).abs() < 1e-4);
         assert_eq!(p.feed_override(), 10);
         // A rapid runs at the axis limit (5000 mm/min); its override scales that.
@@ -777,7 +772,7 @@ mod tests {
         .unwrap();
         let b = *p.blocks.front().unwrap();
         assert!((p.max_speed(&b) - 5000.0 / 60.0).abs() < 1e-3);
-        p.set_rapid_override(25);
+        p.set_overrides(100, 25);
         assert!((p.max_speed(&b) - 1250.0 / 60.0).abs() < 1e-3);
     }
 

@@ -2,7 +2,7 @@
 //! as output room frees up), `$G`, `$I`, `$C`, `$X`, `$H`, `$RST=`, `$J=`, `$Nx=` and
 //! `$n=v`, and the startup lines run after a reset.
 
-use super::report::axis_triplet;
+use super::report::{axis_triplet, report_scale};
 use super::{OutWriter, Protocol, RX_BUFFER_SIZE, VERSION};
 use crate::decimal::{put_int, write_fixed3, Sink};
 use crate::gcode::units::nm_to_mm;
@@ -92,15 +92,9 @@ fn store_startup(
         [d @ b'0'..=b'9', b'=', line @ ..] => (usize::from(d - b'0'), line),
         _ => return Err(Status::InvalidStatement),
     };
-    let slot_exists = idx < STARTUP_LINES;
-    if !slot_exists {
-        return Err(Status::InvalidStatement);
-    }
+    let slot = startup.get_mut(idx).ok_or(Status::InvalidStatement)?;
     machine.validate(line)?;
-    let line = startup_line(line).ok_or(Status::InvalidStatement)?;
-    if let Some(slot) = startup.get_mut(idx) {
-        *slot = line;
-    }
+    *slot = startup_line(line).ok_or(Status::InvalidStatement)?;
     Ok(())
 }
 
@@ -259,7 +253,8 @@ impl Protocol {
         let next = self.listing_line(l);
         self.listing = next;
         if next.is_none() {
-            self.say(&[b"ok"]);
+            // The listing's end answers its line.
+            self.respond(Ok(()));
         }
     }
 
@@ -270,6 +265,7 @@ impl Protocol {
             out: &mut self.out,
             truncated: &mut self.truncated,
         };
+        let scale = report_scale(machine.settings());
         let next = match l {
             Listing::Settings(i) => {
                 machine.settings().write_entry(i, &mut w)?;
@@ -285,9 +281,7 @@ impl Protocol {
                     8 => Some(interpreter.g92()),
                     9 => {
                         w.put(b"[TLO:");
-                        let inches = machine.settings().report_inches();
-                        let tlo = nm_to_mm(interpreter.tool_length_offset());
-                        write_fixed3(&mut w, if inches { tlo / 25.4 } else { tlo });
+                        write_fixed3(&mut w, nm_to_mm(interpreter.tool_length_offset()) / scale);
                         w.put(b"]");
                         None
                     }
@@ -307,11 +301,6 @@ impl Protocol {
                         d.copy_from_slice(code);
                     }
                     w.put(&head);
-                    let scale = if machine.settings().report_inches() {
-                        25.4
-                    } else {
-                        1.0
-                    };
                     axis_triplet(&mut w, &v.map(nm_to_mm), scale);
                     w.put(b"]");
                 }

@@ -16,7 +16,7 @@
 //! It is driven from one context, the protocol tick: [`crate::controller::Controller`]
 //! boots it from the settings store, hands it the host's bytes ([`Protocol::take_byte`]
 //! on each byte the host ring holds, until one is refused), polls it, moves its output
-//! to the host ring ([`Protocol::read_output`]), gives it the input levels
+//! to the host ring ([`Protocol::pop_output`]), gives it the input levels
 //! ([`Protocol::set_inputs`]) and saves what its `take_*_dirty` report at rest. The
 //! e-stop interrupt stops the step engine itself before the tick learns of it through
 //! `set_inputs`. docs/architecture.md shows the whole path.
@@ -167,11 +167,17 @@ impl Protocol {
         core::mem::take(&mut self.startup_dirty)
     }
 
+    /// Take the oldest byte of the responses (the controller moves them straight
+    /// into the host ring).
+    pub fn pop_output(&mut self) -> Option<u8> {
+        self.out.pop_front()
+    }
+
     /// Take up to `buf.len()` bytes of responses.
     pub fn read_output(&mut self, buf: &mut [u8]) -> usize {
         let mut n = 0;
         for slot in buf.iter_mut() {
-            match self.out.pop_front() {
+            match self.pop_output() {
                 Some(b) => {
                     *slot = b;
                     n += 1;
@@ -202,12 +208,11 @@ impl Protocol {
         w.put(b"\r\n");
     }
 
-    /// A line of `head`, a number and `tail`.
-    fn say_n(&mut self, head: &[u8], n: u8, tail: &[u8]) {
+    /// A line of `head` and a number (`error:N`, `ALARM:N`).
+    fn say_n(&mut self, head: &[u8], n: u8) {
         let mut w = self.w();
         w.put(head);
         put_int(&mut w, i32::from(n));
-        w.put(tail);
         w.put(b"\r\n");
     }
 
@@ -239,12 +244,15 @@ impl Protocol {
 
     /// Nothing to do until a byte arrives or an input changes: the machine is settled
     /// ([`Machine::settled`]), no complete line, report, listing, startup line or
-    /// delayed `ok` waits, and every reply has been read out.
+    /// delayed `ok` waits, and every reply has been read out. A poll frames every
+    /// received byte of a partial line into the line at once, so bytes wait in the
+    /// receive buffer only behind a complete line or until the next poll: an empty
+    /// buffer is the test (and, before a poll, the cautious answer).
     pub fn settled<M: MotionControl>(&self, m: &M) -> bool {
         self.machine.settled(m)
             && self.out.is_empty()
             && !self.line_ready
-            && !self.rx.iter().any(|&b| b == b'\n' || b == b'\r')
+            && self.rx.is_empty()
             && self.status_requested == 0
             && self.listing.is_none()
             && self.startup_next.is_none()

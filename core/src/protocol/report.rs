@@ -9,6 +9,17 @@ use crate::gcode::Status;
 use crate::machine::state::Event;
 use crate::machine::{MotionControl, RunState};
 use crate::motion::AXES;
+use crate::settings::Settings;
+
+/// Millimetres per reported unit: 25.4 when reports are in inches ($13), else 1
+/// (dividing by it is then exact).
+pub(super) fn report_scale(settings: &Settings) -> f32 {
+    if settings.report_inches() {
+        25.4
+    } else {
+        1.0
+    }
+}
 
 pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
     for (i, x) in v.iter().enumerate() {
@@ -19,6 +30,14 @@ pub(super) fn axis_triplet(w: &mut dyn Sink, v: &[f32; AXES], scale: f32) {
     }
 }
 
+/// A status field of two whole numbers: `head`, `a`, a comma, `b`.
+fn field_pair(w: &mut dyn Sink, head: &[u8], a: i32, b: i32) {
+    w.put(head);
+    put_int(w, a);
+    w.put(b",");
+    put_int(w, b);
+}
+
 impl Protocol {
     /// The welcome line (power-up, reset, leaving check mode, the host opening the
     /// port), followed, as in Grbl, by how to unlock whenever the machine starts in
@@ -26,23 +45,23 @@ impl Protocol {
     pub(super) fn welcome(&mut self) {
         self.say(&[b"\r\n", WELCOME.as_bytes()]);
         if self.machine.needs_unlock() {
-            self.say(&[b"[MSG:'$H'|'$X' to unlock]"]);
+            self.notify("'$H'|'$X' to unlock");
         }
     }
 
     pub(super) fn respond(&mut self, r: Result<(), Status>) {
         match r {
             Ok(()) => self.say(&[b"ok"]),
-            Err(e) => self.say_n(b"error:", e.code(), b""),
+            Err(e) => self.say_n(b"error:", e.code()),
         }
     }
 
     pub(super) fn flush_events(&mut self) {
         while let Some(e) = self.machine.next_event() {
             match e {
-                Event::Alarm(a) => self.say_n(b"ALARM:", a.code(), b""),
-                Event::Msg(t) => self.say(&[b"[MSG:", t.as_bytes(), b"]"]),
-                Event::JobStarted => self.say(&[b"[MSG:Job started]"]),
+                Event::Alarm(a) => self.say_n(b"ALARM:", a.code()),
+                Event::Msg(t) => self.notify(t),
+                Event::JobStarted => self.notify("Job started"),
                 Event::JobFinished { ms, moves } => {
                     let mut w = self.w();
                     w.put(b"[MSG:Job finished: ");
@@ -82,7 +101,7 @@ impl Protocol {
             RunState::Check => b"<Check",
         });
         let settings = machine.settings();
-        let scale = if settings.report_inches() { 25.4 } else { 1.0 };
+        let scale = report_scale(settings);
         let mask = settings.status_mask();
         let mut pos = machine.machine_position(m);
         let wco_nm = machine.interpreter().work_offset();
@@ -97,24 +116,17 @@ impl Protocol {
         }
         axis_triplet(&mut w, &pos, scale);
         if mask & 2 != 0 {
-            w.put(b"|Bf:");
-            put_int(&mut w, m.free() as i32);
-            w.put(b",");
-            put_int(&mut w, (RX_BUFFER_SIZE - self.rx.len()) as i32);
+            let rx_free = RX_BUFFER_SIZE - self.rx.len();
+            field_pair(&mut w, b"|Bf:", m.free() as i32, rx_free as i32);
         }
-        w.put(b"|FS:");
-        put_int(&mut w, round_i32(m.speed() / scale));
-        w.put(b",");
         // The pen is the spindle: report S while it is down.
         let interpreter = machine.interpreter();
-        put_int(
-            &mut w,
-            if interpreter.modal().pen_down {
-                round_i32(interpreter.spindle())
-            } else {
-                0
-            },
-        );
+        let spindle = if interpreter.modal().pen_down {
+            round_i32(interpreter.spindle())
+        } else {
+            0
+        };
+        field_pair(&mut w, b"|FS:", round_i32(m.speed() / scale), spindle);
         let inputs = machine.inputs();
         let pins = [
             inputs.limits[0],
@@ -139,10 +151,7 @@ impl Protocol {
         }
         if machine.take_overrides_changed() || reports % REFRESH_EVERY == 6 {
             let (fo, ro) = machine.overrides();
-            w.put(b"|Ov:");
-            put_int(&mut w, i32::from(fo));
-            w.put(b",");
-            put_int(&mut w, i32::from(ro));
+            field_pair(&mut w, b"|Ov:", i32::from(fo), i32::from(ro));
             w.put(b",100");
         }
         w.put(b">\r\n");
