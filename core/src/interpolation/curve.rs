@@ -97,7 +97,7 @@ pub struct CurveTrace<C> {
 
 fn nearest(v: f32) -> i32 {
     // Saturating conversion; NaN becomes 0.
-    crate::fmath::round(v) as i32
+    crate::decimal::round_i32(v)
 }
 
 impl<C: Curve> CurveTrace<C> {

@@ -4,6 +4,7 @@
 //! Owns only vertex geometry in step space; the caller turns vertices into
 //! [`crate::motion::Move`]s with the feed it wants.
 
+use crate::decimal::round_i32;
 use crate::motion::StepPos;
 
 /// The six vertices (the last equals the first) of a {5/2} star inscribed in a circle
@@ -17,11 +18,7 @@ pub fn star(center: [i32; 2], r: i32, z: i32) -> [StepPos; 6] {
         let (sin, cos) = crate::fmath::sin_cos(ang);
         let x = center[0] as f32 + r as f32 * cos;
         let y = center[1] as f32 + r as f32 * sin;
-        *p = [
-            crate::fmath::round(x) as i32,
-            crate::fmath::round(y) as i32,
-            z,
-        ];
+        *p = [round_i32(x), round_i32(y), z];
     }
     v
 }
