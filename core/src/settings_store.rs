@@ -413,8 +413,8 @@ fn le32(b: &[u8], at: usize) -> u32 {
 }
 
 fn coords_to_image(c: &Coords) -> [u8; COORDS_LEN] {
-    let mut out = [0u8; COORDS_LEN];
-    out[0] = COORDS_VERSION;
+    // The version is byte 0; the body and CRC below overwrite every other byte.
+    let mut out = [COORDS_VERSION; COORDS_LEN];
     if let Some(body) = out.get_mut(1..COORDS_LEN - 4) {
         // Point by point, then axis by axis (one flattened iterator kept more state
         // than the loop does work).
