@@ -688,10 +688,12 @@ impl Settings {
         out
     }
 
-    /// Parse a byte image written by [`Settings::to_image`], checking everything.
-    /// An image from an older build with fewer (appended-to) settings loads too: the
-    /// settings it lacks take their defaults, so an update keeps the user's values.
-    pub fn from_image(img: &[u8]) -> Result<Settings, ImageError> {
+    /// Take the values of a byte image written by [`Settings::to_image`], checking
+    /// everything first: on an error nothing changes. An image from an older build
+    /// with fewer (appended-to) settings loads too: the settings it lacks keep their
+    /// values (the defaults, read into `Settings::default()`), so an update keeps the
+    /// user's values. In place, so the ~180-byte value table is not copied around.
+    pub fn read_image(&mut self, img: &[u8]) -> Result<(), ImageError> {
         let count = usize::from(*img.get(3).ok_or(ImageError::Length)?);
         if count > COUNT || img.len() != 4 + 4 * count + 4 {
             return Err(ImageError::Length);
@@ -707,17 +709,19 @@ impl Settings {
         if body.get(2) != Some(&FORMAT_VERSION) {
             return Err(ImageError::Version);
         }
-        let mut s = Settings::default();
         let values = body.get(4..).unwrap_or(&[]).as_chunks::<4>().0;
-        for ((slot, chunk), entry) in s.vals.iter_mut().zip(values).zip(ENTRIES.iter()) {
+        // NaN fails both comparisons; every range is finite.
+        let in_range = |(chunk, entry): (&[u8; 4], &Entry)| {
             let v = f32::from_le_bytes(*chunk);
-            // NaN fails both comparisons; every range is finite.
-            if !(v >= entry.min && v <= entry.max) {
-                return Err(ImageError::Range);
-            }
-            *slot = v;
+            v >= entry.min && v <= entry.max
+        };
+        if !values.iter().zip(ENTRIES.iter()).all(in_range) {
+            return Err(ImageError::Range);
         }
-        Ok(s)
+        for (slot, chunk) in self.vals.iter_mut().zip(values) {
+            *slot = f32::from_le_bytes(*chunk);
+        }
+        Ok(())
     }
 }
 
@@ -725,11 +729,17 @@ impl Settings {
 mod tests {
     use super::*;
 
+    /// What the store does: the defaults, then the image read over them.
+    fn from_image(img: &[u8]) -> Result<Settings, ImageError> {
+        let mut s = Settings::default();
+        s.read_image(img).map(|()| s)
+    }
+
     #[test]
     fn table_numbers_are_unique_and_defaults_in_range() {
         for (i, a) in TABLE.iter().enumerate() {
             assert!(a.default >= a.min && a.default <= a.max, "${}", a.number);
-            // from_image's range check also refuses infinities by this.
+            // read_image's range check also refuses infinities by this.
             assert!(a.min.is_finite() && a.max.is_finite(), "${}", a.number);
             for b in TABLE.iter().skip(i + 1) {
                 assert_ne!(a.number, b.number);
@@ -787,15 +797,15 @@ mod tests {
         s.set(100, 123.25).unwrap();
         s.set(201, 1.0).unwrap();
         let img = s.to_image();
-        assert_eq!(Settings::from_image(&img), Ok(s.clone()));
+        assert_eq!(from_image(&img), Ok(s.clone()));
         for byte in 0..IMAGE_LEN {
             for bit in 0..8 {
                 let mut bad = img;
                 bad[byte] ^= 1 << bit;
-                assert!(Settings::from_image(&bad).is_err(), "byte {byte} bit {bit}");
+                assert!(from_image(&bad).is_err(), "byte {byte} bit {bit}");
             }
         }
-        assert_eq!(Settings::from_image(&img[..10]), Err(ImageError::Length));
+        assert_eq!(from_image(&img[..10]), Err(ImageError::Length));
     }
 
     #[test]
@@ -809,7 +819,7 @@ mod tests {
         old[3] = n as u8;
         let crc = crc32(&old);
         old.extend_from_slice(&crc.to_le_bytes());
-        let loaded = Settings::from_image(&old).unwrap();
+        let loaded = from_image(&old).unwrap();
         assert_eq!(loaded.steps_per_mm(0), 42.0);
         assert_eq!(loaded, s, "the rest are defaults, as in s");
     }
@@ -824,7 +834,24 @@ mod tests {
             v[at..at + 4].copy_from_slice(&f32::to_le_bytes(bad));
             let crc = crc32(&v[..IMAGE_LEN - 4]);
             v[IMAGE_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
-            assert_eq!(Settings::from_image(&v), Err(ImageError::Range), "{bad}");
+            assert_eq!(from_image(&v), Err(ImageError::Range), "{bad}");
         }
+    }
+
+    #[test]
+    fn a_refused_image_changes_nothing() {
+        // An image whose first value is not the default, with a bad value further on.
+        let first = &ENTRIES[0];
+        let mut src = Settings::default();
+        src.set(first.number, first.max).unwrap();
+        assert_ne!(src, Settings::default());
+        let mut img = src.to_image();
+        let last = 4 + 4 * (COUNT - 1);
+        img[last..last + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+        let crc = crc32(&img[..IMAGE_LEN - 4]);
+        img[IMAGE_LEN - 4..].copy_from_slice(&crc.to_le_bytes());
+        let mut kept = Settings::default();
+        assert_eq!(kept.read_image(&img), Err(ImageError::Range));
+        assert_eq!(kept, Settings::default());
     }
 }

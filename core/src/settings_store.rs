@@ -343,20 +343,20 @@ impl<F: NorFlash> SettingsStore<F> {
     pub fn load_settings(&mut self) -> (Settings, LoadStatus) {
         let mut buf: Buf = [0; BUF_LEN];
         let mut img = [0u8; IMAGE_LEN];
+        let mut settings = Settings::default();
         let status = match self.fetch(&mut buf, KEY_SETTINGS, &mut img) {
             (_, LoadStatus::Empty) if !self.blank(&mut buf, self.range.start, self.range.end) => {
                 LoadStatus::Corrupt
             }
             (len, LoadStatus::Loaded) => {
-                match Settings::from_image(img.get(..len).unwrap_or(&[])) {
-                    Ok(s) => return (s, LoadStatus::Loaded),
+                match settings.read_image(img.get(..len).unwrap_or(&[])) {
+                    Ok(()) => LoadStatus::Loaded,
                     Err(_) => LoadStatus::Corrupt,
                 }
             }
             (_, status) => status,
         };
-        // One place builds the defaults for every reason to use them.
-        (Settings::default(), status)
+        (settings, status)
     }
 
     pub fn save_settings(&mut self, s: &Settings) -> Result<(), StoreError<F::Error>> {
