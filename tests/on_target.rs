@@ -168,7 +168,8 @@ mod tests {
         // A fresh store over the same pages (as after a reset) loads what was saved.
         let mut store =
             defmt::unwrap!(SettingsStore::new(&mut b.flash, board::settings_pages()).ok());
-        let (loaded, status) = store.load_settings();
+        let mut loaded = Settings::default();
+        let status = store.load_settings(&mut loaded);
         defmt::assert!(status == LoadStatus::Loaded);
         defmt::assert!(loaded.max_rate(0) == 4321.0);
     }

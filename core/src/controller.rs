@@ -160,7 +160,8 @@ impl Controller {
         store: &mut SettingsStore<F>,
         now_ms: u32,
     ) -> &'a mut Controller {
-        let (settings, load) = store.load_settings();
+        let mut settings = Settings::default();
+        let load = store.load_settings(&mut settings);
         let ctl = Controller::init_in(slot, &settings, now_ms);
         ctl.notice = load.message();
         #[cfg(feature = "defmt")]

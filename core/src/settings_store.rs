@@ -337,14 +337,14 @@ impl<F: NorFlash> SettingsStore<F> {
         Ok(())
     }
 
-    /// Load the settings, or defaults with the reason. Settings are the first thing
-    /// the firmware saves, so a region that is not blank but holds no settings is
-    /// reported as corrupt rather than taken for a first boot.
-    pub fn load_settings(&mut self) -> (Settings, LoadStatus) {
+    /// Load the stored settings into `settings` (which holds the defaults), or leave
+    /// it unchanged and say why. Settings are the first thing the firmware saves, so a
+    /// region that is not blank but holds no settings is reported as corrupt rather
+    /// than taken for a first boot. In place: the caller's table is the only copy.
+    pub fn load_settings(&mut self, settings: &mut Settings) -> LoadStatus {
         let mut buf: Buf = [0; BUF_LEN];
         let mut img = [0u8; IMAGE_LEN];
-        let mut settings = Settings::default();
-        let status = match self.fetch(&mut buf, KEY_SETTINGS, &mut img) {
+        match self.fetch(&mut buf, KEY_SETTINGS, &mut img) {
             (_, LoadStatus::Empty) if !self.blank(&mut buf, self.range.start, self.range.end) => {
                 LoadStatus::Corrupt
             }
@@ -355,8 +355,7 @@ impl<F: NorFlash> SettingsStore<F> {
                 }
             }
             (_, status) => status,
-        };
-        (settings, status)
+        }
     }
 
     pub fn save_settings(&mut self, s: &Settings) -> Result<(), StoreError<F::Error>> {
