@@ -348,12 +348,10 @@ impl<F: NorFlash> SettingsStore<F> {
             (_, LoadStatus::Empty) if !self.blank(&mut buf, self.range.start, self.range.end) => {
                 LoadStatus::Corrupt
             }
-            (len, LoadStatus::Loaded) => {
-                match settings.read_image(img.get(..len).unwrap_or(&[])) {
-                    Ok(()) => LoadStatus::Loaded,
-                    Err(_) => LoadStatus::Corrupt,
-                }
-            }
+            (len, LoadStatus::Loaded) => match settings.read_image(img.get(..len).unwrap_or(&[])) {
+                Ok(()) => LoadStatus::Loaded,
+                Err(_) => LoadStatus::Corrupt,
+            },
             (_, status) => status,
         }
     }

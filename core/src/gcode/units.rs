@@ -273,7 +273,7 @@ mod tests {
             let bits = spm.to_bits();
             let m = u128::from((bits & 0x7F_FFFF) | 0x80_0000);
             let e = ((bits >> 23) & 0xFF) as i32 - 150;
-            let num = u128::from(steps.unsigned_abs()) * 1_000_000 << -e;
+            let num = (u128::from(steps.unsigned_abs()) * 1_000_000) << -e;
             let nm = ((2 * num + m) / (2 * m)) as Nm;
             let nm = if steps < 0 { -nm } else { nm };
             proptest::prop_assert_eq!(steps_to_nm(steps, spm), nm);
