@@ -127,6 +127,10 @@ pub enum Interpolator {
 
 impl Interpolator {
     /// Interpolator for `mv`, starting from `start`.
+    // Out of line: inlined into the preparation's `start_next`, LLVM moved each
+    // variant's fields one by one through that frame's temporaries (hundreds of bytes
+    // of loads and stores); here the result is written once, through the return slot.
+    #[inline(never)]
     pub fn new(start: StepPos, mv: &Move, method: Method) -> Result<Self, InterpError> {
         // Everything but a plain line is planar (XY): one check for all of them.
         if !matches!(mv.path, Path::Line) {
