@@ -10,7 +10,7 @@
 //! [`Machine`] and answers `ok` / `error:N`; a line whose motion does not fit the
 //! planner queue waits, and so does everything behind it (the machine interprets it
 //! once and keeps its commands until they fit). Responses collect in an
-//! output buffer drained with [`Protocol::read_output`]; work that produces output
+//! output buffer drained with [`Protocol::pop_output`]; work that produces output
 //! only starts when the buffer has room for it, so responses are never truncated.
 //!
 //! It is driven from one context, the protocol tick: [`crate::controller::Controller`]
