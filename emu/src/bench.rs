@@ -409,6 +409,7 @@ pub fn run(elf: &Path) -> Result<String, String> {
     for (load, lines) in [
         (crate::latency::Load::OneStep, 3_000),
         (crate::latency::Load::Ordinary, 1_000),
+        (crate::latency::Load::Arcs, 300),
     ] {
         let l = crate::latency::measure(elf, load, lines, 10 * T_PER_MS, false)?;
         let _ = writeln!(out, "{}", l.row(load));

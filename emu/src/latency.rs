@@ -25,6 +25,9 @@ pub enum Load {
     /// Ordinary short moves (0.3 to 1.2 mm, the segments of curves from a CAM tool) at
     /// F3000: the motion is the limit, the planner stays full.
     Ordinary,
+    /// Small arcs (`G2`/`G3` semicircles of 0.3 to 1.5 mm radius) at F3000: every line
+    /// is a curve, whose block start costs the most of any move on the board.
+    Arcs,
 }
 
 impl Load {
@@ -32,6 +35,7 @@ impl Load {
         match self {
             Load::OneStep => "one-step moves (G91 G1 X0.0125 F400, 80 steps/mm)",
             Load::Ordinary => "ordinary moves (0.3-1.2 mm segments at F3000)",
+            Load::Arcs => "arcs (G2/G3 semicircles, 0.3-1.5 mm radius, F3000)",
         }
     }
 
@@ -78,6 +82,30 @@ impl Load {
                         "G1 X{:.3} Y{:.3}\n",
                         dx as f64 / 1000.0,
                         dy as f64 / 1000.0
+                    ));
+                }
+            }
+            Load::Arcs => {
+                p.push_str("G1 F3000\n");
+                // Circles in two halves, so the pen comes back to the start after each
+                // pair of lines: radius and turning sense vary line by line pair (the
+                // same congruential sequence as above).
+                let mut seed = 54_321u32;
+                let mut radius_um = 300;
+                let mut arc = "G2";
+                for i in 0..lines {
+                    if i % 2 == 0 {
+                        seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+                        radius_um = 300 + (seed >> 16) as i32 % 1201;
+                        arc = if (seed >> 8) & 1 == 0 { "G2" } else { "G3" };
+                    }
+                    // Out along +X on the first half, back along -X on the second; the
+                    // centre is always half way (I relative to the half's start).
+                    let r = if i % 2 == 0 { radius_um } else { -radius_um };
+                    p.push_str(&format!(
+                        "{arc} X{:.3} Y0 I{:.3} J0\n",
+                        2.0 * r as f64 / 1000.0,
+                        r as f64 / 1000.0
                     ));
                 }
             }

@@ -405,7 +405,7 @@ fn cmd_latency(
     let elf = elf_or_build(elf)?;
     println!("{TABLE_HEAD}");
     let mut ok = true;
-    for load in [Load::OneStep, Load::Ordinary] {
+    for load in [Load::OneStep, Load::Ordinary, Load::Arcs] {
         let l = measure(&elf, load, lines, every_ms * T_PER_MS, explain)?;
         println!("{}", l.row(load));
         eprintln!(

@@ -33,6 +33,13 @@ fn status_answered_within_2_ms_during_a_stream_of_ordinary_moves() {
     assert_bound(Load::Ordinary, 600);
 }
 
+/// Every line a curve: an arc's block start (the circle interpolator's set-up and its
+/// ramp) is the longest the preparation task runs for one command.
+#[test]
+fn status_answered_within_2_ms_during_a_stream_of_arcs() {
+    assert_bound(Load::Arcs, 300);
+}
+
 /// At one step per block every step command is a block start (about 0.1 ms on the
 /// board); the preparation task (priority 5, with the USB task, above the protocol)
 /// prepares only `pipeline::MIN_AHEAD` (2) commands beyond its 5 ms horizon, so a
