@@ -119,8 +119,12 @@ pub fn idle_load(elf: &Path, seconds: u64) -> Result<Load, String> {
 /// answer times, the interrupt lateness of the cycle model.
 pub struct Drawing {
     pub load: Load,
-    /// `?` answer times (OUT packet to IN packet), in time units.
+    /// `?` answer times (OUT packet to IN packet), in time units, of the questions
+    /// during which the flash was not written.
     pub answers: Vec<u64>,
+    /// The same for the questions that overlapped a settings save's flash writes (the
+    /// `$` lines at the top of star.nc): the CPU stalls while the flash is programmed.
+    pub answers_during_save: Vec<u64>,
     pub lateness: crate::machine::Lateness,
 }
 
@@ -135,7 +139,16 @@ pub fn drawing(elf: &Path) -> Result<Drawing, String> {
     let mut next_q = s.now();
     let mut steps_seen = 0;
     let (_, star) = PROGRAMS[0];
+    // When the flash was programmed or erased (seen once per slot of the host's
+    // schedule): a `?` whose answer spans one of these waited for a settings save.
+    let mut flash_ops = s.m.board().flash.ops;
+    let mut flash_at: Vec<u64> = Vec::new();
     let mut watch = |s: &mut Session| {
+        let ops = s.m.board().flash.ops;
+        if ops != flash_ops {
+            flash_ops = ops;
+            flash_at.push(s.now());
+        }
         if s.now() >= next_q {
             s.send(b"?");
             next_q = s.now() + 50 * T_PER_MS + 37 * T_PER_US;
@@ -172,19 +185,30 @@ pub fn drawing(elf: &Path) -> Result<Drawing, String> {
     let load = load_between(&marks[0], &marks[1]);
     let packets = s.m.board().host.packets.take().unwrap_or_default();
     let mut answers = Vec::new();
+    let mut answers_during_save = Vec::new();
     for (i, p) in packets.iter().enumerate() {
         if p.out && p.data.contains(&b'?') {
             if let Some(r) = packets[i + 1..]
                 .iter()
                 .find(|r| !r.out && r.data.contains(&b'<'))
             {
-                answers.push(r.t - p.t);
+                // A flash operation seen after the OUT packet and no later than one
+                // host slot after the IN packet (when the watch last looked).
+                let saving = flash_at
+                    .iter()
+                    .any(|&f| f > p.t && f <= r.t + crate::usb_host::SLOT_T);
+                if saving {
+                    answers_during_save.push(r.t - p.t);
+                } else {
+                    answers.push(r.t - p.t);
+                }
             }
         }
     }
     Ok(Drawing {
         load,
         answers,
+        answers_during_save,
         lateness: s.m.state().lateness.clone(),
     })
 }
@@ -380,11 +404,18 @@ pub fn run(elf: &Path) -> Result<String, String> {
     let mean = a.iter().sum::<u64>() as f64 / a.len() as f64;
     let _ = writeln!(
         out,
-        "\n| figure | value |\n|---|---|\n| `?` answer, OUT packet to IN packet ({} questions while drawing star.nc) | min {:.0} µs, mean {:.0} µs, max {:.0} µs |",
+        "\n| figure | value |\n|---|---|\n| `?` answer, OUT packet to IN packet ({} questions while streaming star.nc) | min {:.0} µs, mean {:.0} µs, max {:.0} µs |",
         a.len(),
         us(*a.iter().min().unwrap_or(&0)),
         mean / T_PER_US as f64,
         us(*a.iter().max().unwrap_or(&0)),
+    );
+    let saving = &draw.answers_during_save;
+    let _ = writeln!(
+        out,
+        "| `?` answer while a settings save writes the flash (the `$` lines at the top of star.nc; the CPU stalls on flash writes) | {} questions, max {:.0} µs |",
+        saving.len(),
+        us(*saving.iter().max().unwrap_or(&0)),
     );
     let (off, after) = estop_latency(elf, 8)?;
     let _ = writeln!(

@@ -104,12 +104,15 @@ enum Cmd {
         #[arg(long)]
         elf: Option<PathBuf>,
     },
-    /// The `?` answer time during long character-counting streams (one-step moves and
-    /// ordinary moves): median, p99 and max; exits 1 if any answer took over 2 ms.
+    /// The `?` answer time during long character-counting streams (one-step moves,
+    /// ordinary moves, arcs): median, p99 and max; exits 1 if any answer took over 2 ms.
     Latency {
         /// Lines per stream.
         #[arg(long, default_value_t = 100_000)]
         lines: usize,
+        /// The streams to run (repeatable; default all): one-step, ordinary, arcs.
+        #[arg(long = "load", value_parser = ["one-step", "ordinary", "arcs"])]
+        loads: Vec<String>,
         /// A `?` every this many ms (the next only once the last is answered).
         #[arg(long, default_value_t = 10)]
         every_ms: u64,
@@ -397,6 +400,7 @@ fn cmd_bench(elf: Option<PathBuf>) -> Result<ExitCode, String> {
 
 fn cmd_latency(
     lines: usize,
+    loads: &[String],
     every_ms: u64,
     explain: bool,
     elf: Option<PathBuf>,
@@ -405,7 +409,15 @@ fn cmd_latency(
     let elf = elf_or_build(elf)?;
     println!("{TABLE_HEAD}");
     let mut ok = true;
-    for load in [Load::OneStep, Load::Ordinary, Load::Arcs] {
+    let all = [
+        ("one-step", Load::OneStep),
+        ("ordinary", Load::Ordinary),
+        ("arcs", Load::Arcs),
+    ];
+    let chosen = all
+        .into_iter()
+        .filter(|(name, _)| loads.is_empty() || loads.iter().any(|l| l == name));
+    for (_, load) in chosen {
         let l = measure(&elf, load, lines, every_ms * T_PER_MS, explain)?;
         println!("{}", l.row(load));
         eprintln!(
@@ -500,10 +512,11 @@ fn main() -> ExitCode {
         Cmd::Bench { elf } => cmd_bench(elf),
         Cmd::Latency {
             lines,
+            loads,
             every_ms,
             explain,
             elf,
-        } => cmd_latency(lines, every_ms, explain, elf),
+        } => cmd_latency(lines, &loads, every_ms, explain, elf),
         Cmd::Test { elf, log } => cmd_test(elf, log.as_deref()),
     };
     match r {
