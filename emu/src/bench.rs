@@ -413,8 +413,9 @@ pub fn run(elf: &Path) -> Result<String, String> {
     let saving = &draw.answers_during_save;
     let _ = writeln!(
         out,
-        "| `?` answer while a settings save writes the flash (the `$` lines at the top of star.nc; the CPU stalls on flash writes) | {} questions, max {:.0} µs |",
+        "| `?` answer while a settings save writes the flash (the `$` lines at the top of star.nc; the CPU stalls on flash writes) | {} of the {} questions, max {:.0} µs |",
         saving.len(),
+        saving.len() + a.len(),
         us(*saving.iter().max().unwrap_or(&0)),
     );
     let (off, after) = estop_latency(elf, 8)?;
