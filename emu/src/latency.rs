@@ -123,6 +123,8 @@ pub struct Latency {
     /// the time the `?` waited on the host's side for its OUT packet: the board
     /// NAKing it would show here).
     pub max_from_write: u64,
+    /// Answers that took longer than [`BOUND`] from the sender's write.
+    pub over_bound_from_write: usize,
     /// `?`s that got no report within 100 ms.
     pub unanswered: usize,
     pub lines: usize,
@@ -206,6 +208,7 @@ pub fn measure(
     // The `?` in flight: when its OUT packet went (once seen), when it was written.
     let mut asked: Option<(Option<u64>, u64)> = None;
     let mut max_from_write = 0u64;
+    let mut over_bound_from_write = 0usize;
     let mut next_q = s.now() + every;
     let mut seen = 0usize;
     let start = s.now();
@@ -227,6 +230,7 @@ pub fn measure(
                         diag.push((t, p.t));
                     }
                     max_from_write = max_from_write.max(p.t - w);
+                    over_bound_from_write += usize::from(p.t - w > BOUND);
                     asked = None;
                 }
                 _ => {}
@@ -271,6 +275,7 @@ pub fn measure(
     out.answers = answers;
     out.unanswered = unanswered;
     out.max_from_write = max_from_write;
+    out.over_bound_from_write = over_bound_from_write;
     Ok(out)
 }
 

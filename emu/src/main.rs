@@ -421,8 +421,9 @@ fn cmd_latency(
         let l = measure(&elf, load, lines, every_ms * T_PER_MS, explain)?;
         println!("{}", l.row(load));
         eprintln!(
-            "  from the sender's write: max {:.0} µs",
-            l.max_from_write as f64 / T_PER_MS as f64 * 1000.0
+            "  from the sender's write: max {:.0} µs, {} over 2 ms",
+            l.max_from_write as f64 / T_PER_MS as f64 * 1000.0,
+            l.over_bound_from_write
         );
         for c in l.complaints.iter().take(5) {
             eprintln!("  {c}");
