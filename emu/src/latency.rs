@@ -16,11 +16,11 @@ pub const BOUND: u64 = 2 * T_PER_MS;
 /// A `?` not answered within this long counts as unanswered (and the next one goes out).
 const GIVE_UP: u64 = 100 * T_PER_MS;
 
-/// The streams the answer time is measured on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The streams the answer time is measured on (`--load one-step|ordinary|arcs`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Load {
-    /// One-step moves (`G91 G1 X0.0125` at 80 steps/mm), alternating in X and Y: the
-    /// protocol's line rate is the limit, the receive buffer stays full.
+    /// One-step moves (`G91 G1 X0.0125` at 80 steps/mm) along X, joined at full speed:
+    /// the planner and the receive buffer stay full.
     OneStep,
     /// Ordinary short moves (0.3 to 1.2 mm, the segments of curves from a CAM tool) at
     /// F3000: the motion is the limit, the planner stays full.
@@ -54,17 +54,15 @@ impl Load {
             }
             Load::Ordinary => {
                 p.push_str("G1 F3000\n");
-                // A polyline of segments of varied length and direction (a small
-                // linear congruential sequence, so every run is the same); every
+                // A polyline of segments of varied length and direction (the same
+                // in every run: `next_random`); every
                 // segment is undone 64 lines later, so the pen stays near the start.
                 let mut seed = 12_345u32;
                 let mut segs: Vec<(i32, i32)> = Vec::new();
                 for i in 0..lines {
                     let (dx, dy) = if (i / 64) % 2 == 0 {
-                        seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-                        let dx = (seed >> 16) as i32 % 1200 - 600;
-                        seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-                        let dy = (seed >> 16) as i32 % 1200 - 600;
+                        let dx = (next_random(&mut seed) >> 16) as i32 % 1200 - 600;
+                        let dy = (next_random(&mut seed) >> 16) as i32 % 1200 - 600;
                         // At least 0.3 mm in X: no zero-length moves.
                         let dx = if dx.abs() < 300 {
                             dx.signum() * 300 + dx
@@ -88,16 +86,15 @@ impl Load {
             Load::Arcs => {
                 p.push_str("G1 F3000\n");
                 // Circles in two halves, so the pen comes back to the start after each
-                // pair of lines: radius and turning sense vary line by line pair (the
-                // same congruential sequence as above).
+                // pair of lines: radius and turning sense vary pair by pair.
                 let mut seed = 54_321u32;
                 let mut radius_um = 300;
                 let mut arc = "G2";
                 for i in 0..lines {
                     if i % 2 == 0 {
-                        seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
-                        radius_um = 300 + (seed >> 16) as i32 % 1201;
-                        arc = if (seed >> 8) & 1 == 0 { "G2" } else { "G3" };
+                        let r = next_random(&mut seed);
+                        radius_um = 300 + (r >> 16) as i32 % 1201;
+                        arc = if (r >> 8) & 1 == 0 { "G2" } else { "G3" };
                     }
                     // Out along +X on the first half, back along -X on the second; the
                     // centre is always half way (I relative to the half's start).
@@ -112,6 +109,13 @@ impl Load {
         }
         p
     }
+}
+
+/// The next value of a small linear congruential sequence: the streams vary their
+/// moves, and every run of them is the same.
+fn next_random(seed: &mut u32) -> u32 {
+    *seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+    *seed
 }
 
 /// The answer times of one stream.

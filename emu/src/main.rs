@@ -110,9 +110,9 @@ enum Cmd {
         /// Lines per stream.
         #[arg(long, default_value_t = 100_000)]
         lines: usize,
-        /// The streams to run (repeatable; default all): one-step, ordinary, arcs.
-        #[arg(long = "load", value_parser = ["one-step", "ordinary", "arcs"])]
-        loads: Vec<String>,
+        /// The streams to run (repeatable; default all).
+        #[arg(long = "load", value_enum)]
+        loads: Vec<inkstep_emu::latency::Load>,
         /// A `?` every this many ms (the next only once the last is answered).
         #[arg(long, default_value_t = 10)]
         every_ms: u64,
@@ -400,7 +400,7 @@ fn cmd_bench(elf: Option<PathBuf>) -> Result<ExitCode, String> {
 
 fn cmd_latency(
     lines: usize,
-    loads: &[String],
+    loads: &[inkstep_emu::latency::Load],
     every_ms: u64,
     explain: bool,
     elf: Option<PathBuf>,
@@ -409,15 +409,12 @@ fn cmd_latency(
     let elf = elf_or_build(elf)?;
     println!("{TABLE_HEAD}");
     let mut ok = true;
-    let all = [
-        ("one-step", Load::OneStep),
-        ("ordinary", Load::Ordinary),
-        ("arcs", Load::Arcs),
-    ];
-    let chosen = all
-        .into_iter()
-        .filter(|(name, _)| loads.is_empty() || loads.iter().any(|l| l == name));
-    for (_, load) in chosen {
+    let chosen = if loads.is_empty() {
+        <Load as clap::ValueEnum>::value_variants()
+    } else {
+        loads
+    };
+    for &load in chosen {
         let l = measure(&elf, load, lines, every_ms * T_PER_MS, explain)?;
         println!("{}", l.row(load));
         eprintln!(
