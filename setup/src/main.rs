@@ -13,7 +13,8 @@
 //! - cmake and libclang: what the system has (`PATH`; the directories clang-sys
 //!   searches), else Debian's packages when it runs as root, else pinned PyPI wheels in
 //!   `.tools/` inside the project (no root needed). `--user` (or `INKSTEP_SETUP=user`)
-//!   skips the system: only what this user has, and the wheels.
+//!   skips the system: only what this user has, and the wheels. (`INKSTEP_TOOLS`
+//!   names another folder than `.tools/`.)
 //!
 //! It never upgrades or removes what is there. When everything is found it does nothing
 //! but look (a few milliseconds). It uses the standard library only, because it has to
@@ -187,7 +188,10 @@ impl<'a> Context<'a> {
         let root = root();
         Context {
             opts,
-            tools: root.join(".tools"),
+            // INKSTEP_TOOLS: another folder for what the set-up installs without root.
+            tools: env::var_os("INKSTEP_TOOLS")
+                .map(PathBuf::from)
+                .unwrap_or_else(|| root.join(".tools")),
             root,
             is_root: running_as_root(),
         }
