@@ -247,6 +247,13 @@ fn on_path(name: &str) -> Option<PathBuf> {
         .find(|p| is_executable(p))
 }
 
+/// Whether a path is the system's (its package manager's), which `--user` leaves alone.
+fn is_system(p: &Path) -> bool {
+    ["/usr", "/bin", "/sbin", "/opt", "/lib"]
+        .iter()
+        .any(|dir| p.starts_with(dir))
+}
+
 fn is_executable(p: &Path) -> bool {
     use std::os::unix::fs::PermissionsExt;
     fs::metadata(p).is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
@@ -372,11 +379,7 @@ fn flip_link(ctx: &Context, found: &mut Found) -> Result<(), String> {
 
 fn cmake(ctx: &Context, found: &mut Found) -> Result<(), String> {
     let wheel_bin = ctx.tools.join("cmake/cmake/data/bin/cmake");
-    let system = if ctx.opts.user_only {
-        None
-    } else {
-        on_path("cmake")
-    };
+    let system = on_path("cmake").filter(|p| !(ctx.opts.user_only && is_system(p)));
     let path = match system.or_else(|| is_executable(&wheel_bin).then(|| wheel_bin.clone())) {
         Some(p) => p,
         None => {
