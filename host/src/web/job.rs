@@ -94,7 +94,9 @@ impl Job {
             .iter()
             .map(|m| {
                 let d = if m.kind == MoveKind::Draw { 1.0 } else { 0.0 };
-                [m.from.x, m.from.y, m.to.x, m.to.y, d]
+                // Micrometres are plenty for a drawing, and keep the message short.
+                let r = |v: f64| (v * 1000.0).round() / 1000.0;
+                [r(m.from.x), r(m.from.y), r(m.to.x), r(m.to.y), d]
             })
             .collect()
     }

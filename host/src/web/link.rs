@@ -24,7 +24,7 @@ use std::collections::{BTreeMap, VecDeque};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use tokio::sync::broadcast;
+use tokio::sync::{broadcast, watch};
 
 /// What a browser asks of the machine.
 pub enum Request {
@@ -48,14 +48,26 @@ const STATUS_HZ: u64 = 20;
 const LOG_KEEP: usize = 100;
 /// Path points kept (a long job at 20 reports a second: about 14 hours).
 const PATH_KEEP: usize = 1_000_000;
+/// Small events (log lines, answers, control changes) kept for browsers that
+/// are behind; one further behind is dropped and reconnects.
+pub const EVENTS: usize = 256;
+/// Points (path) or moves (preview) in one message.
+pub const CHUNK: usize = 2048;
+/// About the largest message of [`CHUNK`] rows, bytes.
+pub const CHUNK_BYTES: usize = CHUNK * 64;
+
+/// A job as browsers are sent it: what it is, then its preview in pieces
+/// (serialized once, shared by every browser).
+pub struct JobView {
+    pub head: Arc<str>,
+    pub preview: Vec<Arc<str>>,
+}
 
 /// What a browser joining now is sent first.
 #[derive(Default)]
 pub struct Snapshot {
     pub link: Option<Value>,
-    pub status: Option<Value>,
     pub settings: Option<Value>,
-    pub job: Option<Value>,
     pub path: Vec<[f64; 3]>,
     pub log: VecDeque<Value>,
     /// The pen's work position, for planning a text or SVG from there.
@@ -66,14 +78,21 @@ pub struct Snapshot {
 
 /// Shared between the link thread and the web handlers.
 pub struct Hub {
+    /// Small events, in order.
     pub out: broadcast::Sender<Arc<str>>,
+    /// The latest status report (a browser behind skips the stale ones).
+    pub status: watch::Sender<Option<Arc<str>>>,
+    /// The job loaded.
+    pub job: watch::Sender<Option<Arc<JobView>>>,
     pub snapshot: Mutex<Snapshot>,
 }
 
 impl Hub {
     pub fn new() -> Arc<Hub> {
         Arc::new(Hub {
-            out: broadcast::channel(4096).0,
+            out: broadcast::channel(EVENTS).0,
+            status: watch::channel(None).0,
+            job: watch::channel(None).0,
             snapshot: Mutex::new(Snapshot {
                 rapid: 3000.0,
                 ..Snapshot::default()
@@ -92,17 +111,32 @@ impl Hub {
         let _ = self.out.send(msg.to_string().into());
     }
 
-    /// The messages that bring a new browser up to date.
-    pub fn catch_up(&self) -> Vec<Value> {
+    /// The small messages that bring a new browser up to date (the job,
+    /// the path and the status follow on their own).
+    pub fn catch_up(&self) -> Vec<Arc<str>> {
         let s = self.snapshot();
-        let mut v: Vec<Value> = [&s.link, &s.settings, &s.job, &s.status]
+        [&s.link, &s.settings]
             .into_iter()
             .flatten()
-            .cloned()
-            .collect();
-        v.push(json!({"t": "path", "pts": s.path}));
-        v.extend(s.log.iter().cloned());
-        v
+            .chain(s.log.iter())
+            .map(|m| m.to_string().into())
+            .collect()
+    }
+
+    /// The path's points from `from` on, at most [`CHUNK`] of them, as a
+    /// message; None past its end (an empty path is one empty message).
+    pub fn path_piece(&self, from: usize) -> Option<Arc<str>> {
+        let s = self.snapshot();
+        if from > 0 && from >= s.path.len() {
+            return None;
+        }
+        let end = (from + CHUNK).min(s.path.len());
+        let pts = s.path.get(from..end).unwrap_or(&[]);
+        Some(json!({"t": "path", "from": from, "pts": pts}).to_string().into())
+    }
+
+    fn set_status(&self, msg: Option<&Value>) {
+        self.status.send_replace(msg.map(|m| m.to_string().into()));
     }
 
     pub fn pen_and_rapid(&self) -> (Pt, f64) {
@@ -156,6 +190,12 @@ struct Link {
     wco: [f64; 3],
     overrides: [u32; 3],
     last: Option<[f64; 3]>,
+    /// Jobs loaded so far (the page tells a job's pieces from another's).
+    generation: u64,
+    /// The machine's state in its last report ("" when none or the port is away).
+    state: String,
+    /// The last alarm the machine raised.
+    alarm: Option<u32>,
 }
 
 /// Runs the link to `port` until `requests` closes.
@@ -171,6 +211,9 @@ pub fn run(port: String, hub: Arc<Hub>, requests: Receiver<Request>) {
         wco: [0.0; 3],
         overrides: [100; 3],
         last: None,
+        generation: 0,
+        state: String::new(),
+        alarm: None,
     };
     loop {
         let mut p = match Port::open(&port, 115_200) {
@@ -200,6 +243,12 @@ pub fn run(port: String, hub: Arc<Hub>, requests: Receiver<Request>) {
 
 impl Link {
     fn set_link(&mut self, port: &str, up: bool, error: &str) {
+        if !up {
+            // Nothing known about the machine now: no position or state to show.
+            self.hub.set_status(None);
+            self.state.clear();
+            self.last = None;
+        }
         let m = json!({"t": "link", "port": port, "up": up, "error": error});
         self.hub.snapshot().link = Some(m.clone());
         self.hub.publish(&m);
@@ -312,15 +361,24 @@ impl Link {
     }
 
     fn load(&mut self, job: Job) {
-        let m = json!({
+        self.generation += 1;
+        let head = json!({
             "t": "job",
+            "gen": self.generation,
             "name": job.name,
             "lines": job.lines.len(),
             "est_s": job.total_s(),
-            "preview": job.preview(),
+            "moves": job.moves.len(),
         });
-        self.hub.snapshot().job = Some(m.clone());
-        self.hub.publish(&m);
+        let preview = job
+            .preview()
+            .chunks(CHUNK)
+            .map(|rows| json!({"t": "preview", "gen": self.generation, "rows": rows}).to_string().into())
+            .collect();
+        self.hub.job.send_replace(Some(Arc::new(JobView {
+            head: head.to_string().into(),
+            preview,
+        })));
         self.hub.log(&format!(
             "loaded {}: {} lines, about {:.0} s",
             job.name,
@@ -335,9 +393,24 @@ impl Link {
             return;
         }
         let Some(job) = &self.job else {
-            self.hub.log("nothing loaded to run");
+            self.refuse_run("nothing loaded to run");
             return;
         };
+        if self.state.starts_with("Alarm") {
+            let why = match self.alarm {
+                Some(n) => format!(
+                    "Run refused: the machine is in alarm (ALARM:{n}, {}); unlock ($X) or home ($H) first",
+                    alarm_text(n)
+                ),
+                None => "Run refused: the machine is in alarm; unlock ($X) or home ($H) first".into(),
+            };
+            self.refuse_run(&why);
+            return;
+        }
+        if self.state.is_empty() {
+            self.refuse_run("Run refused: no report from the machine yet");
+            return;
+        }
         for (i, l) in job.lines.iter().enumerate() {
             self.sender.push(Origin::Job(i), l.text.as_str());
         }
@@ -352,6 +425,12 @@ impl Link {
         self.last = None;
         self.hub.publish(&json!({"t": "clear"}));
         self.hub.log(&format!("running {}", job.name));
+    }
+
+    fn refuse_run(&self, why: &str) {
+        self.hub.log(why);
+        self.hub
+            .publish(&json!({"t": "done", "ok": false, "why": why}));
     }
 
     fn abort_job(&mut self, why: &str) {
@@ -397,12 +476,21 @@ impl Link {
                     self.sender.push(Origin::Listing, "$$");
                 }
             }
-            Event::Answered(Origin::Listing, _) => self.publish_settings(),
+            Event::Answered(Origin::Listing, Answer::Ok) => self.publish_settings(),
+            Event::Answered(Origin::Listing, Answer::Error(n)) => {
+                // Refused (error:8 while moving): the table shown stays.
+                self.listing.clear();
+                self.hub.log(&format!(
+                    "$$: error:{n} ({}); the settings shown are unchanged",
+                    error_text(n)
+                ));
+            }
             Event::Reply(Reply::Setting(n, v)) => {
                 self.listing.insert(n, v);
             }
             Event::Reply(Reply::Status(s)) => self.status(p, &s)?,
             Event::Reply(Reply::Alarm(n)) => {
+                self.alarm = Some(n);
                 self.abort_job(&format!("ALARM:{n} ({})", alarm_text(n)));
                 self.hub.log(&format!("ALARM:{n} ({})", alarm_text(n)));
             }
@@ -469,6 +557,7 @@ impl Link {
         if let Some(o) = s.overrides {
             self.overrides = o;
         }
+        self.state.clone_from(&s.state);
         let Some(m) = s.machine_pos(self.wco) else {
             return Ok(());
         };
@@ -532,9 +621,8 @@ impl Link {
             if moved && snap.path.len() < PATH_KEEP {
                 snap.path.push(point);
             }
-            snap.status = Some(msg.clone());
         }
-        self.hub.publish(&msg);
+        self.hub.set_status(Some(&msg));
         if finished {
             if let Some(r) = self.running.take() {
                 let t = r.started.elapsed().as_secs_f64();
