@@ -68,6 +68,8 @@ pub struct JobView {
 pub struct Snapshot {
     pub link: Option<Value>,
     pub settings: Option<Value>,
+    pub fw: Option<Value>,
+    pub alarm: Option<Value>,
     pub path: Vec<[f64; 3]>,
     pub log: VecDeque<Value>,
     /// The pen's work position, for planning a text or SVG from there.
@@ -115,7 +117,7 @@ impl Hub {
     /// the path and the status follow on their own).
     pub fn catch_up(&self) -> Vec<Arc<str>> {
         let s = self.snapshot();
-        [&s.link, &s.settings]
+        [&s.link, &s.fw, &s.alarm, &s.settings]
             .into_iter()
             .flatten()
             .chain(s.log.iter())
@@ -167,6 +169,8 @@ enum Origin {
     },
     /// The link's own `$$` after connecting or a settings change.
     Listing,
+    /// The link's own `$I` (the version) after connecting.
+    Info,
 }
 
 struct Running {
@@ -247,6 +251,7 @@ impl Link {
             // Nothing known about the machine now: no position or state to show.
             self.hub.set_status(None);
             self.state.clear();
+            self.hub.snapshot().fw = None;
             self.last = None;
         }
         let m = json!({"t": "link", "port": port, "up": up, "error": error});
@@ -276,6 +281,7 @@ impl Link {
         requests: &Receiver<Request>,
     ) -> std::io::Result<()> {
         self.sender.push(Origin::Listing, "$$");
+        self.sender.push(Origin::Info, "$I");
         p.send(b"?")?;
         let poll_every = Duration::from_millis(1000 / STATUS_HZ);
         let mut last_poll = Instant::now();
@@ -379,6 +385,10 @@ impl Link {
             head: head.to_string().into(),
             preview,
         })));
+        // The last run's drawing would hide the new preview.
+        self.hub.snapshot().path.clear();
+        self.last = None;
+        self.hub.publish(&json!({"t": "clear"}));
         self.hub.log(&format!(
             "loaded {}: {} lines, about {:.0} s",
             job.name,
@@ -476,6 +486,7 @@ impl Link {
                     self.sender.push(Origin::Listing, "$$");
                 }
             }
+            Event::Answered(Origin::Info, _) => {}
             Event::Answered(Origin::Listing, Answer::Ok) => self.publish_settings(),
             Event::Answered(Origin::Listing, Answer::Error(n)) => {
                 // Refused (error:8 while moving): the table shown stays.
@@ -491,6 +502,9 @@ impl Link {
             Event::Reply(Reply::Status(s)) => self.status(p, &s)?,
             Event::Reply(Reply::Alarm(n)) => {
                 self.alarm = Some(n);
+                let m = json!({"t": "alarm", "n": n, "text": alarm_text(n)});
+                self.hub.snapshot().alarm = Some(m.clone());
+                self.hub.publish(&m);
                 self.abort_job(&format!("ALARM:{n} ({})", alarm_text(n)));
                 self.hub.log(&format!("ALARM:{n} ({})", alarm_text(n)));
             }
@@ -501,9 +515,15 @@ impl Link {
                 self.stopping = None;
                 self.abort_job("the controller restarted");
                 self.hub.log(&w);
+                self.set_firmware(&w);
                 self.sender.push(Origin::Listing, "$$");
             }
-            Event::Reply(Reply::Feedback(f)) => self.hub.log(&format!("[{f}]")),
+            Event::Reply(Reply::Feedback(f)) => {
+                if let Some(v) = f.strip_prefix("VER:") {
+                    self.set_firmware(&format!("Grbl {}", v.trim_end_matches(':')));
+                }
+                self.hub.log(&format!("[{f}]"));
+            }
             Event::Reply(Reply::Ok | Reply::Error(_) | Reply::Other(_)) => {}
         }
         Ok(())
@@ -533,6 +553,14 @@ impl Link {
         }
         s.settings = Some(m.clone());
         drop(s);
+        self.hub.publish(&m);
+    }
+
+    /// The firmware's name and version, shown in the page.
+    fn set_firmware(&self, text: &str) {
+        let text = text.split(" [").next().unwrap_or(text).trim();
+        let m = json!({"t": "fw", "text": text});
+        self.hub.snapshot().fw = Some(m.clone());
         self.hub.publish(&m);
     }
 
