@@ -84,7 +84,13 @@ fn serve_with(listen: &str, private: bool, machine: &str, extra: &[&str]) -> Ser
         let mut line = String::new();
         while out.read_line(&mut line).unwrap_or(0) > 0 {
             // The announcement ends with the QR code's last row.
-            if !(skipping && (line.starts_with("  http://") || line.contains('\u{2580}') || line.contains('\u{2588}') || line.contains('\u{2584}') || line.trim().is_empty())) {
+            if !(skipping
+                && (line.starts_with("  http://")
+                    || line.contains('\u{2580}')
+                    || line.contains('\u{2588}')
+                    || line.contains('\u{2584}')
+                    || line.trim().is_empty()))
+            {
                 skipping = false;
                 l.lock().unwrap().push_str(&line);
             }
@@ -116,7 +122,11 @@ fn request(port: u16, path: &str, host: &str, more: &str) -> (u16, String) {
     let mut all = Vec::new();
     let _ = s.read_to_end(&mut all);
     let text = String::from_utf8_lossy(&all).to_string();
-    let head = text.split("\r\n\r\n").next().unwrap_or("").to_ascii_lowercase();
+    let head = text
+        .split("\r\n\r\n")
+        .next()
+        .unwrap_or("")
+        .to_ascii_lowercase();
     (text[9..12].parse().unwrap(), head)
 }
 
@@ -248,7 +258,10 @@ async fn a_rebinding_page_gets_nothing() {
     let s = serve("127.0.0.1:0", false);
     let p = s.port;
     assert_eq!(request(p, "/", &format!("evil.example:{p}"), "").0, 421);
-    assert_eq!(request(p, "/app.js", &format!("evil.example:{p}"), "").0, 421);
+    assert_eq!(
+        request(p, "/app.js", &format!("evil.example:{p}"), "").0,
+        421
+    );
     let evil = format!("http://evil.example:{p}");
     assert_eq!(
         connect_as(p, None, Some(&evil), Some(&format!("evil.example:{p}")))
@@ -260,16 +273,23 @@ async fn a_rebinding_page_gets_nothing() {
     assert_eq!(request(p, "/", &format!("localhost:{p}"), "").0, 200);
     assert_eq!(request(p, "/", &format!("127.0.0.1:{p}"), "").0, 200);
     let local = format!("http://localhost:{p}");
-    assert!(connect_as(p, None, Some(&local), Some(&format!("localhost:{p}")))
-        .await
-        .is_ok());
+    assert!(
+        connect_as(p, None, Some(&local), Some(&format!("localhost:{p}")))
+            .await
+            .is_ok()
+    );
     // A page on another port of this computer is another origin.
     assert_eq!(
         connect(p, None, Some("http://127.0.0.1:1")).await.err(),
         Some(403)
     );
     // --allow-host adds a name, and only that one.
-    let named = serve_with("127.0.0.1:0", false, "/nonexistent/inkstep-tty", &["--allow-host", "plotter.lan"]);
+    let named = serve_with(
+        "127.0.0.1:0",
+        false,
+        "/nonexistent/inkstep-tty",
+        &["--allow-host", "plotter.lan"],
+    );
     let q = named.port;
     assert_eq!(request(q, "/", &format!("plotter.lan:{q}"), "").0, 200);
     assert_eq!(request(q, "/", &format!("evil.example:{q}"), "").0, 421);
@@ -286,7 +306,12 @@ async fn the_page_cannot_be_framed_and_sends_no_referrer() {
             .lines()
             .find_map(|l| l.strip_prefix("content-security-policy: "))
             .unwrap_or_else(|| panic!("{path}: no CSP in {head}"));
-        for part in ["frame-ancestors 'none'", "default-src 'none'", "script-src 'self'", "connect-src 'self'"] {
+        for part in [
+            "frame-ancestors 'none'",
+            "default-src 'none'",
+            "script-src 'self'",
+            "connect-src 'self'",
+        ] {
             assert!(csp.contains(part), "{path}: {csp}");
         }
         assert!(!csp.contains("unsafe"), "{csp}");
@@ -294,7 +319,11 @@ async fn the_page_cannot_be_framed_and_sends_no_referrer() {
     }
     // The page has no inline script or style (the CSP would block them).
     let mut t = std::net::TcpStream::connect(("127.0.0.1", s.port)).unwrap();
-    write!(t, "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n").unwrap();
+    write!(
+        t,
+        "GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n"
+    )
+    .unwrap();
     let mut page = String::new();
     t.read_to_string(&mut page).unwrap();
     assert!(page.contains("<script src=\"/app.js\"></script>"));
@@ -307,7 +336,10 @@ async fn the_token_stays_out_of_the_logs() {
     let token = s.token.clone().unwrap();
     assert_eq!(get(s.port, &format!("/?token={token}")), 200);
     assert_eq!(get(s.port, &format!("/?token={token}x")), 401);
-    assert_eq!(request(s.port, &format!("/?token={token}"), "evil.example", "").0, 421);
+    assert_eq!(
+        request(s.port, &format!("/?token={token}"), "evil.example", "").0,
+        421
+    );
     let mut ctl = connect(s.port, Some(&token), None).await.unwrap();
     assert_eq!(next(&mut ctl, "hello").await["role"], "control");
     say(&mut ctl, r#"{"t":"cmd","id":1,"line":"$$"}"#).await;
@@ -325,8 +357,14 @@ async fn the_token_stays_out_of_the_logs() {
     drop(ctl);
     tokio::time::sleep(Duration::from_millis(300)).await;
     let later = s.later.lock().unwrap().clone();
-    assert!(!later.contains(&token), "the token was printed again: {later}");
-    assert!(!logged.contains(&token), "the token reached a browser: {logged}");
+    assert!(
+        !later.contains(&token),
+        "the token was printed again: {later}"
+    );
+    assert!(
+        !logged.contains(&token),
+        "the token reached a browser: {logged}"
+    );
 }
 
 #[tokio::test]
@@ -348,8 +386,15 @@ async fn connections_and_messages_are_bounded_with_an_error() {
         .unwrap()
         .contains("at most 1048576"));
     // A job over the limit is refused before it is sent, with the limit.
-    say(&mut ws, r#"{"t":"load","kind":"gcode","name":"huge.nc","parts":200,"bytes":100000000}"#).await;
-    let e = next(&mut ws, "error").await["text"].as_str().unwrap().to_string();
+    say(
+        &mut ws,
+        r#"{"t":"load","kind":"gcode","name":"huge.nc","parts":200,"bytes":100000000}"#,
+    )
+    .await;
+    let e = next(&mut ws, "error").await["text"]
+        .as_str()
+        .unwrap()
+        .to_string();
     assert!(e.contains("huge.nc") && e.contains("64 MB"), "{e}");
     // The connection is still usable.
     say(&mut ws, r#"{"t":"cmd","id":2,"line":"G0 X1!"}"#).await;

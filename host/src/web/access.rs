@@ -172,7 +172,13 @@ mod tests {
     #[test]
     fn only_requests_naming_this_server() {
         let lo = Access::new("127.0.0.1".parse().unwrap(), false, &[]);
-        for ok in ["127.0.0.1:8080", "localhost:8080", "LocalHost", "[::1]:8080", "127.0.0.2"] {
+        for ok in [
+            "127.0.0.1:8080",
+            "localhost:8080",
+            "LocalHost",
+            "[::1]:8080",
+            "127.0.0.2",
+        ] {
             assert!(lo.host_allowed(Some(ok)), "{ok}");
         }
         for bad in [
@@ -188,7 +194,11 @@ mod tests {
             assert!(!lo.host_allowed(Some(bad)), "{bad}");
         }
         assert!(!lo.host_allowed(None));
-        let lan = Access::new("192.168.1.5".parse().unwrap(), false, &["Plotter.local".into()]);
+        let lan = Access::new(
+            "192.168.1.5".parse().unwrap(),
+            false,
+            &["Plotter.local".into()],
+        );
         assert!(lan.host_allowed(Some("192.168.1.5:8080")));
         assert!(lan.host_allowed(Some("plotter.local:8080")));
         assert!(!lan.host_allowed(Some("localhost:8080")));
@@ -203,24 +213,12 @@ mod tests {
     fn websockets_only_from_the_page_itself() {
         let lo = Access::new("127.0.0.1".parse().unwrap(), false, &[]);
         assert!(lo.origin_allowed(None, Some("127.0.0.1:8080")));
-        assert!(lo.origin_allowed(
-            Some("http://127.0.0.1:8080"),
-            Some("127.0.0.1:8080")
-        ));
-        assert!(!lo.origin_allowed(
-            Some("http://evil.example"),
-            Some("127.0.0.1:8080")
-        ));
+        assert!(lo.origin_allowed(Some("http://127.0.0.1:8080"), Some("127.0.0.1:8080")));
+        assert!(!lo.origin_allowed(Some("http://evil.example"), Some("127.0.0.1:8080")));
         assert!(!lo.origin_allowed(Some("null"), Some("127.0.0.1:8080")));
         // Rebinding: Origin and Host agree, but name another site.
-        assert!(!lo.origin_allowed(
-            Some("http://evil.example:8080"),
-            Some("evil.example:8080")
-        ));
+        assert!(!lo.origin_allowed(Some("http://evil.example:8080"), Some("evil.example:8080")));
         // Another port on this computer is another origin.
-        assert!(!lo.origin_allowed(
-            Some("http://127.0.0.1:9999"),
-            Some("127.0.0.1:8080")
-        ));
+        assert!(!lo.origin_allowed(Some("http://127.0.0.1:9999"), Some("127.0.0.1:8080")));
     }
 }

@@ -74,8 +74,8 @@ pub struct Snapshot {
     pub log: VecDeque<Value>,
     /// The pen's work position, for planning a text or SVG from there.
     pub pen: Pt,
-    /// Rapid rate (mm/min) for time estimates.
-    pub rapid: f64,
+    /// The settings time estimates need.
+    pub machine: super::job::Machine,
 }
 
 /// Shared between the link thread and the web handlers.
@@ -95,10 +95,7 @@ impl Hub {
             out: broadcast::channel(EVENTS).0,
             status: watch::channel(None).0,
             job: watch::channel(None).0,
-            snapshot: Mutex::new(Snapshot {
-                rapid: 3000.0,
-                ..Snapshot::default()
-            }),
+            snapshot: Mutex::new(Snapshot::default()),
         })
     }
 
@@ -134,16 +131,20 @@ impl Hub {
         }
         let end = (from + CHUNK).min(s.path.len());
         let pts = s.path.get(from..end).unwrap_or(&[]);
-        Some(json!({"t": "path", "from": from, "pts": pts}).to_string().into())
+        Some(
+            json!({"t": "path", "from": from, "pts": pts})
+                .to_string()
+                .into(),
+        )
     }
 
     fn set_status(&self, msg: Option<&Value>) {
         self.status.send_replace(msg.map(|m| m.to_string().into()));
     }
 
-    pub fn pen_and_rapid(&self) -> (Pt, f64) {
+    pub fn pen_and_machine(&self) -> (Pt, super::job::Machine) {
         let s = self.snapshot();
-        (s.pen, s.rapid)
+        (s.pen, s.machine)
     }
 
     fn log(&self, text: &str) {
@@ -379,7 +380,11 @@ impl Link {
         let preview = job
             .preview()
             .chunks(CHUNK)
-            .map(|rows| json!({"t": "preview", "gen": self.generation, "rows": rows}).to_string().into())
+            .map(|rows| {
+                json!({"t": "preview", "gen": self.generation, "rows": rows})
+                    .to_string()
+                    .into()
+            })
             .collect();
         self.hub.job.send_replace(Some(Arc::new(JobView {
             head: head.to_string().into(),
@@ -542,15 +547,10 @@ impl Link {
                 json!([n, v, name])
             })
             .collect();
-        let rapid = [110u16, 111]
-            .iter()
-            .filter_map(|n| self.settings.get(n)?.parse::<f64>().ok())
-            .fold(f64::INFINITY, f64::min);
+        let machine = super::job::Machine::from_settings(|n| self.setting(n));
         let m = json!({"t": "settings", "list": list});
         let mut s = self.hub.snapshot();
-        if rapid.is_finite() {
-            s.rapid = rapid;
-        }
+        s.machine = machine;
         s.settings = Some(m.clone());
         drop(s);
         self.hub.publish(&m);

@@ -584,8 +584,14 @@ fn too_big(name: &str, bytes: usize) -> String {
 }
 
 /// Builds a job away from the async threads and hands it to the link.
-async fn build(app: &Arc<App>, kind: String, name: String, data: String, size: f64) -> Option<Value> {
-    let (pen, rapid) = app.hub.pen_and_rapid();
+async fn build(
+    app: &Arc<App>,
+    kind: String,
+    name: String,
+    data: String,
+    size: f64,
+) -> Option<Value> {
+    let (pen, machine) = app.hub.pen_and_machine();
     let failed = name.clone();
     let built = tokio::task::spawn_blocking(move || {
         let src = match kind.as_str() {
@@ -593,7 +599,7 @@ async fn build(app: &Arc<App>, kind: String, name: String, data: String, size: f
             "text" => Source::Text(&data, size),
             _ => Source::Gcode(&data),
         };
-        Job::new(&name, src, pen, rapid)
+        Job::new(&name, src, pen, &machine)
     })
     .await;
     match built {
@@ -612,7 +618,12 @@ mod tests {
 
     #[test]
     fn only_printable_ascii_lines_go_to_the_board() {
-        for ok in ["$X", "$J=G91 G21 X10 F2000", "$110=2500", "G0 X1 (a comment)"] {
+        for ok in [
+            "$X",
+            "$J=G91 G21 X10 F2000",
+            "$110=2500",
+            "G0 X1 (a comment)",
+        ] {
             assert_eq!(check_line(ok), Ok(()), "{ok}");
         }
         for bad in [
@@ -630,6 +641,8 @@ mod tests {
             assert!(check_line(bad).is_err(), "{bad:?}");
         }
         assert!(check_line(&"G0".repeat(61)).is_err());
-        assert!(check_line("G4 P0\u{18}").unwrap_err().contains("control character"));
+        assert!(check_line("G4 P0\u{18}")
+            .unwrap_err()
+            .contains("control character"));
     }
 }
