@@ -133,6 +133,97 @@ try {
   const drawn = await page.evaluate(() => window.inkstep.path.filter((p) => p[2]).length);
   check("the text is drawn and the pen parks at the origin",
     textDone && t.done.ok && t.pos[0] === 0 && t.pos[1] === 0 && drawn > 10, `${drawn} pen-down points, at ${t.pos}`);
+
+  // 7. A command line carrying a real-time byte is refused, and nothing is sent.
+  await page.type("#line", "G4 P0 ~");
+  await page.click("#linego");
+  const refused = await waitFor(page, () => !document.querySelector("#banner").hidden &&
+    /real-time/.test(document.querySelector("#bannertext").textContent), null, "refusal banner");
+  check("a console line with a real-time byte is refused where the user looks", refused,
+    await page.$eval("#bannertext", (e) => e.textContent));
+  await page.click("#bclose");
+
+  // 8. $$ refused while moving (error:8) keeps the settings table.
+  const rows0 = await page.$$eval("#settings tr", (r) => r.length);
+  await page.evaluate(() => command("$J=G91 G21 X40 F300"));
+  await waitFor(page, () => window.inkstep.status.state === "Jog", null, "jogging");
+  await page.evaluate(() => send({ t: "cmd", id: 999, line: "$$" }));
+  const refused8 = await waitFor(page, () => /error:8/.test(document.querySelector("#log").textContent), null, "error:8", 10000);
+  await sleep(300);
+  const rows1 = await page.$$eval("#settings tr", (r) => r.length);
+  check("$$ refused while moving keeps the settings table", refused8 && rows1 === rows0 && rows0 > 20, `${rows0} -> ${rows1} rows`);
+  await page.evaluate(() => send({ t: "rt", b: 133 }));
+  await waitFor(page, () => window.inkstep.status.state === "Idle", null, "jog cancelled");
+
+  // 9. An alarm: a banner with its meaning and Unlock; Run is refused with the reason.
+  await page.$eval("#textsize", (e) => { e.value = "8"; });
+  await page.click("#textgo");
+  await waitFor(page, () => window.inkstep.job && window.inkstep.job.complete && !window.inkstep.loading, null, "text loaded again");
+  await page.click("#run");
+  await waitFor(page, () => window.inkstep.status.state === "Run", null, "running");
+  await page.click("#reset");
+  const alarmed = await waitFor(page, () => /^Alarm/.test(window.inkstep.status.state) && !document.querySelector("#banner").hidden, null, "alarm banner");
+  const btext = await page.$eval("#bannertext", (e) => e.textContent);
+  const unlockShown = await page.$eval("#bunlock", (e) => !e.hidden && e.getBoundingClientRect().height >= 44);
+  check("an alarm shows a banner with its meaning and Unlock", alarmed && /ALARM:3/.test(btext) && unlockShown, btext);
+  const runDisabled = await page.$eval("#run", (e) => e.disabled);
+  await page.evaluate(() => { window.inkstep.done = null; send({ t: "run" }); });
+  const why = await waitFor(page, () => window.inkstep.done && /alarm/i.test(window.inkstep.done.why), null, "run refused");
+  const st = await state(page);
+  check("Run is refused in alarm, with the reason", runDisabled && why && /^Alarm/.test(st.state), st.done && st.done.why);
+  await page.click("#bunlock");
+  const unlocked = await waitFor(page, () => window.inkstep.status.state === "Idle" && document.querySelector("#banner").hidden, null, "unlocked");
+  check("Unlock in the banner clears the alarm", unlocked);
+
+  // 10. The page cannot be framed by another site.
+  const framer = await browser.newPage();
+  await framer.setContent(`<iframe id="f" src="${url}" width="400" height="300"></iframe>`);
+  await sleep(1500);
+  const framed = await framer.evaluate(() => {
+    try { const d = document.getElementById("f").contentDocument; return d ? d.body.innerHTML.length : -1; } catch { return -2; }
+  });
+  const inside = framer.frames().filter((f) => f !== framer.mainFrame());
+  const loadedInFrame = await Promise.all(inside.map((f) => f.evaluate(() => !!window.inkstep).catch(() => false)));
+  check("another page cannot frame the view", !loadedInFrame.some(Boolean), `frame content ${framed}`);
+  await framer.close();
+
+  // 11. A phone: the bar stays at the top with state, position, Hold/Resume/Stop
+  // and progress; buttons are at least 44 px; the drawing does not trap scrolling.
+  await page.close();
+  const phone = await browser.newPage();
+  await phone.emulate({ viewport: { width: 390, height: 844, deviceScaleFactor: 2, isMobile: true, hasTouch: true },
+    userAgent: "Mozilla/5.0 (Linux; Android 14) Mobile" });
+  phone.on("pageerror", (e) => check("no script error (phone)", false, e.message));
+  await phone.goto(url, { waitUntil: "load" });
+  await waitFor(phone, () => window.inkstep.status && window.inkstep.settings.length > 20, null, "phone: status");
+  const barOk = async () => phone.evaluate(() => ["state", "pos", "hold", "resume", "stop", "progress"].every((id) => {
+    const r = document.getElementById(id).getBoundingClientRect();
+    return r.height > 0 && r.top >= 0 && r.bottom <= window.innerHeight;
+  }));
+  const atTop = await barOk();
+  await phone.evaluate(() => window.scrollTo(0, document.body.scrollHeight));
+  await sleep(200);
+  const scrolled = await phone.evaluate(() => window.scrollY);
+  const atBottom = await barOk();
+  check("phone: the bar stays in view while scrolling", atTop && atBottom && scrolled > 300, `scrolled ${scrolled} px`);
+  const small = await phone.$$eval("button", (bs) => bs.filter((b) => b.offsetParent && b.getBoundingClientRect().height < 44).map((b) => b.id || b.textContent));
+  check("phone: every button is at least 44 px high", small.length === 0, small.join(", "));
+  const touch = await phone.$eval("#plot", (e) => getComputedStyle(e).touchAction);
+  check("phone: one finger on the drawing scrolls the page", /pan-y/.test(touch) || touch === "auto", touch);
+  await phone.evaluate(() => window.scrollTo(0, 0));
+  await phone.$eval("#textsize", (e) => { e.value = "8"; });
+  await phone.type("#text", "一帆风顺 Hi");
+  await phone.click("#textgo");
+  await waitFor(phone, () => window.inkstep.job && window.inkstep.job.complete && !window.inkstep.loading, null, "text loaded on the phone");
+  await phone.evaluate(() => window.scrollTo(0, 0));
+  await phone.click("#run");
+  await waitFor(phone, () => window.inkstep.status.state === "Run" && window.inkstep.status.job && window.inkstep.status.job.done > 0.4, null, "phone: drawing");
+  if (shots) await phone.screenshot({ path: path.join(shots, "web-view-phone.png") });
+  const paints = await phone.evaluate(() => window.inkstep.paints.slice(-200));
+  const worst = Math.max(...paints);
+  check("repaints while drawing take under 16 ms", paints.length > 5 && worst < 16, `${paints.length} paints, worst ${worst.toFixed(1)} ms`);
+  await waitFor(phone, () => window.inkstep.done && window.inkstep.status.state === "Idle", null, "phone: text done", 60000);
+  await phone.close();
 } catch (e) {
   check("browser session", false, e.stack);
 } finally {

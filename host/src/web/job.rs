@@ -75,6 +75,23 @@ impl Machine {
         }
     }
 
+    /// This machine with settings `set` changed.
+    pub fn with(&self, set: &[(u16, f64)]) -> Machine {
+        let mut m = *self;
+        for &(n, v) in set {
+            match n {
+                110..=112 => m.rate[usize::from(n - 110)] = v.max(1.0),
+                120..=122 => m.accel[usize::from(n - 120)] = v.max(0.1),
+                11 => m.junction = v.max(0.0),
+                201 if v == 1.0 => m.servo_s = Some(m.servo_s.unwrap_or(0.15)),
+                201 => m.servo_s = None,
+                204 => m.servo_s = m.servo_s.map(|_| v / 1000.0),
+                _ => {}
+            }
+        }
+        m
+    }
+
     /// The slowest of the X and Y rates (the page's older rapid figure).
     pub fn rapid(&self) -> f64 {
         self.rate[0].min(self.rate[1])
@@ -234,7 +251,20 @@ impl Job {
             bail!("nothing to run");
         }
         let moves = toolpath::parse(&gcode)?;
-        let ends_s = estimate(&moves, machine);
+        // Settings the job itself makes ($120=500) count for its estimate.
+        let set: Vec<(u16, f64)> = lines
+            .iter()
+            .filter_map(|l| {
+                let (n, v) = l.text.strip_prefix('$')?.split_once('=')?;
+                Some((n.parse().ok()?, v.parse().ok()?))
+            })
+            .collect();
+        let machine = if set.is_empty() {
+            *machine
+        } else {
+            machine.with(&set)
+        };
+        let ends_s = estimate(&moves, &machine);
         Ok(Job {
             name: name.to_string(),
             lines,
