@@ -79,7 +79,7 @@ impl Access {
                 ip == self.listen
             };
         }
-        (self.listen.is_loopback() && name == "localhost") || self.names.iter().any(|n| *n == name)
+        (self.listen.is_loopback() && name == "localhost") || self.names.contains(&name)
     }
 
     /// A websocket may be opened by the page itself only: its Origin (when

@@ -370,10 +370,7 @@ async fn client(mut s: WebSocket, app: Arc<App>, role: Role, _slot: Slot) {
     }
     // The path so far, piece by piece (never all of it held for one browser).
     let mut from = 0;
-    loop {
-        let Some(piece) = app.hub.path_piece(from) else {
-            break;
-        };
+    while let Some(piece) = app.hub.path_piece(from) {
         from += link::CHUNK;
         if !put(&mut s, &piece).await {
             return;
