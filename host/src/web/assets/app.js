@@ -72,17 +72,26 @@ function handle(m) {
       draw(); break;
     case "clear": resetPath(); S.done = null; draw(); break;
     case "job":
-      S.job = { name: m.name, lines: m.lines, est_s: m.est_s, gen: m.gen, moves: m.moves, preview: [], complete: false };
+      S.job = { at: performance.now(), name: m.name, lines: m.lines, est_s: m.est_s, gen: m.gen, moves: m.moves, preview: [], complete: false };
       S.done = null; S.loading = null;
       $("jobinfo").textContent = m.name + ": " + m.lines + " lines, about " + fmtTime(m.est_s) + (m.moves ? " · receiving the preview…" : "");
       $("progress").value = 0; $("jobstate").textContent = "";
       fitView(); invalidate(); showState(); break;
     case "preview":
-      if (S.job && m.gen === S.job.gen) for (const r of m.rows) S.job.preview.push(r);
+      if (S.job && m.gen === S.job.gen) {
+        // The job's extent, kept as the pieces come (never a pass over all of it).
+        const b = S.job.box || [Infinity, Infinity, -Infinity, -Infinity];
+        for (const r of m.rows) {
+          S.job.preview.push(r);
+          if (r[0] < b[0]) b[0] = r[0]; if (r[2] < b[0]) b[0] = r[2]; if (r[0] > b[2]) b[2] = r[0]; if (r[2] > b[2]) b[2] = r[2];
+          if (r[1] < b[1]) b[1] = r[1]; if (r[3] < b[1]) b[1] = r[3]; if (r[1] > b[3]) b[3] = r[1]; if (r[3] > b[3]) b[3] = r[3];
+        }
+        if (m.rows.length) S.job.box = b;
+      }
       break;
     case "preview_end":
       if (S.job) {
-        S.job.complete = true;
+        S.job.complete = true; S.job.took = performance.now() - S.job.at;
         $("jobinfo").textContent = S.job.name + ": " + S.job.lines + " lines, about " + fmtTime(S.job.est_s);
         fitView(); invalidate();
       }
@@ -205,7 +214,8 @@ function addPoint(p) {
 function bounds() {
   let b = null;
   const grow = (x, y) => { b = b ? [Math.min(b[0], x), Math.min(b[1], y), Math.max(b[2], x), Math.max(b[3], y)] : [x, y, x, y]; };
-  if (S.job && S.job.preview.length) for (const m of S.job.preview) { grow(m[0], m[1]); grow(m[2], m[3]); }
+  if (S.job && S.job.box) b = S.job.box.slice();
+  else if (S.job) grow(0, 0);
   else {
     if (pathBox && S.path.length > 1) { grow(pathBox[0], pathBox[1]); grow(pathBox[2], pathBox[3]); }
     else {
@@ -235,8 +245,14 @@ function geometry(c) {
 
 function layer(g) { const c = document.createElement("canvas"); c.width = g.w; c.height = g.h; return c; }
 
+// The grid, then the planned job a slice at a time (about 4 ms a frame, so
+// a job of half a million moves never holds the page). The job's lines are
+// set as pixels straight into the layer's ImageData (Bresenham, clipped to the
+// canvas): the canvas's own anti-aliased stroking of dense, self-crossing
+// paths took hundreds of ms per thousand moves without a GPU.
+const DRAWN = 0xffc8c8c8, TRAVEL = 0xffe4e4e4; // #c8c8c8, #e4e4e4 (ABGR)
 function paintPlan(G) {
-  const c = layer(G), g = c.getContext("2d"), { X, Y, r } = G;
+  const c = layer(G), g = c.getContext("2d", { willReadFrequently: true }), { X, Y, r } = G;
   g.fillStyle = "#fff"; g.fillRect(0, 0, G.w, G.h);
   g.strokeStyle = "#eee"; g.lineWidth = 1;
   const x0 = G.x(0), x1 = G.x(G.w), y0 = G.y(G.h), y1 = G.y(0);
@@ -245,16 +261,62 @@ function paintPlan(G) {
   for (let x = Math.ceil(x0 / step) * step; x <= x1; x += step) { g.moveTo(X(x), 0); g.lineTo(X(x), G.h); }
   for (let y = Math.ceil(y0 / step) * step; y <= y1; y += step) { g.moveTo(0, Y(y)); g.lineTo(G.w, Y(y)); }
   g.stroke();
-  if (S.job) {
-    const segs = (drawn, style, width, dash) => {
-      g.strokeStyle = style; g.lineWidth = width * r; g.setLineDash(dash.map((d) => d * r)); g.beginPath();
-      for (const s of S.job.preview) if (!!s[4] === drawn) { g.moveTo(X(s[0]), Y(s[1])); g.lineTo(X(s[2]), Y(s[3])); }
-      g.stroke(); g.setLineDash([]);
-    };
-    segs(true, "#c8c8c8", 2, []);
-    segs(false, "#e4e4e4", 1, [4, 3]);
+  const img = g.getImageData(0, 0, G.w, G.h);
+  return { c, g, img, px: new Uint32Array(img.data.buffer), done: 0 };
+}
+
+// Clips the segment to [0, w) x [0, h) (Liang-Barsky); null when it misses.
+function clip(x0, y0, x1, y1, w, h) {
+  if (x0 >= 0 && x1 >= 0 && y0 >= 0 && y1 >= 0 && x0 < w - 1 && x1 < w - 1 && y0 < h - 1 && y1 < h - 1) return [x0, y0, x1, y1];
+  let t0 = 0, t1 = 1;
+  const dx = x1 - x0, dy = y1 - y0;
+  for (const [p, q] of [[-dx, x0], [dx, w - 1 - x0], [-dy, y0], [dy, h - 1 - y0]]) {
+    if (p === 0) { if (q < 0) return null; continue; }
+    const t = q / p;
+    if (p < 0) { if (t > t1) return null; if (t > t0) t0 = t; } else { if (t < t0) return null; if (t < t1) t1 = t; }
   }
-  return c;
+  return [x0 + t0 * dx, y0 + t0 * dy, x0 + t1 * dx, y0 + t1 * dy];
+}
+
+function pixLine(P, s, color, thick, dash) {
+  const { px, img } = P, w = img.width, h = img.height;
+  let x0 = Math.round(s[0]), y0 = Math.round(s[1]);
+  const x1 = Math.round(s[2]), y1 = Math.round(s[3]);
+  const dx = Math.abs(x1 - x0), dy = -Math.abs(y1 - y0), sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
+  let err = dx + dy, n = 0;
+  for (;;) {
+    if (!dash || n % 7 < 4) {
+      const i = y0 * w + x0;
+      if (color === DRAWN || px[i] !== DRAWN) px[i] = color;
+      if (thick) {
+        if (x0 + 1 < w) px[i + 1] = color;
+        if (y0 + 1 < h) { px[i + w] = color; if (x0 + 1 < w) px[i + w + 1] = color; }
+      }
+    }
+    if (x0 === x1 && y0 === y1) break;
+    const e2 = 2 * err;
+    if (e2 >= dy) { err += dy; x0 += sx; }
+    if (e2 <= dx) { err += dx; y0 += sy; }
+    n++;
+  }
+}
+
+function planMore(G, budget) {
+  const rows = S.job ? S.job.preview : [], { X, Y } = G, t0 = performance.now(), thick = G.r >= 1.5;
+  while (plan.done < rows.length && performance.now() - t0 < budget) {
+    const end = Math.min(rows.length, plan.done + 100);
+    for (let i = plan.done; i < end; i++) {
+      const m = rows[i], s = clip(X(m[0]), Y(m[1]), X(m[2]), Y(m[3]), G.w, G.h);
+      if (s) pixLine(plan, s, m[4] ? DRAWN : TRAVEL, thick && m[4], !m[4]);
+    }
+    plan.done = end;
+  }
+  // Copying the pixels in costs a few ms: every 250 ms while painting, and at the end.
+  const finished = plan.done >= rows.length;
+  if (!plan.shown && (finished || performance.now() - (plan.put || 0) > 250)) {
+    plan.g.putImageData(plan.img, 0, 0); plan.put = performance.now(); plan.shown = finished;
+  }
+  return finished;
 }
 
 // Appends the path's new segments to the ink layer.
@@ -283,16 +345,25 @@ function paint() {
   const t0 = performance.now();
   const c = $("plot"), G = geometry(c);
   if (c.width !== G.w || c.height !== G.h) { c.width = G.w; c.height = G.h; }
+  const t1 = performance.now();
   if (!plan) plan = paintPlan(G);
+  const t2 = performance.now();
+  // Only a complete preview is painted (pieces still arriving are not).
+  const planned = !S.job || !S.job.complete || planMore(G, 4);
+  const t3 = performance.now();
   paintInk(G);
+  const t4 = performance.now();
   const g = c.getContext("2d");
-  g.drawImage(plan, 0, 0); g.drawImage(ink, 0, 0);
+  g.drawImage(plan.c, 0, 0); g.drawImage(ink, 0, 0);
+  S.parts = [t1 - t0, t2 - t1, t3 - t2, t4 - t3, performance.now() - t4];
   if (S.status) {
     g.fillStyle = S.status.down ? "#143c8c" : "#1e9e3c";
     g.beginPath(); g.arc(G.X(S.status.pos[0]), G.Y(S.status.pos[1]), 5 * G.r, 0, 7); g.fill();
   }
   S.paints.push(performance.now() - t0);
+  if (performance.now() - t0 > 20) (S.slow = S.slow || []).push(S.parts.map((x) => x.toFixed(0)).join("/"));
   if (S.paints.length > 500) S.paints.splice(0, 250);
+  if (!planned) draw();
 }
 
 // Zoom by `f` keeping the point at canvas CSS position (mx, my) in place.
@@ -346,7 +417,7 @@ function load(kind, name, data, size, bytes) {
     banner(name + ": " + (bytes / 1e6).toFixed(1) + " MB is over the web view's limit of " + (S.limits.job >> 20) + " MB", false);
     return;
   }
-  S.loading = name;
+  S.loading = name; S.loadStart = performance.now();
   $("jobinfo").textContent = "preparing " + name + "…" + (S.job ? " (" + S.job.name + " stays loaded until then)" : "");
   const parts = Math.max(1, Math.ceil(data.length / PART));
   if (!send({ t: "load", kind, name, size, parts, bytes })) { S.loading = null; showJobInfo(); banner("not connected: nothing loaded", false); return; }
