@@ -48,6 +48,10 @@ enum Cmd {
         /// Without the token, show nothing (instead of a page to watch).
         #[arg(long)]
         private: bool,
+        /// A host name the page may also be reached by (e.g. plotter.local);
+        /// requests naming any other host are refused. Repeatable.
+        #[arg(long = "allow-host", value_name = "NAME")]
+        allow_host: Vec<String>,
     },
     /// Text to G-code: Latin in a Hershey font, Chinese from stroke medians.
     Text {
@@ -219,7 +223,8 @@ fn main() -> Result<()> {
             port,
             listen,
             private,
-        } => web::run(port, listen, private),
+            allow_host,
+        } => web::run(port, listen, private, allow_host),
         Cmd::Text {
             text,
             size,

@@ -62,7 +62,7 @@ try {
   // 2. star.nc runs; the path grows while it runs.
   const input = await page.$("#file");
   await input.uploadFile(path.join(root, "bench/star.nc"));
-  await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "star.nc", null, "star.nc loaded");
+  await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "star.nc" && window.inkstep.job.complete, null, "star.nc loaded");
   const planned = await page.evaluate(() => window.inkstep.job.preview.length);
   check("star.nc loads with a preview", planned >= 5, `${planned} moves planned`);
   await page.click("#run");
@@ -122,7 +122,7 @@ try {
   await page.$eval("#textsize", (e) => { e.value = "8"; });
   await page.type("#text", "一帆风顺 Hi");
   await page.click("#textgo");
-  const loaded = await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "text", null, "text preview");
+  const loaded = await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "text" && window.inkstep.job.complete, null, "text preview");
   const moves = await page.evaluate(() => window.inkstep.job.preview.filter((m) => m[4]).length);
   check("a text is previewed", loaded && moves > 10, `${moves} pen-down moves planned`);
   await page.click("#run");
@@ -133,6 +133,142 @@ try {
   const drawn = await page.evaluate(() => window.inkstep.path.filter((p) => p[2]).length);
   check("the text is drawn and the pen parks at the origin",
     textDone && t.done.ok && t.pos[0] === 0 && t.pos[1] === 0 && drawn > 10, `${drawn} pen-down points, at ${t.pos}`);
+
+  // 7. A command line carrying a real-time byte is refused, and nothing is sent.
+  await page.type("#line", "G4 P0 ~");
+  await page.click("#linego");
+  const refused = await waitFor(page, () => !document.querySelector("#banner").hidden &&
+    /real-time/.test(document.querySelector("#bannertext").textContent), null, "refusal banner");
+  check("a console line with a real-time byte is refused where the user looks", refused,
+    await page.$eval("#bannertext", (e) => e.textContent));
+  await page.click("#bclose");
+
+  // 8. $$ refused while moving (error:8) keeps the settings table.
+  const rows0 = await page.$$eval("#settings tr", (r) => r.length);
+  await page.evaluate(() => command("$J=G91 G21 X40 F300"));
+  await waitFor(page, () => window.inkstep.status.state === "Jog", null, "jogging");
+  await page.evaluate(() => send({ t: "cmd", id: 999, line: "$$" }));
+  const refused8 = await waitFor(page, () => /error:8/.test(document.querySelector("#log").textContent), null, "error:8", 10000);
+  await sleep(300);
+  const rows1 = await page.$$eval("#settings tr", (r) => r.length);
+  check("$$ refused while moving keeps the settings table", refused8 && rows1 === rows0 && rows0 > 20, `${rows0} -> ${rows1} rows`);
+  await page.evaluate(() => send({ t: "rt", b: 133 }));
+  await waitFor(page, () => window.inkstep.status.state === "Idle", null, "jog cancelled");
+
+  // 9. An alarm: a banner with its meaning and Unlock; Run is refused with the reason.
+  await page.$eval("#textsize", (e) => { e.value = "8"; });
+  await page.click("#textgo");
+  await waitFor(page, () => window.inkstep.job && window.inkstep.job.complete && !window.inkstep.loading, null, "text loaded again");
+  await page.click("#run");
+  await waitFor(page, () => window.inkstep.status.state === "Run", null, "running");
+  await page.click("#reset");
+  const alarmed = await waitFor(page, () => /^Alarm/.test(window.inkstep.status.state) && !document.querySelector("#banner").hidden, null, "alarm banner");
+  const btext = await page.$eval("#bannertext", (e) => e.textContent);
+  const unlockShown = await page.$eval("#bunlock", (e) => !e.hidden && e.getBoundingClientRect().height >= 44);
+  check("an alarm shows a banner with its meaning and Unlock", alarmed && /ALARM:3/.test(btext) && unlockShown, btext);
+  const runDisabled = await page.$eval("#run", (e) => e.disabled);
+  await page.evaluate(() => { window.inkstep.done = null; send({ t: "run" }); });
+  const why = await waitFor(page, () => window.inkstep.done && /alarm/i.test(window.inkstep.done.why), null, "run refused");
+  const st = await state(page);
+  check("Run is refused in alarm, with the reason", runDisabled && why && /^Alarm/.test(st.state), st.done && st.done.why);
+  await page.click("#bunlock");
+  const unlocked = await waitFor(page, () => window.inkstep.status.state === "Idle" && document.querySelector("#banner").hidden, null, "unlocked");
+  check("Unlock in the banner clears the alarm", unlocked);
+
+  // 9b. Big jobs: 10 MB of G-code loads in under 3 s and repaints stay fast;
+  // one over the limit is refused with the limit, and the page keeps showing
+  // the job that is loaded.
+  const big = path.join(fs.mkdtempSync("/tmp/inkstep-big-"), "big.nc");
+  {
+    let g = "G21 G90\nM3\nG1 F3000\n", x = 0, y = 0, seed = 1;
+    const rows = [];
+    let n = g.length;
+    while (n < 10e6) {
+      seed = (seed * 1103515245 + 12345) % 2147483648;
+      x = Math.max(-40, Math.min(40, x + ((seed >> 8) % 200) / 100 - 1));
+      y = Math.max(-40, Math.min(40, y + ((seed >> 16) % 200) / 100 - 1));
+      const l = "G1 X" + x.toFixed(3) + " Y" + y.toFixed(3) + "\n";
+      rows.push(l); n += l.length;
+    }
+    fs.writeFileSync(big, g + rows.join("") + "M5\nG0 X0 Y0\n");
+  }
+  const t0 = Date.now();
+  await (await page.$("#file")).uploadFile(big);
+  const bigLoaded = await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "big.nc" && window.inkstep.job.complete, null, "big.nc loaded", 60000);
+  const loadS = (Date.now() - t0) / 1000;
+  await sleep(500);
+  await page.evaluate(() => { window.inkstep.paints = []; });
+  await page.evaluate(() => command("$J=G91 G21 X5 F600"));
+  await sleep(1500);
+  const bigPaints = await page.evaluate(() => window.inkstep.paints.slice());
+  const bigWorst = Math.max(...bigPaints);
+  const bigMoves = await page.evaluate(() => window.inkstep.job.preview.length);
+  const split = await page.evaluate(() => [window.inkstep.job.at - window.inkstep.loadStart, window.inkstep.job.took]);
+  check("a 10 MB job loads in under 3 s", bigLoaded && loadS < 3, `${(fs.statSync(big).size / 1e6).toFixed(1)} MB, ${bigMoves} moves, ${loadS.toFixed(2)} s (upload and build ${(split[0] / 1000).toFixed(2)} s, preview ${(split[1] / 1000).toFixed(2)} s)`);
+  check("repaints with the 10 MB job shown take under 16 ms", bigPaints.length > 5 && bigWorst < 16, `${bigPaints.length} paints while jogging, worst ${bigWorst.toFixed(1)} ms ${await page.evaluate(() => JSON.stringify(window.inkstep.slow))}`);
+  // Too big: a sparse 70 MB file (the page reads only its size).
+  const huge = path.join(path.dirname(big), "huge.nc");
+  fs.closeSync(fs.openSync(huge, "w")); fs.truncateSync(huge, 70e6);
+  await (await page.$("#file")).uploadFile(huge);
+  const tooBig = await waitFor(page, () => /limit of 64 MB/.test(document.querySelector("#bannertext").textContent), null, "limit banner");
+  const info = await page.$eval("#jobinfo", (e) => e.textContent);
+  check("a job over the limit is refused with the limit, and the loaded job stays shown", tooBig && /^big\.nc/.test(info) &&
+    (await page.evaluate(() => window.inkstep.job.name)) === "big.nc", await page.$eval("#bannertext", (e) => e.textContent) + " / " + info);
+  fs.rmSync(path.dirname(big), { recursive: true });
+  await page.click("#bclose");
+  await page.evaluate(() => send({ t: "rt", b: 133 }));
+
+  // 10. The page cannot be framed by another site.
+  const framer = await browser.newPage();
+  await framer.setContent(`<iframe id="f" src="${url}" width="400" height="300"></iframe>`);
+  await sleep(1500);
+  const framed = await framer.evaluate(() => {
+    try { const d = document.getElementById("f").contentDocument; return d ? d.body.innerHTML.length : -1; } catch { return -2; }
+  });
+  const inside = framer.frames().filter((f) => f !== framer.mainFrame());
+  const loadedInFrame = await Promise.all(inside.map((f) => f.evaluate(() => !!window.inkstep).catch(() => false)));
+  check("another page cannot frame the view", !loadedInFrame.some(Boolean), `frame content ${framed}`);
+  await framer.close();
+
+  // 11. A phone: the bar stays at the top with state, position, Hold/Resume/Stop
+  // and progress; buttons are at least 44 px; the drawing does not trap scrolling.
+  await page.close();
+  const phone = await browser.newPage();
+  await phone.emulate({ viewport: { width: 390, height: 844, deviceScaleFactor: 2, isMobile: true, hasTouch: true },
+    userAgent: "Mozilla/5.0 (Linux; Android 14) Mobile" });
+  phone.on("pageerror", (e) => check("no script error (phone)", false, e.message));
+  await phone.goto(url, { waitUntil: "load" });
+  await waitFor(phone, () => window.inkstep.status && window.inkstep.settings.length > 20, null, "phone: status");
+  const barOk = async () => phone.evaluate(() => ["state", "pos", "hold", "resume", "stop", "progress"].every((id) => {
+    const r = document.getElementById(id).getBoundingClientRect();
+    return r.height > 0 && r.top >= 0 && r.bottom <= window.innerHeight;
+  }));
+  const atTop = await barOk();
+  await phone.evaluate(() => window.scrollTo(0, document.body.scrollHeight));
+  await sleep(200);
+  const scrolled = await phone.evaluate(() => window.scrollY);
+  const atBottom = await barOk();
+  check("phone: the bar stays in view while scrolling", atTop && atBottom && scrolled > 300, `scrolled ${scrolled} px`);
+  const small = await phone.$$eval("button", (bs) => bs.filter((b) => b.offsetParent && b.getBoundingClientRect().height < 44).map((b) => b.id || b.textContent));
+  check("phone: every button is at least 44 px high", small.length === 0, small.join(", "));
+  const touch = await phone.$eval("#plot", (e) => getComputedStyle(e).touchAction);
+  check("phone: one finger on the drawing scrolls the page", /pan-y/.test(touch) || touch === "auto", touch);
+  await phone.evaluate(() => window.scrollTo(0, 0));
+  await phone.$eval("#textsize", (e) => { e.value = "8"; });
+  await phone.type("#text", "一帆风顺 Hi");
+  await phone.click("#textgo");
+  await waitFor(phone, () => window.inkstep.job && window.inkstep.job.complete && !window.inkstep.loading, null, "text loaded on the phone");
+  await phone.evaluate(() => window.scrollTo(0, 0));
+  await phone.click("#run");
+  await waitFor(phone, () => window.inkstep.status.state === "Run", null, "phone: running");
+  await phone.evaluate(() => { window.inkstep.paints = []; window.inkstep.slow = []; });
+  await waitFor(phone, () => window.inkstep.status.state === "Run" && window.inkstep.status.job && window.inkstep.status.job.done > 0.4, null, "phone: drawing");
+  if (shots) await phone.screenshot({ path: path.join(shots, "web-view-phone.png") });
+  const paints = await phone.evaluate(() => window.inkstep.paints.slice(-200));
+  const worst = Math.max(...paints);
+  check("repaints while drawing take under 16 ms", paints.length > 5 && worst < 16, `${paints.length} paints, worst ${worst.toFixed(1)} ms ${await phone.evaluate(() => JSON.stringify(window.inkstep.slow || []))}`);
+  await waitFor(phone, () => window.inkstep.done && window.inkstep.status.state === "Idle", null, "phone: text done", 60000);
+  await phone.close();
 } catch (e) {
   check("browser session", false, e.stack);
 } finally {

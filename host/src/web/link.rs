@@ -24,7 +24,7 @@ use std::collections::{BTreeMap, VecDeque};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use tokio::sync::broadcast;
+use tokio::sync::{broadcast, watch};
 
 /// What a browser asks of the machine.
 pub enum Request {
@@ -48,36 +48,54 @@ const STATUS_HZ: u64 = 20;
 const LOG_KEEP: usize = 100;
 /// Path points kept (a long job at 20 reports a second: about 14 hours).
 const PATH_KEEP: usize = 1_000_000;
+/// Small events (log lines, answers, control changes) kept for browsers that
+/// are behind; one further behind is dropped and reconnects.
+pub const EVENTS: usize = 256;
+/// Points (path) or moves (preview) in one message.
+pub const CHUNK: usize = 2048;
+/// About the largest message of [`CHUNK`] rows, bytes.
+pub const CHUNK_BYTES: usize = CHUNK * 64;
+
+/// A job as browsers are sent it: what it is, then its preview in pieces
+/// (serialized once, shared by every browser).
+pub struct JobView {
+    pub head: Arc<str>,
+    pub preview: Vec<Arc<str>>,
+}
 
 /// What a browser joining now is sent first.
 #[derive(Default)]
 pub struct Snapshot {
     pub link: Option<Value>,
-    pub status: Option<Value>,
     pub settings: Option<Value>,
-    pub job: Option<Value>,
+    pub fw: Option<Value>,
+    pub alarm: Option<Value>,
     pub path: Vec<[f64; 3]>,
     pub log: VecDeque<Value>,
     /// The pen's work position, for planning a text or SVG from there.
     pub pen: Pt,
-    /// Rapid rate (mm/min) for time estimates.
-    pub rapid: f64,
+    /// The settings time estimates need.
+    pub machine: super::job::Machine,
 }
 
 /// Shared between the link thread and the web handlers.
 pub struct Hub {
+    /// Small events, in order.
     pub out: broadcast::Sender<Arc<str>>,
+    /// The latest status report (a browser behind skips the stale ones).
+    pub status: watch::Sender<Option<Arc<str>>>,
+    /// The job loaded.
+    pub job: watch::Sender<Option<Arc<JobView>>>,
     pub snapshot: Mutex<Snapshot>,
 }
 
 impl Hub {
     pub fn new() -> Arc<Hub> {
         Arc::new(Hub {
-            out: broadcast::channel(4096).0,
-            snapshot: Mutex::new(Snapshot {
-                rapid: 3000.0,
-                ..Snapshot::default()
-            }),
+            out: broadcast::channel(EVENTS).0,
+            status: watch::channel(None).0,
+            job: watch::channel(None).0,
+            snapshot: Mutex::new(Snapshot::default()),
         })
     }
 
@@ -92,22 +110,41 @@ impl Hub {
         let _ = self.out.send(msg.to_string().into());
     }
 
-    /// The messages that bring a new browser up to date.
-    pub fn catch_up(&self) -> Vec<Value> {
+    /// The small messages that bring a new browser up to date (the job,
+    /// the path and the status follow on their own).
+    pub fn catch_up(&self) -> Vec<Arc<str>> {
         let s = self.snapshot();
-        let mut v: Vec<Value> = [&s.link, &s.settings, &s.job, &s.status]
+        [&s.link, &s.fw, &s.alarm, &s.settings]
             .into_iter()
             .flatten()
-            .cloned()
-            .collect();
-        v.push(json!({"t": "path", "pts": s.path}));
-        v.extend(s.log.iter().cloned());
-        v
+            .chain(s.log.iter())
+            .map(|m| m.to_string().into())
+            .collect()
     }
 
-    pub fn pen_and_rapid(&self) -> (Pt, f64) {
+    /// The path's points from `from` on, at most [`CHUNK`] of them, as a
+    /// message; None past its end (an empty path is one empty message).
+    pub fn path_piece(&self, from: usize) -> Option<Arc<str>> {
         let s = self.snapshot();
-        (s.pen, s.rapid)
+        if from > 0 && from >= s.path.len() {
+            return None;
+        }
+        let end = (from + CHUNK).min(s.path.len());
+        let pts = s.path.get(from..end).unwrap_or(&[]);
+        Some(
+            json!({"t": "path", "from": from, "pts": pts})
+                .to_string()
+                .into(),
+        )
+    }
+
+    fn set_status(&self, msg: Option<&Value>) {
+        self.status.send_replace(msg.map(|m| m.to_string().into()));
+    }
+
+    pub fn pen_and_machine(&self) -> (Pt, super::job::Machine) {
+        let s = self.snapshot();
+        (s.pen, s.machine)
     }
 
     fn log(&self, text: &str) {
@@ -133,6 +170,8 @@ enum Origin {
     },
     /// The link's own `$$` after connecting or a settings change.
     Listing,
+    /// The link's own `$I` (the version) after connecting.
+    Info,
 }
 
 struct Running {
@@ -156,6 +195,12 @@ struct Link {
     wco: [f64; 3],
     overrides: [u32; 3],
     last: Option<[f64; 3]>,
+    /// Jobs loaded so far (the page tells a job's pieces from another's).
+    generation: u64,
+    /// The machine's state in its last report ("" when none or the port is away).
+    state: String,
+    /// The last alarm the machine raised.
+    alarm: Option<u32>,
 }
 
 /// Runs the link to `port` until `requests` closes.
@@ -171,6 +216,9 @@ pub fn run(port: String, hub: Arc<Hub>, requests: Receiver<Request>) {
         wco: [0.0; 3],
         overrides: [100; 3],
         last: None,
+        generation: 0,
+        state: String::new(),
+        alarm: None,
     };
     loop {
         let mut p = match Port::open(&port, 115_200) {
@@ -200,6 +248,13 @@ pub fn run(port: String, hub: Arc<Hub>, requests: Receiver<Request>) {
 
 impl Link {
     fn set_link(&mut self, port: &str, up: bool, error: &str) {
+        if !up {
+            // Nothing known about the machine now: no position or state to show.
+            self.hub.set_status(None);
+            self.state.clear();
+            self.hub.snapshot().fw = None;
+            self.last = None;
+        }
         let m = json!({"t": "link", "port": port, "up": up, "error": error});
         self.hub.snapshot().link = Some(m.clone());
         self.hub.publish(&m);
@@ -227,6 +282,7 @@ impl Link {
         requests: &Receiver<Request>,
     ) -> std::io::Result<()> {
         self.sender.push(Origin::Listing, "$$");
+        self.sender.push(Origin::Info, "$I");
         p.send(b"?")?;
         let poll_every = Duration::from_millis(1000 / STATUS_HZ);
         let mut last_poll = Instant::now();
@@ -312,15 +368,37 @@ impl Link {
     }
 
     fn load(&mut self, job: Job) {
-        let m = json!({
+        self.generation += 1;
+        let head = json!({
             "t": "job",
+            "gen": self.generation,
             "name": job.name,
             "lines": job.lines.len(),
             "est_s": job.total_s(),
-            "preview": job.preview(),
+            "moves": job.moves.len(),
         });
-        self.hub.snapshot().job = Some(m.clone());
-        self.hub.publish(&m);
+        let preview = job
+            .preview()
+            .chunks(CHUNK)
+            .map(|rows| {
+                // Straight to text (a JSON value of half a million rows first
+                // took longer than the job's own parsing).
+                let rows = serde_json::to_string(rows).unwrap_or_default();
+                format!(
+                    r#"{{"t":"preview","gen":{},"rows":{rows}}}"#,
+                    self.generation
+                )
+                .into()
+            })
+            .collect();
+        self.hub.job.send_replace(Some(Arc::new(JobView {
+            head: head.to_string().into(),
+            preview,
+        })));
+        // The last run's drawing would hide the new preview.
+        self.hub.snapshot().path.clear();
+        self.last = None;
+        self.hub.publish(&json!({"t": "clear"}));
         self.hub.log(&format!(
             "loaded {}: {} lines, about {:.0} s",
             job.name,
@@ -335,9 +413,24 @@ impl Link {
             return;
         }
         let Some(job) = &self.job else {
-            self.hub.log("nothing loaded to run");
+            self.refuse_run("nothing loaded to run");
             return;
         };
+        if self.state.starts_with("Alarm") {
+            let why = match self.alarm {
+                Some(n) => format!(
+                    "Run refused: the machine is in alarm (ALARM:{n}, {}); unlock ($X) or home ($H) first",
+                    alarm_text(n)
+                ),
+                None => "Run refused: the machine is in alarm; unlock ($X) or home ($H) first".into(),
+            };
+            self.refuse_run(&why);
+            return;
+        }
+        if self.state.is_empty() {
+            self.refuse_run("Run refused: no report from the machine yet");
+            return;
+        }
         for (i, l) in job.lines.iter().enumerate() {
             self.sender.push(Origin::Job(i), l.text.as_str());
         }
@@ -352,6 +445,12 @@ impl Link {
         self.last = None;
         self.hub.publish(&json!({"t": "clear"}));
         self.hub.log(&format!("running {}", job.name));
+    }
+
+    fn refuse_run(&self, why: &str) {
+        self.hub.log(why);
+        self.hub
+            .publish(&json!({"t": "done", "ok": false, "why": why}));
     }
 
     fn abort_job(&mut self, why: &str) {
@@ -397,12 +496,25 @@ impl Link {
                     self.sender.push(Origin::Listing, "$$");
                 }
             }
-            Event::Answered(Origin::Listing, _) => self.publish_settings(),
+            Event::Answered(Origin::Info, _) => {}
+            Event::Answered(Origin::Listing, Answer::Ok) => self.publish_settings(),
+            Event::Answered(Origin::Listing, Answer::Error(n)) => {
+                // Refused (error:8 while moving): the table shown stays.
+                self.listing.clear();
+                self.hub.log(&format!(
+                    "$$: error:{n} ({}); the settings shown are unchanged",
+                    error_text(n)
+                ));
+            }
             Event::Reply(Reply::Setting(n, v)) => {
                 self.listing.insert(n, v);
             }
             Event::Reply(Reply::Status(s)) => self.status(p, &s)?,
             Event::Reply(Reply::Alarm(n)) => {
+                self.alarm = Some(n);
+                let m = json!({"t": "alarm", "n": n, "text": alarm_text(n)});
+                self.hub.snapshot().alarm = Some(m.clone());
+                self.hub.publish(&m);
                 self.abort_job(&format!("ALARM:{n} ({})", alarm_text(n)));
                 self.hub.log(&format!("ALARM:{n} ({})", alarm_text(n)));
             }
@@ -413,9 +525,15 @@ impl Link {
                 self.stopping = None;
                 self.abort_job("the controller restarted");
                 self.hub.log(&w);
+                self.set_firmware(&w);
                 self.sender.push(Origin::Listing, "$$");
             }
-            Event::Reply(Reply::Feedback(f)) => self.hub.log(&format!("[{f}]")),
+            Event::Reply(Reply::Feedback(f)) => {
+                if let Some(v) = f.strip_prefix("VER:") {
+                    self.set_firmware(&format!("Grbl {}", v.trim_end_matches(':')));
+                }
+                self.hub.log(&format!("[{f}]"));
+            }
             Event::Reply(Reply::Ok | Reply::Error(_) | Reply::Other(_)) => {}
         }
         Ok(())
@@ -434,17 +552,20 @@ impl Link {
                 json!([n, v, name])
             })
             .collect();
-        let rapid = [110u16, 111]
-            .iter()
-            .filter_map(|n| self.settings.get(n)?.parse::<f64>().ok())
-            .fold(f64::INFINITY, f64::min);
+        let machine = super::job::Machine::from_settings(|n| self.setting(n));
         let m = json!({"t": "settings", "list": list});
         let mut s = self.hub.snapshot();
-        if rapid.is_finite() {
-            s.rapid = rapid;
-        }
+        s.machine = machine;
         s.settings = Some(m.clone());
         drop(s);
+        self.hub.publish(&m);
+    }
+
+    /// The firmware's name and version, shown in the page.
+    fn set_firmware(&self, text: &str) {
+        let text = text.split(" [").next().unwrap_or(text).trim();
+        let m = json!({"t": "fw", "text": text});
+        self.hub.snapshot().fw = Some(m.clone());
         self.hub.publish(&m);
     }
 
@@ -469,6 +590,7 @@ impl Link {
         if let Some(o) = s.overrides {
             self.overrides = o;
         }
+        self.state.clone_from(&s.state);
         let Some(m) = s.machine_pos(self.wco) else {
             return Ok(());
         };
@@ -532,9 +654,8 @@ impl Link {
             if moved && snap.path.len() < PATH_KEEP {
                 snap.path.push(point);
             }
-            snap.status = Some(msg.clone());
         }
-        self.hub.publish(&msg);
+        self.hub.set_status(Some(&msg));
         if finished {
             if let Some(r) = self.running.take() {
                 let t = r.started.elapsed().as_secs_f64();

@@ -1,12 +1,24 @@
 // inkstep web view: one websocket to the server, a canvas for the drawing, and
 // the controls. Everything the machine does arrives as JSON messages (see
 // host/src/web/link.rs); everything the page asks is a message back.
+//
+// The drawing is painted in layers so that a status report costs only what it
+// adds: the grid and the planned job are drawn once into an offscreen canvas
+// (again only when the job, the size or the view changes), the drawn path is
+// appended to a second one, and each frame copies both and draws the pen.
 "use strict";
 const $ = (id) => document.getElementById(id);
-const token = new URLSearchParams(location.search).get("token");
+// The token: taken from the address once, then kept out of it (history,
+// bookmarks and screenshots of the address bar).
+const token = (() => {
+  const q = new URLSearchParams(location.search), t = q.get("token");
+  if (t) { sessionStorage.setItem("inkstep-token", t); history.replaceState(null, "", location.pathname); }
+  return t || sessionStorage.getItem("inkstep-token");
+})();
 const S = (window.inkstep = {
   id: 0, role: "watch", holder: null, status: null, path: [], job: null,
-  settings: [], answers: {}, done: null, link: null,
+  settings: [], answers: {}, done: null, link: null, alarm: null, fw: "",
+  limits: { message: 1 << 20, job: 64 << 20 }, paints: [], loading: null,
 });
 let ws = null;
 let nextId = 1;
@@ -15,39 +27,94 @@ function connect() {
   const q = token ? "?token=" + encodeURIComponent(token) : "";
   ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws" + q);
   ws.onmessage = (e) => handle(JSON.parse(e.data));
-  ws.onclose = () => { $("link").textContent = "server gone: reconnecting"; setTimeout(connect, 1000); };
+  ws.onclose = () => {
+    S.status = null; showState();
+    $("link").textContent = "server gone: reconnecting";
+    setTimeout(connect, 1000);
+  };
 }
 
-function send(m) { if (ws && ws.readyState === 1) ws.send(JSON.stringify(m)); }
-function command(line) { const id = nextId++; send({ t: "cmd", id, line }); return id; }
-function log(text) { const l = $("log"); l.textContent += text + "\n"; l.scrollTop = l.scrollHeight; }
+function send(m) { if (ws && ws.readyState === 1) { ws.send(JSON.stringify(m)); return true; } return false; }
+function command(line, what) { const id = nextId++; if (what) S.answers[id] = what; send({ t: "cmd", id, line }); return id; }
+function log(text) {
+  const l = $("log"), end = l.scrollHeight - l.scrollTop - l.clientHeight < 20;
+  l.textContent += text + "\n";
+  if (l.textContent.length > 60000) l.textContent = l.textContent.slice(-40000);
+  if (end) l.scrollTop = l.scrollHeight;
+}
 function fmtTime(s) { s = Math.max(0, Math.round(s)); return Math.floor(s / 60) + ":" + String(s % 60).padStart(2, "0"); }
+
+// Errors and alarms where the user is looking: a banner under the bar.
+function banner(text, alarm) {
+  $("bannertext").textContent = text;
+  $("banner").hidden = !text;
+  $("banner").classList.toggle("alarm", !!alarm);
+  $("bunlock").hidden = $("bhome").hidden = !alarm;
+}
 
 function handle(m) {
   switch (m.t) {
     case "hello":
-      S.id = m.id; S.role = m.role; S.holder = m.holder; S.path = []; $("log").textContent = "";
-      showRole(); break;
+      S.id = m.id; S.role = m.role; S.holder = m.holder; S.path = []; S.limits = m.limits || S.limits;
+      $("log").textContent = ""; resetPath(); showRole(); break;
     case "control": S.holder = m.holder; showRole(); break;
     case "link":
-      S.link = m; $("link").textContent = m.up ? "● " + m.port : "○ " + m.port + " " + m.error; break;
+      S.link = m;
+      $("link").textContent = m.up ? "● " + m.port : "○ " + m.port + (m.error ? ": " + m.error : "");
+      if (!m.up) { S.status = null; S.fw = ""; $("fw").textContent = ""; }
+      else if (S.done && /^connection lost/.test(S.done.why)) { S.done = null; $("jobstate").textContent = ""; }
+      showState(); break;
+    case "fw": S.fw = m.text; $("fw").textContent = m.text; break;
     case "status": showStatus(m); break;
-    case "path": S.path = m.pts; draw(); break;
-    case "clear": S.path = []; S.done = null; draw(); break;
-    case "job":
-      S.job = m; S.done = null;
-      $("jobinfo").textContent = m.name + ": " + m.lines + " lines, about " + fmtTime(m.est_s);
-      $("run").disabled = false; $("progress").value = 0; $("jobstate").textContent = "";
+    case "path":
+      if (!m.from) resetPath();
+      for (const p of m.pts) addPoint(p);
       draw(); break;
+    case "clear": resetPath(); S.done = null; draw(); break;
+    case "job":
+      S.job = { at: performance.now(), name: m.name, lines: m.lines, est_s: m.est_s, gen: m.gen, moves: m.moves, preview: [], complete: false };
+      S.done = null; S.loading = null;
+      $("jobinfo").textContent = m.name + ": " + m.lines + " lines, about " + fmtTime(m.est_s) + (m.moves ? " · receiving the preview…" : "");
+      $("progress").value = 0; $("jobstate").textContent = "";
+      fitView(); invalidate(); showState(); break;
+    case "preview":
+      if (S.job && m.gen === S.job.gen) {
+        // The job's extent, kept as the pieces come (never a pass over all of it).
+        const b = S.job.box || [Infinity, Infinity, -Infinity, -Infinity];
+        for (const r of m.rows) {
+          S.job.preview.push(r);
+          if (r[0] < b[0]) b[0] = r[0]; if (r[2] < b[0]) b[0] = r[2]; if (r[0] > b[2]) b[2] = r[0]; if (r[2] > b[2]) b[2] = r[2];
+          if (r[1] < b[1]) b[1] = r[1]; if (r[3] < b[1]) b[1] = r[3]; if (r[1] > b[3]) b[3] = r[1]; if (r[3] > b[3]) b[3] = r[3];
+        }
+        if (m.rows.length) S.job.box = b;
+      }
+      break;
+    case "preview_end":
+      if (S.job) {
+        S.job.complete = true; S.job.took = performance.now() - S.job.at;
+        $("jobinfo").textContent = S.job.name + ": " + S.job.lines + " lines, about " + fmtTime(S.job.est_s);
+        fitView(); invalidate();
+      }
+      break;
     case "done":
       S.done = m; $("jobstate").textContent = m.ok ? "done" : m.why;
-      if (m.ok) $("progress").value = 1; break;
-    case "settings": S.settings = m.list; showSettings(); break;
+      if (m.ok) $("progress").value = 1;
+      else if (m.why) banner(m.why, /alarm/i.test(m.why));
+      showState(); break;
+    case "alarm": S.alarm = m; showState(); break;
+    case "settings": S.settings = m.list; showSettings(); if (!S.job) invalidate(); break;
     case "answer": answered(m); break;
     case "log": log(m.text); break;
-    case "error": log("error: " + m.text); break;
-    case "denied": log("not done: " + m.why); break;
+    case "error":
+      log("error: " + m.text); banner(m.text, false);
+      if (S.loading) { S.loading = null; showJobInfo(); }
+      break;
+    case "denied": log("not done: " + m.why); banner(m.why, false); break;
   }
+}
+
+function showJobInfo() {
+  $("jobinfo").textContent = S.job ? S.job.name + ": " + S.job.lines + " lines, about " + fmtTime(S.job.est_s) : "nothing loaded";
 }
 
 function showRole() {
@@ -57,19 +124,37 @@ function showRole() {
   document.body.classList.toggle("watch", S.role === "watch");
 }
 
+// The state in the bar; without a link to the machine, no state or position at all.
+function showState() {
+  const st = $("state"), m = S.status;
+  if (!S.link || !S.link.up || !m) {
+    st.textContent = S.link && !S.link.up ? "disconnected" : "…";
+    st.className = "state Disconnected";
+    $("pos").textContent = "X – Y –"; $("pen").textContent = "";
+  } else {
+    st.textContent = m.state; st.className = "state " + m.state.split(":")[0];
+  }
+  const alarm = m && /^Alarm/.test(m.state);
+  $("run").disabled = !S.job || !m || alarm || m.state !== "Idle";
+  if (alarm) {
+    const a = S.alarm;
+    banner((a ? "ALARM:" + a.n + " – " + a.text : "Alarm: the machine is locked") +
+      ". Unlock to move again, or Home.", true);
+  } else if ($("banner").classList.contains("alarm")) banner("", false);
+}
+
 function showStatus(m) {
   S.status = m;
-  const st = $("state");
-  st.textContent = m.state; st.className = "state " + m.state.split(":")[0];
-  const p = m.pos.map((v) => v.toFixed(3));
-  $("pos").textContent = "X " + p[0] + " Y " + p[1] + " Z " + p[2];
-  $("feed").textContent = "F " + Math.round(m.feed) + " mm/min" + (m.down ? " · pen down" : " · pen up");
-  $("ov").textContent = "Ov feed " + m.ov[0] + "% rapid " + m.ov[1] + "%";
-  if (m.point) S.path.push(m.point);
+  showState();
+  const p = m.pos.map((v) => v.toFixed(2));
+  $("pos").textContent = "X " + p[0] + " Y " + p[1];
+  $("pen").textContent = (m.down ? "pen down" : "pen up") + " · F " + Math.round(m.feed);
+  $("ov").textContent = "now: feed " + m.ov[0] + "%, rapid " + m.ov[1] + "%";
+  if (m.point) addPoint(m.point);
   if (m.job) {
     $("progress").value = m.job.done;
-    $("jobstate").textContent = m.job.acked + "/" + m.job.lines + " lines · " +
-      Math.round(100 * m.job.done) + "% · " + fmtTime(m.job.left_s) + " left";
+    $("jobstate").textContent = Math.round(100 * m.job.done) + "% · " + fmtTime(m.job.left_s) + " left · " +
+      m.job.acked + "/" + m.job.lines + " lines";
   }
   draw();
 }
@@ -82,7 +167,7 @@ function showSettings() {
     tr.dataset.n = n;
     tr.insertCell().textContent = "$" + n;
     const inp = document.createElement("input");
-    inp.value = v; inp.dataset.n = n;
+    inp.value = v; inp.dataset.n = n; inp.dataset.was = v;
     inp.onkeydown = (e) => { if (e.key === "Enter") inp.blur(); };
     inp.onchange = () => setSetting(n, inp.value, tr);
     tr.insertCell().appendChild(inp);
@@ -93,30 +178,160 @@ function showSettings() {
 
 function setSetting(n, v, tr) {
   tr.cells[3].textContent = "…";
-  S.answers[command("$" + n + "=" + v.trim())] = tr;
+  command("$" + n + "=" + v.trim(), tr);
 }
 
 function answered(m) {
-  const tr = S.answers[m.id];
-  if (tr) { tr.cells[3].textContent = m.ok ? "" : m.error; delete S.answers[m.id]; }
-  else if (!m.ok) log(m.error);
+  const what = S.answers[m.id];
+  delete S.answers[m.id];
+  if (what instanceof HTMLElement) {
+    // A setting: its error beside it, and the field back to the value it has.
+    what.cells[3].textContent = m.ok ? "" : m.error;
+    if (!m.ok) { const inp = what.cells[1].firstChild; inp.value = inp.dataset.was; }
+  } else if (typeof what === "string") {
+    log((m.ok ? "ok  " : "") + what + (m.ok ? "" : ": " + m.error));
+    if (!m.ok) banner(what + ": " + m.error, false);
+  } else if (!m.ok && m.id) { log(m.error); banner(m.error, false); }
 }
 
-// The drawing: fitted to the job, the path and the pen (the machine area,
-// from $130/$131, when there is neither), the planned job in grey, the path
-// from the status reports (pen down blue, pen-up travel red dashed), the pen.
+// ---- The drawing ----------------------------------------------------------
+const V = { zoom: 1, px: 0, py: 0 }; // zoom and pan (CSS px) over the fitted view
+let plan = null, ink = null, inkDone = 0, geo = null, pathBox = null;
+
+function resetPath() { S.path = []; pathBox = null; inkDone = 0; ink = null; }
+function addPoint(p) {
+  S.path.push(p);
+  if (!pathBox) pathBox = [p[0], p[1], p[0], p[1]];
+  else {
+    const b = pathBox, out = p[0] < b[0] || p[1] < b[1] || p[0] > b[2] || p[1] > b[3];
+    pathBox = [Math.min(b[0], p[0]), Math.min(b[1], p[1]), Math.max(b[2], p[0]), Math.max(b[3], p[1])];
+    // Off the fitted area with no job to frame it: fit again.
+    if (out && !S.job && geo && (p[0] < geo.b[0] || p[1] < geo.b[1] || p[0] > geo.b[2] || p[1] > geo.b[3])) invalidate();
+  }
+}
+
+// What is fitted: the job, else the path and the pen, else the machine area ($130/$131).
 function bounds() {
   let b = null;
   const grow = (x, y) => { b = b ? [Math.min(b[0], x), Math.min(b[1], y), Math.max(b[2], x), Math.max(b[3], y)] : [x, y, x, y]; };
-  if (S.job) for (const m of S.job.preview) { grow(m[0], m[1]); grow(m[2], m[3]); }
-  for (const p of S.path) grow(p[0], p[1]);
-  if (S.status) grow(S.status.pos[0], S.status.pos[1]);
-  if (!b || (!S.job && S.path.length < 2)) {
-    const set = (n) => { const r = S.settings.find((s) => s[0] === n); return r ? parseFloat(r[1]) : 100; };
-    grow(0, 0); grow(set(130), set(131));
+  if (S.job && S.job.box) b = S.job.box.slice();
+  else if (S.job) grow(0, 0);
+  else {
+    if (pathBox && S.path.length > 1) { grow(pathBox[0], pathBox[1]); grow(pathBox[2], pathBox[3]); }
+    else {
+      const set = (n) => { const r = S.settings.find((s) => s[0] === n); return r ? parseFloat(r[1]) : 100; };
+      grow(0, 0); grow(set(130), set(131));
+    }
+    if (S.status) grow(S.status.pos[0], S.status.pos[1]);
   }
   const m = Math.max(b[2] - b[0], b[3] - b[1], 10) * 0.04;
   return [b[0] - m, b[1] - m, Math.max(b[2], b[0] + 10) + m, Math.max(b[3], b[1] + 10) + m];
+}
+
+function invalidate() { geo = null; plan = null; ink = null; inkDone = 0; draw(); }
+function fitView() { V.zoom = 1; V.px = 0; V.py = 0; }
+
+function geometry(c) {
+  const r = window.devicePixelRatio || 1, w = c.clientWidth * r, h = c.clientHeight * r;
+  if (geo && geo.w === w && geo.h === h) return geo;
+  const b = bounds(), pad = 12 * r;
+  const k0 = Math.min((w - 2 * pad) / (b[2] - b[0]), (h - 2 * pad) / (b[3] - b[1]));
+  const k = k0 * V.zoom, cx = (b[0] + b[2]) / 2, cy = (b[1] + b[3]) / 2;
+  const ox = w / 2 + V.px * r - cx * k, oy = h / 2 + V.py * r + cy * k;
+  geo = { w, h, r, b, k, k0, cx, cy, X: (x) => ox + x * k, Y: (y) => oy - y * k, x: (X) => (X - ox) / k, y: (Y) => (oy - Y) / k };
+  plan = null; ink = null; inkDone = 0;
+  return geo;
+}
+
+function layer(g) { const c = document.createElement("canvas"); c.width = g.w; c.height = g.h; return c; }
+
+// The grid, then the planned job a slice at a time (about 4 ms a frame, so
+// a job of half a million moves never holds the page). The job's lines are
+// set as pixels straight into the layer's ImageData (Bresenham, clipped to the
+// canvas): the canvas's own anti-aliased stroking of dense, self-crossing
+// paths took hundreds of ms per thousand moves without a GPU.
+const DRAWN = 0xffc8c8c8, TRAVEL = 0xffe4e4e4; // #c8c8c8, #e4e4e4 (ABGR)
+function paintPlan(G) {
+  const c = layer(G), g = c.getContext("2d", { willReadFrequently: true }), { X, Y, r } = G;
+  g.fillStyle = "#fff"; g.fillRect(0, 0, G.w, G.h);
+  g.strokeStyle = "#eee"; g.lineWidth = 1;
+  const x0 = G.x(0), x1 = G.x(G.w), y0 = G.y(G.h), y1 = G.y(0);
+  const step = 10 * Math.pow(10, Math.max(0, Math.floor(Math.log10(80 / (G.k * 10 / r)))));
+  g.beginPath();
+  for (let x = Math.ceil(x0 / step) * step; x <= x1; x += step) { g.moveTo(X(x), 0); g.lineTo(X(x), G.h); }
+  for (let y = Math.ceil(y0 / step) * step; y <= y1; y += step) { g.moveTo(0, Y(y)); g.lineTo(G.w, Y(y)); }
+  g.stroke();
+  const img = g.getImageData(0, 0, G.w, G.h);
+  return { c, g, img, px: new Uint32Array(img.data.buffer), done: 0 };
+}
+
+// Clips the segment to [0, w) x [0, h) (Liang-Barsky); null when it misses.
+function clip(x0, y0, x1, y1, w, h) {
+  if (x0 >= 0 && x1 >= 0 && y0 >= 0 && y1 >= 0 && x0 < w - 1 && x1 < w - 1 && y0 < h - 1 && y1 < h - 1) return [x0, y0, x1, y1];
+  let t0 = 0, t1 = 1;
+  const dx = x1 - x0, dy = y1 - y0;
+  for (const [p, q] of [[-dx, x0], [dx, w - 1 - x0], [-dy, y0], [dy, h - 1 - y0]]) {
+    if (p === 0) { if (q < 0) return null; continue; }
+    const t = q / p;
+    if (p < 0) { if (t > t1) return null; if (t > t0) t0 = t; } else { if (t < t0) return null; if (t < t1) t1 = t; }
+  }
+  return [x0 + t0 * dx, y0 + t0 * dy, x0 + t1 * dx, y0 + t1 * dy];
+}
+
+function pixLine(P, s, color, thick, dash) {
+  const { px, img } = P, w = img.width, h = img.height;
+  let x0 = Math.round(s[0]), y0 = Math.round(s[1]);
+  const x1 = Math.round(s[2]), y1 = Math.round(s[3]);
+  const dx = Math.abs(x1 - x0), dy = -Math.abs(y1 - y0), sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
+  let err = dx + dy, n = 0;
+  for (;;) {
+    if (!dash || n % 7 < 4) {
+      const i = y0 * w + x0;
+      if (color === DRAWN || px[i] !== DRAWN) px[i] = color;
+      if (thick) {
+        if (x0 + 1 < w) px[i + 1] = color;
+        if (y0 + 1 < h) { px[i + w] = color; if (x0 + 1 < w) px[i + w + 1] = color; }
+      }
+    }
+    if (x0 === x1 && y0 === y1) break;
+    const e2 = 2 * err;
+    if (e2 >= dy) { err += dy; x0 += sx; }
+    if (e2 <= dx) { err += dx; y0 += sy; }
+    n++;
+  }
+}
+
+function planMore(G, budget) {
+  const rows = S.job ? S.job.preview : [], { X, Y } = G, t0 = performance.now(), thick = G.r >= 1.5;
+  while (plan.done < rows.length && performance.now() - t0 < budget) {
+    const end = Math.min(rows.length, plan.done + 100);
+    for (let i = plan.done; i < end; i++) {
+      const m = rows[i], s = clip(X(m[0]), Y(m[1]), X(m[2]), Y(m[3]), G.w, G.h);
+      if (s) pixLine(plan, s, m[4] ? DRAWN : TRAVEL, thick && m[4], !m[4]);
+    }
+    plan.done = end;
+  }
+  // Copying the pixels in costs a few ms: every 250 ms while painting, and at the end.
+  const finished = plan.done >= rows.length;
+  if (!plan.shown && (finished || performance.now() - (plan.put || 0) > 250)) {
+    plan.g.putImageData(plan.img, 0, 0); plan.put = performance.now(); plan.shown = finished;
+  }
+  return finished;
+}
+
+// Appends the path's new segments to the ink layer.
+function paintInk(G) {
+  if (!ink) { ink = layer(G); inkDone = 0; }
+  const g = ink.getContext("2d"), { X, Y, r } = G;
+  g.lineCap = "round"; g.lineJoin = "round";
+  const down = new Path2D(), up = new Path2D();
+  for (let i = Math.max(1, inkDone); i < S.path.length; i++) {
+    const a = S.path[i - 1], p = S.path[i], d = a[2] && p[2] ? down : up;
+    d.moveTo(X(a[0]), Y(a[1])); d.lineTo(X(p[0]), Y(p[1]));
+  }
+  inkDone = S.path.length;
+  g.strokeStyle = "#dc3c3c"; g.lineWidth = r; g.setLineDash([5 * r, 4 * r]); g.stroke(up);
+  g.setLineDash([]); g.strokeStyle = "#143c8c"; g.lineWidth = 2.5 * r; g.stroke(down);
 }
 
 let drawPending = false;
@@ -127,59 +342,121 @@ function draw() {
 }
 
 function paint() {
-  const c = $("plot"), r = window.devicePixelRatio || 1;
-  c.width = c.clientWidth * r; c.height = c.clientHeight * r;
+  const t0 = performance.now();
+  const c = $("plot"), G = geometry(c);
+  if (c.width !== G.w || c.height !== G.h) { c.width = G.w; c.height = G.h; }
+  const t1 = performance.now();
+  if (!plan) plan = paintPlan(G);
+  const t2 = performance.now();
+  // Only a complete preview is painted (pieces still arriving are not).
+  const planned = !S.job || !S.job.complete || planMore(G, 4);
+  const t3 = performance.now();
+  paintInk(G);
+  const t4 = performance.now();
   const g = c.getContext("2d");
-  const b = bounds(), pad = 12 * r;
-  const k = Math.min((c.width - 2 * pad) / (b[2] - b[0]), (c.height - 2 * pad) / (b[3] - b[1]));
-  const X = (x) => pad + (x - b[0]) * k, Y = (y) => c.height - pad - (y - b[1]) * k;
-  g.fillStyle = "#fff"; g.fillRect(0, 0, c.width, c.height);
-  g.strokeStyle = "#eee"; g.lineWidth = 1;
-  for (let x = Math.ceil(b[0] / 10) * 10; x <= b[2]; x += 10) { g.beginPath(); g.moveTo(X(x), Y(b[1])); g.lineTo(X(x), Y(b[3])); g.stroke(); }
-  for (let y = Math.ceil(b[1] / 10) * 10; y <= b[3]; y += 10) { g.beginPath(); g.moveTo(X(b[0]), Y(y)); g.lineTo(X(b[2]), Y(y)); g.stroke(); }
-  const lines = (segs, style, width, dash) => {
-    g.strokeStyle = style; g.lineWidth = width * r; g.setLineDash(dash.map((d) => d * r)); g.beginPath();
-    for (const s of segs) { g.moveTo(X(s[0]), Y(s[1])); g.lineTo(X(s[2]), Y(s[3])); }
-    g.stroke(); g.setLineDash([]);
-  };
-  if (S.job) {
-    lines(S.job.preview.filter((m) => m[4]), "#c8c8c8", 2, []);
-    lines(S.job.preview.filter((m) => !m[4]), "#e4e4e4", 1, [4, 3]);
-  }
-  const down = [], up = [];
-  for (let i = 1; i < S.path.length; i++) {
-    const a = S.path[i - 1], p = S.path[i];
-    (a[2] && p[2] ? down : up).push([a[0], a[1], p[0], p[1]]);
-  }
-  lines(up, "#dc3c3c", 1, [5, 4]);
-  g.lineCap = "round"; g.lineJoin = "round";
-  lines(down, "#143c8c", 2.5, []);
+  g.drawImage(plan.c, 0, 0); g.drawImage(ink, 0, 0);
+  S.parts = [t1 - t0, t2 - t1, t3 - t2, t4 - t3, performance.now() - t4];
   if (S.status) {
     g.fillStyle = S.status.down ? "#143c8c" : "#1e9e3c";
-    g.beginPath(); g.arc(X(S.status.pos[0]), Y(S.status.pos[1]), 5 * r, 0, 7); g.fill();
+    g.beginPath(); g.arc(G.X(S.status.pos[0]), G.Y(S.status.pos[1]), 5 * G.r, 0, 7); g.fill();
   }
+  S.paints.push(performance.now() - t0);
+  if (performance.now() - t0 > 20) (S.slow = S.slow || []).push(S.parts.map((x) => x.toFixed(0)).join("/"));
+  if (S.paints.length > 500) S.paints.splice(0, 250);
+  if (!planned) draw();
 }
 
-function load(kind, name, data, size) { $("jobinfo").textContent = "preparing " + name + "…"; send({ t: "load", kind, name, data, size }); }
+// Zoom by `f` keeping the point at canvas CSS position (mx, my) in place.
+function zoomAt(f, mx, my) {
+  const c = $("plot"), w = c.clientWidth, h = c.clientHeight;
+  const z = Math.min(200, Math.max(0.2, V.zoom * f)); f = z / V.zoom;
+  V.px = mx - w / 2 - (mx - w / 2 - V.px) * f; V.py = my - h / 2 - (my - h / 2 - V.py) * f;
+  V.zoom = z; invalidate();
+}
+function panBy(dx, dy) { V.px += dx; V.py += dy; invalidate(); }
+
+// One finger scrolls the page (touch-action: pan-x pan-y); two pan and pinch-zoom the drawing.
+(() => {
+  const c = $("plot");
+  let t = null;
+  const mid = (e) => {
+    const r = c.getBoundingClientRect(), a = e.touches[0], b = e.touches[1];
+    return { x: (a.clientX + b.clientX) / 2 - r.left, y: (a.clientY + b.clientY) / 2 - r.top, d: Math.hypot(a.clientX - b.clientX, a.clientY - b.clientY) };
+  };
+  c.addEventListener("touchstart", (e) => { if (e.touches.length === 2) { t = mid(e); e.preventDefault(); } }, { passive: false });
+  c.addEventListener("touchmove", (e) => {
+    if (e.touches.length !== 2 || !t) return;
+    e.preventDefault();
+    const n = mid(e);
+    V.px += n.x - t.x; V.py += n.y - t.y;
+    zoomAt(n.d / Math.max(1, t.d), n.x, n.y);
+    t = n;
+  }, { passive: false });
+  c.addEventListener("touchend", (e) => { if (e.touches.length < 2) t = null; });
+  let drag = null;
+  c.addEventListener("pointerdown", (e) => { if (e.pointerType === "mouse") { drag = [e.clientX, e.clientY]; c.setPointerCapture(e.pointerId); } });
+  c.addEventListener("pointermove", (e) => { if (drag) { panBy(e.clientX - drag[0], e.clientY - drag[1]); drag = [e.clientX, e.clientY]; } });
+  c.addEventListener("pointerup", () => { drag = null; });
+  // Wheel zooms only with Ctrl (a trackpad pinch): a plain wheel scrolls the page.
+  c.addEventListener("wheel", (e) => {
+    if (!e.ctrlKey) return;
+    e.preventDefault();
+    const r = c.getBoundingClientRect();
+    zoomAt(Math.exp(-e.deltaY / 200), e.clientX - r.left, e.clientY - r.top);
+  }, { passive: false });
+  $("zin").onclick = () => zoomAt(1.5, c.clientWidth / 2, c.clientHeight / 2);
+  $("zout").onclick = () => zoomAt(1 / 1.5, c.clientWidth / 2, c.clientHeight / 2);
+  $("zfit").onclick = () => { fitView(); invalidate(); };
+})();
+
+// ---- Jobs ------------------------------------------------------------------
+// A job goes in parts small enough for one message each, whatever the characters.
+const PART = 128 * 1024;
+function load(kind, name, data, size, bytes) {
+  if (bytes > S.limits.job) {
+    banner(name + ": " + (bytes / 1e6).toFixed(1) + " MB is over the web view's limit of " + (S.limits.job >> 20) + " MB", false);
+    return;
+  }
+  S.loading = name; S.loadStart = performance.now();
+  $("jobinfo").textContent = "preparing " + name + "…" + (S.job ? " (" + S.job.name + " stays loaded until then)" : "");
+  const parts = Math.max(1, Math.ceil(data.length / PART));
+  if (!send({ t: "load", kind, name, size, parts, bytes })) { S.loading = null; showJobInfo(); banner("not connected: nothing loaded", false); return; }
+  for (let i = 0; i < parts; i++) send({ t: "part", data: data.slice(i * PART, (i + 1) * PART) });
+}
 
 document.addEventListener("click", (e) => {
   const b = e.target.closest("button");
   if (!b) return;
   if (b.dataset.rt) send({ t: "rt", b: parseInt(b.dataset.rt, 10) });
-  if (b.dataset.cmd) command(b.dataset.cmd);
+  if (b.dataset.cmd) command(b.dataset.cmd, b.textContent.trim() + " (" + b.dataset.cmd + ")");
   if (b.dataset.jog) {
     const [dx, dy] = b.dataset.jog.split(",").map(Number), s = parseFloat($("jogstep").value);
-    command("$J=G91 G21 X" + (dx * s) + " Y" + (dy * s) + " F" + parseFloat($("jogfeed").value));
+    command("$J=G91 G21 X" + (dx * s) + " Y" + (dy * s) + " F" + parseFloat($("jogfeed").value), "jog");
   }
 });
 $("take").onclick = () => send({ t: "take" });
 $("run").onclick = () => send({ t: "run" });
 $("stop").onclick = () => send({ t: "stop" });
-$("textgo").onclick = () => load("text", "text", $("text").value, parseFloat($("textsize").value));
+$("bclose").onclick = () => banner("", false);
+$("textgo").onclick = () => {
+  const t = $("text").value;
+  $("file").value = "";
+  load("text", "text", t, parseFloat($("textsize").value), new Blob([t]).size);
+};
 $("file").onchange = () => {
   const f = $("file").files[0];
   if (!f) return;
-  f.text().then((t) => load(/\.svg$/i.test(f.name) ? "svg" : "gcode", f.name, t));
+  if (f.size > S.limits.job) { load("gcode", f.name, "", 0, f.size); $("file").value = ""; return; }
+  f.text().then((t) => load(/\.svg$/i.test(f.name) ? "svg" : "gcode", f.name, t, 0, f.size));
 };
-window.addEventListener("resize", draw);
+$("console").onsubmit = (e) => {
+  e.preventDefault();
+  const line = $("line").value.trim();
+  if (!line) return;
+  log("> " + line);
+  command(line, line);
+  $("line").value = "";
+};
+window.addEventListener("resize", () => { geo = null; draw(); });
+showState();
 connect();
