@@ -49,6 +49,15 @@ pub const HOST_TX_RING: usize = 128;
 /// what Grbl's protocol needs).
 const TX_PER_TICK: usize = 64;
 
+/// A session's first byte from the host that comes this long (ms) or longer after
+/// the port opened gets the welcome line again, ahead of its answer. Senders wait
+/// for the welcome to learn the version, and some throw away what came before they
+/// looked: bCNC raises DTR, waits a second (an Arduino's reset) and flushes its
+/// input, and so never saw the welcome sent the moment DTR rose. A sender that read
+/// it and sends at once (UGS, cncjs: within milliseconds) gets it once; one that
+/// waited has nothing in flight for a second welcome to disturb.
+pub const WELCOME_REPEAT_MS: u32 = 500;
+
 /// Jog moves run this far (mm) unless stopped; key release stops them.
 const JOG_REACH_MM: i32 = 1000;
 
@@ -110,6 +119,8 @@ pub struct Controller {
     view_pos: StepPos,
     /// The host had the port open at the last tick.
     port_open: bool,
+    /// When the port opened, while the session's first byte has not come yet.
+    session_quiet_since: Option<u32>,
     /// A message from power-up for the host (a corrupt store), said once it listens.
     notice: Option<&'static str>,
     saves: Saves,
@@ -147,6 +158,7 @@ impl Controller {
             dir = [0, 0],
             view_pos = [0; 3],
             port_open = false,
+            session_quiet_since = None,
             notice = None,
             saves = Saves::default(),
         })
@@ -243,7 +255,13 @@ impl Controller {
         m: &mut M,
         now_ms: u32,
     ) -> Serviced {
-        self.port(host.port_open);
+        self.port(host.port_open, now_ms);
+        if let (Some(since), false) = (self.session_quiet_since, host.rx.is_empty()) {
+            self.session_quiet_since = None;
+            if now_ms.wrapping_sub(since) >= WELCOME_REPEAT_MS {
+                self.protocol.repeat_welcome();
+            }
+        }
         self.set_pins(pins, m, now_ms);
         let said = self.protocol.output_len();
         host.rx.pop_while(|b| self.protocol.take_byte(b, m, now_ms));
@@ -281,9 +299,13 @@ impl Controller {
 
     /// The port's state this tick: opening it starts a session; the power-up notice
     /// waits for a listener.
-    fn port(&mut self, open: bool) {
+    fn port(&mut self, open: bool, now_ms: u32) {
         if open && !self.port_open {
             self.protocol.start_session();
+            self.session_quiet_since = Some(now_ms);
+        }
+        if !open {
+            self.session_quiet_since = None;
         }
         self.port_open = open;
         if open {
@@ -347,7 +369,7 @@ impl Controller {
     /// The machine as the HMI sees it.
     pub fn status<M: MotionControl>(&self, m: &M) -> hmi::Status {
         let state = match self.protocol.machine().state(m) {
-            RunState::Idle | RunState::Check => MachineState::Idle,
+            RunState::Idle | RunState::Check | RunState::Sleep => MachineState::Idle,
             RunState::Run => MachineState::Run,
             RunState::Hold { .. } | RunState::Door { .. } => MachineState::Hold,
             RunState::Jog => MachineState::Jog,

@@ -101,6 +101,8 @@ pub struct Pipeline<S: StepSide> {
     /// has run it.
     waiting: bool,
     pen_down: bool,
+    /// The wait in `wait_left` / `waiting` is a G4 dwell (not a pen lift's).
+    dwell: bool,
     pen_lift_ms: u32,
     held: bool,
     /// Calls of [`Pipeline::fill`] spent waiting at rest for a second move.
@@ -132,6 +134,7 @@ impl<S: StepSide> Pipeline<S> {
             wait_left = 0,
             waiting = false,
             pen_down = false,
+            dwell = false,
             pen_lift_ms = s.pen_lift_ms(),
             held = false,
             gather = 0,
@@ -238,8 +241,12 @@ impl<S: StepSide> Pipeline<S> {
                 return;
             };
             match cmd {
-                Command::Dwell { ms } => self.wait_left = self.ms_ticks(ms).max(1),
+                Command::Dwell { ms } => {
+                    self.dwell = true;
+                    self.wait_left = self.ms_ticks(ms).max(1);
+                }
                 Command::Pen { down } => {
+                    self.dwell = false;
                     self.pen_down = down;
                     self.wait_left = self.ms_ticks(self.pen_lift_ms).max(1);
                 }
@@ -393,6 +400,19 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     fn pen_down(&self) -> bool {
         self.pen_down
     }
+    fn dwelling(&self) -> bool {
+        if !self.prep.is_idle(&self.planner) {
+            return false;
+        }
+        match self.pending.front() {
+            // Queued, not started yet: it is all there is.
+            Some(Command::Dwell { .. }) => {
+                self.pending.len() == 1 && self.wait_left == 0 && !self.waiting
+            }
+            Some(_) => false,
+            None => self.dwell && (self.wait_left > 0 || self.waiting),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -457,6 +477,40 @@ mod tests {
             feed,
             line: 0,
         })
+    }
+
+    /// A dwell alone is reported as dwelling (the machine shows Idle, as Grbl does);
+    /// a move, or a pen lift's wait, is not.
+    #[test]
+    fn a_dwell_alone_is_dwelling_and_nothing_else_is() {
+        let mut s = Settings::default();
+        s.set(201, 1.0).unwrap(); // servo pen: its lift is a timed wait too
+        let mut pipeline = Pipeline::new(
+            &s,
+            PrepConfig::default(),
+            TestSide {
+                queue: StepQueue::new(),
+                pos: [0; 3],
+            },
+        );
+        pipeline.push(Command::Dwell { ms: 50 }).unwrap();
+        assert!(pipeline.dwelling(), "queued");
+        pipeline.fill();
+        assert!(pipeline.dwelling() && pipeline.is_moving(), "running");
+        run(&mut pipeline, X);
+        assert!(!pipeline.dwelling() && pipeline.is_idle());
+
+        pipeline
+            .push(mv([800, 0, 0], Feed::MmPerMin(600.0)))
+            .unwrap();
+        pipeline.push(Command::Dwell { ms: 50 }).unwrap();
+        pipeline.fill();
+        assert!(!pipeline.dwelling(), "a move runs first");
+        pipeline.push(Command::Pen { down: true }).unwrap();
+        run(&mut pipeline, X);
+        pipeline.push(Command::Pen { down: false }).unwrap();
+        pipeline.fill();
+        assert!(pipeline.is_moving() && !pipeline.dwelling(), "a pen lift");
     }
 
     #[test]

@@ -455,3 +455,35 @@ fn quiet_only_when_nothing_waits() {
     }
     assert_eq!(m.pos[X], 2 * Settings::default().steps_per_mm(X) as i32);
 }
+
+/// bCNC raises DTR, waits a second and throws away what came: the welcome is said
+/// again ahead of the answer to its first byte. A sender that speaks at once (UGS,
+/// cncjs) gets it once.
+#[test]
+fn a_sender_that_waited_after_opening_the_port_gets_the_welcome_again() {
+    const WELCOME: &str = "\r\nGrbl 1.1h ['$' for help]\r\n";
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let mut m = FakePlanner::new(16);
+    sh.port_open = false;
+    sh.tick(&mut c, &mut m);
+    sh.port_open = true;
+    assert_eq!(sh.send(&mut c, &mut m, b""), WELCOME);
+    // One second passes; the host flushes its input (drops the welcome).
+    for _ in 0..1000 {
+        sh.tick(&mut c, &mut m);
+    }
+    assert_eq!(sh.read(), "");
+    let out = sh.send(&mut c, &mut m, b"$I\n");
+    assert!(out.starts_with(&format!("{WELCOME}[VER:1.1h")), "{out:?}");
+    // Only the session's first byte.
+    let out = sh.send(&mut c, &mut m, b"?");
+    assert!(out.starts_with("<Idle|"), "{out:?}");
+
+    // A quick sender: welcome once.
+    sh.port_open = false;
+    sh.tick(&mut c, &mut m);
+    sh.port_open = true;
+    sh.tick(&mut c, &mut m);
+    let out = sh.read() + &sh.send(&mut c, &mut m, b"$I\n");
+    assert_eq!(out.matches("Grbl 1.1h").count(), 1, "{out:?}");
+}

@@ -99,6 +99,7 @@ impl Protocol {
             RunState::Alarm => b"<Alarm",
             RunState::Home => b"<Home",
             RunState::Check => b"<Check",
+            RunState::Sleep => b"<Sleep",
         });
         let settings = machine.settings();
         let scale = report_scale(settings);
@@ -122,7 +123,8 @@ impl Protocol {
         // The pen is the spindle: report S while it is down.
         let interpreter = machine.interpreter();
         let spindle = if interpreter.modal().pen_down {
-            round_i32(interpreter.spindle())
+            let (lo, hi) = settings.spindle_range();
+            round_i32(interpreter.spindle().clamp(lo, hi.max(lo)))
         } else {
             0
         };
