@@ -25,6 +25,7 @@ use crate::protocol::Protocol;
 use crate::ring::{ByteRx, ByteTx};
 use crate::settings::{PenMode, Settings};
 use crate::settings_store::SettingsStore;
+use crate::stepper::idle::{Activity, IdleOutputs, Levels};
 use crate::stepper::output::OutputConfig;
 use core::mem::MaybeUninit;
 use embedded_storage::nor_flash::NorFlash;
@@ -57,6 +58,12 @@ const TX_PER_TICK: usize = 64;
 /// it and sends at once (UGS, cncjs: within milliseconds) gets it once; one that
 /// waited has nothing in flight for a second welcome to disturb.
 pub const WELCOME_REPEAT_MS: u32 = 500;
+
+/// The flash the image is linked for, KB: the STM32F103CB's.
+pub const NEEDED_FLASH_KB: u32 = 128;
+/// What a board with less flash says (with every welcome, and to every command that
+/// would unlock or change something).
+pub const WRONG_CHIP: &str = "Wrong chip: this image needs an STM32F103CB (128 KB flash)";
 
 /// Jog moves run this far (mm) unless stopped; key release stops them.
 const JOG_REACH_MM: i32 = 1000;
@@ -124,6 +131,8 @@ pub struct Controller {
     /// A message from power-up for the host (a corrupt store), said once it listens.
     notice: Option<&'static str>,
     saves: Saves,
+    /// The status and power outputs' memory (when the motors last needed power).
+    idle: IdleOutputs,
 }
 
 /// The HMI's view of the machine's configuration, from the settings.
@@ -161,7 +170,34 @@ impl Controller {
             session_quiet_since = None,
             notice = None,
             saves = Saves::default(),
+            idle = IdleOutputs::new(),
         })
+    }
+
+    /// The chip's flash size (its F_SIZE register), KB, checked at boot: a chip with
+    /// less than the image needs (a C8's 64 KB) does not run it. The board stays
+    /// visibly alive instead of looking dead: the LED blinks its code, USB answers
+    /// with the alarm and [`WRONG_CHIP`], the motors stay off.
+    pub fn check_chip(&mut self, flash_kb: u32) {
+        if flash_kb < NEEDED_FLASH_KB {
+            self.protocol.machine_mut().refuse_to_run(WRONG_CHIP);
+        }
+    }
+
+    /// The busy LED, the busy output and the motors' power at `now_ms`: the shell
+    /// calls this every millisecond, moving or not, and drives the pins from it
+    /// ([`crate::stepper::idle`]).
+    pub fn outputs_now<M: MotionControl>(&mut self, m: &M, now_ms: u32) -> Levels {
+        let machine = self.protocol.machine();
+        let busy = machine.busy(m);
+        let a = Activity {
+            busy,
+            needs_power: busy || !m.is_idle(),
+            released: machine.motors_released(),
+            refused: machine.refusal().is_some(),
+        };
+        let delay = machine.settings().step_idle_delay_ms();
+        self.idle.update(a, delay, now_ms)
     }
 
     /// Power-up from the store: the settings (the defaults if the store has none or

@@ -420,7 +420,7 @@ mod tests {
     use super::*;
     use crate::motion::{Feed, X, Y};
     use crate::stepper::queue::StepQueue;
-    use crate::stepper::CmdSource;
+    use crate::stepper::{CmdSource, TIMER_HZ};
 
     /// A side whose "interrupt" is the test: it drains the queue by hand.
     struct TestSide {
@@ -511,6 +511,50 @@ mod tests {
         pipeline.push(Command::Pen { down: false }).unwrap();
         pipeline.fill();
         assert!(pipeline.is_moving() && !pipeline.dwelling(), "a pen lift");
+    }
+
+    /// Runs the step queue for `ms` milliseconds of timer time (the preparation every
+    /// millisecond, as the firmware's task).
+    fn run_for(pipeline: &mut Pipeline<TestSide>, ms: u32) {
+        let per_ms = u64::from(TIMER_HZ / 1000);
+        for _ in 0..ms {
+            pipeline.fill();
+            let mut t = 0u64;
+            let side = pipeline.side_mut();
+            while t < per_ms {
+                let Some(c) = side.queue.pop() else { break };
+                c.tick().apply(&mut side.pos);
+                t += u64::from(c.wait());
+            }
+        }
+    }
+
+    /// `FS:` is the feed the machine runs at: within 1 % at cruise (long moves run in
+    /// segments, which once left the start rate showing), the ramp in between, 0 at rest.
+    #[test]
+    fn the_reported_speed_is_the_real_feed_at_cruise_and_zero_at_rest() {
+        let s = Settings::default();
+        let mut pipeline = Pipeline::new(
+            &s,
+            PrepConfig::default(),
+            TestSide {
+                queue: StepQueue::new(),
+                pos: [0; 3],
+            },
+        );
+        assert_eq!(pipeline.speed(), 0.0);
+        for (target, feed) in [(4800, 1500.0), (12800, 3000.0), (0, 600.0)] {
+            pipeline
+                .push(mv([target, 0, 0], Feed::MmPerMin(feed)))
+                .unwrap();
+            // Mid-move: the ramps (at most 3000 / 60 / 200 = 0.25 s) are over.
+            run_for(&mut pipeline, 400);
+            let v = pipeline.speed();
+            assert!((v - feed).abs() <= feed * 0.01, "F{feed}: FS {v} mid-move");
+            run(&mut pipeline, X);
+            assert_eq!(pipeline.position()[X], target);
+            assert_eq!(pipeline.speed(), 0.0, "at rest");
+        }
     }
 
     #[test]

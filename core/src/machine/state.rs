@@ -90,6 +90,10 @@ pub struct Machine {
     check_mode: bool,
     /// `$SLP` ran: motors released, everything refused until a soft reset.
     sleeping: bool,
+    /// The board refuses to run at all (the chip is not the one the image needs):
+    /// why, said with the welcome and to every command that would unlock. Nothing
+    /// clears it.
+    refusal: Option<&'static str>,
     jogging: bool,
     jog_cancel: bool,
     homing: Option<Homing>,
@@ -146,6 +150,7 @@ impl Machine {
             needs_reset = false,
             check_mode = false,
             sleeping = false,
+            refusal = None,
             jogging = false,
             jog_cancel = false,
             homing = None,
@@ -181,7 +186,20 @@ impl Machine {
     /// In alarm and `$H` or `$X` would unlock it (not while an e-stop is held): the
     /// welcome line is then followed by Grbl's `[MSG:'$H'|'$X' to unlock]`.
     pub fn needs_unlock(&self) -> bool {
-        self.locked && !self.needs_reset
+        self.locked && !self.needs_reset && self.refusal.is_none()
+    }
+
+    /// Refuse to run for good (the shell found a chip the image cannot use): locked in
+    /// alarm, the motors released, `why` said with every welcome and to every `$X`,
+    /// `$H` or other `$` command that would change something.
+    pub fn refuse_to_run(&mut self, why: &'static str) {
+        self.refusal = Some(why);
+        self.locked = true;
+    }
+
+    /// Why the board refuses to run, if it does.
+    pub fn refusal(&self) -> Option<&'static str> {
+        self.refusal
     }
 
     fn event(&mut self, e: Event) {
@@ -274,9 +292,10 @@ impl Machine {
         self.sleeping = true;
     }
 
-    /// The motors must stay unpowered whatever the idle delay says (`$SLP`).
+    /// The motors must stay unpowered whatever the idle delay says (`$SLP`, a
+    /// refused board).
     pub fn motors_released(&self) -> bool {
-        self.sleeping
+        self.sleeping || self.refusal.is_some()
     }
 
     /// The busy output: motion is under way or homing.
@@ -477,6 +496,10 @@ impl Machine {
 
     /// `$X`.
     pub fn unlock(&mut self) -> Result<(), Status> {
+        if let Some(why) = self.refusal {
+            self.event(Event::Msg(why));
+            return Err(Status::SystemLocked);
+        }
         if self.inputs.estop || self.needs_reset {
             self.event(Event::Msg("Reset to continue"));
             return Err(Status::SystemLocked);
@@ -490,6 +513,10 @@ impl Machine {
 
     /// `$H`.
     pub fn start_homing<M: MotionControl>(&mut self, m: &mut M) -> Result<(), Status> {
+        if let Some(why) = self.refusal {
+            self.event(Event::Msg(why));
+            return Err(Status::SystemLocked);
+        }
         if !self.settings.homing_enabled() {
             return Err(Status::HomingDisabled);
         }
@@ -637,7 +664,7 @@ impl Machine {
             self.alarm = Some(a);
             self.event(Event::Alarm(a));
         }
-        if woke && !self.locked {
+        if (woke || self.refusal.is_some()) && !self.locked {
             self.homed = false;
             self.locked = true;
         }

@@ -132,6 +132,21 @@ impl Protocol {
         if !anytime && !at_rest {
             return Some(Err(Status::IdleError));
         }
+        // A board that refuses to run shows what it has but changes nothing (and
+        // writes no flash): only the listings, help and `$G` / `$I` answer (and `$J=`
+        // gets the alarm's error 8 from the machine).
+        let shows = matches!(
+            kind,
+            SysCommand::Help
+                | SysCommand::List(_)
+                | SysCommand::Modal
+                | SysCommand::Info
+                | SysCommand::Jog
+        );
+        if let (Some(why), false) = (self.machine.refusal(), shows) {
+            self.notify(why);
+            return Some(Err(Status::SystemLocked));
+        }
         Some(match kind {
             SysCommand::Help => {
                 self.say(&[b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"]);

@@ -44,6 +44,9 @@ impl Protocol {
     /// alarm.
     pub(super) fn welcome(&mut self) {
         self.say(&[b"\r\n", WELCOME.as_bytes()]);
+        if let Some(why) = self.machine.refusal() {
+            self.notify(why);
+        }
         if self.machine.needs_unlock() {
             self.notify("'$H'|'$X' to unlock");
         }
