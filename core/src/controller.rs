@@ -107,10 +107,10 @@ struct Saves {
     startup: bool,
 }
 
-/// Outputs of the controller that the firmware drives (buzzer, busy LED).
+/// Outputs of the controller that the keypad task drives (the buzzer; the busy LED
+/// and the motors' power follow [`Controller::outputs_now`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Outputs {
-    pub busy_led: bool,
     /// The latest beep to play, taken by the buzzer task.
     pub beep: Option<Beep>,
 }
@@ -189,10 +189,13 @@ impl Controller {
     /// ([`crate::stepper::idle`]).
     pub fn outputs_now<M: MotionControl>(&mut self, m: &M, now_ms: u32) -> Levels {
         let machine = self.protocol.machine();
-        let busy = machine.busy(m);
+        // Busy while anything is queued or moves (a hold or a dwell with the job not
+        // done included): a second controller waiting on the busy output waits for
+        // the end of the job, and the motors keep their position meanwhile.
+        let busy = machine.busy(m) || !m.is_idle();
         let a = Activity {
             busy,
-            needs_power: busy || !m.is_idle(),
+            needs_power: busy,
             released: machine.motors_released(),
             refused: machine.refusal().is_some(),
         };
@@ -508,10 +511,6 @@ impl Controller {
             }
             Action::Beep(b) => {
                 self.outputs.beep = Some(b);
-                false
-            }
-            Action::BusyLed(on) => {
-                self.outputs.busy_led = on;
                 false
             }
         };

@@ -369,6 +369,7 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
         self.pending.clear();
         self.wait_left = 0;
         self.waiting = false;
+        self.dwell = false;
         self.held = false;
     }
 
@@ -401,17 +402,9 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
         self.pen_down
     }
     fn dwelling(&self) -> bool {
-        if !self.prep.is_idle(&self.planner) {
-            return false;
-        }
-        match self.pending.front() {
-            // Queued, not started yet: it is all there is.
-            Some(Command::Dwell { .. }) => {
-                self.pending.len() == 1 && self.wait_left == 0 && !self.waiting
-            }
-            Some(_) => false,
-            None => self.dwell && (self.wait_left > 0 || self.waiting),
-        }
+        // The wait under way is a dwell's, and nothing is behind it. (A dwell that
+        // has just been queued starts at the next preparation, within a millisecond.)
+        self.dwell && (self.wait_left > 0 || self.waiting) && self.pending.is_empty()
     }
 }
 
@@ -494,11 +487,10 @@ mod tests {
             },
         );
         pipeline.push(Command::Dwell { ms: 50 }).unwrap();
-        assert!(pipeline.dwelling(), "queued");
         pipeline.fill();
         assert!(pipeline.dwelling() && pipeline.is_moving(), "running");
         run(&mut pipeline, X);
-        assert!(!pipeline.dwelling() && pipeline.is_idle());
+        assert!(pipeline.is_idle());
 
         pipeline
             .push(mv([800, 0, 0], Feed::MmPerMin(600.0)))

@@ -528,37 +528,28 @@ impl Settings {
         if number == 0 && v < 3.0 {
             return Err(SettingError::PulseTooShort);
         }
-        // A resolution or rate too high for the step rate is error 12 before it is
-        // out of range (Grbl has no upper bound but the step rate).
-        if matches!(number, 100..=102 | 110..=112) {
-            let axis = usize::from(number % 10);
-            let (steps, rate) = if number < 110 {
-                (v, self.max_rate(axis))
-            } else {
-                (self.steps_per_mm(axis), v)
-            };
-            if steps * rate / 60.0 > MAX_AXIS_STEP_RATE_HZ {
-                return Err(SettingError::StepRateTooHigh);
-            }
-        }
-        if v < min || v > max {
-            return Err(SettingError::Invalid);
-        }
         if number == 20 && v != 0.0 && !self.homing_enabled() {
             return Err(SettingError::SoftLimitsNeedHoming);
         }
-        // Try the value in place; put the old one back if the step rate is too high.
+        // Try the value in place; put the old one back if it is refused. A resolution
+        // or rate too high for the step rate is error 12 before it is out of range
+        // (`$110=99999999`: Grbl has no upper bound but the step rate).
         let Some(slot) = self.vals.get_mut(i) else {
             return Err(SettingError::Invalid);
         };
         let old = core::mem::replace(slot, v);
-        for axis in 0..AXES {
-            if self.steps_per_mm(axis) * self.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ {
-                if let Some(slot) = self.vals.get_mut(i) {
-                    *slot = old;
-                }
-                return Err(SettingError::StepRateTooHigh);
+        let too_fast = (0..AXES).any(|axis| {
+            self.steps_per_mm(axis) * self.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ
+        });
+        if too_fast || v < min || v > max {
+            if let Some(slot) = self.vals.get_mut(i) {
+                *slot = old;
             }
+            return Err(if too_fast {
+                SettingError::StepRateTooHigh
+            } else {
+                SettingError::Invalid
+            });
         }
         // Turning homing off also turns soft limits off: they would refer to nothing.
         if number == 22 && v == 0.0 {

@@ -286,8 +286,7 @@ impl Machine {
     /// ([`Machine::motors_released`]) and lines and `$` commands are refused until a
     /// soft reset, which wakes the machine in alarm (the motors may have moved while
     /// unpowered), as Grbl's sleep does.
-    pub fn sleep<M: MotionControl>(&mut self, m: &mut M) {
-        self.drop_queue(m);
+    pub fn sleep(&mut self) {
         self.drop_activity();
         self.sleeping = true;
     }

@@ -227,7 +227,7 @@ impl Protocol {
                 set_setting(&mut self.machine, self.line.get(1..).unwrap_or(&[]), m)
             }
             SysCommand::Sleep => {
-                self.machine.sleep(m);
+                self.machine.sleep();
                 Ok(())
             }
             SysCommand::Invalid => Err(Status::InvalidStatement),

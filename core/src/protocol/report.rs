@@ -127,7 +127,9 @@ impl Protocol {
         let interpreter = machine.interpreter();
         let spindle = if interpreter.modal().pen_down {
             let (lo, hi) = settings.spindle_range();
-            round_i32(interpreter.spindle().clamp(lo, hi.max(lo)))
+            // max/min, not `clamp`: its assertion's message would link float
+            // formatting into the image.
+            round_i32(interpreter.spindle().min(hi).max(lo))
         } else {
             0
         };

@@ -43,20 +43,21 @@ pub struct Levels {
     pub motors: bool,
 }
 
-/// The memory of the outputs: when the motors last needed power.
+/// The memory of the outputs: how long ago the motors last needed power.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct IdleOutputs {
-    /// The last millisecond the motors needed power; `None` before the first motion
-    /// since power-up (the motors are held from power-up for `$1` ms, as after a move).
-    last_needed_ms: Option<u32>,
-    started: bool,
+    /// The last millisecond the motors needed power.
+    last_needed_ms: u32,
+    /// They have needed it since power-up (until then they are off, unless `$1` is
+    /// 255).
+    ever: bool,
 }
 
 impl IdleOutputs {
     pub const fn new() -> Self {
         IdleOutputs {
-            last_needed_ms: None,
-            started: false,
+            last_needed_ms: 0,
+            ever: false,
         }
     }
 
@@ -64,16 +65,13 @@ impl IdleOutputs {
     /// Motors stay powered `idle_delay_ms` after the last millisecond they were needed
     /// (0: off at once at rest; 255: always, unless released).
     pub fn update(&mut self, a: Activity, idle_delay_ms: u8, now_ms: u32) -> Levels {
-        if a.needs_power || !self.started {
-            self.last_needed_ms = Some(now_ms);
-            self.started = true;
+        if a.needs_power {
+            self.last_needed_ms = now_ms;
+            self.ever = true;
         }
-        let held = match self.last_needed_ms {
-            _ if a.needs_power => true,
-            _ if idle_delay_ms == KEEP_POWERED => true,
-            Some(t) => now_ms.wrapping_sub(t) < u32::from(idle_delay_ms),
-            None => false,
-        };
+        let held = idle_delay_ms == KEEP_POWERED
+            || self.ever && now_ms.wrapping_sub(self.last_needed_ms) < u32::from(idle_delay_ms)
+            || a.needs_power;
         let led = if a.refused { blink(now_ms) } else { a.busy };
         Levels {
             led,
@@ -131,6 +129,8 @@ mod tests {
     #[test]
     fn delay_255_keeps_them_powered_and_sleep_releases_them_anyway() {
         let mut o = IdleOutputs::new();
+        assert!(!o.update(AT_REST, 25, 0).motors, "off from power-up");
+        assert!(o.update(AT_REST, 255, 0).motors, "255: on from power-up");
         o.update(MOVING, 255, 0);
         assert_eq!(off_at(&mut o, 255, 1), None);
         let asleep = Activity {
