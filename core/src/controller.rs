@@ -192,7 +192,7 @@ impl Controller {
         // Busy while anything is queued or moves (a hold or a dwell with the job not
         // done included): a second controller waiting on the busy output waits for
         // the end of the job, and the motors keep their position meanwhile.
-        let busy = machine.busy(m) || !m.is_idle();
+        let busy = !m.is_idle() || machine.state(m) == RunState::Home;
         let a = Activity {
             busy,
             needs_power: busy,
