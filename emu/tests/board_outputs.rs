@@ -3,7 +3,8 @@
 //! (PA9) and the 4-phase coils released `$1` ms after the last step (255 keeps them),
 //! the busy LED (PC13) and busy output (PC15) clear within 5 ms of it, `FS:` says the
 //! real feed, a C8 (F_SIZE 64 KB) blinks and answers over USB with the part it needs,
-//! and a sender that waited after opening the port gets the welcome again.
+//! a sender that waited after opening the port gets the welcome again, and floods of
+//! resets and `?` through the USB path cut no line and lose no answer.
 
 mod common;
 
@@ -274,4 +275,58 @@ fn a_sender_that_waits_after_opening_the_port_gets_the_welcome_again() {
     s.run_for(10 * T_PER_MS).unwrap();
     let got = s.take_received() + &s.command("$I", T_PER_S).unwrap();
     assert_eq!(got.matches("Grbl 1.1h").count(), 1, "{got:?}");
+}
+
+/// Floods in one write, through the real USB path: 300 soft resets then `?` cut no
+/// line and the `?` is answered; 500 `?` get 500 reports (the image answered 18).
+#[test]
+fn floods_of_resets_and_queries_cut_no_line_and_lose_no_answer() {
+    let mut s = booted(None);
+    s.run_for(20 * T_PER_MS).unwrap();
+    s.take_received();
+    let mut bytes = vec![0x18u8; 300];
+    bytes.push(b'?');
+    s.send(&bytes);
+    s.run_for(500 * T_PER_MS).unwrap();
+    let got = s.take_received();
+    let lines: Vec<&str> = got
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    for l in &lines {
+        assert!(
+            *l == "Grbl 1.1h ['$' for help]" || l.starts_with("<Idle|") && l.ends_with('>'),
+            "cut or unexpected line {l:?} in {got:?}"
+        );
+    }
+    assert_eq!(
+        lines.iter().filter(|l| l.starts_with('<')).count(),
+        1,
+        "{got:?}"
+    );
+    assert_eq!(
+        lines.last().map(|l| l.starts_with('<')),
+        Some(true),
+        "{got:?}"
+    );
+
+    s.send(&[b'?'; 500]);
+    s.run_for(2 * T_PER_S).unwrap();
+    let got = s.take_received();
+    let reports = got
+        .lines()
+        .map(str::trim)
+        .filter(|l| l.starts_with("<Idle|") && l.ends_with('>'))
+        .count();
+    eprintln!(
+        "300 resets: {} lines; 500 queries: {reports} reports",
+        lines.len()
+    );
+    assert_eq!(reports, 500);
+    assert_eq!(
+        got.lines().filter(|l| !l.trim().is_empty()).count(),
+        500,
+        "{got:?}"
+    );
 }
