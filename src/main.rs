@@ -41,6 +41,8 @@ use inkstep_core::stepper::MAX_RELOAD;
 
 /// Hard limits stop stepping at once only when `$21` is on.
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
+/// 4-phase outputs (`$200=1`): the motors are released by turning the coils off too.
+static FOUR_PHASE: AtomicBool = AtomicBool::new(false);
 /// The host has the serial port open (CDC's DTR), as the USB task last saw it.
 static PORT_OPEN: AtomicBool = AtomicBool::new(false);
 /// Something the protocol task must see happened since it last looked (bytes from the
@@ -111,6 +113,7 @@ mod app {
         servo: board::PenServo,
         keypad: board::KeypadMatrix,
         indicators: board::Indicators,
+        busy: board::BusyOutputs,
         lcd_spi: board::LcdSpi,
         screens: &'static mut Screens,
         fb: &'static mut FrameBuffer,
@@ -142,15 +145,6 @@ mod app {
         syst.enable_interrupt();
         syst.enable_counter();
 
-        // This image uses 128 KB of flash: on a chip that promises less (a C8's 64 KB)
-        // it refuses to run rather than fault later; the panic leaves the drivers off.
-        let flash_kb = board::flash_size_kb();
-        if flash_kb < board::FLASH_SIZE / 1024 {
-            defmt::panic!(
-                "this image needs a 128 KB STM32F103CB; this chip has {} KB of flash",
-                flash_kb
-            );
-        }
         // Settings, offsets and startup lines from flash; a corrupt store falls back to
         // defaults and the host is told.
         let mut store = match SettingsStore::new(b.flash, board::settings_pages()) {
@@ -159,6 +153,17 @@ mod app {
             Err(_) => defmt::panic!("settings flash range"),
         };
         let ctl = Controller::boot_in(cx.local.ctl_cell, &mut store, 0);
+        // This image uses 128 KB of flash: a chip that promises less (a C8's 64 KB)
+        // does not run it, but stays visibly alive: the LED blinks a code, USB answers
+        // with the alarm and the part needed, the motors stay off (the core decides).
+        let flash_kb = board::flash_size_kb();
+        ctl.check_chip(flash_kb);
+        if ctl.protocol().machine().refusal().is_some() {
+            defmt::error!(
+                "this image needs a 128 KB STM32F103CB; this chip has {} KB of flash",
+                flash_kb
+            );
+        }
         let settings = ctl.protocol().machine().settings();
         let (steps_tx, steps_rx) = cx.local.steps.split();
         let prep = PrepConfig {
@@ -203,6 +208,7 @@ mod app {
                 servo: b.servo,
                 keypad,
                 indicators: b.indicators,
+                busy: b.busy,
                 lcd_spi: b.lcd_spi,
                 // The LCD task's retained state: the screens and the 1 KB frame buffer
                 // (entirely dirty from the start: the first flush sends the whole
@@ -234,14 +240,14 @@ mod app {
     }
 
     /// The core's output configuration into the step interrupt, the hard-limit arming
-    /// and the driver enable (at boot and whenever the settings change). `$4` acts at
-    /// once: the enable pin is rewritten with the new polarity unless an e-stop holds
-    /// the drivers off.
+    /// and the driver-enable polarity (at boot and whenever the settings change). `$4`
+    /// acts within a millisecond: the preparation task rewrites the enable pin every
+    /// tick with the polarity set here.
     fn apply_output_config(cfg: &OutputConfig) {
         steps::set_output_config(cfg);
         HARD_LIMITS_ARMED.store(cfg.hard_limits, Ordering::Relaxed);
+        FOUR_PHASE.store(cfg.four_phase, Ordering::Relaxed);
         board::set_enable_polarity(cfg.enable_active_low);
-        steps::drivers_on_unless_halted();
     }
 
     #[idle]
@@ -349,14 +355,31 @@ mod app {
     }
 
     /// Segment preparation, every tick: keep a few ms of step commands queued ahead of
-    /// the interrupt and start the timer when it is idle and commands wait.
-    #[task(binds = I2C1_EV, priority = 5, shared = [core])]
+    /// the interrupt and start the timer when it is idle and commands wait. Then the
+    /// outputs that follow the motion millisecond by millisecond, whatever the
+    /// protocol task does (it sleeps at idle): the busy LED and output, and the
+    /// motors' power (`$1`: released that long after the last motion; on again
+    /// before the first step of the next).
+    #[task(binds = I2C1_EV, priority = 5, shared = [core], local = [busy])]
     fn prepare(mut cx: prepare::Context) {
-        let kick = cx.shared.core.lock(|c| {
-            let pipeline = &mut *c.pipeline;
+        let now = now_ms();
+        let (kick, levels) = cx.shared.core.lock(|c| {
+            let (ctl, pipeline) = c.parts();
             pipeline.fill();
-            pipeline.side().queued() > 0
+            let levels = ctl.outputs_now(pipeline, now);
+            (pipeline.side().queued() > 0, levels)
         });
+        cx.local.busy.set(levels.led, levels.busy);
+        if levels.motors {
+            steps::drivers_on_unless_halted();
+        } else {
+            // At rest (no step queued or in flight: the motors needed no power for
+            // `$1` ms), so the coils are free to write.
+            board::drivers_enabled(false);
+            if FOUR_PHASE.load(Ordering::Relaxed) {
+                board::coils_off();
+            }
+        }
         if kick {
             steps::kick();
         }
@@ -468,7 +491,6 @@ mod app {
         }
         cx.local.keypad.select_column(col);
         let buzzer = cx.local.buzzer;
-        cx.local.indicators.set_busy(out.busy_led);
         if let Some(b) = out.beep {
             buzzer.play(b);
         }

@@ -25,6 +25,7 @@ use crate::protocol::Protocol;
 use crate::ring::{ByteRx, ByteTx};
 use crate::settings::{PenMode, Settings};
 use crate::settings_store::SettingsStore;
+use crate::stepper::idle::{Activity, IdleOutputs, Levels};
 use crate::stepper::output::OutputConfig;
 use core::mem::MaybeUninit;
 use embedded_storage::nor_flash::NorFlash;
@@ -48,6 +49,21 @@ pub const HOST_TX_RING: usize = 128;
 /// Bytes handed to the host ring per tick at most: one USB packet (64 KB/s, far above
 /// what Grbl's protocol needs).
 const TX_PER_TICK: usize = 64;
+
+/// A session's first byte from the host that comes this long (ms) or longer after
+/// the port opened gets the welcome line again, ahead of its answer. Senders wait
+/// for the welcome to learn the version, and some throw away what came before they
+/// looked: bCNC raises DTR, waits a second (an Arduino's reset) and flushes its
+/// input, and so never saw the welcome sent the moment DTR rose. A sender that read
+/// it and sends at once (UGS, cncjs: within milliseconds) gets it once; one that
+/// waited has nothing in flight for a second welcome to disturb.
+pub const WELCOME_REPEAT_MS: u32 = 500;
+
+/// The flash the image is linked for, KB: the STM32F103CB's.
+pub const NEEDED_FLASH_KB: u32 = 128;
+/// What a board with less flash says (with every welcome, and to every command that
+/// would unlock or change something).
+pub const WRONG_CHIP: &str = "Wrong chip: this image needs an STM32F103CB (128 KB flash)";
 
 /// Jog moves run this far (mm) unless stopped; key release stops them.
 const JOG_REACH_MM: i32 = 1000;
@@ -91,10 +107,10 @@ struct Saves {
     startup: bool,
 }
 
-/// Outputs of the controller that the firmware drives (buzzer, busy LED).
+/// Outputs of the controller that the keypad task drives (the buzzer; the busy LED
+/// and the motors' power follow [`Controller::outputs_now`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Outputs {
-    pub busy_led: bool,
     /// The latest beep to play, taken by the buzzer task.
     pub beep: Option<Beep>,
 }
@@ -110,9 +126,13 @@ pub struct Controller {
     view_pos: StepPos,
     /// The host had the port open at the last tick.
     port_open: bool,
+    /// When the port opened, while the session's first byte has not come yet.
+    session_quiet_since: Option<u32>,
     /// A message from power-up for the host (a corrupt store), said once it listens.
     notice: Option<&'static str>,
     saves: Saves,
+    /// The status and power outputs' memory (when the motors last needed power).
+    idle: IdleOutputs,
 }
 
 /// The HMI's view of the machine's configuration, from the settings.
@@ -147,9 +167,40 @@ impl Controller {
             dir = [0, 0],
             view_pos = [0; 3],
             port_open = false,
+            session_quiet_since = None,
             notice = None,
             saves = Saves::default(),
+            idle = IdleOutputs::new(),
         })
+    }
+
+    /// The chip's flash size (its F_SIZE register), KB, checked at boot: a chip with
+    /// less than the image needs (a C8's 64 KB) does not run it. The board stays
+    /// visibly alive instead of looking dead: the LED blinks its code, USB answers
+    /// with the alarm and [`WRONG_CHIP`], the motors stay off.
+    pub fn check_chip(&mut self, flash_kb: u32) {
+        if flash_kb < NEEDED_FLASH_KB {
+            self.protocol.machine_mut().refuse_to_run(WRONG_CHIP);
+        }
+    }
+
+    /// The busy LED, the busy output and the motors' power at `now_ms`: the shell
+    /// calls this every millisecond, moving or not, and drives the pins from it
+    /// ([`crate::stepper::idle`]).
+    pub fn outputs_now<M: MotionControl>(&mut self, m: &M, now_ms: u32) -> Levels {
+        let machine = self.protocol.machine();
+        // Busy while anything is queued or moves (a hold or a dwell with the job not
+        // done included): a second controller waiting on the busy output waits for
+        // the end of the job, and the motors keep their position meanwhile.
+        let busy = !m.is_idle() || machine.state(m) == RunState::Home;
+        let a = Activity {
+            busy,
+            needs_power: busy,
+            released: machine.motors_released(),
+            refused: machine.refusal().is_some(),
+        };
+        let delay = machine.settings().step_idle_delay_ms();
+        self.idle.update(a, delay, now_ms)
     }
 
     /// Power-up from the store: the settings (the defaults if the store has none or
@@ -243,7 +294,13 @@ impl Controller {
         m: &mut M,
         now_ms: u32,
     ) -> Serviced {
-        self.port(host.port_open);
+        self.port(host.port_open, now_ms);
+        if let (Some(since), false) = (self.session_quiet_since, host.rx.is_empty()) {
+            self.session_quiet_since = None;
+            if now_ms.wrapping_sub(since) >= WELCOME_REPEAT_MS {
+                self.protocol.repeat_welcome();
+            }
+        }
         self.set_pins(pins, m, now_ms);
         let said = self.protocol.output_len();
         host.rx.pop_while(|b| self.protocol.take_byte(b, m, now_ms));
@@ -281,9 +338,13 @@ impl Controller {
 
     /// The port's state this tick: opening it starts a session; the power-up notice
     /// waits for a listener.
-    fn port(&mut self, open: bool) {
+    fn port(&mut self, open: bool, now_ms: u32) {
         if open && !self.port_open {
             self.protocol.start_session();
+            self.session_quiet_since = Some(now_ms);
+        }
+        if !open {
+            self.session_quiet_since = None;
         }
         self.port_open = open;
         if open {
@@ -347,7 +408,7 @@ impl Controller {
     /// The machine as the HMI sees it.
     pub fn status<M: MotionControl>(&self, m: &M) -> hmi::Status {
         let state = match self.protocol.machine().state(m) {
-            RunState::Idle | RunState::Check => MachineState::Idle,
+            RunState::Idle | RunState::Check | RunState::Sleep => MachineState::Idle,
             RunState::Run => MachineState::Run,
             RunState::Hold { .. } | RunState::Door { .. } => MachineState::Hold,
             RunState::Jog => MachineState::Jog,
@@ -450,10 +511,6 @@ impl Controller {
             }
             Action::Beep(b) => {
                 self.outputs.beep = Some(b);
-                false
-            }
-            Action::BusyLed(on) => {
-                self.outputs.busy_led = on;
                 false
             }
         };

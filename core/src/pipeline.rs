@@ -101,6 +101,8 @@ pub struct Pipeline<S: StepSide> {
     /// has run it.
     waiting: bool,
     pen_down: bool,
+    /// The wait in `wait_left` / `waiting` is a G4 dwell (not a pen lift's).
+    dwell: bool,
     pen_lift_ms: u32,
     held: bool,
     /// Calls of [`Pipeline::fill`] spent waiting at rest for a second move.
@@ -132,6 +134,7 @@ impl<S: StepSide> Pipeline<S> {
             wait_left = 0,
             waiting = false,
             pen_down = false,
+            dwell = false,
             pen_lift_ms = s.pen_lift_ms(),
             held = false,
             gather = 0,
@@ -238,8 +241,12 @@ impl<S: StepSide> Pipeline<S> {
                 return;
             };
             match cmd {
-                Command::Dwell { ms } => self.wait_left = self.ms_ticks(ms).max(1),
+                Command::Dwell { ms } => {
+                    self.dwell = true;
+                    self.wait_left = self.ms_ticks(ms).max(1);
+                }
                 Command::Pen { down } => {
+                    self.dwell = false;
                     self.pen_down = down;
                     self.wait_left = self.ms_ticks(self.pen_lift_ms).max(1);
                 }
@@ -362,6 +369,7 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
         self.pending.clear();
         self.wait_left = 0;
         self.waiting = false;
+        self.dwell = false;
         self.held = false;
     }
 
@@ -393,6 +401,11 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     fn pen_down(&self) -> bool {
         self.pen_down
     }
+    fn dwelling(&self) -> bool {
+        // The wait under way is a dwell's, and nothing is behind it. (A dwell that
+        // has just been queued starts at the next preparation, within a millisecond.)
+        self.dwell && (self.wait_left > 0 || self.waiting) && self.pending.is_empty()
+    }
 }
 
 #[cfg(test)]
@@ -400,7 +413,7 @@ mod tests {
     use super::*;
     use crate::motion::{Feed, X, Y};
     use crate::stepper::queue::StepQueue;
-    use crate::stepper::CmdSource;
+    use crate::stepper::{CmdSource, TIMER_HZ};
 
     /// A side whose "interrupt" is the test: it drains the queue by hand.
     struct TestSide {
@@ -457,6 +470,83 @@ mod tests {
             feed,
             line: 0,
         })
+    }
+
+    /// A dwell alone is reported as dwelling (the machine shows Idle, as Grbl does);
+    /// a move, or a pen lift's wait, is not.
+    #[test]
+    fn a_dwell_alone_is_dwelling_and_nothing_else_is() {
+        let mut s = Settings::default();
+        s.set(201, 1.0).unwrap(); // servo pen: its lift is a timed wait too
+        let mut pipeline = Pipeline::new(
+            &s,
+            PrepConfig::default(),
+            TestSide {
+                queue: StepQueue::new(),
+                pos: [0; 3],
+            },
+        );
+        pipeline.push(Command::Dwell { ms: 50 }).unwrap();
+        pipeline.fill();
+        assert!(pipeline.dwelling() && pipeline.is_moving(), "running");
+        run(&mut pipeline, X);
+        assert!(pipeline.is_idle());
+
+        pipeline
+            .push(mv([800, 0, 0], Feed::MmPerMin(600.0)))
+            .unwrap();
+        pipeline.push(Command::Dwell { ms: 50 }).unwrap();
+        pipeline.fill();
+        assert!(!pipeline.dwelling(), "a move runs first");
+        pipeline.push(Command::Pen { down: true }).unwrap();
+        run(&mut pipeline, X);
+        pipeline.push(Command::Pen { down: false }).unwrap();
+        pipeline.fill();
+        assert!(pipeline.is_moving() && !pipeline.dwelling(), "a pen lift");
+    }
+
+    /// Runs the step queue for `ms` milliseconds of timer time (the preparation every
+    /// millisecond, as the firmware's task).
+    fn run_for(pipeline: &mut Pipeline<TestSide>, ms: u32) {
+        let per_ms = u64::from(TIMER_HZ / 1000);
+        for _ in 0..ms {
+            pipeline.fill();
+            let mut t = 0u64;
+            let side = pipeline.side_mut();
+            while t < per_ms {
+                let Some(c) = side.queue.pop() else { break };
+                c.tick().apply(&mut side.pos);
+                t += u64::from(c.wait());
+            }
+        }
+    }
+
+    /// `FS:` is the feed the machine runs at: within 1 % at cruise (long moves run in
+    /// segments, which once left the start rate showing), the ramp in between, 0 at rest.
+    #[test]
+    fn the_reported_speed_is_the_real_feed_at_cruise_and_zero_at_rest() {
+        let s = Settings::default();
+        let mut pipeline = Pipeline::new(
+            &s,
+            PrepConfig::default(),
+            TestSide {
+                queue: StepQueue::new(),
+                pos: [0; 3],
+            },
+        );
+        assert_eq!(pipeline.speed(), 0.0);
+        for (target, feed) in [(4800, 1500.0), (12800, 3000.0), (0, 600.0)] {
+            pipeline
+                .push(mv([target, 0, 0], Feed::MmPerMin(feed)))
+                .unwrap();
+            // Mid-move: the ramps (at most 3000 / 60 / 200 = 0.25 s) are over.
+            run_for(&mut pipeline, 400);
+            let v = pipeline.speed();
+            assert!((v - feed).abs() <= feed * 0.01, "F{feed}: FS {v} mid-move");
+            run(&mut pipeline, X);
+            assert_eq!(pipeline.position()[X], target);
+            assert_eq!(pipeline.speed(), 0.0, "at rest");
+        }
     }
 
     #[test]

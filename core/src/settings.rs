@@ -59,7 +59,7 @@ pub const MAX_AXIS_STEP_RATE_HZ: f32 = 100_000.0;
 
 /// The table. Order is the serialisation order: append only, and bump
 /// [`FORMAT_VERSION`] if an entry is removed or reordered.
-pub const TABLE: [Desc; 44] = [
+pub const TABLE: [Desc; 47] = [
     d(0, Int, 10.0, 3.0, 255.0, "Step pulse time, us"),
     d(
         1,
@@ -293,6 +293,32 @@ pub const TABLE: [Desc; 44] = [
         1.0,
         "Invert e-stop, feed-hold and cycle-start inputs",
     ),
+    // Grbl's spindle settings, appended (the store's image grows by appending). The
+    // pen is the spindle: S is reported while it is down, held to $31..$30.
+    d(
+        30,
+        Float,
+        1000.0,
+        0.0,
+        100_000.0,
+        "Maximum S (spindle speed), RPM",
+    ),
+    d(
+        31,
+        Float,
+        0.0,
+        0.0,
+        100_000.0,
+        "Minimum S (spindle speed), RPM",
+    ),
+    d(
+        32,
+        Bool,
+        0.0,
+        0.0,
+        1.0,
+        "Laser mode (the pen never stops motion either way)",
+    ),
 ];
 
 /// Number of settings.
@@ -338,6 +364,30 @@ const DEFAULTS: [f32; COUNT] = {
     let mut i = 0;
     while i < COUNT {
         out[i] = TABLE[i].default;
+        i += 1;
+    }
+    out
+};
+
+/// Table indices in the order of their numbers: `$$` lists by number, as Grbl does,
+/// whatever order the table grew in (computed at compile time).
+const LISTING: [u8; COUNT] = {
+    let mut out = [0u8; COUNT];
+    let mut i = 0;
+    while i < COUNT {
+        out[i] = i as u8;
+        i += 1;
+    }
+    // Insertion sort by number.
+    let mut i = 1;
+    while i < COUNT {
+        let mut j = i;
+        while j > 0 && TABLE[out[j - 1] as usize].number > TABLE[out[j] as usize].number {
+            let t = out[j];
+            out[j] = out[j - 1];
+            out[j - 1] = t;
+            j -= 1;
+        }
         i += 1;
     }
     out
@@ -460,7 +510,13 @@ impl Settings {
         }
         let v = match kind {
             Kind::Float => value,
-            Kind::Int | Kind::Mask => fmath::trunc(value),
+            Kind::Int => fmath::trunc(value),
+            // Any byte is a mask, as in Grbl; the bits no axis or option uses are
+            // dropped.
+            Kind::Mask if value < 256.0 => {
+                f32::from((to_u32(fmath::trunc(value)) & to_u32(max)) as u8)
+            }
+            Kind::Mask => fmath::trunc(value),
             Kind::Bool => {
                 if value != 0.0 {
                     1.0
@@ -472,24 +528,28 @@ impl Settings {
         if number == 0 && v < 3.0 {
             return Err(SettingError::PulseTooShort);
         }
-        if v < min || v > max {
-            return Err(SettingError::Invalid);
-        }
         if number == 20 && v != 0.0 && !self.homing_enabled() {
             return Err(SettingError::SoftLimitsNeedHoming);
         }
-        // Try the value in place; put the old one back if the step rate is too high.
+        // Try the value in place; put the old one back if it is refused. A resolution
+        // or rate too high for the step rate is error 12 before it is out of range
+        // (`$110=99999999`: Grbl has no upper bound but the step rate).
         let Some(slot) = self.vals.get_mut(i) else {
             return Err(SettingError::Invalid);
         };
         let old = core::mem::replace(slot, v);
-        for axis in 0..AXES {
-            if self.steps_per_mm(axis) * self.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ {
-                if let Some(slot) = self.vals.get_mut(i) {
-                    *slot = old;
-                }
-                return Err(SettingError::StepRateTooHigh);
+        let too_fast = (0..AXES).any(|axis| {
+            self.steps_per_mm(axis) * self.max_rate(axis) / 60.0 > MAX_AXIS_STEP_RATE_HZ
+        });
+        if too_fast || v < min || v > max {
+            if let Some(slot) = self.vals.get_mut(i) {
+                *slot = old;
             }
+            return Err(if too_fast {
+                SettingError::StepRateTooHigh
+            } else {
+                SettingError::Invalid
+            });
         }
         // Turning homing off also turns soft limits off: they would refer to nothing.
         if number == 22 && v == 0.0 {
@@ -653,6 +713,16 @@ impl Settings {
     }
     pub fn invert_inputs(&self) -> bool {
         self.flag::<215>()
+    }
+    /// $31..$30: the range S is held to.
+    pub fn spindle_range(&self) -> (f32, f32) {
+        (self.v::<31>(), self.v::<30>())
+    }
+
+    /// Write the `position`-th line of the `$$` listing (by setting number; no line
+    /// ending). `None` past the end.
+    pub fn write_listed(&self, position: usize, w: &mut dyn Sink) -> Option<()> {
+        self.write_entry(usize::from(*LISTING.get(position)?), w)
     }
 
     /// Write `$n=value` for table entry `index` (no line ending). `None` past the end.

@@ -455,3 +455,113 @@ fn quiet_only_when_nothing_waits() {
     }
     assert_eq!(m.pos[X], 2 * Settings::default().steps_per_mm(X) as i32);
 }
+
+/// bCNC raises DTR, waits a second and throws away what came: the welcome is said
+/// again ahead of the answer to its first byte. A sender that speaks at once (UGS,
+/// cncjs) gets it once.
+#[test]
+fn a_sender_that_waited_after_opening_the_port_gets_the_welcome_again() {
+    const WELCOME: &str = "\r\nGrbl 1.1h ['$' for help]\r\n";
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let mut m = FakePlanner::new(16);
+    sh.port_open = false;
+    sh.tick(&mut c, &mut m);
+    sh.port_open = true;
+    assert_eq!(sh.send(&mut c, &mut m, b""), WELCOME);
+    // One second passes; the host flushes its input (drops the welcome).
+    for _ in 0..1000 {
+        sh.tick(&mut c, &mut m);
+    }
+    assert_eq!(sh.read(), "");
+    let out = sh.send(&mut c, &mut m, b"$I\n");
+    assert!(out.starts_with(&format!("{WELCOME}[VER:1.1h")), "{out:?}");
+    // Only the session's first byte.
+    let out = sh.send(&mut c, &mut m, b"?");
+    assert!(out.starts_with("<Idle|"), "{out:?}");
+
+    // A quick sender: welcome once.
+    sh.port_open = false;
+    sh.tick(&mut c, &mut m);
+    sh.port_open = true;
+    sh.tick(&mut c, &mut m);
+    let out = sh.read() + &sh.send(&mut c, &mut m, b"$I\n");
+    assert_eq!(out.matches("Grbl 1.1h").count(), 1, "{out:?}");
+}
+
+/// A C8 (64 KB) does not run the image but is visibly alive: the alarm and the part
+/// it needs on USB, every command that would unlock or move refused, the motors off,
+/// the LED blinking its code.
+#[test]
+fn a_chip_with_too_little_flash_says_so_and_keeps_the_motors_off() {
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    c.check_chip(64);
+    let mut m = FakePlanner::new(16);
+    sh.port_open = false;
+    sh.tick(&mut c, &mut m);
+    sh.port_open = true;
+    let out = sh.send(&mut c, &mut m, b"");
+    assert_eq!(
+        out,
+        format!(
+            "\r\nGrbl 1.1h ['$' for help]\r\n[MSG:{}]\r\n",
+            inkstep_core::controller::WRONG_CHIP
+        )
+    );
+    assert!(out.contains("STM32F103CB"));
+    assert!(sh.send(&mut c, &mut m, b"?").starts_with("<Alarm|"));
+    for (line, want) in [
+        ("$X\n", "error:9"),
+        ("$H\n", "error:9"),
+        ("$100=100\n", "error:9"),
+        ("$RST=*\n", "error:9"),
+        ("G0 X10\n", "error:9"),
+        ("$J=G91 X1 F100\n", "error:8"),
+    ] {
+        let out = sh.send(&mut c, &mut m, line.as_bytes());
+        assert!(out.ends_with(&format!("{want}\r\n")), "{line:?}: {out:?}");
+    }
+    assert!(sh.send(&mut c, &mut m, b"\x18").contains("STM32F103CB"));
+    assert!(m.log.is_empty(), "nothing queued");
+    let lit = (0..2000)
+        .map(|t| c.outputs_now(&m, 10_000 + t))
+        .inspect(|l| assert!(!l.motors && !l.busy))
+        .filter(|l| l.led)
+        .count();
+    assert!(
+        (300..1000).contains(&lit),
+        "a blink code, lit {lit} ms of 2000"
+    );
+    // A CB runs.
+    let (_, mut cb) = Shell::boot(&Settings::default());
+    cb.check_chip(128);
+    assert!(cb.protocol().machine().refusal().is_none());
+}
+
+/// `$1`: the motors keep their power `$1` ms after the last motion, then are released;
+/// the busy outputs follow the motion itself, with no host traffic.
+#[test]
+fn motors_are_released_step_idle_delay_after_the_motion_and_busy_clears_with_it() {
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let mut m = FakePlanner::new(16);
+    sh.send(&mut c, &mut m, b"$1=40\nG1 X10 F600\n");
+    let t0 = sh.now;
+    let l = c.outputs_now(&m, t0);
+    assert!(l.motors && l.busy && l.led);
+    m.run_all();
+    let t1 = t0 + 1;
+    let l = c.outputs_now(&m, t1);
+    assert!(!l.busy && !l.led, "busy clears with the last step");
+    let off = (t1..t1 + 1000).find(|&t| !c.outputs_now(&m, t).motors);
+    assert_eq!(off, Some(t0 + 40), "released $1 = 40 ms after the motion");
+    sh.send(&mut c, &mut m, b"$1=255\nG1 X0\n");
+    m.run_all();
+    assert!(
+        (0..5000).all(|t| c.outputs_now(&m, sh.now + t).motors),
+        "255 keeps them"
+    );
+    sh.send(&mut c, &mut m, b"$SLP\n");
+    assert!(
+        !c.outputs_now(&m, sh.now + 6000).motors,
+        "$SLP releases them"
+    );
+}

@@ -291,7 +291,8 @@ fn soft_limits_reject_before_any_step() {
     let t: Vec<_> = moves(&m).iter().map(|mv| mv.target[0]).collect();
     assert_eq!(t, [8000], "the target outside travel was never queued");
     assert_eq!(send(&mut p, &mut m, "G0 X1\n"), "error:9\r\n");
-    assert!(send(&mut p, &mut m, "$J=G91 X-500 F100\n").ends_with("error:9\r\n"));
+    // A jog outside Idle/Jog, in alarm too, is Grbl's error 8.
+    assert!(send(&mut p, &mut m, "$J=G91 X-500 F100\n").ends_with("error:8\r\n"));
     // The move under way decelerates to rest, then the queue is dropped.
     m.step();
     p.poll(&mut m, 0);
@@ -359,7 +360,8 @@ fn jog_and_jog_cancel() {
     );
     m.step();
     assert!(send(&mut p, &mut m, "?").starts_with("<Jog|"));
-    assert_eq!(send(&mut p, &mut m, "G1 X1 F10\n"), "error:8\r\n");
+    // G-code is locked out while jogging: Grbl's error 9.
+    assert_eq!(send(&mut p, &mut m, "G1 X1 F10\n"), "error:9\r\n");
     send(&mut p, &mut m, "\u{85}");
     m.step();
     p.poll(&mut m, 0);
@@ -407,7 +409,7 @@ fn settings_listing_and_changes() {
             &mut m,
             "$100=100\n$100=-1\n$0=1\n$999=1\n$Q\n$20=1\n"
         ),
-        "ok\r\nerror:4\r\nerror:6\r\nerror:3\r\nerror:3\r\nerror:10\r\n"
+        "ok\r\nerror:4\r\nerror:6\r\nerror:3\r\nerror:2\r\nerror:10\r\n"
     );
     assert!(p.machine_mut().take_settings_dirty());
     assert_eq!(
@@ -809,7 +811,8 @@ fn g4_answers_after_the_motion_before_it_and_its_dwell() {
         "the move ended: the dwell runs, no ok yet"
     );
     assert_eq!(m.queue.front(), Some(&Command::Dwell { ms: 500 }));
-    assert!(send(&mut p, &mut m, "?").starts_with("<Run|MPos:20.000,"));
+    // Grbl reports a dwell as Idle: it is no motion.
+    assert!(send(&mut p, &mut m, "?").starts_with("<Idle|MPos:20.000,"));
     m.step();
     p.poll(&mut m, 0);
     assert_eq!(
@@ -1005,4 +1008,93 @@ fn a_waiting_line_is_dropped_by_a_soft_reset_and_refused_in_alarm() {
     let out = drain(&mut p);
     assert!(out.contains("error:9"), "{out}");
     assert_eq!(moves(&m).len(), 1);
+}
+
+#[test]
+fn feed_hold_at_idle_holds_the_next_move_until_cycle_start() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "!");
+    assert!(send(&mut p, &mut m, "?").starts_with("<Hold:0|"), "as Grbl");
+    assert!(send(&mut p, &mut m, "G1 X10 F600\n").ends_with("ok\r\n"));
+    for _ in 0..10 {
+        m.step();
+    }
+    assert_eq!(m.pos, [0, 0, 0], "the move waits for ~");
+    assert!(send(&mut p, &mut m, "?").starts_with("<Hold:0|"));
+    send(&mut p, &mut m, "~");
+    m.run_all();
+    assert_eq!(m.pos, [800, 0, 0]);
+    assert!(send(&mut p, &mut m, "?").starts_with("<Idle|MPos:10.000,"));
+}
+
+#[test]
+fn three_hundred_resets_in_one_write_then_a_query_cut_no_line() {
+    let (mut p, mut m) = boot();
+    let mut bytes = vec![0x18u8; 300];
+    bytes.push(b'?');
+    let out = send(&mut p, &mut m, std::str::from_utf8(&bytes).unwrap());
+    assert_eq!(p.truncated(), 0);
+    for line in out.split("\r\n").filter(|l| !l.is_empty()) {
+        assert!(
+            line == WELCOME || (line.starts_with("<Idle|") && line.ends_with('>')),
+            "cut or unexpected line {line:?} in {out:?}"
+        );
+    }
+    assert!(out.ends_with(">\r\n"), "the ? is answered last: {out:?}");
+    assert_eq!(out.matches('<').count(), 1);
+}
+
+#[test]
+fn five_hundred_queries_in_one_write_get_five_hundred_reports() {
+    let (mut p, mut m) = boot();
+    let out = send(&mut p, &mut m, &"?".repeat(500));
+    assert_eq!(p.truncated(), 0);
+    let reports: Vec<&str> = out.split("\r\n").filter(|l| !l.is_empty()).collect();
+    assert_eq!(reports.len(), 500);
+    assert!(reports
+        .iter()
+        .all(|r| r.starts_with("<Idle|") && r.ends_with('>')));
+}
+
+#[test]
+fn sleep_releases_the_motors_refuses_everything_and_wakes_in_alarm_on_reset() {
+    let (mut p, mut m) = boot();
+    assert!(!p.machine().motors_released());
+    assert_eq!(send(&mut p, &mut m, "$SLP\n"), "ok\r\n");
+    assert!(p.machine().motors_released());
+    assert!(send(&mut p, &mut m, "?").starts_with("<Sleep|"));
+    assert_eq!(send(&mut p, &mut m, "G0 X1\n"), "error:9\r\n");
+    assert_eq!(send(&mut p, &mut m, "$X\n"), "error:8\r\n");
+    assert_eq!(send(&mut p, &mut m, "$J=G91 X1 F100\n"), "error:8\r\n");
+    assert!(moves(&m).is_empty());
+    let out = send(&mut p, &mut m, "\x18");
+    assert_eq!(
+        out,
+        format!("\r\n{WELCOME}\r\n[MSG:'$H'|'$X' to unlock]\r\n"),
+        "awake in alarm: the motors were unpowered"
+    );
+    assert!(!p.machine().motors_released());
+    assert_eq!(
+        send(&mut p, &mut m, "$X\n"),
+        "[MSG:Caution: Unlocked]\r\nok\r\n"
+    );
+    assert!(send(&mut p, &mut m, "G0 X1\n").ends_with("ok\r\n"));
+}
+
+#[test]
+fn spindle_settings_hold_the_reported_s() {
+    let (mut p, mut m) = boot();
+    assert_eq!(
+        send(&mut p, &mut m, "$30=500\n$31=100\n$32=1\n"),
+        "ok\r\nok\r\nok\r\n"
+    );
+    send(&mut p, &mut m, "M3 S2000\nG1 X10 F600\n");
+    let out = send(&mut p, &mut m, "?");
+    assert!(out.contains("|FS:600,500"), "S held to $30: {out}");
+    m.run_all();
+    let out = send(&mut p, &mut m, "$$\n");
+    assert!(
+        out.contains("$27=1.000\r\n$30=500.000\r\n$31=100.000\r\n$32=1\r\n$100="),
+        "listed by number: {out}"
+    );
 }

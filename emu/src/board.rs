@@ -32,6 +32,13 @@ pub const IRQ_SPI2: usize = 36;
 
 /// Flash size register value (RM0008 30.1): 128 KB on the STM32F103CB.
 pub const F_SIZE_KB: u16 = 128;
+/// ... and on the STM32F103C8, whose footprint is the same (`--chip c8`).
+pub const F_SIZE_KB_C8: u16 = 64;
+
+/// The F_SIZE that new boards report (the `--chip` option sets it once for the
+/// process; a test sets [`Board::f_size_kb`] on its own board instead).
+pub static DEFAULT_F_SIZE_KB: std::sync::atomic::AtomicU16 =
+    std::sync::atomic::AtomicU16::new(F_SIZE_KB);
 
 /// What the outside drives onto the input pins.
 #[derive(Clone, Debug, Default)]
@@ -107,6 +114,8 @@ pub struct Board {
     pub watch: [u32; 3],
     /// (time, port, pin, new level) of each change of a watched pin.
     pub pin_changes: Vec<(u64, usize, usize, bool)>,
+    /// What the flash size register (F_SIZE) reads, KB: the chip (a reset keeps it).
+    pub f_size_kb: u16,
 }
 
 impl Board {
@@ -146,6 +155,7 @@ impl Board {
             last_irq_lines: 0,
             watch: [0; 3],
             pin_changes: Vec::new(),
+            f_size_kb: DEFAULT_F_SIZE_KB.load(std::sync::atomic::Ordering::Relaxed),
         };
         b.clocks_changed();
         b
@@ -611,7 +621,7 @@ impl Board {
     /// System memory (0x1FFF_F000 page): the flash size register and the unique ID.
     pub fn system_read(&self, addr: u32, size: usize) -> Result<u32, BusError> {
         match (addr, size) {
-            (0x1FFF_F7E0, 2) => Ok(u32::from(F_SIZE_KB)),
+            (0x1FFF_F7E0, 2) => Ok(u32::from(self.f_size_kb)),
             (0x1FFF_F7E8..=0x1FFF_F7F7, _) => Ok(0x494E_4B53),
             _ => Err(BusError(format!(
                 "system memory read at 0x{addr:08X} ({size} bytes)"

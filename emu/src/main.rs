@@ -15,8 +15,18 @@ use std::process::ExitCode;
     about = "inkstep's firmware image on an emulated STM32F103CB board"
 )]
 struct Cli {
+    /// The chip on the board: `cb` (128 KB, what the image is built for) or `c8`
+    /// (64 KB, same footprint: the image refuses to run on it, visibly).
+    #[arg(long, global = true, value_enum, default_value_t = Chip::Cb)]
+    chip: Chip,
     #[command(subcommand)]
     cmd: Cmd,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Chip {
+    Cb,
+    C8,
 }
 
 #[derive(Subcommand)]
@@ -460,6 +470,11 @@ fn cmd_test(elf: Option<PathBuf>, log: Option<&Path>) -> Result<ExitCode, String
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let f_size = match cli.chip {
+        Chip::Cb => inkstep_emu::board::F_SIZE_KB,
+        Chip::C8 => inkstep_emu::board::F_SIZE_KB_C8,
+    };
+    inkstep_emu::board::DEFAULT_F_SIZE_KB.store(f_size, std::sync::atomic::Ordering::Relaxed);
     let r = match cli.cmd {
         Cmd::Run {
             file,

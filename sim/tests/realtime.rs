@@ -111,3 +111,59 @@ fn servo_pen_moves_after_the_steps_before_it_and_waits_its_lift_time() {
     let gap = (ev[turn + 1].t - ev[turn].t) as f64 / inkstep_sim::board::TICK_HZ as f64;
     assert!((0.15..0.2).contains(&gap), "lift time {gap}");
 }
+
+/// The feed of `FS:` in a status line.
+fn fs(st: &str) -> f64 {
+    let f = st.split('|').find_map(|p| p.strip_prefix("FS:")).unwrap();
+    f.split(',').next().unwrap().parse().unwrap()
+}
+
+/// `FS:` is the real feed mid-move (it said 0, or the start rate, on moves prepared in
+/// segments), also after a hold and resume, and 0 at rest (issue 23).
+#[test]
+fn the_status_report_gives_the_real_feed_at_cruise() {
+    let mut b = Board::new(Settings::default());
+    let mut ev = Vec::new();
+    for (line, feed) in [
+        ("G21 G90 G1 X60 F1500\n", 1500.0),
+        ("G1 X160 F3000\n", 3000.0),
+    ] {
+        b.usb_write(line.as_bytes());
+        run_ms(&mut b, 1000, &mut ev);
+        let st = status(&mut b, &mut ev);
+        assert!(st.starts_with("<Run|"), "{st}");
+        assert!((fs(&st) - feed).abs() <= feed * 0.01, "{line}: {st}");
+        assert!(b.run_to_idle(Board::ms_to_ticks(60_000), &mut |e| ev.push(e)));
+        assert_eq!(fs(&status(&mut b, &mut ev)), 0.0);
+    }
+    b.usb_write(b"G1 X0 F600\n");
+    run_ms(&mut b, 500, &mut ev);
+    b.usb_write(b"!");
+    run_ms(&mut b, 500, &mut ev);
+    b.usb_write(b"~");
+    run_ms(&mut b, 1000, &mut ev);
+    let st = status(&mut b, &mut ev);
+    assert!((fs(&st) - 600.0).abs() <= 6.0, "after a resume: {st}");
+}
+
+/// `!` at rest holds the next move until `~`, and a G4 dwell reports Idle, as Grbl.
+#[test]
+fn hold_at_rest_waits_for_cycle_start_and_a_dwell_is_idle() {
+    let mut b = Board::new(Settings::default());
+    let mut ev = Vec::new();
+    b.usb_write(b"!");
+    run_ms(&mut b, 5, &mut ev);
+    b.usb_write(b"G21 G91 G1 X5 F600\n");
+    run_ms(&mut b, 500, &mut ev);
+    assert!(ev.is_empty(), "the move waits for ~");
+    assert!(status(&mut b, &mut ev).starts_with("<Hold:0|"));
+    b.usb_write(b"~");
+    assert!(b.run_to_idle(Board::ms_to_ticks(60_000), &mut |e| ev.push(e)));
+    assert_eq!(b.pipeline.side().exec.position(), [400, 0, 0]);
+    b.usb_write(b"G4 P1\n");
+    run_ms(&mut b, 300, &mut ev);
+    assert!(
+        status(&mut b, &mut ev).starts_with("<Idle|"),
+        "during the dwell"
+    );
+}

@@ -71,6 +71,7 @@ mod app {
         steps_tx: StepTx,
         keypad: board::KeypadMatrix,
         indicators: board::Indicators,
+        busy: board::BusyOutputs,
         servo: board::PenServo,
         lcd_spi: board::LcdSpi,
         watchdog: board::Watchdog,
@@ -106,6 +107,7 @@ mod app {
                 steps_tx,
                 keypad: b.keypad,
                 indicators: b.indicators,
+                busy: b.busy,
                 servo: b.servo,
                 lcd_spi: b.lcd_spi,
                 watchdog: b.watchdog,
@@ -173,7 +175,7 @@ mod app {
         }
     }
 
-    #[task(priority = 3, shared = [jog, last_key], local = [keypad, watchdog, indicators, servo])]
+    #[task(priority = 3, shared = [jog, last_key], local = [keypad, watchdog, indicators, busy, servo])]
     async fn keypad_scan(mut cx: keypad_scan::Context) {
         let mut scanner = Keypad::new(KeypadConfig::default());
         let mut pen_down = false;
@@ -206,7 +208,7 @@ mod app {
                 }
             }
             let moving = cx.shared.jog.lock(|j| j.is_some());
-            cx.local.indicators.set_busy(moving);
+            cx.local.busy.set(moving, moving);
             cx.local.indicators.set_buzzer(beep_ms > 0);
             beep_ms = beep_ms.saturating_sub(5);
             if !moving {

@@ -51,14 +51,15 @@ mod watchdog;
 pub use flash::{
     flash_size_kb, settings_pages, FlashError, SettingsFlash, FLASH_PAGE_SIZE, FLASH_SIZE,
 };
-pub use indicators::Indicators;
+pub use indicators::{BusyOutputs, Indicators};
 pub use inputs::{exti_take_pending, Inputs};
 pub use keypad::KeypadMatrix;
 pub use lcd::{lcd_init, LcdSpi, LCD_SPI_HZ};
 pub use servo::PenServo;
 pub use step_port::{
-    bsrr_word, drivers_enabled, emergency_outputs_off, set_enable_polarity, step_outputs, StepPins,
-    StepPort, DIR_SHIFT, MOTION_PINS, STEP_MASK_X, STEP_MASK_Y, STEP_MASK_Z,
+    bsrr_word, coils_off, drivers_enabled, emergency_outputs_off, set_enable_polarity,
+    step_outputs, StepPins, StepPort, DIR_SHIFT, MOTION_PINS, STEP_MASK_X, STEP_MASK_Y,
+    STEP_MASK_Z,
 };
 pub use step_timer::{disarm_step_pulses, stop_step_timer, StepTimer};
 pub use usb::{Usb, UsbCells, UsbSerial, USB_PACKET};
@@ -92,6 +93,7 @@ pub struct Board {
     pub keypad: KeypadMatrix,
     pub inputs: Inputs,
     pub indicators: Indicators,
+    pub busy: BusyOutputs,
     pub lcd_spi: LcdSpi,
     pub usb: &'static mut Usb,
     pub serial: &'static mut UsbSerial,
@@ -198,11 +200,13 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
     };
 
     // Not busy: the LED (active low) off, the busy output low, the buzzer quiet.
-    let indicators = Indicators {
+    let busy = BusyOutputs {
         led: gpioc
             .pc13
             .into_push_pull_output_with_state(&mut gpioc.crh, PinState::High),
         busy_out: gpioc.pc15.into_push_pull_output(&mut gpioc.crh),
+    };
+    let indicators = Indicators {
         buzzer: gpioa.pa10.into_push_pull_output(&mut gpioa.crh),
     };
 
@@ -263,6 +267,7 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
         keypad,
         inputs,
         indicators,
+        busy,
         lcd_spi,
         usb,
         serial,

@@ -85,6 +85,13 @@ pub fn drivers_enabled(enabled: bool) {
     });
 }
 
+/// Every 4-phase coil unpowered (PA0-PA7 low): the motors released at rest in 4-phase
+/// mode, where the coils, not a driver's enable, hold them. One BSRR store; call only
+/// while no step is in flight (the step interrupt writes these pins).
+pub fn coils_off() {
+    write_gpioa(MOTION_PINS << 16);
+}
+
 /// The motion output pins, configured as push-pull outputs (by [`init`](super::init), and by the
 /// interrupt-cost bench, which builds the same parts).
 pub struct StepPins {

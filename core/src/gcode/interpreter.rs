@@ -32,7 +32,7 @@ use heapless::Vec;
 pub const MAX_COMMANDS: usize = 4;
 pub(super) const MM_PER_INCH: f32 = 25.4;
 /// Largest line number Grbl accepts.
-pub const MAX_LINE_NUMBER: i64 = 9_999_999;
+pub const MAX_LINE_NUMBER: i64 = 10_000_000;
 
 /// Coordinate data that Grbl keeps across resets (and inkstep in flash), nanometres.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -639,8 +639,9 @@ impl Interpreter {
                 }
             }
         }
+        // Value words a jog does not use (S, T, I, P, ...): Grbl's unused-words error.
         if b.any_value() {
-            return Err(Status::InvalidJogCommand);
+            return Err(Status::UnusedWords);
         }
         if !any {
             return Err(Status::NoAxisWords);
@@ -828,10 +829,13 @@ mod tests {
         assert_eq!(run(&mut it, &s, "G4"), err(Status::ValueWordMissing));
         assert_eq!(run(&mut it, &s, "G4 P-1"), err(Status::NegativeValue));
         assert_eq!(
-            run(&mut it, &s, "N10000000 G0 X1"),
+            run(&mut it, &s, "N10000001 G0 X1"),
             err(Status::InvalidLineNumber)
         );
-        assert_eq!(run(&mut it, &s, "G59.1"), err(Status::UnsupportedCoordSys));
+        assert_eq!(
+            run(&mut it, &s, "G59.1"),
+            err(Status::CommandValueNotInteger)
+        );
         assert_eq!(
             run(&mut it, &s, "G53 G2 X1 I1 F10"),
             err(Status::G53InvalidMotionMode)

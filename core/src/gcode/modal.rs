@@ -149,13 +149,15 @@ pub(super) fn group_codes(
 ) -> Result<(), Status> {
     for &code in codes {
         let Some(&(_, group, value)) = table.iter().find(|e| e.0 == code) else {
-            return Err(if g && (591..=599).contains(&code) {
-                Status::UnsupportedCoordSys
-            } else if code % 10 != 0 && !(g && matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61)) {
-                Status::CommandValueNotInteger
-            } else {
-                Status::UnsupportedCommand
-            });
+            // G59.1-G59.3 included: Grbl reads them as G59 with a fraction (error 23),
+            // never reaching its unsupported-coordinate-system check.
+            return Err(
+                if code % 10 != 0 && !(g && matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61)) {
+                    Status::CommandValueNotInteger
+                } else {
+                    Status::UnsupportedCommand
+                },
+            );
         };
         if let Some(slot) = groups.get_mut(usize::from(group)) {
             if *slot != NONE {

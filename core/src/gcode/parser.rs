@@ -48,8 +48,10 @@ impl LineCleaner {
                 self.in_semicolon = true;
                 None
             }
-            // Spaces and control characters are ignored; '/' (block delete) too.
-            0..=b' ' | b'/' | 0x7F.. => None,
+            // Spaces and control characters are ignored; '/' (block delete) too. DEL
+            // is kept, as Grbl keeps it: it is no letter, so the line gets `error:1`
+            // rather than running as if the byte had not been sent.
+            0..=b' ' | b'/' => None,
             b'a'..=b'z' => Some(b - 32),
             _ => Some(b),
         }
@@ -171,8 +173,9 @@ impl Block {
             rest = tail.get(used..).unwrap_or(&[]);
             match letter {
                 b'G' | b'M' => {
+                    // Grbl reads a negative code as no code it knows.
                     if value.is_negative() {
-                        return Err(Status::CommandValueNotInteger);
+                        return Err(Status::UnsupportedCommand);
                     }
                     let code = code_of(value)?;
                     let list = if letter == b'G' { &mut b.g } else { &mut b.m };
@@ -353,6 +356,6 @@ mod tests {
         assert_eq!(Block::parse(b"XA"), Err(Status::BadNumberFormat));
         assert_eq!(Block::parse(b"A1"), Err(Status::UnsupportedCommand));
         assert_eq!(Block::parse(b"G1.55"), Err(Status::CommandValueNotInteger));
-        assert_eq!(Block::parse(b"G-1"), Err(Status::CommandValueNotInteger));
+        assert_eq!(Block::parse(b"G-1"), Err(Status::UnsupportedCommand));
     }
 }

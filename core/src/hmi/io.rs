@@ -142,8 +142,6 @@ pub enum Action {
     /// Clear an alarm (like Grbl's `$X`).
     Unlock,
     Beep(Beep),
-    /// Busy LED on/off (on while the axes move).
-    BusyLed(bool),
 }
 
 /// The actions of one call (a job start is the largest: up to 8 moves).

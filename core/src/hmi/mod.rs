@@ -1,5 +1,6 @@
 //! The standalone user interface: menus, manual jog, the drawing modes of the lab report,
-//! and the machine feedback (beeps, busy LED), as one pure state machine.
+//! and the machine feedback (beeps), as one pure state machine. (The busy LED follows
+//! the motion millisecond by millisecond: `stepper::idle`.)
 //!
 //! The HMI never touches the machine. Its inputs are explicit: keypad events
 //! ([`Hmi::key`]) and a [`Status`] snapshot of the machine on every call, plus the
@@ -60,7 +61,6 @@ pub struct Hmi {
     /// The latest distinct feed directions, oldest first: the first `ndirs`.
     dirs: [[i8; 2]; DIR_HISTORY],
     ndirs: u8,
-    busy: bool,
     alarm_latched: bool,
     toast: Option<Toast>,
     /// Bumped whenever what the screens show of the HMI may have changed (every key
@@ -115,7 +115,6 @@ impl Hmi {
             draw_feed: cfg.draw_feed_mm_min,
             dirs: [[0; 2]; DIR_HISTORY],
             ndirs: 0,
-            busy: false,
             alarm_latched: false,
             toast: None,
             revision: 0,
@@ -592,12 +591,6 @@ impl Hmi {
     #[inline(never)]
     pub fn tick(&mut self, st: &Status, now_ms: u32) -> Actions {
         let mut out = Actions::new();
-        // Busy LED follows motion from any source (keypad or PC).
-        let moving = st.state.moving();
-        if moving != self.busy {
-            self.busy = moving;
-            push(&mut out, Action::BusyLed(moving));
-        }
         // Teaching view: remember each new feed direction.
         if st.dir != [0, 0] && self.feed_dirs().next_back() != Some(&st.dir) {
             let n = usize::from(self.ndirs);

@@ -397,7 +397,7 @@ fn completion_beeps_and_reports_time_and_full_progress() {
         pos: [0, -1000, 0],
         ..b.st
     };
-    assert_eq!(b.tick(), [Action::BusyLed(true)]);
+    assert_eq!(b.tick(), []);
     let Page::Run(r) = b.hmi.page() else { panic!() };
     assert!(r.progress() > 0.0 && r.progress() < 0.5);
     b.st = Status {
@@ -407,7 +407,7 @@ fn completion_beeps_and_reports_time_and_full_progress() {
         ..b.st
     };
     let a = b.tick();
-    assert_eq!(a, [Action::BusyLed(false), Action::Beep(Beep::Done)]);
+    assert_eq!(a, [Action::Beep(Beep::Done)]);
     let Page::Run(r) = b.hmi.page() else { panic!() };
     assert_eq!(
         r.phase,

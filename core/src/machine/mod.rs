@@ -68,6 +68,12 @@ pub trait MotionControl {
         false
     }
 
+    /// What runs is a G4 dwell and nothing is queued behind it (the state is then
+    /// reported as Idle, as Grbl does). Fakes without dwells may keep the default.
+    fn dwelling(&self) -> bool {
+        false
+    }
+
     /// Nothing queued and at rest.
     fn is_idle(&self) -> bool {
         self.queued() == 0 && !self.is_moving()

@@ -39,6 +39,8 @@ pub enum RunState {
     Alarm,
     Home,
     Check,
+    /// `$SLP`: the motors are released and only a reset wakes the machine.
+    Sleep,
 }
 
 /// A line the machine took, and when its `ok` may go out.
@@ -86,6 +88,12 @@ pub struct Machine {
     /// A critical alarm happened and no soft reset since.
     needs_reset: bool,
     check_mode: bool,
+    /// `$SLP` ran: motors released, everything refused until a soft reset.
+    sleeping: bool,
+    /// The board refuses to run at all (the chip is not the one the image needs):
+    /// why, said with the welcome and to every command that would unlock. Nothing
+    /// clears it.
+    refusal: Option<&'static str>,
     jogging: bool,
     jog_cancel: bool,
     homing: Option<Homing>,
@@ -141,6 +149,8 @@ impl Machine {
             alarm = None,
             needs_reset = false,
             check_mode = false,
+            sleeping = false,
+            refusal = None,
             jogging = false,
             jog_cancel = false,
             homing = None,
@@ -176,7 +186,20 @@ impl Machine {
     /// In alarm and `$H` or `$X` would unlock it (not while an e-stop is held): the
     /// welcome line is then followed by Grbl's `[MSG:'$H'|'$X' to unlock]`.
     pub fn needs_unlock(&self) -> bool {
-        self.locked && !self.needs_reset
+        self.locked && !self.needs_reset && self.refusal.is_none()
+    }
+
+    /// Refuse to run for good (the shell found a chip the image cannot use): locked in
+    /// alarm, the motors released, `why` said with every welcome and to every `$X`,
+    /// `$H` or other `$` command that would change something.
+    pub fn refuse_to_run(&mut self, why: &'static str) {
+        self.refusal = Some(why);
+        self.locked = true;
+    }
+
+    /// Why the board refuses to run, if it does.
+    pub fn refusal(&self) -> Option<&'static str> {
+        self.refusal
     }
 
     fn event(&mut self, e: Event) {
@@ -231,7 +254,9 @@ impl Machine {
 
     /// The state for status reports.
     pub fn state<M: MotionControl>(&self, m: &M) -> RunState {
-        if self.homing.is_some() {
+        if self.sleeping {
+            RunState::Sleep
+        } else if self.homing.is_some() {
             RunState::Home
         } else if self.locked {
             RunState::Alarm
@@ -248,11 +273,28 @@ impl Machine {
             }
         } else if self.check_mode {
             RunState::Check
-        } else if !m.is_idle() {
+        } else if !m.is_idle() && !m.dwelling() {
             RunState::Run
         } else {
+            // A G4 dwell with nothing queued behind it is Idle, as Grbl reports it
+            // (its dwell is no motion).
             RunState::Idle
         }
+    }
+
+    /// `$SLP` (only at rest; the protocol checks): the motors are released
+    /// ([`Machine::motors_released`]) and lines and `$` commands are refused until a
+    /// soft reset, which wakes the machine in alarm (the motors may have moved while
+    /// unpowered), as Grbl's sleep does.
+    pub fn sleep(&mut self) {
+        self.drop_activity();
+        self.sleeping = true;
+    }
+
+    /// The motors must stay unpowered whatever the idle delay says (`$SLP`, a
+    /// refused board).
+    pub fn motors_released(&self) -> bool {
+        self.sleeping || self.refusal.is_some()
     }
 
     /// The busy output: motion is under way or homing.
@@ -337,13 +379,11 @@ impl Machine {
         m: &mut M,
         now_ms: u32,
     ) -> Option<Result<Taken, Status>> {
-        if self.locked || self.homing.is_some() {
+        // G-code is locked out in alarm, homing, sleep and while jogging (Grbl's
+        // error 9).
+        if self.locked || self.homing.is_some() || self.jogging || self.sleeping {
             self.forget_line();
             return Some(Err(Status::SystemLocked));
-        }
-        if self.jogging {
-            self.forget_line();
-            return Some(Err(Status::IdleError));
         }
         if !self.can_accept() {
             return None;
@@ -437,10 +477,8 @@ impl Machine {
     }
 
     /// `$J=...`: queue a jog (only when idle or already jogging).
+    /// Anything else, alarm included, is Grbl's error 8 (a `$` command outside Idle).
     pub fn jog<M: MotionControl>(&mut self, body: &[u8], m: &mut M) -> Result<(), Status> {
-        if self.locked || self.homing.is_some() {
-            return Err(Status::SystemLocked);
-        }
         let st = self.state(m);
         if !(matches!(st, RunState::Idle | RunState::Jog)) || self.check_mode {
             return Err(Status::IdleError);
@@ -457,6 +495,10 @@ impl Machine {
 
     /// `$X`.
     pub fn unlock(&mut self) -> Result<(), Status> {
+        if let Some(why) = self.refusal {
+            self.event(Event::Msg(why));
+            return Err(Status::SystemLocked);
+        }
         if self.inputs.estop || self.needs_reset {
             self.event(Event::Msg("Reset to continue"));
             return Err(Status::SystemLocked);
@@ -470,6 +512,10 @@ impl Machine {
 
     /// `$H`.
     pub fn start_homing<M: MotionControl>(&mut self, m: &mut M) -> Result<(), Status> {
+        if let Some(why) = self.refusal {
+            self.event(Event::Msg(why));
+            return Err(Status::SystemLocked);
+        }
         if !self.settings.homing_enabled() {
             return Err(Status::HomingDisabled);
         }
@@ -594,6 +640,8 @@ impl Machine {
         self.drop_activity();
         self.stop_then_clear = false;
         self.check_mode = false;
+        // Waking from sleep: where the unpowered motors are is not known.
+        let woke = core::mem::take(&mut self.sleeping);
         self.feed_ovr = 100;
         self.rapid_ovr = 100;
         self.needs_reset = false;
@@ -615,12 +663,17 @@ impl Machine {
             self.alarm = Some(a);
             self.event(Event::Alarm(a));
         }
+        if (woke || self.refusal.is_some()) && !self.locked {
+            self.homed = false;
+            self.locked = true;
+        }
         self.lock_if_unhomed();
     }
 
-    /// `!` or the feed-hold pin.
+    /// `!` or the feed-hold pin. At rest too, as in Grbl: the machine reports
+    /// `Hold:0` and the next motion waits for cycle start.
     pub fn feed_hold<M: MotionControl>(&mut self, m: &mut M) {
-        if self.locked || self.homing.is_some() || self.check_mode {
+        if self.locked || self.homing.is_some() || self.check_mode || self.sleeping {
             return;
         }
         if self.jogging {
@@ -628,16 +681,14 @@ impl Machine {
             self.jog_cancel(m);
             return;
         }
-        if !m.is_idle() {
-            self.hold = true;
-            m.hold();
-        }
+        self.hold = true;
+        m.hold();
     }
 
     /// 0x84, the safety door: like a feed hold reported as `Door`; during homing it
     /// aborts with alarm 7, during a jog it cancels the jog.
     pub fn safety_door<M: MotionControl>(&mut self, m: &mut M) {
-        if self.locked || self.check_mode {
+        if self.locked || self.check_mode || self.sleeping {
             return;
         }
         if self.homing.is_some() {

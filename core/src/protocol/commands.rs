@@ -34,6 +34,13 @@ enum SysCommand {
     Jog,
     Startup,
     Setting,
+    /// `$SLP`: motors released until a reset.
+    Sleep,
+    /// A known command letter with text it does not take (Grbl's error 3).
+    Invalid,
+    /// Neither a command letter nor a setting number (Grbl reads a number and fails:
+    /// error 2).
+    Unknown,
 }
 
 impl SysCommand {
@@ -52,7 +59,12 @@ impl SysCommand {
             [b'R', b'S', b'T', b'=', what @ (b'$' | b'#' | b'*')] => SysCommand::Reset(*what),
             [b'J', b'=', ..] => SysCommand::Jog,
             [b'N', ..] => SysCommand::Startup,
-            _ => SysCommand::Setting,
+            [b'S', b'L', b'P'] => SysCommand::Sleep,
+            [b'0'..=b'9', ..] => SysCommand::Setting,
+            [b'$' | b'#' | b'G' | b'I' | b'C' | b'X' | b'H' | b'R' | b'J' | b'S', ..] => {
+                SysCommand::Invalid
+            }
+            _ => SysCommand::Unknown,
         }
     }
 }
@@ -75,9 +87,11 @@ fn set_setting<M: MotionControl>(
     let n = num
         .iter()
         .fold(0u16, |acc, &d| acc * 10 + u16::from(d - b'0'));
+    // A value that is no number is error 2; a number followed by more text (`1.2.3`,
+    // `1e30`) is a statement not understood, error 3, as in Grbl.
     let (v, used) = crate::gcode::parser::read_number(val)?;
     if used != val.len() {
-        return Err(Status::BadNumberFormat);
+        return Err(Status::InvalidStatement);
     }
     machine.set_setting(n, v.to_f32(), m)
 }
@@ -118,9 +132,24 @@ impl Protocol {
         if !anytime && !at_rest {
             return Some(Err(Status::IdleError));
         }
+        // A board that refuses to run shows what it has but changes nothing (and
+        // writes no flash): only the listings, help and `$G` / `$I` answer (and `$J=`
+        // gets the alarm's error 8 from the machine).
+        let shows = matches!(
+            kind,
+            SysCommand::Help
+                | SysCommand::List(_)
+                | SysCommand::Modal
+                | SysCommand::Info
+                | SysCommand::Jog
+        );
+        if let (Some(why), false) = (self.machine.refusal(), shows) {
+            self.notify(why);
+            return Some(Err(Status::SystemLocked));
+        }
         Some(match kind {
             SysCommand::Help => {
-                self.say(&[b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"]);
+                self.say(&[b"[HLP:$$ $# $G $I $N $x=val $Nx=line $J=line $SLP $C $X $H $RST=$ $RST=# $RST=* ~ ! ? ctrl-x]"]);
                 Ok(())
             }
             SysCommand::List(l) => {
@@ -197,6 +226,12 @@ impl Protocol {
             SysCommand::Setting => {
                 set_setting(&mut self.machine, self.line.get(1..).unwrap_or(&[]), m)
             }
+            SysCommand::Sleep => {
+                self.machine.sleep();
+                Ok(())
+            }
+            SysCommand::Invalid => Err(Status::InvalidStatement),
+            SysCommand::Unknown => Err(Status::BadNumberFormat),
         })
     }
 
@@ -268,7 +303,7 @@ impl Protocol {
         let scale = report_scale(machine.settings());
         let next = match l {
             Listing::Settings(i) => {
-                machine.settings().write_entry(i, &mut w)?;
+                machine.settings().write_listed(i, &mut w)?;
                 Listing::Settings(i + 1)
             }
             Listing::Coords(i) => {

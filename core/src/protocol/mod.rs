@@ -44,9 +44,10 @@ pub const OUT_CAP: usize = 384;
 /// Room kept free before starting anything that writes (the longest single output:
 /// a status report or one listing line plus a message).
 const OUT_RESERVE: usize = 256;
-/// Most `?`s remembered while the output buffer is too full for their reports (a
-/// sender waits for each answer; this only bounds a flood).
-const STATUS_PENDING_MAX: u8 = 8;
+/// Most `?`s remembered while the output buffer is too full for their reports: each
+/// gets its own report as room frees up (500 in one write get 500). Only a flood
+/// beyond this many unanswered ones loses the excess (docs/grbl.md).
+pub const STATUS_PENDING_MAX: u16 = 1024;
 /// Status reports between repeated `WCO:` / `Ov:` fields.
 const REFRESH_EVERY: u8 = 10;
 
@@ -67,7 +68,10 @@ pub struct Protocol {
     after_cr: bool,
     out: Deque<u8, OUT_CAP>,
     /// `?`s waiting for room in the output buffer (each gets its own report).
-    status_requested: u8,
+    status_requested: u16,
+    /// A soft reset's welcome waits for room in the output buffer (resets in a row
+    /// say it once; nothing is written in part).
+    welcome_due: bool,
     listing: Option<Listing>,
     lines_received: u32,
     reports: u8,
@@ -123,6 +127,7 @@ impl Protocol {
             after_cr = false,
             out = Deque::new(),
             status_requested = 0,
+            welcome_due = false,
             listing = None,
             lines_received = 0,
             reports = 0,
@@ -226,7 +231,16 @@ impl Protocol {
     /// Grbl board that the opening of its port resets.
     pub fn start_session(&mut self) {
         self.out.clear();
+        self.welcome_due = false;
         self.welcome();
+    }
+
+    /// Say the welcome again, before the answer to whatever comes next: for a sender
+    /// whose first byte comes long after it opened the port, and which may have
+    /// thrown away what the board said meanwhile (see
+    /// [`crate::controller::WELCOME_REPEAT_MS`]).
+    pub fn repeat_welcome(&mut self) {
+        self.welcome_due = true;
     }
 
     /// Drop the waiting output (the port is closed: nobody reads it).
@@ -254,6 +268,7 @@ impl Protocol {
             && !self.line_ready
             && self.rx.is_empty()
             && self.status_requested == 0
+            && !self.welcome_due
             && self.listing.is_none()
             && self.startup_next.is_none()
             && !self.pending_welcome
@@ -282,6 +297,11 @@ impl Protocol {
         loop {
             if self.room() < OUT_RESERVE {
                 return false;
+            }
+            if core::mem::take(&mut self.welcome_due) {
+                self.flush_events();
+                self.welcome();
+                continue;
             }
             self.flush_events();
             if self.status_requested > 0 {

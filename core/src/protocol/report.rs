@@ -44,6 +44,9 @@ impl Protocol {
     /// alarm.
     pub(super) fn welcome(&mut self) {
         self.say(&[b"\r\n", WELCOME.as_bytes()]);
+        if let Some(why) = self.machine.refusal() {
+            self.notify(why);
+        }
         if self.machine.needs_unlock() {
             self.notify("'$H'|'$X' to unlock");
         }
@@ -99,6 +102,7 @@ impl Protocol {
             RunState::Alarm => b"<Alarm",
             RunState::Home => b"<Home",
             RunState::Check => b"<Check",
+            RunState::Sleep => b"<Sleep",
         });
         let settings = machine.settings();
         let scale = report_scale(settings);
@@ -122,7 +126,10 @@ impl Protocol {
         // The pen is the spindle: report S while it is down.
         let interpreter = machine.interpreter();
         let spindle = if interpreter.modal().pen_down {
-            round_i32(interpreter.spindle())
+            let (lo, hi) = settings.spindle_range();
+            // max/min, not `clamp`: its assertion's message would link float
+            // formatting into the image.
+            round_i32(interpreter.spindle().min(hi).max(lo))
         } else {
             0
         };

@@ -35,7 +35,8 @@ impl Protocol {
             // Every `?` gets its own report: now, or as soon as the output buffer has
             // room (Grbl drops a `?` that comes before the last one was answered).
             b'?' => {
-                if self.room() >= OUT_RESERVE {
+                // In order: behind a reset's welcome or other reports still waiting.
+                if self.room() >= OUT_RESERVE && !self.welcome_due && self.status_requested == 0 {
                     self.status_report(m);
                 } else if self.status_requested < STATUS_PENDING_MAX {
                     self.status_requested += 1;
@@ -68,8 +69,14 @@ impl Protocol {
         self.listing = None;
         self.lines_received = 0;
         self.startup_next = Some(0);
-        self.flush_events();
-        self.welcome();
+        // The welcome (and the reset's alarm) as soon as the output has room for them
+        // whole: a flood of resets says it once and cuts no line.
+        self.welcome_due = true;
+        if self.room() >= OUT_RESERVE {
+            self.welcome_due = false;
+            self.flush_events();
+            self.welcome();
+        }
     }
 
     /// Move bytes from the receive buffer into the line; true when a line is complete.

@@ -7,9 +7,11 @@
 //! board and the simulator share, and the queue traits; [`queue`] is the ring between
 //! preparation and interrupt (the firmware and the simulator run the same one),
 //! [`output`] the output configuration both derive from the settings, and [`phase4`]
-//! maps steps to the 28BYJ-48 half-step sequence.
+//! maps steps to the 28BYJ-48 half-step sequence; [`idle`] decides the motors' power
+//! at rest (`$1`) and the busy outputs, millisecond by millisecond.
 
 pub mod exec;
+pub mod idle;
 pub mod output;
 pub mod phase4;
 pub mod prep;

@@ -415,9 +415,14 @@ impl Prep {
     pub fn is_idle(&self, planner: &Planner) -> bool {
         self.active.is_none() && planner.is_empty()
     }
-    /// Path speed at the last prepared step, mm/s.
+    /// Path speed at the last prepared step, mm/s: the block in execution's cursor,
+    /// which segments move too (a run of steps prepared as one segment leaves no
+    /// single tick behind to say its speed), else the speed the last block ended at.
     pub fn speed(&self) -> f32 {
-        self.v_last
+        match &self.active {
+            Some(a) => a.at.v,
+            None => self.v_last,
+        }
     }
     pub fn skipped(&self) -> u32 {
         self.skipped

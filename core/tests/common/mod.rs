@@ -123,8 +123,11 @@ impl MotionControl for FakePlanner {
     fn set_position(&mut self, pos: StepPos) {
         self.pos = pos;
     }
+    fn dwelling(&self) -> bool {
+        self.queue.len() == 1 && matches!(self.queue.front(), Some(Command::Dwell { .. }))
+    }
     fn speed(&self) -> f32 {
-        if self.is_moving() {
+        if self.is_moving() && !self.dwelling() {
             600.0
         } else {
             0.0
