@@ -134,7 +134,7 @@ fn main() -> ! {
             .pa9
             .into_push_pull_output_with_state(&mut gpioa.crh, PinState::High),
     };
-    let (port, mut timer) = board::step_outputs(pins, dp.TIM2);
+    let (port, mut timer) = board::step_outputs(pins, dp.TIM2, dp.TIM3);
     timer.set_pulse_ticks(10 * 72);
     let (mut port, mut timer) = (Some(port), Some(timer));
     // The interrupt's configuration word is written at boot, as in the firmware (so
