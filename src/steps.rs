@@ -269,7 +269,7 @@ impl StepOutput {
     /// A software pend (the preparation task's kick, the e-stop, a new output
     /// configuration): halt, or start the timer if it is idle and commands wait.
     ///
-    /// This and [`StepOutput::stop`] are kept out of line for speed: the update event
+    /// This and [`StepOutput::halt_now`] are kept out of line for speed: the update event
     /// path, taken once per step, costs 3 instructions less at worst (99 against 102
     /// when measured; bench/isr-cost/run, "step interrupt (update event ...)").
     #[inline(never)]

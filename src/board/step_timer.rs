@@ -36,12 +36,12 @@ const CLOCK_SHIFT: u32 = 1;
 /// The schedule's times are step-timer ticks modulo 2^17 (TIM3's count, doubled).
 const CLOCK_MASK: u32 = (0x1_0000 << CLOCK_SHIFT) - 1;
 /// Step-timer ticks from the clock read in [`StepTimer::restart`] to the counter
-/// starting: the 11 instructions between them (in the release image) at one cycle
+/// starting: the 10 instructions between them (in the release image) at one cycle
 /// each, the least they can take (the emulator charges 1.5, the flash and the APB1
 /// stores may make it more). An
 /// underestimate starts the counter a few ticks low: each step a few ticks late, never
 /// early, and never the steps after it (the schedule is kept apart from the outputs).
-const RESTART_TICKS: u32 = 11;
+const RESTART_TICKS: u32 = 10;
 /// The shortest rest of a period after a late restart: the low time before the next
 /// pulse and the direction hold after a pulse that the lateness stretched.
 const MIN_LATE_TICKS: u32 = DIR_HOLD_TICKS;
@@ -198,8 +198,8 @@ impl StepTimer {
     /// (2..=65536, which the core's executor guarantees), on schedule: with the counter
     /// started at the ticks already gone since the period's scheduled start (the last
     /// one's scheduled end), so that it ends `ticks` after that whatever the
-    /// interrupt's latency; or, if that is too late to leave [`MIN_LATE_TICKS`] of it,
-    /// as that short rest from now (counted in [`LATE_STEP_ARMINGS`]).
+    /// interrupt's latency; or, if that is too late to leave 1 µs (`MIN_LATE_TICKS`) of
+    /// it, as that short rest from now (counted in `LATE_STEP_ARMINGS`).
     #[inline(always)]
     pub fn restart(&mut self, ticks: u32) {
         debug_assert!((2..=MAX_RELOAD).contains(&ticks));
@@ -208,11 +208,12 @@ impl StepTimer {
         self.tim
             .arr()
             .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
+        let due = self.due;
         let at = self.now() + RESTART_TICKS;
-        let gone = at.wrapping_sub(self.due) & CLOCK_MASK;
+        let gone = at.wrapping_sub(due) & CLOCK_MASK;
         if gone + MIN_LATE_TICKS <= ticks {
             self.run(gone);
-            self.due = self.due.wrapping_add(ticks);
+            self.due = due.wrapping_add(ticks);
         } else {
             self.late(at, ticks);
         }
@@ -301,7 +302,7 @@ pub fn stop_step_timer() {
     }
 }
 
-/// Late step armings since power-up (see [`LATE_STEP_ARMINGS`]).
+/// Late step armings since power-up (see `LATE_STEP_ARMINGS`).
 pub fn late_step_armings() -> u32 {
     LATE_STEP_ARMINGS.load(Ordering::Relaxed)
 }

@@ -6,7 +6,8 @@
 //! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
 //! interrupt body with its register accesses. The emulator has no timer, so before each
 //! call the bench sets the status flag the hardware would (the update event; the timer
-//! draws the pulses itself, so there is no other event). measure.py charges every
+//! draws the pulses itself, so there is no other event) and, before an update, stops
+//! the counter as the step timer's one-pulse mode does. measure.py charges every
 //! instruction executed inside `bench_tick` (update event), `bench_kick` (software pend)
 //! and `bench_prepare` to that call.
 #![no_std]
@@ -66,6 +67,7 @@ fn log(bytes: &[u8]) {
 const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
 const UIF: u32 = 1;
 const TIM2_ARR: *const u32 = 0x4000_002C as *const u32;
+const TIM2_CR1: *mut u32 = 0x4000_0000 as *mut u32;
 
 /// The TIM2 interrupt handler exactly as RTIC generates it for the firmware's priority-6
 /// `step` task (`rtic::export::run` saves and restores BASEPRI around the body), compiled
@@ -111,6 +113,13 @@ fn period() -> u64 {
 fn raise(flags: u32) {
     // SAFETY: the emulator maps the timer registers as plain memory.
     unsafe { core::ptr::write_volatile(TIM2_SR, flags) }
+}
+
+/// What the timer does itself at an update event in one-pulse mode (the step timer's):
+/// the counter stops, CEN cleared. Outside the measured calls.
+fn period_ends() {
+    // SAFETY: the emulator maps the timer registers as plain memory.
+    unsafe { core::ptr::write_volatile(TIM2_CR1, core::ptr::read_volatile(TIM2_CR1) & !1) }
 }
 
 #[cortex_m_rt::entry]
@@ -172,6 +181,7 @@ fn main() -> ! {
         loop {
             if let Some(at) = next_irq.filter(|&at| at < next_ms) {
                 let before = steps::position();
+                period_ends();
                 bench_tick(&mut out);
                 irqs += 1;
                 let after = steps::position();
