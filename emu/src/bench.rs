@@ -495,19 +495,23 @@ pub fn run(elf: &Path) -> Result<String, String> {
     }
     let _ = writeln!(
         out,
-        "\nEvery pulse counted at the cap (realistic lines streamed with character counting, `?` every 100 ms, the LCD drawing; rising edges on the step pins signed by the direction pins, against the commanded end point and `MPos`; `$100=$101=160`):\n\n| course | lines (bytes) | `?` sent / answered | cruise events/s | commanded X / Y | pulses X / Y | `MPos` X / Y (steps) | added (+) or lost (-) | late step armings |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "\nEvery pulse counted (realistic lines streamed with character counting, `?` every 100 ms, the LCD drawing, about 0.5 s at cruise; rising edges on the step pins signed by the direction pins, against the commanded end point and `MPos`; `$100=$101=160`):\n\n| course | asked events/s | lines (bytes) | `?` sent / answered | cruise events/s | commanded X / Y | pulses X / Y | `MPos` X / Y (steps) | added (+) or lost (-) | late step armings |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     let mut exact = true;
-    for course in [
-        crate::count_trial::Course::AlongX,
-        crate::count_trial::Course::Diagonal,
+    for (course, rate) in [
+        (crate::count_trial::Course::AlongX, 30_000.0),
+        (crate::count_trial::Course::AlongX, 60_000.0),
+        (crate::count_trial::Course::AlongX, cap),
+        (crate::count_trial::Course::Diagonal, 60_000.0),
+        (crate::count_trial::Course::Diagonal, cap),
     ] {
-        let c = crate::count_trial::run(elf, course, cap, 0.5)?;
+        let c = crate::count_trial::run(elf, course, rate, 0.5)?;
         let off = c.off_by();
         let _ = writeln!(
             out,
-            "| {} | {} ({}-{}) | {} / {} | {:.0} | {} / {} | {} / {} | {} / {} | {:+} / {:+} | {} |",
+            "| {} | {:.0} | {} ({}-{}) | {} / {} | {:.0} | {} / {} | {} / {} | {} / {} | {:+} / {:+} | {} |",
             course.name(),
+            rate,
             c.lines,
             c.line_bytes.0,
             c.line_bytes.1,

@@ -9,8 +9,9 @@
 //! it on schedule: TIM3 counts freely at half the step timer's rate, the schedule (when
 //! each period is due to end) is kept in its time, and the counter starts at the ticks
 //! already gone since the scheduled start of the new period, so that it ends on time
-//! whatever the interrupt's latency (and an error in that latency's estimate moves one
-//! step, never the ones after it). An interrupt too late to keep the schedule starts a
+//! whatever the interrupt's latency (the restart's own few instructions from the clock
+//! read to the counter's start count against the schedule's beginning, which a start
+//! from rest reads the same way). An interrupt too late to keep the schedule starts a
 //! short period instead: the step comes late, never twice, the schedule moves with it,
 //! and the late arming is counted ([`LATE_STEP_ARMINGS`]).
 
@@ -35,13 +36,13 @@ const CR1_STOPPED: u32 = 0b1100;
 const CLOCK_SHIFT: u32 = 1;
 /// The schedule's times are step-timer ticks modulo 2^17 (TIM3's count, doubled).
 const CLOCK_MASK: u32 = (0x1_0000 << CLOCK_SHIFT) - 1;
-/// Step-timer ticks from the clock read in [`StepTimer::restart`] to the counter
-/// starting: the 10 instructions between them (in the release image) at one cycle
-/// each, the least they can take (the emulator charges 1.5, the flash and the APB1
-/// stores may make it more). An
-/// underestimate starts the counter a few ticks low: each step a few ticks late, never
-/// early, and never the steps after it (the schedule is kept apart from the outputs).
-const RESTART_TICKS: u32 = 10;
+/// How much longer [`StepTimer::restart`] takes from its clock read to the counter's
+/// start than [`StepTimer::start`] does: 4 instructions (9 against 5 in the release
+/// image) at one cycle each, the least they can take. The schedule begins at the start's
+/// clock read, and every restart's own delay then counts against it, so only this
+/// difference matters: an error in it moves every step after the start by as many
+/// ticks, the same for all of them (an underestimate later, never earlier).
+const RESTART_LEAD: u32 = 4;
 /// The shortest rest of a period after a late restart: the low time before the next
 /// pulse and the direction hold after a pulse that the lateness stretched.
 const MIN_LATE_TICKS: u32 = DIR_HOLD_TICKS;
@@ -88,8 +89,10 @@ pub struct StepTimer {
     tim: pac::TIM2,
     /// TIM3, the schedule's clock: free-running, one count per two ticks.
     clock: pac::TIM3,
-    /// When the running period is due to end (ticks on the clock, modulo 2^17).
-    due: u32,
+    /// When the running period is due to end, in ticks on the clock (modulo 2^17) as
+    /// a restart reads it (see `RESTART_LEAD`): the ticks gone at a restart are one
+    /// subtraction.
+    due_early: u32,
     /// Pulse width in ticks, the CCR value of an armed channel.
     pulse: u32,
     /// CCR1-CCR3 for each step mask (bit i = axis i): `pulse` or 0 (a fourth word
@@ -136,7 +139,7 @@ impl StepTimer {
         let mut t = Self {
             tim,
             clock,
-            due: 0,
+            due_early: 0,
             pulse: 0,
             arm_table: [[0; 4]; 8],
         };
@@ -208,14 +211,13 @@ impl StepTimer {
         self.tim
             .arr()
             .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
-        let due = self.due;
-        let at = self.now() + RESTART_TICKS;
-        let gone = at.wrapping_sub(due) & CLOCK_MASK;
+        let due_early = self.due_early;
+        let gone = self.now().wrapping_sub(due_early) & CLOCK_MASK;
         if gone + MIN_LATE_TICKS <= ticks {
             self.run(gone);
-            self.due = due.wrapping_add(ticks);
+            self.due_early = due_early.wrapping_add(ticks);
         } else {
-            self.late(at, ticks);
+            self.late(gone, ticks);
         }
     }
 
@@ -226,8 +228,7 @@ impl StepTimer {
     /// never come early. (Only a debugger's halt can hold the interrupt that long: the
     /// longest masked section is 49 µs, and settings are written to flash at rest.)
     #[inline(never)]
-    fn late(&mut self, at: u32, ticks: u32) {
-        let gone = at.wrapping_sub(self.due) & CLOCK_MASK;
+    fn late(&mut self, gone: u32, ticks: u32) {
         let start = if gone > CLOCK_MASK / 2 {
             0
         } else {
@@ -239,7 +240,13 @@ impl StepTimer {
             ticks.saturating_sub(MIN_LATE_TICKS)
         };
         self.run(start);
-        self.due = at.wrapping_sub(start).wrapping_add(ticks);
+        // The new period began `start` ticks before the restart, `gone` after the old
+        // schedule's mark.
+        self.due_early = self
+            .due_early
+            .wrapping_add(gone)
+            .wrapping_sub(start)
+            .wrapping_add(ticks);
     }
 
     /// Start the counter at `start` (below the reload written before).
@@ -258,9 +265,9 @@ impl StepTimer {
         self.tim
             .arr()
             .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
-        let at = self.now() + RESTART_TICKS;
+        let now = self.now();
         self.run(0);
-        self.due = at.wrapping_add(ticks);
+        self.due_early = now.wrapping_add(ticks).wrapping_sub(RESTART_LEAD);
     }
 
     pub fn stop(&mut self) {

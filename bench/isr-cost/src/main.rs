@@ -68,6 +68,7 @@ const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
 const UIF: u32 = 1;
 const TIM2_ARR: *const u32 = 0x4000_002C as *const u32;
 const TIM2_CR1: *mut u32 = 0x4000_0000 as *mut u32;
+const TIM3_CNT: *mut u32 = 0x4000_0424 as *mut u32;
 
 /// The TIM2 interrupt handler exactly as RTIC generates it for the firmware's priority-6
 /// `step` task (`rtic::export::run` saves and restores BASEPRI around the body), compiled
@@ -120,6 +121,14 @@ fn raise(flags: u32) {
 fn period_ends() {
     // SAFETY: the emulator maps the timer registers as plain memory.
     unsafe { core::ptr::write_volatile(TIM2_CR1, core::ptr::read_volatile(TIM2_CR1) & !1) }
+}
+
+/// The step timer's schedule clock (TIM3, one count per two ticks) as the interrupt
+/// reads it when it runs at virtual tick `t`: about 100 ticks after its event (the
+/// entry and the work before the read), so it finds itself on time as on the board.
+fn clock_at(t: u64) {
+    // SAFETY: the emulator maps the timer registers as plain memory.
+    unsafe { core::ptr::write_volatile(TIM3_CNT, (((t + 100) >> 1) & 0xFFFF) as u32) }
 }
 
 #[cortex_m_rt::entry]
@@ -182,6 +191,7 @@ fn main() -> ! {
             if let Some(at) = next_irq.filter(|&at| at < next_ms) {
                 let before = steps::position();
                 period_ends();
+                clock_at(at);
                 bench_tick(&mut out);
                 irqs += 1;
                 let after = steps::position();
@@ -213,6 +223,7 @@ fn main() -> ! {
             bench_prepare(&mut pipeline);
             if next_irq.is_none() && pipeline.side().queued() > 0 {
                 // Start the timer as the firmware's kick does (a pend with no flags).
+                clock_at(next_ms - 72_000);
                 bench_kick(&mut out);
                 next_irq = out.timer.is_running().then(|| next_ms - 72_000 + period());
             }
