@@ -76,6 +76,9 @@ pub struct Counted {
     pub reported: [i64; 3],
     /// The firmware's count of late step armings during the trial, if it keeps one.
     pub late: Option<u32>,
+    /// The count the firmware's log gave last (its LCD task logs the total since
+    /// power-up when it grows), read 300 ms after the machine came to rest.
+    pub logged_late: Option<u32>,
 }
 
 impl Counted {
@@ -96,7 +99,7 @@ impl Counted {
     /// One line for a report.
     pub fn summary(&self) -> String {
         format!(
-            "{}: asked {:.0} events/s, cruise {:.0}; {} lines of {}-{} bytes, {} `?` ({} answered), {} LCD writes; commanded X{} Y{}, pulses X{} Y{} (edges {} {}), MPos X{} Y{} steps; off by X{:+} Y{:+}; late armings {}",
+            "{}: asked {:.0} events/s, cruise {:.0}; {} lines of {}-{} bytes, {} `?` ({} answered), {} LCD writes; commanded X{} Y{}, pulses X{} Y{} (edges {} {}), MPos X{} Y{} steps; off by X{:+} Y{:+}; late armings {} (log: {})",
             self.course.name(),
             self.requested,
             self.cruise,
@@ -117,6 +120,7 @@ impl Counted {
             self.off_by()[0],
             self.off_by()[1],
             self.late.map_or("not kept by this image".to_string(), |n| n.to_string()),
+            self.logged_late.map_or("no line".to_string(), |n| n.to_string()),
         )
     }
 }
@@ -218,6 +222,14 @@ pub fn run(elf: &Path, course: Course, rate: f64, seconds: f64) -> Result<Counte
         (Some(a), Some(b)) => s.read_u32(a).map(|n| n.wrapping_sub(b)),
         _ => None,
     };
+    // Time for the LCD task (every 100 ms) to log the count.
+    s.run_for(300 * T_PER_MS)?;
+    let logged_late = s.m.state().log.as_ref().and_then(|log| {
+        log.lines.iter().rev().find_map(|l| {
+            let rest = l.split("step interrupt late ").nth(1)?;
+            rest.split_whitespace().next()?.parse().ok()
+        })
+    });
     let b = &s.m.state().board;
     let steps = &b.steps[first_step..];
     let cruise = cruise_rate(steps.iter().map(|st| st.t).collect());
@@ -236,6 +248,7 @@ pub fn run(elf: &Path, course: Course, rate: f64, seconds: f64) -> Result<Counte
         edges: b.step_edges,
         reported: reported.map(to_steps),
         late,
+        logged_late,
     })
 }
 

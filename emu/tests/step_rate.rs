@@ -192,6 +192,15 @@ fn assert_every_pulse_counts(c: &Counted) {
         "the image counts its late step armings: {}",
         c.summary()
     );
+    // None came before the trial (the machine was at rest), so the log's total since
+    // power-up is the trial's count; no line at all when there was none.
+    let logged = c.logged_late.unwrap_or(0);
+    assert_eq!(
+        Some(logged),
+        c.late,
+        "the log reports the late step armings: {}",
+        c.summary()
+    );
 }
 
 #[test]
