@@ -501,14 +501,24 @@ mod app {
     /// The LCD at 10 Hz, lowest priority: take a snapshot of the HMI and the status
     /// under a short lock, draw it into the frame buffer, send only the changed words.
     /// The SPI waits here are the only blocking waits in the firmware; every other
-    /// task preempts them.
+    /// task preempts them. Also logs the step interrupt's late armings when their
+    /// count has grown (at most 10 lines a second, from the task with time to spare).
     #[task(binds = USART2, priority = 1, shared = [core], local = [
         lcd_spi,
         screens,
         fb,
         up: bool = false,
+        late_seen: u32 = 0,
     ])]
     fn lcd_refresh(mut cx: lcd_refresh::Context) {
+        let late = board::late_step_armings();
+        if late != *cx.local.late_seen {
+            *cx.local.late_seen = late;
+            defmt::warn!(
+                "step interrupt late {} times since power-up: steps delayed, none lost",
+                late
+            );
+        }
         let spi = cx.local.lcd_spi;
         if !*cx.local.up {
             // The controller comes up in graphics mode; after that only the changed

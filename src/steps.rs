@@ -3,10 +3,13 @@
 //!
 //! Timing per step command, one interrupt per step event: in step/dir mode the timer
 //! draws the step pulses itself (PWM on TIM2 CH1-CH3, armed one period ahead through
-//! the CCR preloads), so a pulse starts exactly when its wait ends and lasts exactly
-//! the set width whatever the interrupt latency. The interrupt at each update event
-//! takes the next command, arms the channels for the end of the new period, writes the
-//! period and the next directions. A direction pin never changes inside a pulse of its
+//! the CCR preloads), so a pulse starts exactly when its wait ends. The timer stops at
+//! every update event (one-pulse mode) until the interrupt has taken the next command,
+//! armed the channels for the end of the new period and written the directions; then
+//! it restarts the timer on schedule (see `board::StepTimer::restart`). So a late
+//! interrupt can only delay a step, never repeat one: an armed pulse fires once, at the
+//! update event, and no further update comes until the interrupt has run. A pulse
+//! lasts the set width, or until the restart if the interrupt comes later than that. A direction pin never changes inside a pulse of its
 //! axis: such a change (a reversal) first runs the executor's short turn guard period
 //! (pulse width + hold time), at whose end the pin turns. In 4-phase mode the pins are GPIO and the interrupt writes the coil pattern. After the
 //! last command the timer runs one more short period so that the last pulse ends. A
@@ -206,20 +209,20 @@ impl StepOutput {
     /// `StepperCell`'s access rule): it reads the stepper state without a lock.
     ///
     /// Update event (a period ends): in step/dir mode the timer has just started the
-    /// pulses armed for this moment by the previous interrupt; the executor counts
-    /// them and takes the next command (a reversal of an axis whose pulse is in flight
-    /// first runs the executor's turn guard period), and this arms the channels that
-    /// pulse when the new period ends, writes the new period and the directions. In
-    /// 4-phase mode the coils are written here.
+    /// pulses armed for this moment by the previous interrupt, and stopped; the
+    /// executor counts them and takes the next command (a reversal of an axis whose
+    /// pulse is in flight first runs the executor's turn guard period), and this arms
+    /// the channels that pulse when the new period ends, writes the directions and
+    /// restarts the timer for the new period. In 4-phase mode the coils are written
+    /// here.
     #[inline(always)]
     pub fn on_interrupt(&mut self) {
         if !self.timer.take_update() {
             self.pend(STEP_STATE.load(Ordering::Relaxed));
             return;
         }
-        // No halt test here: `halt` stops the timer before it sets the latch, so no
-        // update follows a halt; an update already pending counts the pulse that did
-        // start, and the pend that `halt` raises halts the executor next.
+        // An update that came before a halt counts the pulse that did start; the halt
+        // is looked at before the timer restarts (below).
         // SAFETY: the step interrupt is the lock-free accessor of the access rule, and
         // `stepper` points at the installed state.
         let st = unsafe { &mut *self.stepper };
@@ -237,15 +240,22 @@ impl StepOutput {
         if out.dir_changed != 0 {
             self.write_dirs(out.dir);
         }
-        if out.reload != 0 {
-            self.timer.set_period(out.reload);
+        let ticks = if out.reload != 0 {
+            out.reload
         } else if out.step != 0 {
             // Queue empty: one more short period so that the last pulse still ends.
-            self.timer.set_period(tail_period(self.timer.pulse_ticks()));
+            tail_period(self.timer.pulse_ticks())
         } else {
             // That period is over (or the queue ran dry after a pure wait): no pulse
-            // is in flight.
-            self.stop(st, false);
+            // is in flight, and the timer stopped itself at the update event.
+            return;
+        };
+        self.timer.restart(ticks);
+        // A halt that came while this ran stopped a timer that was not yet running:
+        // stop it again (a halt after the restart stopped it itself, before any
+        // update: the period cannot end within these few instructions).
+        if STEP_STATE.load(Ordering::Relaxed) & HALT_BIT != 0 {
+            self.halt_now(st);
         }
     }
 
@@ -259,7 +269,7 @@ impl StepOutput {
     /// A software pend (the preparation task's kick, the e-stop, a new output
     /// configuration): halt, or start the timer if it is idle and commands wait.
     ///
-    /// This and [`StepOutput::stop`] are kept out of line for speed: the update event
+    /// This and [`StepOutput::halt_now`] are kept out of line for speed: the update event
     /// path, taken once per step, costs 3 instructions less at worst (99 against 102
     /// when measured; bench/isr-cost/run, "step interrupt (update event ...)").
     #[inline(never)]
@@ -267,7 +277,7 @@ impl StepOutput {
         // SAFETY: as in `on_interrupt`.
         let st = unsafe { &mut *self.stepper };
         if cfg & HALT_BIT != 0 {
-            self.stop(st, true);
+            self.halt_now(st);
             return;
         }
         if self.timer.is_running() {
@@ -305,21 +315,15 @@ impl StepOutput {
             if !four_phase {
                 self.timer.arm_pulses(out.arm);
             }
-            self.timer.set_period(out.reload);
-            self.timer.start();
+            self.timer.start(out.reload);
         }
     }
 
-    /// Halted, or the last pulse has ended: stop the timer (at once, outputs idle,
-    /// when halted).
+    /// Halted: stop the timer at once, outputs idle, and the executor.
     #[inline(never)]
-    fn stop(&mut self, st: &mut Stepper, halted: bool) {
-        if halted {
-            st.exec.halt();
-            self.timer.stop_now();
-        } else {
-            self.timer.stop();
-        }
+    fn halt_now(&mut self, st: &mut Stepper) {
+        st.exec.halt();
+        self.timer.stop_now();
     }
 }
 

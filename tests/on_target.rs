@@ -57,17 +57,18 @@ mod tests {
         b.step_timer.configure_outputs(true, 0);
         b.step_timer.set_pulse_ticks(WIDTH);
         b.step_timer.arm_pulses(x); // the first pulse, when the first period ends
-        b.step_timer.set_period(PERIOD);
-        // Interrupts stay masked in the NVIC: the test polls the update flag the step
-        // interrupt would see, arms X for the next N - 1 periods and then nothing,
-        // and samples the pin to time every pulse with the cycle counter.
-        // SAFETY: read-only register reads (the input data register).
+                                    // Interrupts stay masked in the NVIC: the test polls the update flag the step
+                                    // interrupt would see, arms X for the next N - 1 periods and then nothing,
+                                    // restarts the timer (one-pulse mode: it stops at every update event) on its
+                                    // schedule, and samples the pin to time every pulse with the cycle counter.
+                                    // SAFETY: read-only register reads (the input data register).
         let gpioa = unsafe { &*pac::GPIOA::ptr() };
         let pin_high = || gpioa.idr().read().bits() & board::STEP_MASK_X != 0;
         let (mut armed, mut rises, mut widths_ok) = (1u32, 0u32, true);
         let (mut high_since, mut first_rise, mut last_rise) = (None, 0u32, 0u32);
         let start = cortex_m::peripheral::DWT::cycle_count();
-        b.step_timer.start();
+        let late_before = board::late_step_armings();
+        b.step_timer.start(PERIOD);
         // N + 3 periods: room to see that no pulse follows the N-th.
         let span = (N + 3) * PERIOD * (board::SYSCLK_HZ / board::STEP_TIMER_HZ);
         loop {
@@ -78,6 +79,7 @@ mod tests {
             if b.step_timer.take_update() {
                 b.step_timer.arm_pulses(if armed < N { x } else { 0 });
                 armed += 1;
+                b.step_timer.restart(PERIOD);
             }
             match (pin_high(), high_since) {
                 (true, None) => {
@@ -101,6 +103,7 @@ mod tests {
         b.step_timer.arm_pulses(0);
         defmt::assert_eq!(rises, N, "pulses drawn");
         defmt::assert!(widths_ok, "a pulse had the wrong width");
+        defmt::assert_eq!(board::late_step_armings(), late_before, "no late arming");
         // N - 1 periods between the first and the last rise.
         let spent = last_rise.wrapping_sub(first_rise);
         let expected = (N - 1) * PERIOD * (board::SYSCLK_HZ / board::STEP_TIMER_HZ);
@@ -115,6 +118,114 @@ mod tests {
 
     /// The panic and e-stop path turns the drivers off with either enable polarity
     /// (`$4`): PA9 high for an active-low /EN, low for an active-high enable.
+    #[test]
+    fn a_late_restart_delays_the_step_and_never_repeats_it(b: &mut Board) {
+        // Issue 20: the step interrupt held back three periods at the 10th update (as
+        // a long masked section would): the pulse armed for that update fires once,
+        // the timer waits, the next one comes a short rest after the late restart,
+        // the late arming is counted, and every period after it is on the new schedule.
+        const N: u32 = 20;
+        const PERIOD: u32 = 7_200;
+        const LATE_AT: u32 = 10;
+        let x = board::STEP_MASK_X as u8;
+        b.step_timer.configure_outputs(true, 0);
+        b.step_timer.set_pulse_ticks(720);
+        b.step_timer.arm_pulses(x);
+        // SAFETY: read-only register reads (the input data register).
+        let gpioa = unsafe { &*pac::GPIOA::ptr() };
+        let pin_high = || gpioa.idr().read().bits() & board::STEP_MASK_X != 0;
+        let (mut updates, mut rises, mut was_high) = (0u32, 0u32, false);
+        let mut rise_at = [0u32; N as usize];
+        // The update flag the last test's final period left.
+        b.step_timer.take_update();
+        let late_before = board::late_step_armings();
+        let start = cortex_m::peripheral::DWT::cycle_count();
+        b.step_timer.start(PERIOD);
+        let span = (N + 8) * PERIOD;
+        loop {
+            let now = cortex_m::peripheral::DWT::cycle_count();
+            if now.wrapping_sub(start) > span {
+                break;
+            }
+            if b.step_timer.take_update() {
+                updates += 1;
+                if updates == LATE_AT {
+                    // Three periods late: sample the pin meanwhile (no pulse may come).
+                    let t0 = cortex_m::peripheral::DWT::cycle_count();
+                    loop {
+                        let t = cortex_m::peripheral::DWT::cycle_count();
+                        if t.wrapping_sub(t0) >= 3 * PERIOD {
+                            break;
+                        }
+                        let high = pin_high();
+                        if high && !was_high {
+                            if let Some(slot) = rise_at.get_mut(rises as usize) {
+                                *slot = t;
+                            }
+                            rises += 1;
+                        }
+                        was_high = high;
+                    }
+                }
+                b.step_timer.arm_pulses(if updates < N { x } else { 0 });
+                b.step_timer.restart(PERIOD);
+                if updates == LATE_AT {
+                    // The short rest after the late restart is 1 µs of low level,
+                    // less than a pass of this loop: watch the pin closely for it.
+                    let t0 = cortex_m::peripheral::DWT::cycle_count();
+                    while pin_high() {}
+                    loop {
+                        let t = cortex_m::peripheral::DWT::cycle_count();
+                        if pin_high() {
+                            if let Some(slot) = rise_at.get_mut(rises as usize) {
+                                *slot = t;
+                            }
+                            rises += 1;
+                            was_high = true;
+                            break;
+                        }
+                        if t.wrapping_sub(t0) > PERIOD {
+                            break;
+                        }
+                    }
+                }
+            }
+            let high = pin_high();
+            if high && !was_high {
+                if let Some(slot) = rise_at.get_mut(rises as usize) {
+                    *slot = now;
+                }
+                rises += 1;
+            }
+            was_high = high;
+        }
+        b.step_timer.stop();
+        b.step_timer.arm_pulses(0);
+        defmt::assert_eq!(rises, N, "pulses drawn: each armed one once");
+        defmt::assert_eq!(
+            board::late_step_armings(),
+            late_before + 1,
+            "one late arming"
+        );
+        // Before the late one and after it, the periods are exact; across it, longer.
+        let gap = |i: usize| rise_at[i + 1].wrapping_sub(rise_at[i]);
+        let on_time = |g: u32| g + 120 >= PERIOD && g <= PERIOD + 120;
+        let late = LATE_AT as usize - 1;
+        for i in 0..N as usize - 1 {
+            if i == late {
+                // The three late periods plus the short rest after the restart.
+                let g = gap(i);
+                defmt::assert!(
+                    g > 3 * PERIOD && g < 3 * PERIOD + PERIOD / 2,
+                    "delayed: {}",
+                    g
+                );
+            } else {
+                defmt::assert!(on_time(gap(i)), "period {}: {} cycles", i, gap(i));
+            }
+        }
+    }
+
     #[test]
     fn emergency_off_follows_the_enable_polarity(b: &mut Board) {
         // SAFETY: read-only register read.

@@ -13,7 +13,11 @@
 //!   planner's cap ([`inkstep_core::stepper::MAX_STEP_RATE`]): above it the cruise
 //!   runs at the cap, without gaps (the bench fails when a trial does not);
 //! - e-stop latency: from the e-stop pin's edge to the drivers' enable pin turning off,
-//!   and to the last step edge.
+//!   and to the last step edge;
+//! - every pulse counted at the planner's cap ([`crate::count_trial`]): realistic lines,
+//!   along X and point by point on a diagonal, the final position pulse by pulse
+//!   against the commanded one and the reported `MPos`, and the firmware's late step
+//!   armings (the bench fails when a pulse is added or lost).
 
 use crate::clock::{T_PER_MS, T_PER_S, T_PER_US};
 use crate::session::{repo_root, Session};
@@ -488,6 +492,46 @@ pub fn run(elf: &Path) -> Result<String, String> {
         return Err(format!(
             "{out}\na rate trial left gaps or fell short of its planned rate"
         ));
+    }
+    let _ = writeln!(
+        out,
+        "\nEvery pulse counted (realistic lines streamed with character counting, `?` every 100 ms, the LCD drawing, about 0.5 s at cruise; rising edges on the step pins signed by the direction pins, against the commanded end point and `MPos`; `$100=$101=160`):\n\n| course | asked events/s | lines (bytes) | `?` sent / answered | cruise events/s | commanded X / Y | pulses X / Y | `MPos` X / Y (steps) | added (+) or lost (-) | late step armings |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    let mut exact = true;
+    for (course, rate) in [
+        (crate::count_trial::Course::AlongX, 30_000.0),
+        (crate::count_trial::Course::AlongX, 60_000.0),
+        (crate::count_trial::Course::AlongX, cap),
+        (crate::count_trial::Course::Diagonal, 60_000.0),
+        (crate::count_trial::Course::Diagonal, cap),
+    ] {
+        let c = crate::count_trial::run(elf, course, rate, 0.5)?;
+        let off = c.off_by();
+        let _ = writeln!(
+            out,
+            "| {} | {:.0} | {} ({}-{}) | {} / {} | {:.0} | {} / {} | {} / {} | {} / {} | {:+} / {:+} | {} |",
+            course.name(),
+            rate,
+            c.lines,
+            c.line_bytes.0,
+            c.line_bytes.1,
+            c.questions,
+            c.reports,
+            c.cruise,
+            c.commanded[0],
+            c.commanded[1],
+            c.pulses[0],
+            c.pulses[1],
+            c.reported[0],
+            c.reported[1],
+            off[0],
+            off[1],
+            c.late.map_or("not counted".to_string(), |n| n.to_string()),
+        );
+        exact &= c.exact();
+    }
+    if !exact {
+        return Err(format!("{out}\na pulse was added or lost"));
     }
     Ok(out)
 }

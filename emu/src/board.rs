@@ -28,6 +28,7 @@ pub const IRQ_USB_LP: usize = 20;
 pub const IRQ_TIM1_UP: usize = 25;
 pub const IRQ_TIM1_CC: usize = 27;
 pub const IRQ_TIM2: usize = 28;
+pub const IRQ_TIM3: usize = 29;
 pub const IRQ_SPI2: usize = 36;
 
 /// Flash size register value (RM0008 30.1): 128 KB on the STM32F103CB.
@@ -79,6 +80,8 @@ pub struct Board {
     pub exti: Exti,
     pub tim1: Timer,
     pub tim2: Timer,
+    /// TIM3: the counter, flags and interrupt; its compare outputs reach no pin.
+    pub tim3: Timer,
     pub spi2: Spi,
     pub lcd: St7920,
     pub iwdg: Iwdg,
@@ -131,6 +134,7 @@ impl Board {
             exti: Exti::new(),
             tim1: Timer::new("TIM1", true),
             tim2: Timer::new("TIM2", false),
+            tim3: Timer::new("TIM3", false),
             spi2: Spi::new("SPI2"),
             lcd: St7920::new(),
             iwdg: Iwdg::new(),
@@ -172,6 +176,7 @@ impl Board {
         self.exti = Exti::new();
         self.tim1.reset();
         self.tim2.reset();
+        self.tim3.reset();
         self.spi2.reset();
         self.iwdg = Iwdg::new();
         self.usb = Usb::new();
@@ -193,6 +198,7 @@ impl Board {
         let tim2 = t_per_cycle(self.rcc.tim_apb1_hz());
         self.tim1.tick_t = tim1;
         self.tim2.tick_t = tim2;
+        self.tim3.tick_t = tim2;
         self.spi2.pclk_t = t_per_cycle(self.rcc.pclk1_hz());
     }
 
@@ -203,6 +209,7 @@ impl Board {
             self.nvic.systick.next_event(),
             self.tim1.next_event(),
             self.tim2.next_event(),
+            self.tim3.next_event(),
             self.spi2.next_event(),
             self.iwdg.deadline(),
         ]
@@ -227,6 +234,9 @@ impl Board {
         edges.clear();
         self.tim2.advance(now, &mut edges);
         self.apply_edges(&edges, false);
+        // TIM3's compare outputs are not wired to pins (enabling one stops the run).
+        edges.clear();
+        self.tim3.advance(now, &mut edges);
         self.edges = edges;
         let mut out = std::mem::take(&mut self.spi_out);
         out.clear();
@@ -414,6 +424,10 @@ impl Board {
         if up || cc {
             lines |= 1 << IRQ_TIM2;
         }
+        let (up, cc) = self.tim3.irq();
+        if up || cc {
+            lines |= 1 << IRQ_TIM3;
+        }
         if self.spi2.irq() {
             lines |= 1 << IRQ_SPI2;
         }
@@ -449,6 +463,10 @@ impl Board {
             0x4000_0000 => {
                 self.clock_on(false, 0, "TIM2")?;
                 self.tim2.read(off, now)?
+            }
+            0x4000_0400 => {
+                self.clock_on(false, 1, "TIM3")?;
+                self.tim3.read(off, now)?
             }
             0x4000_3000 => self.iwdg.read(off, now)?,
             0x4000_3800 => {
@@ -508,6 +526,16 @@ impl Board {
                 self.clock_on(false, 0, "TIM2")?;
                 self.tim2.write(off, v, now, &mut edges)?;
                 self.apply_edges(&edges, false);
+            }
+            0x4000_0400 => {
+                self.clock_on(false, 1, "TIM3")?;
+                if off == 0x20 && v & 0x1111 != 0 {
+                    return Err(BusError(
+                        "TIM3: compare outputs on pins are not modelled".into(),
+                    ));
+                }
+                let mut unused = Vec::new();
+                self.tim3.write(off, v, now, &mut unused)?;
             }
             0x4000_3000 => self.iwdg.write(off, v, now)?,
             0x4000_3800 => {

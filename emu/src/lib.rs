@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod board;
 pub mod clock;
+pub mod count_trial;
 pub mod debug;
 pub mod demo;
 pub mod elf;

@@ -420,6 +420,13 @@ impl<'a> Machine<'a> {
         self.uc.get_data().board.now
     }
 
+    /// The word at `addr` in the CPU's memory map (RAM or flash; not peripherals).
+    pub fn read_u32(&self, addr: u32) -> Option<u32> {
+        let mut w = [0u8; 4];
+        self.uc.mem_read(u64::from(addr), &mut w).ok()?;
+        Some(u32::from_le_bytes(w))
+    }
+
     fn sync_flash_all(&mut self) -> Result<(), String> {
         let end = self.uc.get_data().board.settings.start as usize;
         let end = end.min(FLASH_SIZE);

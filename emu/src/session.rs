@@ -39,6 +39,8 @@ pub struct Session<'a> {
     pub m: Machine<'a>,
     /// Everything the board sent, as text.
     pub received: String,
+    /// The image's symbols (name to address).
+    symbols: std::collections::HashMap<String, u32>,
 }
 
 impl<'a> Session<'a> {
@@ -50,11 +52,22 @@ impl<'a> Session<'a> {
         Ok(Session {
             m,
             received: String::new(),
+            symbols: image.symbols,
         })
     }
 
     pub fn now(&self) -> u64 {
         self.m.now()
+    }
+
+    /// The address of the image's symbol `name`.
+    pub fn symbol(&self, name: &str) -> Option<u32> {
+        self.symbols.get(name).copied()
+    }
+
+    /// The word at `addr` as the CPU sees it (RAM or flash).
+    pub fn read_u32(&self, addr: u32) -> Option<u32> {
+        self.m.read_u32(addr)
     }
 
     /// Run `t` more time units; a stop is an error (with the log's tail).

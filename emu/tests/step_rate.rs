@@ -5,6 +5,12 @@
 //! move that asks for more step events per second than the planner's cap
 //! ([`MAX_STEP_RATE`]) runs at the cap, smoothly.
 //!
+//! And every pulse counts (issue 20, point 3): at the planner's cap, realistic G-code
+//! lines of 25 to 40 bytes streamed with character counting, `?` every 100 ms and the
+//! LCD drawing, along X and point by point on a diagonal, the final position read off
+//! the step pins pulse by pulse (and reported as `MPos`) is the commanded one
+//! (`inkstep_emu::count_trial`).
+//!
 //! What a gap looks like: planned step intervals change smoothly (along a ramp by a
 //! few percent from one step to the next, along a circle with its tangent), while a
 //! queue that ran dry stops the step timer until the next preparation, up to a
@@ -15,6 +21,7 @@ mod common;
 use common::booted;
 use inkstep_core::stepper::MAX_STEP_RATE;
 use inkstep_emu::clock::{T_PER_MS, T_PER_S, T_PER_US};
+use inkstep_emu::count_trial::{self, Counted, Course};
 use inkstep_serial::sender::Flow;
 
 /// The largest ratio of a step interval to the longer of its two neighbours that the
@@ -145,4 +152,65 @@ fn a_move_asking_for_more_than_the_step_rate_cap_runs_at_the_cap_without_gaps() 
         rate <= cap * 1.01 && rate >= cap * 0.95,
         "cruise {rate:.0} events/s, cap {cap:.0}"
     );
+}
+
+/// A counting trial at the planner's cap, for about half a second of cruise.
+fn counted_at_the_cap(course: Course) -> Counted {
+    let cap = f64::from(MAX_STEP_RATE);
+    let c = count_trial::run(common::elf(), course, cap, 0.5).expect("trial");
+    eprintln!("{}", c.summary());
+    assert!(
+        c.line_bytes.0 >= 25 && c.line_bytes.1 <= 40,
+        "realistic lines: {:?} bytes",
+        c.line_bytes
+    );
+    assert!(
+        c.questions >= 4 && c.reports + 1 >= c.questions,
+        "`?` every 100 ms, answered: {} sent, {} reports",
+        c.questions,
+        c.reports
+    );
+    assert!(c.lcd_writes > 100, "the LCD drew during the trial");
+    assert!(
+        c.cruise >= 0.97 * cap && c.cruise <= 1.01 * cap,
+        "cruise {:.0} events/s at the cap {cap:.0}",
+        c.cruise
+    );
+    c
+}
+
+fn assert_every_pulse_counts(c: &Counted) {
+    assert_eq!(
+        c.off_by(),
+        [0, 0, 0],
+        "steps added (+) or lost (-) per axis: {}",
+        c.summary()
+    );
+    assert!(c.exact(), "{}", c.summary());
+    assert!(
+        c.late.is_some(),
+        "the image counts its late step armings: {}",
+        c.summary()
+    );
+    // None came before the trial (the machine was at rest), so the log's total since
+    // power-up is the trial's count; no line at all when there was none.
+    let logged = c.logged_late.unwrap_or(0);
+    assert_eq!(
+        Some(logged),
+        c.late,
+        "the log reports the late step armings: {}",
+        c.summary()
+    );
+}
+
+#[test]
+fn along_x_at_the_cap_with_realistic_lines_every_pulse_counts() {
+    let c = counted_at_the_cap(Course::AlongX);
+    assert_every_pulse_counts(&c);
+}
+
+#[test]
+fn a_point_by_point_diagonal_at_the_cap_with_realistic_lines_every_pulse_counts() {
+    let c = counted_at_the_cap(Course::Diagonal);
+    assert_every_pulse_counts(&c);
 }

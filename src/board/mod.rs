@@ -61,7 +61,7 @@ pub use step_port::{
     step_outputs, StepPins, StepPort, DIR_SHIFT, MOTION_PINS, STEP_MASK_X, STEP_MASK_Y,
     STEP_MASK_Z,
 };
-pub use step_timer::{disarm_step_pulses, stop_step_timer, StepTimer};
+pub use step_timer::{disarm_step_pulses, late_step_armings, stop_step_timer, StepTimer};
 pub use usb::{Usb, UsbCells, UsbSerial, USB_PACKET};
 pub use watchdog::{Watchdog, WATCHDOG_MS};
 
@@ -145,7 +145,7 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
             .pa9
             .into_push_pull_output_with_state(crh, PinState::High),
     };
-    let (step_port, step_timer) = step_outputs(step_pins, dp.TIM2);
+    let (step_port, step_timer) = step_outputs(step_pins, dp.TIM2, dp.TIM3);
 
     let servo_pin = gpioa.pa8.into_alternate_push_pull(&mut gpioa.crh);
     let mut pwm = dp

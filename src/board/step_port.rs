@@ -99,15 +99,16 @@ pub struct StepPins {
     pub enable: gpio::PA9<Output<PushPull>>,
 }
 
-/// The step port and step timer from their pins and TIM2. Separate from [`init`](super::init) so
-/// that the interrupt-cost bench (bench/isr-cost) builds the very same parts.
-pub fn step_outputs(pins: StepPins, tim2: pac::TIM2) -> (StepPort, StepTimer) {
+/// The step port and step timer from their pins, TIM2 and its stopwatch TIM3. Separate
+/// from [`init`](super::init) so that the interrupt-cost bench (bench/isr-cost) builds
+/// the very same parts.
+pub fn step_outputs(pins: StepPins, tim2: pac::TIM2, tim3: pac::TIM3) -> (StepPort, StepTimer) {
     // The pins are configured and moved in here, so nothing else can take them; the
     // port writes their register from here on. Zero-sized, so that the step
     // interrupt's state stays as small as it was measured (bench/isr-cost/run: the
     // update path takes 2 more instructions when the port carries the pin values).
     let StepPins { pins: _, enable: _ } = pins;
-    (StepPort { _owned: () }, StepTimer::new(tim2))
+    (StepPort { _owned: () }, StepTimer::new(tim2, tim3))
 }
 
 /// Disable every motor driver and drop all step/coil outputs, from any context.

@@ -1,12 +1,58 @@
 //! TIM2, the step timer: it draws the step pulses itself in step/dir mode (PWM on
-//! CH1-CH3, armed one period ahead) and raises one interrupt per step event.
+//! CH1-CH3, armed one period ahead) and raises one interrupt per step event; and TIM3,
+//! its clock.
+//!
+//! TIM2 runs in one-pulse mode: its counter stops at every update event, so a period
+//! whose interrupt has not yet come cannot be repeated (the free-running timer this
+//! replaces drew the previous period's pulses again when the interrupt came more than
+//! a period late: a step the firmware never counted, issue 20). The interrupt restarts
+//! it on schedule: TIM3 counts freely at half the step timer's rate, the schedule (when
+//! each period is due to end) is kept in its time, and the counter starts at the ticks
+//! already gone since the scheduled start of the new period, so that it ends on time
+//! whatever the interrupt's latency (the restart's own few instructions from the clock
+//! read to the counter's start count against the schedule's beginning, which a start
+//! from rest reads the same way). An interrupt too late to keep the schedule starts a
+//! short period instead: the step comes late, never twice, the schedule moves with it,
+//! and the late arming is counted ([`LATE_STEP_ARMINGS`]).
 
 use super::{STEP_TIMER_HZ, SYSCLK_HZ};
+use core::sync::atomic::{AtomicU32, Ordering};
+use inkstep_core::stepper::output::DIR_HOLD_TICKS;
 use inkstep_core::stepper::MAX_RELOAD;
 use stm32f1xx_hal::pac;
 
 /// The update event flag (UIF): a period has ended.
 const EVENT_UPDATE: u32 = 1;
+
+/// TIM2 CR1 while running: CEN, URS (only overflows raise the update interrupt, not
+/// UG), OPM (the counter stops at the update event). No ARR preload: the reload
+/// written before each restart is the length of the period it starts.
+const CR1_RUN: u32 = 0b1101;
+/// TIM2 CR1 while stopped.
+const CR1_STOPPED: u32 = 0b1100;
+/// TIM3 counts every second step-timer tick (prescaler 2): 2^17 ticks, 1.8 ms, go
+/// round its 16 bits, twice the longest step period, so that a lateness up to that
+/// reads unambiguously.
+const CLOCK_SHIFT: u32 = 1;
+/// The schedule's times are step-timer ticks modulo 2^17 (TIM3's count, doubled).
+const CLOCK_MASK: u32 = (0x1_0000 << CLOCK_SHIFT) - 1;
+/// How much longer [`StepTimer::restart`] takes from its clock read to the counter's
+/// start than [`StepTimer::start`] does: 4 instructions (9 against 5 in the release
+/// image) at one cycle each, the least they can take. The schedule begins at the start's
+/// clock read, and every restart's own delay then counts against it, so only this
+/// difference matters: an error in it moves every step after the start by as many
+/// ticks, the same for all of them (an underestimate later, never earlier).
+const RESTART_LEAD: u32 = 4;
+/// The shortest rest of a period after a late restart: the low time before the next
+/// pulse and the direction hold after a pulse that the lateness stretched.
+const MIN_LATE_TICKS: u32 = DIR_HOLD_TICKS;
+
+/// Step interrupts that came too late to start their period on schedule since
+/// power-up: each delayed a step (or a wait) by its lateness, none added or lost one.
+/// Written only by the step interrupt; read by the tasks (the log) and, under its
+/// exported name, by the emulator's rate trials.
+#[export_name = "inkstep_late_step_armings"]
+pub static LATE_STEP_ARMINGS: AtomicU32 = AtomicU32::new(0);
 
 // TIM2 register values (RM0008 section 15.4). PWM mode 1 with CCR preload on channels
 // 1-3 (the step pins PA0-PA2): a channel is active from the update event until the count
@@ -41,6 +87,12 @@ fn set_step_pins_to_timer(timer: bool) {
 /// the coils. One interrupt per step event either way.
 pub struct StepTimer {
     tim: pac::TIM2,
+    /// TIM3, the schedule's clock: free-running, one count per two ticks.
+    clock: pac::TIM3,
+    /// When the running period is due to end, in ticks on the clock (modulo 2^17) as
+    /// a restart reads it (see `RESTART_LEAD`): the ticks gone at a restart are one
+    /// subtraction.
+    due_early: u32,
     /// Pulse width in ticks, the CCR value of an armed channel.
     pulse: u32,
     /// CCR1-CCR3 for each step mask (bit i = axis i): `pulse` or 0 (a fourth word
@@ -49,14 +101,17 @@ pub struct StepTimer {
 }
 
 impl StepTimer {
-    pub(super) fn new(tim: pac::TIM2) -> Self {
-        // SAFETY: enabling the TIM2 clock; RCC is otherwise owned by the HAL but this
-        // bit is not touched by it after freeze.
+    pub(super) fn new(tim: pac::TIM2, clock: pac::TIM3) -> Self {
+        // SAFETY: enabling the TIM2 and TIM3 clocks; RCC is otherwise owned by the HAL
+        // but these bits are not touched by it after freeze.
         unsafe {
             let rcc = &*pac::RCC::ptr();
-            rcc.apb1enr().modify(|_, w| w.tim2en().set_bit());
-            rcc.apb1rstr().modify(|_, w| w.tim2rst().set_bit());
-            rcc.apb1rstr().modify(|_, w| w.tim2rst().clear_bit());
+            rcc.apb1enr()
+                .modify(|_, w| w.tim2en().set_bit().tim3en().set_bit());
+            rcc.apb1rstr()
+                .modify(|_, w| w.tim2rst().set_bit().tim3rst().set_bit());
+            rcc.apb1rstr()
+                .modify(|_, w| w.tim2rst().clear_bit().tim3rst().clear_bit());
         }
         let psc = SYSCLK_HZ / STEP_TIMER_HZ - 1;
         // SAFETY: raw writes of documented TIM2 register values (RM0008 15.4) to the
@@ -72,15 +127,19 @@ impl StepTimer {
             // Apply the prescaler and the zero CCRs now, without an interrupt for it.
             tim.egr().write(|w| w.ug().set_bit());
             tim.sr().write(|w| w.bits(0));
-            // No ARR preload: the reload written in the update interrupt is the length
-            // of the period that has just begun (the executor's contract), and
-            // `set_period` guards against a count already past the new value. URS: only
-            // counter overflows raise the update interrupt, not UG.
-            tim.cr1().write(|w| w.arpe().clear_bit().urs().set_bit());
+            tim.cr1().write(|w| w.bits(CR1_STOPPED));
             tim.dier().write(|w| w.bits(DIER_UPDATE));
+            // The clock: free-running over 16 bits, no interrupt.
+            clock.psc().write(|w| w.bits((1 << CLOCK_SHIFT) - 1));
+            clock.arr().write(|w| w.bits(0xFFFF));
+            clock.egr().write(|w| w.ug().set_bit());
+            clock.sr().write(|w| w.bits(0));
+            clock.cr1().write(|w| w.cen().set_bit());
         }
         let mut t = Self {
             tim,
+            clock,
+            due_early: 0,
             pulse: 0,
             arm_table: [[0; 4]; 8],
         };
@@ -132,30 +191,88 @@ impl StepTimer {
         }
     }
 
-    /// Program the period of the next step interval, in ticks: 2..=65536, which the
-    /// core's executor guarantees (so no clamp costs the interrupt time here).
+    /// The clock's time in ticks (modulo 2^17).
     #[inline(always)]
-    pub fn set_period(&mut self, ticks: u32) {
+    fn now(&self) -> u32 {
+        self.clock.cnt().read().bits() << CLOCK_SHIFT
+    }
+
+    /// Start the period that began at the update event just taken, `ticks` long
+    /// (2..=65536, which the core's executor guarantees), on schedule: with the counter
+    /// started at the ticks already gone since the period's scheduled start (the last
+    /// one's scheduled end), so that it ends `ticks` after that whatever the
+    /// interrupt's latency; or, if that is too late to leave 1 µs (`MIN_LATE_TICKS`) of
+    /// it, as that short rest from now (counted in `LATE_STEP_ARMINGS`).
+    #[inline(always)]
+    pub fn restart(&mut self, ticks: u32) {
         debug_assert!((2..=MAX_RELOAD).contains(&ticks));
-        let arr = ticks.wrapping_sub(1);
-        // SAFETY: any 16-bit auto-reload value is valid; `ticks` is 2..=0x10000.
-        self.tim.arr().write(|w| unsafe { w.bits(arr) });
-        // Interrupt latency already counted past the new end: end the period now
-        // rather than wrapping through 65536 ticks.
-        if self.tim.cnt().read().bits() >= arr {
-            // SAFETY: any 16-bit count is valid.
-            self.tim.cnt().write(|w| unsafe { w.bits(arr) });
+        // SAFETY: any 16-bit auto-reload; `ticks` is 2..=0x10000. The counter is
+        // stopped (one-pulse mode).
+        self.tim
+            .arr()
+            .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
+        let due_early = self.due_early;
+        let gone = self.now().wrapping_sub(due_early) & CLOCK_MASK;
+        if gone + MIN_LATE_TICKS <= ticks {
+            self.run(gone);
+            self.due_early = due_early.wrapping_add(ticks);
+        } else {
+            self.late(gone, ticks);
         }
     }
 
-    pub fn start(&mut self) {
-        // SAFETY: any 16-bit count is valid.
-        self.tim.cnt().write(|w| unsafe { w.bits(0) });
-        self.tim.cr1().modify(|_, w| w.cen().set_bit());
+    /// The restart of an interrupt too late for the schedule: the period's last
+    /// [`MIN_LATE_TICKS`] (or all of it, if shorter) from now, and the schedule moved.
+    /// A time past the schedule by more than half the clock's round (0.9 ms) reads as
+    /// one before it: the period runs in full from now, uncounted, so that a step can
+    /// never come early. (Only a debugger's halt can hold the interrupt that long: the
+    /// longest masked section is 49 µs, and settings are written to flash at rest.)
+    #[inline(never)]
+    fn late(&mut self, gone: u32, ticks: u32) {
+        let start = if gone > CLOCK_MASK / 2 {
+            0
+        } else {
+            // The step interrupt is the only writer.
+            LATE_STEP_ARMINGS.store(
+                LATE_STEP_ARMINGS.load(Ordering::Relaxed).wrapping_add(1),
+                Ordering::Relaxed,
+            );
+            ticks.saturating_sub(MIN_LATE_TICKS)
+        };
+        self.run(start);
+        // The new period began `start` ticks before the restart, `gone` after the old
+        // schedule's mark.
+        self.due_early = self
+            .due_early
+            .wrapping_add(gone)
+            .wrapping_sub(start)
+            .wrapping_add(ticks);
+    }
+
+    /// Start the counter at `start` (below the reload written before).
+    #[inline(always)]
+    fn run(&mut self, start: u32) {
+        // SAFETY: any 16-bit count; documented CR1 bits.
+        unsafe {
+            self.tim.cnt().write(|w| w.bits(start));
+            self.tim.cr1().write(|w| w.bits(CR1_RUN));
+        }
+    }
+
+    /// Start from rest with a first period of `ticks`; the schedule begins now.
+    pub fn start(&mut self, ticks: u32) {
+        // SAFETY: any 16-bit auto-reload; `ticks` is 2..=0x10000.
+        self.tim
+            .arr()
+            .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
+        let now = self.now();
+        self.run(0);
+        self.due_early = now.wrapping_add(ticks).wrapping_sub(RESTART_LEAD);
     }
 
     pub fn stop(&mut self) {
-        self.tim.cr1().modify(|_, w| w.cen().clear_bit());
+        // SAFETY: documented CR1 bits.
+        self.tim.cr1().write(|w| unsafe { w.bits(CR1_STOPPED) });
     }
 
     /// Stop at once with every step output back at its idle level (e-stop, abort): the
@@ -184,12 +301,17 @@ impl StepTimer {
 }
 
 /// Stop the step timer from any context (the e-stop and hard-limit interrupts): one
-/// store, CEN cleared and URS kept (StepTimer's configuration).
+/// store, CEN cleared and URS and OPM kept (StepTimer's configuration).
 pub fn stop_step_timer() {
     // SAFETY: a single store to TIM2's CR1.
     unsafe {
-        (*pac::TIM2::ptr()).cr1().write(|w| w.bits(1 << 2));
+        (*pac::TIM2::ptr()).cr1().write(|w| w.bits(CR1_STOPPED));
     }
+}
+
+/// Late step armings since power-up (see `LATE_STEP_ARMINGS`).
+pub fn late_step_armings() -> u32 {
+    LATE_STEP_ARMINGS.load(Ordering::Relaxed)
 }
 
 /// Disarm every step channel of the step timer from a task, inside the critical section

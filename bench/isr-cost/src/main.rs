@@ -6,7 +6,8 @@
 //! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
 //! interrupt body with its register accesses. The emulator has no timer, so before each
 //! call the bench sets the status flag the hardware would (the update event; the timer
-//! draws the pulses itself, so there is no other event). measure.py charges every
+//! draws the pulses itself, so there is no other event) and, before an update, stops
+//! the counter as the step timer's one-pulse mode does. measure.py charges every
 //! instruction executed inside `bench_tick` (update event), `bench_kick` (software pend)
 //! and `bench_prepare` to that call.
 #![no_std]
@@ -66,6 +67,8 @@ fn log(bytes: &[u8]) {
 const TIM2_SR: *mut u32 = 0x4000_0010 as *mut u32;
 const UIF: u32 = 1;
 const TIM2_ARR: *const u32 = 0x4000_002C as *const u32;
+const TIM2_CR1: *mut u32 = 0x4000_0000 as *mut u32;
+const TIM3_CNT: *mut u32 = 0x4000_0424 as *mut u32;
 
 /// The TIM2 interrupt handler exactly as RTIC generates it for the firmware's priority-6
 /// `step` task (`rtic::export::run` saves and restores BASEPRI around the body), compiled
@@ -113,6 +116,21 @@ fn raise(flags: u32) {
     unsafe { core::ptr::write_volatile(TIM2_SR, flags) }
 }
 
+/// What the timer does itself at an update event in one-pulse mode (the step timer's):
+/// the counter stops, CEN cleared. Outside the measured calls.
+fn period_ends() {
+    // SAFETY: the emulator maps the timer registers as plain memory.
+    unsafe { core::ptr::write_volatile(TIM2_CR1, core::ptr::read_volatile(TIM2_CR1) & !1) }
+}
+
+/// The step timer's schedule clock (TIM3, one count per two ticks) as the interrupt
+/// reads it when it runs at virtual tick `t`: about 100 ticks after its event (the
+/// entry and the work before the read), so it finds itself on time as on the board.
+fn clock_at(t: u64) {
+    // SAFETY: the emulator maps the timer registers as plain memory.
+    unsafe { core::ptr::write_volatile(TIM3_CNT, (((t + 100) >> 1) & 0xFFFF) as u32) }
+}
+
 #[cortex_m_rt::entry]
 fn main() -> ! {
     // SAFETY: nothing else owns the peripherals in this bench.
@@ -134,7 +152,7 @@ fn main() -> ! {
             .pa9
             .into_push_pull_output_with_state(&mut gpioa.crh, PinState::High),
     };
-    let (port, mut timer) = board::step_outputs(pins, dp.TIM2);
+    let (port, mut timer) = board::step_outputs(pins, dp.TIM2, dp.TIM3);
     timer.set_pulse_ticks(10 * 72);
     let (mut port, mut timer) = (Some(port), Some(timer));
     // The interrupt's configuration word is written at boot, as in the firmware (so
@@ -172,6 +190,8 @@ fn main() -> ! {
         loop {
             if let Some(at) = next_irq.filter(|&at| at < next_ms) {
                 let before = steps::position();
+                period_ends();
+                clock_at(at);
                 bench_tick(&mut out);
                 irqs += 1;
                 let after = steps::position();
@@ -203,6 +223,7 @@ fn main() -> ! {
             bench_prepare(&mut pipeline);
             if next_irq.is_none() && pipeline.side().queued() > 0 {
                 // Start the timer as the firmware's kick does (a pend with no flags).
+                clock_at(next_ms - 72_000);
                 bench_kick(&mut out);
                 next_irq = out.timer.is_running().then(|| next_ms - 72_000 + period());
             }

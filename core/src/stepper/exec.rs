@@ -167,12 +167,14 @@ impl Executor {
     }
 
     /// The next reload out of a wait of `w` ticks and what is left after it. Up to
-    /// `max_reload` in one period; longer waits go in parts of `max_reload - 1`, which
-    /// always leaves at least 2 (never a 1-tick reload) without a special case.
+    /// `max_reload` in one period; longer waits go in parts of at most `max_reload -
+    /// 1` that always leave at least half of `max_reload`: never a 1-tick reload, and
+    /// never a last part shorter than the interrupt that starts it (a board whose
+    /// timer waits for the interrupt at each period's end would come late there).
     #[inline(always)]
     fn part(&self, w: u32) -> (u32, u32) {
         let reload = if w > self.max_reload {
-            self.max_reload - 1
+            (self.max_reload - 1).min(w - self.max_reload / 2)
         } else {
             w
         };
@@ -441,6 +443,12 @@ mod tests {
                 parts.iter().all(|p| (2..=0x1_0000).contains(&p.reload)),
                 "{wait}: {parts:?}"
             );
+            if wait > 0x1_0000 {
+                assert!(
+                    parts.iter().all(|p| p.reload >= 0x8000),
+                    "{wait}: no part shorter than half the timer's range: {parts:?}"
+                );
+            }
             let armed: std::vec::Vec<u8> = parts.iter().map(|p| p.arm).collect();
             assert_eq!(
                 armed.last(),

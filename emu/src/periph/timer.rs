@@ -1,14 +1,17 @@
-//! TIM1 (advanced-control, RM0008 section 14) and TIM2 (general-purpose, section 15)
-//! in what the board uses of them: up-counting, edge-aligned, with the prescaler, the
-//! auto-reload and compare preloads, update events (overflow and UG, URS, UDIS, OPM),
-//! the four compare channels in output mode (frozen, active/inactive/toggle on match,
-//! forced levels, PWM modes 1 and 2) with their polarity and enable bits, TIM1's main
-//! output enable, the status flags and their interrupts.
+//! TIM1 (advanced-control, RM0008 section 14) and TIM2 and TIM3 (general-purpose,
+//! section 15) in what the board uses of them: up-counting, edge-aligned, with the
+//! prescaler, the auto-reload and compare preloads, update events (overflow and UG,
+//! URS, UDIS, OPM: the counter stops at any update event, CEN cleared), the four
+//! compare channels in output mode (frozen, active/inactive/toggle on match, forced
+//! levels, PWM modes 1 and 2) with their polarity and enable bits, TIM1's main output
+//! enable, the status flags and their interrupts.
 //!
 //! The counter is computed from the time, never stepped: the board asks for the next
 //! event (a compare match or an overflow) and the timer produces the output edges at
-//! exactly their timer tick. Down-counting, centre-aligned, slave and DMA modes are
-//! refused (the run stops) rather than half-modelled.
+//! exactly their timer tick. The PWM modes compare the counter with the compare
+//! register continuously, so a write of the counter moves the output at once.
+//! Down-counting, centre-aligned, slave and master modes and DMA requests are refused
+//! (the run stops) rather than half-modelled.
 
 use super::{unknown, Access, BusError};
 
@@ -157,10 +160,6 @@ impl Timer {
             if next > u64::from(top) {
                 self.cnt = 0;
                 self.update_event(true);
-                if self.cr1 & 8 != 0 {
-                    // One-pulse mode: the counter stops at the update event.
-                    self.cr1 &= !1;
-                }
             } else {
                 self.cnt = next as u32;
             }
@@ -168,12 +167,17 @@ impl Timer {
         }
     }
 
-    /// An update event: preloads transferred, UIF set (not for UG with URS set), and
-    /// the PWM reference levels at the new period's start.
+    /// An update event: preloads transferred, UIF set (not for UG with URS set), and in
+    /// one-pulse mode the counter stopped (RM0008 15.4.1, OPM: "counter stops counting
+    /// at the next update event").
     fn update_event(&mut self, overflow: bool) {
         if self.cr1 & 2 != 0 {
             // UDIS: no update event.
             return;
+        }
+        if self.cr1 & 8 != 0 {
+            // One-pulse mode: the counter stops at the update event.
+            self.cr1 &= !1;
         }
         self.psc_active = self.psc;
         self.arr_active = self.arr;
@@ -289,7 +293,15 @@ impl Timer {
                     self.since = now;
                 }
             }
-            0x04 => self.cr2 = v16,
+            0x04 => {
+                if v & 0x70 != 0 {
+                    return Err(BusError(format!(
+                        "{}: master mode (CR2 0x{v:X}) is not modelled",
+                        self.name
+                    )));
+                }
+                self.cr2 = v16;
+            }
             0x08 => {
                 if v & 7 != 0 {
                     return Err(BusError(format!(
@@ -339,6 +351,7 @@ impl Timer {
             0x24 => {
                 self.cnt = v16;
                 self.since = now;
+                self.compare_levels_now(now, edges);
             }
             0x28 => self.psc = v16,
             0x2C => {
@@ -461,6 +474,55 @@ mod tests {
         assert_eq!(t.read(0x24, 200).unwrap(), 0);
         assert_eq!(t.sr & 1, 1);
         assert_eq!(t.next_event(), None);
+    }
+
+    #[test]
+    fn one_pulse_mode_fires_an_armed_pwm_pulse_once_and_waits_for_the_restart() {
+        // The step output of issue 20: CH1 PWM mode 1 with CCR preload, OPM. A pulse
+        // armed through the preload starts at the update event, where the counter
+        // stops; it ends CCR ticks after a restart from 0 or at once when the counter
+        // is written past CCR; and with no restart nothing more happens, however long.
+        let (mut t, mut e) = (tim2(), Vec::new());
+        w(&mut t, 0x18, 0x68, 0, &mut e);
+        w(&mut t, 0x20, 1, 0, &mut e);
+        w(&mut t, 0x2C, 99, 0, &mut e);
+        w(&mut t, 0x34, 30, 0, &mut e); // armed for the end of the first period
+        w(&mut t, 0x00, 0xD, 0, &mut e); // CEN, URS, OPM
+        t.advance(100_000, &mut e);
+        let got: Vec<(u64, bool)> = e.iter().map(|x| (x.t, x.level)).collect();
+        assert_eq!(got, [(100, true)], "one rising edge, held while stopped");
+        assert_eq!(t.read(0x00, 100_000).unwrap() & 1, 0, "CEN cleared");
+        assert_eq!(t.next_event(), None);
+        e.clear();
+        // A late restart: the counter written past CCR ends the pulse at once; the
+        // period ends ARR + 1 - CNT ticks after the start. The preload still holds 30:
+        // the next update fires it once more, exactly once, and stops again.
+        w(&mut t, 0x24, 90, 100_050, &mut e);
+        w(&mut t, 0x00, 0xD, 100_051, &mut e);
+        assert_eq!(t.next_event(), Some(100_061));
+        t.advance(300_000, &mut e);
+        let got: Vec<(u64, bool)> = e.iter().map(|x| (x.t, x.level)).collect();
+        assert_eq!(got, [(100_050, false), (100_061, true)]);
+        e.clear();
+        // An on-time restart from CNT 5 keeps the pulse's end at CCR: 25 ticks on.
+        w(&mut t, 0x34, 0, 300_010, &mut e); // disarm the next update
+        w(&mut t, 0x24, 5, 300_010, &mut e);
+        w(&mut t, 0x00, 0xD, 300_010, &mut e);
+        t.advance(400_000, &mut e);
+        let got: Vec<(u64, bool)> = e.iter().map(|x| (x.t, x.level)).collect();
+        assert_eq!(
+            got,
+            [(300_035, false)],
+            "ends at CCR, no pulse at the update"
+        );
+    }
+
+    #[test]
+    fn unmodelled_master_and_slave_modes_are_refused() {
+        let (mut t, mut e) = (tim2(), Vec::new());
+        assert!(t.write(0x04, 0x20, 0, &mut e).is_err(), "TRGO = update");
+        assert!(t.write(0x08, 0x04, 0, &mut e).is_err(), "slave reset mode");
+        assert!(t.write(0x04, 0x08, 0, &mut e).is_ok(), "CCDS alone");
     }
 
     #[test]
