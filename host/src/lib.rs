@@ -6,6 +6,7 @@ pub mod bench;
 pub mod font;
 pub mod gcode_out;
 pub mod geom;
+pub mod hatch;
 pub mod plan;
 pub mod preview;
 pub mod stream;
