@@ -135,6 +135,9 @@ impl Problem {
 
     /// Nearest free end point next, from the start.
     pub fn greedy(&self) -> Tour {
+        if self.len() > MATRIX_MAX {
+            return self.greedy_grid();
+        }
         let n = self.len();
         let mut free = vec![true; n];
         let mut t = Tour {
@@ -160,6 +163,39 @@ impl Problem {
             t.order.push(best.1);
             t.rev.push(best.2);
             at = self.exit(best.1, best.2);
+        }
+        t
+    }
+
+    /// [`Problem::greedy`] with a grid for the nearest end: O(n) small
+    /// queries instead of a scan of every free end per step.
+    fn greedy_grid(&self) -> Tour {
+        let n = self.len();
+        let mut near = super::near::Near::new(self.pts[..2 * n].to_vec());
+        if !self.reversible {
+            for i in 0..n {
+                near.remove(2 * i + 1);
+            }
+        }
+        let mut t = Tour {
+            order: Vec::with_capacity(n),
+            rev: Vec::with_capacity(n),
+        };
+        let mut at = self.pts[self.start()];
+        let mut free = vec![true; n];
+        while let Some(id) = near.nearest(at) {
+            let (i, r) = (id / 2, id % 2 == 1);
+            near.remove(2 * i);
+            near.remove(2 * i + 1);
+            free[i] = false;
+            t.order.push(i);
+            t.rev.push(r);
+            at = self.pts[self.exit(i, r)];
+        }
+        // Strokes with end points the grid cannot hold (not finite) go last.
+        for i in (0..n).filter(|&i| free[i]) {
+            t.order.push(i);
+            t.rev.push(false);
         }
         t
     }
