@@ -392,7 +392,7 @@ fn load_svg(file: &PathBuf, a: &SvgArgs) -> Result<svg::Drawing> {
             .for_each(f);
         d.skipped
             .iter_mut()
-            .flat_map(|s| s.outline.iter_mut())
+            .flat_map(|s| s.outline.iter_mut().flatten())
             .for_each(f);
     };
     if let Some(k) = a.scale {

@@ -19,8 +19,9 @@ pub struct Stats {
 /// What else to draw around the moves.
 #[derive(Clone, Debug, Default)]
 pub struct Extra {
-    /// Outlines (mm) of what the program leaves out.
-    pub left_out: Vec<Vec<Pt>>,
+    /// Outlines (mm) of what the program leaves out: each item closed rings,
+    /// inside by even-odd.
+    pub left_out: Vec<Vec<Vec<Pt>>>,
     /// Page size (mm), its corner at the origin.
     pub page: Option<(f64, f64)>,
     /// Machine travel (mm), from the origin.
@@ -52,7 +53,7 @@ pub fn render_with(moves: &[Move], extra: &Extra, width: u32) -> Result<(Pixmap,
     let pts = moves
         .iter()
         .flat_map(|m| [m.from, m.to])
-        .chain(extra.left_out.iter().flatten().copied())
+        .chain(extra.left_out.iter().flatten().flatten().copied())
         .chain(page.iter().flatten().copied())
         .chain(travel.iter().flatten().copied())
         .filter(|p| p.x.is_finite() && p.y.is_finite());
@@ -80,20 +81,22 @@ pub fn render_with(moves: &[Move], extra: &Extra, width: u32) -> Result<(Pixmap,
         )
     };
     let line_w = (width as f32 / 600.0).max(1.0);
-    let outline = |pts: &[Pt]| {
+    let rings = |rings: &[Vec<Pt>]| {
         let mut pb = PathBuilder::new();
-        for (k, p) in pts.iter().enumerate() {
-            let (x, y) = to_px(p.x, p.y);
-            if k == 0 {
-                pb.move_to(x, y);
-            } else {
-                pb.line_to(x, y);
+        for pts in rings {
+            for (k, p) in pts.iter().enumerate() {
+                let (x, y) = to_px(p.x, p.y);
+                if k == 0 {
+                    pb.move_to(x, y);
+                } else {
+                    pb.line_to(x, y);
+                }
             }
         }
         pb.finish()
     };
     for (r, dashed) in [(&page, false), (&travel, true)] {
-        if let Some(path) = r.as_deref().and_then(outline) {
+        if let Some(path) = r.as_ref().and_then(|r| rings(std::slice::from_ref(r))) {
             let mut paint = Paint::default();
             paint.set_color_rgba8(150, 150, 150, 255);
             let stroke = Stroke {
@@ -107,7 +110,7 @@ pub fn render_with(moves: &[Move], extra: &Extra, width: u32) -> Result<(Pixmap,
         }
     }
     for o in &extra.left_out {
-        if let Some(path) = outline(o) {
+        if let Some(path) = rings(o) {
             let (r, g, b) = LEFT_OUT_RGB;
             let mut paint = Paint::default();
             paint.set_color_rgba8(r, g, b, 70);
@@ -166,6 +169,28 @@ pub fn render_with(moves: &[Move], extra: &Extra, width: u32) -> Result<(Pixmap,
         };
         pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
     }
+    // Drawn parts outside the machine travel, over the blue in orange.
+    if let Some((tw, th)) = extra.travel {
+        let mut out_pb = PathBuilder::new();
+        for m in moves.iter().filter(|m| m.kind == MoveKind::Draw) {
+            for (a, b) in outside_pieces(m.from, m.to, tw, th) {
+                let (p, q) = (to_px(a.x, a.y), to_px(b.x, b.y));
+                out_pb.move_to(p.0, p.1);
+                out_pb.line_to(q.0, q.1);
+            }
+        }
+        if let Some(path) = out_pb.finish() {
+            let (r, g, b) = LEFT_OUT_RGB;
+            let mut paint = Paint::default();
+            paint.set_color_rgba8(r, g, b, 255);
+            let stroke = Stroke {
+                width: line_w * 2.0,
+                line_cap: tiny_skia::LineCap::Round,
+                ..Stroke::default()
+            };
+            pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+        }
+    }
     if let Some(first) = moves.first() {
         let (x, y) = to_px(first.from.x, first.from.y);
         if let Some(c) = PathBuilder::from_circle(x, y, 3.0 * line_w) {
@@ -177,10 +202,55 @@ pub fn render_with(moves: &[Move], extra: &Extra, width: u32) -> Result<(Pixmap,
     Ok((pm, stats))
 }
 
+/// The pieces of segment a-b outside the rectangle [0, w] x [0, h]
+/// (Liang-Barsky: the inside is one parameter interval).
+pub fn outside_pieces(a: Pt, b: Pt, w: f64, h: f64) -> Vec<(Pt, Pt)> {
+    let (dx, dy) = (b.x - a.x, b.y - a.y);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [(-dx, a.x), (dx, w - a.x), (-dy, a.y), (dy, h - a.y)] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return vec![(a, b)];
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    if t0 >= t1 {
+        return vec![(a, b)];
+    }
+    let at = |t: f64| Pt::new(a.x + t * dx, a.y + t * dy);
+    let mut out = Vec::new();
+    if t0 > 1e-12 {
+        out.push((a, at(t0)));
+    }
+    if t1 < 1.0 - 1e-12 {
+        out.push((at(t1), b));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::toolpath::parse;
+
+    #[test]
+    fn pieces_outside_the_travel() {
+        let p = |x, y| Pt::new(x, y);
+        assert!(outside_pieces(p(1.0, 1.0), p(5.0, 5.0), 10.0, 10.0).is_empty());
+        assert_eq!(
+            outside_pieces(p(-5.0, 5.0), p(15.0, 5.0), 10.0, 10.0),
+            vec![(p(-5.0, 5.0), p(0.0, 5.0)), (p(10.0, 5.0), p(15.0, 5.0))]
+        );
+        let all = outside_pieces(p(-5.0, 20.0), p(15.0, 20.0), 10.0, 10.0);
+        assert_eq!(all, vec![(p(-5.0, 20.0), p(15.0, 20.0))]);
+    }
 
     #[test]
     fn strokes_and_travel_get_their_colours() {

@@ -104,8 +104,9 @@ impl SkipKind {
 pub struct Skipped {
     pub kind: SkipKind,
     pub name: String,
-    /// Where it is on the page (mm, y up): its outline, for the preview.
-    pub outline: Vec<Pt>,
+    /// Where it is on the page (mm, y up): its outline as closed rings
+    /// (inside by even-odd), for the preview.
+    pub outline: Vec<Stroke>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -415,10 +416,10 @@ impl Walker<'_> {
                         (0.0, s.height()),
                         (0.0, 0.0),
                     ];
-                    let outline = r
+                    let outline = vec![r
                         .iter()
                         .map(|&(x, y)| self.to_mm(map(ts, Point::from_xy(x, y))))
-                        .collect();
+                        .collect()];
                     self.skipped.push(Skipped {
                         kind: SkipKind::Image,
                         name: name_or(if im.id().is_empty() { g.id() } else { im.id() }, "image"),
@@ -481,11 +482,7 @@ impl Walker<'_> {
                     mm.extend(h);
                 }
                 None => {
-                    let outline = mm
-                        .iter()
-                        .max_by_key(|s| s.len())
-                        .cloned()
-                        .unwrap_or_default();
+                    let outline = mm.iter().filter(|s| s.len() > 2).cloned().collect();
                     self.skipped.push(Skipped {
                         kind: SkipKind::Fill,
                         name: name_or(p.id(), "path"),
@@ -534,7 +531,7 @@ impl Walker<'_> {
             let place =
                 |u: f64, v: f64| Pt::new(o.x + u * ux.x + v * uy.x, o.y + u * ux.y + v * uy.y);
             let width = line.chars().count() as f64 * font_px * 0.6;
-            outline.extend([
+            outline.push(vec![
                 place(0.0, 0.0),
                 place(width, 0.0),
                 place(width, -font_px),
@@ -905,7 +902,7 @@ mod tests {
         // The text's outline starts at its anchor (10, 20).
         let t = d.skipped.iter().find(|s| s.kind == SkipKind::Text).unwrap();
         assert!(
-            t.outline[0].dist(Pt::new(10.0, 80.0)) < 1e-4,
+            t.outline[0][0].dist(Pt::new(10.0, 80.0)) < 1e-4,
             "{:?}",
             t.outline
         );

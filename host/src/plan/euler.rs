@@ -195,16 +195,17 @@ fn pair_greedy_undirected(
     }
 }
 
-/// Index in `cands` of the point nearest `pts[u]` (`usize::MAX` if `cands` is empty).
+/// Index in `cands` of the point nearest `pts[u]` (`usize::MAX` if `cands` is
+/// empty; the first candidate when no distance compares, e.g. all infinite).
 fn nearest(pts: &[Pt], u: usize, cands: &[usize]) -> usize {
+    if cands.is_empty() {
+        return usize::MAX;
+    }
     cands
         .iter()
         .enumerate()
         .map(|(k, &v)| (k, pts[u].dist(pts[v])))
-        .fold(
-            (usize::MAX, f64::INFINITY),
-            |b, c| if c.1 < b.1 { c } else { b },
-        )
+        .fold((0, f64::INFINITY), |b, c| if c.1 < b.1 { c } else { b })
         .0
 }
 

@@ -55,6 +55,16 @@ pub fn plan(strokes: &[Stroke], route: Route, opt: &PlanOptions) -> Vec<Stroke> 
             );
         }
     };
+    // Strokes with points that are not finite cannot be measured: they are
+    // kept, unplanned, at the end (the G-code writer refuses them anyway).
+    let finite = |s: &&Stroke| s.iter().all(|p| p.x.is_finite() && p.y.is_finite());
+    let odd: Vec<Stroke> = strokes.iter().filter(|s| !finite(s)).cloned().collect();
+    if !odd.is_empty() {
+        let good: Vec<Stroke> = strokes.iter().filter(finite).cloned().collect();
+        let mut p = plan(&good, route, opt);
+        p.extend(odd);
+        return p;
+    }
     let strokes: Vec<Stroke> = strokes.iter().filter(|s| !s.is_empty()).cloned().collect();
     let joined = if opt.join {
         let j = euler::join(&strokes, opt.join_tol, opt.reverse);

@@ -146,7 +146,9 @@ impl Problem {
         };
         let mut at = self.start();
         for _ in 0..n {
-            let mut best = (f64::INFINITY, 0, false);
+            // Any free stroke first (distances may all be infinite).
+            let any = (0..n).find(|&i| free[i]).unwrap_or(0);
+            let mut best = (f64::INFINITY, any, false);
             for i in (0..n).filter(|&i| free[i]) {
                 let d = self.d(at, 2 * i);
                 if d < best.0 {
