@@ -120,7 +120,7 @@ enum PenMode {
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq)]
-enum Layers {
+enum Passes {
     /// Inkscape layers (top-level `inkscape:groupmode="layer"` groups).
     Layers,
     /// One pass per stroke colour.
@@ -146,7 +146,7 @@ struct SvgArgs {
     /// Passes: Inkscape layers, stroke colours, or one pass. Several passes
     /// get a pen change (M6 T<n> and a message naming the layer) between them.
     #[arg(long, value_enum, default_value = "layers")]
-    layers: Layers,
+    layers: Passes,
     #[arg(long, value_enum, default_value = "none")]
     fill: Fill,
     /// Distance between hatch lines (mm).
@@ -332,9 +332,9 @@ fn load_svg(file: &PathBuf, a: &SvgArgs) -> Result<svg::Drawing> {
     let opt = SvgOptions {
         tol_mm: a.tolerance,
         layers: match a.layers {
-            Layers::Layers => LayerMode::Layers,
-            Layers::ByColor => LayerMode::ByColor,
-            Layers::None => LayerMode::None,
+            Passes::Layers => LayerMode::Layers,
+            Passes::ByColor => LayerMode::ByColor,
+            Passes::None => LayerMode::None,
         },
         hatch: (a.fill == Fill::Hatch).then_some((a.hatch_spacing, a.hatch_angle)),
         text_font: a.text_font.clone(),

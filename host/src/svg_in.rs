@@ -636,9 +636,7 @@ fn flatten_path(
     let finish = |cur: &mut Stroke, out: &mut Vec<Stroke>| {
         let mut s = std::mem::take(cur);
         s.dedup();
-        if s.len() > 1 {
-            out.push(s);
-        } else if s.len() == 1 && dots {
+        if s.len() > 1 || (s.len() == 1 && dots) {
             out.push(s);
         }
     };

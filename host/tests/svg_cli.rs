@@ -45,7 +45,7 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-fn svg_to_gcode(svg: &PathBuf, extra: &[&str]) -> (Output, String) {
+fn svg_to_gcode(svg: &std::path::Path, extra: &[&str]) -> (Output, String) {
     let g = svg.with_extension("gcode");
     let _ = std::fs::remove_file(&g);
     let mut args = vec!["svg", svg.to_str().unwrap(), "-o", g.to_str().unwrap()];
