@@ -5,7 +5,7 @@
 //!   usvg 0.45's `abs_transform()` applies a `<use>` element's transform twice
 //!   (three times for a nested `<svg>`), so it is never used here.
 //! - Curves are flattened by adaptive subdivision until every piece lies within
-//!   the tolerance of its chord *and* its length is within 0.1 % of the curve's
+//!   the tolerance of its chord *and* its length is within 0.4 % of the curve's
 //!   (so tiny circles do not turn into octagons).
 //! - What a pen cannot draw is reported, by name: text (unless drawn with a
 //!   Hershey font: usvg, built without fonts, drops `<text>`, so each one is
@@ -36,7 +36,7 @@ pub const MAX_MM: f64 = 100_000.0;
 
 /// Relative length error allowed for a flattened curve piece (on top of the
 /// distance tolerance).
-const LEN_TOL: f64 = 1e-3;
+const LEN_TOL: f64 = 4e-3;
 
 const PROBE: &str = "inkstep-text-probe-";
 
