@@ -312,12 +312,26 @@ impl Link {
     }
 
     fn load(&mut self, job: Job) {
+        let left_out: Vec<serde_json::Value> = job
+            .left_out
+            .iter()
+            .map(|s| {
+                let rings: Vec<Vec<[f64; 2]>> = s
+                    .outline
+                    .iter()
+                    .map(|r| r.iter().map(|p| [p.x, p.y]).collect())
+                    .collect();
+                json!({"kind": s.kind.label(), "name": s.name, "outline": rings})
+            })
+            .collect();
         let m = json!({
             "t": "job",
             "name": job.name,
             "lines": job.lines.len(),
             "est_s": job.total_s(),
             "preview": job.preview(),
+            "left_out": left_out,
+            "page": job.page.map(|(w, h)| [w, h]),
         });
         self.hub.snapshot().job = Some(m.clone());
         self.hub.publish(&m);
@@ -327,6 +341,10 @@ impl Link {
             job.lines.len(),
             job.total_s()
         ));
+        for s in &job.left_out {
+            self.hub
+                .log(&format!("not drawn ({}): {}", s.kind.label(), s.name));
+        }
         self.job = Some(job);
     }
 

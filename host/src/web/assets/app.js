@@ -103,12 +103,15 @@ function answered(m) {
 }
 
 // The drawing: fitted to the job, the path and the pen (the machine area,
-// from $130/$131, when there is neither), the planned job in grey, the path
+// from $130/$131, when there is neither), the planned job in grey, an SVG's
+// page outline and what it leaves out (text, images, fills: orange), the path
 // from the status reports (pen down blue, pen-up travel red dashed), the pen.
 function bounds() {
   let b = null;
   const grow = (x, y) => { b = b ? [Math.min(b[0], x), Math.min(b[1], y), Math.max(b[2], x), Math.max(b[3], y)] : [x, y, x, y]; };
   if (S.job) for (const m of S.job.preview) { grow(m[0], m[1]); grow(m[2], m[3]); }
+  if (S.job && S.job.page) { grow(0, 0); grow(S.job.page[0], S.job.page[1]); }
+  if (S.job) for (const o of S.job.left_out || []) for (const r of o.outline) for (const p of r) grow(p[0], p[1]);
   for (const p of S.path) grow(p[0], p[1]);
   if (S.status) grow(S.status.pos[0], S.status.pos[1]);
   if (!b || (!S.job && S.path.length < 2)) {
@@ -142,6 +145,16 @@ function paint() {
     for (const s of segs) { g.moveTo(X(s[0]), Y(s[1])); g.lineTo(X(s[2]), Y(s[3])); }
     g.stroke(); g.setLineDash([]);
   };
+  if (S.job && S.job.page) {
+    g.strokeStyle = "#999"; g.lineWidth = r;
+    g.strokeRect(X(0), Y(S.job.page[1]), S.job.page[0] * k, S.job.page[1] * k);
+  }
+  if (S.job) for (const o of S.job.left_out || []) {
+    g.beginPath();
+    for (const ring of o.outline) ring.forEach((p, i) => i ? g.lineTo(X(p[0]), Y(p[1])) : g.moveTo(X(p[0]), Y(p[1])));
+    g.fillStyle = "rgba(240,140,0,0.25)"; g.fill("evenodd");
+    g.strokeStyle = "#f08c00"; g.lineWidth = 1.5 * r; g.stroke();
+  }
   if (S.job) {
     lines(S.job.preview.filter((m) => m[4]), "#c8c8c8", 2, []);
     lines(S.job.preview.filter((m) => !m[4]), "#e4e4e4", 1, [4, 3]);
