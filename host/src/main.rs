@@ -90,7 +90,7 @@ enum Cmd {
         #[arg(long, default_value_t = 1600)]
         width: u32,
     },
-    /// A generated drawing of N paths (179,000 make a 23 MB SVG) from SVG text
+    /// A generated drawing of N paths (179,000 make 20 MB of SVG) from SVG text
     /// to G-code: the time of each stage; fails above a minute in all.
     SvgBench {
         #[arg(long, default_value_t = 179_000)]

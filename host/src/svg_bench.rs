@@ -1,7 +1,7 @@
 //! The large-drawing benchmark (`cargo host svg-bench`): how long a big SVG
 //! takes from text to G-code, stage by stage. The drawing is generated (a
-//! seeded scatter of short curved paths on an A4-ish page, ~130 bytes each,
-//! so 179,000 paths make the 23 MB of the file that once planned for more
+//! seeded scatter of short curved paths on an A4-ish page, ~110 bytes each,
+//! so 179,000 paths make 20 MB, like the file that once planned for more
 //! than 15 minutes), never stored. The goal is a whole run under a minute;
 //! the benchmark fails above it.
 
