@@ -388,3 +388,44 @@ fn the_planner_takes_absurd_coordinates_without_panicking() {
         assert!(n_out >= n_in - 1, "no point lost: {n_in} -> {n_out}");
     }
 }
+
+#[test]
+fn svgz_reads_and_off_page_parts_are_warned_about() {
+    use std::io::Write;
+    let svg = page(r#"<path d="M 90 50 H 130" stroke="black"/>"#);
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(svg.as_bytes()).unwrap();
+    let p = tmp("off.svgz");
+    std::fs::write(&p, gz.finish().unwrap()).unwrap();
+    let (o, g) = svg_to_gcode(&p, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("off the page (100.0 x 100.0 mm)"), "{e}");
+    assert!(!e.contains("outside the machine travel"), "{e}");
+    let drawn: Vec<_> = parse(&g).unwrap().into_iter().filter(|m| m.kind == MoveKind::Draw).collect();
+    assert_eq!(drawn.len(), 1);
+    let xs = [drawn[0].from.x, drawn[0].to.x];
+    assert!(xs.contains(&90.0) && xs.contains(&130.0), "{xs:?}");
+    // The preview takes the SVGZ too.
+    let png = tmp("off.png");
+    let o = run(&["preview", p.to_str().unwrap(), "-o", png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn a_hatched_disc_is_few_strokes_inside_the_disc() {
+    let svg = write("disc.svg", &page(r#"<circle cx="50" cy="50" r="25" fill="black"/>"#));
+    let (o, g) = svg_to_gcode(&svg, &["--fill", "hatch", "--hatch-spacing", "1", "--hatch-angle", "30"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let moves = parse(&g).unwrap();
+    let pen_downs = g.lines().filter(|l| *l == "M3").count();
+    // The outline and the hatching: a handful of strokes, not 50.
+    assert!(pen_downs <= 6, "{pen_downs} strokes");
+    for m in moves.iter().filter(|m| m.kind == MoveKind::Draw) {
+        assert!(m.to.dist(Pt::new(50.0, 50.0)) <= 25.0 + 0.01, "{:?}", m.to);
+    }
+    // Ink inside: about area / spacing = 1963 mm of hatch plus the outline.
+    let ink: f64 = moves.iter().filter(|m| m.kind == MoveKind::Draw).map(|m| m.from.dist(m.to)).sum();
+    let want = std::f64::consts::PI * 625.0 + std::f64::consts::TAU * 25.0;
+    assert!((ink - want).abs() / want < 0.05, "{ink} vs {want}");
+}
