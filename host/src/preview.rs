@@ -135,16 +135,23 @@ pub fn render_with(moves: &[Move], extra: &Extra, width: u32) -> Result<(Pixmap,
     };
     let mut draw = PathBuilder::new();
     let mut travel_pb = PathBuilder::new();
+    // Where each builder's current polyline ends: a move that starts there
+    // continues it (one subpath per stroke, not per move, which keeps a
+    // program of millions of moves quick to stroke).
+    let (mut draw_at, mut travel_at) = (None, None);
     for m in moves {
-        let (pb, acc) = match m.kind {
-            MoveKind::Draw => (&mut draw, &mut stats.draw_mm),
-            MoveKind::Travel => (&mut travel_pb, &mut stats.travel_mm),
+        let (pb, acc, at) = match m.kind {
+            MoveKind::Draw => (&mut draw, &mut stats.draw_mm, &mut draw_at),
+            MoveKind::Travel => (&mut travel_pb, &mut stats.travel_mm, &mut travel_at),
         };
         *acc += m.from.dist(m.to);
         let a = to_px(m.from.x, m.from.y);
         let b = to_px(m.to.x, m.to.y);
-        pb.move_to(a.0, a.1);
+        if *at != Some(a) {
+            pb.move_to(a.0, a.1);
+        }
         pb.line_to(b.0, b.1);
+        *at = Some(b);
     }
     if let Some(path) = travel_pb.finish() {
         let mut paint = Paint::default();
