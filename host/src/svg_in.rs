@@ -38,6 +38,9 @@ pub const MAX_MM: f64 = 100_000.0;
 /// distance tolerance).
 const LEN_TOL: f64 = 4e-3;
 
+/// Deepest element nesting accepted (Inkscape files nest a dozen or so).
+const MAX_DEPTH: usize = 256;
+
 const PROBE: &str = "inkstep-text-probe-";
 
 /// How strokes are split into passes.
@@ -162,6 +165,11 @@ pub fn read_svg(data: &[u8], opt: &SvgOptions) -> Result<Drawing> {
         data
     };
     let text = std::str::from_utf8(data).context("the file is neither SVG text nor SVGZ")?;
+    // The XML parser and usvg recurse per element level: refuse a nesting that
+    // would exhaust the stack (a crash, not an error) before parsing.
+    if let Some(d) = nesting_beyond(text, MAX_DEPTH) {
+        bail!("parsing SVG: elements nested deeper than {MAX_DEPTH} (at least {d})");
+    }
     let xml_opt = roxmltree::ParsingOptions {
         allow_dtd: true,
         ..Default::default()
@@ -189,6 +197,65 @@ pub fn read_svg(data: &[u8], opt: &SvgOptions) -> Result<Drawing> {
         skipped: w.skipped,
         page: (tree.size().width() as f64 * MM_PER_PX, h * MM_PER_PX),
     })
+}
+
+/// The element nesting depth once it exceeds `max`, scanning the markup
+/// without recursion: comments, CDATA, processing instructions and the
+/// doctype are skipped, quoted attribute values may hold '>'.
+fn nesting_beyond(text: &str, max: usize) -> Option<usize> {
+    let b = text.as_bytes();
+    let skip_to = |from: usize, end: &[u8]| -> usize {
+        b.get(from..)
+            .and_then(|rest| rest.windows(end.len()).position(|w| w == end))
+            .map_or(b.len(), |k| from + k + end.len())
+    };
+    let (mut i, mut depth) = (0usize, 0usize);
+    while i < b.len() {
+        if b[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &b[i..];
+        if rest.starts_with(b"<!--") {
+            i = skip_to(i + 4, b"-->");
+        } else if rest.starts_with(b"<![CDATA[") {
+            i = skip_to(i + 9, b"]]>");
+        } else if rest.starts_with(b"<?") {
+            i = skip_to(i + 2, b"?>");
+        } else if rest.starts_with(b"<!") {
+            // A doctype, perhaps with an internal subset in [...].
+            let close = skip_to(i + 2, b">");
+            let open = rest.iter().position(|&c| c == b'[').map(|k| i + k);
+            i = match open {
+                Some(o) if o < close => skip_to(o, b"]>").max(close),
+                _ => close,
+            };
+        } else if rest.starts_with(b"</") {
+            depth = depth.saturating_sub(1);
+            i = skip_to(i + 2, b">");
+        } else {
+            // A start tag: find its end outside quotes.
+            let mut k = i + 1;
+            let mut quote = None;
+            while k < b.len() {
+                match (quote, b[k]) {
+                    (None, b'"') | (None, b'\'') => quote = Some(b[k]),
+                    (Some(q), c) if c == q => quote = None,
+                    (None, b'>') => break,
+                    _ => {}
+                }
+                k += 1;
+            }
+            if k > 0 && b.get(k - 1) != Some(&b'/') {
+                depth += 1;
+                if depth > max {
+                    return Some(depth);
+                }
+            }
+            i = k + 1;
+        }
+    }
+    None
 }
 
 const INKSCAPE_NS: &str = "http://www.inkscape.org/namespaces/inkscape";
@@ -960,6 +1027,37 @@ mod tests {
         let want = std::f64::consts::TAU * 45.0;
         assert!((pen_down_length(&s) - want).abs() / want < 0.001);
         assert!(s[0].len() < 400, "{}", s[0].len());
+    }
+
+    #[test]
+    fn deep_nesting_is_refused_not_a_crash() {
+        for n in [300, 50_000] {
+            let svg = mm_page(&format!(
+                "{}<path d=\"M 0 0 L 1 1\" stroke=\"black\"/>{}",
+                "<g transform=\"translate(0.001,0)\">".repeat(n),
+                "</g>".repeat(n)
+            ));
+            let e = read_svg(svg.as_bytes(), &SvgOptions::default()).unwrap_err();
+            assert!(format!("{e:#}").contains("nested deeper than 256"), "{e:#}");
+        }
+        // Markup that is not nesting does not count: comments, CDATA, a
+        // doctype with entities, quoted '>', self-closing tags.
+        let g300 = "<g>".repeat(300);
+        let fake = format!(
+            "<!DOCTYPE svg [<!ENTITY e \"<g>\">]><svg><!--{g300}--><![CDATA[{g300}]]>{}<g id=\"a>b\">{}</g></svg>",
+            "<path/>".repeat(300),
+            "<g/>".repeat(300)
+        );
+        assert_eq!(nesting_beyond(&fake, 2), None);
+        assert_eq!(nesting_beyond("<a><b><c/></b></a>", 1), Some(2));
+        // 200 levels are fine and each translate counts.
+        let svg = mm_page(&format!(
+            "{}<path d=\"M 0 0 L 1 1\" stroke=\"black\"/>{}",
+            "<g transform=\"translate(0.1,0)\">".repeat(200),
+            "</g>".repeat(200)
+        ));
+        let d = read_svg(svg.as_bytes(), &SvgOptions::default()).unwrap();
+        assert!((d.strokes()[0][0].x - 20.0).abs() < 1e-3);
     }
 
     #[test]

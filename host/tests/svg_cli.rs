@@ -402,7 +402,11 @@ fn svgz_reads_and_off_page_parts_are_warned_about() {
     let e = stderr(&o);
     assert!(e.contains("off the page (100.0 x 100.0 mm)"), "{e}");
     assert!(!e.contains("outside the machine travel"), "{e}");
-    let drawn: Vec<_> = parse(&g).unwrap().into_iter().filter(|m| m.kind == MoveKind::Draw).collect();
+    let drawn: Vec<_> = parse(&g)
+        .unwrap()
+        .into_iter()
+        .filter(|m| m.kind == MoveKind::Draw)
+        .collect();
     assert_eq!(drawn.len(), 1);
     let xs = [drawn[0].from.x, drawn[0].to.x];
     assert!(xs.contains(&90.0) && xs.contains(&130.0), "{xs:?}");
@@ -414,8 +418,21 @@ fn svgz_reads_and_off_page_parts_are_warned_about() {
 
 #[test]
 fn a_hatched_disc_is_few_strokes_inside_the_disc() {
-    let svg = write("disc.svg", &page(r#"<circle cx="50" cy="50" r="25" fill="black"/>"#));
-    let (o, g) = svg_to_gcode(&svg, &["--fill", "hatch", "--hatch-spacing", "1", "--hatch-angle", "30"]);
+    let svg = write(
+        "disc.svg",
+        &page(r#"<circle cx="50" cy="50" r="25" fill="black"/>"#),
+    );
+    let (o, g) = svg_to_gcode(
+        &svg,
+        &[
+            "--fill",
+            "hatch",
+            "--hatch-spacing",
+            "1",
+            "--hatch-angle",
+            "30",
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let moves = parse(&g).unwrap();
     let pen_downs = g.lines().filter(|l| *l == "M3").count();
@@ -425,7 +442,11 @@ fn a_hatched_disc_is_few_strokes_inside_the_disc() {
         assert!(m.to.dist(Pt::new(50.0, 50.0)) <= 25.0 + 0.01, "{:?}", m.to);
     }
     // Ink inside: about area / spacing = 1963 mm of hatch plus the outline.
-    let ink: f64 = moves.iter().filter(|m| m.kind == MoveKind::Draw).map(|m| m.from.dist(m.to)).sum();
+    let ink: f64 = moves
+        .iter()
+        .filter(|m| m.kind == MoveKind::Draw)
+        .map(|m| m.from.dist(m.to))
+        .sum();
     let want = std::f64::consts::PI * 625.0 + std::f64::consts::TAU * 25.0;
     assert!((ink - want).abs() / want < 0.05, "{ink} vs {want}");
 }
