@@ -147,8 +147,9 @@ pub fn strokes_from_svg(text: &str, tol_mm: f64) -> Result<Vec<Stroke>> {
 /// A `<text>` element as found in the XML.
 struct TextInfo {
     name: String,
-    /// Lines: their text (tspans with their own position are lines).
-    lines: Vec<String>,
+    /// Lines: their text (tspans with their own position are lines) and
+    /// anchor (0 start, 0.5 middle, 1 end).
+    lines: Vec<(String, f64)>,
     font_px: f64,
 }
 
@@ -297,6 +298,29 @@ fn font_px(n: roxmltree::Node) -> f64 {
     16.0
 }
 
+/// A presentation property from the element or its ancestors (style first).
+fn style_prop(n: roxmltree::Node, name: &str) -> Option<String> {
+    n.ancestors().find_map(|a| {
+        a.attribute("style")
+            .and_then(|s| {
+                s.split(';').find_map(|kv| {
+                    let (k, v) = kv.split_once(':')?;
+                    (k.trim() == name).then(|| v.trim().to_string())
+                })
+            })
+            .or_else(|| a.attribute(name).map(str::to_string))
+    })
+}
+
+/// Where a text line sits on its x: 0 from its start, 0.5 centred, 1 ending there.
+fn anchor(n: roxmltree::Node) -> f64 {
+    match style_prop(n, "text-anchor").as_deref() {
+        Some("middle") => 0.5,
+        Some("end") => 1.0,
+        _ => 0.0,
+    }
+}
+
 fn length_px(v: &str) -> Option<f64> {
     let v = v.trim();
     let end = v
@@ -339,7 +363,7 @@ fn probe_texts(src: &str, doc: &roxmltree::Document) -> (String, Vec<TextInfo>) 
             first_coord(n, "x").unwrap_or(0.0),
             first_coord(n, "y").unwrap_or(0.0),
         );
-        let mut lines: Vec<(f64, f64, String)> = Vec::new();
+        let mut lines: Vec<(f64, f64, String, f64)> = Vec::new();
         let positioned: Vec<_> = n
             .children()
             .filter(|c| c.has_tag_name("tspan") && c.attribute("y").is_some())
@@ -350,7 +374,7 @@ fn probe_texts(src: &str, doc: &roxmltree::Document) -> (String, Vec<TextInfo>) 
                 .filter(|d| d.is_text())
                 .filter_map(|d| d.text())
                 .collect();
-            lines.push((x0, y0, t));
+            lines.push((x0, y0, t, anchor(n)));
         } else {
             for c in positioned {
                 let t: String = c
@@ -360,11 +384,18 @@ fn probe_texts(src: &str, doc: &roxmltree::Document) -> (String, Vec<TextInfo>) 
                     .collect();
                 let x = first_coord(c, "x").unwrap_or(x0);
                 let y = first_coord(c, "y").unwrap_or(y0);
-                lines.push((x, y, t));
+                lines.push((x, y, t, anchor(c)));
             }
         }
-        let content: Vec<String> = lines.iter().map(|l| l.2.trim().to_string()).collect();
-        let all = content.join(" ");
+        let content: Vec<(String, f64)> = lines
+            .iter()
+            .map(|l| (l.2.trim().to_string(), l.3))
+            .collect();
+        let all = content
+            .iter()
+            .map(|c| c.0.as_str())
+            .collect::<Vec<_>>()
+            .join(" ");
         let name = match n.attribute("id") {
             Some(id) => format!("{id} \"{}\"", clip(&all, 40)),
             None => format!("\"{}\"", clip(&all, 40)),
@@ -377,7 +408,7 @@ fn probe_texts(src: &str, doc: &roxmltree::Document) -> (String, Vec<TextInfo>) 
             }
         }
         g.push('>');
-        for (x, y, _) in &lines {
+        for (x, y, _, _) in &lines {
             let _ = std::fmt::Write::write_fmt(
                 &mut g,
                 format_args!(
@@ -589,15 +620,29 @@ impl Walker<'_> {
         let lines = info.lines.clone();
         let mut all = Vec::new();
         let mut outline = Vec::new();
-        for ((o, ex, ey), line) in frames.iter().zip(&lines) {
+        for ((o, ex, ey), (line, anchor)) in frames.iter().zip(&lines) {
             // Unit vectors of the text's user space on the page, in mm per px.
             let (ux, uy) = (
                 Pt::new(ex.x - o.x, ex.y - o.y),
                 Pt::new(ey.x - o.x, ey.y - o.y),
             );
-            let place =
-                |u: f64, v: f64| Pt::new(o.x + u * ux.x + v * uy.x, o.y + u * ux.y + v * uy.y);
-            let width = line.chars().count() as f64 * font_px * 0.6;
+            let layout = match &self.opt.text_font {
+                Some(font) => Some(
+                    crate::text::layout(line, 1.0, font)
+                        .with_context(|| format!("drawing text {name}"))?,
+                ),
+                None => None,
+            };
+            // Width: the Hershey layout's, or about 0.6 em a character.
+            let width = layout
+                .as_ref()
+                .map_or(line.chars().count() as f64 * 0.6, |l| l.width)
+                * font_px;
+            let shift = -anchor * width;
+            let place = |u: f64, v: f64| {
+                let u = u + shift;
+                Pt::new(o.x + u * ux.x + v * uy.x, o.y + u * ux.y + v * uy.y)
+            };
             outline.push(vec![
                 place(0.0, 0.0),
                 place(width, 0.0),
@@ -605,11 +650,9 @@ impl Walker<'_> {
                 place(0.0, -font_px),
                 place(0.0, 0.0),
             ]);
-            if let Some(font) = &self.opt.text_font {
+            if let Some(l) = layout {
                 // Hershey layout in a box of font_px (y up, baseline 7/32 of
                 // the box above its bottom) to the text's user space (y down).
-                let l = crate::text::layout(line, 1.0, font)
-                    .with_context(|| format!("drawing text {name}"))?;
                 let base = 7.0 / 32.0;
                 for s in l.strokes {
                     all.push(
@@ -997,6 +1040,21 @@ mod tests {
         assert!((lo.y - 50.0).abs() < 1e-4, "{lo:?}");
         assert!((hi.y - lo.y - 21.0 / 32.0 * 10.0).abs() < 1e-4, "{hi:?}");
         assert!(lo.x > 20.0 && hi.x < 40.0, "{lo:?} {hi:?}");
+        // Centred (Inkscape's text-anchor in the style): the middle of the
+        // layout's advance on x = 50.
+        let svg =
+            mm_page(r#"<text x="50" y="50" style="font-size:10px;text-anchor:middle">HI</text>"#);
+        let c = read_svg(svg.as_bytes(), &opt).unwrap().strokes();
+        let (clo, chi) = bounds(&c).unwrap();
+        let w = crate::text::layout("HI", 10.0, "futural").unwrap().width;
+        assert!(
+            (clo.x - (lo.x - 20.0 + 50.0 - w / 2.0)).abs() < 1e-3,
+            "{clo:?} {w}"
+        );
+        assert!(
+            (chi.x - (hi.x - 20.0 + 50.0 - w / 2.0)).abs() < 1e-3,
+            "{chi:?}"
+        );
     }
 
     #[test]
