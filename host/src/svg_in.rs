@@ -41,6 +41,9 @@ const LEN_TOL: f64 = 4e-3;
 /// Deepest element nesting accepted (Inkscape files nest a dozen or so).
 const MAX_DEPTH: usize = 256;
 
+/// The pass of what lies outside every Inkscape layer.
+pub const NO_LAYER: &str = "no layer";
+
 const PROBE: &str = "inkstep-text-probe-";
 
 /// How strokes are split into passes.
@@ -538,7 +541,7 @@ impl Walker<'_> {
                 .cur_layer
                 .and_then(|k| self.layers.get(k))
                 .map(|l| l.name.clone())
-                .unwrap_or_default(),
+                .unwrap_or_else(|| NO_LAYER.to_string()),
             LayerMode::ByColor => {
                 let paint = p
                     .stroke()
@@ -670,7 +673,7 @@ impl Walker<'_> {
                     .cur_layer
                     .and_then(|k| self.layers.get(k))
                     .map(|l| l.name.clone())
-                    .unwrap_or_default(),
+                    .unwrap_or_else(|| NO_LAYER.to_string()),
                 LayerMode::ByColor => "#000000".to_string(),
                 LayerMode::None => String::new(),
             };
