@@ -524,6 +524,13 @@ fn main() -> Result<()> {
                 st.draw_mm,
                 st.travel_mm
             );
+            if is_svg {
+                eprintln!(
+                    "blue: drawn; red dashed: pen-up travel; grey: the page; grey dashed: the \
+                     machine travel; orange: left out ({} items) and drawn parts outside the travel",
+                    extra.left_out.len()
+                );
+            }
             Ok(())
         }
         Cmd::SvgBench { paths } => {
