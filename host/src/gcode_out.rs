@@ -3,10 +3,24 @@
 //! with F, and the pen lifted and dropped either by M5/M3 (the firmware maps
 //! them to the servo or Z, as its settings say) or by moving Z explicitly.
 //! The program ends by parking the pen where the route says (a G0 there).
-//! Lines stay short (well under Grbl's 80-character line buffer).
+//! Lines stay short (well under Grbl's 80-character line buffer): coordinates
+//! are refused beyond +-[`MAX_COORD`] mm before writing ([`check_coords`]),
+//! which bounds every word, and a layer name in a message is cut to fit.
+//!
+//! A drawing of several passes (layers, colours) gets a pen change between
+//! passes: pen up, `(MSG,...)` naming the next layer, `M6 T<n>`. With
+//! `arcs`, runs of points on a circle go out as G2/G3 (see `arcs`).
 
+use crate::arcs::{fit, Piece};
 use crate::geom::{pen_down_length, pen_up_travel, Pt, Route, Stroke};
+use anyhow::{bail, Result};
+use inkstep_core::gcode::LINE_MAX;
 use std::fmt::Write as _;
+
+/// Largest coordinate written (mm). With 3 decimals a word is at most 12
+/// characters, so the longest line (an arc: G3 X Y I J F) stays under
+/// [`LINE_MAX`].
+pub const MAX_COORD: f64 = 100_000.0;
 
 /// How the pen is lifted and dropped.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -27,6 +41,15 @@ pub struct GcodeOptions {
     /// Where the pen starts (for the travel in the header) and where the
     /// program parks it at the end (none: it stays after the last stroke).
     pub route: Route,
+    /// Fit arcs (G2/G3) within this tolerance (mm); None: lines only.
+    pub arcs: Option<f64>,
+}
+
+/// One pass of the pen (a layer or a colour), drawn in order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pass {
+    pub name: String,
+    pub strokes: Vec<Stroke>,
 }
 
 impl Default for GcodeOptions {
@@ -36,6 +59,7 @@ impl Default for GcodeOptions {
             feed: 1500.0,
             dwell: 0.0,
             route: Route::closed(Pt::new(0.0, 0.0)),
+            arcs: None,
         }
     }
 }
@@ -51,6 +75,42 @@ pub fn num(v: f64) -> String {
         s.pop();
     }
     s
+}
+
+fn stroke_lines(out: &mut String, s: &[Pt], o: &GcodeOptions) {
+    let _ = writeln!(out, "G0 X{} Y{}", num(s[0].x), num(s[0].y));
+    pen_line(out, o, true);
+    let pieces: Vec<Piece> = match o.arcs {
+        Some(tol) => fit(s, tol),
+        None => s[1..].iter().map(|&p| Piece::Line(p)).collect(),
+    };
+    let mut from = s[0];
+    for (k, piece) in pieces.iter().enumerate() {
+        let f = if k == 0 {
+            format!(" F{}", num(o.feed))
+        } else {
+            String::new()
+        };
+        match *piece {
+            Piece::Line(p) => {
+                let _ = writeln!(out, "G1 X{} Y{}{f}", num(p.x), num(p.y));
+                from = p;
+            }
+            Piece::Arc { to, centre, ccw } => {
+                let _ = writeln!(
+                    out,
+                    "G{} X{} Y{} I{} J{}{f}",
+                    if ccw { 3 } else { 2 },
+                    num(to.x),
+                    num(to.y),
+                    num(centre.x - from.x),
+                    num(centre.y - from.y)
+                );
+                from = to;
+            }
+        }
+    }
+    pen_line(out, o, false);
 }
 
 fn pen_line(out: &mut String, o: &GcodeOptions, down: bool) {
@@ -69,31 +129,98 @@ fn pen_line(out: &mut String, o: &GcodeOptions, down: bool) {
     }
 }
 
+/// Refuses coordinates that are not finite or beyond +-[`MAX_COORD`] mm, and
+/// feeds or dwells that would not print short.
+pub fn check_coords(strokes: &[Stroke], o: &GcodeOptions) -> Result<()> {
+    let ok = |p: &Pt| p.x.abs() <= MAX_COORD && p.y.abs() <= MAX_COORD;
+    if let Some(p) = strokes.iter().flatten().find(|p| !ok(p)) {
+        bail!(
+            "coordinate ({:e}, {:e}) mm is beyond +-{MAX_COORD} mm: nothing written",
+            p.x,
+            p.y
+        );
+    }
+    let route = [Some(o.route.start), o.route.park];
+    if route.iter().flatten().any(|p| !ok(p)) {
+        bail!("start or park beyond +-{MAX_COORD} mm");
+    }
+    if !(o.feed > 0.0 && o.feed <= 1e6 && o.dwell >= 0.0 && o.dwell <= 1e6) {
+        bail!("feed must be in (0, 1e6] mm/min and dwell in [0, 1e6] s");
+    }
+    if let Pen::Z { up, down, feed } = o.pen {
+        if !(up.abs() <= 1e4 && down.abs() <= 1e4 && feed > 0.0 && feed <= 1e6) {
+            bail!("Z heights must be within +-10000 mm and the Z feed in (0, 1e6] mm/min");
+        }
+    }
+    Ok(())
+}
+
+/// A layer name as it may go in a `(MSG,...)` comment: printable ASCII
+/// without parentheses, cut so that the line fits.
+fn msg_text(name: &str, room: usize) -> String {
+    let t: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_graphic() && c != '(' && c != ')' || c == ' ' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    t.chars().take(room).collect()
+}
+
 /// The whole program for strokes already in drawing order.
 pub fn to_gcode(strokes: &[Stroke], o: &GcodeOptions) -> String {
+    to_gcode_passes(
+        &[Pass {
+            name: String::new(),
+            strokes: strokes.to_vec(),
+        }],
+        o,
+    )
+}
+
+/// The whole program for passes drawn one after another, each already in
+/// drawing order; a pen change (M6) before each pass after the first.
+pub fn to_gcode_passes(passes: &[Pass], o: &GcodeOptions) -> String {
+    let all: Vec<Stroke> = passes
+        .iter()
+        .flat_map(|p| p.strokes.iter().cloned())
+        .collect();
     let mut out = String::new();
     let _ = writeln!(
         out,
         "(inkstep-host: {} strokes, pen-down {} mm, pen-up {} mm)",
-        strokes.len(),
-        num(pen_down_length(strokes)),
-        num(pen_up_travel(strokes, o.route))
+        all.len(),
+        num(pen_down_length(&all)),
+        num(pen_up_travel(&all, o.route))
     );
     out.push_str("G21 G90 G94\n");
     pen_line(&mut out, o, false);
-    for s in strokes.iter().filter(|s| !s.is_empty()) {
-        let _ = writeln!(out, "G0 X{} Y{}", num(s[0].x), num(s[0].y));
-        pen_line(&mut out, o, true);
-        let mut first = true;
-        for p in &s[1..] {
-            if first {
-                let _ = writeln!(out, "G1 X{} Y{} F{}", num(p.x), num(p.y), num(o.feed));
-                first = false;
+    let changes = passes.len() > 1;
+    for (k, pass) in passes.iter().enumerate() {
+        if changes {
+            // "(MSG," + name + ")": the name gets what is left of the line.
+            let name = if pass.name.is_empty() {
+                format!("pass {}", k + 1)
             } else {
-                let _ = writeln!(out, "G1 X{} Y{}", num(p.x), num(p.y));
+                pass.name.clone()
+            };
+            let _ = writeln!(
+                out,
+                "(MSG,pen {}: {})",
+                k + 1,
+                msg_text(&name, LINE_MAX - 20)
+            );
+            if k > 0 {
+                let _ = writeln!(out, "M6 T{}", k + 1);
             }
         }
-        pen_line(&mut out, o, false);
+        for s in pass.strokes.iter().filter(|s| !s.is_empty()) {
+            stroke_lines(&mut out, s, o);
+        }
     }
     if let Some(p) = o.route.park {
         let _ = writeln!(out, "G0 X{} Y{}", num(p.x), num(p.y));

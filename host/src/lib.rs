@@ -2,13 +2,16 @@
 //! command line; everything it does lives in these modules so tests and the
 //! benchmark reach it directly.
 
+pub mod arcs;
 pub mod bench;
 pub mod font;
 pub mod gcode_out;
 pub mod geom;
+pub mod hatch;
 pub mod plan;
 pub mod preview;
 pub mod stream;
+pub mod svg_bench;
 pub mod svg_in;
 pub mod text;
 pub mod toolpath;

@@ -254,12 +254,13 @@ pub fn arc_points(
 }
 
 /// Checks that every line is plain Grbl 1.1 G-code of the kind this tool
-/// emits: known words only, supported G and M numbers, at most 80 characters.
+/// emits: known words only, supported G and M numbers, at most the board's
+/// line length (80 characters, as Grbl's).
 pub fn check_grbl(text: &str) -> Result<()> {
     for (k, line) in text.lines().enumerate() {
         let n = k + 1;
-        if line.len() > 80 {
-            bail!("line {n}: longer than Grbl's 80-character buffer");
+        if line.len() > inkstep_core::gcode::LINE_MAX {
+            bail!("line {n}: longer than the board's 80-character line buffer");
         }
         if !line.is_ascii() {
             bail!("line {n}: not ASCII");
@@ -269,14 +270,14 @@ pub fn check_grbl(text: &str) -> Result<()> {
         };
         if let Some(g) =
             b.g.iter()
-                .find(|g| ![0, 10, 40, 200, 210, 900, 910, 940].contains(*g))
+                .find(|g| ![0, 10, 20, 30, 40, 200, 210, 900, 910, 940].contains(*g))
         {
             bail!("line {n}: unsupported G{}", f64::from(*g) / 10.0);
         }
-        if let Some(m) = b.m.iter().find(|m| ![20, 30, 50, 300].contains(*m)) {
+        if let Some(m) = b.m.iter().find(|m| ![20, 30, 50, 60, 300].contains(*m)) {
             bail!("line {n}: unsupported M{}", f64::from(*m) / 10.0);
         }
-        if let Some(l) = (b'A'..=b'Z').find(|&l| b.get(l).is_some() && !b"XYZFPS".contains(&l)) {
+        if let Some(l) = (b'A'..=b'Z').find(|&l| b.get(l).is_some() && !b"XYZFPSIJT".contains(&l)) {
             bail!("line {n}: unsupported word {}", char::from(l));
         }
     }
@@ -348,7 +349,9 @@ mod tests {
     #[test]
     fn grbl_check_rejects_unsupported() {
         assert!(check_grbl("G21 G90\nG0 X1 Y2\nM3\nG1 X2 F100\nM5\nM2\n").is_ok());
-        assert!(check_grbl("G2 X1 Y1 I1").is_err());
+        assert!(check_grbl("G2 X1 Y1 I1").is_ok());
+        assert!(check_grbl("G2 X1 Y1 K1").is_err());
+        assert!(check_grbl("G28").is_err());
         assert!(check_grbl(&format!("G1 X{}", "1".repeat(90))).is_err());
     }
 }

@@ -65,3 +65,31 @@ fn svg_shapes_run_through_the_simulator() {
     );
     run_clean(&to_gcode(&strokes, &GcodeOptions::default()), "svg");
 }
+
+#[test]
+fn svg_arcs_run_through_the_simulator() {
+    // The same curves as G2/G3: the machine takes them without an error and
+    // ends home; the program is a fraction of the flattened one.
+    let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="60mm" height="40mm" viewBox="0 0 60 40">
+        <circle cx="40" cy="12" r="8" fill="none" stroke="black"/>
+        <circle cx="10" cy="10" r="0.4" fill="none" stroke="black"/>
+        <ellipse cx="20" cy="25" rx="15" ry="6" fill="none" stroke="black"/>
+        <path d="M 5 30 C 15 20, 25 40, 35 30 S 55 20, 58 35" fill="none" stroke="black"/>
+    </svg>"#;
+    let strokes = plan(
+        &strokes_from_svg(svg, 0.05).expect("svg"),
+        Route::closed(Pt::new(0.0, 0.0)),
+        &PlanOptions::default(),
+    );
+    let flat = to_gcode(&strokes, &GcodeOptions::default());
+    let arcs = to_gcode(
+        &strokes,
+        &GcodeOptions {
+            arcs: Some(0.01),
+            ..GcodeOptions::default()
+        },
+    );
+    assert!(arcs.contains("G2 ") || arcs.contains("G3 "));
+    assert!(arcs.lines().count() * 3 < flat.lines().count());
+    run_clean(&arcs, "svg with arcs");
+}

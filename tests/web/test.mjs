@@ -5,7 +5,8 @@
 // Checks, in one browser session: the page loads and shows the machine; star.nc
 // runs, the drawn path grows while it runs and ends at the program's last
 // position; hold stops the pen and resume finishes the job; a setting changes
-// (and a bad value shows Grbl's error); a line of text is previewed and drawn.
+// (and a bad value shows Grbl's error); a line of text is previewed and drawn;
+// an SVG's text is named as left out and shown in orange.
 import puppeteer from "puppeteer-core";
 import path from "node:path";
 import fs from "node:fs";
@@ -133,6 +134,26 @@ try {
   const drawn = await page.evaluate(() => window.inkstep.path.filter((p) => p[2]).length);
   check("the text is drawn and the pen parks at the origin",
     textDone && t.done.ok && t.pos[0] === 0 && t.pos[1] === 0 && drawn > 10, `${drawn} pen-down points, at ${t.pos}`);
+
+  // 6b. An SVG with text: what is not drawn is named in the log and shown in
+  // orange on the page outline.
+  const svgPath = path.join(fs.mkdtempSync("/tmp/inkstep-svg-"), "label.svg");
+  fs.writeFileSync(svgPath, '<svg xmlns="http://www.w3.org/2000/svg" width="60mm" height="40mm" viewBox="0 0 60 40">' +
+    '<rect x="5" y="5" width="20" height="20" fill="none" stroke="black"/>' +
+    '<text id="label" x="30" y="30" font-size="8">Left out</text></svg>');
+  await (await page.$("#file")).uploadFile(svgPath);
+  const svgLoaded = await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "label.svg" && window.inkstep.job.complete && !window.inkstep.loading, null, "svg loaded");
+  const left = await page.evaluate(() => window.inkstep.job.left_out.map((o) => o.kind + ": " + o.name));
+  const logged = await page.$eval("#log", (e) => e.textContent.includes('not drawn (text): label "Left out"'));
+  const orange = await page.$eval("#plot", (c) => {
+    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (d[i] > 220 && d[i + 1] > 110 && d[i + 1] < 190 && d[i + 2] < 90) n++;
+    return n;
+  });
+  check("an SVG's text is named as left out and shown in orange",
+    svgLoaded && left.length === 1 && left[0] === 'text: label "Left out"' && logged && orange > 50,
+    `${JSON.stringify(left)}, logged ${logged}, ${orange} orange pixels`);
 
   // 7. A command line carrying a real-time byte is refused, and nothing is sent.
   await page.type("#line", "G4 P0 ~");

@@ -12,6 +12,7 @@
 //! where they are not exactly equal both points are kept, so no drawn
 //! segment is lost or moved.
 
+use super::near::Near;
 use crate::geom::{Pt, Stroke};
 use std::collections::HashMap;
 
@@ -163,11 +164,30 @@ fn split_at_virtual(
     }
 }
 
+/// Above this many candidates the greedy pairings use a grid, not a scan.
+const SCAN_MAX: usize = 2000;
+
 fn pair_greedy_undirected(
     pts: &[Pt],
     odd: &mut Vec<usize>,
     edges: &mut Vec<(usize, usize, Option<usize>)>,
 ) {
+    if odd.len() > SCAN_MAX {
+        // Same pairing rule (last odd vertex with its nearest), grid-searched.
+        let mut near = Near::new(odd.iter().map(|&v| pts[v]).collect());
+        for k in (0..odd.len()).rev() {
+            if !near.is_live(k) {
+                continue; // already some earlier vertex's nearest
+            }
+            near.remove(k);
+            if let Some(j) = near.nearest(pts[odd[k]]) {
+                near.remove(j);
+                edges.push((odd[k], odd[j], None));
+            }
+        }
+        odd.clear();
+        return;
+    }
     while let Some(u) = odd.pop() {
         let k = nearest(pts, u, odd);
         let v = odd.swap_remove(k);
@@ -175,16 +195,17 @@ fn pair_greedy_undirected(
     }
 }
 
-/// Index in `cands` of the point nearest `pts[u]` (`usize::MAX` if `cands` is empty).
+/// Index in `cands` of the point nearest `pts[u]` (`usize::MAX` if `cands` is
+/// empty; the first candidate when no distance compares, e.g. all infinite).
 fn nearest(pts: &[Pt], u: usize, cands: &[usize]) -> usize {
+    if cands.is_empty() {
+        return usize::MAX;
+    }
     cands
         .iter()
         .enumerate()
         .map(|(k, &v)| (k, pts[u].dist(pts[v])))
-        .fold(
-            (usize::MAX, f64::INFINITY),
-            |b, c| if c.1 < b.1 { c } else { b },
-        )
+        .fold((0, f64::INFINITY), |b, c| if c.1 < b.1 { c } else { b })
         .0
 }
 
@@ -194,6 +215,17 @@ fn pair_greedy_directed(
     to: &mut Vec<usize>,
     edges: &mut Vec<(usize, usize, Option<usize>)>,
 ) {
+    if to.len() > SCAN_MAX {
+        let mut near = Near::new(to.iter().map(|&v| pts[v]).collect());
+        for &u in from {
+            if let Some(k) = near.nearest(pts[u]) {
+                near.remove(k);
+                edges.push((u, to[k], None));
+            }
+        }
+        to.clear();
+        return;
+    }
     for &u in from {
         let k = nearest(pts, u, to);
         let v = to.swap_remove(k);
@@ -226,9 +258,11 @@ impl NodeMap {
 
     fn id(&mut self, p: Pt) -> usize {
         let (cx, cy) = self.cell(p);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                if let Some(ids) = self.grid.get(&(cx + dx, cy + dy)) {
+        for dx in -1..=1i64 {
+            for dy in -1..=1i64 {
+                // Saturating: a far-off point's cell sits at the i64 limit.
+                let c = (cx.saturating_add(dx), cy.saturating_add(dy));
+                if let Some(ids) = self.grid.get(&c) {
                     if let Some(&i) = ids.iter().find(|&&i| self.pts[i].dist(p) <= self.tol) {
                         return i;
                     }

@@ -8,6 +8,7 @@
 //! start at their best vertex, and strokes that meet exactly are drawn as one.
 
 pub mod euler;
+pub mod near;
 pub mod order;
 
 use crate::geom::{pen_up_travel, Pt, Route, Stroke};
@@ -22,6 +23,8 @@ pub struct PlanOptions {
     /// End points closer than this (drawing units) are one junction.
     pub join_tol: f64,
     pub effort: Effort,
+    /// Report the stages of large plans (over 5,000 strokes) on stderr.
+    pub progress: bool,
 }
 
 impl Default for PlanOptions {
@@ -31,19 +34,51 @@ impl Default for PlanOptions {
             join: true,
             join_tol: 1e-3,
             effort: Effort::default(),
+            progress: false,
         }
     }
 }
 
 /// Orders (and orients, joins) strokes to reduce the pen-up travel of the route.
+///
+/// Time is bounded: joining and the greedy tour are near-linear (grid
+/// searches), and the local search stops at `effort.time_limit`, so a drawing
+/// of 179,000 strokes plans in seconds.
 pub fn plan(strokes: &[Stroke], route: Route, opt: &PlanOptions) -> Vec<Stroke> {
+    let t0 = std::time::Instant::now();
+    let say = |what: &str| {
+        if opt.progress && strokes.len() > 5000 {
+            eprintln!(
+                "planning {} strokes: {what} ({:.1} s)",
+                strokes.len(),
+                t0.elapsed().as_secs_f64()
+            );
+        }
+    };
+    // Strokes with points that are not finite cannot be measured: they are
+    // kept, unplanned, at the end (the G-code writer refuses them anyway).
+    let finite = |s: &&Stroke| s.iter().all(|p| p.x.is_finite() && p.y.is_finite());
+    let odd: Vec<Stroke> = strokes.iter().filter(|s| !finite(s)).cloned().collect();
+    if !odd.is_empty() {
+        let good: Vec<Stroke> = strokes.iter().filter(finite).cloned().collect();
+        let mut p = plan(&good, route, opt);
+        p.extend(odd);
+        return p;
+    }
     let strokes: Vec<Stroke> = strokes.iter().filter(|s| !s.is_empty()).cloned().collect();
     let joined = if opt.join {
-        euler::join(&strokes, opt.join_tol, opt.reverse)
+        let j = euler::join(&strokes, opt.join_tol, opt.reverse);
+        say(&format!("joined into {} trails", j.len()));
+        j
     } else {
         strokes.clone()
     };
+    say(&format!(
+        "ordering; local search for at most {:.0} s",
+        opt.effort.time_limit.as_secs_f64()
+    ));
     let mut planned = order_strokes(&joined, route, opt.reverse, opt.effort);
+    say("ordered");
     rotate_loops(&mut planned, route);
     if opt.join {
         planned = merge_touching(planned);

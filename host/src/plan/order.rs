@@ -135,6 +135,9 @@ impl Problem {
 
     /// Nearest free end point next, from the start.
     pub fn greedy(&self) -> Tour {
+        if self.len() > MATRIX_MAX {
+            return self.greedy_grid();
+        }
         let n = self.len();
         let mut free = vec![true; n];
         let mut t = Tour {
@@ -143,7 +146,9 @@ impl Problem {
         };
         let mut at = self.start();
         for _ in 0..n {
-            let mut best = (f64::INFINITY, 0, false);
+            // Any free stroke first (distances may all be infinite).
+            let any = (0..n).find(|&i| free[i]).unwrap_or(0);
+            let mut best = (f64::INFINITY, any, false);
             for i in (0..n).filter(|&i| free[i]) {
                 let d = self.d(at, 2 * i);
                 if d < best.0 {
@@ -160,6 +165,39 @@ impl Problem {
             t.order.push(best.1);
             t.rev.push(best.2);
             at = self.exit(best.1, best.2);
+        }
+        t
+    }
+
+    /// [`Problem::greedy`] with a grid for the nearest end: O(n) small
+    /// queries instead of a scan of every free end per step.
+    fn greedy_grid(&self) -> Tour {
+        let n = self.len();
+        let mut near = super::near::Near::new(self.pts[..2 * n].to_vec());
+        if !self.reversible {
+            for i in 0..n {
+                near.remove(2 * i + 1);
+            }
+        }
+        let mut t = Tour {
+            order: Vec::with_capacity(n),
+            rev: Vec::with_capacity(n),
+        };
+        let mut at = self.pts[self.start()];
+        let mut free = vec![true; n];
+        while let Some(id) = near.nearest(at) {
+            let (i, r) = (id / 2, id % 2 == 1);
+            near.remove(2 * i);
+            near.remove(2 * i + 1);
+            free[i] = false;
+            t.order.push(i);
+            t.rev.push(r);
+            at = self.pts[self.exit(i, r)];
+        }
+        // Strokes with end points the grid cannot hold (not finite) go last.
+        for i in (0..n).filter(|&i| free[i]) {
+            t.order.push(i);
+            t.rev.push(false);
         }
         t
     }

@@ -16,7 +16,7 @@
 use crate::gcode_out::{to_gcode, GcodeOptions};
 use crate::geom::{Pt, Route};
 use crate::plan::{plan, PlanOptions};
-use crate::svg_in::{dist_to_segment, strokes_from_svg};
+use crate::svg_in::{dist_to_segment, read_svg, LayerMode, Skipped, SvgOptions};
 use crate::text::layout;
 use crate::toolpath::{self, Move, MoveKind};
 use anyhow::{bail, Result};
@@ -213,6 +213,10 @@ pub struct Job {
     pub moves: Vec<Move>,
     /// Estimated seconds from the job's start to the end of each move.
     pub ends_s: Vec<f64>,
+    /// What an SVG holds that the job does not draw (text, images, fills).
+    pub left_out: Vec<Skipped>,
+    /// An SVG's page size (mm).
+    pub page: Option<(f64, f64)>,
 }
 
 /// Largest line Grbl takes (its receive buffer).
@@ -236,9 +240,32 @@ impl Job {
                 },
             )
         };
+        let (mut left_out, mut page) = (Vec::new(), None);
         let gcode = match src {
             Source::Gcode(g) => g.to_string(),
-            Source::Svg(svg) => planned(strokes_from_svg(svg, 0.05)?),
+            Source::Svg(svg) => {
+                // One pass: the pen changes of layers need M6, which the
+                // firmware does not take yet.
+                let d = read_svg(
+                    svg.as_bytes(),
+                    &SvgOptions {
+                        layers: LayerMode::None,
+                        ..SvgOptions::default()
+                    },
+                )?;
+                let strokes = d.strokes();
+                if strokes.is_empty() {
+                    let what: Vec<String> = d
+                        .skipped
+                        .iter()
+                        .map(|s| format!("{} {}", s.kind.label(), s.name))
+                        .collect();
+                    bail!("nothing drawable in the SVG ({})", what.join(", "));
+                }
+                left_out = d.skipped;
+                page = Some(d.page);
+                planned(strokes)
+            }
             Source::Text(text, size) => {
                 if !(size > 0.5 && size < 500.0) {
                     bail!("character size {size} mm: choose 0.5 to 500");
@@ -270,6 +297,8 @@ impl Job {
             lines,
             moves,
             ends_s,
+            left_out,
+            page,
         })
     }
 
@@ -410,9 +439,28 @@ mod tests {
         let last = job.moves.last().unwrap();
         assert_eq!((last.to, last.kind), (Pt::new(0.0, 0.0), MoveKind::Travel));
         assert!(job.moves.iter().any(|m| m.kind == MoveKind::Draw));
-        let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="20mm" height="20mm" viewBox="0 0 20 20"><circle cx="10" cy="10" r="5"/></svg>"#;
-        assert!(Job::new("c", Source::Svg(svg), Pt::new(0.0, 0.0), &m).is_ok());
+        let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="20mm" height="20mm" viewBox="0 0 20 20"><circle cx="10" cy="10" r="5"/><text id="t" x="1" y="19">Hi</text></svg>"#;
+        let job = Job::new("c", Source::Svg(svg), Pt::new(0.0, 0.0), &m).unwrap();
+        // The circle's fill and the text are named as left out, on a 20 mm page.
+        let names: Vec<&str> = job.left_out.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["(unnamed path)", "t \"Hi\""]);
+        let (w, h) = job.page.unwrap();
+        assert!((w - 20.0).abs() < 1e-4 && (h - 20.0).abs() < 1e-4);
+        let only_text = r#"<svg xmlns="http://www.w3.org/2000/svg" width="20mm" height="20mm"><text id="t">Hi</text></svg>"#;
+        let Err(e) = Job::new("e", Source::Svg(only_text), Pt::new(0.0, 0.0), &m) else {
+            panic!("a job with nothing drawable")
+        };
+        assert!(
+            e.to_string().contains("nothing drawable") && e.to_string().contains("text t"),
+            "{e}"
+        );
         assert!(Job::new("e", Source::Gcode("(nothing)\n"), Pt::new(0.0, 0.0), &m).is_err());
-        assert!(Job::new("x", Source::Text("\u{1F600}", 10.0), Pt::new(0.0, 0.0), &m).is_err());
+        assert!(Job::new(
+            "x",
+            Source::Text("\u{1F600}", 10.0),
+            Pt::new(0.0, 0.0),
+            &m
+        )
+        .is_err());
     }
 }

@@ -368,6 +368,18 @@ impl Link {
     }
 
     fn load(&mut self, job: Job) {
+        let left_out: Vec<serde_json::Value> = job
+            .left_out
+            .iter()
+            .map(|s| {
+                let rings: Vec<Vec<[f64; 2]>> = s
+                    .outline
+                    .iter()
+                    .map(|r| r.iter().map(|p| [p.x, p.y]).collect())
+                    .collect();
+                json!({"kind": s.kind.label(), "name": s.name, "outline": rings})
+            })
+            .collect();
         self.generation += 1;
         let head = json!({
             "t": "job",
@@ -376,6 +388,8 @@ impl Link {
             "lines": job.lines.len(),
             "est_s": job.total_s(),
             "moves": job.moves.len(),
+            "left_out": left_out,
+            "page": job.page.map(|(w, h)| [w, h]),
         });
         let preview = job
             .preview()
@@ -405,6 +419,10 @@ impl Link {
             job.lines.len(),
             job.total_s()
         ));
+        for s in &job.left_out {
+            self.hub
+                .log(&format!("not drawn ({}): {}", s.kind.label(), s.name));
+        }
         self.job = Some(job);
     }
 

@@ -72,7 +72,7 @@ function handle(m) {
       draw(); break;
     case "clear": resetPath(); S.done = null; draw(); break;
     case "job":
-      S.job = { at: performance.now(), name: m.name, lines: m.lines, est_s: m.est_s, gen: m.gen, moves: m.moves, preview: [], complete: false };
+      S.job = { at: performance.now(), name: m.name, lines: m.lines, est_s: m.est_s, gen: m.gen, moves: m.moves, preview: [], complete: false, page: m.page, left_out: m.left_out || [] };
       S.done = null; S.loading = null;
       $("jobinfo").textContent = m.name + ": " + m.lines + " lines, about " + fmtTime(m.est_s) + (m.moves ? " · receiving the preview…" : "");
       $("progress").value = 0; $("jobstate").textContent = "";
@@ -210,12 +210,15 @@ function addPoint(p) {
   }
 }
 
-// What is fitted: the job, else the path and the pen, else the machine area ($130/$131).
+// What is fitted: the job (an SVG's page and what it leaves out included), else the path and the pen, else the machine area ($130/$131).
 function bounds() {
   let b = null;
   const grow = (x, y) => { b = b ? [Math.min(b[0], x), Math.min(b[1], y), Math.max(b[2], x), Math.max(b[3], y)] : [x, y, x, y]; };
   if (S.job && S.job.box) b = S.job.box.slice();
   else if (S.job) grow(0, 0);
+  // An SVG's page and what it leaves out are framed too.
+  if (S.job && S.job.page) { grow(0, 0); grow(S.job.page[0], S.job.page[1]); }
+  if (S.job) for (const o of S.job.left_out || []) for (const r of o.outline) for (const p of r) grow(p[0], p[1]);
   else {
     if (pathBox && S.path.length > 1) { grow(pathBox[0], pathBox[1]); grow(pathBox[2], pathBox[3]); }
     else {
@@ -261,6 +264,17 @@ function paintPlan(G) {
   for (let x = Math.ceil(x0 / step) * step; x <= x1; x += step) { g.moveTo(X(x), 0); g.lineTo(X(x), G.h); }
   for (let y = Math.ceil(y0 / step) * step; y <= y1; y += step) { g.moveTo(0, Y(y)); g.lineTo(G.w, Y(y)); }
   g.stroke();
+  // An SVG's page outline, and what it leaves out (text, images, fills) in orange.
+  if (S.job && S.job.page) {
+    const p = S.job.page;
+    g.strokeStyle = "#999"; g.lineWidth = r; g.strokeRect(X(0), Y(p[1]), X(p[0]) - X(0), Y(0) - Y(p[1]));
+  }
+  for (const o of (S.job && S.job.left_out) || []) {
+    g.beginPath();
+    for (const ring of o.outline) ring.forEach((p, i) => i ? g.lineTo(X(p[0]), Y(p[1])) : g.moveTo(X(p[0]), Y(p[1])));
+    g.fillStyle = "rgba(240,140,0,0.25)"; g.fill("evenodd");
+    g.strokeStyle = "#f08c00"; g.lineWidth = 1.5 * r; g.stroke();
+  }
   const img = g.getImageData(0, 0, G.w, G.h);
   return { c, g, img, px: new Uint32Array(img.data.buffer), done: 0 };
 }
