@@ -173,11 +173,18 @@ impl Executor {
     /// timer waits for the interrupt at each period's end would come late there).
     #[inline(always)]
     fn part(&self, w: u32) -> (u32, u32) {
-        let reload = if w > self.max_reload {
-            (self.max_reload - 1).min(w - self.max_reload / 2)
+        if w > self.max_reload {
+            self.split(w)
         } else {
-            w
-        };
+            (w, 0)
+        }
+    }
+
+    /// [`Executor::part`] of a wait longer than one period: marked cold, so that the
+    /// interrupt's path for the usual wait stays one compare and a branch.
+    #[cold]
+    fn split(&self, w: u32) -> (u32, u32) {
+        let reload = (self.max_reload - 1).min(w - self.max_reload / 2);
         (reload, w - reload)
     }
 
