@@ -26,9 +26,13 @@ PROGRAMS = [
     ('fast', (0, 0)),
 ]
 # Goals (issue 14): preparation plus interrupt per step event, on average over the
-# programs; the step interrupt at its worst.
+# programs; the step interrupt at its worst. The worst was 100 until the step output
+# stopped depending on the interrupt's deadline (issue 20): restarting the one-pulse
+# timer on its schedule, and the halt check after the restart that keeps an e-stop
+# from being undone, cost 16 instructions, and a pulse that can never be repeated is
+# worth them. The bound stays a bound: 120.
 GOAL_PIPELINE = 250
-GOAL_ISR_WORST = 100
+GOAL_ISR_WORST = 120
 # Cost model (README): cycles = 1.5 per instruction + 24 per interrupt (entry and exit).
 CPI, IRQ_CYCLES, HZ = 1.5, 24, 72e6
 
