@@ -455,12 +455,6 @@ mod tests {
             "{e}"
         );
         assert!(Job::new("e", Source::Gcode("(nothing)\n"), Pt::new(0.0, 0.0), &m).is_err());
-        assert!(Job::new(
-            "x",
-            Source::Text("\u{1F600}", 10.0),
-            Pt::new(0.0, 0.0),
-            &m
-        )
-        .is_err());
+        assert!(Job::new("x", Source::Text("\u{1F600}", 10.0), Pt::new(0.0, 0.0), &m).is_err());
     }
 }
