@@ -255,6 +255,19 @@ try {
   check("phone: every button is at least 44 px high", small.length === 0, small.join(", "));
   const touch = await phone.$eval("#plot", (e) => getComputedStyle(e).touchAction);
   check("phone: one finger on the drawing scrolls the page", /pan-y/.test(touch) || touch === "auto", touch);
+  // Two fingers spread on the drawing: it zooms (and the page does not).
+  const box = await phone.$eval("#plot", (e) => { e.scrollIntoView(); const r = e.getBoundingClientRect(); return [r.left + r.width / 2, r.top + r.height / 2]; });
+  const cdp = await phone.createCDPSession();
+  const finger2 = (type, d) => cdp.send("Input.dispatchTouchEvent", { type,
+    touchPoints: type === "touchEnd" ? [] : [{ x: box[0] - d, y: box[1], id: 1 }, { x: box[0] + d, y: box[1], id: 2 }] });
+  await finger2("touchStart", 30);
+  for (let d = 40; d <= 120; d += 10) await finger2("touchMove", d);
+  await finger2("touchEnd", 0);
+  await sleep(200);
+  const view = await phone.evaluate(() => ({ ...window.inkstep.view, pageZoom: window.visualViewport.scale }));
+  check("phone: two fingers pinch-zoom the drawing, not the page", view.zoom > 2 && view.pageZoom === 1,
+    `drawing zoom ${view.zoom.toFixed(2)}, page scale ${view.pageZoom}`);
+  await phone.click("#zfit");
   await phone.evaluate(() => window.scrollTo(0, 0));
   await phone.$eval("#textsize", (e) => { e.value = "8"; });
   await phone.type("#text", "一帆风顺 Hi");

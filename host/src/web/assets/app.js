@@ -195,7 +195,7 @@ function answered(m) {
 }
 
 // ---- The drawing ----------------------------------------------------------
-const V = { zoom: 1, px: 0, py: 0 }; // zoom and pan (CSS px) over the fitted view
+const V = (S.view = { zoom: 1, px: 0, py: 0 }); // zoom and pan (CSS px) over the fitted view
 let plan = null, ink = null, inkDone = 0, geo = null, pathBox = null;
 
 function resetPath() { S.path = []; pathBox = null; inkDone = 0; ink = null; }
