@@ -115,7 +115,8 @@ try {
   await setTo(110, "-5");
   const bad = await waitFor(page, () => /error:/.test(document.querySelector('#settings tr[data-n="110"] .err').textContent), null, "error shown");
   const err = await page.$eval('#settings tr[data-n="110"] .err', (e) => e.textContent);
-  check("a bad value shows Grbl's error", bad, err);
+  const kept = await page.$eval('#settings input[data-n="110"]', (e) => e.value);
+  check("a bad value shows Grbl's error and the field goes back to the value in force", bad && parseFloat(kept) === 2500, `${err}; field ${kept}`);
   await setTo(110, "5000");
 
   // 6. A line of text: preview, run, drawn.

@@ -625,7 +625,8 @@ impl Link {
         let mut job = Value::Null;
         let mut finished = false;
         if let (Some(r), Some(j)) = (&mut self.running, &self.job) {
-            r.done_s = r.tracker.update(j, Pt::new(w[0], w[1]));
+            let sent = r.acked + self.sender.in_flight();
+            r.done_s = r.tracker.update(j, Pt::new(w[0], w[1]), sent);
             // In a job the program says whether the pen draws (a file may
             // have no pen commands at all: then its feed moves draw).
             if let Some(mv) = j.moves.get(r.tracker.at()) {
