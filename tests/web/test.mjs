@@ -175,6 +175,12 @@ try {
   await page.click("#bunlock");
   const unlocked = await waitFor(page, () => window.inkstep.status.state === "Idle" && document.querySelector("#banner").hidden, null, "unlocked");
   check("Unlock in the banner clears the alarm", unlocked);
+  // A command error shows in the banner, not only in the log ($22=0: no homing).
+  await page.click("#home");
+  const homeErr = await waitFor(page, () => /Home.*error:5/.test(document.querySelector("#bannertext").textContent) &&
+    !document.querySelector("#banner").hidden, null, "Home's error in the banner");
+  check("a command's error shows in the banner", homeErr, await page.$eval("#bannertext", (e) => e.textContent));
+  await page.click("#bclose");
 
   // 9b. Big jobs: 10 MB of G-code loads in under 3 s and repaints stay fast;
   // one over the limit is refused with the limit, and the page keeps showing
