@@ -341,9 +341,19 @@ impl Tracker {
         self.at
     }
 
-    /// Estimated seconds of the job done when the pen is at `p`.
-    pub fn update(&mut self, job: &Job, p: Pt) -> f64 {
-        let end = (self.at + LOOK_AHEAD).min(job.moves.len());
+    /// Estimated seconds of the job done when the pen is at `p`, `sent` of
+    /// the job's lines having gone to the machine: it cannot be on a move of a
+    /// line not sent yet, which keeps a job that starts and ends at the same
+    /// place (a text parked at the origin) from reading as done at its start.
+    pub fn update(&mut self, job: &Job, p: Pt, sent: usize) -> f64 {
+        let last_line = match sent.checked_sub(1) {
+            Some(k) => job.lines.get(k).map_or(usize::MAX, |l| l.file_line),
+            None => 0,
+        };
+        let sent = job.moves.partition_point(|m| m.line <= last_line);
+        let end = (self.at + LOOK_AHEAD)
+            .min(sent.max(self.at + 1))
+            .min(job.moves.len());
         let near = (self.at..end).min_by(|&a, &b| {
             let da = dist_to_segment(p, job.moves[a].from, job.moves[a].to);
             let db = dist_to_segment(p, job.moves[b].from, job.moves[b].to);
@@ -394,9 +404,10 @@ mod tests {
         // diagonal back with both axes at 1200 mm/min: 10 mm each, 0.5 s.
         assert!((job.total_s() - 2.0).abs() < 1e-6, "{}", job.total_s());
         let mut t = Tracker::new();
-        assert!((t.update(&job, Pt::new(5.0, 0.0)) - 0.25).abs() < 1e-6);
-        assert!((t.update(&job, Pt::new(10.0, 5.0)) - 1.0).abs() < 1e-6);
-        assert!((t.update(&job, Pt::new(0.0, 0.0)) - job.total_s()).abs() < 1e-6);
+        let all = job.lines.len();
+        assert!((t.update(&job, Pt::new(5.0, 0.0), all) - 0.25).abs() < 1e-6);
+        assert!((t.update(&job, Pt::new(10.0, 5.0), all) - 1.0).abs() < 1e-6);
+        assert!((t.update(&job, Pt::new(0.0, 0.0), all) - job.total_s()).abs() < 1e-6);
         assert_eq!(job.preview()[1], [10.0, 0.0, 10.0, 10.0, 1.0]);
     }
 
@@ -430,6 +441,29 @@ mod tests {
         assert!((b.total_s() - a.total_s() - 2.0 * (0.5 - m.pen_s())).abs() < 1e-9);
         // Z pen: 2 mm at 600 mm/min (10 mm/s) with 100 mm/s^2: 0.1 s up, 0.1 s down.
         assert!((m.pen_s() - 0.3).abs() < 1e-9, "{}", m.pen_s());
+    }
+
+    #[test]
+    fn a_job_parked_where_it_starts_is_not_done_at_its_start() {
+        let m = Machine::default();
+        let job = Job::new("t", Source::Text("Hi", 10.0), Pt::new(0.0, 0.0), &m).unwrap();
+        let park = *job.moves.last().unwrap();
+        assert!(job.moves.len() < 400 && park.to == Pt::new(0.0, 0.0));
+        // The park runs back across the whole text: a pen early in the job
+        // may be nearest to it. With the first lines sent, it is still early.
+        let q = Pt::new(
+            park.from.x + 0.7 * (park.to.x - park.from.x),
+            park.from.y + 0.7 * (park.to.y - park.from.y),
+        );
+        let mut t = Tracker::new();
+        assert!(t.update(&job, q, 5) < 0.3 * job.total_s());
+        // All answered, back at the origin: done.
+        let mut t = Tracker::new();
+        for k in 0..job.moves.len() {
+            let mv = &job.moves[k];
+            t.update(&job, mv.to, job.lines.len());
+        }
+        assert!((t.update(&job, Pt::new(0.0, 0.0), job.lines.len()) - job.total_s()).abs() < 1e-6);
     }
 
     #[test]

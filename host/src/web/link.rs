@@ -201,6 +201,8 @@ struct Link {
     state: String,
     /// The last alarm the machine raised.
     alarm: Option<u32>,
+    /// A `$$` is on its way (none is sent again until it is answered).
+    listing_sent: bool,
 }
 
 /// Runs the link to `port` until `requests` closes.
@@ -219,6 +221,7 @@ pub fn run(port: String, hub: Arc<Hub>, requests: Receiver<Request>) {
         generation: 0,
         state: String::new(),
         alarm: None,
+        listing_sent: false,
     };
     loop {
         let mut p = match Port::open(&port, 115_200) {
@@ -237,6 +240,7 @@ pub fn run(port: String, hub: Arc<Hub>, requests: Receiver<Request>) {
             Err(e) => {
                 link.abort_job(&format!("connection lost: {e}"));
                 link.sender.clear();
+                link.listing_sent = false;
                 link.set_link(&port, false, &e.to_string());
                 if !link.idle_wait(&requests, Duration::from_secs(1)) {
                     return;
@@ -281,7 +285,7 @@ impl Link {
         p: &mut T,
         requests: &Receiver<Request>,
     ) -> std::io::Result<()> {
-        self.sender.push(Origin::Listing, "$$");
+        self.list_settings();
         self.sender.push(Origin::Info, "$I");
         p.send(b"?")?;
         let poll_every = Duration::from_millis(1000 / STATUS_HZ);
@@ -330,7 +334,7 @@ impl Link {
                     self.answer(id, Err("a job is running".into()));
                 } else if text == "$$" {
                     // Read into the table, which every browser is sent.
-                    self.sender.push(Origin::Listing, text);
+                    self.list_settings();
                     self.answer(id, Ok(()));
                 } else {
                     let setting = text.starts_with('$')
@@ -363,6 +367,7 @@ impl Link {
     fn reset<T: Transport>(&mut self, p: &mut T) -> std::io::Result<()> {
         p.send(&[0x18])?;
         self.sender.clear();
+        self.listing_sent = false;
         self.stopping = None;
         Ok(())
     }
@@ -511,12 +516,16 @@ impl Link {
                 };
                 self.answer(id, r);
                 if setting && a == Answer::Ok {
-                    self.sender.push(Origin::Listing, "$$");
+                    self.list_settings();
                 }
             }
             Event::Answered(Origin::Info, _) => {}
-            Event::Answered(Origin::Listing, Answer::Ok) => self.publish_settings(),
+            Event::Answered(Origin::Listing, Answer::Ok) => {
+                self.listing_sent = false;
+                self.publish_settings();
+            }
             Event::Answered(Origin::Listing, Answer::Error(n)) => {
+                self.listing_sent = false;
                 // Refused (error:8 while moving): the table shown stays.
                 self.listing.clear();
                 self.hub.log(&format!(
@@ -540,11 +549,12 @@ impl Link {
                 // The controller restarted: whatever was in its buffer is gone
                 // (its settings may have changed too: read them again).
                 self.sender.clear();
+                self.listing_sent = false;
                 self.stopping = None;
                 self.abort_job("the controller restarted");
                 self.hub.log(&w);
                 self.set_firmware(&w);
-                self.sender.push(Origin::Listing, "$$");
+                self.list_settings();
             }
             Event::Reply(Reply::Feedback(f)) => {
                 if let Some(v) = f.strip_prefix("VER:") {
@@ -579,6 +589,12 @@ impl Link {
         self.hub.publish(&m);
     }
 
+    /// Reads the `$$` table (into `listing`, published when answered).
+    fn list_settings(&mut self) {
+        self.listing_sent = true;
+        self.sender.push(Origin::Listing, "$$");
+    }
+
     /// The firmware's name and version, shown in the page.
     fn set_firmware(&self, text: &str) {
         let text = text.split(" [").next().unwrap_or(text).trim();
@@ -609,6 +625,11 @@ impl Link {
             self.overrides = o;
         }
         self.state.clone_from(&s.state);
+        // No table yet (the first `$$` was lost to a reset or refused): ask
+        // again once the machine is at rest.
+        if !self.listing_sent && s.state == "Idle" && self.hub.snapshot().settings.is_none() {
+            self.list_settings();
+        }
         let Some(m) = s.machine_pos(self.wco) else {
             return Ok(());
         };
@@ -622,7 +643,8 @@ impl Link {
         let mut job = Value::Null;
         let mut finished = false;
         if let (Some(r), Some(j)) = (&mut self.running, &self.job) {
-            r.done_s = r.tracker.update(j, Pt::new(w[0], w[1]));
+            let sent = r.acked + self.sender.in_flight();
+            r.done_s = r.tracker.update(j, Pt::new(w[0], w[1]), sent);
             // In a job the program says whether the pen draws (a file may
             // have no pen commands at all: then its feed moves draw).
             if let Some(mv) = j.moves.get(r.tracker.at()) {

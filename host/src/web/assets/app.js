@@ -195,7 +195,7 @@ function answered(m) {
 }
 
 // ---- The drawing ----------------------------------------------------------
-const V = { zoom: 1, px: 0, py: 0 }; // zoom and pan (CSS px) over the fitted view
+const V = (S.view = { zoom: 1, px: 0, py: 0 }); // zoom and pan (CSS px) over the fitted view
 let plan = null, ink = null, inkDone = 0, geo = null, pathBox = null;
 
 function resetPath() { S.path = []; pathBox = null; inkDone = 0; ink = null; }
@@ -316,7 +316,7 @@ function pixLine(P, s, color, thick, dash) {
 }
 
 function planMore(G, budget) {
-  const rows = S.job ? S.job.preview : [], { X, Y } = G, t0 = performance.now(), thick = G.r >= 1.5;
+  const rows = S.job ? S.job.preview : [], { X, Y } = G, t0 = performance.now(), thick = true;
   while (plan.done < rows.length && performance.now() - t0 < budget) {
     const end = Math.min(rows.length, plan.done + 100);
     for (let i = plan.done; i < end; i++) {
@@ -374,6 +374,7 @@ function paint() {
     g.fillStyle = S.status.down ? "#143c8c" : "#1e9e3c";
     g.beginPath(); g.arc(G.X(S.status.pos[0]), G.Y(S.status.pos[1]), 5 * G.r, 0, 7); g.fill();
   }
+  // Paint times (and the parts of any slow one) for the browser tests' figures.
   S.paints.push(performance.now() - t0);
   if (performance.now() - t0 > 20) (S.slow = S.slow || []).push(S.parts.map((x) => x.toFixed(0)).join("/"));
   if (S.paints.length > 500) S.paints.splice(0, 250);
