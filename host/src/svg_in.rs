@@ -260,7 +260,7 @@ fn huge_number(s: &str) -> Option<f64> {
                     || ((b[k] == b'-' || b[k] == b'+') && !matches!(b[k - 1], b'e' | b'E'));
                 if end {
                     if let Ok(v) = t[start..k].parse::<f64>() {
-                        if !(v.abs() < 1e30) {
+                        if v.is_nan() || v.abs() >= 1e30 {
                             out = Some(v);
                             break;
                         }
