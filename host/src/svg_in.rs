@@ -179,6 +179,24 @@ pub fn read_svg(data: &[u8], opt: &SvgOptions) -> Result<Drawing> {
         ..Default::default()
     };
     let doc = roxmltree::Document::parse_with_options(text, xml_opt).context("parsing SVG")?;
+    // Numbers beyond f32 (usvg's precision) become infinite there, and an
+    // arc to infinity makes svgtypes build segments without end: refuse them.
+    for n in doc.descendants().filter(|n| n.is_element()) {
+        for a in n
+            .attributes()
+            .filter(|a| GEOMETRY_ATTRS.contains(&a.name()))
+        {
+            if let Some(v) = huge_number(a.value()) {
+                bail!(
+                    "{} {}=\"{}\": the number {v:e} is beyond any drawing (the file is broken)",
+                    n.attribute("id")
+                        .map_or_else(|| format!("<{}>", n.tag_name().name()), |id| id.to_string()),
+                    a.name(),
+                    clip(a.value(), 30)
+                );
+            }
+        }
+    }
     let layer_ids = find_layers(&doc);
     let (probed, texts) = probe_texts(text, &doc);
     let tree = usvg::Tree::from_str(&probed, &usvg::Options::default()).context("parsing SVG")?;
@@ -201,6 +219,57 @@ pub fn read_svg(data: &[u8], opt: &SvgOptions) -> Result<Drawing> {
         skipped: w.skipped,
         page: (tree.size().width() as f64 * MM_PER_PX, h * MM_PER_PX),
     })
+}
+
+/// Attributes that hold coordinates (colours like "#2e5566" must not count).
+const GEOMETRY_ATTRS: &[&str] = &[
+    "d",
+    "points",
+    "transform",
+    "x",
+    "y",
+    "x1",
+    "y1",
+    "x2",
+    "y2",
+    "cx",
+    "cy",
+    "r",
+    "rx",
+    "ry",
+    "width",
+    "height",
+    "viewBox",
+    "gradientTransform",
+    "patternTransform",
+];
+
+/// The first number in `s` of magnitude 1e30 or more (or one too large to
+/// parse as finite), if any.
+fn huge_number(s: &str) -> Option<f64> {
+    let is_num = |c: char| c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '+' | '-');
+    s.split(|c: char| !is_num(c))
+        .filter(|t| t.bytes().any(|b| b.is_ascii_digit()))
+        .find_map(|t| {
+            // "1e5-2e3" is two numbers; a sign after a digit starts the next.
+            let mut start = 0;
+            let b = t.as_bytes();
+            let mut out = None;
+            for k in 1..=b.len() {
+                let end = k == b.len()
+                    || ((b[k] == b'-' || b[k] == b'+') && !matches!(b[k - 1], b'e' | b'E'));
+                if end {
+                    if let Ok(v) = t[start..k].parse::<f64>() {
+                        if v.is_nan() || v.abs() >= 1e30 {
+                            out = Some(v);
+                            break;
+                        }
+                    }
+                    start = k;
+                }
+            }
+            out
+        })
 }
 
 /// The element nesting depth once it exceeds `max`, scanning the markup
@@ -562,6 +631,15 @@ impl Walker<'_> {
         let dots = p
             .stroke()
             .is_some_and(|s| s.linecap() != usvg::LineCap::Butt);
+        // Control points first: a curve 1e13 px across would be flattened
+        // into millions of points before the range check could refuse it.
+        let ctrl: Stroke = p
+            .data()
+            .points()
+            .iter()
+            .map(|&q| self.to_mm(map(ts, q)))
+            .collect();
+        check_range(std::slice::from_ref(&ctrl), &name_or(p.id(), "path"))?;
         let mut strokes = Vec::new();
         flatten_path(p.data(), ts, self.tol_px, dots, &mut strokes);
         let mut mm: Vec<Stroke> = strokes
@@ -1119,6 +1197,29 @@ mod tests {
         ));
         let d = read_svg(svg.as_bytes(), &SvgOptions::default()).unwrap();
         assert!((d.strokes()[0][0].x - 20.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn numbers_beyond_any_drawing_are_refused_before_usvg() {
+        assert_eq!(huge_number("M 1,2 L 3e5-4e2"), None);
+        assert_eq!(huge_number("M1-1E39-8.39"), Some(-1e39));
+        assert_eq!(huge_number("scale(1e300)"), Some(1e300));
+        assert_eq!(huge_number("x1e999"), Some(f64::INFINITY));
+        // Colours with an 'e' among hex digits are not numbers to check.
+        let d = read(r##"<path id="c" d="M 0 0 H 5" stroke="#2e5566" fill="#1e4000"/>"##);
+        assert_eq!(d.strokes().len(), 1);
+        // An arc to 1e39 px once made svgtypes build segments without end.
+        let svg = mm_page(
+            r#"<path id="wild" d="M 0 0 C 1 1 2 2 1e39 3 A 5 5 0 0 0 10 10" stroke="black"/>"#,
+        );
+        let e = read_svg(svg.as_bytes(), &SvgOptions::default()).unwrap_err();
+        assert!(format!("{e:#}").contains("wild d="), "{e:#}");
+        // An arc of radius 1e20 px, refused at its control points, quickly.
+        let t = std::time::Instant::now();
+        let svg = mm_page(r#"<path id="big" d="M 0 0 A 1e20 1e20 0 1 0 1e20 1" stroke="black"/>"#);
+        let e = read_svg(svg.as_bytes(), &SvgOptions::default()).unwrap_err();
+        assert!(format!("{e:#}").contains("big"), "{e:#}");
+        assert!(t.elapsed().as_secs_f64() < 2.0, "{:?}", t.elapsed());
     }
 
     #[test]

@@ -450,3 +450,75 @@ fn a_hatched_disc_is_few_strokes_inside_the_disc() {
     let want = std::f64::consts::PI * 625.0 + std::f64::consts::TAU * 25.0;
     assert!((ink - want).abs() / want < 0.05, "{ink} vs {want}");
 }
+
+/// Real files from tests/data/svg-real, cut, spliced and with bytes changed.
+fn mutated_real_file() -> impl Strategy<Value = Vec<u8>> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/svg-real");
+    let mut files: Vec<Vec<u8>> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| {
+            let p = e.ok()?.path();
+            (p.extension()? == "svg")
+                .then(|| std::fs::read(p).ok())
+                .flatten()
+        })
+        .collect();
+    files.sort();
+    let n = files.len();
+    (
+        0..n,
+        proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..8),
+        any::<prop::sample::Index>(),
+        any::<bool>(),
+    )
+        .prop_map(move |(k, edits, cut, dup)| {
+            let mut b = files[k].clone();
+            for (at, byte) in edits {
+                let i = at.index(b.len().max(1));
+                if i < b.len() {
+                    // Digits stay digits half the time: numbers go wild, markup survives.
+                    // Printable ASCII (other bytes only make invalid UTF-8).
+                    b[i] = if b[i].is_ascii_digit() && byte % 2 == 0 {
+                        b'0' + byte % 10
+                    } else {
+                        32 + byte % 95
+                    };
+                }
+            }
+            if dup {
+                // Splice a copy of the middle back in: repeated and unbalanced elements.
+                let i = cut.index(b.len().max(1));
+                let tail = b[i..].to_vec();
+                b.truncate(i);
+                b.extend_from_slice(&tail[..tail.len() / 2]);
+                b.extend_from_slice(&tail);
+            }
+            b
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    #[test]
+    fn mutated_real_files_never_panic(data in mutated_real_file()) {
+        let opt = SvgOptions {
+            hatch: Some((1.0, 15.0)),
+            text_font: Some("futural".into()),
+            ..SvgOptions::default()
+        };
+        if let Ok(d) = read_svg(&data, &opt) {
+            let route = Route::closed(Pt::new(0.0, 0.0));
+            let quick = PlanOptions {
+                effort: Effort { kicks: 1, time_limit: Duration::from_millis(100), window: 3 },
+                ..PlanOptions::default()
+            };
+            let passes: Vec<Pass> = d
+                .layers
+                .iter()
+                .map(|l| Pass { name: l.name.clone(), strokes: plan(&l.strokes, route, &quick) })
+                .collect();
+            let g = to_gcode_passes(&passes, &GcodeOptions { route, arcs: Some(0.01), ..GcodeOptions::default() });
+            prop_assert!(g.lines().all(|l| l.len() <= LINE_MAX));
+        }
+    }
+}
