@@ -4,28 +4,19 @@
 //! browser that reads keeps getting the status at the rate the link polls it.
 //! The real binary linked to the simulator behind a pty, over real sockets.
 
+mod web_common;
+
 use futures_util::{SinkExt, StreamExt};
 use serde_json::Value;
-use std::io::{BufRead, BufReader};
-use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tokio::io::AsyncWriteExt;
 use tokio_tungstenite::tungstenite::Message;
+use web_common::{sim_at, Server};
 
 /// What 50 clients that never read may add to the server's resident memory.
 const BOUND_MB: f64 = 64.0;
-
-/// The server, ended however the test ends.
-struct Kill(std::process::Child);
-
-impl Drop for Kill {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 fn rss_kb(pid: u32, field: &str) -> u64 {
     let s = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap();
@@ -57,43 +48,9 @@ async fn fifty_clients_that_never_read_leave_memory_bounded_and_status_flowing()
     std::fs::create_dir_all(&dir).unwrap();
     let link = dir.join("tty");
     let stop = Arc::new(AtomicBool::new(false));
-    let s2 = stop.clone();
-    let l2 = link.clone();
-    let sim = std::thread::spawn(move || {
-        inkstep_sim::serve::serve(Some(&l2), 1.0, || s2.load(Ordering::Relaxed))
-    });
-    for _ in 0..100 {
-        if link.exists() {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let mut child = Kill(
-        Command::new(env!("CARGO_BIN_EXE_inkstep-host"))
-            .args([
-                "serve",
-                "--port",
-                link.to_str().unwrap(),
-                "--listen",
-                "127.0.0.1:0",
-            ])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap(),
-    );
-    let pid = child.0.id();
-    let mut out = BufReader::new(child.0.stdout.take().unwrap());
-    let mut line = String::new();
-    out.read_line(&mut line).unwrap();
-    let port: u16 = line
-        .split("http://127.0.0.1:")
-        .nth(1)
-        .and_then(|r| r.split('/').next())
-        .and_then(|p| p.parse().ok())
-        .unwrap_or_else(|| panic!("no address in {line:?}"));
-    std::thread::spawn(move || std::io::copy(&mut out, &mut std::io::sink()));
-
+    let sim = sim_at(&link, &stop);
+    let server = Server::start(&link);
+    let (port, pid) = (server.port, server.pid());
     let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://127.0.0.1:{port}/ws"))
         .await
         .unwrap();
@@ -181,7 +138,7 @@ async fn fifty_clients_that_never_read_leave_memory_bounded_and_status_flowing()
     }
     println!("after 17 s, {closed} of the 50 quiet websockets had been closed by the server");
     assert_eq!(closed, 50);
-    drop(child);
+    drop(server);
     stop.store(true, Ordering::Relaxed);
     let _ = sim.join();
     let _ = std::fs::remove_dir_all(&dir);
@@ -230,31 +187,8 @@ async fn load(ws: &mut Ws, job: &str, name: &str) -> (u64, f64) {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_50_mb_job_loads() {
-    let mut child = Kill(
-        Command::new(env!("CARGO_BIN_EXE_inkstep-host"))
-            .args([
-                "serve",
-                "--port",
-                "/nonexistent/inkstep-tty",
-                "--listen",
-                "127.0.0.1:0",
-            ])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap(),
-    );
-    let pid = child.0.id();
-    let mut out = BufReader::new(child.0.stdout.take().unwrap());
-    let mut line = String::new();
-    out.read_line(&mut line).unwrap();
-    let port: u16 = line
-        .split("http://127.0.0.1:")
-        .nth(1)
-        .and_then(|r| r.split('/').next())
-        .and_then(|p| p.parse().ok())
-        .unwrap();
-    std::thread::spawn(move || std::io::copy(&mut out, &mut std::io::sink()));
+    let server = Server::start(std::path::Path::new("/nonexistent/inkstep-tty"));
+    let (port, pid) = (server.port, server.pid());
     let (mut ws, _) = tokio_tungstenite::connect_async(format!("ws://127.0.0.1:{port}/ws"))
         .await
         .unwrap();
