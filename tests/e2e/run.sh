@@ -7,7 +7,9 @@ cd "$(dirname "$0")/../.."
 SPEED=100
 if [ "${1:-}" = "--speed" ]; then SPEED=$2; fi
 
-if ! python3 -c 'import serial' 2>/dev/null; then
+# pyserial's `serial.Serial`: a bare `import serial` run here would find the repository's
+# own serial/ folder (the inkstep-serial crate) as a namespace package and pass.
+if ! python3 -c 'import serial; serial.Serial' 2>/dev/null; then
   python3 -m pip install --quiet pyserial || python3 -m pip install --quiet --break-system-packages pyserial
 fi
 
