@@ -478,14 +478,7 @@ mod tests {
     fn a_dwell_alone_is_dwelling_and_nothing_else_is() {
         let mut s = Settings::default();
         s.set(201, 1.0).unwrap(); // servo pen: its lift is a timed wait too
-        let mut pipeline = Pipeline::new(
-            &s,
-            PrepConfig::default(),
-            TestSide {
-                queue: StepQueue::new(),
-                pos: [0; 3],
-            },
-        );
+        let mut pipeline = test_pipeline(&s);
         pipeline.push(Command::Dwell { ms: 50 }).unwrap();
         pipeline.fill();
         assert!(pipeline.dwelling() && pipeline.is_moving(), "running");
@@ -503,6 +496,18 @@ mod tests {
         pipeline.push(Command::Pen { down: false }).unwrap();
         pipeline.fill();
         assert!(pipeline.is_moving() && !pipeline.dwelling(), "a pen lift");
+    }
+
+    /// A pipeline on the default preparation, its steps into a test queue.
+    fn test_pipeline(s: &Settings) -> Pipeline<TestSide> {
+        Pipeline::new(
+            s,
+            PrepConfig::default(),
+            TestSide {
+                queue: StepQueue::new(),
+                pos: [0; 3],
+            },
+        )
     }
 
     /// Runs the step queue for `ms` milliseconds of timer time (the preparation every
@@ -526,14 +531,7 @@ mod tests {
     #[test]
     fn the_reported_speed_is_the_real_feed_at_cruise_and_zero_at_rest() {
         let s = Settings::default();
-        let mut pipeline = Pipeline::new(
-            &s,
-            PrepConfig::default(),
-            TestSide {
-                queue: StepQueue::new(),
-                pos: [0; 3],
-            },
-        );
+        let mut pipeline = test_pipeline(&s);
         assert_eq!(pipeline.speed(), 0.0);
         for (target, feed) in [(4800, 1500.0), (12800, 3000.0), (0, 600.0)] {
             pipeline
@@ -552,14 +550,7 @@ mod tests {
     #[test]
     fn overrides_survive_a_setting_change() {
         let mut s = Settings::default();
-        let mut pipeline = Pipeline::new(
-            &s,
-            PrepConfig::default(),
-            TestSide {
-                queue: StepQueue::new(),
-                pos: [0; 3],
-            },
-        );
+        let mut pipeline = test_pipeline(&s);
         pipeline.set_overrides(150, 50);
         // A setting changes at rest (the machine still reports Ov:150,50).
         s.set(120, 300.0).unwrap();
