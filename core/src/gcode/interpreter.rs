@@ -194,6 +194,13 @@ impl Interpreter {
         o
     }
 
+    /// The servo pen went up with a stop that discarded the queue: the next `M3`
+    /// drops it again.
+    pub fn pen_lifted(&mut self) {
+        self.modal.pen_down = false;
+        self.modal.pen_level = 0;
+    }
+
     /// Take the position from the planner after a stop that discarded the queue.
     pub fn sync_position(&mut self, steps: &StepPos, s: &Settings) {
         self.pos = to_nm(steps, s);

@@ -15,7 +15,7 @@ use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
 use crate::motion::Command;
 use crate::motion::{Move, AXES};
-use crate::settings::Settings;
+use crate::settings::{PenMode, Settings};
 use core::mem::MaybeUninit;
 use heapless::Deque;
 
@@ -700,6 +700,10 @@ impl Machine {
     /// the machine stopped.
     fn drop_queue<M: MotionControl>(&mut self, m: &mut M) {
         m.clear();
+        if self.settings.pen_mode() == PenMode::Servo {
+            // The pipeline leaves the servo pen up.
+            self.interpreter.pen_lifted();
+        }
         self.resync(m);
     }
 

@@ -538,7 +538,7 @@ fn prompt_page(fb: &mut FrameBuffer, prompt: &crate::hmi::PromptView, state: &[u
     let msg = prompt.message.bytes();
     let (first, rest) = msg.split_at(msg.len().min(21));
     put(fb, row(2), first);
-    put(fb, row(3), rest);
+    put(fb, row(3), rest.strip_prefix(b" ").unwrap_or(rest));
     bottom_line(fb, b"D:continue", None);
 }
 
