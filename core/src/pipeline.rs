@@ -755,7 +755,13 @@ mod tests {
     /// ($207) times.
     fn servo_settings(speed: f32) -> Settings {
         let mut s = Settings::default();
-        for (n, v) in [(201, 1.0), (202, 90.0), (203, 30.0), (204, 100.0), (207, 300.0)] {
+        for (n, v) in [
+            (201, 1.0),
+            (202, 90.0),
+            (203, 30.0),
+            (204, 100.0),
+            (207, 300.0),
+        ] {
             s.set(n, v).unwrap();
         }
         s.set(208, speed).unwrap();
@@ -799,7 +805,10 @@ mod tests {
         seen.dedup();
         assert_eq!(seen, [200, 400, 600, 800, 1000], "told frame by frame");
         let at_full = levels.iter().position(|&l| l == PEN_FULL).unwrap();
-        assert!((80..=85).contains(&at_full), "fully down after {at_full} ms");
+        assert!(
+            (80..=85).contains(&at_full),
+            "fully down after {at_full} ms"
+        );
         // Half a turn back (M3 S500): 50 ms, then the lift time.
         p.push(Command::Pen { level: 500 }).unwrap();
         let half = ms_to_rest(&mut p, &mut log);
@@ -810,9 +819,15 @@ mod tests {
         servo.set(201, 1.0).unwrap();
         let mut p = test_pipeline(&servo);
         p.push(Command::Pen { level: PEN_FULL }).unwrap();
-        assert!((150..=151).contains(&ms_to_rest(&mut p, &mut log)), "default drop");
+        assert!(
+            (150..=151).contains(&ms_to_rest(&mut p, &mut log)),
+            "default drop"
+        );
         p.push(Command::Pen { level: 0 }).unwrap();
-        assert!((150..=151).contains(&ms_to_rest(&mut p, &mut log)), "default lift");
+        assert!(
+            (150..=151).contains(&ms_to_rest(&mut p, &mut log)),
+            "default lift"
+        );
     }
 
     /// A hold in the middle of a stroke: once XY is at rest the pen lifts; on resume
@@ -842,8 +857,14 @@ mod tests {
         log.clear();
         run_timed(&mut p, 320, &mut log);
         let first_step = log.iter().position(|e| e.1 != held).unwrap();
-        assert!((300..=302).contains(&first_step), "XY waited {first_step} ms");
-        assert!(log.iter().all(|e| e.0 == PEN_FULL), "down from the resume on");
+        assert!(
+            (300..=302).contains(&first_step),
+            "XY waited {first_step} ms"
+        );
+        assert!(
+            log.iter().all(|e| e.0 == PEN_FULL),
+            "down from the resume on"
+        );
         ms_to_rest(&mut p, &mut log);
         assert_eq!((p.position(), p.pen_level()), ([8000, 0, 0], 0));
 

@@ -736,7 +736,8 @@ impl Settings {
     }
     /// Where a pen change (M6) goes, machine mm; `None`: it stays.
     pub fn pen_change_xy(&self) -> Option<[f32; 2]> {
-        self.flag::<216>().then(|| [self.v::<217>(), self.v::<218>()])
+        self.flag::<216>()
+            .then(|| [self.v::<217>(), self.v::<218>()])
     }
     /// The Z-axis pen's Z at level `level`, mm: in proportion between up and down.
     pub fn pen_z_at(&self, level: u16) -> f32 {
@@ -749,7 +750,7 @@ impl Settings {
         if hi <= lo {
             return PEN_FULL;
         }
-        let f = ((s - lo) / (hi - lo)).max(0.0).min(1.0);
+        let f = ((s - lo) / (hi - lo)).clamp(0.0, 1.0);
         to_u32(f * f32::from(PEN_FULL) + 0.5).min(u32::from(PEN_FULL)) as u16
     }
     pub fn pen_z_up(&self) -> f32 {

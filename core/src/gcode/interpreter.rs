@@ -922,10 +922,7 @@ mod tests {
             err(Status::UnsupportedCoordSys)
         );
         assert_eq!(run(&mut it, &s, "M62"), err(Status::UnsupportedCommand));
-        assert_eq!(
-            run(&mut it, &s, "M0 M6"),
-            err(Status::ModalGroupViolation)
-        );
+        assert_eq!(run(&mut it, &s, "M0 M6"), err(Status::ModalGroupViolation));
         assert_eq!(
             run(&mut it, &s, "G1.5 X1"),
             err(Status::CommandValueNotInteger)
@@ -1208,21 +1205,54 @@ mod tests {
         s.set(201, 1.0).unwrap();
         let mut it = Interpreter::new();
         let pen = |o: &Outcome| -> std::vec::Vec<Command> {
-            o.cmds.iter().copied().filter(|c| matches!(c, Command::Pen { .. })).collect()
+            o.cmds
+                .iter()
+                .copied()
+                .filter(|c| matches!(c, Command::Pen { .. }))
+                .collect()
         };
-        assert_eq!(pen(&run(&mut it, &s, "M3").unwrap()), [Command::Pen { level: PEN_FULL }]);
-        assert_eq!(pen(&run(&mut it, &s, "M5").unwrap()), [Command::Pen { level: 0 }]);
-        assert_eq!(pen(&run(&mut it, &s, "M3 S500").unwrap()), [Command::Pen { level: 500 }]);
+        assert_eq!(
+            pen(&run(&mut it, &s, "M3").unwrap()),
+            [Command::Pen { level: PEN_FULL }]
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "M5").unwrap()),
+            [Command::Pen { level: 0 }]
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "M3 S500").unwrap()),
+            [Command::Pen { level: 500 }]
+        );
         let o = run(&mut it, &s, "G1 X1 F100 S250").unwrap();
         assert_eq!(o.cmds[0], Command::Pen { level: 250 }, "before the stroke");
         assert!(matches!(o.cmds[1], Command::Move(_)));
-        assert!(pen(&run(&mut it, &s, "G1 X2 S250").unwrap()).is_empty(), "same S");
-        assert_eq!(pen(&run(&mut it, &s, "S2000").unwrap()), [Command::Pen { level: PEN_FULL }]);
-        assert_eq!(pen(&run(&mut it, &s, "M5").unwrap()), [Command::Pen { level: 0 }]);
-        assert!(pen(&run(&mut it, &s, "S800").unwrap()).is_empty(), "S while up");
-        assert_eq!(pen(&run(&mut it, &s, "M3").unwrap()), [Command::Pen { level: 800 }], "modal S");
+        assert!(
+            pen(&run(&mut it, &s, "G1 X2 S250").unwrap()).is_empty(),
+            "same S"
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "S2000").unwrap()),
+            [Command::Pen { level: PEN_FULL }]
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "M5").unwrap()),
+            [Command::Pen { level: 0 }]
+        );
+        assert!(
+            pen(&run(&mut it, &s, "S800").unwrap()).is_empty(),
+            "S while up"
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "M3").unwrap()),
+            [Command::Pen { level: 800 }],
+            "modal S"
+        );
         s.set(31, 200.0).unwrap();
-        assert_eq!(pen(&run(&mut it, &s, "S200").unwrap()), [Command::Pen { level: 0 }], "S min: up");
+        assert_eq!(
+            pen(&run(&mut it, &s, "S200").unwrap()),
+            [Command::Pen { level: 0 }],
+            "S min: up"
+        );
 
         // The Z pen: between $205 (0) and $206 (-2 mm), 400 steps/mm.
         let s = Settings::default();
@@ -1259,7 +1289,11 @@ mod tests {
         let o = run(&mut it, &s, "T7").unwrap();
         assert!(o.cmds.is_empty());
         let o = run(&mut it, &s, "M6").unwrap();
-        assert_eq!(o.stop, Some(Stop::PenChange { tool: 7, split: 0 }), "the last T");
+        assert_eq!(
+            o.stop,
+            Some(Stop::PenChange { tool: 7, split: 0 }),
+            "the last T"
+        );
         assert!(o.cmds.is_empty(), "pen up, no place: nothing moves");
     }
 

@@ -100,7 +100,11 @@ fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32, out: &mut Actions) -> boo
 fn ascii_text<const N: usize>(msg: &[u8]) -> Text<N> {
     let mut t = Text::new();
     for &b in msg {
-        if !t.push_ascii(if b.is_ascii_graphic() || b == 32 { b } else { 63 }) {
+        if !t.push_ascii(if b.is_ascii_graphic() || b == 32 {
+            b
+        } else {
+            63
+        }) {
             break;
         }
     }

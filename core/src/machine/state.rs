@@ -357,9 +357,7 @@ impl Machine {
     /// queue they wait until it is done (otherwise they would be answered `ok` and
     /// then dropped).
     pub fn can_accept(&self) -> bool {
-        !self.stop_then_clear
-            && !self.jog_cancel
-            && !self.pen_change.is_some_and(|pc| !pc.waiting)
+        !self.stop_then_clear && !self.jog_cancel && self.pen_change.is_none_or(|pc| pc.waiting)
     }
 
     fn idle_or_alarm<M: MotionControl>(&self, m: &M) -> bool {

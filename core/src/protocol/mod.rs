@@ -388,7 +388,9 @@ impl Protocol {
     fn message(&mut self) {
         let comment = core::mem::take(&mut self.comment);
         let c = trim_start(&comment);
-        let Some(rest) = c.get(3..).filter(|_| c.len() >= 3 && c[..3].eq_ignore_ascii_case(b"MSG"))
+        let Some(rest) = c
+            .get(3..)
+            .filter(|_| c.len() >= 3 && c[..3].eq_ignore_ascii_case(b"MSG"))
         else {
             return;
         };

@@ -517,7 +517,6 @@ fn boot(fb: &mut FrameBuffer) {
     put(fb, Cell::at(9, 55, 22).small(), b"STM32F103 + ST7920 LCD");
 }
 
-
 /// The machine waits for the user: M0's pause or M6's pen change, with the last
 /// `(MSG, ...)` text on two lines, and what D does.
 fn prompt_page(fb: &mut FrameBuffer, prompt: &crate::hmi::PromptView, state: &[u8], l: &mut Line) {
