@@ -54,8 +54,9 @@ const REFRESH_EVERY: u8 = 10;
 /// The welcome line that senders look for.
 pub const WELCOME: &str = "Grbl 1.1h ['$' for help]";
 const VERSION: &str = env!("CARGO_PKG_VERSION");
-/// The longest `(MSG, ...)` comment passed on whole to the sender.
-const COMMENT_CAP: usize = 64;
+/// The longest `(MSG, ...)` comment kept (its first bytes; the rest is dropped): the
+/// message's 40 characters and "MSG,". Each byte here is RAM the image is short of.
+const COMMENT_CAP: usize = crate::machine::state::MESSAGE_LEN + 4;
 
 /// The protocol handler.
 pub struct Protocol {
@@ -345,6 +346,12 @@ impl Protocol {
         // The line stays where it is while it runs (and if it waits): the machine
         // borrows it beside the fields it changes, so no copy of it sits on the stack
         // under the G-code and reconfiguration paths.
+        if self.machine.prompt().is_some() && message_of(&self.comment).is_some() {
+            // A new message waits while the machine waits for the user: the prompt
+            // keeps the message it was given (a pen change's "pen 2: red" is not
+            // replaced by the next layer's before the pen is in).
+            return false;
+        }
         let r = match self.line.first() {
             None => {
                 // Grbl answers blank lines (and lines of only a comment) with ok,
@@ -387,17 +394,9 @@ impl Protocol {
     /// the text kept for the LCD. "MSG" in any case, spaces around the comma allowed.
     fn message(&mut self) {
         let comment = core::mem::take(&mut self.comment);
-        let c = trim_start(&comment);
-        let Some(rest) = c
-            .get(3..)
-            .filter(|_| c.len() >= 3 && c[..3].eq_ignore_ascii_case(b"MSG"))
-        else {
+        let Some(text) = message_of(&comment) else {
             return;
         };
-        let Some(text) = trim_start(rest).strip_prefix(b",") else {
-            return;
-        };
-        let text = trim_start(text);
         let mut w = self.w();
         w.put(b"[MSG:");
         w.put(text);
@@ -412,6 +411,15 @@ impl Protocol {
             self.welcome();
         }
     }
+}
+
+/// The text of a `MSG, text` comment ("MSG" in any case, spaces around the comma).
+fn message_of(comment: &[u8]) -> Option<&[u8]> {
+    let c = trim_start(comment);
+    let rest = c
+        .get(3..)
+        .filter(|_| c.get(..3).is_some_and(|m| m.eq_ignore_ascii_case(b"MSG")))?;
+    Some(trim_start(trim_start(rest).strip_prefix(b",")?))
 }
 
 /// `s` without its leading spaces.

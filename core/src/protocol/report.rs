@@ -146,12 +146,15 @@ impl Protocol {
         }
         field_pair(&mut w, b"|FS:", round_i32(m.speed() / scale), spindle);
         // Grbl 1.1's accessory field: the pen touching the paper is the spindle on
-        // (`S`, clockwise). The servo as it is now; a Z pen by where Z stands.
+        // (`S`, clockwise). The servo as it is now; a Z pen by where Z stands (a
+        // partial `M3 S` height is down too).
         let pen_down = match settings.pen_mode() {
             PenMode::Servo => m.pen_down(),
             PenMode::ZAxis => {
+                // Off the up position toward down (by more than 1 % of the way).
                 let z = machine.machine_position(m)[2];
-                (z - settings.pen_z_down()).abs() < (z - settings.pen_z_up()).abs()
+                let (up, down) = (settings.pen_z_up(), settings.pen_z_down());
+                (z - up) * (down - up) > 0.01 * (down - up) * (down - up)
             }
         };
         let inputs = machine.inputs();
