@@ -74,6 +74,12 @@ fn m3_s_sets_the_servo_pulse_between_up_and_down() {
         let got = pulse_now(&mut s);
         assert!((got - want).abs() < 2.0, "{line}: {got} us, want {want}");
     }
+    // The Z pen ($201=0): M3 S500 halfway between $205 (0) and $206 (-2 mm).
+    ok(&mut s, "$201=0");
+    ok(&mut s, "M3 S500");
+    s.wait_idle(5 * T_PER_S).unwrap();
+    let z = s.status().unwrap().pos.unwrap()[2];
+    assert_eq!(z, -1.0, "Z halfway down");
 }
 
 /// `!` mid-stroke: the pulse goes to the up width once XY stands (Hold:0) and stays
@@ -83,9 +89,18 @@ fn m3_s_sets_the_servo_pulse_between_up_and_down() {
 fn a_hold_mid_stroke_lifts_the_servo_and_resume_drops_it_before_xy_moves() {
     let mut s = servo_board();
     ok(&mut s, "M3");
-    ok(&mut s, "G1 X30 F600");
+    ok(&mut s, "N7 G1 X30 F600");
     s.run_for(1500 * T_PER_MS).unwrap();
     assert!((pulse_now(&mut s) - DOWN_US).abs() < 2.0, "drawing");
+    // The report names the line being drawn and the pen down.
+    s.take_received();
+    s.send(b"?");
+    s.run_for(5 * T_PER_MS).unwrap();
+    let report = s.take_received();
+    assert!(
+        report.contains("|Ln:7|") && report.contains("|A:S>"),
+        "{report}"
+    );
     s.send(b"!");
     s.run_for(500 * T_PER_MS).unwrap();
     assert_eq!(s.status().unwrap().state, "Hold:0");

@@ -221,39 +221,43 @@ fn a_hold_mid_stroke_lifts_the_pen_and_resume_draws_the_same_strokes() {
     plain.send(program);
     plain.until_idle();
 
-    let mut held = Run::new(&settings);
-    held.send(program);
-    held.ms(1500);
-    assert_eq!(held.servo(), down, "drawing");
-    held.b.usb_write(b"!");
-    held.ms(400);
-    assert!(held.status().starts_with("<Hold:0|"));
-    assert_eq!(held.servo(), up, "lifted once XY stands");
-    let at = held.samples.last().unwrap().pos;
-    held.ms(1000);
-    assert_eq!(held.samples.last().unwrap().pos, at, "still");
-    assert_eq!(held.servo(), up, "up while held");
-    held.b.usb_write(b"~");
-    held.ms(150);
-    assert_eq!(
-        (held.servo(), held.samples.last().unwrap().pos),
-        (down, at),
-        "down, waiting"
-    );
-    held.until_idle();
+    // `!` and the safety door (0x84) alike.
+    for (stop, state) in [(b'!', "<Hold:0|"), (0x84, "<Door:0|")] {
+        let mut held = Run::new(&settings);
+        held.send(program);
+        held.ms(1500);
+        assert_eq!(held.servo(), down, "drawing");
+        held.b.usb_write(&[stop]);
+        held.ms(400);
+        let st = held.status();
+        assert!(st.starts_with(state), "{st}");
+        assert_eq!(held.servo(), up, "lifted once XY stands");
+        let at = held.samples.last().unwrap().pos;
+        held.ms(1000);
+        assert_eq!(held.samples.last().unwrap().pos, at, "still");
+        assert_eq!(held.servo(), up, "up while held");
+        held.b.usb_write(b"~");
+        held.ms(150);
+        assert_eq!(
+            (held.servo(), held.samples.last().unwrap().pos),
+            (down, at),
+            "down, waiting"
+        );
+        held.until_idle();
 
-    assert_eq!(held.strokes(), plain.strokes(), "the same strokes");
-    assert!(plain.strokes().len() > 4000);
-    // The drop time, then the first step of a start from rest: 1/80 mm from the
-    // start rate (1 mm/s) at 200 mm/s^2 takes 7.2 ms.
-    let still = held.longest_still_down(down);
-    assert!(still <= 200 + 8, "down with XY still for {still} ms");
-    assert_eq!(
-        still,
-        plain.longest_still_down(down),
-        "as at the stroke's start"
-    );
-    assert_eq!(held.samples.last().unwrap().pos, [0, 0, 0]);
+        assert_eq!(held.strokes(), plain.strokes(), "the same strokes");
+        assert!(plain.strokes().len() > 4000);
+        // The drop time, then the first step of a start from rest: 1/80 mm from the
+        // start rate (1 mm/s) at 200 mm/s^2 takes 7.2 ms.
+        let still = held.longest_still_down(down);
+        assert!(still <= 200 + 8, "down with XY still for {still} ms");
+        assert_eq!(
+            still,
+            plain.longest_still_down(down),
+            "as at the stroke's start"
+        );
+        assert_eq!(held.samples.last().unwrap().pos, [0, 0, 0]);
+    }
 }
 
 /// A soft reset in the middle of a stroke leaves the pen up, and the next `M3` drops
