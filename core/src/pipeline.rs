@@ -275,12 +275,16 @@ impl<S: StepSide> Pipeline<S> {
     /// The segment-preparation task: fill the step queue, run dwells and pen commands
     /// in order once the moves before them have been prepared.
     pub fn fill(&mut self) {
+        if self.held && self.prep.hold_state() == HoldState::Running {
+            // Hold asked between blocks: start nothing new until resumed, but let a
+            // wait under way (a pen move, a dwell) end, so that the machine comes to
+            // rest (and the pen up).
+            self.run_waits();
+            self.lift_when_stopped();
+            return;
+        }
         if self.held {
             self.lift_when_stopped();
-            if self.prep.hold_state() == HoldState::Running {
-                // Hold asked between blocks: start nothing new until resumed.
-                return;
-            }
         }
         let horizon = self.timer_hz / 1000 * HORIZON_MS;
         let queued = self.side.queued();
@@ -874,5 +878,29 @@ mod tests {
         assert_eq!(p.pen_level(), PEN_FULL);
         p.clear();
         assert_eq!(p.pen_level(), 0, "an abort leaves the pen up");
+    }
+
+    /// A hold during a pen drop: the drop ends, the machine comes to rest (not stuck
+    /// braking), the pen lifts; resume drops it again before the stroke.
+    #[test]
+    fn a_hold_during_a_pen_drop_comes_to_rest_with_the_pen_up() {
+        let mut log = Vec::new();
+        let mut p = test_pipeline(&servo_settings(0.0));
+        p.push(Command::Pen { level: PEN_FULL }).unwrap();
+        p.push(mv([800, 0, 0], Feed::MmPerMin(600.0))).unwrap();
+        run_timed(&mut p, 100, &mut log);
+        p.hold();
+        run_timed(&mut p, 250, &mut log);
+        assert!(!p.is_moving(), "at rest");
+        assert_eq!((p.pen_level(), p.position()), (0, [0, 0, 0]));
+        p.resume();
+        log.clear();
+        ms_to_rest(&mut p, &mut log);
+        let first_step = log.iter().position(|e| e.1 != [0, 0, 0]).unwrap();
+        assert!(
+            (300..=302).contains(&first_step),
+            "dropped again: {first_step} ms"
+        );
+        assert_eq!(p.position(), [800, 0, 0]);
     }
 }
