@@ -229,3 +229,56 @@ fn a_layered_job_from_the_host_tool_runs_through_its_pen_changes() {
     assert_eq!(drawn.len(), sim_drawn.len(), "pen-down steps");
     assert!(drawn == sim_drawn, "the same strokes, step by step");
 }
+
+/// `M0` after a `(MSG, ...)`: the pen lifts, the LCD shows the pause prompt with the
+/// message (pixel for pixel what the core draws for it), and key D on the keypad
+/// continues: the pen drops and the next stroke is drawn.
+#[test]
+fn m0_shows_its_prompt_on_the_lcd_and_key_d_continues() {
+    use inkstep_core::hmi::{Config, Hmi, MachineState, Status};
+    use inkstep_core::screens::{framebuffer::FrameBuffer, Screens};
+    use inkstep_emu::board::Outside;
+
+    let mut s = servo_board();
+    for line in [
+        "M3",
+        "G1 X5 F600",
+        "(MSG, Check the ink)",
+        "M0",
+        "G1 X10",
+        "M5",
+    ] {
+        ok(&mut s, line);
+    }
+    s.run_for(1500 * T_PER_MS).unwrap();
+    assert_eq!(s.status().unwrap().state, "Hold:0");
+    assert!((pulse_now(&mut s) - UP_US).abs() < 2.0, "up while paused");
+    s.run_for(300 * T_PER_MS).unwrap();
+    let mut hmi = Hmi::new(Config::default(), 0);
+    hmi.set_prompt(Some((None, b"Check the ink")));
+    let mut st = Status::idle_at([0; 3]);
+    st.state = MachineState::Hold;
+    let mut fb = FrameBuffer::new();
+    Screens::new().render(&hmi, &st, 0, &mut fb).unwrap();
+    let lcd = &s.m.state().board.lcd;
+    let differ = (0..64)
+        .flat_map(|y| (0..128).map(move |x| (x, y)))
+        .filter(|&(x, y)| lcd.pixel(x, y) != fb.pixel(x, y))
+        .count();
+    assert_eq!(differ, 0, "the LCD shows the pause prompt");
+
+    // Key D: row 3, column 3 of the matrix.
+    let held_at = s.now();
+    s.set_outside(Outside {
+        keys: vec![(3, 3)],
+        ..Outside::default()
+    });
+    s.run_for(100 * T_PER_MS).unwrap();
+    s.set_outside(Outside::default());
+    s.wait_idle(10 * T_PER_S).unwrap();
+    assert_eq!(x_now(&mut s), 10.0, "the next stroke drawn");
+    let down_again = pulses(&mut s)
+        .iter()
+        .any(|p| p.0 > held_at && (p.1 - DOWN_US).abs() < 2.0);
+    assert!(down_again, "the pen dropped again for it");
+}
