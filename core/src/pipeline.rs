@@ -474,6 +474,9 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     fn hold(&mut self) {
         self.held = true;
         self.prep.hold();
+        // Already at rest (M0, `!` at rest): the pen lifts now, before the shell
+        // reads the servo's level and may sleep until the next event.
+        self.lift_when_stopped();
     }
 
     fn resume(&mut self) {

@@ -282,3 +282,25 @@ fn m0_shows_its_prompt_on_the_lcd_and_key_d_continues() {
         .any(|p| p.0 > held_at && (p.1 - DOWN_US).abs() < 2.0);
     assert!(down_again, "the pen dropped again for it");
 }
+
+/// `M0` as the last line and `!` at rest: nothing is queued, the firmware's protocol
+/// task may sleep at once, and the pen must be up all the same.
+#[test]
+fn a_pause_with_nothing_queued_lifts_the_pen_too() {
+    let mut s = servo_board();
+    for line in ["M3", "G1 X5 F600", "M0"] {
+        ok(&mut s, line);
+    }
+    s.run_for(1500 * T_PER_MS).unwrap();
+    assert_eq!(s.status().unwrap().state, "Hold:0");
+    assert!((pulse_now(&mut s) - UP_US).abs() < 2.0, "up after M0");
+    s.send(b"~");
+    s.run_for(500 * T_PER_MS).unwrap();
+    assert!((pulse_now(&mut s) - DOWN_US).abs() < 2.0, "down again");
+    s.send(b"!");
+    s.run_for(300 * T_PER_MS).unwrap();
+    assert!(
+        (pulse_now(&mut s) - UP_US).abs() < 2.0,
+        "up after ! at rest"
+    );
+}

@@ -296,6 +296,13 @@ fn m0_pauses_with_the_pen_up_and_a_prompt() {
     let first = r.strokes().iter().position(|p| p[0] > 800).unwrap();
     assert_eq!(r.strokes()[first][0], 801, "the second stroke drawn whole");
     assert_eq!(r.samples.last().unwrap().pos, [1600, 0, 0]);
+
+    // M0 as the last line (nothing queued behind it): the pen lifts all the same.
+    let mut r = Run::new(SERVO);
+    r.send("M3\nG1 X10 F600\nM0\n");
+    r.ms(3000);
+    assert!(r.status().starts_with("<Hold:0|"));
+    assert_eq!(r.servo(), pulse(SERVO, 0), "up while paused");
 }
 
 /// A layered job as the host tool writes it: `(MSG,pen N: name)` and `M6 TN`
