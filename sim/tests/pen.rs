@@ -297,6 +297,14 @@ fn m0_pauses_with_the_pen_up_and_a_prompt() {
     assert_eq!(r.strokes()[first][0], 801, "the second stroke drawn whole");
     assert_eq!(r.samples.last().unwrap().pos, [1600, 0, 0]);
 
+    // A message alone shows at the LCD's bottom line for a while.
+    r.send("(MSG,Hello there)\n");
+    r.ms(10);
+    assert_eq!(
+        r.b.ctl.hmi().toast().map(|t| t.as_str()),
+        Some("Hello there")
+    );
+
     // M0 as the last line (nothing queued behind it): the pen lifts all the same.
     let mut r = Run::new(SERVO);
     r.send("M3\nG1 X10 F600\nM0\n");
