@@ -160,7 +160,8 @@ impl PenMove {
         if k == n {
             return Some((self.to, self.settle_ms));
         }
-        let at = |k: u32| self.turn_ms * k / n;
+        // (u64: a very slow servo turns for hours, over 2^32 ms x frames.)
+        let at = |k: u32| (u64::from(self.turn_ms) * u64::from(k) / u64::from(n)) as u32;
         let (from, to) = (i32::from(self.from), i32::from(self.to));
         let level = from + (to - from) * (k as i32 + 1) / n as i32;
         Some((level as u16, at(k + 1) - at(k)))
@@ -881,6 +882,25 @@ mod tests {
         assert_eq!(p.pen_level(), PEN_FULL);
         p.clear();
         assert_eq!(p.pen_level(), 0, "an abort leaves the pen up");
+    }
+
+    /// The slowest servo speed the settings allow: a turn of hours, told in the most
+    /// frames a pen move has, with no overflow on the way.
+    #[test]
+    fn a_very_slow_servo_turn_is_computed_without_overflow() {
+        let t = PenTiming::from(&servo_settings(0.001));
+        let mut m = PenMove::new(0, PEN_FULL, &t);
+        // 60 deg at 0.001 deg/s: 6e7 ms (to f32's precision).
+        assert!(m.turn_ms.abs_diff(60_000_000) < 10, "{}", m.turn_ms);
+        let turn = u64::from(m.turn_ms);
+        let (mut levels, mut total) = (0u32, 0u64);
+        while let Some((level, ms)) = m.next() {
+            levels += 1;
+            total += u64::from(ms);
+            assert!(level <= PEN_FULL);
+        }
+        assert_eq!(levels, u32::from(u16::MAX));
+        assert_eq!(total, turn + 300, "the turn, then the drop time");
     }
 
     /// A hold during a pen drop: the drop ends, the machine comes to rest (not stuck
