@@ -19,6 +19,7 @@ use crate::decimal::{put_int, round_i32, Sink};
 use crate::gcode::STARTUP_LINES;
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
 use crate::keypad::{Keypad, KeypadConfig};
+use crate::machine::state::Prompt;
 use crate::machine::{InputPolarity, MotionControl, PinLevels, RunState};
 use crate::motion::{Command, StepPos, X, Y, Z};
 use crate::protocol::Protocol;
@@ -324,7 +325,7 @@ impl Controller {
         Serviced {
             outputs: changed.then(|| OutputConfig::from(s)),
             servo_pulse_us: (s.pen_mode() == PenMode::Servo)
-                .then(|| s.pen_servo_pulse_us(m.pen_down())),
+                .then(|| s.pen_servo_pulse_us(m.pen_level())),
             alarmed: self.protocol.machine().alarm().is_some(),
             polarity: InputPolarity::from(s),
             more,
@@ -450,6 +451,17 @@ impl Controller {
     /// [`Controller::poll`] with at most one line; true when another may run now.
     fn poll_one<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) -> bool {
         let more = self.protocol.poll_one(m, now_ms);
+        let machine = self.protocol.machine_mut();
+        if machine.take_message_new() {
+            self.hmi.show_message(machine.message(), now_ms);
+        }
+        let pen = |p| match p {
+            Prompt::Paused => None,
+            Prompt::PenChange(n) => Some(n),
+        };
+        let machine = self.protocol.machine();
+        self.hmi
+            .set_prompt(machine.prompt().map(|p| (pen(p), machine.message())));
         let st = self.status(m);
         let actions = self.hmi.tick(&st, now_ms);
         self.apply(&actions, m, now_ms);

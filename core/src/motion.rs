@@ -91,6 +91,9 @@ pub struct Move {
     pub line: u32,
 }
 
+/// The pen level of a pen fully down ([`Command::Pen`]); 0 is up.
+pub const PEN_FULL: u16 = 1000;
+
 /// One entry of the planner queue.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -99,8 +102,9 @@ pub enum Command {
     Move(Move),
     /// Wait `ms` milliseconds at rest (G4), after the moves before it have finished.
     Dwell { ms: u32 },
-    /// Lift (`down == false`) or drop the pen with the RC servo, waiting the lift time
-    /// ($204) at rest. Only used when the pen is a servo ($201 = 1); with a Z-axis pen
-    /// the interpreter queues Z moves instead.
-    Pen { down: bool },
+    /// Turn the RC-servo pen to `level` (0 = up, [`PEN_FULL`] = fully down, between:
+    /// `M3 S`), at rest: at the servo speed ($208), then the lift ($204) or drop ($207)
+    /// time. Only used when the pen is a servo ($201 = 1); with a Z-axis pen the
+    /// interpreter queues Z moves instead.
+    Pen { level: u16 },
 }

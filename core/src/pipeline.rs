@@ -14,7 +14,7 @@
 
 use crate::interpolation::Tick;
 use crate::machine::{MotionControl, QueueFull};
-use crate::motion::Command;
+use crate::motion::{Command, PEN_FULL};
 use crate::motion::{Move, Path, StepPos};
 use crate::planner::{AxisConfig, PlanError, Planner, PlannerConfig, Shape, PLANNER_BLOCKS};
 use crate::settings::{AccelProfile, Interpolation, Settings};
@@ -88,6 +88,88 @@ pub fn planner_config(s: &Settings) -> PlannerConfig {
     }
 }
 
+/// The servo's frame, ms: a slow pen move ($208) is told to the servo in steps of
+/// this length (a 50 Hz servo takes a new position once per frame anyway).
+const PEN_FRAME_MS: u32 = 20;
+
+/// What a pen move takes, from the settings ($202/$203 angles, $204 lift and $207
+/// drop waits, $208 speed).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PenTiming {
+    lift_ms: u32,
+    drop_ms: u32,
+    /// Degrees between up and down.
+    span_deg: f32,
+    /// deg/s; 0 = a jump.
+    speed: f32,
+}
+
+impl PenTiming {
+    fn from(s: &Settings) -> Self {
+        PenTiming {
+            lift_ms: s.pen_lift_ms(),
+            drop_ms: s.pen_drop_ms(),
+            span_deg: (s.pen_down_angle() - s.pen_up_angle()).abs(),
+            speed: s.pen_speed(),
+        }
+    }
+    /// The turn from level `from` to `to`, ms (0 without a speed limit).
+    fn turn_ms(&self, from: u16, to: u16) -> u32 {
+        if self.speed <= 0.0 {
+            return 0;
+        }
+        let deg = self.span_deg * f32::from(from.abs_diff(to)) / f32::from(PEN_FULL);
+        crate::decimal::to_u32(deg * 1000.0 / self.speed + 0.5)
+    }
+}
+
+/// A pen move under way: the turn told to the servo frame by frame, then the settle
+/// wait (lift or drop time).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PenMove {
+    from: u16,
+    to: u16,
+    /// Frames told so far; `frames + 1` once the settle wait has started.
+    frame: u16,
+    frames: u16,
+    turn_ms: u32,
+    settle_ms: u32,
+}
+
+impl PenMove {
+    fn new(from: u16, to: u16, t: &PenTiming) -> Self {
+        let turn_ms = t.turn_ms(from, to);
+        PenMove {
+            from,
+            to,
+            frame: 0,
+            frames: turn_ms.div_ceil(PEN_FRAME_MS).min(u32::from(u16::MAX - 1)) as u16,
+            turn_ms,
+            settle_ms: if to < from { t.lift_ms } else { t.drop_ms },
+        }
+    }
+    /// The next stage: the level to tell the servo and the ms to wait; `None` when
+    /// the move is over.
+    fn next(&mut self) -> Option<(u16, u32)> {
+        let n = u32::from(self.frames);
+        let k = u32::from(self.frame);
+        if k > n {
+            return None;
+        }
+        self.frame += 1;
+        if k == n {
+            return Some((self.to, self.settle_ms));
+        }
+        // turn_ms * k / n, exactly, in 32 bits (a very slow servo turns for hours:
+        // turn_ms * k would overflow; a u64 division costs the image 866 bytes).
+        let (q, r) = (self.turn_ms / n, self.turn_ms % n);
+        let at = |k: u32| q * k + r * k / n;
+        let (from, to) = (i32::from(self.from), i32::from(self.to));
+        let level = from + (to - from) * (k as i32 + 1) / n as i32;
+        Some((level as u16, at(k + 1) - at(k)))
+    }
+}
+
 pub struct Pipeline<S: StepSide> {
     planner: Planner,
     prep: Prep,
@@ -100,10 +182,20 @@ pub struct Pipeline<S: StepSide> {
     /// The running dwell / pen command has been fully queued; it ends when the side
     /// has run it.
     waiting: bool,
-    pen_down: bool,
+    /// The pen level the program has reached (0 up .. [`PEN_FULL`] down), as far as
+    /// the queue has run.
+    pen: u16,
+    /// The level the servo is told now: `pen`, the way there during a pen move, 0
+    /// while lifted for a hold.
+    shown: u16,
+    /// The pen move under way, frame by frame.
+    pen_move: Option<PenMove>,
+    /// The pen was lifted for a hold at this level: it goes down again on resume,
+    /// before XY moves on.
+    lifted: Option<u16>,
     /// The wait in `wait_left` / `waiting` is a G4 dwell (not a pen lift's).
     dwell: bool,
-    pen_lift_ms: u32,
+    pen_timing: PenTiming,
     held: bool,
     /// Calls of [`Pipeline::fill`] spent waiting at rest for a second move.
     gather: u8,
@@ -133,9 +225,12 @@ impl<S: StepSide> Pipeline<S> {
             pending = Deque::new(),
             wait_left = 0,
             waiting = false,
-            pen_down = false,
+            pen = 0,
+            shown = 0,
+            pen_move = None,
+            lifted = None,
             dwell = false,
-            pen_lift_ms = s.pen_lift_ms(),
+            pen_timing = PenTiming::from(s),
             held = false,
             gather = 0,
         })
@@ -158,7 +253,7 @@ impl<S: StepSide> Pipeline<S> {
     fn reconfigure(&mut self, s: &Settings) {
         let pos = self.side.position();
         self.planner.reconfigure(&planner_config(s), pos);
-        self.pen_lift_ms = s.pen_lift_ms();
+        self.pen_timing = PenTiming::from(s);
     }
     /// A move is being prepared or waits in the planner (dwells and pen moves are not
     /// moves): the step queue running dry now would be a stall.
@@ -184,8 +279,15 @@ impl<S: StepSide> Pipeline<S> {
     /// in order once the moves before them have been prepared.
     pub fn fill(&mut self) {
         if self.held && self.prep.hold_state() == HoldState::Running {
-            // Hold asked between blocks: start nothing new until resumed.
+            // Hold asked between blocks: start nothing new until resumed, but let a
+            // wait under way (a pen move, a dwell) end, so that the machine comes to
+            // rest (and the pen up).
+            self.run_waits();
+            self.lift_when_stopped();
             return;
+        }
+        if self.held {
+            self.lift_when_stopped();
         }
         let horizon = self.timer_hz / 1000 * HORIZON_MS;
         let queued = self.side.queued();
@@ -211,23 +313,15 @@ impl<S: StepSide> Pipeline<S> {
         loop {
             let ahead = self.prep.commands_for(horizon).max(MIN_AHEAD);
             let left = ahead.saturating_sub(self.side.queued());
-            self.prep.fill(&mut self.planner, self.side.sink(), left);
-            if self.wait_left > 0 {
-                while self.wait_left > 0 && self.side.sink().room() > 0 {
-                    let w = self.wait_left.min(u64::from(MAX_WAIT)) as u32;
-                    self.side.sink().push_slice(&[StepCmd::new(Tick(0), w)]);
-                    self.wait_left -= u64::from(w);
-                }
-                if self.wait_left > 0 {
-                    return;
-                }
-                self.waiting = true;
+            if self.pen_move.is_some() && !self.run_waits() {
+                // The pen goes down again after a hold before anything moves (its
+                // waits first in the step queue); a pen move from the queue is
+                // only started with nothing prepared, so it is the same there.
+                return;
             }
-            if self.waiting {
-                if self.side.is_running() {
-                    return;
-                }
-                self.waiting = false;
+            self.prep.fill(&mut self.planner, self.side.sink(), left);
+            if !self.run_waits() {
+                return;
             }
             // The path before the head of `pending` is fully prepared: start it.
             if !self.prep.is_idle(&self.planner) {
@@ -245,10 +339,13 @@ impl<S: StepSide> Pipeline<S> {
                     self.dwell = true;
                     self.wait_left = self.ms_ticks(ms).max(1);
                 }
-                Command::Pen { down } => {
+                Command::Pen { level } => {
                     self.dwell = false;
-                    self.pen_down = down;
-                    self.wait_left = self.ms_ticks(self.pen_lift_ms).max(1);
+                    self.pen = level.min(PEN_FULL);
+                    self.pen_move = Some(PenMove::new(self.shown, self.pen, &self.pen_timing));
+                    if !self.run_waits() {
+                        return;
+                    }
                 }
                 Command::Move(mv) => {
                     if self.plan(&mv).is_err() {
@@ -264,6 +361,50 @@ impl<S: StepSide> Pipeline<S> {
                     }
                 }
             }
+        }
+    }
+
+    /// Queue the wait under way (a dwell's, or the pen move's stages one after the
+    /// other, each told to the servo as its wait starts); true once all of it has run.
+    fn run_waits(&mut self) -> bool {
+        loop {
+            if self.wait_left > 0 {
+                while self.wait_left > 0 && self.side.sink().room() > 0 {
+                    let w = self.wait_left.min(u64::from(MAX_WAIT)) as u32;
+                    self.side.sink().push_slice(&[StepCmd::new(Tick(0), w)]);
+                    self.wait_left -= u64::from(w);
+                }
+                if self.wait_left > 0 {
+                    return false;
+                }
+                self.waiting = true;
+            }
+            if self.waiting {
+                if self.side.is_running() {
+                    return false;
+                }
+                self.waiting = false;
+            }
+            let Some(stage) = self.pen_move.as_mut().and_then(PenMove::next) else {
+                self.pen_move = None;
+                return true;
+            };
+            self.shown = stage.0;
+            self.wait_left = self.ms_ticks(stage.1).max(1);
+        }
+    }
+
+    /// A hold has brought XY to rest (nothing runs, no pen move is under way): the
+    /// pen lifts (at once: nothing waits for it), and remembers where it was.
+    fn lift_when_stopped(&mut self) {
+        let at_rest = self.prep.hold_state() != HoldState::Holding
+            && !self.side.is_running()
+            && self.pen_move.is_none()
+            && self.wait_left == 0
+            && !self.waiting;
+        if at_rest && self.shown > 0 {
+            self.lifted = Some(self.shown);
+            self.shown = 0;
         }
     }
 
@@ -305,6 +446,7 @@ impl<S: StepSide> Pipeline<S> {
             || self.side.is_running()
             || self.wait_left > 0
             || self.waiting
+            || self.pen_move.is_some()
     }
 }
 
@@ -335,11 +477,18 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     fn hold(&mut self) {
         self.held = true;
         self.prep.hold();
+        // Already at rest (M0, `!` at rest): the pen lifts now, before the shell
+        // reads the servo's level and may sleep until the next event.
+        self.lift_when_stopped();
     }
 
     fn resume(&mut self) {
         self.held = false;
         self.prep.resume(&mut self.planner);
+        if let Some(level) = self.lifted.take() {
+            // Down again where it was lifted, the drop time waited, before XY goes on.
+            self.pen_move = Some(PenMove::new(0, level, &self.pen_timing));
+        }
     }
 
     fn is_holding(&self) -> bool {
@@ -371,6 +520,11 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
         self.waiting = false;
         self.dwell = false;
         self.held = false;
+        // An abort or an alarm leaves the pen up.
+        self.pen = 0;
+        self.shown = 0;
+        self.pen_move = None;
+        self.lifted = None;
     }
 
     fn set_overrides(&mut self, feed_percent: u8, rapid_percent: u8) {
@@ -398,8 +552,11 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     fn configure(&mut self, s: &Settings) {
         self.reconfigure(s);
     }
-    fn pen_down(&self) -> bool {
-        self.pen_down
+    fn pen_level(&self) -> u16 {
+        self.shown
+    }
+    fn line(&self) -> Option<u32> {
+        self.prep.line()
     }
     fn dwelling(&self) -> bool {
         // The wait under way is a dwell's, and nothing is behind it. (A dwell that
@@ -419,6 +576,8 @@ mod tests {
     struct TestSide {
         queue: StepQueue<256>,
         pos: StepPos,
+        /// Ticks left of the command the "timer" runs now ([`run_timed`]).
+        busy: u64,
     }
 
     impl StepSide for TestSide {
@@ -430,13 +589,14 @@ mod tests {
             self.pos
         }
         fn is_running(&self) -> bool {
-            self.queue.queued() > 0
+            self.queue.queued() > 0 || self.busy > 0
         }
         fn queued(&self) -> usize {
             self.queue.queued()
         }
         fn flush(&mut self) {
             self.queue.clear();
+            self.busy = 0;
         }
         fn set_position(&mut self, p: StepPos) {
             self.pos = p;
@@ -491,9 +651,9 @@ mod tests {
         pipeline.push(Command::Dwell { ms: 50 }).unwrap();
         pipeline.fill();
         assert!(!pipeline.dwelling(), "a move runs first");
-        pipeline.push(Command::Pen { down: true }).unwrap();
+        pipeline.push(Command::Pen { level: PEN_FULL }).unwrap();
         run(&mut pipeline, X);
-        pipeline.push(Command::Pen { down: false }).unwrap();
+        pipeline.push(Command::Pen { level: 0 }).unwrap();
         pipeline.fill();
         assert!(pipeline.is_moving() && !pipeline.dwelling(), "a pen lift");
     }
@@ -506,6 +666,7 @@ mod tests {
             TestSide {
                 queue: StepQueue::new(),
                 pos: [0; 3],
+                busy: 0,
             },
         )
     }
@@ -575,5 +736,196 @@ mod tests {
             "rapid: {wait} ticks per step"
         );
         assert_eq!(pipeline.position(), [8000, 8000, 0]);
+    }
+
+    /// Runs `ms` milliseconds of timer time exactly (a command steps, then waits its
+    /// ticks), the preparation every millisecond; logs each millisecond's end: the pen
+    /// level shown and the position.
+    fn run_timed(pipeline: &mut Pipeline<TestSide>, ms: u32, log: &mut Vec<(u16, StepPos)>) {
+        let per_ms = u64::from(TIMER_HZ / 1000);
+        for _ in 0..ms {
+            pipeline.fill();
+            let mut budget = per_ms;
+            let side = pipeline.side_mut();
+            while budget > 0 {
+                if side.busy == 0 {
+                    let Some(c) = side.queue.pop() else { break };
+                    c.tick().apply(&mut side.pos);
+                    side.busy = u64::from(c.wait());
+                }
+                let take = side.busy.min(budget);
+                side.busy -= take;
+                budget -= take;
+            }
+            log.push((pipeline.pen_level(), pipeline.position()));
+        }
+    }
+
+    /// A servo pen at 90 deg up / 30 deg down with 100 ms lift ($204) and 300 ms drop
+    /// ($207) times.
+    fn servo_settings(speed: f32) -> Settings {
+        let mut s = Settings::default();
+        for (n, v) in [
+            (201, 1.0),
+            (202, 90.0),
+            (203, 30.0),
+            (204, 100.0),
+            (207, 300.0),
+        ] {
+            s.set(n, v).unwrap();
+        }
+        s.set(208, speed).unwrap();
+        s
+    }
+
+    /// Milliseconds until the pipeline is at rest.
+    fn ms_to_rest(pipeline: &mut Pipeline<TestSide>, log: &mut Vec<(u16, StepPos)>) -> usize {
+        let from = log.len();
+        while pipeline.is_moving() || MotionControl::queued(pipeline) > 0 {
+            run_timed(pipeline, 1, log);
+            assert!(log.len() - from < 100_000, "never at rest");
+        }
+        log.len() - from
+    }
+
+    /// The drop waits $207, the lift $204; with a speed ($208) the servo is told the
+    /// way frame by frame (20 ms) and the wait grows by the turn's time: 60 deg at 600
+    /// deg/s = 100 ms. Default settings: one wait of 150 ms each way, as before.
+    #[test]
+    fn lift_and_drop_wait_their_own_times_and_the_turn_at_the_servo_speed() {
+        let mut log = Vec::new();
+        let mut p = test_pipeline(&servo_settings(0.0));
+        p.push(Command::Pen { level: PEN_FULL }).unwrap();
+        let drop = ms_to_rest(&mut p, &mut log);
+        assert!((300..=301).contains(&drop), "drop {drop} ms");
+        assert_eq!(p.pen_level(), PEN_FULL);
+        p.push(Command::Pen { level: 0 }).unwrap();
+        let lift = ms_to_rest(&mut p, &mut log);
+        assert!((100..=101).contains(&lift), "lift {lift} ms");
+        assert_eq!(p.pen_level(), 0);
+
+        let mut p = test_pipeline(&servo_settings(600.0));
+        log.clear();
+        p.push(Command::Pen { level: PEN_FULL }).unwrap();
+        let drop = ms_to_rest(&mut p, &mut log);
+        // 100 ms turn + 300 ms drop; at most a millisecond between frames.
+        assert!((400..=406).contains(&drop), "slow drop {drop} ms");
+        let levels: Vec<u16> = log.iter().map(|e| e.0).collect();
+        let mut seen = levels.clone();
+        seen.dedup();
+        assert_eq!(seen, [200, 400, 600, 800, 1000], "told frame by frame");
+        let at_full = levels.iter().position(|&l| l == PEN_FULL).unwrap();
+        assert!(
+            (80..=85).contains(&at_full),
+            "fully down after {at_full} ms"
+        );
+        // Half a turn back (M3 S500): 50 ms, then the lift time.
+        p.push(Command::Pen { level: 500 }).unwrap();
+        let half = ms_to_rest(&mut p, &mut log);
+        assert!((150..=154).contains(&half), "half lift {half} ms");
+        assert_eq!(p.pen_level(), 500);
+
+        let mut servo = Settings::default();
+        servo.set(201, 1.0).unwrap();
+        let mut p = test_pipeline(&servo);
+        p.push(Command::Pen { level: PEN_FULL }).unwrap();
+        assert!(
+            (150..=151).contains(&ms_to_rest(&mut p, &mut log)),
+            "default drop"
+        );
+        p.push(Command::Pen { level: 0 }).unwrap();
+        assert!(
+            (150..=151).contains(&ms_to_rest(&mut p, &mut log)),
+            "default lift"
+        );
+    }
+
+    /// A hold in the middle of a stroke: once XY is at rest the pen lifts; on resume
+    /// it goes down where it was, waits the drop time with XY still, and the stroke
+    /// goes on to its exact end. A clear (abort, alarm) leaves it up.
+    #[test]
+    fn a_hold_lifts_the_pen_at_rest_and_resume_drops_it_before_xy_moves_on() {
+        let mut log = Vec::new();
+        let mut p = test_pipeline(&servo_settings(0.0));
+        p.push(Command::Pen { level: PEN_FULL }).unwrap();
+        p.push(mv([8000, 0, 0], Feed::MmPerMin(600.0))).unwrap();
+        p.push(Command::Pen { level: 0 }).unwrap();
+        run_timed(&mut p, 800, &mut log);
+        assert_eq!(p.pen_level(), PEN_FULL, "drawing");
+        assert!(p.position()[X] > 0);
+        p.hold();
+        while p.is_moving() {
+            run_timed(&mut p, 1, &mut log);
+            assert_eq!(p.pen_level(), PEN_FULL, "down while XY brakes");
+        }
+        run_timed(&mut p, 1, &mut log);
+        assert_eq!(p.pen_level(), 0, "lifted at rest");
+        let held = p.position();
+        run_timed(&mut p, 500, &mut log);
+        assert_eq!((p.pen_level(), p.position()), (0, held), "up while held");
+        p.resume();
+        log.clear();
+        run_timed(&mut p, 320, &mut log);
+        let first_step = log.iter().position(|e| e.1 != held).unwrap();
+        assert!(
+            (300..=302).contains(&first_step),
+            "XY waited {first_step} ms"
+        );
+        assert!(
+            log.iter().all(|e| e.0 == PEN_FULL),
+            "down from the resume on"
+        );
+        ms_to_rest(&mut p, &mut log);
+        assert_eq!((p.position(), p.pen_level()), ([8000, 0, 0], 0));
+
+        p.push(Command::Pen { level: PEN_FULL }).unwrap();
+        p.push(mv([0, 0, 0], Feed::MmPerMin(600.0))).unwrap();
+        run_timed(&mut p, 500, &mut log);
+        assert_eq!(p.pen_level(), PEN_FULL);
+        p.clear();
+        assert_eq!(p.pen_level(), 0, "an abort leaves the pen up");
+    }
+
+    /// The slowest servo speed the settings allow: a turn of hours, told in the most
+    /// frames a pen move has, with no overflow on the way.
+    #[test]
+    fn a_very_slow_servo_turn_is_computed_without_overflow() {
+        let t = PenTiming::from(&servo_settings(0.001));
+        let mut m = PenMove::new(0, PEN_FULL, &t);
+        // 60 deg at 0.001 deg/s: 6e7 ms (to f32's precision).
+        assert!(m.turn_ms.abs_diff(60_000_000) < 10, "{}", m.turn_ms);
+        let turn = u64::from(m.turn_ms);
+        let (mut levels, mut total) = (0u32, 0u64);
+        while let Some((level, ms)) = m.next() {
+            levels += 1;
+            total += u64::from(ms);
+            assert!(level <= PEN_FULL);
+        }
+        assert_eq!(levels, u32::from(u16::MAX));
+        assert_eq!(total, turn + 300, "the turn, then the drop time");
+    }
+
+    /// A hold during a pen drop: the drop ends, the machine comes to rest (not stuck
+    /// braking), the pen lifts; resume drops it again before the stroke.
+    #[test]
+    fn a_hold_during_a_pen_drop_comes_to_rest_with_the_pen_up() {
+        let mut log = Vec::new();
+        let mut p = test_pipeline(&servo_settings(0.0));
+        p.push(Command::Pen { level: PEN_FULL }).unwrap();
+        p.push(mv([800, 0, 0], Feed::MmPerMin(600.0))).unwrap();
+        run_timed(&mut p, 100, &mut log);
+        p.hold();
+        run_timed(&mut p, 250, &mut log);
+        assert!(!p.is_moving(), "at rest");
+        assert_eq!((p.pen_level(), p.position()), (0, [0, 0, 0]));
+        p.resume();
+        log.clear();
+        ms_to_rest(&mut p, &mut log);
+        let first_step = log.iter().position(|e| e.1 != [0, 0, 0]).unwrap();
+        assert!(
+            (300..=302).contains(&first_step),
+            "dropped again: {first_step} ms"
+        );
+        assert_eq!(p.position(), [800, 0, 0]);
     }
 }

@@ -14,7 +14,7 @@
 use crate::crc::crc32;
 use crate::decimal::{put_int, to_u32, write_fixed3, Sink};
 use crate::fmath;
-use crate::motion::AXES;
+use crate::motion::{AXES, PEN_FULL};
 
 /// What a setting holds; decides range checks and how `$$` prints it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,7 +59,7 @@ pub const MAX_AXIS_STEP_RATE_HZ: f32 = 100_000.0;
 
 /// The table. Order is the serialisation order: append only, and bump
 /// [`FORMAT_VERSION`] if an entry is removed or reordered.
-pub const TABLE: [Desc; 47] = [
+pub const TABLE: [Desc; 52] = [
     d(0, Int, 10.0, 3.0, 255.0, "Step pulse time, us"),
     d(
         1,
@@ -228,7 +228,7 @@ pub const TABLE: [Desc; 47] = [
     d(201, Int, 0.0, 0.0, 1.0, "Pen mode: 0 Z axis, 1 RC servo"),
     d(202, Float, 90.0, 0.0, 180.0, "Pen servo up angle, deg"),
     d(203, Float, 30.0, 0.0, 180.0, "Pen servo down angle, deg"),
-    d(204, Int, 150.0, 0.0, 5000.0, "Pen lift/drop time, ms"),
+    d(204, Int, 150.0, 0.0, 5000.0, "Pen lift time, ms"),
     d(
         205,
         Float,
@@ -318,6 +318,41 @@ pub const TABLE: [Desc; 47] = [
         0.0,
         1.0,
         "Laser mode (the pen never stops motion either way)",
+    ),
+    // The pen's motion (issue 24), appended. $204 became the lift time alone; the
+    // drop time defaults to the same 150 ms, so an unchanged board waits as before.
+    d(207, Int, 150.0, 0.0, 5000.0, "Pen drop time, ms"),
+    d(
+        208,
+        Float,
+        0.0,
+        0.0,
+        10_000.0,
+        "Pen servo speed, deg/s (0 = as fast as it goes)",
+    ),
+    d(
+        216,
+        Bool,
+        0.0,
+        0.0,
+        1.0,
+        "Pen change (M6) goes to $217/$218 (0 = stays)",
+    ),
+    d(
+        217,
+        Float,
+        0.0,
+        -100_000.0,
+        100_000.0,
+        "Pen change X, machine mm",
+    ),
+    d(
+        218,
+        Float,
+        0.0,
+        -100_000.0,
+        100_000.0,
+        "Pen change Y, machine mm",
     ),
 ];
 
@@ -454,6 +489,15 @@ pub enum OutputMode {
     StepDir,
     FourPhase,
 }
+/// `up` at level 0, `down` at [`PEN_FULL`] (both exactly), in proportion between.
+fn between(up: f32, down: f32, level: u16) -> f32 {
+    match level {
+        0 => up,
+        PEN_FULL.. => down,
+        _ => up + (down - up) * (f32::from(level) / f32::from(PEN_FULL)),
+    }
+}
+
 /// How the pen is lifted ($201).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PenMode {
@@ -668,18 +712,46 @@ impl Settings {
     pub fn pen_down_angle(&self) -> f32 {
         self.v::<203>()
     }
-    /// RC-servo pulse width for the pen position, µs: 0..180 degrees maps linearly onto
-    /// 500..2500 µs, the range most hobby servos accept.
-    pub fn pen_servo_pulse_us(&self, down: bool) -> u32 {
-        let angle = if down {
-            self.pen_down_angle()
-        } else {
-            self.pen_up_angle()
-        };
-        500 + to_u32(angle.clamp(0.0, 180.0) * (2000.0 / 180.0))
+    /// The servo angle at pen level `level` (0 = up, [`PEN_FULL`] = down), deg:
+    /// in proportion between the up and down angles.
+    pub fn pen_angle(&self, level: u16) -> f32 {
+        between(self.pen_up_angle(), self.pen_down_angle(), level)
     }
+    /// RC-servo pulse width for pen level `level`, µs: 0..180 degrees maps linearly
+    /// onto 500..2500 µs, the range most hobby servos accept.
+    pub fn pen_servo_pulse_us(&self, level: u16) -> u32 {
+        500 + to_u32(self.pen_angle(level).clamp(0.0, 180.0) * (2000.0 / 180.0))
+    }
+    /// The wait after lifting the pen ($204), ms.
     pub fn pen_lift_ms(&self) -> u32 {
         to_u32(self.v::<204>())
+    }
+    /// The wait after dropping the pen ($207), ms.
+    pub fn pen_drop_ms(&self) -> u32 {
+        to_u32(self.v::<207>())
+    }
+    /// The servo's turning speed ($208), deg/s; 0 = no limit (a jump).
+    pub fn pen_speed(&self) -> f32 {
+        self.v::<208>()
+    }
+    /// Where a pen change (M6) goes, machine mm; `None`: it stays.
+    pub fn pen_change_xy(&self) -> Option<[f32; 2]> {
+        self.flag::<216>()
+            .then(|| [self.v::<217>(), self.v::<218>()])
+    }
+    /// The Z-axis pen's Z at level `level`, mm: in proportion between up and down.
+    pub fn pen_z_at(&self, level: u16) -> f32 {
+        between(self.pen_z_up(), self.pen_z_down(), level)
+    }
+    /// The pen level `S` asks for: its place within $31..$30 (S max = down, S min =
+    /// up), in [`PEN_FULL`]ths; fully down when the range is empty.
+    pub fn pen_level_of(&self, s: f32) -> u16 {
+        let (lo, hi) = self.spindle_range();
+        if hi <= lo {
+            return PEN_FULL;
+        }
+        let f = ((s - lo) / (hi - lo)).clamp(0.0, 1.0);
+        to_u32(f * f32::from(PEN_FULL) + 0.5).min(u32::from(PEN_FULL)) as u16
     }
     pub fn pen_z_up(&self) -> f32 {
         self.v::<205>()

@@ -118,7 +118,7 @@ const GRBL: &[(Setup, &str, &str)] = &[
     // 20: an unsupported command or letter.
     (Setup::Idle, "G5 X1", "error:20"),
     (Setup::Idle, "G-1", "error:20"),
-    (Setup::Idle, "M6", "error:20"),
+    (Setup::Idle, "M62", "error:20"),
     (Setup::Idle, "Q1", "error:20"),
     (Setup::Idle, "G10 L3 P1 X1", "error:20"),
     // 21: two commands of one modal group.
@@ -190,6 +190,13 @@ const DIFFERENT: &[(Setup, &str, &str, &str, &str)] = &[
         "error:22",
         "ok",
         "a rapid ignores the feed rate (RS274/NGC); Grbl's check names G0 by a slip in its condition",
+    ),
+    (
+        Setup::Idle,
+        "M6",
+        "error:20",
+        "ok",
+        "a manual pen change: the pen lifts, the machine holds with a [MSG:] until cycle start",
     ),
 ];
 

@@ -42,7 +42,9 @@ fn every_line_gets_ok_or_error() {
     );
     let t: Vec<_> = moves(&m).iter().map(|mv| mv.target).collect();
     assert_eq!(t, [[800, 0, 0], [800, 400, 0]]);
-    assert_eq!(moves(&m)[0].line, 2, "stream line numbers label moves");
+    assert_eq!(moves(&m)[0].line, 0, "no N, no line number (Ln:)");
+    send(&mut p, &mut m, "N42 G1 X0\n");
+    assert_eq!(moves(&m)[2].line, 42, "N numbers label moves");
 }
 
 #[test]
@@ -402,7 +404,7 @@ fn settings_listing_and_changes() {
     let out = send(&mut p, &mut m, "$$\n");
     assert!(out.starts_with("$0=10\r\n$1=25\r\n$2=0\r\n"));
     assert!(out.contains("$100=80.000\r\n"));
-    assert!(out.ends_with("$215=0\r\nok\r\n"));
+    assert!(out.ends_with("$218=0.000\r\nok\r\n"), "{out}");
     assert_eq!(
         send(
             &mut p,
@@ -531,10 +533,12 @@ fn work_position_reports_pen_speed_and_notifications() {
     );
     m.run_all();
     let out = send(&mut p, &mut m, "?");
+    // M3 S250: a quarter of the way down ($31 = 0, $30 = 1000), and reported down.
     assert!(
-        out.starts_with("<Idle|WPos:5.000,5.000,-2.000|FS:0,250|"),
+        out.starts_with("<Idle|WPos:5.000,5.000,-0.500|FS:0,250|"),
         "{out}"
     );
+    assert!(out.ends_with("|A:S>\r\n"), "{out}");
     p.notify("Stored data corrupt, defaults restored");
     assert_eq!(
         drain(&mut p),
@@ -1097,4 +1101,35 @@ fn spindle_settings_hold_the_reported_s() {
         out.contains("$27=1.000\r\n$30=500.000\r\n$31=100.000\r\n$32=1\r\n$100="),
         "listed by number: {out}"
     );
+}
+
+/// `(MSG, text)` answers `[MSG:text]` before the line's `ok` ("MSG" in any case,
+/// spaces around the comma, on a line of its own or beside G-code); other comments
+/// say nothing. While the machine waits for the user (M0), a new message waits too,
+/// so the prompt keeps the message it was given.
+#[test]
+fn msg_comments_are_passed_on_and_wait_while_the_machine_waits() {
+    let (mut p, mut m) = boot();
+    assert_eq!(
+        send(&mut p, &mut m, "(MSG,pen 2: red)\n"),
+        "[MSG:pen 2: red]\r\nok\r\n"
+    );
+    assert_eq!(
+        send(&mut p, &mut m, "( msg , Change paper )\n"),
+        "[MSG:Change paper ]\r\nok\r\n"
+    );
+    assert_eq!(
+        send(&mut p, &mut m, "(message)\n(MSG no comma)\n"),
+        "ok\r\nok\r\n"
+    );
+    assert_eq!(p.machine().message(), b"Change paper ");
+    let out = send(&mut p, &mut m, "G0 X1 (MSG,moving)\n");
+    assert!(out.starts_with("[MSG:moving]\r\n"), "{out}");
+    m.run_all();
+    let out = send(&mut p, &mut m, "M0\n(MSG,after)\n");
+    assert!(out.starts_with("ok\r\n"), "{out}");
+    assert!(!out.contains("after"), "waits while paused: {out}");
+    assert_eq!(p.machine().message(), b"moving");
+    let out = send(&mut p, &mut m, "~");
+    assert!(out.contains("[MSG:after]\r\nok\r\n"), "{out}");
 }

@@ -14,7 +14,7 @@ use embedded_graphics::prelude::*;
 use embedded_graphics::primitives::{Line, PrimitiveStyle, Rectangle, RoundedRectangle, Triangle};
 use embedded_graphics::text::{Alignment, Baseline, Text, TextStyleBuilder};
 
-use inkstep_core::hmi::{Config, Hmi, MachineState, Status};
+use inkstep_core::hmi::{Action, Config, Hmi, MachineState, Status};
 use inkstep_core::keypad::{Key, KeyEvent, KeyKind, KEYMAP, LEGEND};
 use inkstep_core::screens::framebuffer::{FrameBuffer, HEIGHT, WIDTH};
 use inkstep_core::screens::Screens;
@@ -323,6 +323,35 @@ fn drawing_arc_on_hold() {
     b.st.feed_mm_min = 0.0;
     b.tick(100);
     b.snap("run_arc_hold");
+}
+
+/// G-code's M0 while the menu shows: the pause prompt with the last `(MSG, ...)`; D
+/// answers it with cycle start.
+#[test]
+fn m0_prompt() {
+    let mut b = Bench::new();
+    b.st.state = MachineState::Hold;
+    b.hmi
+        .set_prompt(Some((None, b"Check the paper, then continue with pen 1")));
+    b.snap("prompt_paused");
+    let out = b.hmi.key(
+        KeyEvent {
+            key: Key::Enter,
+            kind: KeyKind::Press,
+        },
+        &b.st,
+        b.now,
+    );
+    assert_eq!(&out[..], &[Action::Resume]);
+}
+
+/// G-code's M6 T2 after `(MSG,pen 2: red)`: the pen-change prompt.
+#[test]
+fn m6_pen_change_prompt() {
+    let mut b = Bench::new();
+    b.st.state = MachineState::Hold;
+    b.hmi.set_prompt(Some((Some(2), b"pen 2: red")));
+    b.snap("prompt_pen_change");
 }
 
 #[test]

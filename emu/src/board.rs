@@ -269,10 +269,16 @@ impl Board {
             } else {
                 e.channel
             };
+            let before = self.pin(0, pin);
             if e.level {
                 self.af_a |= 1 << pin;
             } else {
                 self.af_a &= !(1 << pin);
+            }
+            // A watched pin's timer-driven changes are logged too (the servo on PA8).
+            let after = self.pin(0, pin);
+            if self.watch[0] & (1 << pin) != 0 && after != before {
+                self.pin_changes.push((e.t, 0, pin, after));
             }
             if pin < 3 {
                 self.watch_steps(e.t);

@@ -23,7 +23,7 @@ use super::units::{
 use super::Status;
 use crate::decimal::{put_int, round_i32, Sink};
 use crate::fmath;
-use crate::motion::Command;
+use crate::motion::{Command, PEN_FULL};
 use crate::motion::{Feed, Move, Path, StepPos, AXES};
 use crate::settings::{PenMode, Settings};
 use heapless::Vec;
@@ -51,6 +51,10 @@ pub enum Stop {
     Pause,
     /// M2 / M30: end of program (modal state already reset).
     End,
+    /// M6 T`tool`: a manual pen change. The block's first `split` commands (the
+    /// lift and the way to the pen-change place) run, then the machine waits at rest
+    /// for cycle start, then the rest (the way back and the drop) runs.
+    PenChange { tool: u8, split: u8 },
 }
 
 /// A block's effect for the machine to carry out.
@@ -105,6 +109,11 @@ pub struct Interpreter {
     /// Programmed feed in mm/min (G94) or per-block inverse time; 0 = undefined.
     feed: f32,
     spindle: f32,
+    /// An `S` word has been given since the last reset: `M3` sets the pen level from
+    /// it (without one, `M3` drops the pen fully, as before `S` meant a height).
+    s_given: bool,
+    /// The last T word: the pen an M6 without T changes to.
+    tool_next: u8,
     /// Position in machine nanometres, the end of the last queued block.
     pos: NmPos,
     coords: Coords,
@@ -125,6 +134,8 @@ impl Interpreter {
             modal: Modal::INITIAL,
             feed: 0.0,
             spindle: 0.0,
+            s_given: false,
+            tool_next: 0,
             pos: [0; AXES],
             coords: Coords {
                 wcs: [[0; AXES]; 6],
@@ -183,6 +194,13 @@ impl Interpreter {
         o
     }
 
+    /// The servo pen went up with a stop that discarded the queue: the next `M3`
+    /// drops it again.
+    pub fn pen_lifted(&mut self) {
+        self.modal.pen_down = false;
+        self.modal.pen_level = 0;
+    }
+
     /// Take the position from the planner after a stop that discarded the queue.
     pub fn sync_position(&mut self, steps: &StepPos, s: &Settings) {
         self.pos = to_nm(steps, s);
@@ -195,6 +213,7 @@ impl Interpreter {
         self.modal = Modal::default();
         self.feed = 0.0;
         self.spindle = 0.0;
+        self.s_given = false;
         self.g92 = [0; AXES];
         self.tlo = 0;
     }
@@ -259,7 +278,7 @@ impl Interpreter {
         let mut groups = [NONE; GROUPS];
         group_codes(&b.g, &G_CODES, &mut groups, true)?;
         group_codes(&b.m, &M_CODES, &mut groups, false)?;
-        let [motion, non_modal, units, distance, feed_mode, wcs, _, _, _, tool_length, _, stop, m1, pen, _] =
+        let [motion, non_modal, units, distance, feed_mode, wcs, _, _, _, tool_length, _, stop, m1, pen, _, tool_change] =
             groups;
         let motion = MOTION_MODES.get(usize::from(motion)).copied();
         let non_modal = NON_MODAL.get(usize::from(non_modal)).copied();
@@ -268,11 +287,15 @@ impl Interpreter {
         if m1 != NONE && stop != NONE {
             return Err(Status::ModalGroupViolation.into());
         }
-        let stop = match stop {
+        let mut stop = match stop {
             0 => Some(Stop::Pause),
             1 => Some(Stop::End),
             _ => None,
         };
+        if tool_change != NONE && stop.is_some() {
+            // One stop per block: a pen change beside M0/M2 is ambiguous.
+            return Err(Status::ModalGroupViolation.into());
+        }
 
         // --- Value words. ---
         for &letter in b"FNPSTL" {
@@ -285,9 +308,11 @@ impl Interpreter {
             return Err(Status::InvalidLineNumber.into());
         }
         let line_tag = n_word.map_or(line_no, |n| n as u32);
-        if b.take(b'T').is_some_and(|t| t.millionths() > 255 * ONE) {
+        let tool = b.take(b'T');
+        if tool.is_some_and(|t| t.millionths() > 255 * ONE) {
             return Err(Status::MaxValueExceeded.into());
         }
+        let tool = tool.map(|t| t.round() as u8);
         let spindle = b.take(b'S').map(Value::to_f32);
 
         let mut modal = self.modal;
@@ -387,13 +412,45 @@ impl Interpreter {
             in_travel: true,
         };
 
-        // Pen (M3/M4/M5) runs before motion.
+        // Pen (M3/M4/M5) runs before motion; so does a new S while the pen is down
+        // (a new height, in order with the strokes).
         if pen != NONE {
-            let down = pen != 0;
-            if down != modal.pen_down {
-                pen_move(out, &mut pos, down, s, line_tag, &mut planned)?;
+            modal.pen_down = pen != 0;
+        }
+        if pen != NONE || (modal.pen_down && spindle.is_some()) {
+            let level = match (modal.pen_down, spindle) {
+                (false, _) => 0,
+                (true, Some(v)) => s.pen_level_of(v),
+                (true, None) if self.s_given => s.pen_level_of(self.spindle),
+                (true, None) => PEN_FULL,
+            };
+            if level != modal.pen_level {
+                pen_move(out, &mut pos, level, s, line_tag, &mut planned)?;
             }
-            modal.pen_down = down;
+            modal.pen_level = level;
+        }
+        // M6: lift, to the pen-change place ($216-$218), wait, back, drop again.
+        if tool_change != NONE {
+            let (back, level) = (pos, modal.pen_level);
+            if level != 0 {
+                pen_move(out, &mut pos, 0, s, line_tag, &mut planned)?;
+            }
+            let place = s.pen_change_xy();
+            if let Some(xy) = place {
+                pos[0] = mm_to_nm(xy[0]);
+                pos[1] = mm_to_nm(xy[1]);
+                push_rapid(out, &pos, s, line_tag, &mut planned)?;
+            }
+            let split = out.cmds.len() as u8;
+            if place.is_some() {
+                pos = [back[0], back[1], pos[2]];
+                push_rapid(out, &pos, s, line_tag, &mut planned)?;
+            }
+            if level != 0 {
+                pen_move(out, &mut pos, level, s, line_tag, &mut planned)?;
+            }
+            let tool = tool.unwrap_or(self.tool_next);
+            stop = Some(Stop::PenChange { tool, split });
         }
 
         // --- Targets, in machine nanometres. ---
@@ -541,9 +598,9 @@ impl Interpreter {
         }
 
         if stop == Some(Stop::End) {
-            if modal.pen_down {
+            if modal.pen_level != 0 {
                 // Checked already: the lift stays where the block's moves went.
-                pen_move(out, &mut pos, false, s, line_tag, &mut planned)?;
+                pen_move(out, &mut pos, 0, s, line_tag, &mut planned)?;
             }
             modal = Modal {
                 inches: modal.inches,
@@ -579,6 +636,10 @@ impl Interpreter {
         self.feed = if modal.inverse_time { 0.0 } else { feed };
         if let Some(sp) = spindle {
             self.spindle = sp;
+            self.s_given = true;
+        }
+        if let Some(t) = tool {
+            self.tool_next = t;
         }
         self.pos = pos;
         self.coords = coords;
@@ -704,19 +765,20 @@ fn push_rapid(
     )
 }
 
-/// Lift or drop the pen: a servo command, or a rapid Z move to $205 / $206.
+/// Move the pen to `level` (0 = up, [`PEN_FULL`] = down): a servo command, or a
+/// rapid Z move to its place between $205 and $206.
 fn pen_move(
     out: &mut Outcome,
     pos: &mut NmPos,
-    down: bool,
+    level: u16,
     s: &Settings,
     line: u32,
     planned: &mut Reach,
 ) -> Result<(), Status> {
     match s.pen_mode() {
-        PenMode::Servo => push(out, Command::Pen { down }),
+        PenMode::Servo => push(out, Command::Pen { level }),
         PenMode::ZAxis => {
-            pos[2] = mm_to_nm(if down { s.pen_z_down() } else { s.pen_z_up() });
+            pos[2] = mm_to_nm(s.pen_z_at(level));
             push_rapid(out, pos, s, line, planned)
         }
     }
@@ -859,7 +921,8 @@ mod tests {
             run(&mut it, &s, "G10 L2 P7 X1"),
             err(Status::UnsupportedCoordSys)
         );
-        assert_eq!(run(&mut it, &s, "M6"), err(Status::UnsupportedCommand));
+        assert_eq!(run(&mut it, &s, "M62"), err(Status::UnsupportedCommand));
+        assert_eq!(run(&mut it, &s, "M0 M6"), err(Status::ModalGroupViolation));
         assert_eq!(
             run(&mut it, &s, "G1.5 X1"),
             err(Status::CommandValueNotInteger)
@@ -1127,10 +1190,111 @@ mod tests {
         assert_eq!(it.modal().motion, MotionMode::Linear);
         s.set(201, 1.0).unwrap();
         let o = run(&mut it, &s, "M3").unwrap();
-        assert_eq!(&o.cmds[..], &[Command::Pen { down: true }]);
+        assert_eq!(&o.cmds[..], &[Command::Pen { level: PEN_FULL }]);
         let o = run(&mut it, &s, "M3").unwrap();
         assert!(o.cmds.is_empty(), "no change, nothing queued");
         assert_eq!(run(&mut it, &s, "M0").unwrap().stop, Some(Stop::Pause));
+    }
+
+    /// `M3 S` puts the pen in proportion within $31..$30 (S max = down): the servo's
+    /// level, the Z pen's height; a new S while down is a new height in order with
+    /// the strokes; `M3` without any S drops it fully; `M5` lifts.
+    #[test]
+    fn m3_s_sets_the_pen_height_within_the_spindle_range() {
+        let mut s = Settings::default();
+        s.set(201, 1.0).unwrap();
+        let mut it = Interpreter::new();
+        let pen = |o: &Outcome| -> std::vec::Vec<Command> {
+            o.cmds
+                .iter()
+                .copied()
+                .filter(|c| matches!(c, Command::Pen { .. }))
+                .collect()
+        };
+        assert_eq!(
+            pen(&run(&mut it, &s, "M3").unwrap()),
+            [Command::Pen { level: PEN_FULL }]
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "M5").unwrap()),
+            [Command::Pen { level: 0 }]
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "M3 S500").unwrap()),
+            [Command::Pen { level: 500 }]
+        );
+        let o = run(&mut it, &s, "G1 X1 F100 S250").unwrap();
+        assert_eq!(o.cmds[0], Command::Pen { level: 250 }, "before the stroke");
+        assert!(matches!(o.cmds[1], Command::Move(_)));
+        assert!(
+            pen(&run(&mut it, &s, "G1 X2 S250").unwrap()).is_empty(),
+            "same S"
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "S2000").unwrap()),
+            [Command::Pen { level: PEN_FULL }]
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "M5").unwrap()),
+            [Command::Pen { level: 0 }]
+        );
+        assert!(
+            pen(&run(&mut it, &s, "S800").unwrap()).is_empty(),
+            "S while up"
+        );
+        assert_eq!(
+            pen(&run(&mut it, &s, "M3").unwrap()),
+            [Command::Pen { level: 800 }],
+            "modal S"
+        );
+        s.set(31, 200.0).unwrap();
+        assert_eq!(
+            pen(&run(&mut it, &s, "S200").unwrap()),
+            [Command::Pen { level: 0 }],
+            "S min: up"
+        );
+
+        // The Z pen: between $205 (0) and $206 (-2 mm), 400 steps/mm.
+        let s = Settings::default();
+        let mut it = Interpreter::new();
+        let o = run(&mut it, &s, "M3 S250").unwrap();
+        assert_eq!(moves(&o)[0].target, [0, 0, -200]);
+        let o = run(&mut it, &s, "S1000").unwrap();
+        assert_eq!(moves(&o)[0].target, [0, 0, -800]);
+        let o = run(&mut it, &s, "M5").unwrap();
+        assert_eq!(moves(&o)[0].target, [0, 0, 0]);
+    }
+
+    /// `M6 T2`: lift, to the pen-change place ($216-$218), pause (the split), back,
+    /// down again at the same height; without a place only the lift and drop.
+    #[test]
+    fn m6_lifts_goes_to_the_pen_change_place_and_comes_back() {
+        let mut s = Settings::default();
+        for (n, v) in [(201, 1.0), (216, 1.0), (217, 10.0), (218, 20.0)] {
+            s.set(n, v).unwrap();
+        }
+        let mut it = Interpreter::new();
+        run(&mut it, &s, "G0 X5 Y5").unwrap();
+        run(&mut it, &s, "M3 S600").unwrap();
+        let o = run(&mut it, &s, "M6 T2").unwrap();
+        assert_eq!(o.stop, Some(Stop::PenChange { tool: 2, split: 2 }));
+        assert!(o.sync, "at rest only");
+        assert_eq!(o.cmds[0], Command::Pen { level: 0 });
+        assert_eq!(moves(&o)[0].target, [800, 1600, 0], "to the place");
+        assert_eq!(moves(&o)[1].target, [400, 400, 0], "and back");
+        assert_eq!(o.cmds[3], Command::Pen { level: 600 });
+        assert_eq!(it.position(), &[5_000_000, 5_000_000, 0]);
+        s.set(216, 0.0).unwrap();
+        run(&mut it, &s, "M5").unwrap();
+        let o = run(&mut it, &s, "T7").unwrap();
+        assert!(o.cmds.is_empty());
+        let o = run(&mut it, &s, "M6").unwrap();
+        assert_eq!(
+            o.stop,
+            Some(Stop::PenChange { tool: 7, split: 0 }),
+            "the last T"
+        );
+        assert!(o.cmds.is_empty(), "pen up, no place: nothing moves");
     }
 
     #[test]

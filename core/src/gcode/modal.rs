@@ -26,6 +26,9 @@ pub struct Modal {
     /// Active work coordinate system, 0 = G54 .. 5 = G59.
     pub wcs: u8,
     pub pen_down: bool,
+    /// The pen level queued last (0 = up .. `motion::PEN_FULL` = down): `M3` with
+    /// `S` sets it within $31..$30.
+    pub pen_level: u16,
     /// G43.1 (dynamic tool length offset) in effect; G49 (the default) cancels it.
     pub tool_length: bool,
 }
@@ -39,6 +42,7 @@ impl Modal {
         inverse_time: false,
         wcs: 0,
         pen_down: false,
+        pen_level: 0,
         tool_length: false,
     };
 }
@@ -83,9 +87,9 @@ pub(super) const NON_MODAL: [NonModal; 9] = [
 // Modal groups of the G codes; the plane, arc distance, cutter compensation and path
 // mode groups are accepted (only their default exists) and checked for repeats.
 // Groups 0-10 are the G groups (motion, non-modal, units, distance, feed mode,
-// coordinate system, then the accepted defaults); 11-14 the M groups (stop, M1, pen,
-// coolant). A group not named in the block holds NONE.
-pub(super) const GROUPS: usize = 15;
+// coordinate system, then the accepted defaults); 11-15 the M groups (stop, M1, pen,
+// coolant, tool change). A group not named in the block holds NONE.
+pub(super) const GROUPS: usize = 16;
 pub(super) const NONE: u8 = u8::MAX;
 /// G code (x10), its group and its value in the group (an index into MOTION_MODES
 /// or NON_MODAL; 1 = inches / incremental / inverse time / G43.1; the coordinate
@@ -125,8 +129,8 @@ pub(super) const G_CODES: [(u16, u8, u8); 32] = [
     (610, 10, 0),
 ];
 /// M codes in the same form: stop 0 = M0, 1 = M2/M30; M1; pen 1 = down (M3/M4),
-/// 0 = up (M5); coolant (accepted, nothing to switch).
-pub(super) const M_CODES: [(u16, u8, u8); 10] = [
+/// 0 = up (M5); coolant (accepted, nothing to switch); M6, the manual pen change.
+pub(super) const M_CODES: [(u16, u8, u8); 11] = [
     (0, 11, 0),
     (20, 11, 1),
     (300, 11, 1),
@@ -137,6 +141,7 @@ pub(super) const M_CODES: [(u16, u8, u8); 10] = [
     (70, 14, 0),
     (80, 14, 0),
     (90, 14, 0),
+    (60, 15, 0),
 ];
 
 /// Put each code's value into its group; a group named twice is error 21, an unknown

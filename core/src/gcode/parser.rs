@@ -28,6 +28,10 @@ impl LineCleaner {
     pub fn reset(&mut self) {
         *self = Self::new();
     }
+    /// Inside a `(...)` comment (the bytes pushed now are its text).
+    pub fn in_comment(&self) -> bool {
+        self.in_paren
+    }
     /// The byte to keep for byte `b`, if any.
     pub fn push(&mut self, b: u8) -> Option<u8> {
         if self.in_semicolon {

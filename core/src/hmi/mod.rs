@@ -24,7 +24,7 @@ pub mod text;
 
 pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
 pub use menu::{MachineItem, MenuItem, MACHINE_LINES, MACHINE_MENU, MENU, MENU_LINES};
-pub use page::{JogPage, Page, RunPage, RunPhase, Toast, DIR_HISTORY};
+pub use page::{JogPage, Page, PromptView, RunPage, RunPhase, Toast, DIR_HISTORY, PROMPT_MESSAGE};
 
 use crate::fmath;
 use crate::keypad::{Key, KeyEvent, KeyKind};
@@ -63,6 +63,8 @@ pub struct Hmi {
     ndirs: u8,
     alarm_latched: bool,
     toast: Option<Toast>,
+    /// What the machine waits for the user to do (M0, M6), shown over the page.
+    prompt: Option<PromptView>,
     /// Bumped whenever what the screens show of the HMI may have changed (every key
     /// event, new settings, and each change [`Hmi::tick`] makes to the page or the
     /// message): the LCD skips a refresh when neither this nor the machine status
@@ -94,6 +96,21 @@ fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32, out: &mut Actions) -> boo
     true
 }
 
+/// `msg` as LCD text: what fits, anything but printable ASCII as `?`.
+fn ascii_text<const N: usize>(msg: &[u8]) -> Text<N> {
+    let mut t = Text::new();
+    for &b in msg {
+        if !t.push_ascii(if b.is_ascii_graphic() || b == 32 {
+            b
+        } else {
+            63
+        }) {
+            break;
+        }
+    }
+    t
+}
+
 /// Out of line: one copy of the list's capacity check and slot write for the dozens of
 /// places that answer a key or a tick.
 #[inline(never)]
@@ -117,6 +134,7 @@ impl Hmi {
             ndirs: 0,
             alarm_latched: false,
             toast: None,
+            prompt: None,
             revision: 0,
         }
     }
@@ -151,6 +169,26 @@ impl Hmi {
         self.changed();
         self.cfg = cfg;
         self.draw_feed = cfg.draw_feed_mm_min;
+    }
+    /// The machine's prompt (M0, M6), drawn over the page.
+    pub fn prompt(&self) -> Option<&PromptView> {
+        self.prompt.as_ref()
+    }
+    /// The machine waits for the user, or no longer does: `pen` for M6, `None` for
+    /// M0, with the last `(MSG, ...)` text.
+    pub fn set_prompt(&mut self, prompt: Option<(Option<u8>, &[u8])>) {
+        let view = prompt.map(|(pen, msg)| PromptView {
+            pen,
+            message: ascii_text(msg),
+        });
+        if view != self.prompt {
+            self.prompt = view;
+            self.changed();
+        }
+    }
+    /// A `(MSG, ...)` from the G-code: shown as a message for a while.
+    pub fn show_message(&mut self, msg: &[u8], now_ms: u32) {
+        self.show(ascii_text(msg), now_ms);
     }
     pub fn toast(&self) -> Option<&Text<28>> {
         self.toast.as_ref().map(|t| &t.text)
@@ -240,6 +278,11 @@ impl Hmi {
         let mut out = Actions::new();
         let press = ev.kind == KeyKind::Press;
         let repeat = ev.kind == KeyKind::Repeat;
+        if press && ev.key == Key::Enter && self.prompt.is_some() {
+            // D answers the machine's prompt: cycle start.
+            push(&mut out, Action::Resume);
+            return out;
+        }
         match &mut self.page {
             Page::Boot => {
                 if press {

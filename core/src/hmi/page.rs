@@ -15,6 +15,19 @@ pub struct JogPage {
     pub last_dir: [i8; 2],
 }
 
+/// The machine waits for the user (G-code's M0 or M6): drawn over any page until
+/// cycle start; D continues.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PromptView {
+    /// The pen to put in (M6 T`n`); `None`: a pause (M0).
+    pub pen: Option<u8>,
+    /// The last `(MSG, ...)` text.
+    pub message: Text<PROMPT_MESSAGE>,
+}
+
+/// The message's room on the prompt: two lines of the LCD.
+pub const PROMPT_MESSAGE: usize = 42;
+
 /// Where a running job is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RunPhase {

@@ -62,10 +62,21 @@ pub trait MotionControl {
     /// limits must apply to every move queued after the change, and nothing queued
     /// may be lost. Fakes that plan nothing may keep the default.
     fn configure(&mut self, _settings: &crate::settings::Settings) {}
-    /// The servo pen's commanded state (true = down), as far as the queue has run:
-    /// what the pen servo output shows. Fakes without a servo pen may keep the default.
+    /// The servo pen's level now (0 = up .. `motion::PEN_FULL` = down), as far as the
+    /// queue has run, lifted while a hold keeps XY at rest: what the pen servo output
+    /// shows. Fakes without a servo pen may keep the default.
+    fn pen_level(&self) -> u16 {
+        0
+    }
+    /// The servo pen touches the paper ([`MotionControl::pen_level`] above 0).
     fn pen_down(&self) -> bool {
-        false
+        self.pen_level() > 0
+    }
+
+    /// The N number of the line whose motion is running (0 or `None`: no number).
+    /// Fakes may keep the default.
+    fn line(&self) -> Option<u32> {
+        None
     }
 
     /// What runs is a G4 dwell and nothing is queued behind it (the state is then

@@ -15,7 +15,7 @@ use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
 use crate::motion::Command;
 use crate::motion::{Move, AXES};
-use crate::settings::Settings;
+use crate::settings::{PenMode, Settings};
 use core::mem::MaybeUninit;
 use heapless::Deque;
 
@@ -61,11 +61,38 @@ pub enum Event {
     Msg(&'static str),
     /// `[MSG:Job started]`.
     JobStarted,
+    /// `[MSG:Pen change: pen N, cycle start to continue]`.
+    PenChange(u8),
     /// `[MSG:Job finished ...]` with the job's duration.
     JobFinished {
         ms: u32,
         moves: u32,
     },
+}
+
+/// The longest `(MSG, ...)` text kept for the LCD (the sender gets all of it).
+pub const MESSAGE_LEN: usize = 40;
+/// A message's text.
+pub type Message = heapless::Vec<u8, MESSAGE_LEN>;
+
+/// A pen change (M6) under way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct PenChange {
+    tool: u8,
+    /// Commands of the line still to queue from this index, once at rest.
+    split: u8,
+    /// At rest, waiting for cycle start (the rest is queued).
+    waiting: bool,
+}
+
+/// What the machine waits for the user to do: the LCD's prompt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Prompt {
+    /// M0: paused until cycle start.
+    Paused,
+    /// M6 T`n`: put pen `n` in, then cycle start.
+    PenChange(u8),
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -106,6 +133,14 @@ pub struct Machine {
     hold_by_pin: bool,
     /// M0 ran: held at rest until cycle start (the lines after it queue meanwhile).
     paused: bool,
+    /// An M6 pen change under way: `split` of the line's commands (the lift, the way
+    /// to the pen-change place) run first; once at rest it pauses like M0 and queues
+    /// the rest (back, drop). Lines wait until then (they come after the way back).
+    pen_change: Option<PenChange>,
+    /// The last `(MSG, ...)` text, for the LCD's prompts.
+    message: Message,
+    /// `message` is new: the LCD shows it once.
+    message_new: bool,
     /// Soft-limit alarm: bring motion to rest, then drop the queue.
     stop_then_clear: bool,
     feed_ovr: u8,
@@ -159,6 +194,9 @@ impl Machine {
             door = false,
             hold_by_pin = false,
             paused = false,
+            pen_change = None,
+            message = Message::new(),
+            message_new = false,
             stop_then_clear = false,
             feed_ovr = 100,
             rapid_ovr = 100,
@@ -319,7 +357,7 @@ impl Machine {
     /// queue they wait until it is done (otherwise they would be answered `ok` and
     /// then dropped).
     pub fn can_accept(&self) -> bool {
-        !self.stop_then_clear && !self.jog_cancel
+        !self.stop_then_clear && !self.jog_cancel && self.pen_change.is_none_or(|pc| pc.waiting)
     }
 
     fn idle_or_alarm<M: MotionControl>(&self, m: &M) -> bool {
@@ -434,7 +472,11 @@ impl Machine {
             return Some(Ok(Taken::Now));
         }
         let mut next = 0;
-        while let Some(&cmd) = self.outcome.cmds.get(next) {
+        let upto = match stop {
+            Some(Stop::PenChange { split, .. }) => usize::from(split),
+            _ => usize::MAX,
+        };
+        while let Some(&cmd) = self.outcome.cmds.get(next).filter(|_| next < upto) {
             next += 1;
             if m.push(cmd).is_err() {
                 // free() promised room; if a planner disagrees, stop rather than
@@ -454,6 +496,14 @@ impl Machine {
                 m.hold();
             }
             Some(Stop::End) => self.job.ending = self.job.running,
+            Some(Stop::PenChange { tool, split }) => {
+                self.pen_change = Some(PenChange {
+                    tool,
+                    split,
+                    waiting: false,
+                });
+                self.poll_pen_change(m);
+            }
             None => {}
         }
         Some(Ok(if self.outcome.has_dwell() {
@@ -585,18 +635,73 @@ impl Machine {
         self.job = Job::default();
     }
 
-    /// Forget every reason to hold (`!`, the pin, the door, M0).
+    /// A pen change that has reached its place (the machine at rest) waits there
+    /// for cycle start, with the way back and the drop queued behind the pause.
+    fn poll_pen_change<M: MotionControl>(&mut self, m: &mut M) {
+        let Some(pc) = self.pen_change.as_mut() else {
+            return;
+        };
+        if pc.waiting || !m.is_idle() {
+            return;
+        }
+        pc.waiting = true;
+        let (tool, from) = (pc.tool, usize::from(pc.split));
+        self.paused = true;
+        m.hold();
+        let rest = self.outcome.cmds.get(from..).unwrap_or(&[]);
+        for &cmd in rest {
+            if m.push(cmd).is_err() {
+                self.raise(Alarm::AbortCycle, m);
+                return;
+            }
+        }
+        self.event(Event::PenChange(tool));
+    }
+
+    /// What the machine waits for the user to do, if anything.
+    pub fn prompt(&self) -> Option<Prompt> {
+        match self.pen_change {
+            Some(pc) if pc.waiting => Some(Prompt::PenChange(pc.tool)),
+            Some(_) => None,
+            None => self.paused.then_some(Prompt::Paused),
+        }
+    }
+
+    /// The last `(MSG, ...)` text (at most [`MESSAGE_LEN`] bytes).
+    pub fn message(&self) -> &[u8] {
+        &self.message
+    }
+
+    /// A line's `(MSG, ...)` comment ran: keep its text for the LCD.
+    pub fn set_message(&mut self, text: &[u8]) {
+        self.message.clear();
+        let n = text.len().min(MESSAGE_LEN);
+        let _ = self.message.extend_from_slice(text.get(..n).unwrap_or(&[]));
+        self.message_new = true;
+    }
+
+    /// A new `(MSG, ...)` came since the last call.
+    pub fn take_message_new(&mut self) -> bool {
+        core::mem::take(&mut self.message_new)
+    }
+
+    /// Forget every reason to hold (`!`, the pin, the door, M0, M6).
     fn release_holds(&mut self) {
         self.hold = false;
         self.door = false;
         self.hold_by_pin = false;
         self.paused = false;
+        self.pen_change = None;
     }
 
     /// Stop at once and drop everything queued; the interpreter continues from where
     /// the machine stopped.
     fn drop_queue<M: MotionControl>(&mut self, m: &mut M) {
         m.clear();
+        if self.settings.pen_mode() == PenMode::Servo {
+            // The pipeline leaves the servo pen up.
+            self.interpreter.pen_lifted();
+        }
         self.resync(m);
     }
 
@@ -877,6 +982,7 @@ impl Machine {
         if self.homing.is_some() {
             self.step_homing(m, now_ms);
         }
+        self.poll_pen_change(m);
         let at_rest = !m.is_moving();
         if self.stop_then_clear && at_rest {
             self.stop_then_clear = false;

@@ -54,6 +54,9 @@ const REFRESH_EVERY: u8 = 10;
 /// The welcome line that senders look for.
 pub const WELCOME: &str = "Grbl 1.1h ['$' for help]";
 const VERSION: &str = env!("CARGO_PKG_VERSION");
+/// The longest `(MSG, ...)` comment kept (its first bytes; the rest is dropped): the
+/// message's 40 characters and "MSG,". Each byte here is RAM the image is short of.
+const COMMENT_CAP: usize = crate::machine::state::MESSAGE_LEN + 4;
 
 /// The protocol handler.
 pub struct Protocol {
@@ -73,7 +76,10 @@ pub struct Protocol {
     /// say it once; nothing is written in part).
     welcome_due: bool,
     listing: Option<Listing>,
-    lines_received: u32,
+    /// The line's first `(...)` comment, as sent (up to [`COMMENT_CAP`] bytes).
+    comment: Vec<u8, COMMENT_CAP>,
+    /// That comment has ended: later ones on the line are not kept.
+    comment_done: bool,
     reports: u8,
     startup: [StartupLine; STARTUP_LINES],
     startup_next: Option<usize>,
@@ -129,7 +135,8 @@ impl Protocol {
             status_requested = 0,
             welcome_due = false,
             listing = None,
-            lines_received = 0,
+            comment = Vec::new(),
+            comment_done = false,
             reports = 0,
             startup = [String::new(), String::new()],
             startup_next = Some(0),
@@ -339,18 +346,27 @@ impl Protocol {
         // The line stays where it is while it runs (and if it waits): the machine
         // borrows it beside the fields it changes, so no copy of it sits on the stack
         // under the G-code and reconfiguration paths.
+        if self.machine.prompt().is_some() && message_of(&self.comment).is_some() {
+            // A new message waits while the machine waits for the user: the prompt
+            // keeps the message it was given (a pen change's "pen 2: red" is not
+            // replaced by the next layer's before the pen is in).
+            return false;
+        }
         let r = match self.line.first() {
             None => {
                 // Grbl answers blank lines (and lines of only a comment) with ok,
                 // but a bare CR LF pair is one line end, not two.
+                if !self.machine.check_mode() && !self.machine.is_locked() {
+                    self.message();
+                }
                 Some(Ok(()))
             }
             Some(b'$') => self.system_command(m),
             Some(_) => {
-                let line_no = self.lines_received.wrapping_add(1);
-                let r = self.machine.execute(&self.line, line_no, m, now_ms);
-                if r.is_some() {
-                    self.lines_received = line_no;
+                // Moves carry the line's N number only (0 without one): `Ln:`.
+                let r = self.machine.execute(&self.line, 0, m, now_ms);
+                if matches!(r, Some(Ok(_))) {
+                    self.message();
                 }
                 if r == Some(Ok(Taken::WhenIdle)) {
                     self.flush_events();
@@ -374,6 +390,20 @@ impl Protocol {
         true
     }
 
+    /// A `(MSG, text)` comment on the line just run: `[MSG:text]` to the sender, and
+    /// the text kept for the LCD. "MSG" in any case, spaces around the comma allowed.
+    fn message(&mut self) {
+        let comment = core::mem::take(&mut self.comment);
+        let Some(text) = message_of(&comment) else {
+            return;
+        };
+        let mut w = self.w();
+        w.put(b"[MSG:");
+        w.put(text);
+        w.put(b"]\r\n");
+        self.machine.set_message(text);
+    }
+
     fn finish_line(&mut self, r: Result<(), Status>) {
         self.finish_frame();
         self.respond(r);
@@ -381,4 +411,19 @@ impl Protocol {
             self.welcome();
         }
     }
+}
+
+/// The text of a `MSG, text` comment ("MSG" in any case, spaces around the comma).
+fn message_of(comment: &[u8]) -> Option<&[u8]> {
+    let c = trim_start(comment);
+    let rest = c
+        .get(3..)
+        .filter(|_| c.get(..3).is_some_and(|m| m.eq_ignore_ascii_case(b"MSG")))?;
+    Some(trim_start(trim_start(rest).strip_prefix(b",")?))
+}
+
+/// `s` without its leading spaces.
+fn trim_start(s: &[u8]) -> &[u8] {
+    let n = s.iter().take_while(|&&b| b == b' ').count();
+    s.get(n..).unwrap_or(&[])
 }

@@ -9,7 +9,7 @@ use crate::gcode::Status;
 use crate::machine::state::Event;
 use crate::machine::{MotionControl, RunState};
 use crate::motion::AXES;
-use crate::settings::Settings;
+use crate::settings::{PenMode, Settings};
 
 /// Millimetres per reported unit: 25.4 when reports are in inches ($13), else 1
 /// (dividing by it is then exact).
@@ -65,6 +65,12 @@ impl Protocol {
                 Event::Alarm(a) => self.say_n(b"ALARM:", a.code()),
                 Event::Msg(t) => self.notify(t),
                 Event::JobStarted => self.notify("Job started"),
+                Event::PenChange(tool) => {
+                    let mut w = self.w();
+                    w.put(b"[MSG:Pen change: pen ");
+                    put_decimal(&mut w, u64::from(tool), false, 0);
+                    w.put(b", cycle start to continue]\r\n");
+                }
                 Event::JobFinished { ms, moves } => {
                     let mut w = self.w();
                     w.put(b"[MSG:Job finished: ");
@@ -133,7 +139,24 @@ impl Protocol {
         } else {
             0
         };
+        // Grbl 1.1's `Ln:`: the N number of the line whose motion runs.
+        if let Some(n) = m.line().filter(|&n| n > 0) {
+            w.put(b"|Ln:");
+            put_decimal(&mut w, u64::from(n), false, 0);
+        }
         field_pair(&mut w, b"|FS:", round_i32(m.speed() / scale), spindle);
+        // Grbl 1.1's accessory field: the pen touching the paper is the spindle on
+        // (`S`, clockwise). The servo as it is now; a Z pen by where Z stands (a
+        // partial `M3 S` height is down too).
+        let pen_down = match settings.pen_mode() {
+            PenMode::Servo => m.pen_down(),
+            PenMode::ZAxis => {
+                // Off the up position toward down (by more than 1 % of the way).
+                let z = machine.machine_position(m)[2];
+                let (up, down) = (settings.pen_z_up(), settings.pen_z_down());
+                (z - up) * (down - up) > 0.01 * (down - up) * (down - up)
+            }
+        };
         let inputs = machine.inputs();
         let pins = [
             inputs.limits[0],
@@ -160,6 +183,9 @@ impl Protocol {
             let (fo, ro) = machine.overrides();
             field_pair(&mut w, b"|Ov:", i32::from(fo), i32::from(ro));
             w.put(b",100");
+        }
+        if pen_down {
+            w.put(b"|A:S");
         }
         w.put(b">\r\n");
     }

@@ -67,7 +67,6 @@ impl Protocol {
         self.ok_when_idle = false;
         self.after_cr = false;
         self.listing = None;
-        self.lines_received = 0;
         self.startup_next = Some(0);
         // The welcome (and the reset's alarm) as soon as the output has room for them
         // whole: a flood of resets says it once and cuts no line.
@@ -92,9 +91,18 @@ impl Protocol {
                 self.line_ready = true;
                 return true;
             }
+            let in_comment = self.cleaner.in_comment();
             if let Some(c) = self.cleaner.push(b) {
                 if self.line.push(c).is_err() {
                     self.line_too_long = true;
+                }
+            }
+            // The first `(...)` comment's text, for `(MSG, ...)`.
+            if in_comment && !self.comment_done {
+                if self.cleaner.in_comment() {
+                    let _ = self.comment.push(b);
+                } else {
+                    self.comment_done = true;
                 }
             }
         }
@@ -102,6 +110,8 @@ impl Protocol {
     }
 
     pub(super) fn finish_frame(&mut self) {
+        self.comment.clear();
+        self.comment_done = false;
         self.line.clear();
         self.line_too_long = false;
         self.line_ready = false;

@@ -195,7 +195,11 @@ impl Screens {
 
     fn draw(&mut self, hmi: &Hmi, st: &Status, now_ms: u32, fb: &mut FrameBuffer) {
         let page = hmi.page();
-        let key = page_key(page);
+        let key = match hmi.prompt() {
+            // The prompt covers the page; M0's and each pen's are distinct pages.
+            Some(p) => [10, p.pen.map_or(0, |n| u32::from(n) + 1), 0, 0, 0, 0],
+            None => page_key(page),
+        };
         let fresh = self.key != Some(key);
         if fresh {
             fb.fill(0, 0, 128, 64, false);
@@ -217,6 +221,10 @@ impl Screens {
         let pen_down = hmi.pen_is_down(st);
         let state = st.state.name().as_bytes();
         let mut l = Line::new();
+        if let Some(prompt) = hmi.prompt() {
+            prompt_page(fb, prompt, state, &mut l);
+            return;
+        }
         let hint: &[u8] = match page {
             Page::Boot => {
                 if fresh {
@@ -507,6 +515,30 @@ fn boot(fb: &mut FrameBuffer) {
     }
     put(fb, Cell::at(31, 42, 11), b"pen plotter");
     put(fb, Cell::at(9, 55, 22).small(), b"STM32F103 + ST7920 LCD");
+}
+
+/// The machine waits for the user: M0's pause or M6's pen change, with the last
+/// `(MSG, ...)` text on two lines, and what D does.
+fn prompt_page(fb: &mut FrameBuffer, prompt: &crate::hmi::PromptView, state: &[u8], l: &mut Line) {
+    fb.fill(0, 11, 128, 43, false);
+    let row = |i| Cell::at(0, row_y(i), 21);
+    match prompt.pen {
+        None => {
+            title_bar(fb, b"Paused", state);
+            put(fb, row(0), b"Paused: press D to");
+            put(fb, row(1), b"continue");
+        }
+        Some(n) => {
+            title_bar(fb, b"Pen change", state);
+            put_line(fb, row(0).inverse(true), l, b"Pen \x08", &[f32::from(n)]);
+            put(fb, row(1), b"Put it in, press D");
+        }
+    }
+    let msg = prompt.message.bytes();
+    let (first, rest) = msg.split_at(msg.len().min(21));
+    put(fb, row(2), first);
+    put(fb, row(3), rest.strip_prefix(b" ").unwrap_or(rest));
+    bottom_line(fb, b"D:continue", None);
 }
 
 #[cfg(test)]

@@ -179,6 +179,11 @@ impl Timer {
             // One-pulse mode: the counter stops at the update event.
             self.cr1 &= !1;
         }
+        // AOE (BDTR bit 14, advanced timers): MOE is set again at the update event
+        // (RM0008 14.4.18); the HAL's PWM sets AOE, not MOE.
+        if self.advanced && self.bdtr & (1 << 14) != 0 {
+            self.bdtr |= 1 << 15;
+        }
         self.psc_active = self.psc;
         self.arr_active = self.arr;
         for ch in 0..4 {
@@ -515,6 +520,27 @@ mod tests {
             [(300_035, false)],
             "ends at CCR, no pulse at the update"
         );
+    }
+
+    /// TIM1 (advanced): outputs are off until MOE; AOE (what the HAL's PWM sets)
+    /// sets MOE at the next update event, and the PWM appears on the pin.
+    #[test]
+    fn aoe_turns_the_advanced_timers_outputs_on_at_the_update() {
+        let mut t = Timer::new("TIM1", true);
+        t.tick_t = 1;
+        let mut e = Vec::new();
+        w(&mut t, 0x2C, 99, 0, &mut e); // ARR
+        w(&mut t, 0x18, 0x60, 0, &mut e); // CH1 PWM mode 1
+        w(&mut t, 0x34, 30, 0, &mut e); // CCR1
+        w(&mut t, 0x20, 1, 0, &mut e); // CC1E
+        w(&mut t, 0x44, 1 << 14, 0, &mut e); // AOE, MOE still clear
+        w(&mut t, 0x00, 1, 0, &mut e); // CEN
+        t.advance(99, &mut e);
+        assert!(e.is_empty(), "no output before the update: {e:?}");
+        t.advance(160, &mut e);
+        assert_eq!(t.bdtr & (1 << 15), 1 << 15, "MOE set at the update");
+        let levels: Vec<bool> = e.iter().map(|x| x.level).collect();
+        assert_eq!(levels, [true, false], "the pulse after the update: {e:?}");
     }
 
     #[test]
