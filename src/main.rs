@@ -535,7 +535,7 @@ mod app {
         let (ref hmi, ref status) = cx.shared.core.lock(|c| {
             let (ctl, pipeline) = c.parts();
             let status = ctl.refresh_view(pipeline);
-            (*ctl.hmi(), status)
+            (ctl.hmi().clone(), status)
         });
         let _ = screens.render(hmi, status, now, fb);
         if st7920::flush(fb, |bytes| spi.write(bytes)).is_err() {

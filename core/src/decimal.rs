@@ -104,16 +104,12 @@ pub fn decimal(buf: &mut [u8; DECIMAL_MAX], a: u64, neg: bool, decimals: usize) 
     buf.len() - start
 }
 
-/// `x` rounded half away from zero to an `i32` (saturating): one copy of the
-/// conversion's range checks for every caller.
+/// `x` rounded half away from zero to an `i32` (saturating).
 pub fn round_i32(x: f32) -> i32 {
     fmath::round(x) as i32
 }
 
-/// `x` truncated to a `u32` (saturating, NaN = 0). Out of line, as `round_i32`: the
-/// soft-float conversion and its range checks are some 40 bytes, which the settings'
-/// accessors would otherwise repeat at every use.
-#[inline(never)]
+/// `x` truncated to a `u32` (saturating, NaN = 0).
 pub fn to_u32(x: f32) -> u32 {
     x as u32
 }

@@ -49,9 +49,7 @@ pub fn nm_to_mm(nm: Nm) -> f32 {
     nm as f32 / NM_PER_MM as f32
 }
 
-/// The distance from `a` to `b` in mm (saturating), for geometry. Out of line: one copy
-/// of the saturating difference for the arc geometry's and the lengths' many uses.
-#[inline(never)]
+/// The distance from `a` to `b` in mm (saturating), for geometry.
 pub fn mm_between(a: Nm, b: Nm) -> f32 {
     nm_to_mm(b.saturating_sub(a))
 }

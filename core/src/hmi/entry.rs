@@ -50,9 +50,7 @@ impl Field {
         f
     }
 
-    /// This field's table entry. Out of line: one copy of the checked lookup for the
-    /// accessors below and their many callers.
-    #[inline(never)]
+    /// This field's table entry.
     fn spec(&self) -> &'static FieldSpec {
         FIELD_SPECS.get(usize::from(self.spec)).unwrap_or(&NO_SPEC)
     }

@@ -303,8 +303,6 @@ impl Job {
 }
 
 /// Append a move (no room: the job is too complex, which the fixed jobs never are).
-/// Out of line, as `hmi::push`: one copy of the list's slot write for every move.
-#[inline(never)]
 fn add(out: &mut Actions, target: StepPos, path: Path, feed: Feed) -> Result<(), JobError> {
     let m = Move {
         target,

@@ -46,10 +46,8 @@ const TOAST_MS: u32 = 2500;
 /// A job counts as stopped early if the machine sits idle this long short of its end.
 const SETTLE_MS: u32 = 1000;
 
-/// The HMI state machine. The LCD task draws from a copy taken under a short lock:
-/// `Copy`, so that copy is one block move (a derived field-by-field `Clone` of the
-/// pages, jobs and texts cost the image 300 B of flash).
-#[derive(Clone, Copy, Debug)]
+/// The HMI state machine. The LCD task draws from a clone taken under a short lock.
+#[derive(Clone, Debug)]
 pub struct Hmi {
     cfg: Config,
     page: Page,
@@ -111,9 +109,7 @@ fn ascii_text<const N: usize>(msg: &[u8]) -> Text<N> {
     t
 }
 
-/// Out of line: one copy of the list's capacity check and slot write for the dozens of
-/// places that answer a key or a tick.
-#[inline(never)]
+/// Append an action to a response.
 fn push(out: &mut Actions, a: Action) {
     // Capacity covers the largest single response (a job start); never silently
     // exceeded by construction, checked here rather than panicking.
@@ -228,9 +224,7 @@ impl Hmi {
     }
 
     /// [`Hmi::say`] for a message built at run time: taken as it is, not through
-    /// `&str` (which would check its UTF-8 again). Out of line: one copy of the
-    /// message's move into the toast for every place that shows one.
-    #[inline(never)]
+    /// `&str` (which would check its UTF-8 again).
     fn show(&mut self, text: Text<28>, now_ms: u32) {
         self.changed();
         self.toast = Some(Toast {
@@ -268,9 +262,8 @@ impl Hmi {
     ///
     /// This and [`Hmi::tick`] are the HMI's entry points, kept out of line so that their
     /// working state is gone before the controller applies their actions (through the
-    /// machine and the planner, the deepest path of the keypad and protocol tasks):
-    /// -792 B of worst-case stack in the release image, -776 B in the dev image, whose
-    /// RAM is otherwise within a few hundred bytes of its budget (.ci/stack-depth).
+    /// machine and the planner, the deepest path of the keypad and protocol tasks; the
+    /// RAM budget needs it: docs/architecture.md, "Kept for RAM").
     #[inline(never)]
     pub fn key(&mut self, ev: KeyEvent, st: &Status, now_ms: u32) -> Actions {
         // Keys are rare: any of them counts as a change.
@@ -641,10 +634,11 @@ impl Hmi {
                 *next = st.dir;
                 self.ndirs += 1;
             } else {
-                // Full: the oldest drops out. Built whole, not `copy_within`, which
-                // would be the image's only call of the general `memmove` (1.6 KB).
-                let dirs = self.dirs;
-                self.dirs = core::array::from_fn(|i| dirs.get(i + 1).copied().unwrap_or(st.dir));
+                // Full: the oldest drops out.
+                self.dirs.copy_within(1.., 0);
+                if let Some(last) = self.dirs.last_mut() {
+                    *last = st.dir;
+                }
             }
         }
         if let Some(t) = &self.toast {

@@ -496,7 +496,7 @@ fn scroll_bar(fb: &mut FrameBuffer, top: usize, count: usize) {
 }
 
 /// The boot screen's sine period: row of x = 16 + 2i, i.e. round(32 - 7 sin(2 pi i / 48))
-/// (checked against the formula in the tests; a table costs 49 bytes, sinf far more).
+/// (checked against the formula in the tests).
 const BOOT_WAVE: [u8; 49] = [
     32, 31, 30, 29, 29, 28, 27, 26, 26, 26, 25, 25, 25, 25, 25, 26, 26, 26, 27, 28, 29, 29, 30, 31,
     32, 33, 34, 35, 36, 36, 37, 38, 38, 38, 39, 39, 39, 39, 39, 38, 38, 38, 37, 36, 36, 35, 34, 33,

@@ -150,8 +150,8 @@ impl Executor {
         self.turn_guard = if ticks == 0 {
             0
         } else {
-            // max/min, not clamp: clamp's min <= max assertion (max_reload >= 4 here)
-            // would link core's formatting machinery into the firmware (~330 B).
+            // max/min, not clamp: clamp's min <= max assertion would give the step
+            // interrupt a panic path (and its stack), though max_reload >= 4 here.
             ticks.max(2).min(self.max_reload)
         };
     }
