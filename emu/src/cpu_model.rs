@@ -23,6 +23,10 @@ pub enum CpuModel {
 /// pessimistic.
 pub static DEFAULT_CPU_MODEL: AtomicU8 = AtomicU8::new(0);
 
+thread_local! {
+    static THREAD_MODEL: std::cell::Cell<Option<CpuModel>> = const { std::cell::Cell::new(None) };
+}
+
 impl CpuModel {
     pub fn name(self) -> &'static str {
         match self {
@@ -43,7 +47,16 @@ impl CpuModel {
         DEFAULT_CPU_MODEL.store(1 + m as u8, Ordering::Relaxed);
     }
 
+    /// Pin the model of machines this thread creates (a test that states why it
+    /// runs under another model than the process's).
+    pub fn set_for_thread(m: CpuModel) {
+        THREAD_MODEL.with(|t| t.set(Some(m)));
+    }
+
     pub fn default_model() -> CpuModel {
+        if let Some(m) = THREAD_MODEL.with(|t| t.get()) {
+            return m;
+        }
         match DEFAULT_CPU_MODEL.load(Ordering::Relaxed) {
             1 => CpuModel::Typical,
             2 => CpuModel::Pessimistic,

@@ -629,6 +629,12 @@ impl<'a> Machine<'a> {
 
     /// A data read from the flash: its wait states stall the block.
     fn flash_data_read(uc: &mut Unicorn<State>) {
+        // A memory hook brings back the IT state of the accessing instruction, which
+        // unicorn then keeps (see `mmio_time`): clear it.
+        let xpsr = uc.reg_read(RegisterARM::XPSR).unwrap_or(0);
+        if xpsr & IT_BITS != 0 {
+            let _ = uc.reg_write(RegisterARM::XPSR, xpsr & !IT_BITS);
+        }
         let s = uc.get_data_mut();
         let ws = s.board.flash.latency();
         s.block.stall += s.model.flash_read(ws);

@@ -409,7 +409,12 @@ fn cmd_soak(minutes: f64, elf: Option<PathBuf>, log: Option<&Path>) -> Result<Ex
 
 fn cmd_bench(elf: Option<PathBuf>) -> Result<ExitCode, String> {
     let elf = elf_or_build(elf)?;
-    print!("{}", inkstep_emu::bench::run(&elf)?);
+    // Both cycle models, unless `--cpu` picked one.
+    let models = match std::env::args().any(|a| a == "--cpu" || a.starts_with("--cpu=")) {
+        true => vec![CpuModel::default_model()],
+        false => vec![CpuModel::Typical, CpuModel::Pessimistic],
+    };
+    print!("{}", inkstep_emu::bench::run(&elf, &models)?);
     Ok(ExitCode::SUCCESS)
 }
 
