@@ -22,7 +22,6 @@ use common::booted;
 use inkstep_core::stepper::MAX_STEP_RATE;
 use inkstep_emu::clock::{T_PER_MS, T_PER_S, T_PER_US};
 use inkstep_emu::count_trial::{self, Counted, Course};
-use inkstep_emu::cpu_model::CpuModel;
 use inkstep_serial::sender::Flow;
 
 /// The largest ratio of a step interval to the longer of its two neighbours that the
@@ -113,14 +112,8 @@ fn a_long_diagonal_at_f4000_and_16x_microstepping_has_no_gap() {
     );
 }
 
-/// Under the typical cycle model only: under the pessimistic one (the default) one
-/// interval at the top of the circle (Y about to reverse, X stepping alone) is 38 µs
-/// between 14 µs neighbours (2.69 x), at a cap of 70,000 or 80,000 events/s alike, so
-/// not the cap: the preparation did not run in the 80 µs before it, and the cause is
-/// not found yet (issue 20, left open).
 #[test]
 fn an_r20_circle_at_f4000_and_16x_microstepping_has_no_gap() {
-    CpuModel::set_for_thread(CpuModel::Typical);
     // To the circle's start, then a full circle around (20, 40) through it.
     let train = run(&FINE, "G21 G90\nG1 X40 Y40 F4000\nG2 X40 Y40 I-20 J0\n");
     let (jump, at) = train.worst_jump();

@@ -39,13 +39,13 @@ pub fn tail_period(pulse_ticks: u32) -> u32 {
 /// for: every block's speed is capped so that its events come no faster
 /// ([`crate::planner::geometry`]), so a program that asks for more runs slower, and the
 /// step queue never runs dry. Measured on the product image in the emulator under its
-/// pessimistic cycle model (`cargo emu bench`, emu/README.md "Cycle model"): with a
-/// job streaming over USB, `?` polling and the LCD refreshing, a diagonal traced point
-/// by point (one axis per event, the costlier tracing) leaves intervals of 1.50-1.53
-/// times the median at 90,000 events/s (gaps), 1.49 at 85,000, 1.28-1.44 at 80,000
-/// and 1.18 at 70,000 (emu/tests/step_rate.rs); the cap keeps 22 % below the first
-/// gaps. (At the old flat 1.5 cycles per instruction 90,000 passed.)
-pub const MAX_STEP_RATE: f32 = 70_000.0;
+/// pessimistic cycle model (emu/README.md "Cycle model"; emu/tests/step_rate.rs): with
+/// a job streaming over USB, `?` polling and the LCD refreshing, a diagonal traced
+/// point by point (one axis per event, the costlier tracing) asking for more than the
+/// cap runs with a worst interval of 1.26 times its neighbours at 70,000 events/s,
+/// 1.43 at 80,000, 1.46 at 90,000, and leaves a 168 µs gap (the queue ran dry) at
+/// 100,000. The cap keeps 20 % below that first failure.
+pub const MAX_STEP_RATE: f32 = 80_000.0;
 
 /// Largest wait one command can carry (24 bits of timer ticks).
 pub const MAX_WAIT: u32 = (1 << 24) - 1;
