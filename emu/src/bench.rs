@@ -394,7 +394,7 @@ pub fn run(elf: &Path, models: &[CpuModel]) -> Result<String, String> {
         CpuModel::set_default(m);
         let _ = writeln!(
             out,
-            "\n## Cycle model: {}\n\n{}",
+            "\n### Cycle model: {}\n\n{}",
             m.name(),
             reference_loop(m)
         );
