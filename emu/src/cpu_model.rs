@@ -440,6 +440,18 @@ mod tests {
         );
     }
 
+    /// `subs r0, #1; cmp r0, #0; bne` in flash: measured at 6 cycles a turn on
+    /// STM32F103ZET6 and VET6 at 72 MHz (MarlinFirmware/Marlin pull request 19059).
+    #[test]
+    fn marlin_delay_loop_in_flash() {
+        let code = asm(&[0x3801, 0x2800, 0xD1FC]);
+        let a = 0x0800_2000;
+        let t = block_cost(&code, a, CpuModel::Typical, 2);
+        let p = block_cost(&code, a, CpuModel::Pessimistic, 2);
+        assert_eq!(block_total(&t, a + 6, Some(a), CpuModel::Typical, 2), 7);
+        assert_eq!(block_total(&p, a + 6, Some(a), CpuModel::Pessimistic, 2), 8);
+    }
+
     #[test]
     fn push_pop_divide_and_literal() {
         // push {r4-r7, lr}: 1 + 5; udiv r0, r0, r1: 7 / 12; pop {r4-r7, pc}: 1 + 5 + P.
