@@ -88,6 +88,10 @@ mod app {
     /// writer), read by every task.
     static NOW_MS: AtomicU32 = AtomicU32::new(0);
 
+    /// While the LCD powers up: the millisecond its next step is due (0: none). The
+    /// tick pends the LCD task then, so the power-up waits cost no CPU.
+    static LCD_DUE_MS: AtomicU32 = AtomicU32::new(0);
+
     fn now_ms() -> u32 {
         NOW_MS.load(Ordering::Relaxed)
     }
@@ -349,7 +353,8 @@ mod app {
         if now.is_multiple_of(KEYPAD_SCAN_MS) {
             rtic::pend(Interrupt::USART3);
         }
-        if now.is_multiple_of(LCD_REFRESH_MS) {
+        let lcd_due = LCD_DUE_MS.load(Ordering::Relaxed);
+        if now.is_multiple_of(LCD_REFRESH_MS) || (lcd_due != 0 && now == lcd_due) {
             rtic::pend(Interrupt::USART2);
         }
     }
@@ -502,31 +507,48 @@ mod app {
     /// under a short lock, draw it into the frame buffer, send only the changed words.
     /// The SPI waits here are the only blocking waits in the firmware; every other
     /// task preempts them. Also logs the step interrupt's late armings when their
-    /// count has grown (at most 10 lines a second, from the task with time to spare).
+    /// count has grown, once the queue is empty (from the task with time to spare).
     #[task(binds = USART2, priority = 1, shared = [core], local = [
         lcd_spi,
         screens,
         fb,
-        up: bool = false,
+        // Power-up steps done (0: none; past `INIT_SEQUENCE.len() + 1`: up).
+        init_step: usize = 0,
+        init_due: u32 = 0,
         late_seen: u32 = 0,
     ])]
     fn lcd_refresh(mut cx: lcd_refresh::Context) {
-        let late = board::late_step_armings();
-        if late != *cx.local.late_seen {
-            *cx.local.late_seen = late;
-            defmt::warn!(
-                "step interrupt late {} times since power-up: steps delayed, none lost",
-                late
-            );
-        }
         let spi = cx.local.lcd_spi;
-        if !*cx.local.up {
-            // The controller comes up in graphics mode; after that only the changed
-            // bytes are sent (core::screens::st7920).
-            if board::lcd_init(spi).is_err() {
-                defmt::warn!("LCD init failed");
+        let init = board::INIT_SEQUENCE;
+        let step = *cx.local.init_step;
+        if step <= init.len() + 1 {
+            // The controller comes up in graphics mode, one instruction per wake-up at
+            // the tick its wait ends (rounded up to whole milliseconds, plus one for
+            // the tick's phase); after that only the changed bytes are sent
+            // (core::screens::st7920).
+            let now = now_ms();
+            if step > 0 && (now.wrapping_sub(*cx.local.init_due) as i32) < 0 {
+                return;
             }
-            *cx.local.up = true;
+            if step <= init.len() {
+                let wait_ms = match step.checked_sub(1).and_then(|i| init.get(i)) {
+                    None => board::POWER_UP_MS,
+                    Some(&(cmd, wait_us)) => {
+                        if spi.command(cmd).is_err() {
+                            defmt::warn!("LCD init failed");
+                        }
+                        wait_us.div_ceil(1000)
+                    }
+                };
+                let due = now.wrapping_add(wait_ms + 1).max(1);
+                *cx.local.init_due = due;
+                LCD_DUE_MS.store(due, Ordering::Relaxed);
+                *cx.local.init_step = step + 1;
+                return;
+            }
+            // The last wait is over: draw from now on.
+            LCD_DUE_MS.store(0, Ordering::Relaxed);
+            *cx.local.init_step = step + 1;
         }
         let (screens, fb) = (&mut **cx.local.screens, &mut **cx.local.fb);
         let now = now_ms();
@@ -537,6 +559,18 @@ mod app {
             let status = ctl.refresh_view(pipeline);
             (ctl.hmi().clone(), status)
         });
+        // The late step armings, logged at rest only: a defmt frame masks every
+        // interrupt while it is written (critical-section), for about 35 µs under the
+        // emulator's pessimistic cycle model, which is itself enough to make the next
+        // step arming late.
+        let late = board::late_step_armings();
+        if late != *cx.local.late_seen && status.queue_empty {
+            *cx.local.late_seen = late;
+            defmt::warn!(
+                "step interrupt late {} times since power-up: steps delayed, none lost",
+                late
+            );
+        }
         let _ = screens.render(hmi, status, now, fb);
         if st7920::flush(fb, |bytes| spi.write(bytes)).is_err() {
             defmt::warn!("LCD write failed");

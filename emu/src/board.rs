@@ -187,6 +187,16 @@ impl Board {
         self.pins_changed();
     }
 
+    /// HCLK cycles per PCLK1 and per PCLK2 cycle (the APB prescalers), for the cost
+    /// of a register access through the AHB-to-APB bridges.
+    pub fn apb_ratios(&self) -> (u32, u32) {
+        let h = self.rcc.hclk_hz();
+        (
+            (h / self.rcc.pclk1_hz().max(1)).max(1),
+            (h / self.rcc.pclk2_hz().max(1)).max(1),
+        )
+    }
+
     pub fn sysclk_hz(&self) -> u32 {
         self.rcc.sysclk_hz()
     }

@@ -1,6 +1,6 @@
 //! Virtual time. One unit ("T") is 1/144 µs, half a cycle of the 72 MHz system clock,
-//! so that the cycle model's 1.5 cycles per instruction is a whole number of units at
-//! 72 MHz (3 T) and at the 8 MHz reset clock (27 T). Everything the emulator reports
+//! so that a cycle is a whole number of units at 72 MHz (2 T), 36 MHz and the 8 MHz
+//! reset clock (18 T). Everything the emulator reports
 //! is derived from this counter, which only instructions and modelled hardware delays
 //! advance: a run is the same every time.
 

@@ -20,7 +20,7 @@ use inkstep_serial::sender::Flow;
 use std::path::Path;
 
 /// Steps per mm of X and Y in the trials: with `$110 = 33751` mm/min one axis may step
-/// at 90,002 Hz, just above the planner's cap of 90,000 events/s.
+/// just above the planner's cap (`MAX_STEP_RATE`).
 pub const STEPS_PER_MM: f64 = 160.0;
 
 /// The shape of a trial's moves.

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod board;
 pub mod clock;
 pub mod count_trial;
+pub mod cpu_model;
 pub mod debug;
 pub mod demo;
 pub mod elf;

@@ -2,18 +2,19 @@
 //! the ARMv7-M exception model done here (unicorn has no NVIC: stacking, EXC_RETURN,
 //! tail-chaining, late arrival, fault escalation), the cycle model, and the run loop.
 //!
-//! Cycle model (emu/README.md): every instruction costs 1.5 CPU cycles (the Cortex-M3's
-//! single-cycle core behind the flash's 2 wait states at 72 MHz, with the prefetch
-//! buffer hiding most of them); exception entry 12 cycles, return 12, tail-chain 6;
-//! flash programming stalls the CPU for the operation's time; WFI sleeps until the
+//! Cycle model (emu/README.md, `cpu_model.rs`): each instruction costs its Cortex-M3
+//! cycles (TRM Table 3.1) with the flash's wait states after taken branches and on
+//! data reads from flash, APB accesses their bridge cycles, exceptions their entry,
+//! return and tail-chain cycles, in a typical or a pessimistic mode; flash programming stalls the CPU for the operation's time; WFI sleeps until the
 //! next event. Time advances per translated block (a straight run of instructions):
 //! interrupts are taken at block boundaries, peripherals (timers, SPI, USB) have
 //! their own exact times.
 
 use crate::board::{Board, Halt, FLASH_BASE};
 use crate::clock::{t_per_cycle, us};
+use crate::cpu_model::{block_cost, block_total, instr_len, BlockCost, CpuModel};
 use crate::elf::Image;
-use crate::nvic::{ENTRY_CYCLES, HARDFAULT, RETURN_CYCLES, SVCALL, TAIL_CHAIN_CYCLES};
+use crate::nvic::{HARDFAULT, SVCALL};
 use crate::periph::flash::{Flash, SIZE as FLASH_SIZE};
 use crate::periph::BusError;
 use crate::profiler::Profiler;
@@ -81,8 +82,11 @@ pub struct Profile {
 /// Everything the hooks reach: the board and the CPU-side bookkeeping.
 pub struct State {
     pub board: Board,
-    /// Instruction counts of translated blocks, by (address, size).
-    blocks: HashMap<(u64, u32), u32>,
+    /// Translated blocks' costs (`costs`), by (address, size, flash wait states).
+    blocks: HashMap<(u64, u32, u32), u32>,
+    costs: Vec<BlockCost>,
+    /// The cycle model's mode.
+    pub model: CpuModel,
     /// Stop the CPU at the next block boundary.
     stop_requested: bool,
     /// The current run's end.
@@ -108,6 +112,8 @@ pub struct State {
     /// When recording: (end time, exception) of each stretch of execution.
     pub runs: Option<Vec<(u64, usize)>>,
     pub instructions: u64,
+    /// CPU cycles charged to instructions (exception entry and return not counted).
+    pub cycles: u64,
     /// Watchdog resets so far.
     pub watchdog_resets: u32,
     pub hardfaults: u32,
@@ -133,9 +139,15 @@ pub struct Machine<'a> {
 #[derive(Clone, Copy, Debug, Default)]
 struct Block {
     addr: u32,
+    size: u32,
     /// Instructions not yet charged (0 once charged).
     n: u32,
     start: u64,
+    /// Its costs (an index into `State::costs`) and the wait states they assume.
+    cost: u32,
+    ws: u32,
+    /// Cycles the block stalled so far on bus accesses (APB, flash data).
+    stall: u32,
 }
 
 /// Interrupts are taken at block boundaries, so one that becomes due inside a block
@@ -166,15 +178,6 @@ fn count_instructions(code: &[u8]) -> u32 {
     n
 }
 
-fn instr_len(halfword: u16) -> u32 {
-    // Thumb-2: 0b11101, 0b11110 and 0b11111 in the top bits start a 32-bit instruction.
-    if halfword >> 11 >= 0b11101 {
-        4
-    } else {
-        2
-    }
-}
-
 impl<'a> Machine<'a> {
     /// A board with `image` flashed and its flash array in `flash` (kept by the caller
     /// in a file, or blank), held in reset until the first run.
@@ -203,6 +206,8 @@ impl<'a> Machine<'a> {
         let state = State {
             board: Board::new(flash, settings.clone()),
             blocks: HashMap::new(),
+            costs: Vec::new(),
+            model: CpuModel::default_model(),
             stop_requested: false,
             until: 0,
             next_event: 0,
@@ -222,6 +227,7 @@ impl<'a> Machine<'a> {
             profile_mark: 0,
             runs: None,
             instructions: 0,
+            cycles: 0,
             watchdog_resets: 0,
             hardfaults: 0,
             echo_log: false,
@@ -246,11 +252,12 @@ impl<'a> Machine<'a> {
                 u64::from(FLASH_BASE + settings.start),
                 u64::from(settings.end - settings.start),
                 Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
-                    Machine::mmio_time(uc);
+                    Machine::mmio_time(uc, 0, false);
+                    Machine::flash_data_read(uc);
                     uc.get_data().board.settings_read(off as u32, size) as u64
                 }),
                 Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
-                    Machine::mmio_time(uc);
+                    Machine::mmio_time(uc, 0, true);
                     let s = uc.get_data_mut();
                     if let Err(err) = s.board.settings_write(off as u32, size, v as u32) {
                         // A flash write the controller refuses is a bus error on the chip.
@@ -269,14 +276,14 @@ impl<'a> Machine<'a> {
             0x4000_0000,
             0x2_4000,
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
-                Machine::mmio_time(uc);
                 let addr = 0x4000_0000 + off as u32;
+                Machine::mmio_time(uc, addr, false);
                 let r = uc.get_data_mut().board.read(addr, size);
                 Machine::mmio_done(uc, r.map(u64::from), addr)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
-                Machine::mmio_time(uc);
                 let addr = 0x4000_0000 + off as u32;
+                Machine::mmio_time(uc, addr, true);
                 let r = uc.get_data_mut().board.write(addr, size, v as u32);
                 Machine::mmio_done(uc, r.map(|()| 0), addr);
             }),
@@ -289,14 +296,14 @@ impl<'a> Machine<'a> {
             0x4200_0000,
             0x24000 * 32,
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize| {
-                Machine::mmio_time(uc);
                 let (addr, bit) = bit_band(0x4000_0000, off);
+                Machine::mmio_time(uc, addr, false);
                 let r = uc.get_data_mut().board.read(addr, 4);
                 Machine::mmio_done(uc, r.map(|v| u64::from((v >> bit) & 1)), addr)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, v: u64| {
-                Machine::mmio_time(uc);
                 let (addr, bit) = bit_band(0x4000_0000, off);
+                Machine::mmio_time(uc, addr, true);
                 let b = &mut uc.get_data_mut().board;
                 let r = b
                     .read(addr, 4)
@@ -328,13 +335,13 @@ impl<'a> Machine<'a> {
             0x1FFF_F000,
             0x1000,
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
-                Machine::mmio_time(uc);
+                Machine::mmio_time(uc, 0, false);
                 let addr = 0x1FFF_F000 + off as u32;
                 let r = uc.get_data().board.system_read(addr, size);
                 Machine::mmio_done(uc, r.map(u64::from), addr)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, _size: usize, _v: u64| {
-                Machine::mmio_time(uc);
+                Machine::mmio_time(uc, 0, false);
                 let addr = 0x1FFF_F000 + off as u32;
                 let r = Err(BusError("write to system memory".into()));
                 Machine::mmio_done(uc, r, addr);
@@ -347,13 +354,13 @@ impl<'a> Machine<'a> {
             SCS_BASE,
             0xF000,
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize| {
-                Machine::mmio_time(uc);
+                Machine::mmio_time(uc, 0, false);
                 let s = uc.get_data_mut();
                 let r = s.board.ppb_read(off as u32, size);
                 Machine::mmio_done(uc, r.map(u64::from), SCS_BASE as u32 + off as u32)
             }),
             Some(|uc: &mut Unicorn<State>, off: u64, size: usize, v: u64| {
-                Machine::mmio_time(uc);
+                Machine::mmio_time(uc, 0, false);
                 let s = uc.get_data_mut();
                 let r = s.board.ppb_write(off as u32, size, v as u32);
                 Machine::mmio_done(uc, r.map(|()| 0), SCS_BASE as u32 + off as u32);
@@ -371,6 +378,18 @@ impl<'a> Machine<'a> {
             let lo = u64::from(FLASH_BASE + settings.start);
             buses.push((lo, u64::from(FLASH_BASE + settings.end) - 1));
         }
+        // Data reads from the program flash (literal pools, constant tables) wait for
+        // the flash: the cycle model charges its wait states.
+        uc.add_mem_hook(
+            HookType::MEM_READ,
+            u64::from(FLASH_BASE),
+            prog_end - 1 + u64::from(FLASH_BASE),
+            |uc: &mut Unicorn<State>, _, _, _, _| {
+                Machine::flash_data_read(uc);
+                true
+            },
+        )
+        .map_err(|e| format!("unicorn hook: {e:?}"))?;
         for (lo, hi) in buses {
             uc.add_mem_hook(
                 HookType::MEM_READ | HookType::MEM_WRITE,
@@ -490,18 +509,23 @@ impl<'a> Machine<'a> {
     /// the board to now, and stop in front of this block when something is due (the
     /// run loop then takes the exception before the block runs).
     fn on_block(uc: &mut Unicorn<State>, addr: u64, size: u32) {
-        let n = match uc.get_data().blocks.get(&(addr, size)) {
-            Some(&n) => n,
+        let ws = uc.get_data().board.flash.latency();
+        let cost = match uc.get_data().blocks.get(&(addr, size, ws)) {
+            Some(&i) => i,
             None => {
                 let mut code = vec![0u8; size as usize];
                 let _ = uc.mem_read(addr, &mut code);
-                let n = count_instructions(&code);
-                uc.get_data_mut().blocks.insert((addr, size), n);
-                n
+                let s = uc.get_data_mut();
+                let c = block_cost(&code, addr as u32, s.model, ws);
+                s.costs.push(c);
+                let i = s.costs.len() as u32 - 1;
+                s.blocks.insert((addr, size, ws), i);
+                i
             }
         };
+        let n = uc.get_data().costs[cost as usize].n();
         let s = uc.get_data_mut();
-        s.charge_block(None);
+        s.charge_block(None, Some(addr as u32));
         if s.board.now >= s.next_event {
             let due = s.next_event;
             s.events();
@@ -531,11 +555,11 @@ impl<'a> Machine<'a> {
         // A busy-wait delay loop (`subs rN, #1; bne .-2`, cortex_m::asm::delay): its
         // remaining iterations are skipped at their exact cycle cost.
         if size == 4 && n == 2 {
-            if let Some(skipped) = Machine::skip_delay_loop(uc, addr) {
+            if let Some(skipped) = Machine::skip_delay_loop(uc, addr, cost, ws) {
                 let s = uc.get_data_mut();
                 s.delay_loops_skipped += skipped;
-                let cpi = s.instr_t();
-                s.board.now += skipped * 2 * cpi;
+                let turn = s.loop_turn_t(cost, addr as u32, ws);
+                s.board.now += skipped * turn;
                 s.instructions += skipped * 2;
             }
         }
@@ -554,14 +578,18 @@ impl<'a> Machine<'a> {
         let s = uc.get_data_mut();
         s.block = Block {
             addr: addr as u32,
+            size,
             n,
             start: s.board.now,
+            cost,
+            ws,
+            stall: 0,
         };
     }
 
     /// A bus access by the instruction at the PC (exact: the memory hooks keep it):
     /// the board is brought to the time that instruction completes.
-    fn mmio_time(uc: &mut Unicorn<State>) {
+    fn mmio_time(uc: &mut Unicorn<State>, addr: u32, write: bool) {
         let pc = uc.reg_read(RegisterARM::PC).unwrap_or(0) as u32;
         // Bringing the PC up to date also brought back the IT state of the accessing
         // instruction, and unicorn leaves it there: the next block would then run as
@@ -581,13 +609,35 @@ impl<'a> Machine<'a> {
         };
         let s = uc.get_data_mut();
         s.access_pc = pc;
-        let t = b.start + u64::from(done) * s.instr_t();
+        // The access waits for the APB bridge; later instructions of the block too.
+        let (r1, r2) = s.board.apb_ratios();
+        let stall = s.model.apb_access(addr, write, r1, r2);
+        s.block.stall += stall;
+        let cycles = if b.n > 0 {
+            s.costs[b.cost as usize].upto(done)
+        } else {
+            0
+        };
+        let t = b.start + u64::from(cycles + b.stall + stall) * s.cycle_t();
         if t > s.board.now {
             s.board.now = t;
             if t >= s.next_event {
                 s.events();
             }
         }
+    }
+
+    /// A data read from the flash: its wait states stall the block.
+    fn flash_data_read(uc: &mut Unicorn<State>) {
+        // A memory hook brings back the IT state of the accessing instruction, which
+        // unicorn then keeps (see `mmio_time`): clear it.
+        let xpsr = uc.reg_read(RegisterARM::XPSR).unwrap_or(0);
+        if xpsr & IT_BITS != 0 {
+            let _ = uc.reg_write(RegisterARM::XPSR, xpsr & !IT_BITS);
+        }
+        let s = uc.get_data_mut();
+        let ws = s.board.flash.latency();
+        s.block.stall += s.model.flash_read(ws);
     }
 
     /// After a bus access: a refused one stops the run; one that raised an exception
@@ -620,7 +670,7 @@ impl<'a> Machine<'a> {
     /// If the block at `addr` is `subs rN, #1; bne addr`, set rN to 1 (the last
     /// iteration runs) and return the iterations skipped. Only while nothing is due
     /// before the loop would end, so no interrupt is delayed.
-    fn skip_delay_loop(uc: &mut Unicorn<State>, addr: u64) -> Option<u64> {
+    fn skip_delay_loop(uc: &mut Unicorn<State>, addr: u64, cost: u32, ws: u32) -> Option<u64> {
         let mut code = [0u8; 4];
         uc.mem_read(addr, &mut code).ok()?;
         let subs = u16::from_le_bytes([code[0], code[1]]);
@@ -644,9 +694,9 @@ impl<'a> Machine<'a> {
             return None;
         }
         let s = uc.get_data();
-        let cpi = s.instr_t();
+        let turn = s.loop_turn_t(cost, addr as u32, ws);
         // Iterations that fit before the next event.
-        let room = s.next_event.min(s.until).saturating_sub(s.board.now) / (2 * cpi);
+        let room = s.next_event.min(s.until).saturating_sub(s.board.now) / turn.max(1);
         let skip = (count - 2).min(room);
         if skip == 0 {
             return None;
@@ -921,7 +971,7 @@ impl<'a> Machine<'a> {
         // that becomes pending before the vector is fetched is taken instead, on the
         // same frame; `e` stays pending and follows by tail-chaining.
         let s = self.uc.get_data_mut();
-        let cost = ENTRY_CYCLES * t_per_cycle(s.board.sysclk_hz());
+        let cost = u64::from(s.model.entry(s.board.flash.latency())) * s.cycle_t();
         let start = s.board.now;
         s.account(start);
         s.events_at(start + cost);
@@ -994,7 +1044,7 @@ impl<'a> Machine<'a> {
             self.vector(e, vtor, pc)?;
             let _ = self.uc.reg_write(RegisterARM::LR, u64::from(exc));
             let s = self.uc.get_data_mut();
-            let cost = TAIL_CHAIN_CYCLES * t_per_cycle(s.board.sysclk_hz());
+            let cost = u64::from(s.model.tail_chain(s.board.flash.latency())) * s.cycle_t();
             s.switch_to(e, cost);
             return Ok(());
         }
@@ -1025,7 +1075,7 @@ impl<'a> Machine<'a> {
         let _ = self.uc.reg_write(RegisterARM::PC, u64::from(w(6) & !1));
         let s = self.uc.get_data_mut();
         let back = s.board.nvic.current();
-        let cost = RETURN_CYCLES * t_per_cycle(s.board.sysclk_hz());
+        let cost = u64::from(s.model.exit(s.board.flash.latency())) * s.cycle_t();
         s.switch_to(back, cost);
         Ok(())
     }
@@ -1069,7 +1119,7 @@ impl<'a> Machine<'a> {
             }
             _ => None,
         };
-        self.uc.get_data_mut().charge_block(partial);
+        self.uc.get_data_mut().charge_block(partial, Some(pc));
     }
 
     /// After `emu_start` returned: exception returns, faults, WFI.
@@ -1141,21 +1191,35 @@ impl<'a> Machine<'a> {
 }
 
 impl State {
-    /// Charge the block that ran: all its instructions, or the first `partial`.
-    fn charge_block(&mut self, partial: Option<u32>) {
+    /// Charge the block that ran: all its instructions (the CPU then went to `next`,
+    /// which tells whether its last branch was taken), or the first `partial`.
+    fn charge_block(&mut self, partial: Option<u32>, next: Option<u32>) {
         let b = std::mem::take(&mut self.block);
         if b.n == 0 {
             return;
         }
         let n = partial.unwrap_or(b.n).min(b.n);
+        let c = &self.costs[b.cost as usize];
+        let cycles = match partial {
+            Some(k) => c.upto(k),
+            None => block_total(c, b.addr + b.size, next, self.model, b.ws),
+        };
         self.instructions += u64::from(n);
+        self.cycles += u64::from(cycles + b.stall);
         self.lateness.longest_block = self.lateness.longest_block.max(n);
-        self.board.now = self.board.now.max(b.start + u64::from(n) * self.instr_t());
+        let t = b.start + u64::from(cycles + b.stall) * self.cycle_t();
+        self.board.now = self.board.now.max(t);
     }
 
-    /// Time units per instruction: 1.5 cycles of the current CPU clock.
-    fn instr_t(&self) -> u64 {
-        t_per_cycle(self.board.sysclk_hz()) * 3 / 2
+    /// Time units per cycle of the current CPU clock.
+    fn cycle_t(&self) -> u64 {
+        t_per_cycle(self.board.sysclk_hz())
+    }
+
+    /// One turn of the delay loop at `addr` (block `cost`), in time units.
+    fn loop_turn_t(&self, cost: u32, addr: u32, ws: u32) -> u64 {
+        let c = &self.costs[cost as usize];
+        u64::from(block_total(c, addr + 4, Some(addr), self.model, ws)) * self.cycle_t()
     }
 
     fn bus_stop(&mut self, message: String, addr: u32) {

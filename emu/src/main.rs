@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use inkstep_emu::clock::{T_PER_MS, T_PER_S};
+use inkstep_emu::cpu_model::CpuModel;
 use inkstep_emu::session::{product_elf, Session};
 use inkstep_serial::sender::Flow;
 use inkstep_sim::trace::TraceWriter;
@@ -19,6 +20,10 @@ struct Cli {
     /// (64 KB, same footprint: the image refuses to run on it, visibly).
     #[arg(long, global = true, value_enum, default_value_t = Chip::Cb)]
     chip: Chip,
+    /// The cycle model: `typical` or `pessimistic` (emu/README.md, "Cycle model");
+    /// default: $INKSTEP_EMU_CPU, else pessimistic. `bench` runs both.
+    #[arg(long, global = true)]
+    cpu: Option<String>,
     #[command(subcommand)]
     cmd: Cmd,
 }
@@ -404,7 +409,12 @@ fn cmd_soak(minutes: f64, elf: Option<PathBuf>, log: Option<&Path>) -> Result<Ex
 
 fn cmd_bench(elf: Option<PathBuf>) -> Result<ExitCode, String> {
     let elf = elf_or_build(elf)?;
-    print!("{}", inkstep_emu::bench::run(&elf)?);
+    // Both cycle models, unless `--cpu` picked one.
+    let models = match std::env::args().any(|a| a == "--cpu" || a.starts_with("--cpu=")) {
+        true => vec![CpuModel::default_model()],
+        false => vec![CpuModel::Typical, CpuModel::Pessimistic],
+    };
+    print!("{}", inkstep_emu::bench::run(&elf, &models)?);
     Ok(ExitCode::SUCCESS)
 }
 
@@ -475,6 +485,15 @@ fn main() -> ExitCode {
         Chip::C8 => inkstep_emu::board::F_SIZE_KB_C8,
     };
     inkstep_emu::board::DEFAULT_F_SIZE_KB.store(f_size, std::sync::atomic::Ordering::Relaxed);
+    if let Some(m) = &cli.cpu {
+        match CpuModel::parse(m) {
+            Some(m) => CpuModel::set_default(m),
+            None => {
+                eprintln!("emu: --cpu {m}: expected `typical` or `pessimistic`");
+                return ExitCode::from(2);
+            }
+        }
+    }
     let r = match cli.cmd {
         Cmd::Run {
             file,

@@ -470,12 +470,6 @@ impl SysTick {
     }
 }
 
-/// Exception entry costs 12 cycles, return 12, and a tail-chained entry 6 (Cortex-M3
-/// TRM 5.5: interrupt latency with zero-wait-state memory; see emu/README.md).
-pub const ENTRY_CYCLES: u64 = 12;
-pub const RETURN_CYCLES: u64 = 12;
-pub const TAIL_CHAIN_CYCLES: u64 = 6;
-
 /// Time units of `n` cycles at 72 MHz.
 pub const fn cycles72(n: u64) -> u64 {
     n * T_PER_US / 72

@@ -5,8 +5,9 @@
 //! Compared pixel for pixel: every screen of a state that stands still (boot, menu,
 //! the forms, the previews, the screen after the G-code job), and on the screens at
 //! the end of a drawing everything but what is sampled at each LCD refresh: the pen
-//! trace in the plot (a polyline through the positions seen at each refresh) and the
-//! teaching view (the feed directions between refreshes). The firmware refreshes
+//! trace in the plot (a polyline through the positions seen at each refresh), the
+//! teaching view (the feed directions between refreshes) and the job's time (the
+//! firmware's planning takes CPU time the simulator does not count). The firmware refreshes
 //! every 100 ms of its own clock, the simulator also when a snapshot is taken, so the
 //! two sample the drawing at different moments: same path, other vertices. Not
 //! compared: the three screens taken while the pen moves (06, 09, 12), whose moment
@@ -31,8 +32,12 @@ const SAME: [&str; 8] = [
 const DONE: [&str; 2] = ["07_sine_done", "10_star_done"];
 /// What is sampled at each refresh (core/src/screens): the plot with the pen trace
 /// and its position ticks (x ..76, y 8..56), the teaching view (x 76.., y 39..55).
+/// Also the job's time in the title row (x 90.., y ..8): it counts from the job's
+/// start, and the firmware spends CPU time planning before and between the moves,
+/// which the simulator does not; under the emulator's pessimistic cycle model the
+/// star takes 15.0 s against the simulator's 14.9 s (the same under the typical one).
 fn sampled(x: usize, y: usize) -> bool {
-    (x < 76 && (8..56).contains(&y)) || (x >= 76 && (39..55).contains(&y))
+    (x < 76 && (8..56).contains(&y)) || (x >= 76 && (39..55).contains(&y)) || (x >= 90 && y < 8)
 }
 
 /// A demo PNG back to the 128x64 picture (`inkstep_sim::lcd`: 4x4 pixels, 1 apart):

@@ -157,7 +157,7 @@ fn a_move_asking_for_more_than_the_step_rate_cap_runs_at_the_cap_without_gaps() 
 /// A counting trial at the planner's cap, for about half a second of cruise.
 fn counted_at_the_cap(course: Course) -> Counted {
     let cap = f64::from(MAX_STEP_RATE);
-    let c = count_trial::run(common::elf(), course, cap, 0.5).expect("trial");
+    let c = count_trial::run(common::elf(), course, cap, 0.7).expect("trial");
     eprintln!("{}", c.summary());
     assert!(
         c.line_bytes.0 >= 25 && c.line_bytes.1 <= 40,

@@ -27,25 +27,36 @@ impl LcdSpi {
     }
 }
 
-/// Bring the ST7920 up in graphics mode: the st7920 crate's sequence (its reset wait
-/// on a tied reset pin, then basic function set, display on, clear, entry mode,
-/// extended function set, graphics on, each followed by its execution time), without
-/// building that crate's 1 KB frame buffer. Blocking: only for the lowest-priority task.
+/// The ST7920's power-up, the st7920 crate's sequence (its reset wait on a tied reset
+/// pin, then basic function set, display on, clear, entry mode, extended function
+/// set, graphics on, each followed by its execution time), without building that
+/// crate's 1 KB frame buffer: wait [`POWER_UP_MS`], then each instruction of
+/// [`INIT_SEQUENCE`] followed by its wait. The product image runs it off the 1 ms tick
+/// (src/main.rs, `lcd_refresh`): the waits cost no CPU.
+pub const POWER_UP_MS: u32 = 80;
+/// (instruction, wait after it in µs)
+pub const INIT_SEQUENCE: [(u8, u32); 6] = [
+    (0x30, 200),
+    (0x0C, 100),
+    (0x01, 10_000),
+    (0x06, 100),
+    (0x34, 10_000),
+    (0x36, 100_000),
+];
+
+impl LcdSpi {
+    /// One instruction: a serial frame (command start byte, high nibble, low nibble).
+    pub fn command(&mut self, cmd: u8) -> Result<(), stm32f1xx_hal::spi::Error> {
+        self.write(&[0xF8, cmd & 0xF0, cmd << 4])
+    }
+}
+
+/// The power-up with busy waits, for the bring-up image (src/bin/bringup.rs).
 pub fn lcd_init(spi: &mut LcdSpi) -> Result<(), stm32f1xx_hal::spi::Error> {
-    /// (instruction, wait after it in µs)
-    const STEPS: [(u8, u32); 6] = [
-        (0x30, 200),
-        (0x0C, 100),
-        (0x01, 10_000),
-        (0x06, 100),
-        (0x34, 10_000),
-        (0x36, 100_000),
-    ];
     const CYCLES_PER_US: u32 = SYSCLK_HZ / 1_000_000;
-    cortex_m::asm::delay(80_000 * CYCLES_PER_US);
-    for (cmd, wait_us) in STEPS {
-        // One serial frame: command start byte, high nibble, low nibble.
-        spi.write(&[0xF8, cmd & 0xF0, cmd << 4])?;
+    cortex_m::asm::delay(POWER_UP_MS * 1000 * CYCLES_PER_US);
+    for (cmd, wait_us) in INIT_SEQUENCE {
+        spi.command(cmd)?;
         cortex_m::asm::delay(wait_us * CYCLES_PER_US);
     }
     Ok(())

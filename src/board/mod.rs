@@ -54,7 +54,7 @@ pub use flash::{
 pub use indicators::{BusyOutputs, Indicators};
 pub use inputs::{exti_take_pending, Inputs};
 pub use keypad::KeypadMatrix;
-pub use lcd::{lcd_init, LcdSpi, LCD_SPI_HZ};
+pub use lcd::{lcd_init, LcdSpi, INIT_SEQUENCE, LCD_SPI_HZ, POWER_UP_MS};
 pub use servo::PenServo;
 pub use step_port::{
     bsrr_word, coils_off, drivers_enabled, emergency_outputs_off, set_enable_polarity,
