@@ -4,7 +4,7 @@
 //! URS, UDIS, OPM: the counter stops at any update event, CEN cleared), the four
 //! compare channels in output mode (frozen, active/inactive/toggle on match, forced
 //! levels, PWM modes 1 and 2) with their polarity and enable bits, TIM1's main output
-//! enable, the status flags and their interrupts.
+//! enable (MOE, set by software or, with AOE, at the next update event), the status flags and their interrupts.
 //!
 //! The counter is computed from the time, never stepped: the board asks for the next
 //! event (a compare match or an overflow) and the timer produces the output edges at
@@ -178,6 +178,11 @@ impl Timer {
         if self.cr1 & 8 != 0 {
             // One-pulse mode: the counter stops at the update event.
             self.cr1 &= !1;
+        }
+        if self.advanced && self.bdtr & (1 << 14) != 0 {
+            // AOE: MOE is set at the next update event (RM0008 14.4.18; no break
+            // input is modelled, so nothing holds it off).
+            self.bdtr |= 1 << 15;
         }
         self.psc_active = self.psc;
         self.arr_active = self.arr;
@@ -515,6 +520,52 @@ mod tests {
             [(300_035, false)],
             "ends at CCR, no pulse at the update"
         );
+    }
+
+    #[test]
+    fn tim1_automatic_output_enable_sets_moe_at_the_next_update() {
+        // What the servo's PWM setup does: BDTR = AOE only, CH1 PWM mode 1 enabled.
+        let mut t = Timer::new("TIM1", true);
+        let mut e = Vec::new();
+        w(&mut t, 0x2C, 99, 0, &mut e); // ARR
+        w(&mut t, 0x34, 30, 0, &mut e); // CCR1
+        w(&mut t, 0x18, 0x68, 0, &mut e); // OC1M PWM 1, preload
+        w(&mut t, 0x20, 1, 0, &mut e); // CC1E
+        w(&mut t, 0x44, 0x4000, 0, &mut e); // AOE, MOE clear
+        w(&mut t, 0x00, 1, 0, &mut e); // CEN
+        t.advance(99, &mut e);
+        assert!(e.is_empty(), "no output before the first update: {e:?}");
+        t.advance(100, &mut e);
+        assert_eq!(
+            e,
+            [Edge {
+                t: 100,
+                channel: 0,
+                level: true
+            }],
+            "MOE set at the update"
+        );
+        assert_eq!(t.read(0x44, 100).unwrap() & 0xC000, 0xC000);
+        e.clear();
+        t.advance(130, &mut e);
+        assert_eq!(
+            e,
+            [Edge {
+                t: 130,
+                channel: 0,
+                level: false
+            }]
+        );
+        // Without AOE the output stays off.
+        let mut t = Timer::new("TIM1", true);
+        let mut e = Vec::new();
+        w(&mut t, 0x2C, 99, 0, &mut e);
+        w(&mut t, 0x34, 30, 0, &mut e);
+        w(&mut t, 0x18, 0x68, 0, &mut e);
+        w(&mut t, 0x20, 1, 0, &mut e);
+        w(&mut t, 0x00, 1, 0, &mut e);
+        t.advance(1000, &mut e);
+        assert!(e.is_empty(), "{e:?}");
     }
 
     #[test]
