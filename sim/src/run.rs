@@ -227,6 +227,7 @@ pub fn run_on_timed(
             // Real-time bytes are taken as they arrive; the receive ring holds one
             // line at most with send-response, so they always fit.
             board.usb_write(&realtime[rt_next].bytes);
+            board.wake_protocol();
             rt_next += 1;
             progressed = true;
         }
@@ -267,6 +268,24 @@ pub fn run_on_timed(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A settings save between two moves stalls the CPU on the flash as on the chip
+    /// (half-word 52.5 µs, page erase 20 ms): the second move starts that much later.
+    #[test]
+    fn a_settings_save_between_moves_takes_the_flash_programming_time() {
+        let plain = run_gcode("G21 G91 G1 F600 X1\nG4 P0.01\nG1 X1\n", Flow::SendResponse);
+        let saved = run_gcode(
+            "G21 G91 G1 F600 X1\nG4 P0.01\n$110=2000\nG1 X1\n",
+            Flow::SendResponse,
+        );
+        let gap = |r: &RunResult| {
+            let t: Vec<u64> = r.events.iter().map(|e| e.t).collect();
+            t.windows(2).map(|w| w[1] - w[0]).max().unwrap() as f64 / TICK_HZ as f64
+        };
+        let extra = gap(&saved) - gap(&plain);
+        // One record: the settings image in half-words, each 52.5 µs, at least 2 ms.
+        assert!((0.002..0.03).contains(&extra), "{extra} s");
+    }
 
     #[test]
     fn realtime_bytes_parse_and_a_timed_hold_lengthens_the_job_by_its_length() {
