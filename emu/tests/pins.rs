@@ -565,3 +565,81 @@ fn inverting_the_inputs_under_a_closed_estop_alarms_and_never_stalls_silently() 
         );
     }
 }
+
+/// `cargo emu run --pins OUT.csv --input ...` end to end: the CSV has a row for every
+/// change of the wiring table's outputs (step pins, /EN, the LED and busy output, the
+/// servo with its `PA8_us` widths), times in µs, and the SYNC input driven from the
+/// command line holds the job (its job time grows by the hold).
+#[test]
+fn the_run_command_writes_the_pin_log_and_drives_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let prog = dir.path().join("job.nc");
+    std::fs::write(
+        &prog,
+        "$201=1\n$203=45\nG21 G91 G1 F1200 X5\nM3\nG1 Y3\nM5\n",
+    )
+    .unwrap();
+    let run = |extra: &[&str], csv: &std::path::Path| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_inkstep-emu"))
+            .args([
+                "run",
+                prog.to_str().unwrap(),
+                "--elf",
+                common::elf().to_str().unwrap(),
+            ])
+            .args(["--log", dir.path().join("log").to_str().unwrap()])
+            .args(["--pins", csv.to_str().unwrap()])
+            .args(extra)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(
+            out.status.success(),
+            "{text}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let job: f64 = text
+            .split("job time ")
+            .nth(1)
+            .and_then(|t| t.split(' ').next())
+            .and_then(|t| t.parse().ok())
+            .unwrap();
+        (std::fs::read_to_string(csv).unwrap(), job)
+    };
+    let (csv, plain) = run(&[], &dir.path().join("a.csv"));
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(csv.lines().next(), Some("t_us,pin,value"));
+    let count = |pin: &str| rows.iter().filter(|r| r[1] == pin).count();
+    assert_eq!(count("PA0"), 2 * 400, "X's 400 pulses, both edges");
+    assert_eq!(count("PA1"), 2 * 240, "Y's 240 pulses");
+    assert!(
+        count("PA9") >= 1 && count("PC13") >= 2 && count("PC15") >= 2,
+        "{csv}"
+    );
+    let widths: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[1] == "PA8_us")
+        .map(|r| r[2].parse().unwrap())
+        .collect();
+    assert!(
+        widths.iter().any(|w| (w - 1500.0).abs() < 1.5),
+        "pen up 90°"
+    );
+    assert!(
+        widths.iter().any(|w| (w - 1000.0).abs() < 1.5),
+        "pen down 45°"
+    );
+    let times: Vec<f64> = rows.iter().map(|r| r[0].parse().unwrap()).collect();
+    assert!(times.windows(2).all(|w| w[0] <= w[1]), "in time order");
+    // SYNC low for 300 ms during the first move: the job takes that much longer.
+    let (_, held) = run(
+        &["--input", "150ms:hold=low", "--input", "450ms:hold=high"],
+        &dir.path().join("b.csv"),
+    );
+    eprintln!("job {plain:.4} s, with a 300 ms SYNC hold {held:.4} s");
+    assert!((held - plain - 0.3).abs() < 0.1, "{plain} -> {held}");
+}
