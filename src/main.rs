@@ -27,7 +27,7 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 #![no_main]
 
-use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
 use defmt_rtt as _;
 use inkstep::board;
 use inkstep::steps::{self, BoardSide, StepOutput};
@@ -41,6 +41,12 @@ use inkstep_core::stepper::MAX_RELOAD;
 
 /// Hard limits stop stepping at once only when `$21` is on.
 static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
+/// Inputs whose interrupt halted the step output since the protocol task last looked
+/// (bit 0 the e-stop, bits 1 and 2 the X and Y limits with hard limits armed). The
+/// task shows them to the machine as active even when the pin was released again
+/// before it read the pins (a glitch of a few µs), so a halted output always comes
+/// with its alarm: never a machine that says `Run` and makes no step (issue 23).
+static TRIPPED: AtomicU8 = AtomicU8::new(0);
 /// 4-phase outputs (`$200=1`): the motors are released by turning the coils off too.
 static FOUR_PHASE: AtomicBool = AtomicBool::new(false);
 /// The host has the serial port open (CDC's DTR), as the USB task last saw it.
@@ -78,6 +84,7 @@ mod app {
     use cortex_m::peripheral::syst::SystClkSource;
     use inkstep_core::controller::{Controller, HostLink};
     use inkstep_core::hmi::buzzer::Buzzer;
+    use inkstep_core::machine::InputPolarity;
     use inkstep_core::pipeline::Pipeline;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
     use inkstep_core::settings_store::SettingsStore;
@@ -268,6 +275,7 @@ mod app {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
             steps::halt();
+            TRIPPED.fetch_or(1, Ordering::SeqCst);
             wake_protocol();
         }
     }
@@ -289,6 +297,7 @@ mod app {
         if board::exti_take_pending(line) {
             if HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
                 steps::halt();
+                TRIPPED.fetch_or(if line == 1 { 2 } else { 4 }, Ordering::SeqCst);
             }
             // The machine reads the switch (alarm, homing, the `?` report's pins).
             wake_protocol();
@@ -394,13 +403,25 @@ mod app {
     /// protocol, the HMI's timers, replies, settings and their persistence at rest),
     /// then what it asks of the hardware: the output configuration, the pen servo and
     /// the release of a halt.
-    #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, servo, store, servo_us: Option<u32> = None])]
+    #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, servo, store, servo_us: Option<u32> = None, polarity: InputPolarity = InputPolarity { invert_limits: false, invert_controls: false }])]
     fn protocol(mut cx: protocol::Context) {
         let started = now_ms();
         let quiet = loop {
             PROTOCOL_WAKE.store(false, Ordering::Relaxed);
             let now = now_ms();
-            let pins = board::Inputs::levels();
+            let mut pins = board::Inputs::levels();
+            // An input that halted the steps is seen active at least once (TRIPPED),
+            // at the level the polarity settings read as active.
+            let tripped = TRIPPED.swap(0, Ordering::SeqCst);
+            let p = *cx.local.polarity;
+            if tripped & 1 != 0 {
+                pins.estop = !p.invert_controls;
+            }
+            for (axis, bit) in [(0, 2), (1, 4)] {
+                if tripped & bit != 0 {
+                    pins.limits[axis] = Some(!p.invert_limits);
+                }
+            }
             let host = HostLink {
                 rx: &mut *cx.local.usb_rx_out,
                 tx: &mut *cx.local.usb_tx_in,
@@ -417,6 +438,7 @@ mod app {
             // the USB task's own back-pressure mask (see `usb_lp`).
             unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
             rtic::pend(Interrupt::USB_LP_CAN_RX0);
+            *cx.local.polarity = done.polarity;
             if let Some(cfg) = done.outputs {
                 apply_output_config(&cfg);
             }

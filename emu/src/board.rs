@@ -21,6 +21,7 @@ use crate::periph::st7920::St7920;
 use crate::periph::timer::{Edge, Timer};
 use crate::periph::usb::Usb;
 use crate::periph::BusError;
+use crate::pins::{phase_index, Decode, PosSwitch};
 use crate::usb_host::Host;
 
 /// IRQ numbers (RM0008 table 63).
@@ -53,6 +54,9 @@ pub struct Outside {
     pub cycle_start_low: bool,
     /// Keys held, as (row, column) of the matrix.
     pub keys: Vec<(usize, usize)>,
+    /// Limit/home switches at positions (`--switch`): each opens its axis's input
+    /// while the axis is beyond it, besides `limit_x_open` / `limit_y_open`.
+    pub switches: Vec<PosSwitch>,
 }
 
 /// Why the board wants the run to stop.
@@ -96,6 +100,8 @@ pub struct Board {
     pub bus_fault: Option<String>,
     /// The CPU stalls (flash programming) until this time.
     pub stall_until: u64,
+    /// Every flash programming stall: (start, duration).
+    pub flash_stalls: Vec<(u64, u64)>,
     /// Flash bytes that changed and must be copied into the CPU's view.
     pub flash_dirty: Vec<(usize, usize)>,
     /// Alternate-function output levels of PA0..PA15 (the timers' channels).
@@ -119,6 +125,15 @@ pub struct Board {
     pub pin_changes: Vec<(u64, usize, usize, bool)>,
     /// What the flash size register (F_SIZE) reads, KB: the chip (a reset keeps it).
     pub f_size_kb: u16,
+    /// How the drivers read the motion pins (the stored settings, re-read after every
+    /// flash operation).
+    pub decode: Decode,
+    /// The half-step sequence index of X's and Y's coils (4-phase): at power-up the
+    /// rotor is taken to sit at coil A's position (index 0), where the firmware's
+    /// sequence starts; all coils off keeps the index.
+    phase: [Option<u8>; 2],
+    /// Coil changes that are no half-step (a jump of more than one position).
+    pub misreads: u64,
 }
 
 impl Board {
@@ -145,6 +160,7 @@ impl Board {
             halt: None,
             bus_fault: None,
             stall_until: 0,
+            flash_stalls: Vec::new(),
             flash_dirty: Vec::new(),
             af_a: 0,
             step_levels: 0,
@@ -160,7 +176,11 @@ impl Board {
             watch: [0; 3],
             pin_changes: Vec::new(),
             f_size_kb: DEFAULT_F_SIZE_KB.load(std::sync::atomic::Ordering::Relaxed),
+            decode: Decode::default(),
+            phase: [Some(0); 2],
+            misreads: 0,
         };
+        b.read_decode();
         b.clocks_changed();
         b
     }
@@ -181,6 +201,7 @@ impl Board {
         self.iwdg = Iwdg::new();
         self.usb = Usb::new();
         self.af_a = 0;
+        self.phase = [Some(0); 2];
         self.lcd_cs = false;
         self.pins_dirty = true;
         self.clocks_changed();
@@ -279,16 +300,18 @@ impl Board {
             } else {
                 e.channel
             };
-            let before = self.pin(0, pin);
+            let watched = self.watch[0] & (1 << pin) != 0;
+            let before = if watched { self.pin(0, pin) } else { false };
             if e.level {
                 self.af_a |= 1 << pin;
             } else {
                 self.af_a &= !(1 << pin);
             }
-            // A watched pin's timer-driven changes are logged too (the servo on PA8).
-            let after = self.pin(0, pin);
-            if self.watch[0] & (1 << pin) != 0 && after != before {
-                self.pin_changes.push((e.t, 0, pin, after));
+            if watched {
+                let after = self.pin(0, pin);
+                if after != before {
+                    self.pin_changes.push((e.t, 0, pin, after));
+                }
             }
             if pin < 3 {
                 self.watch_steps(e.t);
@@ -332,8 +355,8 @@ impl Board {
         let nc = |open: bool| if open { None } else { Some(false) };
         match (p, n) {
             (1, 0) => nc(o.estop_open),
-            (1, 1) => nc(o.limit_x_open),
-            (1, 3) => nc(o.limit_y_open),
+            (1, 1) => nc(o.limit_x_open || self.switch_open(0)),
+            (1, 3) => nc(o.limit_y_open || self.switch_open(1)),
             (1, 4) => o.feed_hold_low.then_some(false),
             (1, 5) => o.cycle_start_low.then_some(false),
             (1, 6..=9) => {
@@ -359,26 +382,90 @@ impl Board {
         self.gpio[p].level(n, None, false)
     }
 
-    /// Step pins: a rising edge on PA0..PA2 is one step of X, Y, Z, its direction the
-    /// DIR pin's level (PA3..PA5, high = negative) at that moment.
-    fn watch_steps(&mut self, t: u64) {
+    /// Whether a switch at a position holds `axis`'s input open.
+    fn switch_open(&self, axis: usize) -> bool {
+        self.outside
+            .switches
+            .iter()
+            .any(|sw| sw.axis == axis && sw.open(self.pos[axis], self.decode.steps_per_mm[axis]))
+    }
+
+    /// The settings stored in the flash array decide how the pins are read.
+    fn read_decode(&mut self) {
+        let r = self.settings.start as usize..self.settings.end as usize;
+        let d = match self.flash.array.get(r) {
+            Some(pages) => Decode::from_pages(pages),
+            None => Decode::default(),
+        };
+        if d != self.decode {
+            self.decode = d;
+            // What the pins show now is the new idle state, not a step.
+            self.step_levels = self.step_pin_levels();
+            self.watch_steps(self.now);
+        }
+    }
+
+    /// The step pins PA0..PA2, active high (after `$2`).
+    fn step_pin_levels(&self) -> u32 {
         let mut levels = 0;
         for a in 0..3 {
             if self.pin(0, a) {
                 levels |= 1 << a;
             }
         }
-        let rising = levels & !self.step_levels;
-        self.step_levels = levels;
-        if rising == 0 {
+        levels ^ u32::from(self.decode.step_invert)
+    }
+
+    /// The motion pins to steps. Step/dir: a step of X, Y, Z at the leading edge of a
+    /// pulse on PA0..PA2 (rising, or falling for an axis inverted by `$2`), its
+    /// direction the level of PA3..PA5 at that moment (high = negative, unless `$3`
+    /// inverts the axis). 4-phase: a step each time X's coils (PA0-PA3) or Y's
+    /// (PA4-PA7) move one position along the half-step sequence, forward = positive;
+    /// all coils off (released) keeps the position.
+    fn watch_steps(&mut self, t: u64) {
+        let before = self.pos;
+        if self.decode.four_phase {
+            let port = (0..8)
+                .filter(|&n| self.pin(0, n))
+                .fold(0u32, |v, n| v | 1 << n);
+            for a in 0..2 {
+                let coils = (port >> (4 * a)) & 0xF;
+                let Some(idx) = phase_index(coils) else {
+                    if coils != 0 {
+                        self.misreads += 1;
+                    }
+                    continue;
+                };
+                if let Some(prev) = self.phase[a] {
+                    match idx.wrapping_sub(prev) & 7 {
+                        0 => {}
+                        1 => self.pos[a] += 1,
+                        7 => self.pos[a] -= 1,
+                        _ => self.misreads += 1,
+                    }
+                    if idx != prev {
+                        self.step_edges[a] += 1;
+                    }
+                }
+                self.phase[a] = Some(idx);
+            }
+        } else {
+            let levels = self.step_pin_levels();
+            let rising = levels & !self.step_levels;
+            self.step_levels = levels;
+            for a in 0..3 {
+                if rising & (1 << a) != 0 {
+                    let negative = self.pin(0, 3 + a) != (self.decode.dir_invert & (1 << a) != 0);
+                    self.pos[a] += if negative { -1 } else { 1 };
+                    self.step_edges[a] += 1;
+                }
+            }
+        }
+        if self.pos == before {
             return;
         }
-        for a in 0..3 {
-            if rising & (1 << a) != 0 {
-                let negative = self.pin(0, 3 + a);
-                self.pos[a] += if negative { -1 } else { 1 };
-                self.step_edges[a] += 1;
-            }
+        if !self.outside.switches.is_empty() {
+            self.pins_dirty = true;
         }
         if self.record_steps {
             match self.steps.last_mut() {
@@ -612,7 +699,9 @@ impl Board {
             Op::None => {}
             Op::Changed { at, len, stall_t } => {
                 self.stall_until = self.now + stall_t;
+                self.flash_stalls.push((self.now, stall_t));
                 self.flash_dirty.push((at, len));
+                self.read_decode();
             }
             Op::PowerCut => self.halt = Some(Halt::PowerCut),
         }

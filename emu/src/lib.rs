@@ -14,6 +14,7 @@ pub mod latency;
 pub mod machine;
 pub mod nvic;
 pub mod periph;
+pub mod pins;
 pub mod profiler;
 pub mod rtt;
 pub mod session;

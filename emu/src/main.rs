@@ -28,6 +28,80 @@ struct Cli {
     cmd: Cmd,
 }
 
+/// The pins beyond the USB cable: the output log and the inputs the outside drives.
+#[derive(clap::Args)]
+struct Io {
+    /// Record every change of the output pins of the wiring table (PA0-PA10, PC13,
+    /// PC15) as CSV `t_us,pin,value` (virtual µs from power-up), with a `PA8_us` row
+    /// giving each servo pulse's width.
+    #[arg(long, value_name = "OUT.csv")]
+    pins: Option<PathBuf>,
+    /// A limit/home switch at a position, e.g. `x-:-5.0mm` or `y+:120mm`: NC, it opens
+    /// the axis's input (PB1 for X, PB3 for Y) while the axis is beyond it, counted
+    /// in steps from power-up (repeatable).
+    #[arg(long = "switch", value_name = "AXIS(+|-):POS")]
+    switches: Vec<String>,
+    /// Drive an input at a time from the start of the job, e.g. `1.5s:hold=low`,
+    /// `2s:start=pulse`, `3s:estop=open`; inputs estop, limit-x, limit-y (open/closed),
+    /// hold, start (low/high/pulse) (repeatable).
+    #[arg(long = "input", value_name = "TIME:INPUT=STATE")]
+    inputs: Vec<String>,
+    /// A script of such input changes, one a line (`#` comments).
+    #[arg(long = "input-script", value_name = "FILE")]
+    script: Option<PathBuf>,
+}
+
+impl Io {
+    /// Before boot: what to log and where the switches are.
+    fn setup(&self, s: &mut Session) -> Result<(), String> {
+        if self.pins.is_some() {
+            for (w, add) in
+                s.m.board()
+                    .watch
+                    .iter_mut()
+                    .zip(inkstep_emu::pins::OUTPUT_WATCH)
+            {
+                *w |= add;
+            }
+        }
+        let mut o = s.m.state().board.outside.clone();
+        for sw in &self.switches {
+            o.switches.push(inkstep_emu::pins::PosSwitch::parse(sw)?);
+        }
+        s.set_outside(o);
+        Ok(())
+    }
+
+    /// At the start of the job: the input times count from here.
+    fn start(&self, s: &mut Session) -> Result<(), String> {
+        use inkstep_emu::pins::{InputEvent, Schedule};
+        let mut events = Vec::new();
+        for i in &self.inputs {
+            events.extend(InputEvent::parse(i)?);
+        }
+        if let Some(p) = &self.script {
+            let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            events.extend(
+                InputEvent::parse_script(&text).map_err(|e| format!("{}: {e}", p.display()))?,
+            );
+        }
+        s.inputs = Schedule::new(events, s.now());
+        Ok(())
+    }
+
+    fn finish(&self, s: &Session) -> Result<(), String> {
+        if let Some(p) = &self.pins {
+            let f = std::fs::File::create(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            inkstep_emu::pins::write_pin_log(
+                &s.m.state().board.pin_changes,
+                std::io::BufWriter::new(f),
+            )
+            .map_err(|e| format!("{}: {e}", p.display()))?;
+        }
+        Ok(())
+    }
+}
+
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum Chip {
     Cb,
@@ -67,6 +141,12 @@ enum Cmd {
         /// G-code line.
         #[arg(long, value_name = "N")]
         profile: Option<usize>,
+        /// Send real-time bytes at a time after the first step, e.g. `250ms:!`,
+        /// `1.2s:~`, `700ms:0x91` (repeatable; as `cargo sim run --realtime`).
+        #[arg(long = "realtime", value_name = "TIME:BYTES")]
+        realtime: Vec<String>,
+        #[command(flatten)]
+        io: Io,
     },
     /// Put the board's USB serial port on a pseudo-terminal any Grbl sender can open
     /// (DTR rises when it is opened); runs until killed.
@@ -87,6 +167,8 @@ enum Cmd {
         log: Option<PathBuf>,
         #[arg(long)]
         flash: Option<PathBuf>,
+        #[command(flatten)]
+        io: Io,
     },
     /// The simulator's demo on the emulated board: its keypad script pressed on the
     /// key matrix, its G-code streamed over USB, the LCD written as PNGs.
@@ -190,12 +272,21 @@ fn cmd_run(
     flash: Option<&Path>,
     keys: Option<&str>,
     profile: Option<usize>,
+    realtime: &[String],
+    io: &Io,
 ) -> Result<ExitCode, String> {
     let text = std::fs::read_to_string(file).map_err(|e| format!("{}: {e}", file.display()))?;
     let elf = elf_or_build(elf)?;
     let mut s = Session::new(&elf, flash)?;
     s.m.state_mut().echo_log = log.is_none();
+    io.setup(&mut s)?;
     s.boot()?;
+    io.start(&mut s)?;
+    s.realtime = realtime
+        .iter()
+        .map(|r| inkstep_sim::run::Realtime::parse(r))
+        .collect::<Result<_, _>>()?;
+    s.realtime.sort_by_key(|r| r.at_us);
     if let Some(script) = keys {
         inkstep_emu::demo::play(&mut s, script, lcd.unwrap_or(Path::new(".")))?;
     }
@@ -233,6 +324,7 @@ fn cmd_run(
     if let Some(path) = trace {
         write_trace(&s, path)?;
     }
+    io.finish(&s)?;
     let steps = &s.m.state().board.steps;
     let job = match (steps.first(), steps.last()) {
         (Some(a), Some(b)) => (b.t - a.t) as f64 / T_PER_S as f64,
@@ -258,6 +350,22 @@ fn cmd_run(
         pos[2],
         s.now() as f64 / T_PER_MS as f64,
     );
+    // The CPU stalls of flash programming between the first and the last step (the
+    // settings saves of `$` lines in a job; the simulator does not model them).
+    if let (Some(a), Some(b)) = (steps.first(), steps.last()) {
+        let stalled: u64 =
+            s.m.state()
+                .board
+                .flash_stalls
+                .iter()
+                .filter(|st| st.0 >= a.t && st.0 <= b.t)
+                .map(|st| st.1)
+                .sum();
+        println!(
+            "flash programming stalls during the job: {:.6} s",
+            stalled as f64 / T_PER_S as f64
+        );
+    }
     for e in done.errors.iter().chain(&done.alarms) {
         println!("{e}");
     }
@@ -292,6 +400,7 @@ fn cmd_serve(
     lcd: Option<&Path>,
     log: Option<&Path>,
     flash: Option<&Path>,
+    io: &Io,
 ) -> Result<ExitCode, String> {
     use inkstep_serial::pty::Pty;
     use std::sync::atomic::{AtomicBool, Ordering};
@@ -310,6 +419,8 @@ fn cmd_serve(
     let mut s = Session::new(&elf, flash)?;
     s.m.state_mut().echo_log = log.is_none();
     s.m.board().host.port_open = false;
+    io.setup(&mut s)?;
+    io.start(&mut s)?;
     eprintln!(
         "emulated board on {} ({}), speed {speed}x; Ctrl-C ends",
         link.display(),
@@ -356,6 +467,7 @@ fn cmd_serve(
     if let Some(p) = trace {
         write_trace(&s, p)?;
     }
+    io.finish(&s)?;
     write_log(&s, log)?;
     result.map(|()| ExitCode::SUCCESS)
 }
@@ -505,6 +617,8 @@ fn main() -> ExitCode {
             flash,
             keys,
             profile,
+            realtime,
+            io,
         } => cmd_run(
             &file,
             elf,
@@ -515,6 +629,8 @@ fn main() -> ExitCode {
             flash.as_deref(),
             keys.as_deref(),
             profile,
+            &realtime,
+            &io,
         ),
         Cmd::Serve {
             elf,
@@ -524,6 +640,7 @@ fn main() -> ExitCode {
             lcd,
             log,
             flash,
+            io,
         } => cmd_serve(
             elf,
             &link,
@@ -532,6 +649,7 @@ fn main() -> ExitCode {
             lcd.as_deref(),
             log.as_deref(),
             flash.as_deref(),
+            &io,
         ),
         Cmd::Demo {
             out,

@@ -41,6 +41,12 @@ pub struct Session<'a> {
     pub received: String,
     /// The image's symbols (name to address).
     symbols: std::collections::HashMap<String, u32>,
+    /// Input changes at given times (`--input`), applied as time passes.
+    pub inputs: crate::pins::Schedule,
+    /// Real-time bytes to send at times after the first step (`--realtime`, as
+    /// `cargo sim run --realtime`), in time order, and how many went out.
+    pub realtime: Vec<inkstep_sim::run::Realtime>,
+    pub realtime_sent: usize,
 }
 
 impl<'a> Session<'a> {
@@ -53,6 +59,9 @@ impl<'a> Session<'a> {
             m,
             received: String::new(),
             symbols: image.symbols,
+            inputs: crate::pins::Schedule::default(),
+            realtime: Vec::new(),
+            realtime_sent: 0,
         })
     }
 
@@ -77,8 +86,45 @@ impl<'a> Session<'a> {
     }
 
     pub fn run_to(&mut self, until: u64) -> Result<(), String> {
-        if let Some(stop) = self.m.run_until(until) {
-            return Err(self.stopped(stop));
+        loop {
+            // Stop at each scheduled input change and real-time byte, so that it
+            // comes at its time (before the first step, every 125 µs while real-time
+            // bytes wait for it).
+            let mut to = match self.inputs.next_time() {
+                Some(t) if t < until => t,
+                _ => until,
+            };
+            if self.realtime_sent < self.realtime.len() {
+                let t = match self.m.state().board.steps.first() {
+                    Some(first) => {
+                        first.t + self.realtime[self.realtime_sent].at_us * (T_PER_MS / 1000)
+                    }
+                    None => self.now() + crate::usb_host::SLOT_T,
+                };
+                to = to.min(t.max(self.now()));
+            }
+            if let Some(stop) = self.m.run_until(to) {
+                return Err(self.stopped(stop));
+            }
+            if self.inputs.next_time().is_some() {
+                let mut inputs = std::mem::take(&mut self.inputs);
+                inputs.apply_due(self);
+                self.inputs = inputs;
+            }
+            while let (Some(r), Some(first)) = (
+                self.realtime.get(self.realtime_sent),
+                self.m.state().board.steps.first(),
+            ) {
+                if first.t + r.at_us * (T_PER_MS / 1000) > self.now() {
+                    break;
+                }
+                let bytes = r.bytes.clone();
+                self.send(&bytes);
+                self.realtime_sent += 1;
+            }
+            if to >= until {
+                break;
+            }
         }
         self.collect();
         Ok(())

@@ -114,6 +114,15 @@ pub struct Board {
     pub held: Vec<Key>,
     /// The LCD, when the session shows it (off for plain G-code runs).
     pub lcd: Option<Lcd>,
+    /// The flash's stall counter (ns), and how far it had got at the last look.
+    flash_busy: std::rc::Rc<std::cell::Cell<u64>>,
+    flash_busy_seen: u64,
+    /// The CPU stalls on flash programming until this tick (a settings save).
+    stall_until: u64,
+    /// Ticks the millisecond grid runs ahead of the tick count: SysTick interrupts
+    /// lost while the CPU stalled on the flash (one pending tick is taken when the
+    /// stall ends, the others are lost, as on the chip and in the emulator).
+    lag: u64,
 }
 
 impl Board {
@@ -130,7 +139,11 @@ impl Board {
     }
 
     /// Power-up from `store`, as the firmware's init does.
-    pub fn boot(mut store: SettingsStore<RamFlash>) -> Board {
+    pub fn boot(store: SettingsStore<RamFlash>) -> Board {
+        // The store again over the same flash, to keep a handle on its stall counter.
+        let flash = store.into_flash();
+        let flash_busy = flash.busy_ns.clone();
+        let mut store = SettingsStore::new(flash, STORE_RANGE).expect("store range");
         let ctl = inkstep_core::in_place::build(|slot| Controller::boot_in(slot, &mut store, 0));
         let settings = ctl.protocol().machine().settings();
         let side = SimSide {
@@ -159,6 +172,10 @@ impl Board {
             first_motion: None,
             held: Vec::new(),
             lcd: None,
+            flash_busy_seen: flash_busy.get(),
+            flash_busy,
+            stall_until: 0,
+            lag: 0,
         }
     }
 
@@ -299,6 +316,31 @@ impl Board {
         }
     }
 
+    /// Bytes arrived: the protocol task runs now, not at the next tick, as the
+    /// firmware's USB task wakes it (a real-time byte such as `!` acts at once).
+    pub fn wake_protocol(&mut self) {
+        let now = self.ms;
+        loop {
+            let (_, mut rx) = self.host_rx.split();
+            let (mut tx, _) = self.host_tx.split();
+            let host = HostLink {
+                rx: &mut rx,
+                tx: &mut tx,
+                port_open: self.port_open,
+            };
+            let done = self
+                .ctl
+                .service(host, self.pins, &mut self.store, &mut self.pipeline, now);
+            if let Some(cfg) = done.outputs {
+                self.outputs = cfg;
+            }
+            self.servo_pulse_us = done.servo_pulse_us;
+            if !done.more {
+                break;
+            }
+        }
+    }
+
     fn scan(&mut self) {
         let col = self.ctl.keypad().column();
         let mut rows = 0u8;
@@ -314,9 +356,33 @@ impl Board {
         let _ = self.ctl.take_outputs();
     }
 
-    /// The time of the next millisecond tick.
+    /// The time of the next millisecond tick: on the millisecond grid, or when a
+    /// flash stall ends if the grid's tick fell inside it.
     fn next_tick(&self) -> u64 {
-        Self::ms_to_ticks(u64::from(self.ms) + u64::from(TICK_MS))
+        let grid = Self::ms_to_ticks(u64::from(self.ms) + u64::from(TICK_MS)) + self.lag;
+        grid.max(self.stall_until)
+    }
+
+    /// After a tick: flash programming in it stalls the CPU (settings saves run at
+    /// rest, so no step is due); the SysTick interrupts that fall in the stall
+    /// collapse into one taken when it ends, and the grid goes on after it.
+    fn flash_stall(&mut self, tick_at: u64) {
+        let busy = self.flash_busy.get();
+        let d_ns = busy - self.flash_busy_seen;
+        self.flash_busy_seen = busy;
+        if d_ns == 0 {
+            return;
+        }
+        let d = (u128::from(d_ns) * u128::from(TICK_HZ) / 1_000_000_000) as u64;
+        self.stall_until = self.now.max(tick_at) + d;
+        let period = Self::ms_to_ticks(u64::from(TICK_MS));
+        let grid = Self::ms_to_ticks(u64::from(self.ms) + u64::from(TICK_MS)) + self.lag;
+        if grid < self.stall_until {
+            // The first grid tick after the stall's end follows the one taken at it.
+            let next = grid + period * ((self.stall_until - grid) / period + 1);
+            let lost = (next - grid) / period - 1;
+            self.lag += lost * period;
+        }
     }
 
     /// Runs virtual time up to `until` ticks, calling `on_step` for every step.
@@ -336,6 +402,7 @@ impl Board {
             if t == tick {
                 self.ms += TICK_MS;
                 self.tick();
+                self.flash_stall(t);
             }
         }
     }

@@ -53,6 +53,10 @@ enum Cmd {
         /// Use character counting (128-byte buffer) instead of send-response.
         #[arg(long)]
         char_count: bool,
+        /// Send real-time bytes at a time after the first step, e.g. `250ms:!`,
+        /// `1.2s:~`, `700ms:0x91` (repeatable; as `cargo emu run --realtime`).
+        #[arg(long = "realtime", value_name = "TIME:BYTES")]
+        realtime: Vec<String>,
     },
     /// Run the reference programs of bench/ and compare with Grbl's figures.
     Bench {
@@ -127,6 +131,7 @@ fn main() -> ExitCode {
             lcd,
             lcd_every,
             char_count,
+            realtime,
         } => {
             let outs = RunOutputs {
                 trace: trace.as_deref(),
@@ -134,7 +139,14 @@ fn main() -> ExitCode {
                 svg: svg.as_deref(),
                 lcd: lcd.as_deref(),
             };
-            cmd_run(&file, outs, lcd_every.max(1), char_count)
+            match realtime
+                .iter()
+                .map(|r| run::Realtime::parse(r))
+                .collect::<Result<Vec<_>, _>>()
+            {
+                Ok(rt) => cmd_run(&file, outs, lcd_every.max(1), char_count, &rt),
+                Err(e) => Err(e),
+            }
         }
         Cmd::Bench { dir } => cmd_bench(dir),
         Cmd::GrblModel { files } => cmd_grbl_model(&files),
@@ -202,6 +214,7 @@ fn cmd_run(
     outs: RunOutputs,
     lcd_every: u64,
     char_count: bool,
+    realtime: &[run::Realtime],
 ) -> Result<ExitCode, String> {
     let RunOutputs {
         trace,
@@ -216,7 +229,13 @@ fn cmd_run(
         Flow::SendResponse
     };
     let r = match lcd {
-        None => run::run_gcode(&text, flow),
+        None => run::run_on_timed(
+            &mut Board::new(Settings::default()),
+            &text,
+            flow,
+            realtime,
+            &mut |_| {},
+        ),
         Some(dir) => {
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
             let mut board = Board::new(Settings::default()).with_lcd();
@@ -233,7 +252,7 @@ fn cmd_run(
                     next = b.now() + every;
                 }
             };
-            let r = run::run_on_with(&mut board, &text, flow, &mut |b| shoot(b, false));
+            let r = run::run_on_timed(&mut board, &text, flow, realtime, &mut |b| shoot(b, false));
             shoot(&mut board, true);
             if let Some(e) = failed {
                 return Err(e);

@@ -113,6 +113,46 @@ pub fn run_on(board: &mut Board, text: &str, flow: Flow) -> RunResult {
     run_on_with(board, text, flow, &mut |_| {})
 }
 
+/// Real-time bytes sent at a time after the first step (`cargo sim run --realtime`,
+/// and the same option of `cargo emu run`, so that both get them at the same moment
+/// of the job: `.ci/emu-random`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Realtime {
+    /// Time after the first step, microseconds.
+    pub at_us: u64,
+    pub bytes: Vec<u8>,
+}
+
+impl Realtime {
+    /// `250ms:!`, `1.5s:~`, `700ms:0x91` (a byte in hex), `40ms:0x91,0x91`.
+    pub fn parse(s: &str) -> Result<Realtime, String> {
+        let bad = |why: &str| format!("--realtime {s:?}: {why} (e.g. 250ms:! or 1.2s:0x91)");
+        let (time, what) = s.split_once(':').ok_or_else(|| bad("no time"))?;
+        let (num, scale) = match time.strip_suffix("ms") {
+            Some(n) => (n, 1e3),
+            None => (time.strip_suffix('s').unwrap_or(time), 1e6),
+        };
+        let v: f64 = num.trim().parse().map_err(|_| bad("bad time"))?;
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(bad("bad time"));
+        }
+        let mut bytes = Vec::new();
+        for part in what.split(',') {
+            let part = part.trim();
+            let b = match part.strip_prefix("0x") {
+                Some(h) => u8::from_str_radix(h, 16).map_err(|_| bad("bad hex byte"))?,
+                None if part.len() == 1 => part.as_bytes()[0],
+                None => return Err(bad("one character or 0xNN per byte")),
+            };
+            bytes.push(b);
+        }
+        Ok(Realtime {
+            at_us: (v * scale).round() as u64,
+            bytes,
+        })
+    }
+}
+
 /// As [`run_on`], calling `each_ms` with the board after every millisecond of virtual
 /// time (for snapshots while a stream runs).
 pub fn run_on_with(
@@ -121,6 +161,20 @@ pub fn run_on_with(
     flow: Flow,
     each_ms: &mut dyn FnMut(&mut Board),
 ) -> RunResult {
+    run_on_timed(board, text, flow, &[], each_ms)
+}
+
+/// As [`run_on_with`], with real-time bytes sent at their times after the first step.
+pub fn run_on_timed(
+    board: &mut Board,
+    text: &str,
+    flow: Flow,
+    realtime: &[Realtime],
+    each_ms: &mut dyn FnMut(&mut Board),
+) -> RunResult {
+    let mut realtime: Vec<Realtime> = realtime.to_vec();
+    realtime.sort_by_key(|r| r.at_us);
+    let mut rt_next = 0;
     let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
     let mut sender = Sender::new(flow);
     for (i, l) in lines.iter().enumerate() {
@@ -163,7 +217,25 @@ pub fn run_on_with(
         let out = board.usb_read();
         progressed |= !out.is_empty();
         received(&mut sender, &out);
-        if sender.done() && unsent.is_empty() && board.is_idle() {
+        // Real-time bytes due (times from the first step).
+        let due = |events: &Vec<StepEvent>, i: usize| {
+            let first = events.first()?.t;
+            let r: &Realtime = realtime.get(i)?;
+            Some(first + (r.at_us as u128 * u128::from(TICK_HZ) / 1_000_000) as u64)
+        };
+        while due(&events, rt_next).is_some_and(|t| t <= board.now()) {
+            // Real-time bytes are taken as they arrive; the receive ring holds one
+            // line at most with send-response, so they always fit.
+            board.usb_write(&realtime[rt_next].bytes);
+            board.wake_protocol();
+            rt_next += 1;
+            progressed = true;
+        }
+        if sender.done()
+            && unsent.is_empty()
+            && board.is_idle()
+            && (rt_next >= realtime.len() || events.is_empty())
+        {
             break;
         }
         if board.now() >= limit {
@@ -171,7 +243,10 @@ pub fn run_on_with(
             break;
         }
         if !progressed {
-            let until = board.now() + step;
+            let mut until = board.now() + step;
+            if let Some(t) = due(&events, rt_next) {
+                until = until.min(t.max(board.now() + 1));
+            }
             board.run_until(until, &mut |e| events.push(e));
             each_ms(board);
         }
@@ -193,6 +268,55 @@ pub fn run_on_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A settings save between two moves stalls the CPU on the flash as on the chip
+    /// (half-word 52.5 µs, page erase 20 ms): the second move starts that much later.
+    #[test]
+    fn a_settings_save_between_moves_takes_the_flash_programming_time() {
+        let plain = run_gcode("G21 G91 G1 F600 X1\nG4 P0.01\nG1 X1\n", Flow::SendResponse);
+        let saved = run_gcode(
+            "G21 G91 G1 F600 X1\nG4 P0.01\n$110=2000\nG1 X1\n",
+            Flow::SendResponse,
+        );
+        let gap = |r: &RunResult| {
+            let t: Vec<u64> = r.events.iter().map(|e| e.t).collect();
+            t.windows(2).map(|w| w[1] - w[0]).max().unwrap() as f64 / TICK_HZ as f64
+        };
+        let extra = gap(&saved) - gap(&plain);
+        // One record: the settings image in half-words, each 52.5 µs, at least 2 ms.
+        assert!((0.002..0.03).contains(&extra), "{extra} s");
+    }
+
+    #[test]
+    fn realtime_bytes_parse_and_a_timed_hold_lengthens_the_job_by_its_length() {
+        assert_eq!(
+            Realtime::parse("250ms:!").unwrap(),
+            Realtime {
+                at_us: 250_000,
+                bytes: vec![b'!']
+            }
+        );
+        assert_eq!(
+            Realtime::parse("1.5s:0x91,0x91").unwrap().bytes,
+            [0x91, 0x91]
+        );
+        for bad in ["!", "xms:!", "1s:", "1s:0xZZ", "1s:ab", "-1s:!"] {
+            assert!(Realtime::parse(bad).is_err(), "{bad}");
+        }
+        let prog = "G21 G91 G1 F600 X20\n";
+        let plain = run_gcode(prog, Flow::SendResponse);
+        let rt = [
+            Realtime::parse("500ms:!").unwrap(),
+            Realtime::parse("1500ms:~").unwrap(),
+        ];
+        let mut board = Board::new(Settings::default());
+        let held = run_on_timed(&mut board, prog, Flow::SendResponse, &rt, &mut |_| {});
+        let pos = |r: &RunResult| r.events.iter().map(|e| e.pos).collect::<Vec<_>>();
+        assert_eq!(pos(&plain), pos(&held), "the same path");
+        let longer = held.job_time_s() - plain.job_time_s();
+        // Held for 1 s, less what the stop and the restart cost in ramps.
+        assert!((0.8..1.2).contains(&longer), "{longer} s longer");
+    }
 
     #[test]
     fn a_square_runs_to_its_exact_corners() {

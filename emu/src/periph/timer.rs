@@ -4,7 +4,7 @@
 //! URS, UDIS, OPM: the counter stops at any update event, CEN cleared), the four
 //! compare channels in output mode (frozen, active/inactive/toggle on match, forced
 //! levels, PWM modes 1 and 2) with their polarity and enable bits, TIM1's main output
-//! enable, the status flags and their interrupts.
+//! enable (MOE, set by software or, with AOE, at the next update event), the status flags and their interrupts.
 //!
 //! The counter is computed from the time, never stepped: the board asks for the next
 //! event (a compare match or an overflow) and the timer produces the output edges at
@@ -522,25 +522,50 @@ mod tests {
         );
     }
 
-    /// TIM1 (advanced): outputs are off until MOE; AOE (what the HAL's PWM sets)
-    /// sets MOE at the next update event, and the PWM appears on the pin.
     #[test]
-    fn aoe_turns_the_advanced_timers_outputs_on_at_the_update() {
+    fn tim1_automatic_output_enable_sets_moe_at_the_next_update() {
+        // What the servo's PWM setup does: BDTR = AOE only, CH1 PWM mode 1 enabled.
         let mut t = Timer::new("TIM1", true);
-        t.tick_t = 1;
         let mut e = Vec::new();
         w(&mut t, 0x2C, 99, 0, &mut e); // ARR
-        w(&mut t, 0x18, 0x60, 0, &mut e); // CH1 PWM mode 1
         w(&mut t, 0x34, 30, 0, &mut e); // CCR1
+        w(&mut t, 0x18, 0x68, 0, &mut e); // OC1M PWM 1, preload
         w(&mut t, 0x20, 1, 0, &mut e); // CC1E
-        w(&mut t, 0x44, 1 << 14, 0, &mut e); // AOE, MOE still clear
+        w(&mut t, 0x44, 0x4000, 0, &mut e); // AOE, MOE clear
         w(&mut t, 0x00, 1, 0, &mut e); // CEN
         t.advance(99, &mut e);
-        assert!(e.is_empty(), "no output before the update: {e:?}");
-        t.advance(160, &mut e);
-        assert_eq!(t.bdtr & (1 << 15), 1 << 15, "MOE set at the update");
-        let levels: Vec<bool> = e.iter().map(|x| x.level).collect();
-        assert_eq!(levels, [true, false], "the pulse after the update: {e:?}");
+        assert!(e.is_empty(), "no output before the first update: {e:?}");
+        t.advance(100, &mut e);
+        assert_eq!(
+            e,
+            [Edge {
+                t: 100,
+                channel: 0,
+                level: true
+            }],
+            "MOE set at the update"
+        );
+        assert_eq!(t.read(0x44, 100).unwrap() & 0xC000, 0xC000);
+        e.clear();
+        t.advance(130, &mut e);
+        assert_eq!(
+            e,
+            [Edge {
+                t: 130,
+                channel: 0,
+                level: false
+            }]
+        );
+        // Without AOE the output stays off.
+        let mut t = Timer::new("TIM1", true);
+        let mut e = Vec::new();
+        w(&mut t, 0x2C, 99, 0, &mut e);
+        w(&mut t, 0x34, 30, 0, &mut e);
+        w(&mut t, 0x18, 0x68, 0, &mut e);
+        w(&mut t, 0x20, 1, 0, &mut e);
+        w(&mut t, 0x00, 1, 0, &mut e);
+        t.advance(1000, &mut e);
+        assert!(e.is_empty(), "{e:?}");
     }
 
     #[test]
