@@ -121,6 +121,22 @@ pub fn run_on_with(
     flow: Flow,
     each_ms: &mut dyn FnMut(&mut Board),
 ) -> RunResult {
+    let mut events = Vec::new();
+    let mut r = run_on_each(board, text, flow, each_ms, &mut |e| events.push(e));
+    r.events = events;
+    r
+}
+
+/// As [`run_on_with`], handing each step event to `on_step` instead of keeping it
+/// (the result's `events` stay empty): a long job's millions of steps need not be
+/// held, e.g. by the host's time estimate.
+pub fn run_on_each(
+    board: &mut Board,
+    text: &str,
+    flow: Flow,
+    each_ms: &mut dyn FnMut(&mut Board),
+    on_step: &mut dyn FnMut(StepEvent),
+) -> RunResult {
     let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
     let mut sender = Sender::new(flow);
     for (i, l) in lines.iter().enumerate() {
@@ -143,7 +159,6 @@ pub fn run_on_with(
             }
         }
     };
-    let mut events = Vec::new();
     let mut unsent: Vec<u8> = Vec::new();
     let limit = board.now() + TIME_LIMIT_S * TICK_HZ;
     let step = Board::ms_to_ticks(1);
@@ -172,12 +187,12 @@ pub fn run_on_with(
         }
         if !progressed {
             let until = board.now() + step;
-            board.run_until(until, &mut |e| events.push(e));
+            board.run_until(until, &mut |e| on_step(e));
             each_ms(board);
         }
     }
     RunResult {
-        events,
+        events: Vec::new(),
         first_motion: board.first_motion,
         errors,
         alarms,
