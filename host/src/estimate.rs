@@ -1,8 +1,9 @@
 //! The time a job will take, from the firmware's own code: the program runs on
 //! the simulator's virtual board (inkstep-sim: the core's interpreter, planner,
 //! segment preparation and step executor, in virtual time) with the machine's
-//! settings, and the time from its first motion to its last step is the job's
-//! time, pen lifts and drops included. Nothing here models the planner: a
+//! settings, and the time from its first motion to the end of the program (the
+//! last line done, the machine at rest) is the job's time, pen lifts and drops
+//! included. Nothing here models the planner: a
 //! change to the firmware's motion changes the estimate with it.
 //!
 //! The settings come from the board (`$$` read over the port), from a file of
@@ -23,7 +24,9 @@ use std::time::{Duration, Instant};
 /// What the virtual board made of a program.
 #[derive(Clone, Debug, Default)]
 pub struct Estimate {
-    /// First motion to last step, seconds.
+    /// From the first motion to the end of the program (every line done and
+    /// the machine at rest, as the board's own `Job finished` time counts it),
+    /// seconds.
     pub job_s: f64,
     /// For each move asked about: seconds from the first motion to its end.
     pub ends_s: Vec<f64>,
@@ -149,7 +152,8 @@ pub fn estimate(program: &str, s: &Settings, start: Pt, moves: &[Move]) -> Estim
     });
     let t0 = r.first_motion.unwrap_or(0);
     let secs = |t: u64| t.saturating_sub(t0) as f64 / TICK_HZ as f64;
-    let job_s = last.map_or(0.0, secs);
+    // Lines after the last motion (dwells, M2) take time too.
+    let job_s = if last.is_some() { secs(r.end) } else { 0.0 };
     let mut ends_s: Vec<f64> = reached.iter().map(|&t| secs(t)).collect();
     // Moves never reached (a program with offsets the preview does not apply,
     // a refused line): the rest of the time shared by their lengths.
