@@ -21,6 +21,10 @@ use inkstep_sim::board::{Board, TICK_HZ};
 use inkstep_sim::run::{run_on_each, Flow, LineError};
 use std::time::{Duration, Instant};
 
+/// The longest job estimated: a week of virtual time (about three minutes of
+/// computing at the simulator's speed of an hour in 1.3 s).
+pub const LIMIT_S: u64 = 7 * 24 * 3600;
+
 /// What the virtual board made of a program.
 #[derive(Clone, Debug, Default)]
 pub struct Estimate {
@@ -51,7 +55,7 @@ impl Estimate {
         }
         w.extend(self.alarms.iter().cloned());
         if self.timed_out {
-            w.push("the job did not end within an hour: estimate stopped there".into());
+            w.push("the job did not end within a week: estimate stopped there".into());
         }
         w
     }
@@ -124,7 +128,7 @@ pub fn estimate(program: &str, s: &Settings, start: Pt, moves: &[Move]) -> Estim
     let flow = Flow::CharCount(inkstep_core::protocol::RX_BUFFER_SIZE);
     if start != Pt::new(0.0, 0.0) {
         let go = format!("G21G90G0X{:.4}Y{:.4}\n", start.x, start.y);
-        run_on_each(&mut board, &go, flow, &mut |_| {}, &mut |_| {});
+        run_on_each(&mut board, &go, flow, 60, &mut |_| {}, &mut |_| {});
         board.first_motion = None;
     }
     let spmm = [s.steps_per_mm(0) as f64, s.steps_per_mm(1) as f64];
@@ -139,7 +143,7 @@ pub fn estimate(program: &str, s: &Settings, start: Pt, moves: &[Move]) -> Estim
         .collect();
     let mut reached: Vec<u64> = Vec::with_capacity(moves.len());
     let mut last = None;
-    let r = run_on_each(&mut board, program, flow, &mut |_| {}, &mut |e| {
+    let r = run_on_each(&mut board, program, flow, LIMIT_S, &mut |_| {}, &mut |e| {
         last = Some(e.t);
         let (x, y) = (i64::from(e.pos[0]), i64::from(e.pos[1]));
         while let Some(t) = targets.get(reached.len()) {

@@ -53,7 +53,8 @@ fn setting_of(text: &str) -> Option<(u16, f32)> {
     Some((n.parse().ok()?, v.parse().ok()?))
 }
 
-fn n_word(text: &str) -> Option<u32> {
+/// The N word a cleaned line starts with.
+pub fn n_word(text: &str) -> Option<u32> {
     let rest = text.strip_prefix('N')?;
     let end = rest
         .find(|c: char| !c.is_ascii_digit())
@@ -154,7 +155,11 @@ fn state(i: &Interpreter) -> (Modal, f32, f32, NmPos, i64, [i64; 3]) {
 /// up, travel to where the line starts, pen down if it was), then the lines
 /// from `from_line` on. Preamble lines carry `from_line` as their file line.
 pub fn resume_lines(program: &str, from_line: usize, s: &Settings) -> Result<Vec<Line>> {
-    let lines = lines_of(program)?;
+    resume_lines_of(&lines_of(program)?, from_line, s)
+}
+
+/// [`resume_lines`] of a program already prepared for sending.
+pub fn resume_lines_of(lines: &[Line], from_line: usize, s: &Settings) -> Result<Vec<Line>> {
     let k = lines.partition_point(|l| l.file_line < from_line);
     if k >= lines.len() {
         bail!("nothing to resume from line {from_line}: the program has no line to send there");

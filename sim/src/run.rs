@@ -122,18 +122,22 @@ pub fn run_on_with(
     each_ms: &mut dyn FnMut(&mut Board),
 ) -> RunResult {
     let mut events = Vec::new();
-    let mut r = run_on_each(board, text, flow, each_ms, &mut |e| events.push(e));
+    let mut r = run_on_each(board, text, flow, TIME_LIMIT_S, each_ms, &mut |e| {
+        events.push(e)
+    });
     r.events = events;
     r
 }
 
 /// As [`run_on_with`], handing each step event to `on_step` instead of keeping it
-/// (the result's `events` stay empty): a long job's millions of steps need not be
-/// held, e.g. by the host's time estimate.
+/// (the result's `events` stay empty), and giving up after `limit_s` of virtual
+/// time: a long job's millions of steps need not be held, e.g. by the host's time
+/// estimate, and a job of many hours can run to its end.
 pub fn run_on_each(
     board: &mut Board,
     text: &str,
     flow: Flow,
+    limit_s: u64,
     each_ms: &mut dyn FnMut(&mut Board),
     on_step: &mut dyn FnMut(StepEvent),
 ) -> RunResult {
@@ -160,7 +164,7 @@ pub fn run_on_each(
         }
     };
     let mut unsent: Vec<u8> = Vec::new();
-    let limit = board.now() + TIME_LIMIT_S * TICK_HZ;
+    let limit = board.now() + limit_s * TICK_HZ;
     let step = Board::ms_to_ticks(1);
     let mut timed_out = false;
     loop {
