@@ -225,11 +225,11 @@ mod tests {
         assert_eq!(s.overrides, Some([120, 50, 100]));
         assert_eq!(s.pins, "XH");
         assert_eq!(s.line, None);
+        assert_eq!(s.machine_pos([1.0, 2.0, 0.0]), Some([1.0, 2.0, 1.0]));
         let Reply::Status(s) = parse_reply("<Run|MPos:1,2,0|Ln:1234|FS:500,0>") else {
             panic!()
         };
         assert_eq!((s.line, s.feed), (Some(1234), Some((500.0, 0.0))));
-        assert_eq!(s.machine_pos([1.0, 2.0, 0.0]), Some([1.0, 2.0, 1.0]));
         assert_eq!(
             parse_reply("$110=3000.000"),
             Reply::Setting(110, "3000.000".into())
