@@ -54,6 +54,9 @@ pub struct Job {
     pub ends_s: Vec<f64>,
     /// Estimated seconds for the whole job (to the end of the program).
     pub total: f64,
+    /// The preview's rows ([`Job::preview`]) as JSON arrays of at most
+    /// [`super::link::CHUNK`] rows each, made while the job is built.
+    pub preview_json: Vec<String>,
     /// The estimate is the firmware's; false while a big job's is computed
     /// (then a rough one, moves at their feed, stands in).
     pub estimated: bool,
@@ -117,11 +120,21 @@ impl Job {
                 planned(layout(text, size, "futural")?.strokes)
             }
         };
-        let lines = prepare(&gcode, RX).map_err(anyhow::Error::msg)?;
+        // The lines to send on one core, the moves and their preview on the
+        // other: a 10 MB file spends most of its load here.
+        let (lines, moves, preview_json) = std::thread::scope(|sc| {
+            let lines = sc.spawn(|| prepare(&gcode, RX));
+            let moves = toolpath::parse(&gcode);
+            let rows = moves.as_deref().map(preview_rows).unwrap_or_default();
+            (lines.join(), moves, rows)
+        });
+        let lines = lines
+            .map_err(|_| anyhow::anyhow!("reading the lines failed"))?
+            .map_err(anyhow::Error::msg)?;
         if lines.is_empty() {
             bail!("nothing to run");
         }
-        let moves = toolpath::parse(&gcode)?;
+        let moves = moves?;
         // Small jobs get the firmware's estimate now; a big one (seconds of
         // simulation) a rough one, until `estimate` is run away from the load.
         let (ends_s, total, estimated) = if moves.len() <= QUICK_MOVES {
@@ -143,6 +156,7 @@ impl Job {
         Ok(Job {
             id,
             estimated,
+            preview_json,
             name: name.to_string(),
             lines,
             moves,
@@ -167,16 +181,28 @@ impl Job {
 
     /// The moves as [x0, y0, x1, y1, drawn] rows for the page.
     pub fn preview(&self) -> Vec<[f64; 5]> {
-        self.moves
-            .iter()
-            .map(|m| {
-                let d = if m.kind == MoveKind::Draw { 1.0 } else { 0.0 };
-                // Micrometres are plenty for a drawing, and keep the message short.
-                let r = |v: f64| (v * 1000.0).round() / 1000.0;
-                [r(m.from.x), r(m.from.y), r(m.to.x), r(m.to.y), d]
-            })
-            .collect()
+        self.moves.iter().map(preview_row).collect()
     }
+}
+
+fn preview_row(m: &Move) -> [f64; 5] {
+    let d = if m.kind == MoveKind::Draw { 1.0 } else { 0.0 };
+    // Micrometres are plenty for a drawing, and keep the message short.
+    let r = |v: f64| (v * 1000.0).round() / 1000.0;
+    [r(m.from.x), r(m.from.y), r(m.to.x), r(m.to.y), d]
+}
+
+/// The preview rows as JSON, [`super::link::CHUNK`] rows a piece (straight to
+/// text: a JSON value of half a million rows first took longer than the
+/// job's own parsing).
+fn preview_rows(moves: &[Move]) -> Vec<String> {
+    moves
+        .chunks(super::link::CHUNK)
+        .map(|c| {
+            let rows: Vec<[f64; 5]> = c.iter().map(preview_row).collect();
+            serde_json::to_string(&rows).unwrap_or_default()
+        })
+        .collect()
 }
 
 /// Follows a running job along its moves from the positions the machine

@@ -405,7 +405,7 @@ impl Link {
         Ok(())
     }
 
-    fn load(&mut self, job: Job) {
+    fn load(&mut self, mut job: Job) {
         let left_out: Vec<serde_json::Value> = job
             .left_out
             .iter()
@@ -429,13 +429,10 @@ impl Link {
             "left_out": left_out,
             "page": job.page.map(|(w, h)| [w, h]),
         });
-        let preview = job
-            .preview()
-            .chunks(CHUNK)
+        // The rows were made into text while the job was built.
+        let preview = std::mem::take(&mut job.preview_json)
+            .into_iter()
             .map(|rows| {
-                // Straight to text (a JSON value of half a million rows first
-                // took longer than the job's own parsing).
-                let rows = serde_json::to_string(rows).unwrap_or_default();
                 format!(
                     r#"{{"t":"preview","gen":{},"rows":{rows}}}"#,
                     self.generation

@@ -621,6 +621,7 @@ async fn build(
                         ends_s: Vec::new(),
                         total: 0.0,
                         estimated: false,
+                        preview_json: Vec::new(),
                         left_out: Vec::new(),
                         page: None,
                     };
