@@ -23,8 +23,14 @@ use std::time::{Duration, Instant};
 /// many (each at least a letter and its line end).
 const MAX_IN_FLIGHT: usize = 64;
 
+/// Lines up to which the estimate is made before sending (about a second).
+const QUICK_LINES: usize = 50_000;
+
 struct Bar {
     pb: ProgressBar,
+    /// The estimate being made, and how it is worded when it is done.
+    pending: Option<std::thread::JoinHandle<f64>>,
+    say: Box<dyn Fn(f64) -> String>,
     seen: Seen,
     wco: [f64; 3],
 }
@@ -49,6 +55,12 @@ impl Bar {
 
 impl Observer for Bar {
     fn progress(&mut self, acked: usize, total: usize) {
+        if self.pending.as_ref().is_some_and(|h| h.is_finished()) {
+            if let Some(Ok(s)) = self.pending.take().map(|h| h.join()) {
+                let text = (self.say)(s);
+                self.message(&text);
+            }
+        }
         self.seen.acked = acked;
         self.pb.set_length(total as u64);
         self.pb.set_position(acked as u64);
@@ -163,12 +175,25 @@ pub fn run(o: &SendOptions) -> Result<()> {
             }
         };
     let text: String = lines.iter().map(|l| format!("{}\n", l.text)).collect();
-    let est = estimate::estimate(&text, &settings, crate::geom::Pt::new(0.0, 0.0), &[]);
-    eprintln!(
-        "estimated job time {} ({:.3} s, the firmware's planner with the board's settings)",
-        fmt_time(est.job_s),
-        est.job_s
-    );
+    let say = |job_s: f64| {
+        format!(
+            "estimated job time {} ({job_s:.3} s, the firmware's planner with the board's settings)",
+            fmt_time(job_s)
+        )
+    };
+    // A big job simulates for seconds: it starts at once and its estimate
+    // is shown when ready.
+    let mut pending = None;
+    if lines.len() <= QUICK_LINES {
+        let est = estimate::estimate(&text, &settings, crate::geom::Pt::new(0.0, 0.0), &[]);
+        eprintln!("{}", say(est.job_s));
+    } else {
+        let s = settings.clone();
+        pending = Some(std::thread::spawn(move || {
+            estimate::estimate(&text, &s, crate::geom::Pt::new(0.0, 0.0), &[]).job_s
+        }));
+        eprintln!("estimating the job time while it runs…");
+    }
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
@@ -185,6 +210,8 @@ pub fn run(o: &SendOptions) -> Result<()> {
     pb.enable_steady_tick(Duration::from_millis(200));
     let mut bar = Bar {
         pb: pb.clone(),
+        pending,
+        say: Box::new(say),
         seen: Seen::default(),
         wco: [0.0; 3],
     };
