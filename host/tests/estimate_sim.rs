@@ -54,6 +54,11 @@ impl Drop for Sim {
 
 fn host(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_inkstep-host"))
+        // Where a stopped job is remembered: not the user's cache.
+        .env(
+            "INKSTEP_STATE_DIR",
+            std::env::temp_dir().join("inkstep-est-state"),
+        )
         .args(args)
         .output()
         .unwrap()

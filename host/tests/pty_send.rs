@@ -47,6 +47,8 @@ fn run_send(program: &str) -> (std::process::Output, FakeGrbl) {
     let file = dir.join("job.gcode");
     std::fs::write(&file, program).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_inkstep-host"))
+        // Where a stopped job is remembered: not the user's cache.
+        .env("INKSTEP_STATE_DIR", &dir)
         .args([
             "send",
             file.to_str().unwrap(),
