@@ -21,12 +21,14 @@
 //! searched among the lines that can still have been in its planner. The line
 //! is remembered in a small state file so that `send --resume` needs no number.
 
+use crate::geom::Pt;
+use crate::toolpath::arc_points;
 use anyhow::{bail, Context, Result};
 use inkstep_core::gcode::interpreter::Interpreter;
 use inkstep_core::gcode::modal::{Modal, MotionMode};
 use inkstep_core::gcode::units::NmPos;
 use inkstep_core::planner::PLANNER_BLOCKS;
-use inkstep_core::settings::Settings;
+use inkstep_core::settings::{PenMode, Settings};
 use inkstep_serial::stream::{prepare, Line};
 use std::path::{Path, PathBuf};
 
@@ -39,6 +41,65 @@ pub struct Span {
     pub to: [f64; 3],
     /// The line's N word, if it has one.
     pub n: Option<u32>,
+    /// Points along the way of an arc (G2/G3), within 5 µm of it; empty for
+    /// a straight move.
+    pub via: Vec<[f64; 3]>,
+}
+
+impl Span {
+    /// The line moves the pen.
+    pub fn moves(&self) -> bool {
+        self.from != self.to || !self.via.is_empty()
+    }
+
+    /// Distance from `p` to the line's motion.
+    pub fn dist(&self, p: [f64; 3]) -> f64 {
+        let mut best = f64::INFINITY;
+        let mut a = self.from;
+        for &b in self.via.iter().chain(std::iter::once(&self.to)) {
+            best = best.min(dist(p, a, b));
+            a = b;
+        }
+        best
+    }
+}
+
+/// The points along an arc line (`b`: the interpreter after it) from `from`
+/// to `to`, or none for any other line.
+fn arc_via(text: &str, b: &Interpreter, from: [f64; 3], to: [f64; 3]) -> Vec<[f64; 3]> {
+    let cw = match b.modal().motion {
+        MotionMode::ArcCw => true,
+        MotionMode::ArcCcw => false,
+        _ => return Vec::new(),
+    };
+    // Only a line with an arc's words is an arc (a refused line, or one
+    // without motion, leaves the mode as it was).
+    let Ok(blk) = inkstep_core::gcode::parser::Block::parse(text.as_bytes()) else {
+        return Vec::new();
+    };
+    if !(blk.get(b'I').is_some() || blk.get(b'J').is_some() || blk.get(b'R').is_some()) {
+        return Vec::new();
+    }
+    let scale = if b.modal().inches { 25.4 } else { 1.0 };
+    let v = |c: u8| blk.get(c).map(|v| v.millionths() as f64 / 1e6 * scale);
+    let (f, t) = (Pt::new(from[0], from[1]), Pt::new(to[0], to[1]));
+    let Ok(pts) = arc_points(
+        f,
+        t,
+        v(b'I').unwrap_or(0.0),
+        v(b'J').unwrap_or(0.0),
+        v(b'R'),
+        cw,
+        0.005,
+    ) else {
+        return Vec::new();
+    };
+    let n = pts.len().max(1) as f64;
+    pts.iter()
+        .enumerate()
+        .take(pts.len().saturating_sub(1))
+        .map(|(k, q)| [q.x, q.y, from[2] + (to[2] - from[2]) * (k + 1) as f64 / n])
+        .collect()
 }
 
 /// The sendable lines of a program (cleaned as the sender cleans them) and
@@ -68,7 +129,7 @@ fn nm_to_mm(nm: i64) -> f64 {
 
 fn work_mm(i: &Interpreter) -> [f64; 3] {
     let (p, o) = (i.position(), i.work_offset());
-    [0, 1, 2].map(|k| nm_to_mm(p[k] - o[k]))
+    [0, 1, 2].map(|k| nm_to_mm(p[k].saturating_sub(o[k])))
 }
 
 /// Runs the interpreter over `lines`, applying settings lines to `s`; a line
@@ -104,11 +165,13 @@ pub fn spans_of(lines: &[Line], s: &Settings) -> Vec<Span> {
     let mut s = s.clone();
     let mut out = Vec::with_capacity(lines.len());
     interpret(lines, &mut s, |l, a, b| {
+        let (from, to) = (work_mm(a), work_mm(b));
         out.push(Span {
             file_line: l.file_line,
-            from: work_mm(a),
-            to: work_mm(b),
+            from,
+            to,
             n: n_word(&l.text),
+            via: arc_via(&l.text, b, from, to),
         })
     });
     out
@@ -146,7 +209,7 @@ fn state(i: &Interpreter) -> (Modal, f32, f32, NmPos, i64, [i64; 3]) {
         i.spindle(),
         *i.g92(),
         i.tool_length_offset(),
-        [p[0] - o[0], p[1] - o[1], p[2] - o[2]],
+        [0, 1, 2].map(|k| p[k].saturating_sub(o[k])),
     )
 }
 
@@ -188,8 +251,8 @@ pub fn resume_lines_of(lines: &[Line], from_line: usize, s: &Settings) -> Result
         .get(usize::from(m.wcs))
         .copied()
         .unwrap_or([0; 3]);
-    let frame = [p[0] - wcs[0], p[1] - wcs[1]];
-    let work = [0, 1, 2].map(|a| p[a] - wo[a]);
+    let frame = [p[0].saturating_sub(wcs[0]), p[1].saturating_sub(wcs[1])];
+    let work = [0, 1, 2].map(|a| p[a].saturating_sub(wo[a]));
 
     let mut pre: Vec<String> = settings_lines;
     pre.push(format!("G92.1G49G21G90G94G17G{}", 54 + m.wcs));
@@ -207,10 +270,19 @@ pub fn resume_lines_of(lines: &[Line], from_line: usize, s: &Settings) -> Result
         Ok(())
     };
     run(&mut check, &pre)?;
-    // The pen up (M5 moved a Z pen to its up height), and above everything
-    // the job drew at if the program moves Z itself, before the travel.
-    let z_safe = mm_nm(zmax) + wo[2] - wcs[2];
-    if zmax.is_finite() && z_safe > check.position()[2] - wcs[2] {
+    // The pen up before the travel: M5 moves a Z pen only when the board
+    // thinks it down, and after a reset it thinks it up wherever it is, so
+    // Z goes to the up height ($205) itself; and above everything the job
+    // drew at if the program moves Z itself.
+    let mut z_safe = if zmax.is_finite() {
+        mm_nm(zmax).saturating_add(wo[2]).saturating_sub(wcs[2])
+    } else {
+        i64::MIN
+    };
+    if s.pen_mode() == PenMode::ZAxis {
+        z_safe = z_safe.max(mm_nm(f64::from(s.pen_z_up())).saturating_sub(wcs[2]));
+    }
+    if z_safe > i64::MIN {
         pre.push(format!("G0Z{}", mm(z_safe)));
     }
     pre.push(format!("G0X{}Y{}", mm(frame[0]), mm(frame[1])));
@@ -254,11 +326,16 @@ pub fn resume_lines_of(lines: &[Line], from_line: usize, s: &Settings) -> Result
     if m.inverse_time {
         modes += "G93";
     }
+    // An arc mode cannot be set without an arc: the first line that moves
+    // gets the G2/G3 word instead (when it names no motion of its own).
+    let arc = match m.motion {
+        MotionMode::ArcCw => Some("G2"),
+        MotionMode::ArcCcw => Some("G3"),
+        _ => None,
+    };
     modes += match m.motion {
         MotionMode::Rapid => "G0",
-        MotionMode::Linear => "G1",
-        MotionMode::ArcCw => "G2",
-        MotionMode::ArcCcw => "G3",
+        MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw => "G1",
         MotionMode::Cancel => "G80",
     };
     pre.push(modes);
@@ -266,11 +343,14 @@ pub fn resume_lines_of(lines: &[Line], from_line: usize, s: &Settings) -> Result
     let mut c = Interpreter::new();
     c.set_coords(*target.coords());
     run(&mut c, &pre).context("the resume preamble does not read back")?;
-    if state(&c) != state(&target) {
+    let mut got = state(&c);
+    if arc.is_some() {
+        got.0.motion = m.motion;
+    }
+    if got != state(&target) {
         bail!(
-            "cannot rebuild the state before line {from_line}: the preamble gives {:?}, \
+            "cannot rebuild the state before line {from_line}: the preamble gives {got:?}, \
              the job had {:?}",
-            state(&c),
             state(&target)
         );
     }
@@ -282,6 +362,21 @@ pub fn resume_lines_of(lines: &[Line], from_line: usize, s: &Settings) -> Result
         })
         .collect();
     out.extend_from_slice(rest);
+    if let Some(g) = arc {
+        let first = out.len() - rest.len();
+        let moving = out[first..].iter_mut().find(|l| {
+            inkstep_core::gcode::parser::Block::parse(l.text.as_bytes()).is_ok_and(|b| {
+                b.get(b'X').is_some() || b.get(b'Y').is_some() || b.get(b'Z').is_some()
+            })
+        });
+        if let Some(l) = moving {
+            let b = inkstep_core::gcode::parser::Block::parse(l.text.as_bytes());
+            let own = b.is_ok_and(|b| b.g.iter().any(|&c| matches!(c, 0 | 10 | 20 | 30 | 800)));
+            if !own {
+                l.text = format!("{g}{}", l.text);
+            }
+        }
+    }
     Ok(out)
 }
 
@@ -342,7 +437,7 @@ pub fn resume_point(spans: &[Span], seen: &Seen) -> Option<usize> {
     let mut moving = 0;
     while lo > 0 && moving <= PLANNER_BLOCKS + 2 {
         lo -= 1;
-        if spans[lo].from != spans[lo].to {
+        if spans[lo].moves() {
             moving += 1;
         }
     }
@@ -350,14 +445,12 @@ pub fn resume_point(spans: &[Span], seen: &Seen) -> Option<usize> {
         return spans.get(seen.acked).map(|s| s.file_line);
     };
     let window = &spans[lo..hi];
-    let on = window
-        .iter()
-        .find(|s| s.from != s.to && dist(p, s.from, s.to) <= ON_LINE_MM);
+    let on = window.iter().find(|s| s.moves() && s.dist(p) <= ON_LINE_MM);
     let pick = on.or_else(|| {
         window
             .iter()
-            .filter(|s| s.from != s.to)
-            .min_by(|a, b| dist(p, a.from, a.to).total_cmp(&dist(p, b.from, b.to)))
+            .filter(|s| s.moves())
+            .min_by(|a, b| a.dist(p).total_cmp(&b.dist(p)))
     });
     pick.map(|s| s.file_line)
         .or_else(|| spans.get(seen.acked).map(|s| s.file_line))
@@ -490,6 +583,18 @@ mod tests {
             sent: 4,
         };
         assert_eq!(resume_point(&sp, &s), Some(3));
+    }
+
+    #[test]
+    fn an_arc_in_modal_g2_resumes() {
+        let g = "G21 G90\nG2 X10 Y0 I5 J0 F500\nX0 Y0 I-5 J0\n";
+        let r = resume_lines(g, 3, &Settings::default()).unwrap();
+        let t = texts(&r);
+        // The arc mode rides on the arc's own line.
+        assert!(
+            t.contains(&"G0X10Y0") && t.last() == Some(&"G2X0Y0I-5J0"),
+            "{t:?}"
+        );
     }
 
     #[test]
