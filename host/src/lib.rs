@@ -4,12 +4,14 @@
 
 pub mod arcs;
 pub mod bench;
+pub mod estimate;
 pub mod font;
 pub mod gcode_out;
 pub mod geom;
 pub mod hatch;
 pub mod plan;
 pub mod preview;
+pub mod resume;
 pub mod stream;
 pub mod svg_bench;
 pub mod svg_in;

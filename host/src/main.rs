@@ -33,6 +33,24 @@ enum Cmd {
         /// Status polls ('?') per second.
         #[arg(long, default_value_t = 5.0)]
         status_hz: f64,
+        /// Resume at this line of the file (1-based): the state before it
+        /// (units, modes, offsets, feed, pen) is rebuilt, the pen travels up
+        /// to where the line starts, and the job goes on.
+        #[arg(long, value_name = "N", conflicts_with = "resume")]
+        from_line: Option<usize>,
+        /// Resume where the last run of this file stopped (remembered in the
+        /// user's cache folder, inkstep/resume.tsv).
+        #[arg(long)]
+        resume: bool,
+    },
+    /// The job time from the firmware's own planner (the program run on a
+    /// virtual board), pen lifts and drops included, with the board's settings
+    /// (read from --port with $$, or from --settings / --set, else the
+    /// firmware's defaults).
+    Estimate {
+        file: PathBuf,
+        #[command(flatten)]
+        machine: MachineArgs,
     },
     /// List serial ports.
     Ports,
@@ -93,6 +111,8 @@ enum Cmd {
         /// Image width in pixels.
         #[arg(long, default_value_t = 1600)]
         width: u32,
+        #[command(flatten)]
+        machine: MachineArgs,
     },
     /// A generated drawing of N paths (179,000 make 20 MB of SVG) from SVG text
     /// to G-code: the time of each stage; fails above a minute in all.
@@ -215,6 +235,52 @@ struct OutArgs {
     arcs: Option<f64>,
 }
 
+/// Where the machine's settings come from (for the time estimate).
+#[derive(Args)]
+struct MachineArgs {
+    /// Read the settings from the board on this port ($$).
+    #[arg(long = "port")]
+    settings_port: Option<String>,
+    #[arg(long, default_value_t = 115200)]
+    baud: u32,
+    /// A file of `$N=V` lines (e.g. the board's `$$` listing).
+    #[arg(long)]
+    settings: Option<PathBuf>,
+    /// A setting, `N=V` (e.g. --set 110=5000); repeatable, applied last.
+    #[arg(long = "set", value_name = "N=V")]
+    set: Vec<String>,
+}
+
+fn machine_settings(m: &MachineArgs) -> Result<inkstep_core::settings::Settings> {
+    let mut s = if let Some(p) = &m.settings_port {
+        let mut t =
+            inkstep_serial::port::Port::open(p, m.baud).with_context(|| format!("opening {p}"))?;
+        inkstep_host::estimate::read_settings(&mut t)?
+    } else if let Some(f) = &m.settings {
+        let text =
+            std::fs::read_to_string(f).with_context(|| format!("reading {}", f.display()))?;
+        inkstep_host::estimate::settings_from_text(&text)
+            .with_context(|| format!("reading {}", f.display()))?
+    } else {
+        inkstep_core::settings::Settings::default()
+    };
+    inkstep_host::estimate::apply_flags(&mut s, &m.set)?;
+    Ok(s)
+}
+
+/// Prints the estimate of `program` on stdout, warnings on stderr.
+fn print_estimate(name: &str, program: &str, s: &inkstep_core::settings::Settings) {
+    let e = inkstep_host::estimate::estimate(program, s, Pt::new(0.0, 0.0), &[]);
+    for w in e.warnings() {
+        eprintln!("warning: {w}");
+    }
+    println!(
+        "{name}: estimated job time {} ({:.3} s), the firmware's planner with the machine's settings",
+        inkstep_host::estimate::fmt_time(e.job_s),
+        e.job_s
+    );
+}
+
 /// The `--park` choice.
 #[derive(Clone, Copy, Debug)]
 struct Park(Option<Pt>);
@@ -317,7 +383,8 @@ fn write_program(passes: &[Pass], a: &OutArgs, output: &PathBuf) -> Result<()> {
     if planned.len() > 1 {
         eprintln!(
             "{} passes with a pen change (M6 T<n>) before each after the first: {}. \
-             Note: the firmware does not take M6 yet (error:20); --layers none draws one pass.",
+             The board lifts the pen and waits for cycle start (~ or key D) at each; \
+             --layers none draws one pass.",
             planned.len(),
             planned
                 .iter()
@@ -444,7 +511,27 @@ fn main() -> Result<()> {
             port,
             baud,
             status_hz,
-        } => stream::send::run(&file, &port, baud, status_hz),
+            from_line,
+            resume,
+        } => stream::send::run(&stream::send::SendOptions {
+            file: &file,
+            port: &port,
+            baud,
+            status_hz,
+            from: match (from_line, resume) {
+                (Some(n), _) => stream::send::From::Line(n),
+                (None, true) => stream::send::From::Remembered,
+                (None, false) => stream::send::From::Start,
+            },
+        }),
+        Cmd::Estimate { file, machine } => {
+            let program = std::fs::read_to_string(&file)
+                .with_context(|| format!("reading {}", file.display()))?;
+            inkstep_serial::stream::prepare(&program, 128).map_err(anyhow::Error::msg)?;
+            let s = machine_settings(&machine)?;
+            print_estimate(&file.display().to_string(), &program, &s);
+            Ok(())
+        }
         Cmd::Ports => stream::send::list_ports(),
         Cmd::Serve {
             port,
@@ -488,14 +575,16 @@ fn main() -> Result<()> {
             svg,
             output,
             width,
+            machine,
         } => {
+            let settings = machine_settings(&machine)?;
             let is_svg = std::fs::read(&file)
                 .map(|b| {
                     b.starts_with(&[0x1f, 0x8b])
                         || String::from_utf8_lossy(&b[..b.len().min(4096)]).contains("<svg")
                 })
                 .unwrap_or(false);
-            let (moves, extra) = if is_svg {
+            let (moves, extra, program) = if is_svg {
                 let d = load_svg(&file, &svg)?;
                 let o = GcodeOptions::default();
                 let passes: Vec<Pass> = d
@@ -512,11 +601,11 @@ fn main() -> Result<()> {
                     page: Some(d.page),
                     travel: Some((svg.travel.x, svg.travel.y)),
                 };
-                (toolpath::parse(&g)?, extra)
+                (toolpath::parse(&g)?, extra, g)
             } else {
                 let src = std::fs::read_to_string(&file)
                     .with_context(|| format!("reading {}", file.display()))?;
-                (toolpath::parse(&src)?, preview::Extra::default())
+                (toolpath::parse(&src)?, preview::Extra::default(), src)
             };
             let (pm, st) = preview::render_with(&moves, &extra, width)?;
             pm.save_png(&output)
@@ -536,6 +625,7 @@ fn main() -> Result<()> {
                     extra.left_out.len()
                 );
             }
+            print_estimate(&file.display().to_string(), &program, &settings);
             Ok(())
         }
         Cmd::SvgBench { paths } => {

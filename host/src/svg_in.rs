@@ -210,6 +210,7 @@ pub fn read_svg(data: &[u8], opt: &SvgOptions) -> Result<Drawing> {
         layers: Vec::new(),
         skipped: Vec::new(),
         cur_layer: None,
+        hatch_segments: 0,
     };
     w.walk(tree.root(), tree.root().transform())?;
     let mut layers = w.layers;
@@ -516,6 +517,11 @@ fn xml_escape(s: &str) -> String {
         .replace('<', "&lt;")
 }
 
+/// Most hatch segments a drawing may get, all shapes together (each shape
+/// has its own cap in hatch.rs): a million lines are about 25 MB of G-code
+/// and hours of drawing.
+pub const MAX_HATCH_SEGMENTS: usize = 1_000_000;
+
 struct Walker<'a> {
     opt: &'a SvgOptions,
     tol_px: f64,
@@ -527,6 +533,8 @@ struct Walker<'a> {
     skipped: Vec<Skipped>,
     /// Index in `layers` of the Inkscape layer being walked.
     cur_layer: Option<usize>,
+    /// Hatch segments made so far, all shapes together.
+    hatch_segments: usize,
 }
 
 impl Walker<'_> {
@@ -658,6 +666,17 @@ impl Walker<'_> {
                     };
                     let h = hatch(&rings, rule, spacing, angle)
                         .with_context(|| format!("hatching {}", name_or(p.id(), "path")))?;
+                    self.hatch_segments +=
+                        h.iter().map(|s| s.len().saturating_sub(1)).sum::<usize>();
+                    if self.hatch_segments > MAX_HATCH_SEGMENTS {
+                        bail!(
+                            "hatching needs more than {MAX_HATCH_SEGMENTS} lines in all (reached at \
+                             {}; about {} MB of G-code) at --hatch-spacing {spacing} mm: choose a \
+                             larger spacing, or hatch fewer shapes",
+                            name_or(p.id(), "path"),
+                            MAX_HATCH_SEGMENTS * 25 / 1_000_000
+                        );
+                    }
                     mm.extend(h);
                 }
                 None => {
@@ -1259,6 +1278,35 @@ mod tests {
         .unwrap();
         let names: Vec<&str> = by.layers.iter().map(|l| l.name.as_str()).collect();
         assert_eq!(names, ["#ff0000", "#0000ff", "#000000"]);
+    }
+
+    #[test]
+    fn hatching_has_a_total_cap_with_a_clear_error() {
+        // Twelve squares of 50 mm at 0.0005 mm: 100,000 lines each, under the
+        // cap of one shape, 1.2 million in all.
+        let body: String = (0..12)
+            .map(|k| {
+                format!(
+                    r#"<rect id="r{k}" x="{}" y="{}" width="50" height="50"/>"#,
+                    k % 2 * 50,
+                    k / 2 * 8
+                )
+            })
+            .collect();
+        let opt = |spacing| SvgOptions {
+            hatch: Some((spacing, 0.0)),
+            ..SvgOptions::default()
+        };
+        let Err(e) = read_svg(mm_page(&body).as_bytes(), &opt(0.0005)) else {
+            panic!("1.2 million hatch lines")
+        };
+        let e = format!("{e:#}");
+        assert!(
+            e.contains("more than 1000000 lines in all") && e.contains("larger spacing"),
+            "{e}"
+        );
+        // At 0.5 mm the same drawing hatches.
+        assert!(read_svg(mm_page(&body).as_bytes(), &opt(0.5)).is_ok());
     }
 
     #[test]

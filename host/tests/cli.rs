@@ -111,3 +111,50 @@ fn plan_bench_prints_its_table() {
         assert!(s.contains(row), "{s}");
     }
 }
+
+/// The seconds in "estimated job time ... (12.345 s" on stdout.
+fn estimate_in(out: &std::process::Output) -> f64 {
+    let s = String::from_utf8_lossy(&out.stdout);
+    let k = s.find("estimated job time").expect("an estimate");
+    let rest = &s[k..];
+    let open = rest.find(" (").unwrap() + 2;
+    rest[open..].split(' ').next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn estimate_and_preview_give_the_firmwares_time_with_the_settings_given() {
+    let g = tmp("e.gcode");
+    host(&["text", "Hi", "--size", "12", "-o", g.to_str().unwrap()]);
+    let file = g.to_str().unwrap();
+    let plain = estimate_in(&host(&["estimate", file]));
+    // The program on the simulator's board with the firmware's defaults.
+    let text = std::fs::read_to_string(&g).unwrap();
+    let r = inkstep_sim::run::run_gcode(&text, inkstep_sim::run::Flow::CharCount(128));
+    let sim = r.rel(r.end) as f64 / inkstep_sim::board::TICK_HZ as f64;
+    assert!((plain - sim).abs() < 0.01 * sim, "{plain} vs {sim}");
+    // Slower acceleration from a flag, and a servo pen from a $$ listing.
+    let slow = estimate_in(&host(&[
+        "estimate", file, "--set", "120=20", "--set", "121=20",
+    ]));
+    assert!(slow > plain * 1.2, "{slow} vs {plain}");
+    let listing = tmp("settings.txt");
+    std::fs::write(&listing, "$201=1\n$204=600\nok\n").unwrap();
+    let servo = estimate_in(&host(&[
+        "estimate",
+        file,
+        "--settings",
+        listing.to_str().unwrap(),
+    ]));
+    assert!((servo - plain).abs() > 0.5, "{servo} vs {plain}");
+    // preview prints the same figure as estimate.
+    let png = tmp("e.png");
+    let p = estimate_in(&host(&["preview", file, "-o", png.to_str().unwrap()]));
+    assert!((p - plain).abs() < 1e-3, "{p} vs {plain}");
+    // A bad flag is an error naming it.
+    let bad = Command::new(env!("CARGO_BIN_EXE_inkstep-host"))
+        .args(["estimate", file, "--set", "110=fast"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("110=fast"));
+}

@@ -47,6 +47,8 @@ fn run_send(program: &str) -> (std::process::Output, FakeGrbl) {
     let file = dir.join("job.gcode");
     std::fs::write(&file, program).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_inkstep-host"))
+        // Where a stopped job is remembered: not the user's cache.
+        .env("INKSTEP_STATE_DIR", &dir)
         .args([
             "send",
             file.to_str().unwrap(),
@@ -86,8 +88,10 @@ fn send_streams_a_whole_file_over_a_pty() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(stdout.contains("153 lines sent, all ok"), "{stdout}");
-    assert_eq!(g.received.len(), 153);
-    assert_eq!(g.received[2], "G1X0.25Y0.5F1200");
+    // First the settings, read for the estimate, then the program.
+    assert_eq!(g.received.len(), 154);
+    assert_eq!(g.received[0], "$$");
+    assert_eq!(g.received[3], "G1X0.25Y0.5F1200");
     assert!(!g.overflow);
     assert!(g.max_fill > 100, "{}", g.max_fill);
 }

@@ -38,6 +38,9 @@ pub struct Status {
     pub wco: Option<[f64; 3]>,
     /// Input pins that are active, from `Pn:`.
     pub pins: String,
+    /// The line number (`N` word) of the motion executing, from `Ln:` (sent by
+    /// controllers that report it when lines carry numbers).
+    pub line: Option<u32>,
 }
 
 impl Status {
@@ -120,6 +123,7 @@ fn parse_status(body: &str) -> Status {
             }
             "WCO" => st.wco = triplet(&numbers(val)),
             "Pn" => st.pins = val.to_string(),
+            "Ln" => st.line = val.trim().parse().ok(),
             _ => {}
         }
     }
@@ -220,7 +224,12 @@ mod tests {
         assert_eq!(s.wco, Some([1.0, 2.0, 0.0]));
         assert_eq!(s.overrides, Some([120, 50, 100]));
         assert_eq!(s.pins, "XH");
+        assert_eq!(s.line, None);
         assert_eq!(s.machine_pos([1.0, 2.0, 0.0]), Some([1.0, 2.0, 1.0]));
+        let Reply::Status(s) = parse_reply("<Run|MPos:1,2,0|Ln:1234|FS:500,0>") else {
+            panic!()
+        };
+        assert_eq!((s.line, s.feed), (Some(1234), Some((500.0, 0.0))));
         assert_eq!(
             parse_reply("$110=3000.000"),
             Reply::Setting(110, "3000.000".into())

@@ -42,7 +42,11 @@ pub struct Pty {
 impl Pty {
     /// Opens a new pseudo-terminal in raw mode.
     pub fn open() -> io::Result<Pty> {
-        let master: OwnedFd = openpt(OpenptFlags::RDWR | OpenptFlags::NOCTTY)?;
+        // Close-on-exec: a program started later (a sender under test) must
+        // not inherit the master, or the port never hangs up when this side
+        // goes away.
+        let master: OwnedFd =
+            openpt(OpenptFlags::RDWR | OpenptFlags::NOCTTY | OpenptFlags::CLOEXEC)?;
         grantpt(&master)?;
         unlockpt(&master)?;
         let name = ptsname(&master, Vec::new())?;

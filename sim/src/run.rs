@@ -172,9 +172,38 @@ pub fn run_on_timed(
     realtime: &[Realtime],
     each_ms: &mut dyn FnMut(&mut Board),
 ) -> RunResult {
+    let mut events = Vec::new();
+    let mut r = run_on_each(
+        board,
+        text,
+        flow,
+        TIME_LIMIT_S,
+        realtime,
+        each_ms,
+        &mut |e| events.push(e),
+    );
+    r.events = events;
+    r
+}
+
+/// As [`run_on_timed`], handing each step event to `on_step` instead of keeping it
+/// (the result's `events` stay empty), and giving up after `limit_s` of virtual
+/// time: a long job's millions of steps need not be held, e.g. by the host's time
+/// estimate, and a job of many hours can run to its end.
+pub fn run_on_each(
+    board: &mut Board,
+    text: &str,
+    flow: Flow,
+    limit_s: u64,
+    realtime: &[Realtime],
+    each_ms: &mut dyn FnMut(&mut Board),
+    on_step: &mut dyn FnMut(StepEvent),
+) -> RunResult {
     let mut realtime: Vec<Realtime> = realtime.to_vec();
     realtime.sort_by_key(|r| r.at_us);
     let mut rt_next = 0;
+    // The first step's time: real-time bytes are timed from it.
+    let mut first_step: Option<u64> = None;
     let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
     let mut sender = Sender::new(flow);
     for (i, l) in lines.iter().enumerate() {
@@ -197,9 +226,8 @@ pub fn run_on_timed(
             }
         }
     };
-    let mut events = Vec::new();
     let mut unsent: Vec<u8> = Vec::new();
-    let limit = board.now() + TIME_LIMIT_S * TICK_HZ;
+    let limit = board.now() + limit_s * TICK_HZ;
     let step = Board::ms_to_ticks(1);
     let mut timed_out = false;
     loop {
@@ -218,12 +246,12 @@ pub fn run_on_timed(
         progressed |= !out.is_empty();
         received(&mut sender, &out);
         // Real-time bytes due (times from the first step).
-        let due = |events: &Vec<StepEvent>, i: usize| {
-            let first = events.first()?.t;
+        let due = |first_step: Option<u64>, i: usize| {
+            let first = first_step?;
             let r: &Realtime = realtime.get(i)?;
             Some(first + (r.at_us as u128 * u128::from(TICK_HZ) / 1_000_000) as u64)
         };
-        while due(&events, rt_next).is_some_and(|t| t <= board.now()) {
+        while due(first_step, rt_next).is_some_and(|t| t <= board.now()) {
             // Real-time bytes are taken as they arrive; the receive ring holds one
             // line at most with send-response, so they always fit.
             board.usb_write(&realtime[rt_next].bytes);
@@ -234,7 +262,7 @@ pub fn run_on_timed(
         if sender.done()
             && unsent.is_empty()
             && board.is_idle()
-            && (rt_next >= realtime.len() || events.is_empty())
+            && (rt_next >= realtime.len() || first_step.is_none())
         {
             break;
         }
@@ -244,15 +272,18 @@ pub fn run_on_timed(
         }
         if !progressed {
             let mut until = board.now() + step;
-            if let Some(t) = due(&events, rt_next) {
+            if let Some(t) = due(first_step, rt_next) {
                 until = until.min(t.max(board.now() + 1));
             }
-            board.run_until(until, &mut |e| events.push(e));
+            board.run_until(until, &mut |e| {
+                first_step.get_or_insert(e.t);
+                on_step(e)
+            });
             each_ms(board);
         }
     }
     RunResult {
-        events,
+        events: Vec::new(),
         first_motion: board.first_motion,
         errors,
         alarms,

@@ -40,6 +40,10 @@ trap cleanup EXIT
 
 "$@" --link "$dir/tty" --speed "$SPEED" >"$dir/machine.log" 2>&1 &
 pids+=($!)
+# For the test that takes the machine away and brings it back.
+export INKSTEP_MACHINE_PID=$!
+printf '%s\n' "$@" --link "$dir/tty" --speed "$SPEED" >"$dir/machine.cmd"
+export INKSTEP_MACHINE_CMD="$dir/machine.cmd"
 for _ in $(seq 200); do [ -e "$dir/tty" ] && break; sleep 0.1; done
 [ -e "$dir/tty" ] || { echo "FAIL: no pty from: $*"; cat "$dir/machine.log"; exit 1; }
 

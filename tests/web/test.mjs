@@ -10,8 +10,14 @@
 import puppeteer from "puppeteer-core";
 import path from "node:path";
 import fs from "node:fs";
+import { spawn } from "node:child_process";
 
 const [url, root, shots] = process.argv.slice(2);
+// The machine run.sh started (its pid, and its command line one argument a
+// line), so that a test can take it away and bring it back.
+const machinePid = parseInt(process.env.INKSTEP_MACHINE_PID || "0", 10);
+const machineCmd = process.env.INKSTEP_MACHINE_CMD ? fs.readFileSync(process.env.INKSTEP_MACHINE_CMD, "utf8").split("\n").filter((l) => l) : [];
+let machine = null;
 const results = [];
 let failed = 0;
 
@@ -127,6 +133,16 @@ try {
   const loaded = await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "text" && window.inkstep.job.complete, null, "text preview");
   const moves = await page.evaluate(() => window.inkstep.job.preview.filter((m) => m[4]).length);
   check("a text is previewed", loaded && moves > 10, `${moves} pen-down moves planned`);
+  // The file chooser named star.nc: a text job loaded since, it names nothing.
+  const chooser = await page.$eval("#file", (e) => e.value);
+  check("the file chooser is cleared once a text job is loaded", loaded && chooser === "", JSON.stringify(chooser));
+  // star.nc's drawing is not shown over the new preview (the path may hold
+  // the pen's position from a report since: nothing else).
+  const old = await page.evaluate(() => {
+    const p = window.inkstep.status.pos;
+    return window.inkstep.path.filter((q) => q[0] !== p[0] || q[1] !== p[1]).length;
+  });
+  check("the last job's drawing is not shown over a new preview", loaded && old === 0, `${old} points of it left`);
   await page.click("#run");
   await waitFor(page, () => window.inkstep.status.state === "Run" && window.inkstep.status.job.done > 0.5, null, "text half drawn");
   if (shots) await page.screenshot({ path: path.join(shots, "web-view-text.png") });
@@ -155,6 +171,24 @@ try {
   check("an SVG's text is named as left out and shown in orange",
     svgLoaded && left.length === 1 && left[0] === 'text: label "Left out"' && logged && orange > 50,
     `${JSON.stringify(left)}, logged ${logged}, ${orange} orange pixels`);
+
+  // 6c. A job stopped midway continues where it stopped (Continue at line N).
+  await page.$eval("#text", (e) => { e.value = ""; });
+  await page.type("#text", "Hi 42");
+  await page.click("#textgo");
+  await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "text" && window.inkstep.job.complete && !window.inkstep.loading, null, "text loaded to stop");
+  await page.click("#run");
+  await waitFor(page, () => window.inkstep.status.state === "Run" && window.inkstep.status.job && window.inkstep.status.job.done > 0.3, null, "a third drawn");
+  await page.click("#stop");
+  const offered = await waitFor(page, () => !document.querySelector("#rejob").hidden && window.inkstep.status.state === "Idle" &&
+    !document.querySelector("#rejob").disabled, null, "Continue offered");
+  const label = await page.$eval("#rejob", (e) => e.textContent);
+  await page.click("#rejob");
+  const contDone = await waitFor(page, () => window.inkstep.done && window.inkstep.done.ok && window.inkstep.status.state === "Idle", null, "continued to the end", 60000);
+  const c = await state(page);
+  const gone = await page.$eval("#rejob", (e) => e.hidden);
+  check("a stopped job continues where it stopped and ends at the park", offered && contDone && c.pos[0] === 0 && c.pos[1] === 0 && gone,
+    `${label}, ended at ${c.pos}`);
 
   // 7. A command line carrying a real-time byte is refused, and nothing is sent.
   await page.type("#line", "G4 P0 ~");
@@ -248,6 +282,28 @@ try {
   await page.click("#bclose");
   await page.evaluate(() => send({ t: "rt", b: 133 }));
 
+  // 9c. The machine goes away mid-job and comes back: "connection lost" is
+  // shown, then cleared once the link is up again (the simulator only: it is
+  // the one process run.sh started).
+  if (machinePid && machineCmd.length && /inkstep-sim$/.test(machineCmd[0])) {
+    await page.$eval("#text", (e) => { e.value = ""; });
+    await page.type("#text", "Lost");
+    await page.click("#textgo");
+    await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "text" && window.inkstep.job.complete && !window.inkstep.loading, null, "text loaded to lose");
+    await page.click("#run");
+    await waitFor(page, () => window.inkstep.status && window.inkstep.status.state === "Run", null, "running before the loss");
+    process.kill(machinePid, "SIGTERM");
+    const lost = await waitFor(page, () => /connection lost/.test(document.querySelector("#jobstate").textContent), null, "connection lost shown", 15000);
+    machine = spawn(machineCmd[0], machineCmd.slice(1), { stdio: "ignore" });
+    const back = await waitFor(page, () => window.inkstep.link && window.inkstep.link.up && window.inkstep.status &&
+      window.inkstep.status.state === "Idle", null, "the link back", 20000);
+    const shown = await page.$eval("#jobstate", (e) => e.textContent);
+    check("\"connection lost\" is shown, and cleared when the machine is back", lost && back && !/connection lost/.test(shown),
+      `after reconnecting: ${JSON.stringify(shown)}`);
+  } else {
+    console.log("skip connection lost: the machine is not the simulator run.sh started");
+  }
+
   // 10. The page cannot be framed by another site.
   const framer = await browser.newPage();
   await framer.setContent(`<iframe id="f" src="${url}" width="400" height="300"></iframe>`);
@@ -316,6 +372,7 @@ try {
   check("browser session", false, e.stack);
 } finally {
   await browser.close();
+  if (machine) machine.kill("SIGTERM");
 }
 console.log(`${results.length - failed} passed, ${failed} failed`);
 process.exit(failed ? 1 : 0);

@@ -5,13 +5,10 @@
 //! and an estimate of each move's duration, so that progress along the path and
 //! the time left can be told from where the machine reports the pen.
 //!
-//! The estimate follows the machine's own rules (from its settings): each move
-//! at its feed (or the rapid rate) within the axes' rates and accelerations,
-//! corners taken at the speed the junction deviation ($11) allows, a full stop
-//! at every pen change, and the pen's own time: the lift/drop wait ($204) of a
-//! servo pen, or the Z move between $205 and $206 of a Z pen. Text is mostly
-//! short strokes and pen changes, so leaving those out (as a plain length /
-//! feed sum does) made a 27 s job read 8 s.
+//! The estimate is the firmware's own ([`crate::estimate`]): the job run on a
+//! virtual board with the machine's settings (its `$$`), from where the pen is,
+//! each move's end found in the step stream. A model of the planner here read a
+//! text job 9 % short; the firmware's code cannot disagree with itself.
 
 use crate::gcode_out::{to_gcode, GcodeOptions};
 use crate::geom::{Pt, Route};
@@ -20,6 +17,7 @@ use crate::svg_in::{dist_to_segment, read_svg, LayerMode, Skipped, SvgOptions};
 use crate::text::layout;
 use crate::toolpath::{self, Move, MoveKind};
 use anyhow::{bail, Result};
+use inkstep_core::settings::Settings;
 use inkstep_serial::stream::{prepare, Line};
 
 /// What was uploaded.
@@ -30,189 +28,38 @@ pub enum Source<'a> {
     Text(&'a str, f64),
 }
 
-/// What the estimate needs from the machine's settings.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Machine {
-    /// Axis maximum rates ($110..$112), mm/min.
-    pub rate: [f64; 3],
-    /// Axis accelerations ($120..$122), mm/s^2.
-    pub accel: [f64; 3],
-    /// Junction deviation ($11), mm.
-    pub junction: f64,
-    /// Servo pen ($201 = 1): lift/drop wait ($204), s. None: a Z pen.
-    pub servo_s: Option<f64>,
-    /// Z pen travel |$205 - $206|, mm.
-    pub z_travel: f64,
-}
+/// Moves up to which a job's estimate is computed while it loads (a tenth of
+/// a second or so); bigger jobs get theirs afterwards.
+pub const QUICK_MOVES: usize = 20_000;
 
-impl Default for Machine {
-    /// The firmware's defaults.
-    fn default() -> Machine {
-        Machine::from_settings(|_| None)
+/// The estimate of [`crate::estimate`], each move's end and the total; at the
+/// end of the last move the job is done (what follows, the program's end,
+/// takes a few milliseconds).
+fn firmware_estimate(gcode: &str, settings: &Settings, pen: Pt, moves: &[Move]) -> (Vec<f64>, f64) {
+    let est = crate::estimate::estimate(gcode, settings, pen, moves);
+    let (mut ends_s, total) = (est.ends_s, est.job_s);
+    if let Some(l) = ends_s.last_mut() {
+        *l = l.max(total);
     }
-}
-
-impl Machine {
-    /// From the settings `get` knows (the firmware's defaults for the rest).
-    pub fn from_settings(get: impl Fn(u16) -> Option<f64>) -> Machine {
-        let v = |n: u16| {
-            get(n)
-                .filter(|v| v.is_finite())
-                .or_else(|| {
-                    inkstep_core::settings::TABLE
-                        .iter()
-                        .find(|d| d.number == n)
-                        .map(|d| d.default as f64)
-                })
-                .unwrap_or(0.0)
-        };
-        Machine {
-            rate: [v(110), v(111), v(112)].map(|r| r.max(1.0)),
-            accel: [v(120), v(121), v(122)].map(|a| a.max(0.1)),
-            junction: v(11).max(0.0),
-            servo_s: (v(201) == 1.0).then(|| v(204) / 1000.0),
-            z_travel: (v(205) - v(206)).abs(),
-        }
-    }
-
-    /// This machine with settings `set` changed.
-    pub fn with(&self, set: &[(u16, f64)]) -> Machine {
-        let mut m = *self;
-        for &(n, v) in set {
-            match n {
-                110..=112 => m.rate[usize::from(n - 110)] = v.max(1.0),
-                120..=122 => m.accel[usize::from(n - 120)] = v.max(0.1),
-                11 => m.junction = v.max(0.0),
-                201 if v == 1.0 => m.servo_s = Some(m.servo_s.unwrap_or(0.15)),
-                201 => m.servo_s = None,
-                204 => m.servo_s = m.servo_s.map(|_| v / 1000.0),
-                _ => {}
-            }
-        }
-        m
-    }
-
-    /// The slowest of the X and Y rates (the page's older rapid figure).
-    pub fn rapid(&self) -> f64 {
-        self.rate[0].min(self.rate[1])
-    }
-
-    /// Seconds a pen lift or drop takes.
-    pub fn pen_s(&self) -> f64 {
-        match self.servo_s {
-            Some(s) => s,
-            None => trapezoid(self.z_travel, self.rate[2] / 60.0, self.accel[2], 0.0, 0.0),
-        }
-    }
-}
-
-/// Seconds to go `len` mm, entering at `vi` and leaving at `vo` mm/s, at most
-/// `v` mm/s, accelerating and braking at `a` mm/s^2.
-fn trapezoid(len: f64, v: f64, a: f64, vi: f64, vo: f64) -> f64 {
-    if len <= 0.0 {
-        return 0.0;
-    }
-    let up = (v * v - vi * vi).max(0.0) / (2.0 * a);
-    let down = (v * v - vo * vo).max(0.0) / (2.0 * a);
-    if up + down <= len {
-        (v - vi).max(0.0) / a + (v - vo).max(0.0) / a + (len - up - down) / v
-    } else {
-        let peak = ((2.0 * a * len + vi * vi + vo * vo) / 2.0).sqrt();
-        (peak - vi).max(0.0) / a + (peak - vo).max(0.0) / a
-    }
-}
-
-/// Estimated seconds from the start to the end of each move.
-pub fn estimate(moves: &[Move], m: &Machine) -> Vec<f64> {
-    let n = moves.len();
-    // Per move: length, unit direction, top speed and acceleration (mm/s, mm/s^2)
-    // as the axes it uses allow.
-    let mut len = vec![0.0; n];
-    let mut dir = vec![(0.0, 0.0); n];
-    let mut top = vec![0.0; n];
-    let mut acc = vec![0.0; n];
-    for (i, mv) in moves.iter().enumerate() {
-        let (dx, dy) = (mv.to.x - mv.from.x, mv.to.y - mv.from.y);
-        let l = dx.hypot(dy);
-        len[i] = l;
-        if l <= 0.0 {
-            continue;
-        }
-        let (ux, uy) = (dx / l, dy / l);
-        dir[i] = (ux, uy);
-        let lim = |per_axis: [f64; 3]| {
-            let mut best = f64::INFINITY;
-            for (u, p) in [(ux, per_axis[0]), (uy, per_axis[1])] {
-                if u.abs() > 1e-12 {
-                    best = best.min(p / u.abs());
-                }
-            }
-            best
-        };
-        let wanted = mv.feed.unwrap_or(f64::INFINITY).max(1.0) / 60.0;
-        top[i] = wanted.min(lim(m.rate.map(|r| r / 60.0)));
-        acc[i] = lim(m.accel);
-    }
-    // A stop before move i: the first move, and every pen change.
-    let stop_before = |i: usize| i == 0 || moves[i].kind != moves[i - 1].kind;
-    // Highest speed at the start of each move (the junction with the one before).
-    let mut entry = vec![0.0; n + 1];
-    for i in 1..n {
-        if stop_before(i) || len[i] <= 0.0 || len[i - 1] <= 0.0 {
-            continue;
-        }
-        let (a, b) = (dir[i - 1], dir[i]);
-        let cos = -(a.0 * b.0 + a.1 * b.1);
-        let cap = top[i].min(top[i - 1]);
-        entry[i] = if cos < -0.999_999 {
-            cap
-        } else {
-            let sin_half = (0.5 * (1.0 - cos)).max(0.0).sqrt();
-            let a_j = acc[i].min(acc[i - 1]);
-            let v2 = a_j * m.junction * sin_half / (1.0 - sin_half).max(1e-9);
-            v2.sqrt().min(cap)
-        };
-    }
-    // Backward: each move can brake from its entry to the next one's.
-    for i in (0..n).rev() {
-        let next = if i + 1 < n && !stop_before(i + 1) {
-            entry[i + 1]
-        } else {
-            0.0
-        };
-        entry[i] = entry[i].min((next * next + 2.0 * acc[i] * len[i]).sqrt());
-    }
-    // Forward: each move can reach its exit from its entry.
-    let mut t = 0.0;
-    let mut out = Vec::with_capacity(n);
-    for i in 0..n {
-        if i > 0 && stop_before(i) {
-            t += m.pen_s();
-        }
-        let vi = entry[i];
-        let mut vo = if i + 1 < n && !stop_before(i + 1) {
-            entry[i + 1]
-        } else {
-            0.0
-        };
-        if len[i] > 0.0 {
-            vo = vo.min((vi * vi + 2.0 * acc[i] * len[i]).sqrt());
-            if i + 1 < n {
-                entry[i + 1] = entry[i + 1].min(vo);
-            }
-            t += trapezoid(len[i], top[i], acc[i], vi, vo);
-        }
-        out.push(t);
-    }
-    out
+    (ends_s, total)
 }
 
 pub struct Job {
+    /// Unique among the jobs built (the late estimate finds its job by it).
+    pub id: u64,
     pub name: String,
     pub lines: Vec<Line>,
     pub moves: Vec<Move>,
     /// Estimated seconds from the job's start to the end of each move.
     pub ends_s: Vec<f64>,
+    /// Estimated seconds for the whole job (to the end of the program).
+    pub total: f64,
+    /// The preview's rows ([`Job::preview`]) as JSON arrays of at most
+    /// [`super::link::CHUNK`] rows each, made while the job is built.
+    pub preview_json: Vec<String>,
+    /// The estimate is the firmware's; false while a big job's is computed
+    /// (then a rough one, moves at their feed, stands in).
+    pub estimated: bool,
     /// What an SVG holds that the job does not draw (text, images, fills).
     pub left_out: Vec<Skipped>,
     /// An SVG's page size (mm).
@@ -224,8 +71,8 @@ const RX: usize = 128;
 
 impl Job {
     /// Builds a job; `pen` is where the pen is now (the plan starts there) and
-    /// `machine` what the estimate needs of the settings.
-    pub fn new(name: &str, src: Source, pen: Pt, machine: &Machine) -> Result<Job> {
+    /// `settings` the machine's, for the estimate.
+    pub fn new(name: &str, src: Source, pen: Pt, settings: &Settings) -> Result<Job> {
         let route = Route {
             start: pen,
             park: Some(Pt::new(0.0, 0.0)),
@@ -273,52 +120,89 @@ impl Job {
                 planned(layout(text, size, "futural")?.strokes)
             }
         };
-        let lines = prepare(&gcode, RX).map_err(anyhow::Error::msg)?;
+        // The lines to send on one core, the moves and their preview on the
+        // other: a 10 MB file spends most of its load here.
+        let (lines, moves, preview_json) = std::thread::scope(|sc| {
+            let lines = sc.spawn(|| prepare(&gcode, RX));
+            let moves = toolpath::parse(&gcode);
+            let rows = moves.as_deref().map(preview_rows).unwrap_or_default();
+            (lines.join(), moves, rows)
+        });
+        let lines = lines
+            .map_err(|_| anyhow::anyhow!("reading the lines failed"))?
+            .map_err(anyhow::Error::msg)?;
         if lines.is_empty() {
             bail!("nothing to run");
         }
-        let moves = toolpath::parse(&gcode)?;
-        // Settings the job itself makes ($120=500) count for its estimate.
-        let set: Vec<(u16, f64)> = lines
-            .iter()
-            .filter_map(|l| {
-                let (n, v) = l.text.strip_prefix('$')?.split_once('=')?;
-                Some((n.parse().ok()?, v.parse().ok()?))
-            })
-            .collect();
-        let machine = if set.is_empty() {
-            *machine
+        let moves = moves?;
+        // Small jobs get the firmware's estimate now; a big one (seconds of
+        // simulation) a rough one, until `estimate` is run away from the load.
+        let (ends_s, total, estimated) = if moves.len() <= QUICK_MOVES {
+            let (e, t) = firmware_estimate(&gcode, settings, pen, &moves);
+            (e, t, true)
         } else {
-            machine.with(&set)
+            let mut t = 0.0;
+            let e: Vec<f64> = moves
+                .iter()
+                .map(|m| {
+                    t += m.from.dist(m.to) / (m.feed.unwrap_or(3000.0).max(1.0) / 60.0);
+                    t
+                })
+                .collect();
+            (e, t, false)
         };
-        let ends_s = estimate(&moves, &machine);
+        static IDS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        let id = IDS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         Ok(Job {
+            id,
+            estimated,
+            preview_json,
             name: name.to_string(),
             lines,
             moves,
             ends_s,
+            total,
             left_out,
             page,
         })
     }
 
+    /// The firmware's estimate of this job (what `estimated` jobs have
+    /// already): each move's end and the total, seconds.
+    pub fn estimate(&self, settings: &Settings, pen: Pt) -> (Vec<f64>, f64) {
+        let g: String = self.lines.iter().map(|l| l.text.clone() + "\n").collect();
+        firmware_estimate(&g, settings, pen, &self.moves)
+    }
+
     /// Estimated duration, s.
     pub fn total_s(&self) -> f64 {
-        self.ends_s.last().copied().unwrap_or(0.0)
+        self.total
     }
 
     /// The moves as [x0, y0, x1, y1, drawn] rows for the page.
     pub fn preview(&self) -> Vec<[f64; 5]> {
-        self.moves
-            .iter()
-            .map(|m| {
-                let d = if m.kind == MoveKind::Draw { 1.0 } else { 0.0 };
-                // Micrometres are plenty for a drawing, and keep the message short.
-                let r = |v: f64| (v * 1000.0).round() / 1000.0;
-                [r(m.from.x), r(m.from.y), r(m.to.x), r(m.to.y), d]
-            })
-            .collect()
+        self.moves.iter().map(preview_row).collect()
     }
+}
+
+fn preview_row(m: &Move) -> [f64; 5] {
+    let d = if m.kind == MoveKind::Draw { 1.0 } else { 0.0 };
+    // Micrometres are plenty for a drawing, and keep the message short.
+    let r = |v: f64| (v * 1000.0).round() / 1000.0;
+    [r(m.from.x), r(m.from.y), r(m.to.x), r(m.to.y), d]
+}
+
+/// The preview rows as JSON, [`super::link::CHUNK`] rows a piece (straight to
+/// text: a JSON value of half a million rows first took longer than the
+/// job's own parsing).
+fn preview_rows(moves: &[Move]) -> Vec<String> {
+    moves
+        .chunks(super::link::CHUNK)
+        .map(|c| {
+            let rows: Vec<[f64; 5]> = c.iter().map(preview_row).collect();
+            serde_json::to_string(&rows).unwrap_or_default()
+        })
+        .collect()
 }
 
 /// Follows a running job along its moves from the positions the machine
@@ -334,6 +218,11 @@ const LOOK_AHEAD: usize = 400;
 impl Tracker {
     pub fn new() -> Tracker {
         Tracker { at: 0 }
+    }
+
+    /// A tracker for a job resumed at move `k`.
+    pub fn starting_at(k: usize) -> Tracker {
+        Tracker { at: k }
     }
 
     /// The move the pen is on now.
@@ -389,63 +278,46 @@ mod tests {
     #[test]
     fn a_gcode_job_estimates_its_time_and_tracks_the_pen() {
         let g = "G21 G90\nG0 X10\nM3\nG1 X10 Y10 F600\nM5\nG0 X0 Y0\n";
-        // Near-instant acceleration and pen: the times are length / rate.
-        let quick = Machine {
-            rate: [1200.0, 1200.0, 600.0],
-            accel: [1e9; 3],
-            junction: 0.01,
-            servo_s: Some(0.0),
-            z_travel: 2.0,
-        };
-        let job = Job::new("square", Source::Gcode(g), Pt::new(0.0, 0.0), &quick).unwrap();
+        let m = Settings::default();
+        let job = Job::new("square", Source::Gcode(g), Pt::new(0.0, 0.0), &m).unwrap();
         assert_eq!(job.lines.len(), 6);
         assert_eq!(job.moves.len(), 3);
-        // 10 mm at 1200 mm/min (0.5 s), 10 mm at 600 (1 s), and the rapid
-        // diagonal back with both axes at 1200 mm/min: 10 mm each, 0.5 s.
-        assert!((job.total_s() - 2.0).abs() < 1e-6, "{}", job.total_s());
+        // Each move's end in order, the draw (10 mm at 600 mm/min, after the
+        // pen drop) at least a second, the program's end last.
+        let e = &job.ends_s;
+        assert!(e.windows(2).all(|w| w[0] < w[1]), "{e:?}");
+        assert!(
+            e[1] - e[0] > 1.0 && *e.last().unwrap() <= job.total_s(),
+            "{e:?}"
+        );
         let mut t = Tracker::new();
         let all = job.lines.len();
-        assert!((t.update(&job, Pt::new(5.0, 0.0), all) - 0.25).abs() < 1e-6);
-        assert!((t.update(&job, Pt::new(10.0, 5.0), all) - 1.0).abs() < 1e-6);
-        assert!((t.update(&job, Pt::new(0.0, 0.0), all) - job.total_s()).abs() < 1e-6);
+        let half = t.update(&job, Pt::new(10.0, 5.0), all);
+        assert!((half - (e[0] + e[1]) / 2.0).abs() < 1e-9, "{half}");
+        assert!((t.update(&job, Pt::new(0.0, 0.0), all) - e[2]).abs() < 1e-9);
         assert_eq!(job.preview()[1], [10.0, 0.0, 10.0, 10.0, 1.0]);
     }
 
     #[test]
-    fn the_estimate_counts_acceleration_corners_and_the_pen() {
-        let m = Machine::default();
-        // 100 mm at 3000 mm/min (50 mm/s) with 200 mm/s^2: 0.25 s up, 0.25 s
-        // down (6.25 mm each), 87.5 mm at speed (1.75 s).
-        let line = Job::new("l", Source::Gcode("G0 X100\n"), Pt::new(0.0, 0.0), &m).unwrap();
-        assert!((line.total_s() - 2.25).abs() < 1e-9, "{}", line.total_s());
-        // Straight on through a split: no stop in between.
-        let split = Job::new(
-            "s",
-            Source::Gcode("G0 X50\nG0 X100\n"),
-            Pt::new(0.0, 0.0),
-            &m,
-        )
-        .unwrap();
-        assert!((split.total_s() - 2.25).abs() < 1e-6, "{}", split.total_s());
-        // A reversal stops.
-        let back = Job::new("b", Source::Gcode("G0 X50\nG0 X0\n"), Pt::new(0.0, 0.0), &m).unwrap();
-        assert!((back.total_s() - 2.0 * (0.5 + 37.5 / 50.0)).abs() < 1e-6);
-        // Pen changes: a servo waits $204 each time; a Z pen moves.
+    fn the_estimate_counts_the_pen_with_the_machines_settings() {
         let pen = "G0 X10\nM3\nG1 X20 F600\nM5\nG0 X0\n";
-        let servo = Machine {
-            servo_s: Some(0.5),
-            ..m
+        let servo = |ms: f32| {
+            let mut s = Settings::default();
+            s.set(201, 1.0).unwrap();
+            s.set(204, ms).unwrap();
+            s.set(207, ms).unwrap();
+            Job::new("p", Source::Gcode(pen), Pt::new(0.0, 0.0), &s)
+                .unwrap()
+                .total_s()
         };
-        let a = Job::new("p", Source::Gcode(pen), Pt::new(0.0, 0.0), &m).unwrap();
-        let b = Job::new("p", Source::Gcode(pen), Pt::new(0.0, 0.0), &servo).unwrap();
-        assert!((b.total_s() - a.total_s() - 2.0 * (0.5 - m.pen_s())).abs() < 1e-9);
-        // Z pen: 2 mm at 600 mm/min (10 mm/s) with 100 mm/s^2: 0.1 s up, 0.1 s down.
-        assert!((m.pen_s() - 0.3).abs() < 1e-9, "{}", m.pen_s());
+        // A lift and a drop, waiting $204 and $207.
+        let d = servo(600.0) - servo(100.0);
+        assert!((d - 1.0).abs() < 0.01, "{d}");
     }
 
     #[test]
     fn a_job_parked_where_it_starts_is_not_done_at_its_start() {
-        let m = Machine::default();
+        let m = Settings::default();
         let job = Job::new("t", Source::Text("Hi", 10.0), Pt::new(0.0, 0.0), &m).unwrap();
         let park = *job.moves.last().unwrap();
         assert!(job.moves.len() < 400 && park.to == Pt::new(0.0, 0.0));
@@ -468,7 +340,7 @@ mod tests {
 
     #[test]
     fn text_and_svg_jobs_are_planned_and_parked() {
-        let m = Machine::default();
+        let m = Settings::default();
         let job = Job::new("t", Source::Text("一 Hi", 10.0), Pt::new(0.0, 0.0), &m).unwrap();
         let last = job.moves.last().unwrap();
         assert_eq!((last.to, last.kind), (Pt::new(0.0, 0.0), MoveKind::Travel));

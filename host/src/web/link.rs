@@ -19,6 +19,7 @@ use crate::geom::Pt;
 use inkstep_serial::grbl::{alarm_text, error_text, Reply, Status};
 use inkstep_serial::port::{Port, Transport};
 use inkstep_serial::sender::{Answer, Event, Flow, Sender};
+use inkstep_serial::stream::Line;
 use serde_json::{json, Value};
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::mpsc::{Receiver, TryRecvError};
@@ -40,6 +41,16 @@ pub enum Request {
     Load(Box<Job>),
     Run,
     Stop,
+    /// Continues the job at a file line (None: where it stopped), the state
+    /// before it rebuilt ([`crate::resume`]).
+    Resume(Option<usize>),
+    /// The firmware's estimate of the job `id`, computed after it was loaded:
+    /// each move's end and the total, seconds.
+    Estimate {
+        id: u64,
+        ends_s: Vec<f64>,
+        total: f64,
+    },
 }
 
 /// Status polls per second.
@@ -74,8 +85,10 @@ pub struct Snapshot {
     pub log: VecDeque<Value>,
     /// The pen's work position, for planning a text or SVG from there.
     pub pen: Pt,
-    /// The settings time estimates need.
-    pub machine: super::job::Machine,
+    /// The job's resume point (`{"t":"resumable","line":N}`).
+    pub resumable: Option<Value>,
+    /// The machine's settings (its `$$`), for time estimates.
+    pub machine: inkstep_core::settings::Settings,
 }
 
 /// Shared between the link thread and the web handlers.
@@ -114,7 +127,7 @@ impl Hub {
     /// the path and the status follow on their own).
     pub fn catch_up(&self) -> Vec<Arc<str>> {
         let s = self.snapshot();
-        [&s.link, &s.fw, &s.alarm, &s.settings]
+        [&s.link, &s.fw, &s.alarm, &s.settings, &s.resumable]
             .into_iter()
             .flatten()
             .chain(s.log.iter())
@@ -142,9 +155,15 @@ impl Hub {
         self.status.send_replace(msg.map(|m| m.to_string().into()));
     }
 
-    pub fn pen_and_machine(&self) -> (Pt, super::job::Machine) {
+    /// Where the job loaded can be resumed, for browsers that join later.
+    pub fn set_resumable(&self, msg: Value) {
+        self.snapshot().resumable = Some(msg.clone());
+        self.publish(&msg);
+    }
+
+    pub fn pen_and_machine(&self) -> (Pt, inkstep_core::settings::Settings) {
         let s = self.snapshot();
-        (s.pen, s.machine)
+        (s.pen, s.machine.clone())
     }
 
     fn log(&self, text: &str) {
@@ -175,6 +194,14 @@ enum Origin {
 }
 
 struct Running {
+    /// The lines sent: the job's, or a resume's preamble and the job's rest.
+    lines: Vec<Line>,
+    /// Lines of the resume's preamble, and the index in the job's lines of
+    /// the first one sent after it.
+    pre: usize,
+    offset: usize,
+    /// The last `Ln:` the machine reported.
+    ln: Option<u32>,
     started: Instant,
     acked: usize,
     tracker: Tracker,
@@ -203,6 +230,8 @@ struct Link {
     alarm: Option<u32>,
     /// A `$$` is on its way (none is sent again until it is answered).
     listing_sent: bool,
+    /// The file line where the loaded job stopped, to resume from.
+    resume_at: Option<usize>,
 }
 
 /// Runs the link to `port` until `requests` closes.
@@ -222,6 +251,7 @@ pub fn run(port: String, hub: Arc<Hub>, requests: Receiver<Request>) {
         state: String::new(),
         alarm: None,
         listing_sent: false,
+        resume_at: None,
     };
     loop {
         let mut p = match Port::open(&port, 115_200) {
@@ -272,6 +302,7 @@ impl Link {
             match requests.try_recv() {
                 Ok(Request::Line { id, .. }) => self.answer(id, Err("no connection".into())),
                 Ok(Request::Load(job)) => self.load(*job),
+                Ok(Request::Estimate { id, ends_s, total }) => self.estimated(id, ends_s, total),
                 Ok(_) => {}
                 Err(TryRecvError::Empty) => std::thread::sleep(Duration::from_millis(20)),
                 Err(TryRecvError::Disconnected) => return false,
@@ -351,6 +382,8 @@ impl Link {
                 }
             }
             Request::Run => self.start_job(),
+            Request::Resume(line) => self.resume_job(line),
+            Request::Estimate { id, ends_s, total } => self.estimated(id, ends_s, total),
             Request::Stop => {
                 if self.running.is_some() && self.stopping.is_none() {
                     self.sender.drop_queued();
@@ -372,7 +405,7 @@ impl Link {
         Ok(())
     }
 
-    fn load(&mut self, job: Job) {
+    fn load(&mut self, mut job: Job) {
         let left_out: Vec<serde_json::Value> = job
             .left_out
             .iter()
@@ -396,13 +429,10 @@ impl Link {
             "left_out": left_out,
             "page": job.page.map(|(w, h)| [w, h]),
         });
-        let preview = job
-            .preview()
-            .chunks(CHUNK)
+        // The rows were made into text while the job was built.
+        let preview = std::mem::take(&mut job.preview_json)
+            .into_iter()
             .map(|rows| {
-                // Straight to text (a JSON value of half a million rows first
-                // took longer than the job's own parsing).
-                let rows = serde_json::to_string(rows).unwrap_or_default();
                 format!(
                     r#"{{"t":"preview","gen":{},"rows":{rows}}}"#,
                     self.generation
@@ -429,6 +459,38 @@ impl Link {
                 .log(&format!("not drawn ({}): {}", s.kind.label(), s.name));
         }
         self.job = Some(job);
+        self.resume_at = None;
+        self.hub
+            .set_resumable(json!({"t": "resumable", "line": null, "gen": self.generation}));
+    }
+
+    /// The firmware's estimate of a job arrived: shown if it is still loaded.
+    fn estimated(&mut self, id: u64, ends_s: Vec<f64>, total: f64) {
+        let Some(job) = self.job.as_mut().filter(|j| j.id == id) else {
+            return;
+        };
+        if ends_s.len() == job.ends_s.len() {
+            job.ends_s = ends_s;
+        }
+        job.total = total;
+        job.estimated = true;
+        let m = json!({"t": "estimate", "gen": self.generation, "est_s": total});
+        // Browsers that join later get it in the job's head.
+        let view = self.hub.job.borrow().clone();
+        if let Some(v) = view {
+            if let Ok(mut head) = serde_json::from_str::<Value>(&v.head) {
+                head["est_s"] = json!(total);
+                self.hub.job.send_replace(Some(Arc::new(JobView {
+                    head: head.to_string().into(),
+                    preview: v.preview.clone(),
+                })));
+            }
+        }
+        self.hub.publish(&m);
+        self.hub.log(&format!(
+            "{}: the machine's estimate is {:.0} s",
+            job.name, total
+        ));
     }
 
     fn start_job(&mut self) {
@@ -454,20 +516,72 @@ impl Link {
             self.refuse_run("Run refused: no report from the machine yet");
             return;
         }
-        for (i, l) in job.lines.iter().enumerate() {
+        let lines = job.lines.clone();
+        let name = job.name.clone();
+        self.start_lines(lines, 0, 0, Tracker::new());
+        self.hub.log(&format!("running {name}"));
+    }
+
+    /// Continues the job at `line` (or where it stopped).
+    fn resume_job(&mut self, line: Option<usize>) {
+        if self.running.is_some() {
+            return;
+        }
+        let Some(job) = &self.job else {
+            self.refuse_run("nothing loaded to resume");
+            return;
+        };
+        let Some(n) = line.or(self.resume_at) else {
+            self.refuse_run("Resume refused: the job has not stopped anywhere; give a line");
+            return;
+        };
+        if self.state.starts_with("Alarm") || self.state.is_empty() {
+            self.refuse_run(
+                "Resume refused: the machine is in alarm or not reporting; unlock ($X) or \
+                 home ($H) first (after a power cut: home, or check the pen is at the origin)",
+            );
+            return;
+        }
+        let lines = match crate::resume::resume_lines_of(&job.lines, n, &self.core_settings()) {
+            Ok(l) => l,
+            Err(e) => {
+                self.refuse_run(&format!("Resume refused: {e:#}"));
+                return;
+            }
+        };
+        let offset = job.lines.partition_point(|l| l.file_line < n);
+        let pre = lines.len() - (job.lines.len() - offset);
+        let first_move = job.moves.partition_point(|m| m.line < n);
+        let name = job.name.clone();
+        self.start_lines(lines, pre, offset, Tracker::starting_at(first_move));
+        self.hub.log(&format!(
+            "resuming {name} at line {n} ({pre} lines rebuild the state before it)"
+        ));
+    }
+
+    fn start_lines(&mut self, lines: Vec<Line>, pre: usize, offset: usize, tracker: Tracker) {
+        for (i, l) in lines.iter().enumerate() {
             self.sender.push(Origin::Job(i), l.text.as_str());
         }
         self.running = Some(Running {
+            lines,
+            pre,
+            offset,
+            ln: None,
             started: Instant::now(),
             acked: 0,
-            tracker: Tracker::new(),
+            tracker,
             done_s: 0.0,
             idle_reports: 0,
         });
         self.hub.snapshot().path.clear();
         self.last = None;
         self.hub.publish(&json!({"t": "clear"}));
-        self.hub.log(&format!("running {}", job.name));
+    }
+
+    /// The machine's settings as the core reads them (defaults for the rest).
+    fn core_settings(&self) -> inkstep_core::settings::Settings {
+        self.hub.pen_and_machine().1
     }
 
     fn refuse_run(&self, why: &str) {
@@ -477,6 +591,22 @@ impl Link {
     }
 
     fn abort_job(&mut self, why: &str) {
+        if let (Some(r), Some(job)) = (&self.running, &self.job) {
+            // Where to resume: the line the machine reported (Ln:), else the
+            // line of the move the pen was last seen on.
+            let by_ln = r.ln.and_then(|n| {
+                job.lines
+                    .iter()
+                    .find(|l| crate::resume::n_word(&l.text) == Some(n))
+                    .map(|l| l.file_line)
+            });
+            let by_pos = job.moves.get(r.tracker.at()).map(|m| m.line);
+            if let Some(n) = by_ln.or(by_pos) {
+                self.resume_at = Some(n);
+                self.hub
+                    .set_resumable(json!({"t": "resumable", "line": n, "gen": self.generation}));
+            }
+        }
         if self.running.take().is_some() {
             self.sender.drop_queued();
             self.hub.log(why);
@@ -501,7 +631,11 @@ impl Link {
                     r.idle_reports = 0;
                 }
                 if let Answer::Error(n) = a {
-                    let line = self.job.as_ref().map_or(0, |j| j.lines[i].file_line);
+                    let line = self
+                        .running
+                        .as_ref()
+                        .and_then(|r| r.lines.get(i))
+                        .map_or(0, |l| l.file_line);
                     let why = format!("line {line}: error:{n} ({}); stopped", error_text(n));
                     self.sender.drop_queued();
                     p.send(b"!")?;
@@ -580,7 +714,13 @@ impl Link {
                 json!([n, v, name])
             })
             .collect();
-        let machine = super::job::Machine::from_settings(|n| self.setting(n));
+        // The firmware's defaults for anything the listing leaves out.
+        let mut machine = inkstep_core::settings::Settings::default();
+        for (&n, v) in &self.settings {
+            if let Ok(v) = v.trim().parse::<f32>() {
+                let _ = machine.set(n, v);
+            }
+        }
         let m = json!({"t": "settings", "list": list});
         let mut s = self.hub.snapshot();
         s.machine = machine;
@@ -643,7 +783,12 @@ impl Link {
         let mut job = Value::Null;
         let mut finished = false;
         if let (Some(r), Some(j)) = (&mut self.running, &self.job) {
+            if s.line.is_some() {
+                r.ln = s.line;
+            }
+            // The job's lines sent (a resume's preamble counts as none).
             let sent = r.acked + self.sender.in_flight();
+            let sent = r.offset + sent.saturating_sub(r.pre);
             r.done_s = r.tracker.update(j, Pt::new(w[0], w[1]), sent);
             // In a job the program says whether the pen draws (a file may
             // have no pen commands at all: then its feed moves draw).
@@ -703,6 +848,9 @@ impl Link {
                     .log(&format!("job done: {} lines in {t:.1} s", r.acked));
                 self.hub
                     .publish(&json!({"t": "done", "ok": true, "why": ""}));
+                self.resume_at = None;
+                self.hub
+                    .set_resumable(json!({"t": "resumable", "line": null, "gen": self.generation}));
             }
         }
         Ok(())

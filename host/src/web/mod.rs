@@ -568,6 +568,11 @@ async fn command(
             app.request(Request::Stop);
             None
         }
+        "resume" => {
+            let line = m["line"].as_u64().and_then(|n| usize::try_from(n).ok());
+            app.request(Request::Resume(line));
+            None
+        }
         _ => deny("unknown command"),
     }
 }
@@ -601,6 +606,29 @@ async fn build(
     .await;
     match built {
         Ok(Ok(job)) => {
+            if !job.estimated {
+                // The firmware's estimate of a big job takes seconds: the job
+                // is shown now, its estimate follows.
+                let (pen, machine) = app.hub.pen_and_machine();
+                let (id, lines, moves) = (job.id, job.lines.clone(), job.moves.clone());
+                let app2 = app.clone();
+                tokio::task::spawn_blocking(move || {
+                    let j = Job {
+                        id,
+                        name: String::new(),
+                        lines,
+                        moves,
+                        ends_s: Vec::new(),
+                        total: 0.0,
+                        estimated: false,
+                        preview_json: Vec::new(),
+                        left_out: Vec::new(),
+                        page: None,
+                    };
+                    let (ends_s, total) = j.estimate(&machine, pen);
+                    app2.request(Request::Estimate { id, ends_s, total });
+                });
+            }
             app.request(Request::Load(Box::new(job)));
             None
         }

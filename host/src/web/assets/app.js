@@ -102,6 +102,10 @@ function handle(m) {
       else if (m.why) banner(m.why, /alarm/i.test(m.why));
       showState(); break;
     case "alarm": S.alarm = m; showState(); break;
+    case "resumable": S.resumable = m.line; showState(); break;
+    case "estimate":
+      if (S.job && m.gen === S.job.gen) { S.job.est_s = m.est_s; if (S.job.complete || !S.job.moves) showJobInfo(); }
+      break;
     case "settings": S.settings = m.list; showSettings(); if (!S.job) invalidate(); break;
     case "answer": answered(m); break;
     case "log": log(m.text); break;
@@ -136,6 +140,11 @@ function showState() {
   }
   const alarm = m && /^Alarm/.test(m.state);
   $("run").disabled = !S.job || !m || alarm || m.state !== "Idle";
+  // A stopped job can go on where it stopped (after an alarm: unlock or home first).
+  const rj = $("rejob");
+  rj.hidden = !S.job || S.resumable == null;
+  rj.textContent = "Continue at line " + S.resumable;
+  rj.disabled = !m || alarm || m.state !== "Idle";
   if (alarm) {
     const a = S.alarm;
     banner((a ? "ALARM:" + a.n + " – " + a.text : "Alarm: the machine is locked") +
@@ -452,6 +461,7 @@ document.addEventListener("click", (e) => {
 $("take").onclick = () => send({ t: "take" });
 $("run").onclick = () => send({ t: "run" });
 $("stop").onclick = () => send({ t: "stop" });
+$("rejob").onclick = () => send({ t: "resume" });
 $("bclose").onclick = () => banner("", false);
 $("textgo").onclick = () => {
   const t = $("text").value;
