@@ -206,8 +206,15 @@ fn check(name: &str, program: &str, stops: &[Stop], seed: u64) {
             let mut sender: Sender<usize> = Sender::new(Flow::CharCount(128));
             b.usb_read();
             b.usb_write(b"?");
-            idle(&mut b, 5, &mut after);
-            take(&mut first, &mut sender, &b.usb_read());
+            // Read as a sender reads, every millisecond: the welcome after the reset
+            // and the whole report (with WCO and the pen's A:) are more than the
+            // board's 128-byte transmit ring holds at once.
+            let mut got = Vec::new();
+            for _ in 0..20 {
+                idle(&mut b, 1, &mut after);
+                got.extend(b.usb_read());
+            }
+            take(&mut first, &mut sender, &got);
             let r = command(&mut b, "$X");
             assert!(r.contains("ok"), "{name}: $X after {stop:?}: {r}");
         }
