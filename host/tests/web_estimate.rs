@@ -43,11 +43,12 @@ fn the_estimate_is_within_one_percent_of_the_job_time() {
     )
     .unwrap();
     let b = compare("text (一帆风顺 Hello, 8 mm)", &text, &m);
-    // A servo pen that waits 400 ms at every lift and drop: a text job is
+    // A servo pen that waits 400 ms at every lift ($204) and drop ($207): a text job is
     // mostly pen changes, and the estimate follows the machine's settings.
     let mut slow = m.clone();
     slow.set(201, 1.0).unwrap();
     slow.set(204, 400.0).unwrap();
+    slow.set(207, 400.0).unwrap();
     let servo = Job::new(
         "text",
         Source::Text("一帆风顺 Hello", 8.0),
@@ -55,7 +56,7 @@ fn the_estimate_is_within_one_percent_of_the_job_time() {
         &slow,
     )
     .unwrap();
-    let c = compare("text, servo pen with $204=400", &servo, &slow);
+    let c = compare("text, servo pen with $204=$207=400", &servo, &slow);
     assert!(servo.total_s() > text.total_s() * 1.2, "the pen counts");
     for (what, off) in [("star.nc", a), ("text", b), ("text, servo", c)] {
         assert!(off.abs() < 0.01, "{what} off by {:.2} %", off * 100.0);
