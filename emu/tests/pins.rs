@@ -101,8 +101,11 @@ fn step_pulses_follow_0_2_3_and_4_and_decode_to_the_reported_position() {
             assert_eq!(leading.len() as u64, 80 * [5, 3][a], "{case}: PA{a} pulses");
             for w in ch.windows(2).filter(|w| w[0].1 != idle) {
                 let us = (w[1].0 - w[0].0) as f64 / T_PER_US as f64;
+                // Never shorter than $0 (what a driver needs); a step interrupt that
+                // restarts the one-pulse timer late (the pessimistic CPU model's
+                // latency) may stretch it by a fraction of a microsecond.
                 assert!(
-                    (us - f64::from(width)).abs() < 0.1,
+                    us > f64::from(width) - 0.1 && us < f64::from(width) + 0.5,
                     "{case}: PA{a} pulse {us} µs"
                 );
             }
@@ -211,8 +214,9 @@ fn servo_pulses(s: &Session, t0: u64) -> Vec<(u64, f64)> {
 
 /// `$201=1`: PA8 carries 50 Hz pulses of 500 + angle x 2000/180 µs, the `$202` width
 /// with the pen up and the `$203` width with it down; the pen moves only once the
-/// steps before it are made, and the next move's first step comes `$204` ms after the
-/// pulse width changed (the servo's travel time), not before.
+/// steps before it are made, and the next move's first step comes `$204` ms (a lift)
+/// or `$207` ms (a drop) after the pulse width changed (the servo's travel time), not
+/// before.
 #[test]
 fn the_servo_pulse_is_202_or_203_wide_and_motion_waits_the_lift_time() {
     let mut s = board();
@@ -221,6 +225,7 @@ fn the_servo_pulse_is_202_or_203_wide_and_motion_waits_the_lift_time() {
         "$202=120",
         "$203=45",
         "$204=300",
+        "$207=250",
         "G21 G91 G1 F600",
     ] {
         ok(&mut s, l);
@@ -238,7 +243,7 @@ fn the_servo_pulse_is_202_or_203_wide_and_motion_waits_the_lift_time() {
         "50 Hz: {periods:?}"
     );
     let _ = t_last;
-    for (cmd, want) in [("M3", down), ("M5", up), ("M3", down)] {
+    for (cmd, want, wait_ms) in [("M3", down, 250.0), ("M5", up, 300.0), ("M3", down, 250.0)] {
         let t0 = s.now();
         ok(&mut s, "G1 X1");
         ok(&mut s, cmd);
@@ -279,8 +284,8 @@ fn the_servo_pulse_is_202_or_203_wide_and_motion_waits_the_lift_time() {
         );
         let wait = ms(resume - rise);
         assert!(
-            (280.0..=325.0).contains(&wait),
-            "{cmd}: motion resumed {wait:.1} ms after the servo pulse changed ($204=300)"
+            (wait_ms - 20.0..=wait_ms + 25.0).contains(&wait),
+            "{cmd}: motion resumed {wait:.1} ms after the servo pulse changed, want {wait_ms} ms ($204=300 lift, $207=250 drop)"
         );
     }
 }
