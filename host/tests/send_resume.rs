@@ -118,3 +118,60 @@ fn send_resumes_a_job_after_the_board_went_away() {
     sim.join().unwrap();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A layered job's pen change on a board that waits for cycle start: `send` says the
+/// board holds, and Enter (a line on its stdin) continues it; without Enter the job
+/// stays held, and the pen-down moves after the change are not drawn.
+#[test]
+fn send_continues_a_pen_change_when_enter_is_pressed() {
+    use std::io::Write;
+    let dir: PathBuf = std::env::temp_dir().join(format!("inkstep-send-m6-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (link, job) = (dir.join("tty"), dir.join("job.nc"));
+    std::fs::write(
+        &job,
+        "G21 G90\nM3\nG1 X5 Y0 F1500\nM5\n(MSG,pen 2: red)\nM6 T2\nM3\nG1 X5 Y5\nM5\nG0 X0 Y0\n",
+    )
+    .unwrap();
+    let (stop, sim) = sim_at(&link, 4.0);
+    let mut send = host(&dir)
+        .args([
+            "send",
+            job.to_str().unwrap(),
+            "--port",
+            link.to_str().unwrap(),
+        ])
+        .stdin(Stdio::piped())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Held at the change: still running after a few seconds (the job takes well
+    // under a second at 4x).
+    std::thread::sleep(Duration::from_secs(3));
+    assert!(
+        send.try_wait().unwrap().is_none(),
+        "the job waits for the user at M6"
+    );
+    send.stdin.as_mut().unwrap().write_all(b"\n").unwrap();
+    let t0 = std::time::Instant::now();
+    while send.try_wait().unwrap().is_none() {
+        if t0.elapsed() > Duration::from_secs(20) {
+            let _ = send.kill();
+            panic!("Enter did not continue the pen change");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let o = send.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    let out = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(o.status.success(), "{err}\n{out}");
+    assert!(
+        err.contains("MSG:Pen change") && err.contains("press Enter"),
+        "{err}"
+    );
+    assert!(out.contains("all ok"), "{out}");
+    stop.store(true, Ordering::Relaxed);
+    sim.join().unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+}

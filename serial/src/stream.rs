@@ -20,6 +20,11 @@ pub trait Observer {
     fn progress(&mut self, acked: usize, total: usize);
     fn status(&mut self, status: &Status);
     fn message(&mut self, text: &str);
+    /// True when the user asked to continue (a pen change or an `M0` waits for
+    /// cycle start): the stream sends `~`. Asked once per loop; none by default.
+    fn cycle_start(&mut self) -> bool {
+        false
+    }
 }
 
 /// A line to send and where it came from.
@@ -214,6 +219,9 @@ fn stream_inner<T: Transport>(
         let bytes = sender.to_send();
         if !bytes.is_empty() {
             t.send(&bytes)?;
+        }
+        if obs.cycle_start() {
+            t.send(b"~")?;
         }
         if last_poll.elapsed() >= cfg.status_interval {
             t.send(b"?")?;

@@ -33,6 +33,10 @@ struct Bar {
     say: Box<dyn Fn(f64) -> String>,
     seen: Seen,
     wco: [f64; 3],
+    /// Enter pressed (a line on stdin): continue a hold.
+    enter: Arc<AtomicBool>,
+    /// The board holds (a pen change, `M0`, `!`): Enter continues it.
+    held: bool,
 }
 
 impl Bar {
@@ -67,6 +71,11 @@ impl Observer for Bar {
     }
     fn status(&mut self, s: &Status) {
         self.note(s);
+        let held = s.state.starts_with("Hold:0");
+        if held && !self.held {
+            self.message("holding (a pen change or M0 waits here): press Enter to continue, or cycle start / D on the board");
+        }
+        self.held = held;
         let pos = s.pos.map_or(String::new(), |p| {
             format!(
                 " {} X{:.2} Y{:.2} Z{:.2}",
@@ -78,6 +87,11 @@ impl Observer for Bar {
         });
         let ln = s.line.map_or(String::new(), |n| format!(" Ln {n}"));
         self.pb.set_message(format!("{}{}{ln}", s.state, pos));
+    }
+    fn cycle_start(&mut self) -> bool {
+        // Enter counts only while the board holds: a key pressed while drawing is
+        // not kept for the next pen change.
+        self.enter.swap(false, Ordering::SeqCst) && self.held
     }
     fn message(&mut self, text: &str) {
         // Hidden when not on a terminal: the messages still go to stderr.
@@ -106,6 +120,21 @@ pub struct SendOptions<'a> {
     pub baud: u32,
     pub status_hz: f64,
     pub from: From,
+}
+
+/// A flag set by every line read from stdin (Enter on a terminal), read by a
+/// background thread so the stream never waits for the keyboard.
+fn enter_pressed() -> Arc<AtomicBool> {
+    let flag = Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        while std::io::stdin().read_line(&mut line).is_ok_and(|n| n > 0) {
+            f.store(true, Ordering::SeqCst);
+            line.clear();
+        }
+    });
+    flag
 }
 
 /// One status report asked for now (after a stop, for the final position).
@@ -214,6 +243,8 @@ pub fn run(o: &SendOptions) -> Result<()> {
         say: Box::new(say),
         seen: Seen::default(),
         wco: [0.0; 3],
+        enter: enter_pressed(),
+        held: false,
     };
     let outcome = stream(&mut t, &lines, &cfg, &stop, &mut bar)?;
     pb.finish();
