@@ -516,7 +516,13 @@ impl Circle {
         loop {
             match (&self.stage, self.method) {
                 (Stage::Done, _) => return Next::Done,
-                (Stage::Settle(_) | Stage::Tail(_), _) => return Next::Extra,
+                (Stage::Settle(_), _) => return Next::Extra,
+                // A tail step has a length (straight, [`Circle::last_tick_len`]): it is
+                // timed along the profile like a trace tick. A tail can be many steps (a
+                // classic trace stops where the next tick would pass the target's
+                // coordinate, e.g. along a near-vertical stretch), and timed as
+                // catch-up steps they would come at ever shorter intervals.
+                (Stage::Tail(_), _) => return Next::Tick,
                 (Stage::Trace, Method::Dda) if self.piece.left == 0 => self.next_piece(),
                 (Stage::Trace, Method::Dda) => return Next::Run(self.piece.left),
                 (Stage::Trace, Method::Classic) => return Next::Tick,

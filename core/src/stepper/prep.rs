@@ -30,7 +30,7 @@
 // `!(x > 0.0)` is meant throughout: a NaN must fail the test, not pass it.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::{CmdSink, StepCmd, MAX_WAIT};
+use super::{CmdSink, StepCmd, MAX_STEP_RATE, MAX_WAIT};
 use crate::interpolation::{Interpolator, Next, Tick};
 use crate::motion::{StepPos, X, Y};
 use crate::planner::profile::{Phase, Shape};
@@ -797,7 +797,13 @@ impl Prep {
                 }
             }
         };
-        let wait = at.saturating_sub(self.t_last).max(2);
+        // No step comes sooner than the step pipeline's cap allows after the last one
+        // (a classic tick across the circle's radius has almost no path length; a
+        // catch-up step is timed off the last wait): later steps keep their profile
+        // times, so the delay is made up where the profile leaves room.
+        let wait = at
+            .saturating_sub(self.t_last)
+            .max(min_wait(self.cfg.timer_hz));
         let needed = commands_for_wait(wait);
         if needed > room {
             a.pending = Some(pending);
@@ -814,6 +820,14 @@ impl Prep {
         }
         Some(needed)
     }
+}
+
+/// The shortest wait between two step events, timer ticks: one event period at the
+/// step pipeline's cap ([`MAX_STEP_RATE`], 12.5 us), longer than any step pulse plus
+/// the drivers' low time.
+fn min_wait(timer_hz: u32) -> u64 {
+    let w = timer_hz as f32 / MAX_STEP_RATE;
+    (w as u64 + u64::from((w as u64 as f32) < w)).max(2)
 }
 
 /// Whole ticks of `q` in `len` (Q units): the division in f32, checked exactly.
@@ -1281,6 +1295,7 @@ mod tests {
     //! Timing accuracy against the ideal profile, computed in f64 from the same block
     //! (length, speed limit, acceleration) with the profile's own formulas.
     use super::*;
+    use crate::interpolation::Method;
     use crate::motion::{Feed, Move, Path};
     use crate::planner::{geometry, AxisConfig, Shape};
     use proptest::prelude::*;
@@ -1569,8 +1584,121 @@ mod tests {
         assert!(err <= 1e-6 + 2e-7 * total, "{} us", err * 1e6);
     }
 
+    /// Every step event of `moves` prepared from rest at the origin: (timer tick,
+    /// position after it).
+    fn events(cfg: PlannerConfig, moves: &[Move]) -> Vec<(u64, StepPos)> {
+        let mut planner = Planner::new(cfg, [0; 3]);
+        for mv in moves {
+            planner.push(mv).unwrap();
+        }
+        let mut prep = Prep::new(PrepConfig::default(), [0; 3]);
+        let mut sink = VecSink(Vec::new());
+        for _ in 0..10_000_000 {
+            prep.fill(&mut planner, &mut sink, 48);
+            if prep.is_idle(&planner) {
+                break;
+            }
+        }
+        let (mut t, mut pos) = (0u64, [0i32; 3]);
+        let mut out = Vec::new();
+        for c in &sink.0 {
+            t += u64::from(c.wait());
+            let d = c.tick().deltas();
+            if c.tick().steps() != 0 {
+                for (p, d) in pos.iter_mut().zip(d) {
+                    *p += i32::from(d);
+                }
+                out.push((t, pos));
+            }
+        }
+        out
+    }
+
+    /// The shortest interval between two step events the drivers and the step
+    /// pipeline take, timer ticks (1 / MAX_STEP_RATE, less a tick of rounding).
+    fn shortest_allowed() -> u64 {
+        (HZ / f64::from(MAX_STEP_RATE)) as u64 - 1
+    }
+
+    /// The smallest case the emulator found (emu/random-regressions/seed-143959954.nc):
+    /// `$212=0`, an R arc at 1500 mm/min whose classic trace stops where X reaches the
+    /// target's coordinate, 8 steps short in Y; the straight tail to the target was
+    /// timed as catch-up steps at halving intervals down to 5.5 us, and the board's
+    /// driver lost a step.
+    #[test]
+    fn a_classic_arc_with_a_long_tail_keeps_its_steps_apart() {
+        let mut cfg = config(Shape::Trapezoid, 80.0, 3000.0, 500.0);
+        cfg.method = Method::Classic;
+        // G3 X0.0848 Y0.8765 R3.2101 from the origin (the centre from the R form),
+        // then G1 X-4.8475 Y6.6434, in steps at 80 steps/mm.
+        let (ex, ey, r) = (0.0848f64 * 80.0, 0.8765f64 * 80.0, 3.2101f64 * 80.0);
+        let (mx, my) = (ex / 2.0, ey / 2.0);
+        let half = ex.hypot(ey) / 2.0;
+        let h = (r * r - half * half).sqrt();
+        let (ux, uy) = (-ey / (2.0 * half), ex / (2.0 * half));
+        let (cx, cy) = (mx + h * ux, my + h * uy);
+        let q = |v: f64| (v * 256.0).round() as i32;
+        let arc = Move {
+            target: [ex.round() as i32, ey.round() as i32, 0],
+            path: Path::ArcFine {
+                from: [0, 0],
+                center: [q(cx), q(cy)],
+                ccw: true,
+                turns: 0,
+            },
+            feed: Feed::MmPerMin(1500.0),
+            line: 0,
+        };
+        let line = Move {
+            target: [
+                (-4.8475f64 * 80.0).round() as i32,
+                (6.6434f64 * 80.0).round() as i32,
+                0,
+            ],
+            path: Path::Line,
+            feed: Feed::MmPerMin(1500.0),
+            line: 1,
+        };
+        let ev = events(cfg, &[arc, line]);
+        let gap = ev.windows(2).map(|w| w[1].0 - w[0].0).min().unwrap();
+        assert!(gap >= shortest_allowed(), "{} us", gap as f64 / HZ * 1e6);
+        assert_eq!(ev.last().unwrap().1, line.target);
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Arcs (off-grid centres, either way, either tracing) followed by a line: no
+        /// two step events closer than the step pipeline's cap, and the exact target.
+        #[test]
+        fn arc_step_events_keep_the_cap_and_end_on_the_target(
+            cx in -800.0f64..800.0, cy in -800.0f64..800.0, end in 0.0f64..std::f64::consts::TAU,
+            feed in 60.0f32..6000.0, accel in 50.0f32..3000.0, ccw in any::<bool>(),
+            classic in any::<bool>(), cosine in any::<bool>(), lx in -400i32..400, ly in -400i32..400) {
+            let r = cx.hypot(cy);
+            prop_assume!(r > 4.0 && (lx != 0 || ly != 0));
+            let shape = if cosine { Shape::Cosine } else { Shape::Trapezoid };
+            let mut cfg = config(shape, 80.0, 6000.0, accel);
+            cfg.method = if classic { Method::Classic } else { Method::Dda };
+            let q = |v: f64| (v * 256.0).round() as i32;
+            let target = [(cx + r * end.cos()).round() as i32, (cy + r * end.sin()).round() as i32, 0];
+            let arc = Move {
+                target,
+                path: Path::ArcFine { from: [0, 0], center: [q(cx), q(cy)], ccw, turns: 0 },
+                feed: Feed::MmPerMin(feed),
+                line: 0,
+            };
+            let line = Move {
+                target: [target[0] + lx, target[1] + ly, 0],
+                path: Path::Line,
+                feed: Feed::MmPerMin(feed),
+                line: 1,
+            };
+            let ev = events(cfg, &[arc, line]);
+            let gap = ev.windows(2).map(|w| w[1].0 - w[0].0).min().unwrap_or(u64::MAX);
+            prop_assert!(gap >= shortest_allowed(), "{} us apart", gap as f64 / HZ * 1e6);
+            prop_assert_eq!(ev.last().map(|e| e.1).unwrap_or([0; 3]), line.target);
+        }
 
         #[test]
         fn arc_steps_are_within_a_microsecond_of_the_ideal_profile(
