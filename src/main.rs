@@ -39,8 +39,9 @@ use inkstep_core::stepper::output::OutputConfig;
 use inkstep_core::stepper::queue::StepCmdQueue;
 use inkstep_core::stepper::MAX_RELOAD;
 
-/// Hard limits stop stepping at once only when `$21` is on.
-static HARD_LIMITS_ARMED: AtomicBool = AtomicBool::new(false);
+/// Axes (bit 0 X) whose limit switch stops stepping at once: with `$21` on, those
+/// with a switch (`$214`).
+static HARD_LIMITS_ARMED: AtomicU8 = AtomicU8::new(0);
 /// Inputs whose interrupt halted the step output since the protocol task last looked
 /// (bit 0 the e-stop, bits 1 and 2 the X and Y limits with hard limits armed). The
 /// task shows them to the machine as active even when the pin was released again
@@ -256,7 +257,7 @@ mod app {
     /// tick with the polarity set here.
     fn apply_output_config(cfg: &OutputConfig) {
         steps::set_output_config(cfg);
-        HARD_LIMITS_ARMED.store(cfg.hard_limits, Ordering::Relaxed);
+        HARD_LIMITS_ARMED.store(cfg.hard_limit_axes, Ordering::Relaxed);
         FOUR_PHASE.store(cfg.four_phase, Ordering::Relaxed);
         board::set_enable_polarity(cfg.enable_active_low);
     }
@@ -295,7 +296,8 @@ mod app {
     /// A limit switch on EXTI line `line` changed (one body for both axes).
     fn limit_switch(line: u8) {
         if board::exti_take_pending(line) {
-            if HARD_LIMITS_ARMED.load(Ordering::Relaxed) {
+            let axis_bit = if line == 1 { 1 } else { 2 };
+            if HARD_LIMITS_ARMED.load(Ordering::Relaxed) & axis_bit != 0 {
                 steps::halt();
                 TRIPPED.fetch_or(if line == 1 { 2 } else { 4 }, Ordering::SeqCst);
             }

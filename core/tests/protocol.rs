@@ -284,6 +284,28 @@ fn hard_limit_alarm() {
     assert_eq!(drain(&mut p), "ALARM:1\r\n[MSG:Reset to continue]\r\n");
 }
 
+/// An axis left out of `$214` has no switch: its pin is no hard limit.
+#[test]
+fn hard_limits_only_on_axes_with_a_switch() {
+    let (mut p, mut m) = boot();
+    send(&mut p, &mut m, "$214=1\n$21=1\nG1 X10 F600\n");
+    drain(&mut p);
+    let y = Inputs {
+        limits: [false, true, false],
+        ..Inputs::default()
+    };
+    p.set_inputs(y, &mut m, 0);
+    assert!(!m.queue.is_empty(), "the move goes on");
+    assert!(!drain(&mut p).contains("ALARM"));
+    let x = Inputs {
+        limits: [true, true, false],
+        ..Inputs::default()
+    };
+    p.set_inputs(x, &mut m, 0);
+    assert!(m.queue.is_empty());
+    assert_eq!(drain(&mut p), "ALARM:1\r\n[MSG:Reset to continue]\r\n");
+}
+
 #[test]
 fn soft_limits_reject_before_any_step() {
     let (mut p, mut m) = boot();

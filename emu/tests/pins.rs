@@ -3,8 +3,9 @@
 //! the inversions `$2`/`$3`/`$4` read back to the reported position, the 4-phase coil
 //! sequences both ways on both axes, the servo's pulse widths `$202`/`$203` and the
 //! lift time `$204`, limit/home switches at positions (homing both axes, a hard limit),
-//! the e-stop with the alarm's buzzer pattern, feed hold/SYNC and cycle start from the
-//! pins, `$215`. The outside is driven as `cargo emu run --switch/--input` drives it
+//! the same at inverted levels (`$5`), only on the axes with a switch (`$214`), the
+//! e-stop with the alarm's buzzer pattern, the error and done beeps from the keypad,
+//! feed hold/SYNC and cycle start from the pins, `$215`. The outside is driven as `cargo emu run --switch/--input` drives it
 //! (src/pins.rs).
 
 mod common;
@@ -647,4 +648,207 @@ fn the_run_command_writes_the_pin_log_and_drives_inputs() {
     );
     eprintln!("job {plain:.4} s, with a 300 ms SYNC hold {held:.4} s");
     assert!((held - plain - 0.3).abs() < 0.1, "{plain} -> {held}");
+}
+
+/// Play a `--keys` script on the board's key matrix (no LCD snapshots in it).
+fn keys(s: &mut Session, script: &str) {
+    inkstep_emu::demo::play(s, script, &std::env::temp_dir()).unwrap();
+}
+
+/// The buzzer's segments (on, off, on, ...) in ms from its first change after `t0`,
+/// and when that first change came.
+fn beep_segments(s: &Session, t0: u64) -> (Vec<f64>, Vec<(u64, bool)>) {
+    let beep = changes(s, PA, 10, t0);
+    let segs = beep.windows(2).map(|w| ms(w[1].0 - w[0].0)).collect();
+    (segs, beep)
+}
+
+fn assert_pattern(what: &str, segs: &[f64], beep: &[(u64, bool)], want: &[f64]) {
+    eprintln!("{what}: segments {segs:?} ms");
+    assert!(
+        beep.first().is_some_and(|b| b.1),
+        "{what}: starts on: {beep:?}"
+    );
+    assert_eq!(segs.len(), want.len(), "{what}: {segs:?} against {want:?}");
+    for (got, want) in segs.iter().zip(want) {
+        assert!(
+            (got - want).abs() <= 5.0,
+            "{what}: {segs:?} against {want:?}"
+        );
+    }
+}
+
+/// The buzzer's other patterns (core/src/hmi/io.rs `Beep::pattern`), from the keypad:
+/// a homing cycle asked from the machine menu with homing off (`$22=0`) is refused
+/// with the error beep, two 80 ms beeps 80 ms apart; a star drawn from the menu ends
+/// with the done beep, one 150 ms chirp, when its last step is out.
+#[test]
+fn the_buzzer_plays_the_error_and_done_patterns_from_the_keypad() {
+    let mut s = board();
+    // Past the boot screen, then 9 (Machine...) and 3 (Homing cycle).
+    keys(&mut s, "wait:2000 9");
+    let t0 = s.now();
+    keys(&mut s, "3 wait:500");
+    let (segs, beep) = beep_segments(&s, t0);
+    assert!(
+        ms(beep.first().map_or(0, |b| b.0) - t0) < 200.0,
+        "the error beep comes with the key: {beep:?}"
+    );
+    assert_pattern("homing refused", &segs, &beep, &[80.0, 80.0, 80.0]);
+    assert!(!s.m.state().board.pin(PA, 10), "silent after it");
+    assert!(s.m.state().board.steps.is_empty(), "nothing moved");
+
+    // Back to the menu, 6 (Star) of 5 mm, Enter on its preview: the star is drawn.
+    keys(&mut s, "back wait:200 back wait:200 6 5 enter wait:200");
+    let t0 = s.now();
+    keys(&mut s, "enter wait:200 idle wait:500");
+    let last = s.m.state().board.steps.last().map(|st| st.t).unwrap();
+    assert!(last > t0, "the star was drawn");
+    let (segs, beep) = beep_segments(&s, t0);
+    let after = ms(beep.first().map_or(0, |b| b.0).saturating_sub(last));
+    eprintln!("done beep {after:.1} ms after the last step");
+    assert!(
+        beep.first().is_some_and(|b| b.0 >= last) && after < 200.0,
+        "the done beep follows the last step: {beep:?}"
+    );
+    assert_pattern("job done", &segs, &beep, &[150.0]);
+}
+
+/// `$5=1` inverts the limit pins: a switch wired normally open (the pin pulled high at
+/// rest, pulled low while the axis is past it) is read as pressed when its pin is low.
+/// The emulator's switches at positions are normally closed, so the same wiring is
+/// made from them: a switch that is closed (low) up to a position and open (high)
+/// beyond it, i.e. an `x+:P` switch, is at the axis's minus side a normally-open
+/// switch at P (its pin falls as the axis goes below P). With `$5=1`: `$H` homes both
+/// axes onto them and pulls off `$27`; with `$21=1` crossing one is a hard limit
+/// (ALARM:1) within a step; with `$5=0` the same fall on the pin is a release and the
+/// move runs to its end.
+#[test]
+fn inverted_limit_pins_home_and_trip_hard_limits_at_the_inverted_level() {
+    let mut s = board();
+    // The pins high at rest (the switches released, before `$5=1` they read open).
+    let mut o = s.m.state().board.outside.clone();
+    o.switches = vec![
+        PosSwitch::parse("x+:-5mm").unwrap(),
+        PosSwitch::parse("y+:-3.5mm").unwrap(),
+    ];
+    s.set_outside(o);
+    for l in ["$5=1", "$22=1", "$23=3", "$27=1"] {
+        ok(&mut s, l);
+    }
+    let got = s.command("$H", 60 * T_PER_S).unwrap();
+    assert!(got.contains("ok"), "$H with $5=1: {got:?}");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    let pos = s.m.state().board.pos;
+    let mm = [pos[0] as f64 / STEPS_PER_MM, pos[1] as f64 / STEPS_PER_MM];
+    eprintln!("homed with $5=1 at {mm:?} mm");
+    assert!(
+        (mm[0] - -4.0).abs() <= 0.05,
+        "X 1 mm off its switch: {mm:?}"
+    );
+    assert!(
+        (mm[1] - -2.5).abs() <= 0.05,
+        "Y 1 mm off its switch: {mm:?}"
+    );
+    assert!(
+        s.m.state().board.pin(1, 1) && s.m.state().board.pin(1, 3),
+        "both pins high: released at the inverted level"
+    );
+
+    // A hard limit: moving X down across its switch (the pin falls at -5 mm).
+    ok(&mut s, "$21=1");
+    s.send(b"G21 G91 G1 F600 X-3\n");
+    let mut alarm = false;
+    for _ in 0..300 {
+        s.run_for(10 * T_PER_MS).unwrap();
+        if s.received.contains("ALARM:1") {
+            alarm = true;
+            break;
+        }
+    }
+    assert!(alarm, "ALARM:1 with $5=1 (got {:?})", s.received);
+    s.run_for(200 * T_PER_MS).unwrap();
+    let x = s.m.state().board.pos[0] as f64 / STEPS_PER_MM;
+    eprintln!("inverted hard limit: stopped at {x:.4} mm, switch at -5 mm");
+    assert!(
+        (-5.0 - 2.0 / STEPS_PER_MM..=-5.0).contains(&x),
+        "stopped within a step past the switch: {x}"
+    );
+
+    // The same crossing with `$5=0` is a release (the pin falls): no alarm, the move
+    // runs to its end.
+    s.send(&[0x18]);
+    s.run_for(300 * T_PER_MS).unwrap();
+    ok(&mut s, "$X");
+    ok(&mut s, "$21=0");
+    ok(&mut s, "$5=0");
+    ok(&mut s, "G21 G91 G1 F600 X3");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    ok(&mut s, "$21=1");
+    s.take_received();
+    ok(&mut s, "G1 X-3");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    assert!(!s.received.contains("ALARM"), "{:?}", s.received);
+    let x2 = s.m.state().board.pos[0] as f64 / STEPS_PER_MM;
+    assert!(
+        (x2 - x).abs() < 0.02,
+        "the move ran to its end: {x} -> {x2}"
+    );
+}
+
+/// `$214` (axes with switches): with X only (`$214=1`) `$H` homes X onto its switch
+/// and leaves Y where it is, though Y's switch is reachable; with no axis (`$214=0`)
+/// `$H` is refused and nothing moves.
+#[test]
+fn homing_takes_only_the_axes_of_214() {
+    let mut s = board();
+    let mut o = s.m.state().board.outside.clone();
+    o.switches = vec![
+        PosSwitch::parse("x-:-5mm").unwrap(),
+        PosSwitch::parse("y-:-3.5mm").unwrap(),
+    ];
+    s.set_outside(o);
+    for l in ["$22=1", "$23=3", "$27=1", "$214=0"] {
+        ok(&mut s, l);
+    }
+    let got = s.command("$H", 10 * T_PER_S).unwrap();
+    eprintln!("$H with $214=0: {got:?}");
+    assert!(got.contains("error:"), "refused: {got:?}");
+    s.run_for(200 * T_PER_MS).unwrap();
+    assert!(s.m.state().board.steps.is_empty(), "nothing moved");
+
+    ok(&mut s, "$214=1");
+    let got = s.command("$H", 60 * T_PER_S).unwrap();
+    assert!(got.contains("ok"), "$H: {got:?}");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    let pos = s.m.state().board.pos;
+    eprintln!("homed with $214=1 at {pos:?} steps");
+    assert!(
+        (pos[0] as f64 / STEPS_PER_MM - -4.0).abs() <= 0.05,
+        "X homed: {pos:?}"
+    );
+    assert_eq!(pos[1], 0, "Y left alone");
+    assert!(
+        s.m.state().board.steps.iter().all(|st| st.pos[1] == 0),
+        "Y never stepped"
+    );
+}
+
+/// `$214` and hard limits: an axis left out of the mask has no switch, so its pin
+/// (left floating, or picking up a stray switch) must not stop the machine.
+#[test]
+fn a_limit_pin_of_an_axis_without_a_switch_is_no_hard_limit() {
+    let mut s = board();
+    ok(&mut s, "$214=1");
+    ok(&mut s, "$21=1");
+    ok(&mut s, "G21 G91 G1 F1200 X5");
+    let t0 = s.now();
+    s.inputs = Schedule::new(InputEvent::parse("150ms:limit-y=open").unwrap(), t0);
+    s.wait_idle(10 * T_PER_S).unwrap();
+    eprintln!("Y's pin opened mid-move with $214=1: {:?}", s.received);
+    assert!(!s.received.contains("ALARM"), "{:?}", s.received);
+    assert_eq!(s.m.state().board.pos[0], 400, "the move ran to its end");
+    ok(&mut s, "G1 Y-1");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    assert_eq!(s.m.state().board.pos[1], -80, "Y moves with its pin open");
 }

@@ -934,11 +934,15 @@ impl Machine {
             self.step_homing(m, now_ms);
             return;
         }
+        // Only the axes that have a switch ($214): another axis's pin is not wired
+        // to one (floating, or a stray switch) and must not stop the machine.
+        let with_switch = self.settings.switch_mask();
         let newly_hit = inputs
             .limits
             .iter()
             .zip(before.limits.iter())
-            .any(|(&now, &was)| now && !was);
+            .enumerate()
+            .any(|(axis, (&now, &was))| now && !was && with_switch & (1 << axis) != 0);
         if newly_hit && self.settings.hard_limits() && !self.needs_reset {
             self.raise(Alarm::HardLimit, m);
             return;

@@ -28,8 +28,9 @@ pub struct OutputConfig {
     pub pulse_ticks: u32,
     /// The driver enable pin is active low ($4 = 0, A4988/DRV8825 /EN).
     pub enable_active_low: bool,
-    /// A limit switch stops stepping at once, like the e-stop ($21).
-    pub hard_limits: bool,
+    /// Axes whose limit switch stops stepping at once, like the e-stop: those with a
+    /// switch ($214) when hard limits are on ($21), else none.
+    pub hard_limit_axes: u8,
 }
 
 impl OutputConfig {
@@ -55,7 +56,11 @@ impl From<&Settings> for OutputConfig {
             four_phase: s.output_mode() == OutputMode::FourPhase,
             pulse_ticks: pulse.clamp(1, MAX_PULSE_TICKS),
             enable_active_low: !s.invert_enable(),
-            hard_limits: s.hard_limits(),
+            hard_limit_axes: if s.hard_limits() {
+                s.switch_mask() & 0b111
+            } else {
+                0
+            },
         }
     }
 }
@@ -76,7 +81,7 @@ mod tests {
                 four_phase: false,
                 pulse_ticks: 720, // $0=10 us at 72 MHz
                 enable_active_low: true,
-                hard_limits: false,
+                hard_limit_axes: 0,
             }
         );
         assert_eq!(c.turn_guard_ticks(), 720 + 72);
@@ -93,7 +98,10 @@ mod tests {
             "the longest pulse still fits the 16-bit compare"
         );
         assert_eq!((c.step_invert, c.dir_invert), (5, 6));
-        assert!(c.four_phase && !c.enable_active_low && c.hard_limits);
+        assert!(c.four_phase && !c.enable_active_low);
+        assert_eq!(c.hard_limit_axes, 3, "$21 arms the $214 axes");
+        s.set(214, 2.0).unwrap();
+        assert_eq!(OutputConfig::from(&s).hard_limit_axes, 2);
         assert_eq!(c.turn_guard_ticks(), 0, "coils are levels");
     }
 }
