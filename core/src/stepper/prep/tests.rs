@@ -4,6 +4,7 @@ use super::*;
 use crate::interpolation::Method;
 use crate::motion::{Feed, Move, Path};
 use crate::planner::{geometry, AxisConfig, Shape};
+use crate::stepper::MAX_STEP_RATE;
 use proptest::prelude::*;
 use std::vec::Vec;
 
