@@ -309,7 +309,11 @@ fn a_hold_mid_stroke_lifts_the_z_pen_and_resume_draws_the_same_strokes() {
         let at = held.samples.last().unwrap().pos;
         assert_eq!(at[2], up, "Z up once at rest");
         // XY stood still from the first Z step on.
-        let lift = from + held.steps[from..].iter().position(|e| e.pos[2] != down).unwrap();
+        let lift = from
+            + held.steps[from..]
+                .iter()
+                .position(|e| e.pos[2] != down)
+                .unwrap();
         assert!(
             held.steps[lift..].iter().all(|e| e.pos[..2] == at[..2]),
             "XY still while Z rises"
