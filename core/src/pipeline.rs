@@ -7,8 +7,10 @@
 //! It owns only what the trait asks beyond the planner: commands that are not moves
 //! (G4 dwells, servo pen lifts) wait in order behind the moves before them and run as
 //! pure-wait step commands, so their timing comes from the same timer as the steps;
-//! hold/resume/clear map onto the preparation and the planner; the position is the
-//! executor's count. The firmware (its preparation task, `inkstep::steps::BoardSide`)
+//! hold/resume/clear map onto the preparation and the planner (a hold lifts the pen
+//! once XY is at rest: the servo's level, or a Z pen's trip to $205 and back made of
+//! raw Z steps beside the held block, so the job's own steps are untouched); the
+//! position is the executor's count. The firmware (its preparation task, `inkstep::steps::BoardSide`)
 //! and the simulator (`SimSide`) each give it their interrupt side through the same
 //! [`StepSide`] trait.
 
