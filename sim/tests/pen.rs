@@ -343,6 +343,33 @@ fn a_hold_mid_stroke_lifts_the_z_pen_and_resume_draws_the_same_strokes() {
     }
 }
 
+/// `M0` with a Z pen down: Z goes up to $205 while paused (Hold:0 once it is up) and
+/// `~` brings it back to $206 before the next stroke starts, which is drawn whole.
+#[test]
+fn m0_lifts_the_z_pen_and_cycle_start_lowers_it_before_the_next_stroke() {
+    let mut r = Run::new(&[]);
+    r.send("M3\nG1 X10 F600\nM0\nG1 X20\nM5\n");
+    r.ms(3000);
+    assert!(
+        r.status().starts_with("<Hold:0|MPos:10.000,0.000,0.000"),
+        "Z up while paused"
+    );
+    let from = r.steps.len();
+    r.b.usb_write(b"~");
+    r.until_idle();
+    let after = &r.steps[from..];
+    let x = after.iter().position(|e| e.pos[0] > 800).unwrap();
+    assert!(
+        x > 0 && after[x - 1].pos == [800, 0, -800],
+        "down at X10 first"
+    );
+    assert!(
+        after[x].pos == [801, 0, -800],
+        "the stroke drawn whole, pen down"
+    );
+    assert_eq!(r.samples.last().unwrap().pos, [1600, 0, 0]);
+}
+
 /// A soft reset in the middle of a stroke leaves the pen up, and the next `M3` drops
 /// it again.
 #[test]
