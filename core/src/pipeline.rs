@@ -7,8 +7,10 @@
 //! It owns only what the trait asks beyond the planner: commands that are not moves
 //! (G4 dwells, servo pen lifts) wait in order behind the moves before them and run as
 //! pure-wait step commands, so their timing comes from the same timer as the steps;
-//! hold/resume/clear map onto the preparation and the planner; the position is the
-//! executor's count. The firmware (its preparation task, `inkstep::steps::BoardSide`)
+//! hold/resume/clear map onto the preparation and the planner (a hold lifts the pen
+//! once XY is at rest: the servo's level, or a Z pen's trip to $205 and back made of
+//! raw Z steps beside the held block, so the job's own steps are untouched); the
+//! position is the executor's count. The firmware (its preparation task, `inkstep::steps::BoardSide`)
 //! and the simulator (`SimSide`) each give it their interrupt side through the same
 //! [`StepSide`] trait.
 
@@ -102,6 +104,8 @@ struct PenTiming {
     span_deg: f32,
     /// deg/s; 0 = a jump.
     speed: f32,
+    /// A Z-axis pen's up place ($205) in steps, as the interpreter rounds it.
+    z_up: i32,
 }
 
 impl PenTiming {
@@ -111,6 +115,7 @@ impl PenTiming {
             drop_ms: s.pen_drop_ms(),
             span_deg: (s.pen_down_angle() - s.pen_up_angle()).abs(),
             speed: s.pen_speed(),
+            z_up: z_steps(s, s.pen_z_up()).unwrap_or(0),
         }
     }
     /// The turn from level `from` to `to`, ms (0 without a speed limit).
@@ -120,6 +125,25 @@ impl PenTiming {
         }
         let deg = self.span_deg * f32::from(from.abs_diff(to)) / f32::from(PEN_FULL);
         crate::decimal::to_u32(deg * 1000.0 / self.speed + 0.5)
+    }
+}
+
+/// A Z place in steps, as the interpreter rounds it.
+fn z_steps(s: &Settings, mm: f32) -> Option<i32> {
+    crate::gcode::units::nm_to_steps(crate::gcode::units::mm_to_nm(mm), s.steps_per_mm(2))
+}
+
+/// A Z-axis pen ($201=0): which way from its up place ($205) down ($206) is, -1 or
+/// 1; 0: a servo pen (or both places the same). Kept beside the pipeline's flags,
+/// not in [`PenTiming`], where it would cost a word of RAM.
+fn z_down_side(s: &Settings) -> i8 {
+    match (
+        s.pen_mode(),
+        z_steps(s, s.pen_z_up()),
+        z_steps(s, s.pen_z_down()),
+    ) {
+        (crate::settings::PenMode::ZAxis, Some(u), Some(d)) => (d - u).signum() as i8,
+        _ => 0,
     }
 }
 
@@ -170,6 +194,35 @@ impl PenMove {
     }
 }
 
+/// Where a Z pen's trip for a hold is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum ZStage {
+    /// Going up to $205.
+    Rising,
+    /// Up, waiting for the resume.
+    Up,
+    /// Going back down to where the hold found it.
+    Falling,
+}
+
+/// A Z pen's trip up for a hold and back down on resume: raw Z steps straight into
+/// the step queue, beside the held block (the planner and the preparation never see
+/// them, so the job resumes from exactly the same step count).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct ZTrip {
+    /// Z where the hold found it: the way back ends here.
+    back: i32,
+    /// Steps of the way under way queued so far (16 bits: the trip fits in the
+    /// pipeline's spare word of RAM; a pen further than 65,535 steps from $205 is not
+    /// lifted).
+    sent: u16,
+    stage: ZStage,
+}
+
+/// Most Z steps of a hold's trip queued per [`Pipeline::fill`] (each costs a square
+/// root): 32 a millisecond is far above a Z axis' rate.
+const Z_STEPS_PER_FILL: u32 = 32;
+
 pub struct Pipeline<S: StepSide> {
     planner: Planner,
     prep: Prep,
@@ -193,9 +246,13 @@ pub struct Pipeline<S: StepSide> {
     /// The pen was lifted for a hold at this level: it goes down again on resume,
     /// before XY moves on.
     lifted: Option<u16>,
+    /// A Z pen lifted for a hold (or on its way up or back).
+    z_trip: Option<ZTrip>,
     /// The wait in `wait_left` / `waiting` is a G4 dwell (not a pen lift's).
     dwell: bool,
     pen_timing: PenTiming,
+    /// [`z_down_side`]: a Z pen's down side, 0 for a servo pen.
+    z_down: i8,
     held: bool,
     /// Calls of [`Pipeline::fill`] spent waiting at rest for a second move.
     gather: u8,
@@ -229,8 +286,10 @@ impl<S: StepSide> Pipeline<S> {
             shown = 0,
             pen_move = None,
             lifted = None,
+            z_trip = None,
             dwell = false,
             pen_timing = PenTiming::from(s),
+            z_down = z_down_side(s),
             held = false,
             gather = 0,
         })
@@ -254,6 +313,7 @@ impl<S: StepSide> Pipeline<S> {
         let pos = self.side.position();
         self.planner.reconfigure(&planner_config(s), pos);
         self.pen_timing = PenTiming::from(s);
+        self.z_down = z_down_side(s);
     }
     /// A move is being prepared or waits in the planner (dwells and pen moves are not
     /// moves): the step queue running dry now would be a stall.
@@ -283,11 +343,22 @@ impl<S: StepSide> Pipeline<S> {
             // wait under way (a pen move, a dwell) end, so that the machine comes to
             // rest (and the pen up).
             self.run_waits();
+            self.run_z();
             self.lift_when_stopped();
+            self.run_z();
             return;
         }
         if self.held {
+            self.run_z();
             self.lift_when_stopped();
+            if self.z_trip.is_some() {
+                // The Z pen goes up (or waits up) beside the held block.
+                self.run_z();
+                return;
+            }
+        } else if !self.run_z() {
+            // Back down after a hold before XY moves on.
+            return;
         }
         let horizon = self.timer_hz / 1000 * HORIZON_MS;
         let queued = self.side.queued();
@@ -395,17 +466,109 @@ impl<S: StepSide> Pipeline<S> {
     }
 
     /// A hold has brought XY to rest (nothing runs, no pen move is under way): the
-    /// pen lifts (at once: nothing waits for it), and remembers where it was.
+    /// pen lifts (a servo at once: nothing waits for it; a Z pen on its own trip to
+    /// $205 if it stands below it), and remembers where it was.
+    // Out of line: its frame stays off the preparation's deepest stack path.
+    #[inline(never)]
     fn lift_when_stopped(&mut self) {
-        let at_rest = self.prep.hold_state() != HoldState::Holding
-            && !self.side.is_running()
-            && self.pen_move.is_none()
-            && self.wait_left == 0
-            && !self.waiting;
-        if at_rest && self.shown > 0 {
+        if !self.at_rest() {
+            return;
+        }
+        if self.shown > 0 {
             self.lifted = Some(self.shown);
             self.shown = 0;
         }
+        if let Some(z) = self.z_to_lift() {
+            self.z_trip = Some(ZTrip {
+                back: z,
+                sent: 0,
+                stage: ZStage::Rising,
+            });
+        }
+    }
+
+    /// Nothing runs and no pen move is under way (a hold may lift the pen).
+    fn at_rest(&self) -> bool {
+        self.prep.hold_state() != HoldState::Holding
+            && !self.side.is_running()
+            && self.pen_move.is_none()
+            && self.wait_left == 0
+            && !self.waiting
+            && self.z_trip.is_none()
+    }
+
+    /// A Z pen on the paper's side of its up place (or between the two): where Z
+    /// stands.
+    fn z_to_lift(&self) -> Option<i32> {
+        let (up, down) = (self.pen_timing.z_up, self.z_down);
+        let z = self.side.position()[2];
+        (down != 0 && (z - up).signum() == i32::from(down) && z.abs_diff(up) <= u32::from(u16::MAX))
+            .then_some(z)
+    }
+
+    /// A held machine at rest whose Z pen is still to be lifted (at the next
+    /// [`Pipeline::fill`]): it is not at rest yet.
+    fn z_lift_due(&self) -> bool {
+        self.held && self.at_rest() && self.z_to_lift().is_some()
+    }
+
+    /// Queue the Z pen's trip under way; true when no Z move of a hold is under way
+    /// (none, or up and held). Up and no longer held: the way back starts; the trip
+    /// ends once Z stands where the hold found it.
+    // Out of line: its frame stays off the preparation's deepest stack path.
+    #[inline(never)]
+    fn run_z(&mut self) -> bool {
+        let Some(mut t) = self.z_trip else {
+            return true;
+        };
+        let up = self.pen_timing.z_up;
+        loop {
+            let (from, to) = match t.stage {
+                ZStage::Up if self.held => {
+                    self.z_trip = Some(t);
+                    return true;
+                }
+                ZStage::Up => {
+                    t.stage = ZStage::Falling;
+                    t.sent = 0;
+                    continue;
+                }
+                ZStage::Rising => (t.back, up),
+                ZStage::Falling => (up, t.back),
+            };
+            let n = from.abs_diff(to);
+            let tick = Tick::from_deltas([0, 0, if to > from { 1 } else { -1 }]);
+            let mut budget = Z_STEPS_PER_FILL;
+            while u32::from(t.sent) < n && budget > 0 && self.side.sink().room() > 0 {
+                let wait = self.z_wait(u32::from(t.sent), n);
+                self.side.sink().push_slice(&[StepCmd::new(tick, wait)]);
+                t.sent += 1;
+                budget -= 1;
+            }
+            if u32::from(t.sent) < n || self.side.is_running() {
+                self.z_trip = Some(t);
+                return false;
+            }
+            match t.stage {
+                ZStage::Rising => t.stage = ZStage::Up,
+                _ => {
+                    self.z_trip = None;
+                    return true;
+                }
+            }
+        }
+    }
+
+    /// The wait after step `k` of a Z way of `n` steps, timer ticks: Z's own
+    /// acceleration ($122) from rest and to rest, capped at its rate ($112).
+    fn z_wait(&self, k: u32, n: u32) -> u32 {
+        let z = &self.planner.config().axes[2];
+        let max = z.max_rate / 60.0 * z.steps_per_mm;
+        let accel = z.accel * z.steps_per_mm;
+        // Steps from the nearer end, to the step's middle.
+        let d = k.min(n - 1 - k) as f32 + 0.5;
+        let v = crate::fmath::sqrt(2.0 * accel * d).min(max).max(1.0);
+        crate::decimal::to_u32(self.timer_hz as f32 / v)
     }
 
     /// Hands a move to the planner. A fine line or arc whose exact start is not where
@@ -447,6 +610,13 @@ impl<S: StepSide> Pipeline<S> {
             || self.wait_left > 0
             || self.waiting
             || self.pen_move.is_some()
+            || self.z_moving()
+    }
+
+    /// A Z pen's trip for a hold is under way (or due: up and resumed).
+    fn z_moving(&self) -> bool {
+        self.z_trip
+            .is_some_and(|t| t.stage != ZStage::Up || !self.held)
     }
 }
 
@@ -497,7 +667,7 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
 
     fn is_moving(&self) -> bool {
         if self.prep.hold_state() == HoldState::Held {
-            return self.side.is_running();
+            return self.side.is_running() || self.z_moving() || self.z_lift_due();
         }
         if self.held
             && self.prep.hold_state() == HoldState::Running
@@ -505,7 +675,7 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
             && !self.waiting
         {
             // Hold asked between blocks: nothing is in execution, the queue waits.
-            return self.side.is_running();
+            return self.side.is_running() || self.z_moving() || self.z_lift_due();
         }
         self.executing()
     }
@@ -525,6 +695,8 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
         self.shown = 0;
         self.pen_move = None;
         self.lifted = None;
+        // A Z pen stays where the stop found it (its steps end with the rest).
+        self.z_trip = None;
     }
 
     fn set_overrides(&mut self, feed_percent: u8, rapid_percent: u8) {
@@ -927,5 +1099,113 @@ mod tests {
             "dropped again: {first_step} ms"
         );
         assert_eq!(p.position(), [800, 0, 0]);
+    }
+
+    /// Runs one step command at a time until at rest or `until` says stop; logs the
+    /// position after each.
+    fn run_steps(
+        p: &mut Pipeline<TestSide>,
+        log: &mut Vec<StepPos>,
+        mut until: impl FnMut(&Pipeline<TestSide>) -> bool,
+    ) {
+        for _ in 0..10_000_000 {
+            if until(p) {
+                return;
+            }
+            p.fill();
+            let side = p.side_mut();
+            match side.queue.pop() {
+                Some(c) => {
+                    c.tick().apply(&mut side.pos);
+                    log.push(side.pos);
+                }
+                None if !p.is_moving() && MotionControl::queued(p) == 0 => return,
+                None => {}
+            }
+        }
+        panic!("never at rest");
+    }
+
+    /// A Z pen ($201=0): a hold mid-stroke lifts Z to $205 once XY is at rest (XY
+    /// still, Hold:0 only once Z is up), resume brings it back to the same step before
+    /// XY moves on, and the steps drawn with the pen down are exactly those of the
+    /// uninterrupted job. An abort leaves Z where it stands.
+    #[test]
+    fn a_z_pen_goes_up_for_a_hold_and_back_down_before_the_stroke_goes_on() {
+        let s = Settings::default();
+        let spm = s.steps_per_mm(2);
+        let (up, down) = (
+            crate::fmath::round(s.pen_z_up() * spm) as i32,
+            crate::fmath::round(s.pen_z_down() * spm) as i32,
+        );
+        assert!(down < up, "default: down below up");
+        let job = |p: &mut Pipeline<TestSide>| {
+            for target in [[0, 0, down], [8000, 3000, down], [8000, 3000, up]] {
+                p.push(mv(target, Feed::MmPerMin(600.0))).unwrap();
+            }
+        };
+        let drawn = |log: &[StepPos]| -> Vec<[i32; 2]> {
+            let mut d: Vec<[i32; 2]> = log
+                .iter()
+                .filter(|q| q[2] == down)
+                .map(|q| [q[0], q[1]])
+                .collect();
+            d.dedup();
+            d
+        };
+        let mut whole = Vec::new();
+        let mut p = test_pipeline(&s);
+        job(&mut p);
+        run_steps(&mut p, &mut whole, |_| false);
+        assert_eq!(p.position(), [8000, 3000, up]);
+
+        let mut log = Vec::new();
+        let mut p = test_pipeline(&s);
+        job(&mut p);
+        run_steps(&mut p, &mut log, |p| p.position()[X] >= 4000);
+        p.hold();
+        let held_at = log.len();
+        run_steps(&mut p, &mut log, |p| !p.is_moving());
+        let rest = p.position();
+        assert_eq!(rest[2], up, "Z up once at rest");
+        let xy_stop = held_at + log[held_at..].iter().position(|q| q[2] != down).unwrap();
+        assert!(
+            log[xy_stop..]
+                .iter()
+                .all(|q| [q[0], q[1]] == [rest[0], rest[1]]),
+            "XY still while Z rises"
+        );
+        // Held: nothing moves.
+        for _ in 0..100 {
+            p.fill();
+        }
+        assert!(p.side().queue.queued() == 0 && p.position() == rest);
+        p.resume();
+        let from = log.len();
+        run_steps(&mut p, &mut log, |_| false);
+        let back = log[from..].iter().position(|q| q[2] == down).unwrap();
+        assert!(
+            log[from..from + back]
+                .iter()
+                .all(|q| [q[0], q[1]] == [rest[0], rest[1]]),
+            "XY still until Z is back down"
+        );
+        assert_eq!(p.position(), [8000, 3000, up], "nothing lost");
+        assert_eq!(drawn(&log), drawn(&whole), "the same strokes");
+
+        let mut p = test_pipeline(&s);
+        job(&mut p);
+        run_steps(&mut p, &mut log, |p| p.position()[X] >= 4000);
+        p.hold();
+        run_steps(&mut p, &mut log, |p| {
+            p.position()[2] > down && p.position()[2] < up
+        });
+        let stop = p.position();
+        p.clear();
+        for _ in 0..10 {
+            p.fill();
+        }
+        assert_eq!(p.position(), stop, "an abort leaves Z where it stands");
+        assert!(p.is_idle());
     }
 }

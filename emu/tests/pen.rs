@@ -135,6 +135,49 @@ fn a_hold_mid_stroke_lifts_the_servo_and_resume_drops_it_before_xy_moves() {
     assert_eq!(x_now(&mut s), 30.0);
 }
 
+/// The Z pen ($201=0, the default) on the image: `!` mid-stroke lifts Z to $205 (0)
+/// once XY stands, before Hold:0; `~` takes it back to $206 (-2 mm) and only then does
+/// XY move on; the stroke ends exactly where it should, the pen still down.
+#[test]
+fn a_hold_mid_stroke_lifts_the_z_pen_and_resume_lowers_it_before_xy_moves() {
+    let mut s = booted(None);
+    let spm = Settings::default().steps_per_mm(2);
+    let down = (Settings::default().pen_z_down() * spm).round() as i32;
+    ok(&mut s, "M3");
+    ok(&mut s, "G1 X30 F600");
+    s.run_for(1500 * T_PER_MS).unwrap();
+    assert_eq!(s.status().unwrap().pos.unwrap()[2], -2.0, "drawing");
+    s.send(b"!");
+    s.run_for(800 * T_PER_MS).unwrap();
+    let st = s.status().unwrap();
+    assert_eq!(st.state, "Hold:0");
+    let held = st.pos.unwrap();
+    assert_eq!(held[2], 0.0, "Z up while held");
+    s.run_for(1000 * T_PER_MS).unwrap();
+    assert_eq!(s.status().unwrap().pos.unwrap(), held, "nothing moved");
+    let resumed = s.now();
+    s.send(b"~");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    let steps = &s.m.state().board.steps;
+    let after: Vec<[i32; 3]> = steps
+        .iter()
+        .filter(|st| st.t > resumed)
+        .map(|st| st.pos)
+        .collect();
+    let xy = after
+        .iter()
+        .position(|p| p[..2] != after[0][..2])
+        .expect("moving again");
+    assert!(xy > 0);
+    assert_eq!(after[xy - 1][2], down, "Z down before XY moves");
+    assert!(
+        after[xy..].iter().all(|p| p[2] == down),
+        "down while drawing"
+    );
+    let end = s.status().unwrap().pos.unwrap();
+    assert_eq!(end, [30.0, 0.0, -2.0]);
+}
+
 /// The host tool's output for a three-layer SVG (`inkstep-host svg
 /// host/tests/data/svg-real/vpype--test_svg-misc-multilayer_by_attributes.svg
 /// --scale 0.2`), with the pen-change place at the origin ($216-$218): each `M6`

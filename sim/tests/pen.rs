@@ -260,6 +260,116 @@ fn a_hold_mid_stroke_lifts_the_pen_and_resume_draws_the_same_strokes() {
     }
 }
 
+/// A Z-axis pen ($201=0): a feed hold or the safety door in the middle of a stroke
+/// lifts Z to $205 once XY stands (the state shows Hold:0 / Door:0 only once it is
+/// up), Z stays up while held, and `~` takes it back to the very step it left before
+/// XY moves on. The pen-down steps are exactly those of the uninterrupted run and the
+/// job ends where it would have.
+#[test]
+fn a_hold_mid_stroke_lifts_the_z_pen_and_resume_draws_the_same_strokes() {
+    let s = Settings::default();
+    let z = |mm: f32| (mm * s.steps_per_mm(2)).round() as i32;
+    let (up, down) = (z(s.pen_z_up()), z(s.pen_z_down()));
+    assert_ne!(up, down);
+    let program = "G0 X10\nM3\nG1 X60 F1200\nG1 Y30\nM5\nG0 X0 Y0\n";
+    // The XY points stepped with Z at the down place, in order (the arrival of Z
+    // itself once).
+    let strokes = |r: &Run| {
+        let mut d: Vec<[i32; 2]> = r
+            .steps
+            .iter()
+            .filter(|e| e.pos[2] == down)
+            .map(|e| [e.pos[0], e.pos[1]])
+            .collect();
+        d.dedup();
+        d
+    };
+
+    let mut plain = Run::new(&[]);
+    plain.send(program);
+    plain.until_idle();
+    assert!(strokes(&plain).len() > 4000);
+
+    for (stop, state) in [(b'!', "<Hold:0|"), (0x84, "<Door:0|")] {
+        let mut held = Run::new(&[]);
+        held.send(program);
+        held.ms(1500);
+        assert_eq!(held.samples.last().unwrap().pos[2], down, "drawing");
+        let from = held.steps.len();
+        held.b.usb_write(&[stop]);
+        let mut st = String::new();
+        for _ in 0..100 {
+            held.ms(20);
+            st = held.status();
+            if st.starts_with(state) {
+                break;
+            }
+        }
+        assert!(st.starts_with(state), "{st}");
+        let at = held.samples.last().unwrap().pos;
+        assert_eq!(at[2], up, "Z up once at rest");
+        // XY stood still from the first Z step on.
+        let lift = from
+            + held.steps[from..]
+                .iter()
+                .position(|e| e.pos[2] != down)
+                .unwrap();
+        assert!(
+            held.steps[lift..].iter().all(|e| e.pos[..2] == at[..2]),
+            "XY still while Z rises"
+        );
+        held.ms(1000);
+        assert_eq!(held.samples.last().unwrap().pos, at, "up while held");
+
+        let from = held.steps.len();
+        held.b.usb_write(b"~");
+        held.until_idle();
+        let xy = from
+            + held.steps[from..]
+                .iter()
+                .position(|e| e.pos[..2] != at[..2])
+                .unwrap();
+        assert_eq!(
+            held.steps[xy - 1].pos,
+            [at[0], at[1], down],
+            "Z back down before XY moves on"
+        );
+        assert_eq!(strokes(&held), strokes(&plain), "the same strokes");
+        assert_eq!(held.samples.last().unwrap().pos, [0, 0, up]);
+        assert_eq!(
+            held.samples.last().unwrap().pos,
+            plain.samples.last().unwrap().pos
+        );
+    }
+}
+
+/// `M0` with a Z pen down: Z goes up to $205 while paused (Hold:0 once it is up) and
+/// `~` brings it back to $206 before the next stroke starts, which is drawn whole.
+#[test]
+fn m0_lifts_the_z_pen_and_cycle_start_lowers_it_before_the_next_stroke() {
+    let mut r = Run::new(&[]);
+    r.send("M3\nG1 X10 F600\nM0\nG1 X20\nM5\n");
+    r.ms(3000);
+    assert!(
+        r.status().starts_with("<Hold:0|MPos:10.000,0.000,0.000"),
+        "Z up while paused"
+    );
+    let from = r.steps.len();
+    r.b.usb_write(b"~");
+    r.until_idle();
+    let after = &r.steps[from..];
+    let x = after.iter().position(|e| e.pos[0] > 800).unwrap();
+    assert!(
+        x > 0 && after[x - 1].pos == [800, 0, -800],
+        "down at X10 first"
+    );
+    assert!(
+        after[x].pos == [801, 0, -800],
+        "the stroke drawn whole, pen down"
+    );
+    assert_eq!(r.samples.last().unwrap().pos, [1600, 0, 0]);
+}
+
 /// A soft reset in the middle of a stroke leaves the pen up, and the next `M3` drops
 /// it again.
 #[test]
