@@ -480,30 +480,7 @@ fn sync_holds_and_cycle_start_resumes_from_the_pins_with_and_without_215() {
 /// a machine that says `Run` or `Idle` while its step output is halted for good.
 #[test]
 fn an_estop_glitch_alarms_rather_than_stalling_silently() {
-    let mut s = board();
-    ok(&mut s, "G21 G91 G1 F1200 X20");
-    let t0 = s.now();
-    let mut ev = InputEvent::parse("300ms:estop=open").unwrap();
-    ev.extend(InputEvent::parse("300.002ms:estop=closed").unwrap());
-    s.inputs = Schedule::new(ev, t0);
-    s.run_for(1000 * T_PER_MS).unwrap();
-    let st = s.status().unwrap();
-    let steps_after =
-        s.m.state()
-            .board
-            .steps
-            .iter()
-            .filter(|st| st.t > t0 + 301 * T_PER_MS)
-            .count();
-    eprintln!(
-        "after the glitch: {} with {steps_after} steps; received {:?}",
-        st.state, s.received
-    );
-    assert!(
-        s.received.contains("ALARM:10") || steps_after > 0,
-        "a silent stall: {} and no step after the glitch",
-        st.state
-    );
+    glitch_alarms_or_steps_on(&[], "estop", "ALARM:10");
 }
 
 /// The same for a hard limit (`$21=1`): a 2 µs glitch on the X limit line halts the
@@ -511,12 +488,20 @@ fn an_estop_glitch_alarms_rather_than_stalling_silently() {
 /// left the machine in `Run` with no step, for good.)
 #[test]
 fn a_limit_glitch_with_hard_limits_alarms_rather_than_stalling_silently() {
+    glitch_alarms_or_steps_on(&["$21=1"], "limit-x", "ALARM:1\r");
+}
+
+/// A 2 µs open on `input` 300 ms into a 20 mm move (after `setup`): the board must
+/// either report `alarm` or step on, never stall silently.
+fn glitch_alarms_or_steps_on(setup: &[&str], input: &str, alarm: &str) {
     let mut s = board();
-    ok(&mut s, "$21=1");
+    for l in setup {
+        ok(&mut s, l);
+    }
     ok(&mut s, "G21 G91 G1 F1200 X20");
     let t0 = s.now();
-    let mut ev = InputEvent::parse("300ms:limit-x=open").unwrap();
-    ev.extend(InputEvent::parse("300.002ms:limit-x=closed").unwrap());
+    let mut ev = InputEvent::parse(&format!("300ms:{input}=open")).unwrap();
+    ev.extend(InputEvent::parse(&format!("300.002ms:{input}=closed")).unwrap());
     s.inputs = Schedule::new(ev, t0);
     s.run_for(1000 * T_PER_MS).unwrap();
     let st = s.status().unwrap();
@@ -532,7 +517,7 @@ fn a_limit_glitch_with_hard_limits_alarms_rather_than_stalling_silently() {
         st.state, s.received
     );
     assert!(
-        s.received.contains("ALARM:1\r") || steps_after > 0,
+        s.received.contains(alarm) || steps_after > 0,
         "a silent stall: {} and no step after the glitch",
         st.state
     );

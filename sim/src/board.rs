@@ -289,25 +289,7 @@ impl Board {
         self.kick();
         // As the firmware's protocol task: one line a call, called again while
         // another may run (the firmware stops at the next tick; here it costs no time).
-        loop {
-            let (_, mut rx) = self.host_rx.split();
-            let (mut tx, _) = self.host_tx.split();
-            let host = HostLink {
-                rx: &mut rx,
-                tx: &mut tx,
-                port_open: self.port_open,
-            };
-            let done = self
-                .ctl
-                .service(host, self.pins, &mut self.store, &mut self.pipeline, now);
-            if let Some(cfg) = done.outputs {
-                self.outputs = cfg;
-            }
-            self.servo_pulse_us = done.servo_pulse_us;
-            if !done.more {
-                break;
-            }
-        }
+        self.run_protocol();
         if now.is_multiple_of(KEYPAD_SCAN_MS) {
             self.scan();
         }
@@ -319,6 +301,12 @@ impl Board {
     /// Bytes arrived: the protocol task runs now, not at the next tick, as the
     /// firmware's USB task wakes it (a real-time byte such as `!` acts at once).
     pub fn wake_protocol(&mut self) {
+        self.run_protocol();
+    }
+
+    /// The protocol task: the controller's service, one line a call, until it has
+    /// no more to do now.
+    fn run_protocol(&mut self) {
         let now = self.ms;
         loop {
             let (_, mut rx) = self.host_rx.split();
