@@ -28,7 +28,7 @@
 //! step is lost.
 //!
 //! Layers. This module is the block flow: it takes blocks from the planner, keeps the
-//! one in execution ([`Active`]), decides when its profile is rebuilt ([`Stale`], the
+//! one in execution (`Active`), decides when its profile is rebuilt (`Stale`, the
 //! planner's generation) and runs feed hold and resume ([`HoldState`]). The profile's
 //! evaluation and the choice of each segment are in `profile`, the integer per-tick
 //! arithmetic and the queueing in `kernel`.
