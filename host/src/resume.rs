@@ -456,7 +456,7 @@ pub fn resume_point(spans: &[Span], seen: &Seen) -> Option<usize> {
         .or_else(|| spans.get(seen.acked).map(|s| s.file_line))
 }
 
-/// The resume state file: one line per job, "LINE<TAB>PATH", kept in the
+/// The resume state file: one line per job, `LINE<TAB>PATH`, kept in the
 /// user's cache folder ($XDG_CACHE_HOME or ~/.cache, inkstep/resume.tsv), or
 /// where $INKSTEP_STATE_DIR says.
 pub fn state_file() -> Option<PathBuf> {
