@@ -59,7 +59,7 @@ pub const MAX_AXIS_STEP_RATE_HZ: f32 = 100_000.0;
 
 /// The table. Order is the serialisation order: append only, and bump
 /// [`FORMAT_VERSION`] if an entry is removed or reordered.
-pub const TABLE: [Desc; 52] = [
+pub const TABLE: [Desc; 51] = [
     d(0, Int, 10.0, 3.0, 255.0, "Step pulse time, us"),
     d(
         1,
@@ -251,15 +251,7 @@ pub const TABLE: [Desc; 52] = [
         0.0,
         0.0,
         1.0,
-        "Acceleration profile: 0 trapezoid, 1 S-curve",
-    ),
-    d(
-        211,
-        Float,
-        5000.0,
-        1.0,
-        1_000_000.0,
-        "Jerk for S-curve, mm/s^3",
+        "Acceleration profile: 0 trapezoid, 1 cosine S-curve",
     ),
     d(
         212,
@@ -450,10 +442,18 @@ const _: () = {
     }
 };
 /// Version of the byte image; bump when [`TABLE`] changes other than by appending.
-pub const FORMAT_VERSION: u8 = 1;
+/// Version 2 dropped `$211` (a jerk that no ramp read: the cosine S-curve's jerk
+/// follows from its acceleration and speed change); a version 1 image still loads.
+pub const FORMAT_VERSION: u8 = 2;
+/// Where version 1 of the image kept the retired `$211`: its value is skipped.
+const V1_RETIRED_SLOT: usize = 39;
+const _: () =
+    assert!(TABLE[V1_RETIRED_SLOT - 1].number == 210 && TABLE[V1_RETIRED_SLOT].number == 212);
 const MAGIC: [u8; 2] = *b"IS";
 /// Size of the byte image: magic, version, count, values, CRC-32.
 pub const IMAGE_LEN: usize = 4 + 4 * COUNT + 4;
+/// The longest image any version wrote (version 1 held one value more).
+pub const IMAGE_MAX_LEN: usize = IMAGE_LEN + 4;
 
 /// Why a `$n=v` was refused; maps onto Grbl's error numbers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -766,9 +766,6 @@ impl Settings {
             AccelProfile::Trapezoid
         }
     }
-    pub fn jerk(&self) -> f32 {
-        self.v::<211>()
-    }
     pub fn interpolation(&self) -> Interpolation {
         if self.flag::<212>() {
             Interpolation::Dda
@@ -836,8 +833,11 @@ impl Settings {
     /// values (the defaults, read into `Settings::default()`), so an update keeps the
     /// user's values. In place, so the ~180-byte value table is not copied around.
     pub fn read_image(&mut self, img: &[u8]) -> Result<(), ImageError> {
+        let version = *img.get(2).ok_or(ImageError::Length)?;
+        // Version 1 had one more slot (the retired `$211`).
+        let slots = if version == 1 { COUNT + 1 } else { COUNT };
         let count = usize::from(*img.get(3).ok_or(ImageError::Length)?);
-        if count > COUNT || img.len() != 4 + 4 * count + 4 {
+        if count > slots || img.len() != 4 + 4 * count + 4 {
             return Err(ImageError::Length);
         }
         let (body, tail) = img.split_at(img.len() - 4);
@@ -848,23 +848,50 @@ impl Settings {
         if body.get(..2) != Some(&MAGIC[..]) {
             return Err(ImageError::Magic);
         }
-        if body.get(2) != Some(&FORMAT_VERSION) {
+        if version != FORMAT_VERSION && version != 1 {
             return Err(ImageError::Version);
         }
-        let values = body.get(4..).unwrap_or(&[]).as_chunks::<4>().0;
+        let stored = body.get(4..).unwrap_or(&[]).as_chunks::<4>().0;
+        // A version 1 image read as this version's table: the retired slot left out.
+        let (head, tail) = stored.split_at(stored.len().min(if version == 1 {
+            V1_RETIRED_SLOT
+        } else {
+            usize::MAX
+        }));
+        let tail = if version == 1 {
+            tail.get(1..).unwrap_or(&[])
+        } else {
+            tail
+        };
+        let values = || head.iter().chain(tail.iter());
         // NaN fails both comparisons; every range is finite.
         let in_range = |(chunk, entry): (&[u8; 4], &Entry)| {
             let v = f32::from_le_bytes(*chunk);
             v >= entry.min && v <= entry.max
         };
-        if !values.iter().zip(ENTRIES.iter()).all(in_range) {
+        if !values().zip(ENTRIES.iter()).all(in_range) {
             return Err(ImageError::Range);
         }
-        for (slot, chunk) in self.vals.iter_mut().zip(values) {
+        for (slot, chunk) in self.vals.iter_mut().zip(values()) {
             *slot = f32::from_le_bytes(*chunk);
         }
         Ok(())
     }
+}
+
+/// A version 1 image: this version's values with the retired `$211` slot put back.
+#[cfg(test)]
+pub(crate) fn v1_image(s: &Settings, count: usize) -> std::vec::Vec<u8> {
+    let mut vals: std::vec::Vec<f32> = s.vals.to_vec();
+    vals.insert(V1_RETIRED_SLOT, 5000.0);
+    vals.truncate(count);
+    let mut img = std::vec![MAGIC[0], MAGIC[1], 1, count as u8];
+    for v in vals {
+        img.extend_from_slice(&v.to_le_bytes());
+    }
+    let crc = crc32(&img);
+    img.extend_from_slice(&crc.to_le_bytes());
+    img
 }
 
 #[cfg(test)]
@@ -931,6 +958,32 @@ mod tests {
         s.write_entry(index_of(11).unwrap(), &mut line).unwrap();
         assert_eq!(line.as_str(), "$11=0.010");
         assert!(s.write_entry(COUNT, &mut line).is_none());
+    }
+
+    #[test]
+    fn a_version_1_image_keeps_every_value_but_the_retired_jerk() {
+        let mut s = Settings::default();
+        s.set(100, 123.25).unwrap();
+        s.set(210, 1.0).unwrap();
+        s.set(212, 0.0).unwrap();
+        s.set(218, 7.5).unwrap();
+        assert_eq!(from_image(&v1_image(&s, COUNT + 1)), Ok(s.clone()));
+        // An older version 1 image that ended before `$211`, and one that ended after it.
+        let mut short = Settings::default();
+        short.set(100, 123.25).unwrap();
+        assert_eq!(from_image(&v1_image(&short, 30)), Ok(short.clone()));
+        let mut mid = Settings::default();
+        mid.set(210, 1.0).unwrap();
+        mid.set(212, 0.0).unwrap();
+        assert_eq!(from_image(&v1_image(&mid, 42)), Ok(mid));
+        // This version's count limit still holds for version 2 images.
+        let mut long = s.to_image().to_vec();
+        long[3] = (COUNT + 1) as u8;
+        assert_eq!(from_image(&long), Err(ImageError::Length));
+        assert_eq!(
+            Settings::default().set(211, 100.0),
+            Err(SettingError::Invalid)
+        );
     }
 
     #[test]

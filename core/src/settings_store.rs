@@ -28,7 +28,7 @@ use crate::crc::crc32;
 use crate::gcode::interpreter::Coords;
 use crate::gcode::{startup_line, StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::motion::AXES;
-use crate::settings::{Settings, IMAGE_LEN};
+use crate::settings::{Settings, IMAGE_MAX_LEN};
 use core::ops::Range;
 use embedded_storage::nor_flash::NorFlash;
 
@@ -343,7 +343,7 @@ impl<F: NorFlash> SettingsStore<F> {
     /// than taken for a first boot. In place: the caller's table is the only copy.
     pub fn load_settings(&mut self, settings: &mut Settings) -> LoadStatus {
         let mut buf: Buf = [0; BUF_LEN];
-        let mut img = [0u8; IMAGE_LEN];
+        let mut img = [0u8; IMAGE_MAX_LEN];
         match self.fetch(&mut buf, KEY_SETTINGS, &mut img) {
             (_, LoadStatus::Empty) if !self.blank(&mut buf, self.range.start, self.range.end) => {
                 LoadStatus::Corrupt
@@ -442,4 +442,64 @@ fn coords_from_image(img: &[u8; COORDS_LEN]) -> Option<Coords> {
         }
     }
     Some(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use embedded_storage::nor_flash::{ErrorType, NorFlashErrorKind, ReadNorFlash};
+
+    /// Two erased 1 KB pages of NOR flash in RAM (writes only clear bits).
+    struct RamFlash([u8; 2048]);
+    impl ErrorType for RamFlash {
+        type Error = NorFlashErrorKind;
+    }
+    impl ReadNorFlash for RamFlash {
+        const READ_SIZE: usize = 1;
+        fn read(&mut self, at: u32, out: &mut [u8]) -> Result<(), Self::Error> {
+            let src = self.0.get(at as usize..at as usize + out.len());
+            out.copy_from_slice(src.ok_or(NorFlashErrorKind::OutOfBounds)?);
+            Ok(())
+        }
+        fn capacity(&self) -> usize {
+            self.0.len()
+        }
+    }
+    impl NorFlash for RamFlash {
+        const WRITE_SIZE: usize = 2;
+        const ERASE_SIZE: usize = 1024;
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            let dst = self.0.get_mut(from as usize..to as usize);
+            dst.ok_or(NorFlashErrorKind::OutOfBounds)?.fill(0xFF);
+            Ok(())
+        }
+        fn write(&mut self, at: u32, data: &[u8]) -> Result<(), Self::Error> {
+            let dst = self.0.get_mut(at as usize..at as usize + data.len());
+            for (d, s) in dst
+                .ok_or(NorFlashErrorKind::OutOfBounds)?
+                .iter_mut()
+                .zip(data)
+            {
+                *d &= *s;
+            }
+            Ok(())
+        }
+    }
+
+    /// Settings saved by a build before `$211` was retired load after the update, every
+    /// value kept (not "corrupt, defaults").
+    #[test]
+    fn settings_saved_by_the_version_1_layout_load_after_the_update() {
+        let mut st = SettingsStore::new(RamFlash([0xFF; 2048]), 0..2048).unwrap();
+        let mut saved = Settings::default();
+        saved.set(100, 123.25).unwrap();
+        saved.set(210, 1.0).unwrap();
+        saved.set(212, 0.0).unwrap();
+        saved.set(218, 7.5).unwrap();
+        st.store_raw(KEY_SETTINGS, &crate::settings::v1_image(&saved, 52))
+            .unwrap();
+        let mut loaded = Settings::default();
+        assert_eq!(st.load_settings(&mut loaded), LoadStatus::Loaded);
+        assert_eq!(loaded, saved);
+    }
 }
