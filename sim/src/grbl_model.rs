@@ -138,7 +138,7 @@ fn read_program(text: &str) -> Result<(Limits, Vec<Target>), Unsupported> {
                 ('G', 0..=3) => motion = v as u32,
                 ('G', 4) => dwell = true,
                 ('G', 17 | 21 | 90 | 94) => {}
-                ('X' | 'Y' | 'I' | 'J' | 'F', _) => {}
+                ('X' | 'Y' | 'I' | 'J' | 'R' | 'F', _) => {}
                 ('P', _) if dwell => {}
                 _ => return Err(Unsupported(line.to_string())),
             }
@@ -152,10 +152,14 @@ fn read_program(text: &str) -> Result<(Limits, Vec<Target>), Unsupported> {
         let target = [word('X').unwrap_or(pos[0]), word('Y').unwrap_or(pos[1])];
         let feed = if motion == 0 { None } else { feed };
         if motion >= 2 {
-            let centre = [
-                pos[0] + word('I').unwrap_or(0.0),
-                pos[1] + word('J').unwrap_or(0.0),
-            ];
+            let centre = match word('R') {
+                Some(r) => radius_centre(pos, target, r, motion == 2)
+                    .ok_or_else(|| Unsupported(line.to_string()))?,
+                None => [
+                    pos[0] + word('I').unwrap_or(0.0),
+                    pos[1] + word('J').unwrap_or(0.0),
+                ],
+            };
             chords(
                 &mut out,
                 pos,
@@ -175,6 +179,31 @@ fn read_program(text: &str) -> Result<(Limits, Vec<Target>), Unsupported> {
         pos = target;
     }
     Ok((lim, out))
+}
+
+/// The centre of an R-form arc, as the G-code standard defines it: on the chord's
+/// perpendicular bisector, to the right of the chord for a clockwise arc of at most half
+/// a turn (R > 0), to the left for the longer arc (R < 0); mirrored for
+/// counter-clockwise. `None` when the radius is shorter than half the chord (beyond
+/// rounding) or the ends coincide.
+fn radius_centre(from: [f64; 2], to: [f64; 2], r: f64, cw: bool) -> Option<[f64; 2]> {
+    let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
+    let d = dx.hypot(dy);
+    if d == 0.0 {
+        return None;
+    }
+    let h2 = r * r - 0.25 * d * d;
+    if h2 < -1e-6 * r * r {
+        return None;
+    }
+    let h = h2.max(0.0).sqrt();
+    // Unit vector to the right of the travel direction.
+    let right = [dy / d, -dx / d];
+    let side = if cw == (r > 0.0) { h } else { -h };
+    Some([
+        0.5 * (from[0] + to[0]) + side * right[0],
+        0.5 * (from[1] + to[1]) + side * right[1],
+    ])
 }
 
 /// An arc from `from` to `to` around `centre` as chords within `tol` (clockwise when
@@ -457,6 +486,26 @@ mod tests {
             .iter()
             .all(|p| ((p.xy[0] - 20.0).hypot(p.xy[1]) - 20.0).abs() < 1e-9));
         assert_eq!(t.last().unwrap().xy, [0.0, 0.0]);
+    }
+
+    #[test]
+    fn an_r_arc_has_the_centre_of_its_i_j_twin() {
+        // A quarter circle of radius 10 about the origin, both ways, short and long.
+        let c = |x, y, r, cw| radius_centre([10.0, 0.0], [x, y], r, cw).unwrap();
+        let near = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9;
+        assert!(near(c(0.0, 10.0, 10.0, false), [0.0, 0.0]));
+        assert!(near(c(0.0, -10.0, 10.0, true), [0.0, 0.0]));
+        assert!(near(c(0.0, 10.0, -10.0, true), [0.0, 0.0]));
+        assert!(near(c(0.0, 10.0, 10.0, true), [10.0, 10.0]));
+        assert!(radius_centre([0.0, 0.0], [10.0, 0.0], 4.0, true).is_none());
+        let ij = read_program(&format!("{HEAD}G0 X10\nG3 X0 Y10 I-10 J0 F3000\n"))
+            .unwrap()
+            .1;
+        let r = read_program(&format!("{HEAD}G0 X10\nG3 X0 Y10 R10 F3000\n"))
+            .unwrap()
+            .1;
+        assert_eq!(ij.len(), r.len());
+        assert!(ij.iter().zip(&r).all(|(a, b)| near(a.xy, b.xy)));
     }
 
     #[test]
