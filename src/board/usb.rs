@@ -20,7 +20,7 @@ const FULL_RUN_MAX: u8 = 10;
 
 /// The CDC-ACM serial port: usbd-serial's class (descriptors, control requests, DTR)
 /// with the data moved straight between its endpoints and the byte rings the tasks
-/// share. usbd-serial's `SerialPort` would put a second pair of buffers (192 bytes)
+/// share. usbd-serial's `SerialPort` would put a second pair of buffers
 /// in front of those rings, and a copy of every byte through them.
 pub struct UsbSerial {
     class: CdcAcmClass<'static, UsbBusType>,
