@@ -34,19 +34,28 @@ pub struct Move {
 /// A line cleaned as Grbl cleans it (comments, spaces gone, upper case) and parsed
 /// into its block; None for lines that move nothing (empty, `$` commands, `%`).
 pub fn block(line: &str) -> Result<Option<WordBlock>, u8> {
+    block_in(line, &mut Vec::new())
+}
+
+/// [`block`], cleaning the line into `clean`.
+fn block_in(line: &str, clean: &mut Vec<u8>) -> Result<Option<WordBlock>, u8> {
     let mut c = LineCleaner::new();
-    let clean: Vec<u8> = line.bytes().filter_map(|b| c.push(b)).collect();
-    if clean.is_empty() || clean[0] == b'$' || clean[0] == b'%' {
-        return Ok(None);
+    clean.clear();
+    clean.extend(line.bytes().filter_map(|b| c.push(b)));
+    match clean.first() {
+        None | Some(b'$' | b'%') => Ok(None),
+        Some(_) => WordBlock::parse(clean).map(Some).map_err(|s| s.code()),
     }
-    WordBlock::parse(&clean).map(Some).map_err(|s| s.code())
 }
 
 fn blocks(text: &str) -> Result<Vec<Option<WordBlock>>> {
+    // One buffer for every line's cleaned text (a 10 MB job has half a million).
+    let mut clean = Vec::new();
     text.lines()
         .enumerate()
         .map(|(k, l)| {
-            block(l).map_err(|n| anyhow!("line {}: error:{n} ({})", k + 1, error_text(n.into())))
+            block_in(l, &mut clean)
+                .map_err(|n| anyhow!("line {}: error:{n} ({})", k + 1, error_text(n.into())))
         })
         .collect()
 }

@@ -71,7 +71,8 @@ pub const CHUNK_BYTES: usize = CHUNK * 64;
 /// (serialized once, shared by every browser).
 pub struct JobView {
     pub head: Arc<str>,
-    pub preview: Vec<Arc<str>>,
+    /// Binary messages: the generation (`u32` little-endian), then the rows.
+    pub preview: Vec<axum::body::Bytes>,
 }
 
 /// What a browser joining now is sent first.
@@ -429,15 +430,16 @@ impl Link {
             "left_out": left_out,
             "page": job.page.map(|(w, h)| [w, h]),
         });
-        // The rows were made into text while the job was built.
-        let preview = std::mem::take(&mut job.preview_json)
+        // The rows were made while the job was built; each piece is sent after
+        // its generation, so a browser drops pieces of a job it no longer shows.
+        let generation = self.generation as u32;
+        let preview = std::mem::take(&mut job.preview_bin)
             .into_iter()
             .map(|rows| {
-                format!(
-                    r#"{{"t":"preview","gen":{},"rows":{rows}}}"#,
-                    self.generation
-                )
-                .into()
+                let mut m = Vec::with_capacity(4 + rows.len());
+                m.extend_from_slice(&generation.to_le_bytes());
+                m.extend_from_slice(&rows);
+                m.into()
             })
             .collect();
         self.hub.job.send_replace(Some(Arc::new(JobView {

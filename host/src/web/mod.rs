@@ -324,7 +324,8 @@ async fn put_job(s: &mut WebSocket, job: &JobView) -> bool {
         return false;
     }
     for c in &job.preview {
-        if !put(s, c).await {
+        let sent = tokio::time::timeout(SEND_TIMEOUT, s.send(Message::Binary(c.clone()))).await;
+        if !matches!(sent, Ok(Ok(()))) {
             return false;
         }
     }
@@ -621,7 +622,7 @@ async fn build(
                         ends_s: Vec::new(),
                         total: 0.0,
                         estimated: false,
-                        preview_json: Vec::new(),
+                        preview_bin: Vec::new(),
                         left_out: Vec::new(),
                         page: None,
                     };

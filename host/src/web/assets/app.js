@@ -23,10 +23,29 @@ const S = (window.inkstep = {
 let ws = null;
 let nextId = 1;
 
+// A piece of the job's preview, binary: the job's generation (u32), then rows of
+// five f32 (x0, y0, x1, y1, drawn), little-endian (the page's own byte order on
+// every browser that runs it).
+function previewRows(buf) {
+  const gen = new DataView(buf).getUint32(0, true);
+  if (!S.job || gen !== S.job.gen) return;
+  const f = new Float32Array(buf, 4, (buf.byteLength - 4) / 4);
+  // The job's extent, kept as the pieces come (never a pass over all of it).
+  const b = S.job.box || [Infinity, Infinity, -Infinity, -Infinity], rows = S.job.preview;
+  for (let k = 0; k + 4 < f.length; k += 5) {
+    const r = [f[k], f[k + 1], f[k + 2], f[k + 3], f[k + 4]];
+    rows.push(r);
+    if (r[0] < b[0]) b[0] = r[0]; if (r[2] < b[0]) b[0] = r[2]; if (r[0] > b[2]) b[2] = r[0]; if (r[2] > b[2]) b[2] = r[2];
+    if (r[1] < b[1]) b[1] = r[1]; if (r[3] < b[1]) b[1] = r[3]; if (r[1] > b[3]) b[3] = r[1]; if (r[3] > b[3]) b[3] = r[3];
+  }
+  if (f.length >= 5) S.job.box = b;
+}
+
 function connect() {
   const q = token ? "?token=" + encodeURIComponent(token) : "";
   ws = new WebSocket((location.protocol === "https:" ? "wss://" : "ws://") + location.host + "/ws" + q);
-  ws.onmessage = (e) => handle(JSON.parse(e.data));
+  ws.binaryType = "arraybuffer";
+  ws.onmessage = (e) => (typeof e.data === "string" ? handle(JSON.parse(e.data)) : previewRows(e.data));
   ws.onclose = () => {
     S.status = null; showState();
     $("link").textContent = "server gone: reconnecting";
@@ -77,18 +96,6 @@ function handle(m) {
       $("jobinfo").textContent = m.name + ": " + m.lines + " lines, about " + fmtTime(m.est_s) + (m.moves ? " · receiving the preview…" : "");
       $("progress").value = 0; $("jobstate").textContent = "";
       fitView(); invalidate(); showState(); break;
-    case "preview":
-      if (S.job && m.gen === S.job.gen) {
-        // The job's extent, kept as the pieces come (never a pass over all of it).
-        const b = S.job.box || [Infinity, Infinity, -Infinity, -Infinity];
-        for (const r of m.rows) {
-          S.job.preview.push(r);
-          if (r[0] < b[0]) b[0] = r[0]; if (r[2] < b[0]) b[0] = r[2]; if (r[0] > b[2]) b[2] = r[0]; if (r[2] > b[2]) b[2] = r[2];
-          if (r[1] < b[1]) b[1] = r[1]; if (r[3] < b[1]) b[1] = r[3]; if (r[1] > b[3]) b[3] = r[1]; if (r[3] > b[3]) b[3] = r[3];
-        }
-        if (m.rows.length) S.job.box = b;
-      }
-      break;
     case "preview_end":
       if (S.job) {
         S.job.complete = true; S.job.took = performance.now() - S.job.at;
