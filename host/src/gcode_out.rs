@@ -12,6 +12,7 @@
 //! `arcs`, runs of points on a circle go out as G2/G3 (see `arcs`).
 
 use crate::arcs::{fit, Piece};
+use crate::biarc::ArcHints;
 use crate::geom::{pen_down_length, pen_up_travel, Pt, Route, Stroke};
 use anyhow::{bail, Result};
 use inkstep_core::gcode::LINE_MAX;
@@ -31,7 +32,7 @@ pub enum Pen {
     Z { up: f64, down: f64, feed: f64 },
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct GcodeOptions {
     pub pen: Pen,
     /// Drawing feed (mm/min).
@@ -43,6 +44,10 @@ pub struct GcodeOptions {
     pub route: Route,
     /// Fit arcs (G2/G3) within this tolerance (mm); None: lines only.
     pub arcs: Option<f64>,
+    /// Arcs known from the curves they stand for (`svg --arcs`): a pair of
+    /// consecutive points found here goes out as that arc; the runs between
+    /// them are fitted as `arcs` says.
+    pub arc_hints: ArcHints,
 }
 
 /// One pass of the pen (a layer or a colour), drawn in order.
@@ -60,6 +65,7 @@ impl Default for GcodeOptions {
             dwell: 0.0,
             route: Route::closed(Pt::new(0.0, 0.0)),
             arcs: None,
+            arc_hints: ArcHints::default(),
         }
     }
 }
@@ -80,9 +86,35 @@ pub fn num(v: f64) -> String {
 fn stroke_lines(out: &mut String, s: &[Pt], o: &GcodeOptions) {
     let _ = writeln!(out, "G0 X{} Y{}", num(s[0].x), num(s[0].y));
     pen_line(out, o, true);
-    let pieces: Vec<Piece> = match o.arcs {
-        Some(tol) => fit(s, tol),
-        None => s[1..].iter().map(|&p| Piece::Line(p)).collect(),
+    let run = |r: &[Pt]| -> Vec<Piece> {
+        match o.arcs {
+            Some(tol) => fit(r, tol),
+            None => r[1..].iter().map(|&p| Piece::Line(p)).collect(),
+        }
+    };
+    let pieces: Vec<Piece> = if o.arc_hints.is_empty() {
+        run(s)
+    } else {
+        // Known arcs as they are; the points between them fitted as above.
+        let mut pieces = Vec::new();
+        let mut begin = 0;
+        for k in 1..s.len() {
+            if let Some((centre, ccw)) = o.arc_hints.get(s[k - 1], s[k]) {
+                if k - 1 > begin {
+                    pieces.extend(run(&s[begin..k]));
+                }
+                pieces.push(Piece::Arc {
+                    to: s[k],
+                    centre,
+                    ccw,
+                });
+                begin = k;
+            }
+        }
+        if s.len() - 1 > begin {
+            pieces.extend(run(&s[begin..]));
+        }
+        pieces
     };
     let mut from = s[0];
     for (k, piece) in pieces.iter().enumerate() {

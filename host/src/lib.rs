@@ -4,6 +4,7 @@
 
 pub mod arcs;
 pub mod bench;
+pub mod biarc;
 pub mod estimate;
 pub mod font;
 pub mod gcode_out;

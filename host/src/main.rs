@@ -2,6 +2,7 @@
 //! is done by the library modules.
 use anyhow::{Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use inkstep_host::biarc::ArcHints;
 use inkstep_host::gcode_out::{check_coords, to_gcode_passes, GcodeOptions, Pass, Pen};
 use inkstep_host::geom::{bounds, pen_up_travel, Pt, Route, Stroke};
 use inkstep_host::plan::{plan, PlanOptions};
@@ -321,17 +322,26 @@ fn gcode_options(a: &OutArgs, route: Route) -> Result<GcodeOptions> {
         dwell: a.dwell,
         route,
         arcs: a.arcs,
+        arc_hints: ArcHints::default(),
     })
 }
 
 /// Plans each pass (from where the last one ended; the last one up to the
 /// park) and writes the program.
-fn write_program(passes: &[Pass], a: &OutArgs, output: &PathBuf) -> Result<()> {
+fn write_program(
+    passes: &[Pass],
+    a: &OutArgs,
+    arc_hints: ArcHints,
+    output: &PathBuf,
+) -> Result<()> {
     let route = Route {
         start: a.start,
         park: a.park.0,
     };
-    let o = gcode_options(a, route)?;
+    let o = GcodeOptions {
+        arc_hints,
+        ..gcode_options(a, route)?
+    };
     let all: Vec<Stroke> = passes
         .iter()
         .flat_map(|p| p.strokes.iter().cloned())
@@ -398,7 +408,7 @@ fn write_program(passes: &[Pass], a: &OutArgs, output: &PathBuf) -> Result<()> {
 
 /// Reads an SVG as `svg` does: scaled or fitted as asked, what is left out
 /// named and the travel checked on stderr. Fails when nothing is drawable.
-fn load_svg(file: &PathBuf, a: &SvgArgs) -> Result<svg::Drawing> {
+fn load_svg(file: &PathBuf, a: &SvgArgs, arcs: Option<f64>) -> Result<svg::Drawing> {
     let data = std::fs::read(file).with_context(|| format!("reading {}", file.display()))?;
     let opt = SvgOptions {
         tol_mm: a.tolerance,
@@ -409,6 +419,7 @@ fn load_svg(file: &PathBuf, a: &SvgArgs) -> Result<svg::Drawing> {
         },
         hatch: (a.fill == Fill::Hatch).then_some((a.hatch_spacing, a.hatch_angle)),
         text_font: a.text_font.clone(),
+        arcs,
     };
     let mut d =
         svg::read_svg(&data, &opt).with_context(|| format!("reading {}", file.display()))?;
@@ -465,6 +476,7 @@ fn load_svg(file: &PathBuf, a: &SvgArgs) -> Result<svg::Drawing> {
             .iter_mut()
             .flat_map(|s| s.outline.iter_mut().flatten())
             .for_each(f);
+        d.arc_hints.scale_move(k, off);
     };
     if let Some(k) = a.scale {
         if !(k > 0.0 && k.is_finite()) {
@@ -551,7 +563,7 @@ fn main() -> Result<()> {
                 name: String::new(),
                 strokes: l.strokes,
             };
-            write_program(&[pass], &out, &output)
+            write_program(&[pass], &out, ArcHints::default(), &output)
         }
         Cmd::Svg {
             file,
@@ -559,7 +571,8 @@ fn main() -> Result<()> {
             svg,
             out,
         } => {
-            let d = load_svg(&file, &svg)?;
+            let d = load_svg(&file, &svg, out.arcs)?;
+            let hints = d.arc_hints;
             let passes: Vec<Pass> = d
                 .layers
                 .into_iter()
@@ -568,7 +581,7 @@ fn main() -> Result<()> {
                     strokes: l.strokes,
                 })
                 .collect();
-            write_program(&passes, &out, &output)
+            write_program(&passes, &out, hints, &output)
         }
         Cmd::Preview {
             file,
@@ -585,7 +598,7 @@ fn main() -> Result<()> {
                 })
                 .unwrap_or(false);
             let (moves, extra, program) = if is_svg {
-                let d = load_svg(&file, &svg)?;
+                let d = load_svg(&file, &svg, None)?;
                 let o = GcodeOptions::default();
                 let passes: Vec<Pass> = d
                     .layers

@@ -21,6 +21,7 @@
 //! Output is in millimetres, y up (SVG y down is flipped about the page
 //! height), so it feeds the planner and the G-code writer directly.
 
+use crate::biarc::{fit_cubics, ArcHints, Seg};
 use crate::geom::{Pt, Stroke};
 use crate::hatch::{hatch, FillRule};
 use anyhow::{anyhow, bail, Context, Result};
@@ -67,6 +68,9 @@ pub struct SvgOptions {
     pub hatch: Option<(f64, f64)>,
     /// Draw `<text>` with this Hershey font instead of leaving it out.
     pub text_font: Option<String>,
+    /// Curves as arcs within this tolerance (mm), recorded in
+    /// [`Drawing::arc_hints`]; None: curves flattened into lines.
+    pub arcs: Option<f64>,
 }
 
 impl Default for SvgOptions {
@@ -76,6 +80,7 @@ impl Default for SvgOptions {
             layers: LayerMode::Layers,
             hatch: None,
             text_font: None,
+            arcs: None,
         }
     }
 }
@@ -121,6 +126,8 @@ pub struct Drawing {
     pub skipped: Vec<Skipped>,
     /// Page size (mm).
     pub page: (f64, f64),
+    /// The arcs between consecutive stroke points, with [`SvgOptions::arcs`].
+    pub arc_hints: ArcHints,
 }
 
 impl Drawing {
@@ -211,6 +218,7 @@ pub fn read_svg(data: &[u8], opt: &SvgOptions) -> Result<Drawing> {
         skipped: Vec::new(),
         cur_layer: None,
         hatch_segments: 0,
+        arc_hints: ArcHints::default(),
     };
     w.walk(tree.root(), tree.root().transform())?;
     let mut layers = w.layers;
@@ -219,6 +227,7 @@ pub fn read_svg(data: &[u8], opt: &SvgOptions) -> Result<Drawing> {
         layers,
         skipped: w.skipped,
         page: (tree.size().width() as f64 * MM_PER_PX, h * MM_PER_PX),
+        arc_hints: w.arc_hints,
     })
 }
 
@@ -535,6 +544,7 @@ struct Walker<'a> {
     cur_layer: Option<usize>,
     /// Hatch segments made so far, all shapes together.
     hatch_segments: usize,
+    arc_hints: ArcHints,
 }
 
 impl Walker<'_> {
@@ -650,11 +660,17 @@ impl Walker<'_> {
         check_range(std::slice::from_ref(&ctrl), &name_or(p.id(), "path"))?;
         let mut strokes = Vec::new();
         flatten_path(p.data(), ts, self.tol_px, dots, &mut strokes);
-        let mut mm: Vec<Stroke> = strokes
+        let mm: Vec<Stroke> = strokes
             .into_iter()
             .map(|s| s.into_iter().map(|q| self.to_mm(q)).collect())
             .collect();
         check_range(&mm, &name_or(p.id(), "path"))?;
+        // What the pen draws: the flattened outline, or its curves as arcs (the
+        // outline stays flat for hatching and for what is left out).
+        let mut drawn = match self.opt.arcs {
+            Some(tol) => self.arc_strokes(p.data(), ts, tol, dots),
+            None => mm.clone(),
+        };
         let has_area = mm.iter().any(|s| area(s).abs() > 1e-12);
         if let (Some(fill), true) = (p.fill(), has_area) {
             match self.opt.hatch {
@@ -677,7 +693,7 @@ impl Walker<'_> {
                             MAX_HATCH_SEGMENTS * 25 / 1_000_000
                         );
                     }
-                    mm.extend(h);
+                    drawn.extend(h);
                 }
                 None => {
                     let outline = mm.iter().filter(|s| s.len() > 2).cloned().collect();
@@ -690,8 +706,88 @@ impl Walker<'_> {
             }
         }
         let name = self.pass_name(p);
-        self.layer(&name).strokes.extend(mm);
+        self.layer(&name).strokes.extend(drawn);
         Ok(())
+    }
+
+    /// The path's subpaths in mm with its curves as arcs within `tol` (runs of
+    /// cubics fitted together), the arcs recorded in `arc_hints`.
+    fn arc_strokes(
+        &mut self,
+        data: &usvg::tiny_skia_path::Path,
+        ts: Transform,
+        tol: f64,
+        dots: bool,
+    ) -> Vec<Stroke> {
+        let mm = |q: Point| self.to_mm(map(ts, q));
+        let mut out = Vec::new();
+        let mut cur: Stroke = Vec::new();
+        let mut run: Vec<[Pt; 4]> = Vec::new();
+        let mut start = Pt::new(0.0, 0.0);
+        let mut hints = ArcHints::default();
+        let flush = |cur: &mut Stroke, run: &mut Vec<[Pt; 4]>, hints: &mut ArcHints| {
+            if let (None, Some(c)) = (cur.last(), run.first()) {
+                cur.push(c[0]);
+            }
+            for seg in fit_cubics(run, tol) {
+                let Some(&from) = cur.last() else { break };
+                match seg {
+                    Seg::Line(p) => cur.push(p),
+                    Seg::Arc { to, centre, ccw } => {
+                        hints.insert(from, to, centre, ccw);
+                        cur.push(to);
+                    }
+                }
+            }
+            run.clear();
+        };
+        let finish = |cur: &mut Stroke, out: &mut Vec<Stroke>| {
+            let mut s = std::mem::take(cur);
+            s.dedup();
+            if s.len() > 1 || (s.len() == 1 && dots) {
+                out.push(s);
+            }
+        };
+        for seg in data.segments() {
+            let last = run
+                .last()
+                .map(|c| c[3])
+                .or_else(|| cur.last().copied())
+                .unwrap_or(start);
+            match seg {
+                PathSegment::QuadTo(c, p) => {
+                    let (c, p3) = (mm(c), mm(p));
+                    // Degree elevation: the quadratic as a cubic.
+                    let c1 = Pt::new(
+                        last.x + 2.0 / 3.0 * (c.x - last.x),
+                        last.y + 2.0 / 3.0 * (c.y - last.y),
+                    );
+                    let c2 = Pt::new(
+                        p3.x + 2.0 / 3.0 * (c.x - p3.x),
+                        p3.y + 2.0 / 3.0 * (c.y - p3.y),
+                    );
+                    run.push([last, c1, c2, p3]);
+                }
+                PathSegment::CubicTo(c1, c2, p) => run.push([last, mm(c1), mm(c2), mm(p)]),
+                other => {
+                    flush(&mut cur, &mut run, &mut hints);
+                    match other {
+                        PathSegment::MoveTo(p) => {
+                            finish(&mut cur, &mut out);
+                            start = mm(p);
+                            cur.push(start);
+                        }
+                        PathSegment::LineTo(p) => cur.push(mm(p)),
+                        PathSegment::Close if cur.last() != Some(&start) => cur.push(start),
+                        _ => {}
+                    }
+                }
+            }
+        }
+        flush(&mut cur, &mut run, &mut hints);
+        finish(&mut cur, &mut out);
+        self.arc_hints.extend(hints);
+        out
     }
 
     /// A text probe: draws the text with the Hershey font when asked, else

@@ -93,3 +93,71 @@ fn svg_arcs_run_through_the_simulator() {
     assert!(arcs.lines().count() * 3 < flat.lines().count());
     run_clean(&arcs, "svg with arcs");
 }
+
+/// `svg --arcs` on the board: the curves go out as G2/G3 (a circle as two arcs), run
+/// through the simulator without an error, and every step the pen makes while down
+/// lies within the arc tolerance plus one step of the true curves (flattened here to
+/// half a micrometre).
+#[test]
+fn svg_curves_as_arcs_draw_within_the_tolerance_and_a_step() {
+    use inkstep_host::svg_in::{read_svg, SvgOptions};
+    let svg = r#"<svg xmlns="http://www.w3.org/2000/svg" width="100mm" height="60mm" viewBox="0 0 100 60">
+        <circle cx="25" cy="25" r="15" fill="none" stroke="black"/>
+        <ellipse cx="70" cy="20" rx="20" ry="8" fill="none" stroke="black"/>
+        <path d="M 5 55 C 25 35, 45 65, 65 45 S 90 40, 95 55" fill="none" stroke="black"/>
+    </svg>"#;
+    let tol = 0.01;
+    let d = read_svg(
+        svg.as_bytes(),
+        &SvgOptions {
+            arcs: Some(tol),
+            ..SvgOptions::default()
+        },
+    )
+    .expect("svg");
+    let strokes = plan(
+        &d.strokes(),
+        Route::closed(Pt::new(0.0, 0.0)),
+        &PlanOptions::default(),
+    );
+    let g = to_gcode(
+        &strokes,
+        &GcodeOptions {
+            arcs: Some(tol),
+            arc_hints: d.arc_hints.clone(),
+            ..GcodeOptions::default()
+        },
+    );
+    let arcs = g
+        .lines()
+        .filter(|l| l.starts_with("G2 ") || l.starts_with("G3 "))
+        .count();
+    let lines = g.lines().filter(|l| l.starts_with("G1 ")).count();
+    assert!(
+        (4..=80).contains(&arcs) && lines <= 2,
+        "{arcs} arcs, {lines} lines:\n{g}"
+    );
+    let r = run_gcode(&g, Flow::CharCount(128));
+    assert!(r.errors.is_empty(), "errors {:?}", r.errors);
+    assert!(r.alarms.is_empty() && !r.timed_out);
+    let truth: Vec<Vec<Pt>> = strokes_from_svg(svg, 0.0005).expect("svg");
+    let spmm = 80.0;
+    let mut down = 0;
+    let mut worst = 0.0f64;
+    for e in r.events.iter().filter(|e| e.servo_down || e.pos[2] < 0) {
+        let p = Pt::new(f64::from(e.pos[0]) / spmm, f64::from(e.pos[1]) / spmm);
+        let d = truth
+            .iter()
+            .flat_map(|s| s.windows(2))
+            .map(|w| inkstep_host::svg_in::dist_to_segment(p, w[0], w[1]))
+            .fold(f64::INFINITY, f64::min);
+        worst = worst.max(d);
+        down += 1;
+    }
+    eprintln!("{arcs} arcs; {down} pen-down steps, the farthest {worst:.4} mm from the curves");
+    assert!(down > 10_000, "{down} steps with the pen down");
+    assert!(
+        worst <= tol + 1.0 / spmm,
+        "a step {worst} mm from the curves"
+    );
+}

@@ -55,7 +55,7 @@ pub struct Job {
     /// Estimated seconds for the whole job (to the end of the program).
     pub total: f64,
     /// The preview's rows ([`Job::preview`]) in pieces of at most
-    /// [`super::link::CHUNK`] rows, as [`preview_bytes`] writes them, made while
+    /// [`super::link::CHUNK`] rows, five little-endian `f32` a row (x0, y0, x1, y1, drawn), made while
     /// the job is built.
     pub preview_bin: Vec<Vec<u8>>,
     /// The estimate is the firmware's; false while a big job's is computed
