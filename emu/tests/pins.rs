@@ -847,3 +847,94 @@ fn a_limit_pin_of_an_axis_without_a_switch_is_no_hard_limit() {
     s.wait_idle(10 * T_PER_S).unwrap();
     assert_eq!(s.m.state().board.pos[1], -80, "Y moves with its pin open");
 }
+
+/// The X steps of one `$H` of X alone (`$214=1`) onto a switch at -5 mm, split into
+/// its four moves by direction: seek (-), back-off (+), locate (-), pull-off (+).
+fn homing_phases(rates: (f64, f64, u32)) -> Vec<Vec<u64>> {
+    let (feed, seek, debounce) = rates;
+    let mut s = board();
+    let mut o = s.m.state().board.outside.clone();
+    o.switches = vec![PosSwitch::parse("x-:-5mm").unwrap()];
+    s.set_outside(o);
+    for l in [
+        "$22=1".to_string(),
+        "$23=1".into(),
+        "$27=1".into(),
+        "$214=1".into(),
+        format!("$24={feed}"),
+        format!("$25={seek}"),
+        format!("$26={debounce}"),
+    ] {
+        ok(&mut s, &l);
+    }
+    let got = s.command("$H", 60 * T_PER_S).unwrap();
+    assert!(got.contains("ok"), "$H: {got:?}");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    let mut phases: Vec<Vec<u64>> = Vec::new();
+    let mut last = 0i32;
+    let mut dir = 0i32;
+    for st in &s.m.state().board.steps {
+        let d = (st.pos[0] - last).signum();
+        last = st.pos[0];
+        if d != dir {
+            phases.push(Vec::new());
+            dir = d;
+        }
+        if let Some(p) = phases.last_mut() {
+            p.push(st.t);
+        }
+    }
+    assert_eq!(phases.len(), 4, "seek, back-off, locate, pull-off");
+    phases
+}
+
+/// The rate of a phase's cruise (the median step interval), mm/min.
+fn cruise_mm_per_min(t: &[u64]) -> f64 {
+    let mut iv: Vec<u64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    iv.sort_unstable();
+    let median = iv[iv.len() / 2] as f64 / T_PER_S as f64;
+    60.0 / (median * STEPS_PER_MM)
+}
+
+/// `$25` (seek rate) times the fast search and the back-off, `$24` (locate feed) the
+/// slow locate and the pull-off, each read from the step pin's edges at cruise; `$26`
+/// (debounce) is the wait between the step that trips the switch and the first step
+/// away from it, and between the locate's last step and the pull-off's first. Two
+/// boards with the rates swapped round and debounce times 200 ms apart.
+#[test]
+fn homing_seeks_at_25_locates_at_24_and_waits_26_after_each_trip() {
+    let mut seek_waits = Vec::new();
+    for (feed, seek, debounce) in [(80.0, 600.0, 40u32), (150.0, 300.0, 240)] {
+        let ph = homing_phases((feed, seek, debounce));
+        let rates: Vec<f64> = ph.iter().map(|p| cruise_mm_per_min(p)).collect();
+        let waits = [
+            ms(ph[1][0] - ph[0][ph[0].len() - 1]),
+            ms(ph[3][0] - ph[2][ph[2].len() - 1]),
+        ];
+        eprintln!(
+            "$24={feed} $25={seek} $26={debounce}: rates {rates:.2?} mm/min, \
+             waits after the trips {waits:.2?} ms, steps {:?}",
+            ph.iter().map(|p| p.len()).collect::<Vec<_>>()
+        );
+        for (i, want) in [seek, seek, feed, feed].into_iter().enumerate() {
+            assert!(
+                (rates[i] - want).abs() <= want * 0.01,
+                "phase {i}: {:.2} mm/min, want {want}",
+                rates[i]
+            );
+        }
+        for w in waits {
+            // The wait, then the next move's first step: it starts from rest at the
+            // start rate `$213` (60 mm/min, 12.5 ms a step), and the trip and the
+            // wait's end are seen at the protocol's polls.
+            assert!(
+                w >= f64::from(debounce) && w <= f64::from(debounce) + 25.0,
+                "wait after a trip {w:.2} ms, $26={debounce}"
+            );
+        }
+        seek_waits.push(waits[0]);
+    }
+    // The same back-off start after both seeks: the waits differ by the $26 difference.
+    let d = seek_waits[1] - seek_waits[0];
+    assert!((d - 200.0).abs() <= 3.0, "$26 240 vs 40: waits {d:.2} ms apart");
+}
