@@ -841,7 +841,10 @@ fn a_limit_pin_of_an_axis_without_a_switch_is_no_hard_limit() {
     let t0 = s.now();
     s.inputs = Schedule::new(InputEvent::parse("150ms:limit-y=open").unwrap(), t0);
     let rest = s.wait_idle(10 * T_PER_S).unwrap();
-    eprintln!("Y's pin opened mid-move with $214=1: {:?} {rest}", s.received);
+    eprintln!(
+        "Y's pin opened mid-move with $214=1: {:?} {rest}",
+        s.received
+    );
     // Nor is it shown as a tripped switch.
     assert!(!rest.contains("Pn:"), "{rest}");
     assert!(!s.received.contains("ALARM"), "{:?}", s.received);
@@ -939,5 +942,112 @@ fn homing_seeks_at_25_locates_at_24_and_waits_26_after_each_trip() {
     }
     // The same back-off start after both seeks: the waits differ by the $26 difference.
     let d = seek_waits[1] - seek_waits[0];
-    assert!((d - 200.0).abs() <= 3.0, "$26 240 vs 40: waits {d:.2} ms apart");
+    assert!(
+        (d - 200.0).abs() <= 3.0,
+        "$26 240 vs 40: waits {d:.2} ms apart"
+    );
+}
+
+/// `$208` (servo speed): at 120 deg/s the 60 deg from up (90) to down (30) are told to
+/// the servo frame by frame, the pulse narrowing step by step over 0.5 s instead of
+/// jumping, and the next stroke waits the turn plus the drop time `$207`.
+#[test]
+fn the_servo_turns_at_the_208_speed() {
+    let mut s = board();
+    for l in [
+        "$201=1",
+        "$202=90",
+        "$203=30",
+        "$207=100",
+        "$208=120",
+        "G21 G91 G1 F600",
+    ] {
+        ok(&mut s, l);
+    }
+    let up = 500.0 + 90.0 * 2000.0 / 180.0;
+    let down = 500.0 + 30.0 * 2000.0 / 180.0;
+    let t0 = s.now();
+    ok(&mut s, "G1 X1");
+    ok(&mut s, "M3");
+    ok(&mut s, "G1 X1");
+    s.wait_idle(20 * T_PER_S).unwrap();
+    let steps: Vec<u64> = s.m.state().board.steps.iter().map(|st| st.t).collect();
+    assert_eq!(steps.len(), 160);
+    let pulses = servo_pulses(&s, t0);
+    let turning: Vec<(u64, f64)> = pulses
+        .iter()
+        .copied()
+        .filter(|p| p.1 < up - 1.5 && p.1 > down + 1.5)
+        .collect();
+    let first_down = pulses
+        .iter()
+        .find(|p| (p.1 - down).abs() < 1.5)
+        .expect("the pen reaches down");
+    let start = pulses
+        .iter()
+        .find(|p| p.1 < up - 1.5)
+        .expect("the pulse narrows");
+    // From the first narrowed pulse to the first at the down width: the turn, to
+    // within a 20 ms frame either way.
+    let turn = ms(first_down.0 - start.0);
+    let resume = steps[80];
+    eprintln!(
+        "{} pulses between up and down, the turn {turn:.1} ms, next step {:.1} ms after the pen is down",
+        turning.len(),
+        ms(resume - first_down.0)
+    );
+    assert!(
+        turning.windows(2).all(|w| w[1].1 <= w[0].1 + 0.5),
+        "narrowing only: {turning:?}"
+    );
+    assert!(turning.len() >= 20, "step by step, not a jump: {turning:?}");
+    assert!(
+        (turn - 500.0).abs() <= 25.0,
+        "60 deg at 120 deg/s: {turn:.1} ms"
+    );
+    // The drop time from the turn's end, seen at the next 20 ms frame at worst.
+    let wait = ms(resume - first_down.0);
+    assert!(
+        (80.0..=145.0).contains(&wait),
+        "the stroke waits the drop time $207=100 after the turn: {wait:.1} ms"
+    );
+}
+
+/// `$100`-`$102` (steps per mm) and `$110`-`$112` (maximum rates) per axis, from the
+/// step pins: a `G0` of 10 mm on each axis alone makes 10 x `$10n` pulses, and its
+/// cruise (the median step interval) is the `$11n` rate.
+#[test]
+fn each_axis_steps_100_to_102_per_mm_and_rapids_at_110_to_112() {
+    let mut s = board();
+    let set = [(100.0, 900.0), (50.0, 1200.0), (250.0, 300.0)];
+    for (axis, (per_mm, rate)) in set.iter().enumerate() {
+        ok(&mut s, &format!("$10{axis}={per_mm}"));
+        ok(&mut s, &format!("$11{axis}={rate}"));
+    }
+    ok(&mut s, "G21 G91");
+    for (axis, (per_mm, rate)) in set.into_iter().enumerate() {
+        let from = s.m.state().board.steps.len();
+        let before = s.m.state().board.pos;
+        ok(&mut s, &format!("G0 {}10", ["X", "Y", "Z"][axis]));
+        s.wait_idle(20 * T_PER_S).unwrap();
+        let b = &s.m.state().board;
+        let t: Vec<u64> = b.steps[from..].iter().map(|st| st.t).collect();
+        let mut iv: Vec<u64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+        iv.sort_unstable();
+        let cruise = 60.0 / (iv[iv.len() / 2] as f64 / T_PER_S as f64 * per_mm);
+        eprintln!(
+            "axis {axis}: {} pulses at $10{axis}={per_mm}, cruise {cruise:.2} mm/min at $11{axis}={rate}",
+            t.len()
+        );
+        assert_eq!(t.len() as f64, 10.0 * per_mm, "axis {axis}: pulses");
+        assert_eq!(
+            b.pos[axis] - before[axis],
+            (10.0 * per_mm) as i32,
+            "axis {axis} alone, 10 mm"
+        );
+        assert!(
+            (cruise - rate).abs() <= rate * 0.01,
+            "axis {axis}: cruise {cruise:.2} mm/min, want {rate}"
+        );
+    }
 }
