@@ -1051,3 +1051,43 @@ fn each_axis_steps_100_to_102_per_mm_and_rapids_at_110_to_112() {
         );
     }
 }
+
+/// `$20` with `$130`/`$131` (soft limits and travel): after `$H` onto switches at
+/// positions, a move to inside the travel runs, one past `$130` is refused with
+/// ALARM:2 before a single step, and a Y move past `$131` the same.
+#[test]
+fn soft_limits_refuse_a_move_past_130_or_131_before_any_step() {
+    let mut s = board();
+    let mut o = s.m.state().board.outside.clone();
+    o.switches = vec![
+        PosSwitch::parse("x-:-5mm").unwrap(),
+        PosSwitch::parse("y-:-3.5mm").unwrap(),
+    ];
+    s.set_outside(o);
+    for l in ["$22=1", "$23=3", "$27=1", "$130=20", "$131=15", "$20=1"] {
+        ok(&mut s, l);
+    }
+    let got = s.command("$H", 60 * T_PER_S).unwrap();
+    assert!(got.contains("ok"), "$H: {got:?}");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    // Homed toward minus: the travel is [0, $130] x [0, $131] from the switches.
+    ok(&mut s, "G21 G90 G53 G0 X19 Y14");
+    let rest = s.wait_idle(10 * T_PER_S).unwrap();
+    assert!(rest.contains("MPos:19.000,14.000"), "inside the travel: {rest}");
+    let inside = s.m.state().board.pos;
+    for (line, axis) in [("G53 G0 X21", 0), ("G53 G0 Y16", 1)] {
+        let steps = s.m.state().board.steps.len();
+        s.send(format!("{line}\n").as_bytes());
+        s.run_for(300 * T_PER_MS).unwrap();
+        eprintln!("{line}: {:?}", s.received);
+        assert!(s.received.contains("ALARM:2"), "{line}: {:?}", s.received);
+        assert_eq!(s.m.state().board.steps.len(), steps, "{line}: no step");
+        assert_eq!(s.m.state().board.pos, inside, "{line} (axis {axis})");
+        s.received.clear();
+        // Reset and unlock for the next one (the position is kept).
+        s.send(&[0x18]);
+        s.run_for(300 * T_PER_MS).unwrap();
+        ok(&mut s, "$X");
+        s.received.clear();
+    }
+}
