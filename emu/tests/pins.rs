@@ -1073,7 +1073,10 @@ fn soft_limits_refuse_a_move_past_130_or_131_before_any_step() {
     // Homed toward minus: the travel is [0, $130] x [0, $131] from the switches.
     ok(&mut s, "G21 G90 G53 G0 X19 Y14");
     let rest = s.wait_idle(10 * T_PER_S).unwrap();
-    assert!(rest.contains("MPos:19.000,14.000"), "inside the travel: {rest}");
+    assert!(
+        rest.contains("MPos:19.000,14.000"),
+        "inside the travel: {rest}"
+    );
     let inside = s.m.state().board.pos;
     for (line, axis) in [("G53 G0 X21", 0), ("G53 G0 Y16", 1)] {
         let steps = s.m.state().board.steps.len();
