@@ -5,7 +5,9 @@
 //! lift time `$204`, limit/home switches at positions (homing both axes, a hard limit),
 //! the same at inverted levels (`$5`), only on the axes with a switch (`$214`), the
 //! e-stop with the alarm's buzzer pattern, the error and done beeps from the keypad,
-//! feed hold/SYNC and cycle start from the pins, `$215`. The outside is driven as `cargo emu run --switch/--input` drives it
+//! feed hold/SYNC and cycle start from the pins, `$215`, the homing rates and debounce
+//! `$24`-`$26`, the servo speed `$208`, steps per mm and rates per axis `$100`-`$112`,
+//! soft limits `$20`/`$130`/`$131`. The outside is driven as `cargo emu run --switch/--input` drives it
 //! (src/pins.rs).
 
 mod common;
