@@ -306,6 +306,40 @@ fn hard_limits_only_on_axes_with_a_switch() {
     assert_eq!(drain(&mut p), "ALARM:1\r\n[MSG:Reset to continue]\r\n");
 }
 
+/// `Pn:` names the limit pins of the axes with a switch (`$214`) only: the pin of an
+/// axis without one is wired to nothing (it reads open), and no tripped switch.
+#[test]
+fn pn_shows_the_limit_pins_of_axes_with_a_switch_only() {
+    let (mut p, mut m) = boot();
+    let both = Inputs {
+        limits: [true, true, false],
+        ..Inputs::default()
+    };
+    p.set_inputs(both, &mut m, 0);
+    let report = send(&mut p, &mut m, "?");
+    assert!(report.contains("|Pn:XY"), "{report}");
+    send(&mut p, &mut m, "$214=1\n");
+    let report = send(&mut p, &mut m, "?");
+    assert!(
+        report.contains("|Pn:X") && !report.contains("Y"),
+        "{report}"
+    );
+    send(&mut p, &mut m, "$214=0\n");
+    let report = send(&mut p, &mut m, "?");
+    assert!(!report.contains("Pn:"), "{report}");
+    let held = Inputs {
+        limits: [true, true, false],
+        feed_hold: true,
+        ..Inputs::default()
+    };
+    p.set_inputs(held, &mut m, 0);
+    let report = send(&mut p, &mut m, "?");
+    assert!(
+        report.contains("|Pn:H"),
+        "the other pins as before: {report}"
+    );
+}
+
 #[test]
 fn soft_limits_reject_before_any_step() {
     let (mut p, mut m) = boot();

@@ -5,7 +5,9 @@
 //! lift time `$204`, limit/home switches at positions (homing both axes, a hard limit),
 //! the same at inverted levels (`$5`), only on the axes with a switch (`$214`), the
 //! e-stop with the alarm's buzzer pattern, the error and done beeps from the keypad,
-//! feed hold/SYNC and cycle start from the pins, `$215`. The outside is driven as `cargo emu run --switch/--input` drives it
+//! feed hold/SYNC and cycle start from the pins, `$215`, the homing rates and debounce
+//! `$24`-`$26`, the servo speed `$208`, steps per mm and rates per axis `$100`-`$112`,
+//! soft limits `$20`/`$130`/`$131`. The outside is driven as `cargo emu run --switch/--input` drives it
 //! (src/pins.rs).
 
 mod common;
@@ -830,7 +832,8 @@ fn homing_takes_only_the_axes_of_214() {
 }
 
 /// `$214` and hard limits: an axis left out of the mask has no switch, so its pin
-/// (left floating, or picking up a stray switch) must not stop the machine.
+/// (left floating, or picking up a stray switch) must not stop the machine, nor
+/// appear in the status report's `Pn:`.
 #[test]
 fn a_limit_pin_of_an_axis_without_a_switch_is_no_hard_limit() {
     let mut s = board();
@@ -839,11 +842,257 @@ fn a_limit_pin_of_an_axis_without_a_switch_is_no_hard_limit() {
     ok(&mut s, "G21 G91 G1 F1200 X5");
     let t0 = s.now();
     s.inputs = Schedule::new(InputEvent::parse("150ms:limit-y=open").unwrap(), t0);
-    s.wait_idle(10 * T_PER_S).unwrap();
-    eprintln!("Y's pin opened mid-move with $214=1: {:?}", s.received);
+    let rest = s.wait_idle(10 * T_PER_S).unwrap();
+    eprintln!(
+        "Y's pin opened mid-move with $214=1: {:?} {rest}",
+        s.received
+    );
+    // Nor is it shown as a tripped switch.
+    assert!(!rest.contains("Pn:"), "{rest}");
     assert!(!s.received.contains("ALARM"), "{:?}", s.received);
     assert_eq!(s.m.state().board.pos[0], 400, "the move ran to its end");
     ok(&mut s, "G1 Y-1");
     s.wait_idle(10 * T_PER_S).unwrap();
     assert_eq!(s.m.state().board.pos[1], -80, "Y moves with its pin open");
+}
+
+/// The X steps of one `$H` of X alone (`$214=1`) onto a switch at -5 mm, split into
+/// its four moves by direction: seek (-), back-off (+), locate (-), pull-off (+).
+fn homing_phases(rates: (f64, f64, u32)) -> Vec<Vec<u64>> {
+    let (feed, seek, debounce) = rates;
+    let mut s = board();
+    let mut o = s.m.state().board.outside.clone();
+    o.switches = vec![PosSwitch::parse("x-:-5mm").unwrap()];
+    s.set_outside(o);
+    for l in [
+        "$22=1".to_string(),
+        "$23=1".into(),
+        "$27=1".into(),
+        "$214=1".into(),
+        format!("$24={feed}"),
+        format!("$25={seek}"),
+        format!("$26={debounce}"),
+    ] {
+        ok(&mut s, &l);
+    }
+    let got = s.command("$H", 60 * T_PER_S).unwrap();
+    assert!(got.contains("ok"), "$H: {got:?}");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    let mut phases: Vec<Vec<u64>> = Vec::new();
+    let mut last = 0i32;
+    let mut dir = 0i32;
+    for st in &s.m.state().board.steps {
+        let d = (st.pos[0] - last).signum();
+        last = st.pos[0];
+        if d != dir {
+            phases.push(Vec::new());
+            dir = d;
+        }
+        if let Some(p) = phases.last_mut() {
+            p.push(st.t);
+        }
+    }
+    assert_eq!(phases.len(), 4, "seek, back-off, locate, pull-off");
+    phases
+}
+
+/// The rate of a phase's cruise (the median step interval), mm/min.
+fn cruise_mm_per_min(t: &[u64]) -> f64 {
+    let mut iv: Vec<u64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    iv.sort_unstable();
+    let median = iv[iv.len() / 2] as f64 / T_PER_S as f64;
+    60.0 / (median * STEPS_PER_MM)
+}
+
+/// `$25` (seek rate) times the fast search and the back-off, `$24` (locate feed) the
+/// slow locate and the pull-off, each read from the step pin's edges at cruise; `$26`
+/// (debounce) is the wait between the step that trips the switch and the first step
+/// away from it, and between the locate's last step and the pull-off's first. Two
+/// boards with the rates swapped round and debounce times 200 ms apart.
+#[test]
+fn homing_seeks_at_25_locates_at_24_and_waits_26_after_each_trip() {
+    let mut seek_waits = Vec::new();
+    for (feed, seek, debounce) in [(80.0, 600.0, 40u32), (150.0, 300.0, 240)] {
+        let ph = homing_phases((feed, seek, debounce));
+        let rates: Vec<f64> = ph.iter().map(|p| cruise_mm_per_min(p)).collect();
+        let waits = [
+            ms(ph[1][0] - ph[0][ph[0].len() - 1]),
+            ms(ph[3][0] - ph[2][ph[2].len() - 1]),
+        ];
+        eprintln!(
+            "$24={feed} $25={seek} $26={debounce}: rates {rates:.2?} mm/min, \
+             waits after the trips {waits:.2?} ms, steps {:?}",
+            ph.iter().map(|p| p.len()).collect::<Vec<_>>()
+        );
+        for (i, want) in [seek, seek, feed, feed].into_iter().enumerate() {
+            assert!(
+                (rates[i] - want).abs() <= want * 0.01,
+                "phase {i}: {:.2} mm/min, want {want}",
+                rates[i]
+            );
+        }
+        for w in waits {
+            // The wait, then the next move's first step: it starts from rest at the
+            // start rate `$213` (60 mm/min, 12.5 ms a step), and the trip and the
+            // wait's end are seen at the protocol's polls.
+            assert!(
+                w >= f64::from(debounce) && w <= f64::from(debounce) + 25.0,
+                "wait after a trip {w:.2} ms, $26={debounce}"
+            );
+        }
+        seek_waits.push(waits[0]);
+    }
+    // The same back-off start after both seeks: the waits differ by the $26 difference.
+    let d = seek_waits[1] - seek_waits[0];
+    assert!(
+        (d - 200.0).abs() <= 3.0,
+        "$26 240 vs 40: waits {d:.2} ms apart"
+    );
+}
+
+/// `$208` (servo speed): at 120 deg/s the 60 deg from up (90) to down (30) are told to
+/// the servo frame by frame, the pulse narrowing step by step over 0.5 s instead of
+/// jumping, and the next stroke waits the turn plus the drop time `$207`.
+#[test]
+fn the_servo_turns_at_the_208_speed() {
+    let mut s = board();
+    for l in [
+        "$201=1",
+        "$202=90",
+        "$203=30",
+        "$207=100",
+        "$208=120",
+        "G21 G91 G1 F600",
+    ] {
+        ok(&mut s, l);
+    }
+    let up = 500.0 + 90.0 * 2000.0 / 180.0;
+    let down = 500.0 + 30.0 * 2000.0 / 180.0;
+    let t0 = s.now();
+    ok(&mut s, "G1 X1");
+    ok(&mut s, "M3");
+    ok(&mut s, "G1 X1");
+    s.wait_idle(20 * T_PER_S).unwrap();
+    let steps: Vec<u64> = s.m.state().board.steps.iter().map(|st| st.t).collect();
+    assert_eq!(steps.len(), 160);
+    let pulses = servo_pulses(&s, t0);
+    let turning: Vec<(u64, f64)> = pulses
+        .iter()
+        .copied()
+        .filter(|p| p.1 < up - 1.5 && p.1 > down + 1.5)
+        .collect();
+    let first_down = pulses
+        .iter()
+        .find(|p| (p.1 - down).abs() < 1.5)
+        .expect("the pen reaches down");
+    let start = pulses
+        .iter()
+        .find(|p| p.1 < up - 1.5)
+        .expect("the pulse narrows");
+    // From the first narrowed pulse to the first at the down width: the turn, to
+    // within a 20 ms frame either way.
+    let turn = ms(first_down.0 - start.0);
+    let resume = steps[80];
+    eprintln!(
+        "{} pulses between up and down, the turn {turn:.1} ms, next step {:.1} ms after the pen is down",
+        turning.len(),
+        ms(resume - first_down.0)
+    );
+    assert!(
+        turning.windows(2).all(|w| w[1].1 <= w[0].1 + 0.5),
+        "narrowing only: {turning:?}"
+    );
+    assert!(turning.len() >= 20, "step by step, not a jump: {turning:?}");
+    assert!(
+        (turn - 500.0).abs() <= 25.0,
+        "60 deg at 120 deg/s: {turn:.1} ms"
+    );
+    // The drop time from the turn's end, seen at the next 20 ms frame at worst.
+    let wait = ms(resume - first_down.0);
+    assert!(
+        (80.0..=145.0).contains(&wait),
+        "the stroke waits the drop time $207=100 after the turn: {wait:.1} ms"
+    );
+}
+
+/// `$100`-`$102` (steps per mm) and `$110`-`$112` (maximum rates) per axis, from the
+/// step pins: a `G0` of 10 mm on each axis alone makes 10 x `$10n` pulses, and its
+/// cruise (the median step interval) is the `$11n` rate.
+#[test]
+fn each_axis_steps_100_to_102_per_mm_and_rapids_at_110_to_112() {
+    let mut s = board();
+    let set = [(100.0, 900.0), (50.0, 1200.0), (250.0, 300.0)];
+    for (axis, (per_mm, rate)) in set.iter().enumerate() {
+        ok(&mut s, &format!("$10{axis}={per_mm}"));
+        ok(&mut s, &format!("$11{axis}={rate}"));
+    }
+    ok(&mut s, "G21 G91");
+    for (axis, (per_mm, rate)) in set.into_iter().enumerate() {
+        let from = s.m.state().board.steps.len();
+        let before = s.m.state().board.pos;
+        ok(&mut s, &format!("G0 {}10", ["X", "Y", "Z"][axis]));
+        s.wait_idle(20 * T_PER_S).unwrap();
+        let b = &s.m.state().board;
+        let t: Vec<u64> = b.steps[from..].iter().map(|st| st.t).collect();
+        let mut iv: Vec<u64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+        iv.sort_unstable();
+        let cruise = 60.0 / (iv[iv.len() / 2] as f64 / T_PER_S as f64 * per_mm);
+        eprintln!(
+            "axis {axis}: {} pulses at $10{axis}={per_mm}, cruise {cruise:.2} mm/min at $11{axis}={rate}",
+            t.len()
+        );
+        assert_eq!(t.len() as f64, 10.0 * per_mm, "axis {axis}: pulses");
+        assert_eq!(
+            b.pos[axis] - before[axis],
+            (10.0 * per_mm) as i32,
+            "axis {axis} alone, 10 mm"
+        );
+        assert!(
+            (cruise - rate).abs() <= rate * 0.01,
+            "axis {axis}: cruise {cruise:.2} mm/min, want {rate}"
+        );
+    }
+}
+
+/// `$20` with `$130`/`$131` (soft limits and travel): after `$H` onto switches at
+/// positions, a move to inside the travel runs, one past `$130` is refused with
+/// ALARM:2 before a single step, and a Y move past `$131` the same.
+#[test]
+fn soft_limits_refuse_a_move_past_130_or_131_before_any_step() {
+    let mut s = board();
+    let mut o = s.m.state().board.outside.clone();
+    o.switches = vec![
+        PosSwitch::parse("x-:-5mm").unwrap(),
+        PosSwitch::parse("y-:-3.5mm").unwrap(),
+    ];
+    s.set_outside(o);
+    for l in ["$22=1", "$23=3", "$27=1", "$130=20", "$131=15", "$20=1"] {
+        ok(&mut s, l);
+    }
+    let got = s.command("$H", 60 * T_PER_S).unwrap();
+    assert!(got.contains("ok"), "$H: {got:?}");
+    s.wait_idle(10 * T_PER_S).unwrap();
+    // Homed toward minus: the travel is [0, $130] x [0, $131] from the switches.
+    ok(&mut s, "G21 G90 G53 G0 X19 Y14");
+    let rest = s.wait_idle(10 * T_PER_S).unwrap();
+    assert!(
+        rest.contains("MPos:19.000,14.000"),
+        "inside the travel: {rest}"
+    );
+    let inside = s.m.state().board.pos;
+    for (line, axis) in [("G53 G0 X21", 0), ("G53 G0 Y16", 1)] {
+        let steps = s.m.state().board.steps.len();
+        s.send(format!("{line}\n").as_bytes());
+        s.run_for(300 * T_PER_MS).unwrap();
+        eprintln!("{line}: {:?}", s.received);
+        assert!(s.received.contains("ALARM:2"), "{line}: {:?}", s.received);
+        assert_eq!(s.m.state().board.steps.len(), steps, "{line}: no step");
+        assert_eq!(s.m.state().board.pos, inside, "{line} (axis {axis})");
+        s.received.clear();
+        // Reset and unlock for the next one (the position is kept).
+        s.send(&[0x18]);
+        s.run_for(300 * T_PER_MS).unwrap();
+        ok(&mut s, "$X");
+        s.received.clear();
+    }
 }

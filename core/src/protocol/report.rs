@@ -158,10 +158,16 @@ impl Protocol {
             }
         };
         let inputs = machine.inputs();
+        // A limit pin only on an axis with a switch (`$214`): another axis's pin is
+        // wired to nothing (floating, so open to the NC logic), homing and hard
+        // limits ignore it, and a sender showing it as a tripped switch would mislead.
+        let switch = |axis: usize| {
+            settings.switch_mask() & (1 << axis) != 0 && inputs.limits.get(axis) == Some(&true)
+        };
         let pins = [
-            inputs.limits[0],
-            inputs.limits[1],
-            inputs.limits[2],
+            switch(0),
+            switch(1),
+            switch(2),
             inputs.feed_hold,
             inputs.cycle_start,
             inputs.estop,
