@@ -125,8 +125,6 @@ pub struct Machine {
     jog_cancel: bool,
     homing: Option<Homing>,
     homed: bool,
-    /// Hold requested by `!` or the feed-hold pin, until `~`.
-    hold: bool,
     /// Safety door requested (0x84), until cycle start.
     door: bool,
     /// The hold came from the feed-hold pin and ends when it is released.
@@ -190,7 +188,6 @@ impl Machine {
             jog_cancel = false,
             homing = None,
             homed = false,
-            hold = false,
             door = false,
             hold_by_pin = false,
             paused = false,
@@ -305,7 +302,7 @@ impl Machine {
         } else if self.jogging {
             // Including the deceleration of a jog cancel, as Grbl reports it.
             RunState::Jog
-        } else if self.paused || m.is_holding() || self.hold {
+        } else if self.paused || m.is_holding() {
             RunState::Hold {
                 complete: !m.is_moving(),
             }
@@ -687,7 +684,6 @@ impl Machine {
 
     /// Forget every reason to hold (`!`, the pin, the door, M0, M6).
     fn release_holds(&mut self) {
-        self.hold = false;
         self.door = false;
         self.hold_by_pin = false;
         self.paused = false;
@@ -778,16 +774,22 @@ impl Machine {
     /// `!` or the feed-hold pin. At rest too, as in Grbl: the machine reports
     /// `Hold:0` and the next motion waits for cycle start.
     pub fn feed_hold<M: MotionControl>(&mut self, m: &mut M) {
+        self.hold_motion(m);
+    }
+
+    /// [`Machine::feed_hold`]; true if the motion now holds for it (the pipeline
+    /// keeps the hold until cycle start or a clear).
+    fn hold_motion<M: MotionControl>(&mut self, m: &mut M) -> bool {
         if self.locked || self.homing.is_some() || self.check_mode || self.sleeping {
-            return;
+            return false;
         }
         if self.jogging {
             // A hold during a jog cancels it, as Grbl does.
             self.jog_cancel(m);
-            return;
+            return false;
         }
-        self.hold = true;
         m.hold();
+        true
     }
 
     /// 0x84, the safety door: like a feed hold reported as `Door`; during homing it
@@ -810,7 +812,7 @@ impl Machine {
         if self.locked || self.homing.is_some() || self.stop_then_clear || self.jog_cancel {
             return;
         }
-        if self.hold || self.paused || self.door || m.is_holding() {
+        if self.paused || self.door || m.is_holding() {
             self.release_holds();
             m.resume();
         }
@@ -948,8 +950,7 @@ impl Machine {
             return;
         }
         if inputs.feed_hold && !before.feed_hold {
-            self.feed_hold(m);
-            self.hold_by_pin = self.hold;
+            self.hold_by_pin = self.hold_motion(m);
         } else if !inputs.feed_hold && before.feed_hold && self.hold_by_pin {
             self.cycle_start(m);
         }

@@ -15,7 +15,7 @@
 //! [`StepSide`] trait.
 
 use crate::interpolation::Tick;
-use crate::machine::{MotionControl, QueueFull};
+use crate::machine::{MotionControl, MotionState, QueueFull};
 use crate::motion::{Command, PEN_FULL};
 use crate::motion::{Move, Path, StepPos};
 use crate::planner::{AxisConfig, PlanError, Planner, PlannerConfig, Shape, PLANNER_BLOCKS};
@@ -523,23 +523,35 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
         }
     }
 
-    fn is_holding(&self) -> bool {
-        self.held || self.prep.hold_state() != HoldState::Running
-    }
-
-    fn is_moving(&self) -> bool {
-        if self.prep.hold_state() == HoldState::Held {
-            return self.side.is_running() || self.z_moving() || self.z_lift_due();
+    fn motion(&self) -> MotionState {
+        let hold = self.prep.hold_state();
+        if self.held || hold != HoldState::Running {
+            let braking = if hold == HoldState::Held
+                || (self.held && hold == HoldState::Running && self.wait_left == 0 && !self.waiting)
+            {
+                // At rest in the block, or asked between blocks with no wait under
+                // way (nothing is in execution, the queue waits): only what runs
+                // out of the step queue, and the Z pen's trip, still move.
+                self.side.is_running() || self.z_moving() || self.z_lift_due()
+            } else {
+                self.executing()
+            };
+            return if braking {
+                MotionState::Holding
+            } else {
+                MotionState::Held
+            };
         }
-        if self.held
-            && self.prep.hold_state() == HoldState::Running
-            && self.wait_left == 0
-            && !self.waiting
-        {
-            // Hold asked between blocks: nothing is in execution, the queue waits.
-            return self.side.is_running() || self.z_moving() || self.z_lift_due();
+        if !self.executing() {
+            MotionState::Idle
+        } else if self.dwell && (self.wait_left > 0 || self.waiting) && self.pending.is_empty() {
+            // The wait under way is a dwell's, and nothing is behind it. (A dwell
+            // that has just been queued starts at the next preparation, within a
+            // millisecond.)
+            MotionState::Dwelling
+        } else {
+            MotionState::Running
         }
-        self.executing()
     }
 
     fn clear(&mut self) {
@@ -591,11 +603,6 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     }
     fn line(&self) -> Option<u32> {
         self.prep.line()
-    }
-    fn dwelling(&self) -> bool {
-        // The wait under way is a dwell's, and nothing is behind it. (A dwell that
-        // has just been queued starts at the next preparation, within a millisecond.)
-        self.dwell && (self.wait_left > 0 || self.waiting) && self.pending.is_empty()
     }
 }
 

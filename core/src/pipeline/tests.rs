@@ -470,3 +470,43 @@ fn a_z_pen_goes_up_for_a_hold_and_back_down_before_the_stroke_goes_on() {
     assert_eq!(p.position(), stop, "an abort leaves Z where it stands");
     assert!(p.is_idle());
 }
+
+/// The one motion state through a job with a hold: Idle, Running, Holding while XY
+/// brakes, Held at rest (with the position still), Running again on resume, Idle at
+/// the exact end; a clear ends the hold.
+#[test]
+fn the_motion_state_follows_a_hold_from_braking_to_rest_and_back() {
+    let mut log = Vec::new();
+    let mut p = test_pipeline(&Settings::default());
+    assert_eq!(p.motion(), MotionState::Idle);
+    p.push(mv([8000, 0, 0], Feed::MmPerMin(600.0))).unwrap();
+    run_timed(&mut p, 300, &mut log);
+    assert_eq!(p.motion(), MotionState::Running);
+    p.hold();
+    assert_eq!(p.motion(), MotionState::Holding, "braking");
+    let mut braking_ms = 0;
+    while p.motion() == MotionState::Holding {
+        run_timed(&mut p, 1, &mut log);
+        braking_ms += 1;
+        assert!(braking_ms < 1000, "never at rest");
+    }
+    assert_eq!(p.motion(), MotionState::Held);
+    assert!(braking_ms > 1, "it braked: {braking_ms} ms");
+    let held = p.position();
+    run_timed(&mut p, 100, &mut log);
+    assert_eq!((p.motion(), p.position()), (MotionState::Held, held));
+    p.resume();
+    run_timed(&mut p, 2, &mut log);
+    assert_eq!(p.motion(), MotionState::Running);
+    ms_to_rest(&mut p, &mut log);
+    assert_eq!(
+        (p.motion(), p.position()),
+        (MotionState::Idle, [8000, 0, 0])
+    );
+
+    p.push(mv([0, 0, 0], Feed::MmPerMin(600.0))).unwrap();
+    run_timed(&mut p, 300, &mut log);
+    p.hold();
+    p.clear();
+    assert_eq!(p.motion(), MotionState::Idle, "a clear ends the hold");
+}
