@@ -11,6 +11,7 @@
 pub mod homing;
 pub mod safety;
 pub mod state;
+mod tell;
 
 use crate::motion::{Command, StepPos};
 

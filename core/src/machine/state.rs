@@ -19,6 +19,8 @@ use crate::settings::{PenMode, Settings};
 use core::mem::MaybeUninit;
 use heapless::Deque;
 
+pub use super::tell::{Event, Message, Prompt, MESSAGE_LEN};
+
 /// The state shown in status reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -53,28 +55,6 @@ pub enum Taken {
     WhenIdle,
 }
 
-/// Something the protocol should tell the host.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Event {
-    Alarm(Alarm),
-    /// `[MSG:...]` text.
-    Msg(&'static str),
-    /// `[MSG:Job started]`.
-    JobStarted,
-    /// `[MSG:Pen change: pen N, cycle start to continue]`.
-    PenChange(u8),
-    /// `[MSG:Job finished ...]` with the job's duration.
-    JobFinished {
-        ms: u32,
-        moves: u32,
-    },
-}
-
-/// The longest `(MSG, ...)` text kept for the LCD (the sender gets all of it).
-pub const MESSAGE_LEN: usize = 40;
-/// A message's text.
-pub type Message = heapless::Vec<u8, MESSAGE_LEN>;
-
 /// A pen change (M6) under way.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct PenChange {
@@ -83,16 +63,6 @@ struct PenChange {
     split: u8,
     /// At rest, waiting for cycle start (the rest is queued).
     waiting: bool,
-}
-
-/// What the machine waits for the user to do: the LCD's prompt.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Prompt {
-    /// M0: paused until cycle start.
-    Paused,
-    /// M6 T`n`: put pen `n` in, then cycle start.
-    PenChange(u8),
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
