@@ -15,35 +15,12 @@ use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
 use crate::motion::Command;
 use crate::motion::{Move, AXES};
+use crate::pending::Work;
 use crate::settings::{PenMode, Settings};
 use core::mem::MaybeUninit;
 use heapless::Deque;
 
-pub use super::tell::{Event, Message, Prompt, MESSAGE_LEN};
-
-/// The state shown in status reports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum RunState {
-    Idle,
-    Run,
-    /// `complete`: at rest (Hold:0); otherwise still decelerating (Hold:1).
-    Hold {
-        complete: bool,
-    },
-    Jog,
-    /// Safety door (0x84): `at_rest` false while stopping (Door:2), true once stopped
-    /// and ready to resume with cycle start (Door:0; there is no door switch to hold
-    /// it open).
-    Door {
-        at_rest: bool,
-    },
-    Alarm,
-    Home,
-    Check,
-    /// `$SLP`: the motors are released and only a reset wakes the machine.
-    Sleep,
-}
+pub use super::tell::{Event, Message, Prompt, RunState, MESSAGE_LEN};
 
 /// A line the machine took, and when its `ok` may go out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -307,17 +284,37 @@ impl Machine {
         self.homing.is_some() || m.is_moving()
     }
 
-    /// Nothing changes without an outside event (a byte, an input, a key): nothing
-    /// queued or moving, no homing, no stop or job end waiting for rest, no message
-    /// unsaid. [`Machine::poll`] has nothing to do then.
-    pub fn settled<M: MotionControl>(&self, m: &M) -> bool {
-        m.is_idle()
-            && self.homing.is_none()
-            && !self.stop_then_clear
-            && !self.jog_cancel
-            && !self.jogging
-            && !self.job.ending
-            && self.events.is_empty()
+    /// The first work the machine (with its motion) still holds: without any,
+    /// nothing changes until an outside event (a byte, an input, a key), and
+    /// [`Machine::poll`] has nothing to do.
+    pub fn pending<M: MotionControl>(&self, m: &M) -> Option<Work> {
+        let work = [
+            (!m.is_idle(), Work::Motion),
+            (self.homing.is_some(), Work::Homing),
+            (self.stop_then_clear, Work::StopThenClear),
+            (self.jog_cancel, Work::JogCancel),
+            (self.jogging, Work::Jogging),
+            (self.job.ending, Work::JobEnding),
+            (!self.events.is_empty(), Work::Events),
+        ];
+        work.into_iter().find_map(|(held, w)| held.then_some(w))
+    }
+
+    /// Test support: hold `w` if it is the machine's own kind of work (`on`), or
+    /// none of it; false for the other layers' kinds.
+    #[cfg(test)]
+    pub(crate) fn set_work(&mut self, w: Work, on: bool) -> bool {
+        match w {
+            Work::Homing => self.homing = on.then(|| Homing::start(&Settings::default())).flatten(),
+            Work::StopThenClear => self.stop_then_clear = on,
+            Work::JogCancel => self.jog_cancel = on,
+            Work::Jogging => self.jogging = on,
+            Work::JobEnding => self.job.ending = on,
+            Work::Events if on => self.event(Event::Msg("test")),
+            Work::Events => self.events.clear(),
+            _ => return false,
+        }
+        true
     }
 
     /// G-code lines are taken only when this holds: during a stop that will drop the
