@@ -288,16 +288,24 @@ impl Machine {
     /// nothing changes until an outside event (a byte, an input, a key), and
     /// [`Machine::poll`] has nothing to do.
     pub fn pending<M: MotionControl>(&self, m: &M) -> Option<Work> {
-        let work = [
-            (!m.is_idle(), Work::Motion),
-            (self.homing.is_some(), Work::Homing),
-            (self.stop_then_clear, Work::StopThenClear),
-            (self.jog_cancel, Work::JogCancel),
-            (self.jogging, Work::Jogging),
-            (self.job.ending, Work::JobEnding),
-            (!self.events.is_empty(), Work::Events),
-        ];
-        work.into_iter().find_map(|(held, w)| held.then_some(w))
+        let work = if !m.is_idle() {
+            Work::Motion
+        } else if self.homing.is_some() {
+            Work::Homing
+        } else if self.stop_then_clear {
+            Work::StopThenClear
+        } else if self.jog_cancel {
+            Work::JogCancel
+        } else if self.jogging {
+            Work::Jogging
+        } else if self.job.ending {
+            Work::JobEnding
+        } else if !self.events.is_empty() {
+            Work::Events
+        } else {
+            return None;
+        };
+        Some(work)
     }
 
     /// Test support: hold `w` if it is the machine's own kind of work (`on`), or

@@ -275,18 +275,28 @@ impl Protocol {
         if let Some(w) = self.machine.pending(m) {
             return Some(w);
         }
-        let work = [
-            (!self.out.is_empty(), Work::Output),
-            (self.line_ready, Work::LineReady),
-            (!self.rx.is_empty(), Work::Received),
-            (self.status_requested != 0, Work::StatusRequested),
-            (self.welcome_due, Work::Welcome),
-            (self.listing.is_some(), Work::Listing),
-            (self.startup_next.is_some(), Work::StartupLine),
-            (self.pending_welcome, Work::PendingWelcome),
-            (self.ok_when_idle, Work::OkWhenIdle),
-        ];
-        work.into_iter().find_map(|(held, w)| held.then_some(w))
+        let work = if !self.out.is_empty() {
+            Work::Output
+        } else if self.line_ready {
+            Work::LineReady
+        } else if !self.rx.is_empty() {
+            Work::Received
+        } else if self.status_requested != 0 {
+            Work::StatusRequested
+        } else if self.welcome_due {
+            Work::Welcome
+        } else if self.listing.is_some() {
+            Work::Listing
+        } else if self.startup_next.is_some() {
+            Work::StartupLine
+        } else if self.pending_welcome {
+            Work::PendingWelcome
+        } else if self.ok_when_idle {
+            Work::OkWhenIdle
+        } else {
+            return None;
+        };
+        Some(work)
     }
 
     /// Test support: hold `w` if it is the protocol's or the machine's kind of
