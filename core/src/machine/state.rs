@@ -119,12 +119,9 @@ impl Machine {
     /// so that no whole machine is built on the stack and copied.
     #[allow(unsafe_code)]
     pub fn init_in<'a>(slot: &'a mut MaybeUninit<Machine>, settings: &Settings) -> &'a mut Machine {
-        // The interpreter from a const template (copied from flash) instead of field by
-        // field.
-        const FRESH: Interpreter = Interpreter::new();
         let m = crate::init_fields!(slot => Machine {
             settings = settings.clone(),
-            interpreter = FRESH,
+            interpreter = Interpreter::new(),
             locked = false,
             alarm = None,
             needs_reset = false,
