@@ -136,9 +136,9 @@ impl Hmi {
         }
     }
 
-    /// [`Hmi::tick`] has timed work: the boot screen or a message to take down, a job
-    /// to follow. Otherwise it only follows the machine, which a settled machine does
-    /// not change.
+    /// The timed work [`Hmi::tick`] still has: the boot screen or a message to take
+    /// down, a job to follow. Otherwise it only follows the machine, which does not
+    /// change while no layer has work.
     pub fn pending(&self) -> Option<Work> {
         let following = |run: &RunPage| !matches!(run.phase, RunPhase::Done { .. });
         if self.toast.is_some() || matches!(&self.page, Page::Boot) {
