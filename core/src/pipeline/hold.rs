@@ -7,7 +7,7 @@
 //! moment of rest.
 
 use super::{Pipeline, StepSide};
-use crate::interpolation::Tick;
+use crate::interpolation::StepEvent;
 use crate::stepper::prep::HoldState;
 use crate::stepper::{CmdSink, StepCmd};
 
@@ -113,7 +113,7 @@ impl<S: StepSide> Pipeline<S> {
                 ZStage::Falling => (up, t.back),
             };
             let n = from.abs_diff(to);
-            let tick = Tick::from_deltas([0, 0, if to > from { 1 } else { -1 }]);
+            let tick = StepEvent::from_deltas([0, 0, if to > from { 1 } else { -1 }]);
             let mut budget = Z_STEPS_PER_FILL;
             while u32::from(t.sent) < n && budget > 0 && self.side.sink().room() > 0 {
                 let wait = self.z_wait(u32::from(t.sent), n);
@@ -135,7 +135,7 @@ impl<S: StepSide> Pipeline<S> {
         }
     }
 
-    /// The wait after step `k` of a Z way of `n` steps, timer ticks: Z's own
+    /// The wait after step `k` of a Z way of `n` steps, timer counts: Z's own
     /// acceleration ($122) from rest and to rest, capped at its rate ($112).
     fn z_wait(&self, k: u32, n: u32) -> u32 {
         let z = &self.planner.config().axes[2];

@@ -14,7 +14,7 @@
 //! and the simulator (`SimSide`) each give it their interrupt side through the same
 //! [`StepSide`] trait.
 
-use crate::interpolation::Tick;
+use crate::interpolation::StepEvent;
 use crate::machine::{MotionControl, MotionState, QueueFull};
 use crate::motion::{Command, PEN_FULL};
 use crate::motion::{Move, Path, StepPos};
@@ -204,7 +204,7 @@ pub struct Pipeline<S: StepSide> {
     timer_hz: u32,
     /// Commands behind a dwell or pen command, in order.
     pending: Deque<Command, PENDING>,
-    /// Timer ticks of the running dwell still to queue.
+    /// Timer counts of the running dwell still to queue.
     wait_left: u64,
     /// The running dwell / pen command has been fully queued; it ends when the side
     /// has run it.
@@ -416,7 +416,9 @@ impl<S: StepSide> Pipeline<S> {
             if self.wait_left > 0 {
                 while self.wait_left > 0 && self.side.sink().room() > 0 {
                     let w = self.wait_left.min(u64::from(MAX_WAIT)) as u32;
-                    self.side.sink().push_slice(&[StepCmd::new(Tick(0), w)]);
+                    self.side
+                        .sink()
+                        .push_slice(&[StepCmd::new(StepEvent(0), w)]);
                     self.wait_left -= u64::from(w);
                 }
                 if self.wait_left > 0 {

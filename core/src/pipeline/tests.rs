@@ -38,7 +38,7 @@ impl StepSide for TestSide {
 }
 
 /// Runs everything queued; returns the shortest wait between two steps of `axis`
-/// (timer ticks), i.e. the cruise speed.
+/// (timer counts), i.e. the cruise speed.
 fn run(pipeline: &mut Pipeline<TestSide>, axis: usize) -> u32 {
     let mut fastest = u32::MAX;
     for _ in 0..1_000_000 {
@@ -153,7 +153,7 @@ fn overrides_survive_a_setting_change() {
     assert_eq!(pipeline.planner().feed_override(), 150);
     assert_eq!(pipeline.planner().config().axes[X].accel, 300.0);
 
-    // 100 mm at F1000 with 150 %: 25 mm/s = 2000 steps/s = 36,000 timer ticks.
+    // 100 mm at F1000 with 150 %: 25 mm/s = 2000 steps/s = 36,000 timer counts.
     pipeline
         .push(mv([8000, 0, 0], Feed::MmPerMin(1000.0)))
         .unwrap();
