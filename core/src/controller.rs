@@ -22,6 +22,7 @@ use crate::keypad::{Keypad, KeypadConfig};
 use crate::machine::state::Prompt;
 use crate::machine::{InputPolarity, MotionControl, PinLevels, RunState};
 use crate::motion::{Command, StepPos, X, Y, Z};
+use crate::pending::Work;
 use crate::protocol::Protocol;
 use crate::ring::{ByteRx, ByteTx};
 use crate::settings::{PenMode, Settings};
@@ -329,11 +330,21 @@ impl Controller {
             alarmed: self.protocol.machine().alarm().is_some(),
             polarity: InputPolarity::from(s),
             more,
-            quiet: !more
-                && host.rx.is_empty()
-                && self.saves == Saves::default()
-                && !self.hmi.waiting()
-                && self.protocol.settled(m),
+            quiet: !more && self.pending(host.rx.is_empty(), m).is_none(),
+        }
+    }
+
+    /// The first work any layer still holds, which goes on without an outside event:
+    /// host bytes not yet taken (`rx_empty` false), saves waiting for rest, the
+    /// HMI's timed work ([`Hmi::pending`]), the protocol's with the machine's and the
+    /// motion's ([`Protocol::pending`]). `None`: [`Serviced::quiet`].
+    pub fn pending<M: MotionControl>(&self, rx_empty: bool, m: &M) -> Option<Work> {
+        if !rx_empty {
+            Some(Work::HostBytes)
+        } else if self.saves != Saves::default() {
+            Some(Work::Saves)
+        } else {
+            self.hmi.pending().or_else(|| self.protocol.pending(m))
         }
     }
 
@@ -528,6 +539,81 @@ impl Controller {
         };
         if refused {
             self.outputs.beep = Some(Beep::Error);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::machine::{MotionState, QueueFull};
+
+    /// Motion that is either at rest with nothing queued or busy with one command.
+    struct Motion(bool);
+
+    impl MotionControl for Motion {
+        fn push(&mut self, _: Command) -> Result<(), QueueFull> {
+            Err(QueueFull)
+        }
+        fn queued(&self) -> usize {
+            usize::from(self.0)
+        }
+        fn capacity(&self) -> usize {
+            1
+        }
+        fn hold(&mut self) {}
+        fn resume(&mut self) {}
+        fn motion(&self) -> MotionState {
+            if self.0 {
+                MotionState::Running
+            } else {
+                MotionState::Idle
+            }
+        }
+        fn clear(&mut self) {}
+        fn set_overrides(&mut self, _: u8, _: u8) {}
+        fn position(&self) -> StepPos {
+            [0; 3]
+        }
+        fn set_position(&mut self, _: StepPos) {}
+        fn speed(&self) -> f32 {
+            0.0
+        }
+    }
+
+    /// Every kind of work any layer can hold, built one at a time on a controller
+    /// with nothing else to do: the service loop's combination names it, so the
+    /// protocol task never sleeps with it waiting. A layer's new kind of work that
+    /// the combination does not see fails here (each kind must be built by its
+    /// layer's `set_work`, and found).
+    #[test]
+    fn every_kind_of_pending_work_keeps_the_service_loop_awake() {
+        let mut c = Controller::new(Settings::default(), 0);
+        let clear = |c: &mut Controller| {
+            for w in Work::ALL {
+                c.hmi.set_work(w, false);
+                c.protocol.set_work(w, false);
+            }
+            c.saves = Saves::default();
+        };
+        clear(&mut c);
+        assert_eq!(c.pending(true, &Motion(false)), None, "nothing to do");
+        for w in Work::ALL {
+            clear(&mut c);
+            let (rx_empty, motion) = match w {
+                Work::HostBytes => (false, false),
+                Work::Motion => (true, true),
+                Work::Saves => {
+                    c.saves.settings = true;
+                    (true, false)
+                }
+                _ => {
+                    let built = c.hmi.set_work(w, true) || c.protocol.set_work(w, true);
+                    assert!(built, "{w:?}: no layer builds it");
+                    (true, false)
+                }
+            };
+            assert_eq!(c.pending(rx_empty, &Motion(motion)), Some(w), "{w:?}");
         }
     }
 }

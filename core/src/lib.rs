@@ -24,6 +24,7 @@
 //!   motion pipeline behind the machine's motion trait: [`pipeline`]
 //! - construction of those large structs in their final place: [`in_place`] (its
 //!   [`init_fields!`] macro)
+//! - what work each layer still holds, combined where the service loop sleeps: [`pending`]
 //!
 //! Floating point is allowed in planning code (tasks), never in the step interrupt path.
 #![cfg_attr(not(test), no_std)]
@@ -44,6 +45,7 @@ pub mod interpolation;
 pub mod keypad;
 pub mod machine;
 pub mod motion;
+pub mod pending;
 pub mod pipeline;
 pub mod planner;
 pub mod protocol;

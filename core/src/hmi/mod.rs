@@ -29,6 +29,7 @@ pub use page::{JogPage, Page, PromptView, RunPage, RunPhase, Toast, DIR_HISTORY,
 use crate::fmath;
 use crate::keypad::{Key, KeyEvent, KeyKind};
 use crate::motion::{Feed, Move, Path, StepPos, X, Y, Z};
+use crate::pending::Work;
 use entry::{FieldInput, Form, FormKind, FormMemory, DEFAULT_PARAMS};
 use job::Job;
 use text::Text;
@@ -135,14 +136,45 @@ impl Hmi {
         }
     }
 
-    /// [`Hmi::tick`] has timed work: the boot screen or a message to take down, a job
-    /// to follow. Otherwise it only follows the machine, which a settled machine does
-    /// not change.
-    pub fn waiting(&self) -> bool {
+    /// The timed work [`Hmi::tick`] still has: the boot screen or a message to take
+    /// down, a job to follow. Otherwise it only follows the machine, which does not
+    /// change while no layer has work.
+    pub fn pending(&self) -> Option<Work> {
         let following = |run: &RunPage| !matches!(run.phase, RunPhase::Done { .. });
-        self.toast.is_some()
-            || matches!(&self.page, Page::Boot)
-            || matches!(&self.page, Page::Run(run) if following(run))
+        if self.toast.is_some() || matches!(&self.page, Page::Boot) {
+            Some(Work::HmiTimer)
+        } else if matches!(&self.page, Page::Run(run) if following(run)) {
+            Some(Work::HmiJob)
+        } else {
+            None
+        }
+    }
+
+    /// Test support: hold `w` if it is the HMI's kind of work (`on`), or none of it
+    /// (a menu, no message); false for the other layers' kinds.
+    #[cfg(test)]
+    pub(crate) fn set_work(&mut self, w: Work, on: bool) -> bool {
+        self.toast = None;
+        self.page = Page::Menu { sel: 0 };
+        match (w, on) {
+            (Work::HmiTimer, true) => self.page = Page::Boot,
+            (Work::HmiJob, true) => {
+                self.page = Page::Run(RunPage {
+                    job: Job::Line { dx: 1.0, dy: 0.0 },
+                    start: [0; 3],
+                    end: [80, 0, 0],
+                    started_ms: 0,
+                    phase: RunPhase::Running,
+                    traveled_mm: 0.0,
+                    length_mm: 1.0,
+                    last_pos: [0; 3],
+                    idle_since: None,
+                })
+            }
+            (Work::HmiTimer | Work::HmiJob, false) => {}
+            _ => return false,
+        }
+        true
     }
 
     /// Changes whenever what the screens show of the HMI may have changed.

@@ -892,16 +892,21 @@ mod tests {
         );
     }
 
+    /// A test arc: where the machine starts, its exact Q8 start and centre, its
+    /// target, and the circle it should trace (centre `c`, radius `rr`).
+    struct TestArc {
+        start: StepPos,
+        from: [i64; 2],
+        center: [i64; 2],
+        target: StepPos,
+        c: [f64; 2],
+        rr: f64,
+    }
+
     /// An arc as G-code gives it: a centre anywhere (between steps), an exact start on
     /// its circle at angle `a0`, the end at angle `a1` (rounded to the grid for the
     /// target; the start rounded for the machine position).
-    fn arc(
-        cx: f64,
-        cy: f64,
-        r: f64,
-        a0: f64,
-        a1: f64,
-    ) -> (StepPos, [i64; 2], [i64; 2], StepPos, [f64; 2], f64) {
+    fn arc(cx: f64, cy: f64, r: f64, a0: f64, a1: f64) -> TestArc {
         let from = [cx + r * a0.cos(), cy + r * a0.sin()];
         let from_q = [q8(from[0]), q8(from[1])];
         let center_q = [q8(cx), q8(cy)];
@@ -915,7 +920,14 @@ mod tests {
             (c[1] + rr * a1.sin()).round() as i32,
             0,
         ];
-        (start, from_q, center_q, target, c, rr)
+        TestArc {
+            start,
+            from: from_q,
+            center: center_q,
+            target,
+            c,
+            rr,
+        }
     }
 
     proptest! {
@@ -924,7 +936,7 @@ mod tests {
             cx in -3000.0f64..3000.0, cy in -3000.0f64..3000.0, r in 1.0f64..3000.0,
             a0 in 0.0f64..std::f64::consts::TAU, a1 in 0.0f64..std::f64::consts::TAU,
             ccw in any::<bool>(), turns in 0u16..2) {
-            let (start, from, center, target, c, rr) = arc(cx, cy, r, a0, a1);
+            let TestArc { start, from, center, target, c, rr } = arc(cx, cy, r, a0, a1);
             let circle = Circle::new(start, from, center, target, ccw, turns, Method::Dda).unwrap();
             let pts = run(circle, start);
             let ck = check(&pts, c, rr, target);
@@ -936,7 +948,7 @@ mod tests {
             cx in -3000.0f64..3000.0, cy in -3000.0f64..3000.0, r in 0.6f64..3000.0,
             a0 in 0.0f64..std::f64::consts::TAU, a1 in 0.0f64..std::f64::consts::TAU,
             ccw in any::<bool>()) {
-            let (start, from, center, target, c, rr) = arc(cx, cy, r, a0, a1);
+            let TestArc { start, from, center, target, c, rr } = arc(cx, cy, r, a0, a1);
             let mut circle = Circle::new(start, from, center, target, ccw, 0, Method::Classic).unwrap();
             let mut p = start;
             let mut pts = std::vec![p];

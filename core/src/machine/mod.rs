@@ -11,11 +11,33 @@
 pub mod homing;
 pub mod safety;
 pub mod state;
+mod tell;
 
 use crate::motion::{Command, StepPos};
 
 pub use safety::{Alarm, InputPolarity, Inputs, PinLevels};
 pub use state::{Machine, RunState, Taken};
+
+/// What the motion is doing: the one answer to "is it running, holding, held?" that
+/// the machine's state, its reports and the keypad ask of [`MotionControl::motion`]
+/// (the pipeline works it out from its preparation and its step queue; nobody keeps
+/// a copy). Whether commands are still queued is [`MotionControl::queued`]: a held
+/// machine may have none, an idle one may have some not started yet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MotionState {
+    /// At rest and not held.
+    Idle,
+    /// Steps, a pen move or a wait are under way.
+    Running,
+    /// A G4 dwell runs and nothing is queued behind it (reported Idle, as Grbl does).
+    Dwelling,
+    /// A hold is bringing the machine to rest (braking, a pen move or a hold's Z-pen
+    /// trip still under way).
+    Holding,
+    /// A hold keeps the machine at rest until resume.
+    Held,
+}
 
 /// The planner queue has no room for another command.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -27,8 +49,8 @@ pub struct QueueFull;
 /// Semantics the implementation must keep:
 /// - `push` appends to the look-ahead queue and starts motion unless held.
 /// - `hold` decelerates to rest along the path and keeps the queue; `resume` continues
-///   it from the exact position reached. `is_holding` is true from `hold` until
-///   `resume` or `clear`; `is_moving` is false once the axes are at rest.
+///   it from the exact position reached. [`MotionState`] is `Holding` or `Held` from `hold` until
+///   `resume` or `clear`, and `Held` once the axes are at rest.
 /// - `clear` stops at once (no further step), empties the queue and ends any hold;
 ///   `position` afterwards is the exact step count reached.
 /// - `set_position` is only called at rest with an empty queue (homing, `G92` does
@@ -44,10 +66,19 @@ pub trait MotionControl {
     fn hold(&mut self);
     /// Continue after a hold.
     fn resume(&mut self);
+    /// What the motion is doing now.
+    fn motion(&self) -> MotionState;
     /// A hold is in effect (decelerating or at rest).
-    fn is_holding(&self) -> bool;
+    fn is_holding(&self) -> bool {
+        matches!(self.motion(), MotionState::Holding | MotionState::Held)
+    }
     /// Steps are being produced (including a dwell or pen lift in progress).
-    fn is_moving(&self) -> bool;
+    fn is_moving(&self) -> bool {
+        matches!(
+            self.motion(),
+            MotionState::Running | MotionState::Dwelling | MotionState::Holding
+        )
+    }
     /// Stop immediately and drop everything queued.
     fn clear(&mut self);
     /// Feed override (10-200 %) and rapid override (25, 50 or 100 %).
@@ -80,9 +111,9 @@ pub trait MotionControl {
     }
 
     /// What runs is a G4 dwell and nothing is queued behind it (the state is then
-    /// reported as Idle, as Grbl does). Fakes without dwells may keep the default.
+    /// reported as Idle, as Grbl does).
     fn dwelling(&self) -> bool {
-        false
+        self.motion() == MotionState::Dwelling
     }
 
     /// Nothing queued and at rest.

@@ -15,33 +15,12 @@ use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{ErrorCode, Interpreter, Outcome, Reject, Stop};
 use crate::motion::Command;
 use crate::motion::{Move, AXES};
+use crate::pending::Work;
 use crate::settings::{PenMode, Settings};
 use core::mem::MaybeUninit;
 use heapless::Deque;
 
-/// The state shown in status reports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum RunState {
-    Idle,
-    Run,
-    /// `complete`: at rest (Hold:0); otherwise still decelerating (Hold:1).
-    Hold {
-        complete: bool,
-    },
-    Jog,
-    /// Safety door (0x84): `at_rest` false while stopping (Door:2), true once stopped
-    /// and ready to resume with cycle start (Door:0; there is no door switch to hold
-    /// it open).
-    Door {
-        at_rest: bool,
-    },
-    Alarm,
-    Home,
-    Check,
-    /// `$SLP`: the motors are released and only a reset wakes the machine.
-    Sleep,
-}
+pub use super::tell::{Event, Message, Prompt, RunState, MESSAGE_LEN};
 
 /// A line the machine took, and when its `ok` may go out.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,28 +32,6 @@ pub enum Taken {
     WhenIdle,
 }
 
-/// Something the protocol should tell the host.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Event {
-    Alarm(Alarm),
-    /// `[MSG:...]` text.
-    Msg(&'static str),
-    /// `[MSG:Job started]`.
-    JobStarted,
-    /// `[MSG:Pen change: pen N, cycle start to continue]`.
-    PenChange(u8),
-    /// `[MSG:Job finished ...]` with the job's duration.
-    JobFinished {
-        ms: u32,
-        moves: u32,
-    },
-}
-
-/// The longest `(MSG, ...)` text kept for the LCD (the sender gets all of it).
-pub const MESSAGE_LEN: usize = 40;
-/// A message's text.
-pub type Message = heapless::Vec<u8, MESSAGE_LEN>;
-
 /// A pen change (M6) under way.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct PenChange {
@@ -83,16 +40,6 @@ struct PenChange {
     split: u8,
     /// At rest, waiting for cycle start (the rest is queued).
     waiting: bool,
-}
-
-/// What the machine waits for the user to do: the LCD's prompt.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub enum Prompt {
-    /// M0: paused until cycle start.
-    Paused,
-    /// M6 T`n`: put pen `n` in, then cycle start.
-    PenChange(u8),
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -125,8 +72,6 @@ pub struct Machine {
     jog_cancel: bool,
     homing: Option<Homing>,
     homed: bool,
-    /// Hold requested by `!` or the feed-hold pin, until `~`.
-    hold: bool,
     /// Safety door requested (0x84), until cycle start.
     door: bool,
     /// The hold came from the feed-hold pin and ends when it is released.
@@ -174,12 +119,9 @@ impl Machine {
     /// so that no whole machine is built on the stack and copied.
     #[allow(unsafe_code)]
     pub fn init_in<'a>(slot: &'a mut MaybeUninit<Machine>, settings: &Settings) -> &'a mut Machine {
-        // The interpreter from a const template (copied from flash) instead of field by
-        // field.
-        const FRESH: Interpreter = Interpreter::new();
         let m = crate::init_fields!(slot => Machine {
             settings = settings.clone(),
-            interpreter = FRESH,
+            interpreter = Interpreter::new(),
             locked = false,
             alarm = None,
             needs_reset = false,
@@ -190,7 +132,6 @@ impl Machine {
             jog_cancel = false,
             homing = None,
             homed = false,
-            hold = false,
             door = false,
             hold_by_pin = false,
             paused = false,
@@ -305,7 +246,7 @@ impl Machine {
         } else if self.jogging {
             // Including the deceleration of a jog cancel, as Grbl reports it.
             RunState::Jog
-        } else if self.paused || m.is_holding() || self.hold {
+        } else if self.paused || m.is_holding() {
             RunState::Hold {
                 complete: !m.is_moving(),
             }
@@ -340,17 +281,45 @@ impl Machine {
         self.homing.is_some() || m.is_moving()
     }
 
-    /// Nothing changes without an outside event (a byte, an input, a key): nothing
-    /// queued or moving, no homing, no stop or job end waiting for rest, no message
-    /// unsaid. [`Machine::poll`] has nothing to do then.
-    pub fn settled<M: MotionControl>(&self, m: &M) -> bool {
-        m.is_idle()
-            && self.homing.is_none()
-            && !self.stop_then_clear
-            && !self.jog_cancel
-            && !self.jogging
-            && !self.job.ending
-            && self.events.is_empty()
+    /// The first work the machine (with its motion) still holds: without any,
+    /// nothing changes until an outside event (a byte, an input, a key), and
+    /// [`Machine::poll`] has nothing to do.
+    pub fn pending<M: MotionControl>(&self, m: &M) -> Option<Work> {
+        let work = if !m.is_idle() {
+            Work::Motion
+        } else if self.homing.is_some() {
+            Work::Homing
+        } else if self.stop_then_clear {
+            Work::StopThenClear
+        } else if self.jog_cancel {
+            Work::JogCancel
+        } else if self.jogging {
+            Work::Jogging
+        } else if self.job.ending {
+            Work::JobEnding
+        } else if !self.events.is_empty() {
+            Work::Events
+        } else {
+            return None;
+        };
+        Some(work)
+    }
+
+    /// Test support: hold `w` if it is the machine's own kind of work (`on`), or
+    /// none of it; false for the other layers' kinds.
+    #[cfg(test)]
+    pub(crate) fn set_work(&mut self, w: Work, on: bool) -> bool {
+        match w {
+            Work::Homing => self.homing = on.then(|| Homing::start(&Settings::default())).flatten(),
+            Work::StopThenClear => self.stop_then_clear = on,
+            Work::JogCancel => self.jog_cancel = on,
+            Work::Jogging => self.jogging = on,
+            Work::JobEnding => self.job.ending = on,
+            Work::Events if on => self.event(Event::Msg("test")),
+            Work::Events => self.events.clear(),
+            _ => return false,
+        }
+        true
     }
 
     /// G-code lines are taken only when this holds: during a stop that will drop the
@@ -687,7 +656,6 @@ impl Machine {
 
     /// Forget every reason to hold (`!`, the pin, the door, M0, M6).
     fn release_holds(&mut self) {
-        self.hold = false;
         self.door = false;
         self.hold_by_pin = false;
         self.paused = false;
@@ -778,16 +746,22 @@ impl Machine {
     /// `!` or the feed-hold pin. At rest too, as in Grbl: the machine reports
     /// `Hold:0` and the next motion waits for cycle start.
     pub fn feed_hold<M: MotionControl>(&mut self, m: &mut M) {
+        self.hold_motion(m);
+    }
+
+    /// [`Machine::feed_hold`]; true if the motion now holds for it (the pipeline
+    /// keeps the hold until cycle start or a clear).
+    fn hold_motion<M: MotionControl>(&mut self, m: &mut M) -> bool {
         if self.locked || self.homing.is_some() || self.check_mode || self.sleeping {
-            return;
+            return false;
         }
         if self.jogging {
             // A hold during a jog cancels it, as Grbl does.
             self.jog_cancel(m);
-            return;
+            return false;
         }
-        self.hold = true;
         m.hold();
+        true
     }
 
     /// 0x84, the safety door: like a feed hold reported as `Door`; during homing it
@@ -810,7 +784,7 @@ impl Machine {
         if self.locked || self.homing.is_some() || self.stop_then_clear || self.jog_cancel {
             return;
         }
-        if self.hold || self.paused || self.door || m.is_holding() {
+        if self.paused || self.door || m.is_holding() {
             self.release_holds();
             m.resume();
         }
@@ -948,8 +922,7 @@ impl Machine {
             return;
         }
         if inputs.feed_hold && !before.feed_hold {
-            self.feed_hold(m);
-            self.hold_by_pin = self.hold;
+            self.hold_by_pin = self.hold_motion(m);
         } else if !inputs.feed_hold && before.feed_hold && self.hold_by_pin {
             self.cycle_start(m);
         }

@@ -3,7 +3,9 @@
 //!
 //! Owns: the block queue, junction speeds, the reverse/forward planning passes and the
 //! feed and rapid overrides. It knows nothing about time slices or steps; the step
-//! engine pops the oldest block and asks [`Planner::exit_speed`] how fast it may leave.
+//! engine pops the oldest block, reports how fast it runs and how much of it is left
+//! ([`Planner::head_runs`]: the planner decides what that allows the next block), and
+//! asks [`Planner::exit_speed`] how fast it may leave.
 //!
 //! Semantics follow Grbl's documented behaviour (settings $110.. max rate in mm/min,
 //! $120.. acceleration in mm/s^2, $11 junction deviation), written from the maths:
@@ -319,9 +321,18 @@ impl Planner {
             .unwrap_or(self.cfg.start_speed)
     }
 
-    /// The step engine reports the fastest exit its block can still reach; the
-    /// forward pass starts from it.
-    pub fn set_head_cap(&mut self, cap: f32) {
+    /// The step engine reports where the block in execution (`block`, popped from
+    /// here) is: running at `v` with `rest` of its length ahead. The fastest exit it
+    /// can still reach, accelerating all the way, caps the next block's entry: the
+    /// forward pass starts from it (and replans if the cap binds).
+    pub fn head_runs(&mut self, block: &Block, v: f32, rest: f32) {
+        let ae = self.plan_accel(block);
+        self.set_head_cap(crate::fmath::sqrt(v * v + 2.0 * ae * rest));
+    }
+
+    /// The fastest exit the block in execution can still reach; the forward pass
+    /// starts from it.
+    fn set_head_cap(&mut self, cap: f32) {
         if (cap - self.head_cap).abs() <= 1e-3 {
             return;
         }

@@ -30,6 +30,7 @@ use crate::gcode::units::{Nm, NmPos};
 use crate::gcode::{ErrorCode, LineCleaner, StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::machine::{Inputs, Machine, MotionControl, Taken};
 use crate::motion::AXES;
+use crate::pending::Work;
 use crate::settings::Settings;
 use commands::Listing;
 use core::mem::MaybeUninit;
@@ -263,23 +264,64 @@ impl Protocol {
         }
     }
 
-    /// Nothing to do until a byte arrives or an input changes: the machine is settled
-    /// ([`Machine::settled`]), no complete line, report, listing, startup line or
-    /// delayed `ok` waits, and every reply has been read out. A poll frames every
-    /// received byte of a partial line into the line at once, so bytes wait in the
-    /// receive buffer only behind a complete line or until the next poll: an empty
-    /// buffer is the test (and, before a poll, the cautious answer).
-    pub fn settled<M: MotionControl>(&self, m: &M) -> bool {
-        self.machine.settled(m)
-            && self.out.is_empty()
-            && !self.line_ready
-            && self.rx.is_empty()
-            && self.status_requested == 0
-            && !self.welcome_due
-            && self.listing.is_none()
-            && self.startup_next.is_none()
-            && !self.pending_welcome
-            && !self.ok_when_idle
+    /// The first work the protocol (with its machine, [`Machine::pending`]) still
+    /// holds: a complete line, a report, a listing, a startup line or a delayed `ok`
+    /// waiting, or a reply not yet read out. Without any, nothing changes until a
+    /// byte arrives or an input changes. A poll frames every received byte of a
+    /// partial line into the line at once, so bytes wait in the receive buffer only
+    /// behind a complete line or until the next poll: an empty buffer is the test
+    /// (and, before a poll, the cautious answer).
+    pub fn pending<M: MotionControl>(&self, m: &M) -> Option<Work> {
+        if let Some(w) = self.machine.pending(m) {
+            return Some(w);
+        }
+        let work = if !self.out.is_empty() {
+            Work::Output
+        } else if self.line_ready {
+            Work::LineReady
+        } else if !self.rx.is_empty() {
+            Work::Received
+        } else if self.status_requested != 0 {
+            Work::StatusRequested
+        } else if self.welcome_due {
+            Work::Welcome
+        } else if self.listing.is_some() {
+            Work::Listing
+        } else if self.startup_next.is_some() {
+            Work::StartupLine
+        } else if self.pending_welcome {
+            Work::PendingWelcome
+        } else if self.ok_when_idle {
+            Work::OkWhenIdle
+        } else {
+            return None;
+        };
+        Some(work)
+    }
+
+    /// Test support: hold `w` if it is the protocol's or the machine's kind of
+    /// work (`on`), or none of it; false for the other layers' kinds.
+    #[cfg(test)]
+    pub(crate) fn set_work(&mut self, w: Work, on: bool) -> bool {
+        match w {
+            Work::Output if on => {
+                let _ = self.out.push_back(b'x');
+            }
+            Work::Output => self.out.clear(),
+            Work::LineReady => self.line_ready = on,
+            Work::Received if on => {
+                let _ = self.rx.push_back(b'x');
+            }
+            Work::Received => self.rx.clear(),
+            Work::StatusRequested => self.status_requested = u16::from(on),
+            Work::Welcome => self.welcome_due = on,
+            Work::Listing => self.listing = on.then_some(Listing::Settings(0)),
+            Work::StartupLine => self.startup_next = on.then_some(0),
+            Work::PendingWelcome => self.pending_welcome = on,
+            Work::OkWhenIdle => self.ok_when_idle = on,
+            _ => return self.machine.set_work(w, on),
+        }
+        true
     }
 
     /// Make progress: run every buffered line that can run now, continue listings,

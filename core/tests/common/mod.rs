@@ -5,7 +5,7 @@
 
 pub mod flash;
 
-use inkstep_core::machine::{MotionControl, QueueFull};
+use inkstep_core::machine::{MotionControl, MotionState, QueueFull};
 use inkstep_core::motion::Command;
 use inkstep_core::motion::StepPos;
 use inkstep_core::protocol::Protocol;
@@ -67,6 +67,11 @@ impl FakePlanner {
         }
     }
 
+    /// A dwell runs with nothing behind it.
+    fn dwell_alone(&self) -> bool {
+        self.queue.len() == 1 && matches!(self.queue.front(), Some(Command::Dwell { .. }))
+    }
+
     pub fn run_all(&mut self) {
         for _ in 0..1_000_000 {
             if self.queue.is_empty() || self.holding {
@@ -102,11 +107,15 @@ impl MotionControl for FakePlanner {
         self.holding = false;
         self.stopping = false;
     }
-    fn is_holding(&self) -> bool {
-        self.holding
-    }
-    fn is_moving(&self) -> bool {
-        !self.queue.is_empty() && (!self.holding || self.stopping)
+    fn motion(&self) -> MotionState {
+        let moving = !self.queue.is_empty() && (!self.holding || self.stopping);
+        match (self.holding, moving) {
+            (true, true) => MotionState::Holding,
+            (true, false) => MotionState::Held,
+            (false, true) if self.dwell_alone() => MotionState::Dwelling,
+            (false, true) => MotionState::Running,
+            (false, false) => MotionState::Idle,
+        }
     }
     fn clear(&mut self) {
         self.queue.clear();
@@ -123,11 +132,8 @@ impl MotionControl for FakePlanner {
     fn set_position(&mut self, pos: StepPos) {
         self.pos = pos;
     }
-    fn dwelling(&self) -> bool {
-        self.queue.len() == 1 && matches!(self.queue.front(), Some(Command::Dwell { .. }))
-    }
     fn speed(&self) -> f32 {
-        if self.is_moving() && !self.dwelling() {
+        if self.is_moving() && !self.dwell_alone() {
             600.0
         } else {
             0.0

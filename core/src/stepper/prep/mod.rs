@@ -255,11 +255,10 @@ impl Prep {
         if self.hold == HoldState::Held || self.hold == HoldState::Holding {
             self.hold = HoldState::Running;
             if let Some(a) = self.active.as_ref() {
-                let ae = planner.plan_accel(&a.block);
+                // From rest (or the speed the hold left) with the rest of the block
+                // ahead: the planner decides how fast it may now be left.
                 let rest = from_q(a.rest_q.saturating_sub(a.at.s));
-                planner.set_head_cap(crate::fmath::sqrt(
-                    self.v_last * self.v_last + 2.0 * ae * rest,
-                ));
+                planner.head_runs(&a.block, self.v_last, rest);
             }
             self.stale = Stale::Profile;
         }
@@ -362,9 +361,10 @@ impl Prep {
                 ),
             };
             let shape = cfg.shape;
-            let ae = planner.plan_accel(&block);
             let v = self.v_last;
-            planner.set_head_cap(crate::fmath::sqrt(v * v + 2.0 * ae * block.length));
+            // The block starts at the speed the last one left at: the planner
+            // decides how fast it may be left.
+            planner.head_runs(&block, v, block.length);
             self.active = Some(Active {
                 block,
                 interp,

@@ -1,0 +1,155 @@
+//! A hold's pen lift for a Z-axis pen ($201=0): once a hold has brought XY to rest,
+//! the pen goes up to its up place ($205) in raw Z steps queued straight into the step
+//! queue beside the held block, and back down to where the hold found it on resume,
+//! before XY moves on. The planner and the preparation never see these steps, so the
+//! job resumes from exactly the same step count. A servo pen's lift is only a level
+//! (see [`Pipeline::pen_level`](super::Pipeline)); it is decided here too, at the same
+//! moment of rest.
+
+use super::{Pipeline, StepSide};
+use crate::interpolation::StepEvent;
+use crate::stepper::prep::HoldState;
+use crate::stepper::{CmdSink, StepCmd};
+
+/// Where a Z pen's trip for a hold is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum ZStage {
+    /// Going up to $205.
+    Rising,
+    /// Up, waiting for the resume.
+    Up,
+    /// Going back down to where the hold found it.
+    Falling,
+}
+
+/// A Z pen's trip up for a hold and back down on resume: raw Z steps straight into
+/// the step queue, beside the held block (the planner and the preparation never see
+/// them, so the job resumes from exactly the same step count).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct ZTrip {
+    /// Z where the hold found it: the way back ends here.
+    back: i32,
+    /// Steps of the way under way queued so far (16 bits: the trip fits in the
+    /// pipeline's spare word of RAM; a pen further than 65,535 steps from $205 is not
+    /// lifted).
+    sent: u16,
+    stage: ZStage,
+}
+
+/// Most Z steps of a hold's trip queued per [`Pipeline::fill`] (each costs a square
+/// root): 32 a millisecond is far above a Z axis' rate.
+const Z_STEPS_PER_FILL: u32 = 32;
+
+impl<S: StepSide> Pipeline<S> {
+    /// A hold has brought XY to rest (nothing runs, no pen move is under way): the
+    /// pen lifts (a servo at once: nothing waits for it; a Z pen on its own trip to
+    /// $205 if it stands below it), and remembers where it was.
+    // Out of line: its frame stays off the preparation's deepest stack path.
+    #[inline(never)]
+    pub(super) fn lift_when_stopped(&mut self) {
+        if !self.at_rest() {
+            return;
+        }
+        if self.shown > 0 {
+            self.lifted = Some(self.shown);
+            self.shown = 0;
+        }
+        if let Some(z) = self.z_to_lift() {
+            self.z_trip = Some(ZTrip {
+                back: z,
+                sent: 0,
+                stage: ZStage::Rising,
+            });
+        }
+    }
+
+    /// Nothing runs and no pen move is under way (a hold may lift the pen).
+    fn at_rest(&self) -> bool {
+        self.prep.hold_state() != HoldState::Holding
+            && !self.side.is_running()
+            && self.pen_move.is_none()
+            && self.wait_left == 0
+            && !self.waiting
+            && self.z_trip.is_none()
+    }
+
+    /// A Z pen on the paper's side of its up place (or between the two): where Z
+    /// stands.
+    fn z_to_lift(&self) -> Option<i32> {
+        let (up, down) = (self.pen_timing.z_up, self.z_down);
+        let z = self.side.position()[2];
+        (down != 0 && (z - up).signum() == i32::from(down) && z.abs_diff(up) <= u32::from(u16::MAX))
+            .then_some(z)
+    }
+
+    /// A held machine at rest whose Z pen is still to be lifted (at the next
+    /// [`Pipeline::fill`]): it is not at rest yet.
+    pub(super) fn z_lift_due(&self) -> bool {
+        self.held && self.at_rest() && self.z_to_lift().is_some()
+    }
+
+    /// Queue the Z pen's trip under way; true when no Z move of a hold is under way
+    /// (none, or up and held). Up and no longer held: the way back starts; the trip
+    /// ends once Z stands where the hold found it.
+    // Out of line: its frame stays off the preparation's deepest stack path.
+    #[inline(never)]
+    pub(super) fn run_z(&mut self) -> bool {
+        let Some(mut t) = self.z_trip else {
+            return true;
+        };
+        let up = self.pen_timing.z_up;
+        loop {
+            let (from, to) = match t.stage {
+                ZStage::Up if self.held => {
+                    self.z_trip = Some(t);
+                    return true;
+                }
+                ZStage::Up => {
+                    t.stage = ZStage::Falling;
+                    t.sent = 0;
+                    continue;
+                }
+                ZStage::Rising => (t.back, up),
+                ZStage::Falling => (up, t.back),
+            };
+            let n = from.abs_diff(to);
+            let tick = StepEvent::from_deltas([0, 0, if to > from { 1 } else { -1 }]);
+            let mut budget = Z_STEPS_PER_FILL;
+            while u32::from(t.sent) < n && budget > 0 && self.side.sink().room() > 0 {
+                let wait = self.z_wait(u32::from(t.sent), n);
+                self.side.sink().push_slice(&[StepCmd::new(tick, wait)]);
+                t.sent += 1;
+                budget -= 1;
+            }
+            if u32::from(t.sent) < n || self.side.is_running() {
+                self.z_trip = Some(t);
+                return false;
+            }
+            match t.stage {
+                ZStage::Rising => t.stage = ZStage::Up,
+                _ => {
+                    self.z_trip = None;
+                    return true;
+                }
+            }
+        }
+    }
+
+    /// The wait after step `k` of a Z way of `n` steps, timer counts: Z's own
+    /// acceleration ($122) from rest and to rest, capped at its rate ($112).
+    fn z_wait(&self, k: u32, n: u32) -> u32 {
+        let z = &self.planner.config().axes[2];
+        let max = z.max_rate / 60.0 * z.steps_per_mm;
+        let accel = z.accel * z.steps_per_mm;
+        // Steps from the nearer end, to the step's middle.
+        let d = k.min(n - 1 - k) as f32 + 0.5;
+        let v = crate::fmath::sqrt(2.0 * accel * d).min(max).max(1.0);
+        crate::decimal::to_u32(self.timer_hz as f32 / v)
+    }
+
+    /// A Z pen's trip for a hold is under way (or due: up and resumed).
+    pub(super) fn z_moving(&self) -> bool {
+        self.z_trip
+            .is_some_and(|t| t.stage != ZStage::Up || !self.held)
+    }
+}
