@@ -22,28 +22,28 @@
 #[cfg(doc)]
 use crate::controller::Serviced;
 use crate::machine::{InputPolarity, PinLevels};
-use core::sync::atomic::{AtomicU16, Ordering};
+use core::sync::atomic::{AtomicU32, Ordering};
 
 /// Tripped by the e-stop.
-const TRIP_ESTOP: u16 = 1;
+const TRIP_ESTOP: u32 = 1;
 /// Tripped by a limit switch: bit `1 + axis`.
-const TRIP_LIMIT: u16 = 0b1110;
-const TRIPPED: u16 = TRIP_ESTOP | TRIP_LIMIT;
+const TRIP_LIMIT: u32 = 0b1110;
+const TRIPPED: u32 = TRIP_ESTOP | TRIP_LIMIT;
 /// Axes whose limit switch halts (hard limits armed): bit `4 + axis`.
-const ARMED_SHIFT: u16 = 4;
-const ARMED: u16 = 0b111 << ARMED_SHIFT;
+const ARMED_SHIFT: u32 = 4;
+const ARMED: u32 = 0b111 << ARMED_SHIFT;
 /// The steps queued before the trip are still queued.
-const UNFLUSHED: u16 = 1 << 14;
+const UNFLUSHED: u32 = 1 << 14;
 /// The step output is halted.
-const HALTED: u16 = 1 << 15;
+const HALTED: u32 = 1 << 31;
 
 /// See the module comment.
 #[derive(Debug, Default)]
-pub struct HaltLatch(AtomicU16);
+pub struct HaltLatch(AtomicU32);
 
 /// Inputs that tripped the latch since the protocol task last looked.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Tripped(u16);
+pub struct Tripped(u32);
 
 impl Tripped {
     /// `pins` with every input that tripped shown at its active level under
@@ -63,13 +63,13 @@ impl Tripped {
 
 impl HaltLatch {
     pub const fn new() -> HaltLatch {
-        HaltLatch(AtomicU16::new(0))
+        HaltLatch(AtomicU32::new(0))
     }
 
     /// The axes (bit 0 X) whose limit switch halts the output: `OutputConfig`'s
     /// `hard_limit_axes`, at boot and whenever the settings change.
     pub fn arm_hard_limits(&self, axes: u8) {
-        let armed = (u16::from(axes) << ARMED_SHIFT) & ARMED;
+        let armed = (u32::from(axes) << ARMED_SHIFT) & ARMED;
         let _ = self
             .0
             .fetch_update(Ordering::SeqCst, Ordering::Relaxed, |s| {
@@ -86,7 +86,7 @@ impl HaltLatch {
     /// The limit switch of `axis` changed (either edge): halt if that axis has hard
     /// limits armed. True when it halted (the shell stops the step output at once).
     pub fn trip_limit(&self, axis: usize) -> bool {
-        let bit = 1u16 << (axis & 3);
+        let bit = 1u32 << (axis & 3);
         if (self.0.load(Ordering::Relaxed) >> ARMED_SHIFT) & bit == 0 {
             return false;
         }
