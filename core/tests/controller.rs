@@ -62,6 +62,16 @@ impl Shell {
 
     /// One call of the controller's service at `self.now`.
     fn service(&mut self, c: &mut Controller, m: &mut FakePlanner) -> Serviced {
+        let clears = m.clears;
+        let done = self.service_once(c, m);
+        // The step side's flush tells the latch (the firmware's and the simulator's).
+        if m.clears != clears {
+            self.halt.flushed();
+        }
+        done
+    }
+
+    fn service_once(&mut self, c: &mut Controller, m: &mut FakePlanner) -> Serviced {
         let (_, mut rx) = self.rx.split();
         let (mut tx, _) = self.tx.split();
         let host = HostLink {
@@ -118,14 +128,7 @@ impl Shell {
 
 /// Scan the matrix every 5 ms from `from` to `to` with `held` keys down, the protocol
 /// task running after each scan.
-fn scan(
-    sh: &mut Shell,
-    c: &mut Controller,
-    m: &mut FakePlanner,
-    held: &[Key],
-    from: u32,
-    to: u32,
-) {
+fn scan(sh: &mut Shell, c: &mut Controller, m: &mut FakePlanner, held: &[Key], from: u32, to: u32) {
     let mut t = from;
     while t < to {
         let col = c.keypad().column();
@@ -594,4 +597,52 @@ fn motors_are_released_step_idle_delay_after_the_motion_and_busy_clears_with_it(
         !c.outputs_now(&m, sh.now + 6000).motors,
         "$SLP releases them"
     );
+}
+
+/// The halt latch's release rule through the service: an e-stop whose interrupt comes
+/// after the protocol task read the inputs is not undone, even with its pin up again
+/// when the release reads it (a glitch); the next run shows it to the machine, and
+/// the latch holds until the machine is out of alarm with the e-stop released.
+#[test]
+fn an_estop_after_the_inputs_were_read_is_not_undone() {
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let mut m = FakePlanner::new(16);
+    m.rate = 1;
+    sh.send(&mut c, &mut m, b"G1 X10 F600\n");
+    assert!(m.is_moving());
+    let done = sh.tick(&mut c, &mut m);
+    // The e-stop's interrupt, after that run read the pins; released again at once.
+    sh.halt.trip_estop();
+    assert!(!sh.halt.release(done.allows_release(AT_REST)));
+    assert!(sh.halt.is_halted());
+    let done = sh.tick(&mut c, &mut m);
+    assert!(done.alarmed, "the machine saw the e-stop");
+    assert!(!m.is_moving(), "the queue was dropped");
+    assert!(!sh.halt.release(done.allows_release(AT_REST)));
+    // Out of alarm with the e-stop up: released.
+    sh.send(&mut c, &mut m, b"\x18");
+    sh.send(&mut c, &mut m, b"$X\n");
+    let done = sh.tick(&mut c, &mut m);
+    assert!(!done.alarmed);
+    // Pressed when the release looks: held.
+    let pressed = PinLevels {
+        estop: true,
+        ..AT_REST
+    };
+    assert!(!sh.halt.release(done.allows_release(pressed)));
+    assert!(sh.halt.release(done.allows_release(AT_REST)));
+    assert!(!sh.halt.is_halted());
+}
+
+/// The pen servo's pulse is handed out when it changes, not every run.
+#[test]
+fn the_servo_pulse_is_handed_out_once_per_change() {
+    let mut s = Settings::default();
+    s.set(201, 1.0).unwrap();
+    let (mut sh, mut c) = Shell::boot(&s);
+    let mut m = FakePlanner::new(16);
+    let up = sh.tick(&mut c, &mut m).servo_pulse_us;
+    assert!(up.is_some());
+    assert_eq!(sh.tick(&mut c, &mut m).servo_pulse_us, None);
+    assert_eq!(sh.tick(&mut c, &mut m).servo_pulse_us, None);
 }

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{Drive, drain, send, FakePlanner};
+use common::{drain, send, Drive, FakePlanner};
 use inkstep_core::machine::{Inputs, MotionControl, RunState};
 use inkstep_core::motion::Command;
 use inkstep_core::motion::{Feed, Move, Path};

@@ -185,7 +185,6 @@ impl Protocol {
         self.out.pop_front()
     }
 
-
     fn room(&self) -> usize {
         OUT_CAP - self.out.len()
     }
