@@ -85,9 +85,9 @@ pub struct HostLink<'a, 'r> {
 pub struct Serviced {
     /// The settings changed: apply this output configuration.
     pub outputs: Option<OutputConfig>,
-    /// A new pulse width for the pen servo, us: only when the pen is a servo ($201 =
-    /// 1) and the width differs from the last one handed out (the shell writes the
-    /// timer only then).
+    /// A new pulse width for the pen servo, us: only when the pen is a servo
+    /// (`$201=1`) and the width differs from the last one handed out (the shell
+    /// writes the timer only then).
     pub servo_pulse_us: Option<u32>,
     /// The machine is in alarm: a halted step engine stays halted.
     pub alarmed: bool,

@@ -16,15 +16,15 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 
 use defmt_rtt as _;
+use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 use inkstep::board::{self, StepPins};
 use inkstep::steps::{self, BoardSide, StepOutput};
-use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 use inkstep_core::controller::{Controller, HostLink, HOST_RX_RING, HOST_TX_RING};
 use inkstep_core::machine::PinLevels;
-use inkstep_core::ring::ByteRing;
-use inkstep_core::settings_store::SettingsStore;
 use inkstep_core::pipeline::{Pipeline, StepSide};
+use inkstep_core::ring::ByteRing;
 use inkstep_core::settings::Settings;
+use inkstep_core::settings_store::SettingsStore;
 use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::output::OutputConfig;
 use inkstep_core::stepper::prep::PrepConfig;
@@ -265,7 +265,8 @@ fn main() -> ! {
                 let after = steps::position();
                 if after != before {
                     events += 1;
-                    axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
+                    axis_steps +=
+                        before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
                 }
                 next_irq = out.timer.is_running().then(|| at + period());
                 if next_irq.is_none() && pipeline.in_move() {
