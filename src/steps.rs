@@ -24,7 +24,7 @@ use crate::board::{self, StepPort, StepTimer};
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicU32, Ordering};
 use inkstep_core::halt::HaltLatch;
-use inkstep_core::interpolation::Tick;
+use inkstep_core::interpolation::StepEvent;
 use inkstep_core::motion::StepPos;
 use inkstep_core::pipeline::StepSide;
 use inkstep_core::stepper::exec::Executor;
@@ -40,10 +40,10 @@ static STEP_STATE: AtomicU32 = AtomicU32::new(0);
 /// The core's halt latch: tripped by the e-stop and limit interrupts, looked at by the
 /// step interrupt, released by the protocol task ([`release_halt`]).
 pub static HALT: HaltLatch = HaltLatch::new();
-/// Step pulse width in timer ticks (`$0`), taken when the timer starts.
-static PULSE_TICKS: AtomicU32 = AtomicU32::new(720);
-/// The executor's reversal guard in timer ticks, taken when the timer starts.
-static TURN_GUARD_TICKS: AtomicU32 = AtomicU32::new(0);
+/// Step pulse width in timer counts (`$0`), taken when the timer starts.
+static PULSE_COUNTS: AtomicU32 = AtomicU32::new(720);
+/// The executor's reversal guard in timer counts, taken when the timer starts.
+static TURN_GUARD_COUNTS: AtomicU32 = AtomicU32::new(0);
 
 const CFG_FOUR_PHASE: u32 = 1 << 6;
 
@@ -93,8 +93,8 @@ pub type StepRx = QueueRx<'static, STEP_QUEUE_LEN>;
 /// step interrupt applies it to the timer and pins at rest; the pend makes that happen
 /// now if the machine is idle.
 pub fn set_output_config(cfg: &OutputConfig) {
-    PULSE_TICKS.store(cfg.pulse_ticks, Ordering::Relaxed);
-    TURN_GUARD_TICKS.store(cfg.turn_guard_ticks(), Ordering::Relaxed);
+    PULSE_COUNTS.store(cfg.pulse_ticks, Ordering::Relaxed);
+    TURN_GUARD_COUNTS.store(cfg.turn_guard_ticks(), Ordering::Relaxed);
     let word = u32::from(cfg.step_invert & 0b111)
         | (u32::from(cfg.dir_invert & 0b111) << 3)
         | if cfg.four_phase { CFG_FOUR_PHASE } else { 0 };
@@ -234,7 +234,7 @@ impl StepOutput {
         // The output configuration only changes at rest (see `pend`).
         if self.applied_cfg & CFG_FOUR_PHASE != 0 {
             if out.step != 0 {
-                let coils = self.phase4.step(Tick(out.tick));
+                let coils = self.phase4.step(StepEvent(out.tick));
                 let bits = (coils[0] & 0x0F) | ((coils[1] & 0x0F) << 4);
                 self.port.write(bits, !bits);
             }
@@ -302,12 +302,12 @@ impl StepOutput {
         }
         // Both from the core's OutputConfig: the pulse fits the 16-bit compare, and
         // 4-phase outputs (levels) have no guard.
-        let pulse = PULSE_TICKS.load(Ordering::Relaxed);
+        let pulse = PULSE_COUNTS.load(Ordering::Relaxed);
         if pulse != self.timer.pulse_ticks() {
             self.timer.set_pulse_ticks(pulse as u16);
         }
         st.exec
-            .set_turn_guard(TURN_GUARD_TICKS.load(Ordering::Relaxed));
+            .set_turn_guard(TURN_GUARD_COUNTS.load(Ordering::Relaxed));
         if let Some(out) = st.exec.start(&mut st.rx) {
             // Directions first (no pulse is in flight); the first pulse comes when
             // the first wait ends.

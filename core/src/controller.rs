@@ -34,7 +34,7 @@ use embedded_storage::nor_flash::NorFlash;
 use heapless::Vec;
 
 /// The protocol tick, ms: the protocol and segment preparation run once per tick.
-pub const TICK_MS: u32 = 1;
+pub const SERVICE_PERIOD_MS: u32 = 1;
 /// One keypad column is scanned per this many ms; the buzzer pattern advances by it.
 pub const KEYPAD_SCAN_MS: u32 = 5;
 /// The LCD refresh period, ms.
@@ -283,7 +283,7 @@ impl Controller {
     /// The LCD task's view of the machine. The teaching view's feed directions are
     /// the way each axis moved since the last call (the step interrupt keeps no
     /// bookkeeping for it).
-    pub fn refresh_view<M: MotionControl>(&mut self, m: &M) -> hmi::Status {
+    pub fn refresh_view<M: MotionControl>(&mut self, m: &M) -> hmi::Snapshot {
         let pos = m.position();
         if pos != self.view_pos {
             let sign = |a: usize| pos[a].cmp(&self.view_pos[a]) as i8;
@@ -427,7 +427,7 @@ impl Controller {
     }
 
     /// The machine as the HMI sees it.
-    pub fn status<M: MotionControl>(&self, m: &M) -> hmi::Status {
+    pub fn status<M: MotionControl>(&self, m: &M) -> hmi::Snapshot {
         let state = match self.protocol.machine().state(m) {
             RunState::Idle | RunState::Check | RunState::Sleep => MachineState::Idle,
             RunState::Run => MachineState::Run,
@@ -438,7 +438,7 @@ impl Controller {
                 MachineState::Alarm(self.protocol.machine().alarm().map_or(0, |a| a.code()))
             }
         };
-        hmi::Status {
+        hmi::Snapshot {
             state,
             pos: m.position(),
             feed_mm_min: m.speed(),

@@ -14,7 +14,7 @@
 //! and the simulator (`SimSide`) each give it their interrupt side through the same
 //! [`StepSide`] trait.
 
-use crate::interpolation::Tick;
+use crate::interpolation::StepEvent;
 use crate::machine::{MotionControl, QueueFull};
 use crate::motion::{Command, PEN_FULL};
 use crate::motion::{Move, Path, StepPos};
@@ -230,7 +230,7 @@ pub struct Pipeline<S: StepSide> {
     timer_hz: u32,
     /// Commands behind a dwell or pen command, in order.
     pending: Deque<Command, PENDING>,
-    /// Timer ticks of the running dwell still to queue.
+    /// Timer counts of the running dwell still to queue.
     wait_left: u64,
     /// The running dwell / pen command has been fully queued; it ends when the side
     /// has run it.
@@ -442,7 +442,9 @@ impl<S: StepSide> Pipeline<S> {
             if self.wait_left > 0 {
                 while self.wait_left > 0 && self.side.sink().room() > 0 {
                     let w = self.wait_left.min(u64::from(MAX_WAIT)) as u32;
-                    self.side.sink().push_slice(&[StepCmd::new(Tick(0), w)]);
+                    self.side
+                        .sink()
+                        .push_slice(&[StepCmd::new(StepEvent(0), w)]);
                     self.wait_left -= u64::from(w);
                 }
                 if self.wait_left > 0 {
@@ -537,7 +539,7 @@ impl<S: StepSide> Pipeline<S> {
                 ZStage::Falling => (up, t.back),
             };
             let n = from.abs_diff(to);
-            let tick = Tick::from_deltas([0, 0, if to > from { 1 } else { -1 }]);
+            let tick = StepEvent::from_deltas([0, 0, if to > from { 1 } else { -1 }]);
             let mut budget = Z_STEPS_PER_FILL;
             while u32::from(t.sent) < n && budget > 0 && self.side.sink().room() > 0 {
                 let wait = self.z_wait(u32::from(t.sent), n);
@@ -559,7 +561,7 @@ impl<S: StepSide> Pipeline<S> {
         }
     }
 
-    /// The wait after step `k` of a Z way of `n` steps, timer ticks: Z's own
+    /// The wait after step `k` of a Z way of `n` steps, timer counts: Z's own
     /// acceleration ($122) from rest and to rest, capped at its rate ($112).
     fn z_wait(&self, k: u32, n: u32) -> u32 {
         let z = &self.planner.config().axes[2];
@@ -776,7 +778,7 @@ mod tests {
     }
 
     /// Runs everything queued; returns the shortest wait between two steps of `axis`
-    /// (timer ticks), i.e. the cruise speed.
+    /// (timer counts), i.e. the cruise speed.
     fn run(pipeline: &mut Pipeline<TestSide>, axis: usize) -> u32 {
         let mut fastest = u32::MAX;
         for _ in 0..1_000_000 {
@@ -891,7 +893,7 @@ mod tests {
         assert_eq!(pipeline.planner().feed_override(), 150);
         assert_eq!(pipeline.planner().config().axes[X].accel, 300.0);
 
-        // 100 mm at F1000 with 150 %: 25 mm/s = 2000 steps/s = 36,000 timer ticks.
+        // 100 mm at F1000 with 150 %: 25 mm/s = 2000 steps/s = 36,000 timer counts.
         pipeline
             .push(mv([8000, 0, 0], Feed::MmPerMin(1000.0)))
             .unwrap();

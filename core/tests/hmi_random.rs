@@ -3,7 +3,7 @@
 //! move stays inside the step range, and the incrementally painted frame buffer always
 //! equals a from-scratch render (no stale pixels from painting in place).
 
-use inkstep_core::hmi::{Action, Actions, Config, Hmi, MachineState, Page, Status};
+use inkstep_core::hmi::{Action, Actions, Config, Hmi, MachineState, Page, Snapshot};
 use inkstep_core::keypad::{KeyEvent, KeyKind, KEYMAP};
 use inkstep_core::screens::framebuffer::FrameBuffer;
 use inkstep_core::screens::Screens;
@@ -45,7 +45,7 @@ proptest! {
         let mut now = 0u32;
         for (k, kind, s, x, y, empty) in ops {
             now = now.wrapping_add(37);
-            let st = Status {
+            let st = Snapshot {
                 state: state(s),
                 pos: [x, y, if empty { 0 } else { 500 }],
                 feed_mm_min: 300.0,

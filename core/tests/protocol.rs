@@ -673,7 +673,7 @@ fn keypad_moves_and_abort_keep_the_interpreter_in_step() {
         0,
     );
     let r = p.machine_mut().queue(Command::Move(mv), &mut m, 0);
-    assert_eq!(r, Err(inkstep_core::gcode::Status::SystemLocked));
+    assert_eq!(r, Err(inkstep_core::gcode::ErrorCode::SystemLocked));
 }
 
 #[test]

@@ -14,7 +14,7 @@ use embedded_graphics::prelude::*;
 use embedded_graphics::primitives::{Line, PrimitiveStyle, Rectangle, RoundedRectangle, Triangle};
 use embedded_graphics::text::{Alignment, Baseline, Text, TextStyleBuilder};
 
-use inkstep_core::hmi::{Action, Config, Hmi, MachineState, Status};
+use inkstep_core::hmi::{Action, Config, Hmi, MachineState, Snapshot};
 use inkstep_core::keypad::{Key, KeyEvent, KeyKind, KEYMAP, LEGEND};
 use inkstep_core::screens::framebuffer::{FrameBuffer, HEIGHT, WIDTH};
 use inkstep_core::screens::Screens;
@@ -116,7 +116,7 @@ fn check(name: &str, fb: &FrameBuffer) {
 /// An HMI past the boot screen plus its status, screens and frame buffer.
 struct Bench {
     hmi: Hmi,
-    st: Status,
+    st: Snapshot,
     now: u32,
     screens: Screens,
     fb: FrameBuffer,
@@ -124,7 +124,7 @@ struct Bench {
 
 impl Bench {
     fn new() -> Self {
-        let st = Status::idle_at([1000, 400, 500]);
+        let st = Snapshot::idle_at([1000, 400, 500]);
         let mut hmi = Hmi::new(Config::default(), 0);
         hmi.tick(&st, 2000);
         Bench {
@@ -178,7 +178,7 @@ fn boot() {
     let mut fb = FrameBuffer::new();
     let hmi = Hmi::new(Config::default(), 0);
     Screens::new()
-        .render(&hmi, &Status::idle_at([0; 3]), 0, &mut fb)
+        .render(&hmi, &Snapshot::idle_at([0; 3]), 0, &mut fb)
         .unwrap();
     check("boot", &fb);
 }
@@ -298,7 +298,7 @@ fn drawing_star_done() {
         panic!()
     };
     draw_along(&mut b, 1.0, 100);
-    b.st = Status {
+    b.st = Snapshot {
         state: MachineState::Idle,
         queue_empty: true,
         pos: run.end,

@@ -278,7 +278,7 @@ fn a_layered_job_from_the_host_tool_runs_through_its_pen_changes() {
 /// continues: the pen drops and the next stroke is drawn.
 #[test]
 fn m0_shows_its_prompt_on_the_lcd_and_key_d_continues() {
-    use inkstep_core::hmi::{Config, Hmi, MachineState, Status};
+    use inkstep_core::hmi::{Config, Hmi, MachineState, Snapshot};
     use inkstep_core::screens::{framebuffer::FrameBuffer, Screens};
     use inkstep_emu::board::Outside;
 
@@ -299,7 +299,7 @@ fn m0_shows_its_prompt_on_the_lcd_and_key_d_continues() {
     s.run_for(300 * T_PER_MS).unwrap();
     let mut hmi = Hmi::new(Config::default(), 0);
     hmi.set_prompt(Some((None, b"Check the ink")));
-    let mut st = Status::idle_at([0; 3]);
+    let mut st = Snapshot::idle_at([0; 3]);
     st.state = MachineState::Hold;
     let mut fb = FrameBuffer::new();
     Screens::new().render(&hmi, &st, 0, &mut fb).unwrap();

@@ -74,7 +74,7 @@ fn arc_via(text: &str, b: &Interpreter, from: [f64; 3], to: [f64; 3]) -> Vec<[f6
     };
     // Only a line with an arc's words is an arc (a refused line, or one
     // without motion, leaves the mode as it was).
-    let Ok(blk) = inkstep_core::gcode::parser::Block::parse(text.as_bytes()) else {
+    let Ok(blk) = inkstep_core::gcode::parser::WordBlock::parse(text.as_bytes()) else {
         return Vec::new();
     };
     if !(blk.get(b'I').is_some() || blk.get(b'J').is_some() || blk.get(b'R').is_some()) {
@@ -365,12 +365,12 @@ pub fn resume_lines_of(lines: &[Line], from_line: usize, s: &Settings) -> Result
     if let Some(g) = arc {
         let first = out.len() - rest.len();
         let moving = out[first..].iter_mut().find(|l| {
-            inkstep_core::gcode::parser::Block::parse(l.text.as_bytes()).is_ok_and(|b| {
+            inkstep_core::gcode::parser::WordBlock::parse(l.text.as_bytes()).is_ok_and(|b| {
                 b.get(b'X').is_some() || b.get(b'Y').is_some() || b.get(b'Z').is_some()
             })
         });
         if let Some(l) = moving {
-            let b = inkstep_core::gcode::parser::Block::parse(l.text.as_bytes());
+            let b = inkstep_core::gcode::parser::WordBlock::parse(l.text.as_bytes());
             let own = b.is_ok_and(|b| b.g.iter().any(|&c| matches!(c, 0 | 10 | 20 | 30 | 800)));
             if !own {
                 l.text = format!("{g}{}", l.text);

@@ -8,7 +8,7 @@
 
 use crate::geom::Pt;
 use anyhow::{anyhow, bail, Result};
-use inkstep_core::gcode::parser::Block;
+use inkstep_core::gcode::parser::WordBlock;
 use inkstep_core::gcode::LineCleaner;
 use inkstep_serial::grbl::error_text;
 
@@ -33,16 +33,16 @@ pub struct Move {
 
 /// A line cleaned as Grbl cleans it (comments, spaces gone, upper case) and parsed
 /// into its block; None for lines that move nothing (empty, `$` commands, `%`).
-pub fn block(line: &str) -> Result<Option<Block>, u8> {
+pub fn block(line: &str) -> Result<Option<WordBlock>, u8> {
     let mut c = LineCleaner::new();
     let clean: Vec<u8> = line.bytes().filter_map(|b| c.push(b)).collect();
     if clean.is_empty() || clean[0] == b'$' || clean[0] == b'%' {
         return Ok(None);
     }
-    Block::parse(&clean).map(Some).map_err(|s| s.code())
+    WordBlock::parse(&clean).map(Some).map_err(|s| s.code())
 }
 
-fn blocks(text: &str) -> Result<Vec<Option<Block>>> {
+fn blocks(text: &str) -> Result<Vec<Option<WordBlock>>> {
     text.lines()
         .enumerate()
         .map(|(k, l)| {
@@ -51,7 +51,7 @@ fn blocks(text: &str) -> Result<Vec<Option<Block>>> {
         .collect()
 }
 
-fn value(b: &Block, letter: u8) -> Option<f64> {
+fn value(b: &WordBlock, letter: u8) -> Option<f64> {
     b.get(letter).map(|v| v.millionths() as f64 / 1e6)
 }
 

@@ -13,7 +13,8 @@
 //! persistence.
 
 use inkstep_core::controller::{
-    Controller, HostLink, HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS, TICK_MS,
+    Controller, HostLink, HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS,
+    SERVICE_PERIOD_MS,
 };
 use inkstep_core::halt::HaltLatch;
 use inkstep_core::keypad::{Key, KEYMAP};
@@ -85,7 +86,7 @@ impl StepSide for SimSide {
     }
 }
 
-/// One step event: virtual time in timer ticks, axes stepped, position after it, and
+/// One step event: virtual time in timer counts, axes stepped, position after it, and
 /// whether the servo pen was down (always false with a Z-axis pen).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StepEvent {
@@ -411,8 +412,8 @@ impl Board {
 
     /// The time of the next millisecond tick: on the millisecond grid, or when a
     /// flash stall ends if the grid's tick fell inside it.
-    fn next_tick(&self) -> u64 {
-        let grid = Self::ms_to_ticks(u64::from(self.ms) + u64::from(TICK_MS)) + self.lag;
+    fn next_event(&self) -> u64 {
+        let grid = Self::ms_to_ticks(u64::from(self.ms) + u64::from(SERVICE_PERIOD_MS)) + self.lag;
         grid.max(self.stall_until)
     }
 
@@ -428,8 +429,8 @@ impl Board {
         }
         let d = (u128::from(d_ns) * u128::from(TICK_HZ) / 1_000_000_000) as u64;
         self.stall_until = self.now.max(tick_at) + d;
-        let period = Self::ms_to_ticks(u64::from(TICK_MS));
-        let grid = Self::ms_to_ticks(u64::from(self.ms) + u64::from(TICK_MS)) + self.lag;
+        let period = Self::ms_to_ticks(u64::from(SERVICE_PERIOD_MS));
+        let grid = Self::ms_to_ticks(u64::from(self.ms) + u64::from(SERVICE_PERIOD_MS)) + self.lag;
         if grid < self.stall_until {
             // The first grid tick after the stall's end follows the one taken at it.
             let next = grid + period * ((self.stall_until - grid) / period + 1);
@@ -441,7 +442,7 @@ impl Board {
     /// Runs virtual time up to `until` ticks, calling `on_step` for every step.
     pub fn run_until(&mut self, until: u64, on_step: &mut impl FnMut(StepEvent)) {
         loop {
-            let tick = self.next_tick();
+            let tick = self.next_event();
             let t = self.next_irq.map_or(tick, |irq| irq.min(tick));
             if t > until {
                 self.now = until;
@@ -453,7 +454,7 @@ impl Board {
                 self.step_interrupt(t, on_step);
             }
             if t == tick {
-                self.ms += TICK_MS;
+                self.ms += SERVICE_PERIOD_MS;
                 self.tick();
                 self.flash_stall(t);
             }

@@ -1,7 +1,7 @@
 //! The step trace: one row per step-timer interrupt that moved at least one axis.
 //!
 //! Owns the CSV format (`t_us,x,y,z`) shared by `run --trace`, `plot` and `bench`, and
-//! the exact conversion from virtual timer ticks to microseconds. Rows are kept as
+//! the exact conversion from virtual timer counts to microseconds. Rows are kept as
 //! integer ticks in memory so that nothing is rounded until it is printed.
 
 use std::fmt::Write as _;

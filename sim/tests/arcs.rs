@@ -43,7 +43,7 @@ fn deviation(mv: &Move, start: [i32; 3], c: [f64; 2], r: f64, spm: f64) -> (f64,
     let mut a = Analyzer::new(Ideal::Circle { c, r }, [spm, spm], start);
     let mut p = start;
     let mut n = 0u64;
-    while let Some(t) = it.next_tick() {
+    while let Some(t) = it.next_event() {
         t.apply(&mut p);
         a.step(n as f64, t.steps(), p);
         n += 1;

@@ -40,7 +40,7 @@ mod app {
         text::{Baseline, Text},
     };
     use inkstep::steps::{self, StepOutput, StepTx};
-    use inkstep_core::interpolation::Tick;
+    use inkstep_core::interpolation::StepEvent;
     use inkstep_core::keypad::{KeyKind, Keypad, KeypadConfig};
     use inkstep_core::ring::ByteRing;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920};
@@ -53,7 +53,7 @@ mod app {
     systick_monotonic!(Mono, 1_000);
 
     /// Jog rate: one step per millisecond on each moving axis.
-    const JOG_WAIT_TICKS: u32 = board::STEP_TIMER_HZ / 1_000;
+    const JOG_WAIT_COUNTS: u32 = board::STEP_TIMER_HZ / 1_000;
 
     #[shared]
     struct Shared {
@@ -168,7 +168,7 @@ mod app {
                 while tx.len() < 4 && !tx.is_full() {
                     let step = u8::from(dx != 0) | (u8::from(dy != 0) << 1);
                     let neg = u8::from(dx < 0) | (u8::from(dy < 0) << 1);
-                    tx.push(StepCmd::new(Tick(step | (neg << 3)), JOG_WAIT_TICKS));
+                    tx.push(StepCmd::new(StepEvent(step | (neg << 3)), JOG_WAIT_COUNTS));
                 }
                 steps::kick();
             }

@@ -17,7 +17,7 @@
 
 use super::{STEP_TIMER_HZ, SYSCLK_HZ};
 use core::sync::atomic::{AtomicU32, Ordering};
-use inkstep_core::stepper::output::DIR_HOLD_TICKS;
+use inkstep_core::stepper::output::DIR_HOLD_COUNTS;
 use inkstep_core::stepper::MAX_RELOAD;
 use stm32f1xx_hal::pac;
 
@@ -30,11 +30,11 @@ const EVENT_UPDATE: u32 = 1;
 const CR1_RUN: u32 = 0b1101;
 /// TIM2 CR1 while stopped.
 const CR1_STOPPED: u32 = 0b1100;
-/// TIM3 counts every second step-timer tick (prescaler 2): 2^17 ticks, 1.8 ms, go
+/// TIM3 counts every second step-timer count (prescaler 2): 2^17 ticks, 1.8 ms, go
 /// round its 16 bits, twice the longest step period, so that a lateness up to that
 /// reads unambiguously.
 const CLOCK_SHIFT: u32 = 1;
-/// The schedule's times are step-timer ticks modulo 2^17 (TIM3's count, doubled).
+/// The schedule's times are step-timer counts modulo 2^17 (TIM3's count, doubled).
 const CLOCK_MASK: u32 = (0x1_0000 << CLOCK_SHIFT) - 1;
 /// How much longer [`StepTimer::restart`] takes from its clock read to the counter's
 /// start than [`StepTimer::start`] does: 4 instructions (9 against 5 in the release
@@ -45,7 +45,7 @@ const CLOCK_MASK: u32 = (0x1_0000 << CLOCK_SHIFT) - 1;
 const RESTART_LEAD: u32 = 4;
 /// The shortest rest of a period after a late restart: the low time before the next
 /// pulse and the direction hold after a pulse that the lateness stretched.
-const MIN_LATE_TICKS: u32 = DIR_HOLD_TICKS;
+const MIN_LATE_COUNTS: u32 = DIR_HOLD_COUNTS;
 
 /// Step interrupts that came too late to start their period on schedule since
 /// power-up: each delayed a step (or a wait) by its lateness, none added or lost one.
@@ -163,7 +163,7 @@ impl StepTimer {
         set_step_pins_to_timer(step_dir);
     }
 
-    /// Set the pulse width in timer ticks (at rest; taken by the next armed pulse).
+    /// Set the pulse width in timer counts (at rest; taken by the next armed pulse).
     pub fn set_pulse_ticks(&mut self, ticks: u16) {
         self.pulse = u32::from(ticks.max(1));
         for (mask, row) in (0u8..).zip(self.arm_table.iter_mut()) {
@@ -201,7 +201,7 @@ impl StepTimer {
     /// (2..=65536, which the core's executor guarantees), on schedule: with the counter
     /// started at the ticks already gone since the period's scheduled start (the last
     /// one's scheduled end), so that it ends `ticks` after that whatever the
-    /// interrupt's latency; or, if that is too late to leave 1 µs (`MIN_LATE_TICKS`) of
+    /// interrupt's latency; or, if that is too late to leave 1 µs (`MIN_LATE_COUNTS`) of
     /// it, as that short rest from now (counted in `LATE_STEP_ARMINGS`).
     #[inline(always)]
     pub fn restart(&mut self, ticks: u32) {
@@ -213,7 +213,7 @@ impl StepTimer {
             .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
         let due_early = self.due_early;
         let gone = self.now().wrapping_sub(due_early) & CLOCK_MASK;
-        if gone + MIN_LATE_TICKS <= ticks {
+        if gone + MIN_LATE_COUNTS <= ticks {
             self.run(gone);
             self.due_early = due_early.wrapping_add(ticks);
         } else {
@@ -222,7 +222,7 @@ impl StepTimer {
     }
 
     /// The restart of an interrupt too late for the schedule: the period's last
-    /// [`MIN_LATE_TICKS`] (or all of it, if shorter) from now, and the schedule moved.
+    /// [`MIN_LATE_COUNTS`] (or all of it, if shorter) from now, and the schedule moved.
     /// A time past the schedule by more than half the clock's round (0.9 ms) reads as
     /// one before it: the period runs in full from now, uncounted, so that a step can
     /// never come early. (Only a debugger's halt can hold the interrupt that long: the
@@ -237,7 +237,7 @@ impl StepTimer {
                 LATE_STEP_ARMINGS.load(Ordering::Relaxed).wrapping_add(1),
                 Ordering::Relaxed,
             );
-            ticks.saturating_sub(MIN_LATE_TICKS)
+            ticks.saturating_sub(MIN_LATE_COUNTS)
         };
         self.run(start);
         // The new period began `start` ticks before the restart, `gone` after the old

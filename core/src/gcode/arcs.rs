@@ -3,11 +3,11 @@
 //! in step space (a circle, or the ellipse it becomes with unequal X/Y resolution),
 //! and the points that bound its extent for the travel checks.
 
-use super::parser::Block;
+use super::parser::WordBlock;
 use super::units::{
     mm_between, mm_to_nm, nm_to_fine_steps, nm_to_mm, nm_to_steps, value_to_nm, Nm, NmPos, Reach,
 };
-use super::Status;
+use super::ErrorCode;
 use crate::fmath;
 use crate::motion::Path;
 use crate::settings::Settings;
@@ -42,26 +42,26 @@ fn positive_sweep(mut a: f32) -> f32 {
 
 /// Centre and sweep of a G2/G3 block from its I/J or R words (in block units).
 pub(super) fn arc_geometry(
-    b: &mut Block,
+    b: &mut WordBlock,
     start: &NmPos,
     target: &NmPos,
     ccw: bool,
     inches: bool,
-) -> Result<ArcGeom, Status> {
+) -> Result<ArcGeom, ErrorCode> {
     let dx = mm_between(start[0], target[0]);
     let dy = mm_between(start[1], target[1]);
     // The centre relative to the start, in nanometres.
     let (ci, cj) = if let Some(r) = b.take(b'R') {
         let r = nm_to_mm(value_to_nm(r, inches));
         if dx == 0.0 && dy == 0.0 {
-            return Err(Status::InvalidTarget);
+            return Err(ErrorCode::InvalidTarget);
         }
         let mut disc = 4.0 * r * r - dx * dx - dy * dy;
         if disc < 0.0 {
             // A half circle with a rounded radius: accept within the tolerance.
             let chord = fmath::hypot(dx, dy);
             if chord / 2.0 - fmath::abs(r) > ARC_ABS_TOL {
-                return Err(Status::ArcRadiusError);
+                return Err(ErrorCode::ArcRadiusError);
             }
             disc = 0.0;
         }
@@ -79,12 +79,12 @@ pub(super) fn arc_geometry(
         let i = b.take(b'I').map(|v| value_to_nm(v, inches));
         let j = b.take(b'J').map(|v| value_to_nm(v, inches));
         if i.is_none() && j.is_none() {
-            return Err(Status::NoOffsetsInPlane);
+            return Err(ErrorCode::NoOffsetsInPlane);
         }
         (i.unwrap_or(0), j.unwrap_or(0))
     };
     if b.get(b'K').is_some() {
-        return Err(Status::UnusedWords);
+        return Err(ErrorCode::UnusedWords);
     }
     let center = [start[0].saturating_add(ci), start[1].saturating_add(cj)];
     let (ci, cj) = (nm_to_mm(ci), nm_to_mm(cj));
@@ -99,7 +99,7 @@ pub(super) fn arc_geometry(
         || r_start <= 0.0
         || (dr > ARC_ABS_TOL && (dr > ARC_MAX_ERR || dr > ARC_REL_TOL * r_start))
     {
-        return Err(Status::InvalidTarget);
+        return Err(ErrorCode::InvalidTarget);
     }
     let a0 = fmath::atan2(-cj, -ci);
     let a1 = fmath::atan2(

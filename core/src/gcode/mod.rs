@@ -3,7 +3,7 @@
 //! in steps, the arc geometry of G2/G3 (`arcs`), and millimetres to steps with the
 //! travel limits ([`units`]).
 //!
-//! Errors use Grbl 1.1's status numbers ([`Status`]) so that senders show the right
+//! Errors use Grbl 1.1's status numbers ([`ErrorCode`]) so that senders show the right
 //! message; they are shared with the `$` commands of the protocol.
 
 mod arcs;
@@ -13,7 +13,7 @@ pub mod parser;
 pub mod units;
 
 pub use interpreter::{Interpreter, Outcome, Reject, Stop};
-pub use parser::{Block, LineCleaner};
+pub use parser::{LineCleaner, WordBlock};
 
 /// Longest line after cleaning (Grbl's limit); longer lines get `error:11`.
 pub const LINE_MAX: usize = 80;
@@ -40,7 +40,7 @@ pub fn startup_line(text: &[u8]) -> Option<StartupLine> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[repr(u8)]
-pub enum Status {
+pub enum ErrorCode {
     ExpectedCommandLetter = 1,
     BadNumberFormat = 2,
     InvalidStatement = 3,
@@ -78,22 +78,22 @@ pub enum Status {
     MaxValueExceeded = 38,
 }
 
-impl Status {
+impl ErrorCode {
     /// The number sent after `error:`.
     pub fn code(self) -> u8 {
         self as u8
     }
 }
 
-impl From<crate::settings::SettingError> for Status {
+impl From<crate::settings::SettingError> for ErrorCode {
     fn from(e: crate::settings::SettingError) -> Self {
         use crate::settings::SettingError as E;
         match e {
-            E::Invalid => Status::InvalidStatement,
-            E::Negative => Status::NegativeValue,
-            E::PulseTooShort => Status::StepPulseMin,
-            E::SoftLimitsNeedHoming => Status::SoftLimitError,
-            E::StepRateTooHigh => Status::MaxStepRateExceeded,
+            E::Invalid => ErrorCode::InvalidStatement,
+            E::Negative => ErrorCode::NegativeValue,
+            E::PulseTooShort => ErrorCode::StepPulseMin,
+            E::SoftLimitsNeedHoming => ErrorCode::SoftLimitError,
+            E::StepRateTooHigh => ErrorCode::MaxStepRateExceeded,
         }
     }
 }

@@ -4,7 +4,7 @@
 //! the interpreter acts on anything.
 
 use super::parser::Code;
-use super::Status;
+use super::ErrorCode;
 
 /// Motion mode (modal group 1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -151,22 +151,22 @@ pub(super) fn group_codes(
     table: &[(u16, u8, u8)],
     groups: &mut [u8; GROUPS],
     g: bool,
-) -> Result<(), Status> {
+) -> Result<(), ErrorCode> {
     for &code in codes {
         let Some(&(_, group, value)) = table.iter().find(|e| e.0 == code) else {
             // G59.1-G59.3 included: Grbl reads them as G59 with a fraction (error 23),
             // never reaching its unsupported-coordinate-system check.
             return Err(
                 if code % 10 != 0 && !(g && matches!(code / 10, 18 | 19 | 38 | 43 | 90 | 61)) {
-                    Status::CommandValueNotInteger
+                    ErrorCode::CommandValueNotInteger
                 } else {
-                    Status::UnsupportedCommand
+                    ErrorCode::UnsupportedCommand
                 },
             );
         };
         if let Some(slot) = groups.get_mut(usize::from(group)) {
             if *slot != NONE {
-                return Err(Status::ModalGroupViolation);
+                return Err(ErrorCode::ModalGroupViolation);
             }
             *slot = value;
         }

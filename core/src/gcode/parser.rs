@@ -1,12 +1,12 @@
 //! Lexical layer: the [`LineCleaner`] that drops what Grbl drops (spaces, control
 //! characters, `(...)` and `;` comments, block-delete `/`) and upper-cases the rest,
-//! and [`Block::parse`] that splits a cleaned line into words with Grbl's number rules.
+//! and [`WordBlock::parse`] that splits a cleaned line into words with Grbl's number rules.
 //!
 //! The cleaner works one byte at a time so that the protocol can clean while it reads
 //! from its receive buffer and count the line length the way Grbl does (after
 //! cleaning). The parser only checks syntax and repeats; meaning is the interpreter's.
 
-use super::Status;
+use super::ErrorCode;
 use crate::decimal::{div_rem, round_div};
 use heapless::Vec;
 
@@ -63,12 +63,12 @@ impl LineCleaner {
 }
 
 /// Clean a whole raw line into `out`; `Err(Overflow)` if the cleaned line is too long.
-pub fn clean_line<const N: usize>(raw: &[u8], out: &mut Vec<u8, N>) -> Result<(), Status> {
+pub fn clean_line<const N: usize>(raw: &[u8], out: &mut Vec<u8, N>) -> Result<(), ErrorCode> {
     let mut c = LineCleaner::new();
     out.clear();
     for &b in raw {
         if let Some(k) = c.push(b) {
-            out.push(k).map_err(|_| Status::Overflow)?;
+            out.push(k).map_err(|_| ErrorCode::Overflow)?;
         }
     }
     Ok(())
@@ -117,7 +117,7 @@ impl Value {
 }
 
 /// Letters that carry values (everything else except G and M is unsupported), each
-/// with its slot in [`Block`].
+/// with its slot in [`WordBlock`].
 const VALUE_LETTERS: &[u8; 13] = b"FIJKLNPRSTXYZ";
 
 /// The slot of a value letter.
@@ -129,14 +129,14 @@ fn slot(letter: u8) -> Option<usize> {
 /// A value word is present while its slot's bit is set in `present`: a mask and plain
 /// numbers are smaller to test and clear than 13 `Option`s.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Block {
+pub struct WordBlock {
     pub g: Vec<Code, MAX_CODES>,
     pub m: Vec<Code, MAX_CODES>,
     present: u16,
     values: [Value; 13],
 }
 
-impl Block {
+impl WordBlock {
     /// Value word for `letter` (upper case), if present.
     pub fn get(&self, letter: u8) -> Option<Value> {
         let i = slot(letter)?;
@@ -159,19 +159,19 @@ impl Block {
     }
 
     /// Parse a cleaned line (upper case, no spaces or comments).
-    pub fn parse(line: &[u8]) -> Result<Block, Status> {
-        let mut b = Block::default();
+    pub fn parse(line: &[u8]) -> Result<WordBlock, ErrorCode> {
+        let mut b = WordBlock::default();
         b.parse_into(line)?;
         Ok(b)
     }
 
-    /// [`Block::parse`] into an empty block (no block moved through a `Result`).
-    pub fn parse_into(&mut self, line: &[u8]) -> Result<(), Status> {
+    /// [`WordBlock::parse`] into an empty block (no block moved through a `Result`).
+    pub fn parse_into(&mut self, line: &[u8]) -> Result<(), ErrorCode> {
         let b = self;
         let mut rest = line;
         while let Some((&letter, tail)) = rest.split_first() {
             if !letter.is_ascii_uppercase() {
-                return Err(Status::ExpectedCommandLetter);
+                return Err(ErrorCode::ExpectedCommandLetter);
             }
             let (value, used) = read_number(tail)?;
             rest = tail.get(used..).unwrap_or(&[]);
@@ -179,16 +179,17 @@ impl Block {
                 b'G' | b'M' => {
                     // Grbl reads a negative code as no code it knows.
                     if value.is_negative() {
-                        return Err(Status::UnsupportedCommand);
+                        return Err(ErrorCode::UnsupportedCommand);
                     }
                     let code = code_of(value)?;
                     let list = if letter == b'G' { &mut b.g } else { &mut b.m };
-                    list.push(code).map_err(|_| Status::ModalGroupViolation)?;
+                    list.push(code)
+                        .map_err(|_| ErrorCode::ModalGroupViolation)?;
                 }
                 _ => {
-                    let i = slot(letter).ok_or(Status::UnsupportedCommand)?;
+                    let i = slot(letter).ok_or(ErrorCode::UnsupportedCommand)?;
                     if b.present & (1 << i) != 0 {
-                        return Err(Status::WordRepeated);
+                        return Err(ErrorCode::WordRepeated);
                     }
                     b.present |= 1 << i;
                     if let Some(v) = b.values.get_mut(i) {
@@ -202,22 +203,22 @@ impl Block {
 }
 
 /// G/M value to code x 10; only whole numbers and one decimal (G28.1) are codes.
-fn code_of(value: Value) -> Result<Code, Status> {
+fn code_of(value: Value) -> Result<Code, ErrorCode> {
     let v = value.millionths();
     if v > 999 * ONE {
-        return Err(Status::UnsupportedCommand);
+        return Err(ErrorCode::UnsupportedCommand);
     }
     // Tenths: 0 ..= 9990 (the value is not negative here).
     match div_rem(u128::from(v.unsigned_abs()), (ONE / 10) as u32) {
         (tenths, 0) => Ok(tenths as Code),
-        _ => Err(Status::CommandValueNotInteger),
+        _ => Err(ErrorCode::CommandValueNotInteger),
     }
 }
 
 /// Read a number as Grbl does: optional sign, digits with at most one decimal point,
 /// no exponent; exactly, in millionths (see [`Value`]). Returns the value and the
 /// bytes used. Integer parts of 9,223,372,036,854 and more are `error:2`.
-pub fn read_number(s: &[u8]) -> Result<(Value, usize), Status> {
+pub fn read_number(s: &[u8]) -> Result<(Value, usize), ErrorCode> {
     let mut i = 0;
     let mut negative = false;
     if let Some(&c) = s.first() {
@@ -242,7 +243,7 @@ pub fn read_number(s: &[u8]) -> Result<(Value, usize), Status> {
                     // No overflow: `whole` stays below i64::MAX / ONE (< 2^44).
                     whole = whole * 10 + i64::from(digit);
                     if whole >= i64::MAX / ONE {
-                        return Err(Status::BadNumberFormat);
+                        return Err(ErrorCode::BadNumberFormat);
                     }
                 } else {
                     place /= 10;
@@ -255,7 +256,7 @@ pub fn read_number(s: &[u8]) -> Result<(Value, usize), Status> {
         i += 1;
     }
     if !any_digit {
-        return Err(Status::BadNumberFormat);
+        return Err(ErrorCode::BadNumberFormat);
     }
     let v = whole * ONE + i64::from((frac + 5) / 10);
     Ok((Value(if negative { -v } else { v }), i))
@@ -300,14 +301,17 @@ mod tests {
             read_number(b"9223372.036854"),
             Ok((v(9_223_372_036_854), 14))
         );
-        assert_eq!(read_number(b"-"), Err(Status::BadNumberFormat));
-        assert_eq!(read_number(b"."), Err(Status::BadNumberFormat));
-        assert_eq!(read_number(b"X"), Err(Status::BadNumberFormat));
+        assert_eq!(read_number(b"-"), Err(ErrorCode::BadNumberFormat));
+        assert_eq!(read_number(b"."), Err(ErrorCode::BadNumberFormat));
+        assert_eq!(read_number(b"X"), Err(ErrorCode::BadNumberFormat));
         assert_eq!(
             read_number(b"99999999999999999999999"),
-            Err(Status::BadNumberFormat)
+            Err(ErrorCode::BadNumberFormat)
         );
-        assert_eq!(read_number(b"9223372036855"), Err(Status::BadNumberFormat));
+        assert_eq!(
+            read_number(b"9223372036855"),
+            Err(ErrorCode::BadNumberFormat)
+        );
         assert_eq!(v(2_500_000).to_f32(), 2.5);
         assert_eq!(v(3_000_000).whole(), Some(3));
         assert_eq!(v(3_000_001).whole(), None);
@@ -336,7 +340,7 @@ mod tests {
             text += "X1";
             let digits = decimals.as_deref().unwrap_or("");
             let want = if whole.is_none() && digits.is_empty() {
-                Err(Status::BadNumberFormat)
+                Err(ErrorCode::BadNumberFormat)
             } else {
                 let six: std::string::String = digits.chars().chain("000000".chars()).take(6).collect();
                 let seventh = digits.as_bytes().get(6).is_some_and(|&d| d >= b'5');
@@ -349,17 +353,23 @@ mod tests {
 
     #[test]
     fn blocks_split_into_codes_and_words() {
-        let b = Block::parse(b"G1G91.1X10Y-2F300M3").unwrap();
+        let b = WordBlock::parse(b"G1G91.1X10Y-2F300M3").unwrap();
         assert_eq!(&b.g[..], &[10, 911]);
         assert_eq!(&b.m[..], &[30]);
         assert_eq!(b.get(b'X'), Some(v(10_000_000)));
         assert_eq!(b.get(b'F'), Some(v(300_000_000)));
         assert_eq!(b.get(b'Z'), None);
-        assert_eq!(Block::parse(b"X1X2"), Err(Status::WordRepeated));
-        assert_eq!(Block::parse(b"1"), Err(Status::ExpectedCommandLetter));
-        assert_eq!(Block::parse(b"XA"), Err(Status::BadNumberFormat));
-        assert_eq!(Block::parse(b"A1"), Err(Status::UnsupportedCommand));
-        assert_eq!(Block::parse(b"G1.55"), Err(Status::CommandValueNotInteger));
-        assert_eq!(Block::parse(b"G-1"), Err(Status::UnsupportedCommand));
+        assert_eq!(WordBlock::parse(b"X1X2"), Err(ErrorCode::WordRepeated));
+        assert_eq!(
+            WordBlock::parse(b"1"),
+            Err(ErrorCode::ExpectedCommandLetter)
+        );
+        assert_eq!(WordBlock::parse(b"XA"), Err(ErrorCode::BadNumberFormat));
+        assert_eq!(WordBlock::parse(b"A1"), Err(ErrorCode::UnsupportedCommand));
+        assert_eq!(
+            WordBlock::parse(b"G1.55"),
+            Err(ErrorCode::CommandValueNotInteger)
+        );
+        assert_eq!(WordBlock::parse(b"G-1"), Err(ErrorCode::UnsupportedCommand));
     }
 }

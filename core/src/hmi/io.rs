@@ -1,5 +1,5 @@
 //! The HMI's contract with the integrator: what it is told about the machine
-//! ([`Config`], [`Status`]) and what it asks for ([`Action`]). Kept apart from the state
+//! ([`Config`], [`Snapshot`]) and what it asks for ([`Action`]). Kept apart from the state
 //! machine so the firmware and the simulator can read it on its own: these types are
 //! all they need to wire the HMI in.
 
@@ -67,7 +67,7 @@ impl MachineState {
 /// A snapshot of the machine, passed with every call.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Status {
+pub struct Snapshot {
     pub state: MachineState,
     /// Position in steps, in the planner's coordinates (what Move targets use).
     pub pos: StepPos,
@@ -79,10 +79,10 @@ pub struct Status {
     pub dir: [i8; 2],
 }
 
-impl Status {
+impl Snapshot {
     /// An idle machine at `pos` with nothing queued.
     pub fn idle_at(pos: StepPos) -> Self {
-        Status {
+        Snapshot {
             state: MachineState::Idle,
             pos,
             feed_mm_min: 0.0,

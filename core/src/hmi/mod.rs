@@ -3,7 +3,7 @@
 //! the motion millisecond by millisecond: `stepper::idle`.)
 //!
 //! The HMI never touches the machine. Its inputs are explicit: keypad events
-//! ([`Hmi::key`]) and a [`Status`] snapshot of the machine on every call, plus the
+//! ([`Hmi::key`]) and a [`Snapshot`] of the machine on every call, plus the
 //! time in ms; its outputs are [`Action`]s the integrator carries out in order (queue
 //! these moves, start/stop a jog, feed hold, abort, beep, ...). The pages the screens
 //! draw are exposed read-only ([`Hmi::page`] and friends). So it runs unchanged in the
@@ -22,7 +22,7 @@ pub mod menu;
 pub mod page;
 pub mod text;
 
-pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Status};
+pub use io::{alarm_text, Action, Actions, Beep, Config, MachineState, Snapshot};
 pub use menu::{MachineItem, MenuItem, MACHINE_LINES, MACHINE_MENU, MENU, MENU_LINES};
 pub use page::{JogPage, Page, PromptView, RunPage, RunPhase, Toast, DIR_HISTORY, PROMPT_MESSAGE};
 
@@ -80,7 +80,7 @@ fn dist_mm(a: StepPos, b: StepPos, spmm: [f32; 3]) -> f32 {
 
 /// Queue a rapid pen-axis move to `z_mm` where X and Y stand; false (and nothing
 /// queued) if out of step range.
-fn pen_move(st: &Status, z_mm: f32, steps_per_mm: f32, out: &mut Actions) -> bool {
+fn pen_move(st: &Snapshot, z_mm: f32, steps_per_mm: f32, out: &mut Actions) -> bool {
     let Some(z) = fixed::round_checked(z_mm * steps_per_mm) else {
         return false;
     };
@@ -206,12 +206,12 @@ impl Hmi {
             .iter()
     }
     /// Whether the pen is down (pen axis nearer the down than the up position).
-    pub fn pen_is_down(&self, st: &Status) -> bool {
+    pub fn pen_is_down(&self, st: &Snapshot) -> bool {
         let z = st.pos[Z] as f32 / self.cfg.steps_per_mm[Z];
         (z - self.cfg.pen_down_mm).abs() < (z - self.cfg.pen_up_mm).abs()
     }
     /// Position in mm.
-    pub fn pos_mm(&self, st: &Status) -> [f32; 3] {
+    pub fn pos_mm(&self, st: &Snapshot) -> [f32; 3] {
         let mut p = [0.0; 3];
         for ((mm, &steps), &spmm) in p.iter_mut().zip(&st.pos).zip(&self.cfg.steps_per_mm) {
             *mm = steps as f32 / spmm;
@@ -239,14 +239,14 @@ impl Hmi {
     }
 
     /// Can a new motion command start now? Otherwise shows why.
-    fn ready(&mut self, st: &Status, out: &mut Actions) -> bool {
+    fn ready(&mut self, st: &Snapshot, out: &mut Actions) -> bool {
         let settled = st.state == MachineState::Idle && st.queue_empty;
         self.allowed(st, !settled, out)
     }
 
     /// Unless the machine is in alarm or `busy`, true; otherwise shows why (the alarm
     /// first) and false. The one place that words a refused command.
-    fn allowed(&mut self, st: &Status, busy: bool, out: &mut Actions) -> bool {
+    fn allowed(&mut self, st: &Snapshot, busy: bool, out: &mut Actions) -> bool {
         let (title, text) = if matches!(st.state, MachineState::Alarm(_)) {
             ("Alarm", "Unlock or home first")
         } else if busy {
@@ -265,7 +265,7 @@ impl Hmi {
     /// machine and the planner, the deepest path of the keypad and protocol tasks; the
     /// RAM budget needs it: docs/architecture.md, "Kept for RAM").
     #[inline(never)]
-    pub fn key(&mut self, ev: KeyEvent, st: &Status, now_ms: u32) -> Actions {
+    pub fn key(&mut self, ev: KeyEvent, st: &Snapshot, now_ms: u32) -> Actions {
         // Keys are rare: any of them counts as a change.
         self.changed();
         let mut out = Actions::new();
@@ -390,7 +390,7 @@ impl Hmi {
     }
 
     /// Open main menu entry `i`.
-    fn open(&mut self, i: usize, st: &Status, now_ms: u32, out: &mut Actions) {
+    fn open(&mut self, i: usize, st: &Snapshot, now_ms: u32, out: &mut Actions) {
         let Some((_, item)) = MENU.get(i).copied() else {
             return;
         };
@@ -424,7 +424,7 @@ impl Hmi {
         self.page = Page::Form(Form::new(kind, &self.params[kind.index()]));
     }
 
-    fn machine(&mut self, i: usize, st: &Status, now_ms: u32, out: &mut Actions) {
+    fn machine(&mut self, i: usize, st: &Snapshot, now_ms: u32, out: &mut Actions) {
         let Some((_, item)) = MACHINE_MENU.get(i).copied() else {
             return;
         };
@@ -456,7 +456,7 @@ impl Hmi {
         }
     }
 
-    fn toggle_pen(&mut self, st: &Status, now_ms: u32, out: &mut Actions) {
+    fn toggle_pen(&mut self, st: &Snapshot, now_ms: u32, out: &mut Actions) {
         let down = !self.pen_is_down(st);
         let z_mm = if down {
             self.cfg.pen_down_mm
@@ -469,7 +469,7 @@ impl Hmi {
         self.say(if down { "Pen down" } else { "Pen up" }, now_ms);
     }
 
-    fn jog_key(&mut self, ev: KeyEvent, st: &Status, now_ms: u32, out: &mut Actions) {
+    fn jog_key(&mut self, ev: KeyEvent, st: &Snapshot, now_ms: u32, out: &mut Actions) {
         let Page::Jog(jog) = &mut self.page else {
             return;
         };
@@ -592,7 +592,7 @@ impl Hmi {
     }
 
     /// Queue a job's moves and show it running.
-    fn start(&mut self, job: Job, st: &Status, now_ms: u32, out: &mut Actions) {
+    fn start(&mut self, job: Job, st: &Snapshot, now_ms: u32, out: &mut Actions) {
         if !self.ready(st, out) {
             return;
         }
@@ -625,7 +625,7 @@ impl Hmi {
     /// Follow the machine: call every refresh (e.g. 10-20 Hz) with a fresh snapshot.
     /// Out of line, as [`Hmi::key`].
     #[inline(never)]
-    pub fn tick(&mut self, st: &Status, now_ms: u32) -> Actions {
+    pub fn tick(&mut self, st: &Snapshot, now_ms: u32) -> Actions {
         let mut out = Actions::new();
         // Teaching view: remember each new feed direction.
         if st.dir != [0, 0] && self.feed_dirs().next_back() != Some(&st.dir) {

@@ -7,7 +7,7 @@ use core::f32::consts::PI;
 
 struct Bench {
     hmi: Hmi,
-    st: Status,
+    st: Snapshot,
     now: u32,
 }
 
@@ -20,7 +20,7 @@ impl Bench {
     fn new() -> Self {
         let mut b = Bench {
             hmi: Hmi::new(cfg(), 0),
-            st: Status::idle_at([0, 0, 500]),
+            st: Snapshot::idle_at([0, 0, 500]),
             now: 0,
         };
         b.now = BOOT_MS;
@@ -83,7 +83,7 @@ fn d(n: u8) -> Key {
 #[test]
 fn boot_screen_gives_way_to_the_menu_on_a_key() {
     let mut hmi = Hmi::new(cfg(), 0);
-    let st = Status::idle_at([0; 3]);
+    let st = Snapshot::idle_at([0; 3]);
     assert_eq!(hmi.page(), &Page::Boot);
     assert!(hmi.tick(&st, 100).is_empty());
     assert_eq!(hmi.page(), &Page::Boot);
@@ -345,7 +345,7 @@ fn start_star(b: &mut Bench) -> StepPos {
 fn abort_mid_drawing_holds_clears_then_lifts_the_pen_where_it_stopped() {
     let mut b = Bench::new();
     start_star(&mut b);
-    b.st = Status {
+    b.st = Snapshot {
         state: MachineState::Run,
         pos: [300, -900, 0],
         ..b.st
@@ -358,7 +358,7 @@ fn abort_mid_drawing_holds_clears_then_lifts_the_pen_where_it_stopped() {
     b.st.state = MachineState::Hold;
     assert!(moves(&b.tick()).is_empty());
     // Stopped and flushed: pen up at the stop point, back to the menu, position shown.
-    b.st = Status {
+    b.st = Snapshot {
         state: MachineState::Idle,
         pos: [320, -960, 0],
         queue_empty: true,
@@ -391,7 +391,7 @@ fn completion_beeps_and_reports_time_and_full_progress() {
     let end = start_star(&mut b);
     let Page::Run(r) = b.hmi.page() else { panic!() };
     let t0 = r.started_ms;
-    b.st = Status {
+    b.st = Snapshot {
         state: MachineState::Run,
         queue_empty: false,
         pos: [0, -1000, 0],
@@ -400,7 +400,7 @@ fn completion_beeps_and_reports_time_and_full_progress() {
     assert_eq!(b.tick(), []);
     let Page::Run(r) = b.hmi.page() else { panic!() };
     assert!(r.progress() > 0.0 && r.progress() < 0.5);
-    b.st = Status {
+    b.st = Snapshot {
         state: MachineState::Idle,
         queue_empty: true,
         pos: end,

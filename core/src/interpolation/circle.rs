@@ -9,19 +9,19 @@
 //! `e = 2 s X + s^2`, s = +-256, and then `e` grows by 2 s^2).
 //!
 //! - DDA ([`Method::Dda`]): the circle is cut into octant pieces. In a piece one axis
-//!   (the major) steps on every tick and the other (the minor) takes the grid point
+//!   (the major) steps on every step event and the other (the minor) takes the grid point
 //!   nearest the circle at the new major coordinate, one midpoint test: per-axis error
 //!   <= 0.5 step, so every position is within 0.5 step of the circle. A piece runs
 //!   either toward the minor axis (|major| falls to the grid line nearest the centre's
 //!   line, the minor moves outward) or away from it (|major| grows up to the diagonal,
-//!   the minor moves inward), so every piece's tick count is known when it begins and
+//!   the minor moves inward), so every piece's step event count is known when it begins and
 //!   the path position is a smooth function of the major coordinate ([`Circle::path_ahead`]):
 //!   the segment preparation times a whole piece with a few polynomials.
 //! - Classic ([`Method::Classic`], the lab report's point-by-point comparison, 3.6):
-//!   one axis per tick, F >= 0 steps the axis that moves inward, F < 0 the one that
+//!   one axis per step event, F >= 0 steps the axis that moves inward, F < 0 the one that
 //!   moves outward, within a quadrant whose feed directions are fixed; within 1 step of
 //!   the circle (plus at most 1/(2R) where the inward axis crosses the centre's line
-//!   between two grid lines). Each tick is timed on its own (it is the teaching mode).
+//!   between two grid lines). Each step event is timed on its own (it is the teaching mode).
 //!
 //! The arc ends at the integer target: the trace stops where it reaches the target's
 //! coordinate on the last lap (the piece that contains it), and a straight tail of
@@ -29,7 +29,7 @@
 //! off the traced points. Full circles are `target == start`; `turns` adds revolutions.
 
 use super::line::Line;
-use super::{tick_xy, InterpError, Interpolate, Method, Next, Tick};
+use super::{event_xy, InterpError, Interpolate, Method, Next, StepEvent};
 use crate::motion::{StepPos, X, Y};
 
 /// Largest |coordinate| relative to the centre, 1/256 step (2^22 steps, 52 m at 80
@@ -48,7 +48,7 @@ struct Piece {
     /// DDA: the minor moves toward the centre's line (the piece runs away from the
     /// minor axis up to the diagonal).
     inward: bool,
-    /// DDA: ticks left in the piece. Classic: unused.
+    /// DDA: step events left in the piece. Classic: unused.
     left: u32,
     /// This is the last piece: it ends at the target's coordinate.
     last: bool,
@@ -98,7 +98,7 @@ pub struct Circle {
     /// Target relative to the centre, 1/256 step.
     target: [i32; 2],
     stage: Stage,
-    /// The point before the last tick (classic and tail ticks: their length).
+    /// The point before the last step event (classic and tail step events: their length).
     prev: [i32; 2],
     /// See [`Circle::entry_shift`].
     entry: f32,
@@ -282,7 +282,7 @@ impl Circle {
         let pm = i64::from(self.p[m]);
         if f0 == 0 || pm * pm >= self.r2 {
             // On the circle, or beyond its extent along the major (a start rounded
-            // outward): the first tick moves the major back in.
+            // outward): the first step event moves the major back in.
             return 0;
         }
         // Toward the circle along the minor: inward when outside.
@@ -302,7 +302,7 @@ impl Circle {
     }
 
     /// One minor-only step of the settle stage.
-    fn settle_tick(&mut self, sigma: i32) -> Tick {
+    fn settle_tick(&mut self, sigma: i32) -> StepEvent {
         let n = 1 - self.piece.major;
         self.prev = self.p;
         self.p[n] += sigma * ONE;
@@ -312,7 +312,7 @@ impl Circle {
         self.set_dirs(d);
         let mut dl = [0i8; 2];
         dl[n] = sigma as i8;
-        tick_xy(dl[0], dl[1])
+        event_xy(dl[0], dl[1])
     }
 
     /// DDA: the octant piece the start point belongs to. The major is the axis with the
@@ -390,7 +390,7 @@ impl Circle {
         };
     }
 
-    /// Ticks from the present point to the target's coordinate if the present piece
+    /// Step events from the present point to the target's coordinate if the present piece
     /// reaches it (0 = here); the target must lie on the piece's side of the centre.
     fn target_in_piece(&self) -> Option<u32> {
         let (p, t) = (self.p, self.target);
@@ -420,7 +420,7 @@ impl Circle {
         }
     }
 
-    /// Counts a pass of the target in the piece just begun (at least `k_min` ticks
+    /// Counts a pass of the target in the piece just begun (at least `k_min` step events
     /// ahead); the pass after the whole turns makes this the last piece.
     fn pass_target(&mut self, k_min: u32) {
         let hit = self.target_in_piece().filter(|&k| k >= k_min);
@@ -509,7 +509,7 @@ impl Circle {
     }
 
     /// What comes next (moving on to the next piece when this one is used up): a DDA
-    /// piece is a run; a classic tick is timed on its own; settle and tail steps are
+    /// piece is a run; a classic step event is timed on its own; settle and tail steps are
     /// extra steps. (Not an iterator: it never ends, it says `Done`.)
     #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> Next {
@@ -518,19 +518,19 @@ impl Circle {
                 (Stage::Done, _) => return Next::Done,
                 (Stage::Settle(_), _) => return Next::Extra,
                 // A tail step has a length (straight, [`Circle::last_tick_len`]): it is
-                // timed along the profile like a trace tick. A tail can be many steps (a
-                // classic trace stops where the next tick would pass the target's
+                // timed along the profile like a trace step event. A tail can be many steps (a
+                // classic trace stops where the next step event would pass the target's
                 // coordinate, e.g. along a near-vertical stretch), and timed as
                 // catch-up steps they would come at ever shorter intervals.
-                (Stage::Tail(_), _) => return Next::Tick,
+                (Stage::Tail(_), _) => return Next::StepEvent,
                 (Stage::Trace, Method::Dda) if self.piece.left == 0 => self.next_piece(),
                 (Stage::Trace, Method::Dda) => return Next::Run(self.piece.left),
-                (Stage::Trace, Method::Classic) => return Next::Tick,
+                (Stage::Trace, Method::Classic) => return Next::StepEvent,
             }
         }
     }
 
-    /// Largest |d^n s / dk^n| (n = 1..4) over the next `k` ticks of a DDA piece, s the
+    /// Largest |d^n s / dk^n| (n = 1..4) over the next `k` step events of a DDA piece, s the
     /// path in steps and k the major coordinate: s = R asin(u), u = k / R, whose
     /// derivatives grow with |u| (at most 1/sqrt 2 in a piece). Bounded without roots:
     /// 1/(1-u^2), u/(1-u^2)^2, (1+2u^2)/(1-u^2)^3 and (9u+6u^3)/(1-u^2)^4, over R^n.
@@ -562,9 +562,9 @@ impl Circle {
         self.piece.major
     }
 
-    /// Path position `k` ticks ahead in the present DDA piece (k <= its run),
+    /// Path position `k` step events ahead in the present DDA piece (k <= its run),
     /// relative to the present point, in steps along the circle, and its rate in steps
-    /// per tick there. The position of a tick is the point of the circle at its major
+    /// per step event there. The position of a step event is the point of the circle at its major
     /// coordinate.
     pub fn path_ahead(&self, k: u32) -> (f32, f32) {
         let m = self.piece.major;
@@ -602,8 +602,8 @@ impl Circle {
         (r * angle, rate)
     }
 
-    /// DDA ticks of the present piece, at most `out.len()`; the count written.
-    fn dda_ticks(&mut self, out: &mut [Tick]) -> usize {
+    /// DDA step events of the present piece, at most `out.len()`; the count written.
+    fn dda_ticks(&mut self, out: &mut [StepEvent]) -> usize {
         let m = self.piece.major;
         let n = 1 - m;
         let count = out.len().min(self.piece.left as usize);
@@ -613,9 +613,9 @@ impl Circle {
         let inward = self.piece.inward;
         let mut d = [0i8; 2];
         d[m] = sgn(sm) as i8;
-        let straight = tick_xy(d[0], d[1]);
+        let straight = event_xy(d[0], d[1]);
         d[n] = sgn(sn) as i8;
-        let diagonal = tick_xy(d[0], d[1]);
+        let diagonal = event_xy(d[0], d[1]);
         for slot in out.iter_mut().take(count) {
             f += em;
             em += E_GROWTH;
@@ -640,8 +640,8 @@ impl Circle {
         count
     }
 
-    /// One classic tick, or `None` when the quadrant is left (a new piece begins).
-    fn classic_tick(&mut self) -> Option<Tick> {
+    /// One classic step event, or `None` when the quadrant is left (a new piece begins).
+    fn classic_tick(&mut self) -> Option<StepEvent> {
         let i = if self.f >= 0 {
             self.piece.major
         } else {
@@ -673,12 +673,12 @@ impl Circle {
             // The inward axis crossed (or reached) the centre's line: next quadrant.
             self.piece.left = 0;
         }
-        Some(tick_xy(d[0], d[1]))
+        Some(event_xy(d[0], d[1]))
     }
 
-    /// Fills `out` with the next ticks of the present piece; the count (0 when done). A
-    /// DDA piece is filled in one tight loop; classic and tail ticks come one by one.
-    pub fn ticks(&mut self, out: &mut [Tick]) -> usize {
+    /// Fills `out` with the next step events of the present piece; the count (0 when done). A
+    /// DDA piece is filled in one tight loop; classic and tail step events come one by one.
+    pub fn ticks(&mut self, out: &mut [StepEvent]) -> usize {
         loop {
             match &mut self.stage {
                 Stage::Done => return 0,
@@ -695,7 +695,7 @@ impl Circle {
                     return 1;
                 }
                 Stage::Tail(line) => {
-                    let Some(t) = line.next_tick() else {
+                    let Some(t) = line.next_event() else {
                         self.stage = Stage::Done;
                         return 0;
                     };
@@ -739,7 +739,7 @@ impl Circle {
         }
     }
 
-    /// Path length of the last tick, steps (classic and tail ticks, timed one by one):
+    /// Path length of the last step event, steps (classic and tail step events, timed one by one):
     /// along the circle, the radius times the angle between the points before and after
     /// (the angles add up to the arc's); along the tail, its straight length.
     pub fn last_tick_len(&self) -> f32 {
@@ -762,8 +762,8 @@ impl Circle {
 }
 
 impl Interpolate for Circle {
-    fn next_tick(&mut self) -> Option<Tick> {
-        let mut one = [Tick(0)];
+    fn next_event(&mut self) -> Option<StepEvent> {
+        let mut one = [StepEvent(0)];
         (self.ticks(&mut one) == 1).then_some(one[0])
     }
 }
@@ -778,7 +778,7 @@ mod tests {
     fn run(mut c: Circle, start: StepPos) -> Vec<StepPos> {
         let mut p = start;
         let mut v = std::vec![p];
-        let mut buf = [Tick(0); 7];
+        let mut buf = [StepEvent(0); 7];
         loop {
             if c.next() == Next::Done {
                 break;
@@ -940,7 +940,7 @@ mod tests {
             let mut circle = Circle::new(start, from, center, target, ccw, 0, Method::Classic).unwrap();
             let mut p = start;
             let mut pts = std::vec![p];
-            while let Some(t) = circle.next_tick() {
+            while let Some(t) = circle.next_event() {
                 prop_assert_eq!(t.steps().count_ones(), 1);
                 t.apply(&mut p);
                 pts.push(p);

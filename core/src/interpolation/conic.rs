@@ -6,20 +6,20 @@
 //! negation (CW), which replaces the lab report's per-quadrant direction table and works
 //! in every quadrant and across quadrant boundaries.
 //! - DDA: the axis with the larger tangent component (the major axis) steps every
-//!   tick; the other axis takes the integer nearest to the curve at the new major
+//!   step event; the other axis takes the integer nearest to the curve at the new major
 //!   coordinate (a midpoint test on F), so per-axis error <= 0.5.
-//! - Classic: one axis per tick; if F >= 0 (on or outside) take the candidate step that
+//! - Classic: one axis per step event; if F >= 0 (on or outside) take the candidate step that
 //!   lowers F, otherwise the one that raises it. Within 1 step of the curve.
 //!
 //! The move ends when the trace reaches the target, or passes the ray from the centre
 //! through the target (a full ellipse is target == start); if it passes the ray
 //! without meeting the target, a short
 //! straight tail goes to the integer target, so the end is exact even when rounding
-//! put the target a step off the traced curve. A tick budget bounds every
+//! put the target a step off the traced curve. A step event budget bounds every
 //! trace, so hostile input cannot loop forever.
 
 use super::line::Line;
-use super::{sgn, tick_xy, InterpError, Interpolate, Method, Tick};
+use super::{event_xy, sgn, InterpError, Interpolate, Method, StepEvent};
 use crate::motion::{StepPos, X, Y};
 
 /// Largest |coordinate| relative to the centre and largest semi-axis, so that
@@ -45,7 +45,7 @@ pub struct Conic {
     tail: Option<Line>,
     /// On the last lap, the trace runs along the target ray.
     on_ray: bool,
-    /// The point before the last tick (relative to the centre).
+    /// The point before the last step event (relative to the centre).
     prev: (i64, i64),
     finished: bool,
 }
@@ -133,7 +133,7 @@ impl Conic {
         [tx as f32, ty as f32]
     }
 
-    /// Ideal path length of the last tick in mm (`spx`, `spy`: steps per mm): the
+    /// Ideal path length of the last step event in mm (`spx`, `spy`: steps per mm): the
     /// change of the parameter angle t (x = a cos t, y = b sin t) between the two points,
     /// atan(cross/dot) ~ cross/dot for one step, times |dP/dt| at their midpoint. The
     /// angles telescope, so the lengths of a whole arc add up to its true length.
@@ -280,9 +280,9 @@ impl Conic {
         }
     }
 
-    /// Moves to the neighbouring point `p`: the tick that gets there.
-    fn go(&mut self, p: (i64, i64)) -> Tick {
-        let t = tick_xy(sgn(p.0 - self.x), sgn(p.1 - self.y));
+    /// Moves to the neighbouring point `p`: the step event that gets there.
+    fn go(&mut self, p: (i64, i64)) -> StepEvent {
+        let t = event_xy(sgn(p.0 - self.x), sgn(p.1 - self.y));
         self.prev = (self.x, self.y);
         (self.x, self.y) = p;
         t
@@ -305,7 +305,7 @@ impl Conic {
             Method::Dda => self.dda_candidate(),
             Method::Classic => self.classic_candidate(),
         };
-        // Does this tick reach or pass the target ray on the last lap?
+        // Does this step event reach or pass the target ray on the last lap?
         let before = self.side(self.x, self.y);
         let after = self.side(nx, ny);
         if (nx, ny) == (self.tx, self.ty) {
@@ -328,7 +328,7 @@ impl Conic {
 }
 
 impl Interpolate for Conic {
-    fn next_tick(&mut self) -> Option<Tick> {
+    fn next_event(&mut self) -> Option<StepEvent> {
         if self.finished {
             return None;
         }
@@ -338,8 +338,8 @@ impl Interpolate for Conic {
             }
             self.start_tail();
         }
-        // The tail's ticks are XY steps: the point follows them like the trace's.
-        let Some(t) = self.tail.as_mut().and_then(|t| t.next_tick()) else {
+        // The tail's step events are XY steps: the point follows them like the trace's.
+        let Some(t) = self.tail.as_mut().and_then(|t| t.next_event()) else {
             self.finished = true;
             return None;
         };
@@ -357,7 +357,7 @@ mod tests {
     fn run(mut c: Conic, start: StepPos) -> Vec<StepPos> {
         let mut p = start;
         let mut v = std::vec![p];
-        while let Some(t) = c.next_tick() {
+        while let Some(t) = c.next_event() {
             t.apply(&mut p);
             v.push(p);
             assert!(v.len() < 10_000_000);

@@ -7,14 +7,14 @@
 //! column), crosses to column k + 1 and climbs on to Y_{k+1}. Every visited grid point
 //! is then within half a step of the curve on both axes, provided f is monotonic on
 //! each half column (true for any sine with a period above two steps). In DDA mode
-//! the column crossing is merged with one climbing step into a diagonal tick; in
-//! classic mode every tick moves one axis.
+//! the column crossing is merged with one climbing step into a diagonal step event; in
+//! classic mode every step event moves one axis.
 //!
 //! Evaluation uses f32 ([`crate::fmath`]); this runs in the segment-preparation task,
 //! never in the step interrupt.
 
 use super::line::Line;
-use super::{tick_xy, InterpError, Interpolate, Method, Tick};
+use super::{event_xy, InterpError, Interpolate, Method, StepEvent};
 use crate::motion::{StepPos, X, Y};
 
 /// Largest sine amplitude, steps (2^28, 3.3 km at 80 steps/mm).
@@ -87,7 +87,7 @@ pub struct CurveTrace<C> {
     /// Rows still to climb before the column crossing, and after it.
     first: i32,
     second: i32,
-    /// The crossing tick of the current column is still to come.
+    /// The crossing step event of the current column is still to come.
     crossing: bool,
     method: Method,
     /// Exact target relative to the start.
@@ -128,8 +128,8 @@ impl<C: Curve> CurveTrace<C> {
         [self.dir as f32, self.dir as f32 * self.curve.slope(u)]
     }
 
-    /// Ideal path length per tick at the present column, mm (`spx`, `spy`: steps per
-    /// mm): the tangent's length over the ticks it takes (DDA: one per step of the
+    /// Ideal path length per step event at the present column, mm (`spx`, `spy`: steps per
+    /// mm): the tangent's length over the step events it takes (DDA: one per step of the
     /// larger component; classic: one per step of either).
     pub fn tick_len(&self, spx: f32, spy: f32) -> f32 {
         let [tx, ty] = self.direction();
@@ -178,12 +178,12 @@ impl<C: Curve> CurveTrace<C> {
 }
 
 impl<C: Curve> Interpolate for CurveTrace<C> {
-    fn next_tick(&mut self) -> Option<Tick> {
+    fn next_event(&mut self) -> Option<StepEvent> {
         if let Some(tail) = self.tail.as_mut() {
-            return tail.next_tick().map(|t| {
+            return tail.next_event().map(|t| {
                 // The tail was built in a frame where x grows with `dir`; flip back.
                 let d = t.deltas();
-                tick_xy(d[X] * self.dir as i8, d[Y])
+                event_xy(d[X] * self.dir as i8, d[Y])
             });
         }
         let merge = self.method == Method::Dda;
@@ -193,7 +193,7 @@ impl<C: Curve> Interpolate for CurveTrace<C> {
         if self.first.abs() > i32::from(keep_one) {
             let s = Self::climb(&mut self.first);
             self.y += i32::from(s);
-            return Some(tick_xy(0, s));
+            return Some(event_xy(0, s));
         }
         if self.crossing {
             self.crossing = false;
@@ -207,15 +207,15 @@ impl<C: Curve> Interpolate for CurveTrace<C> {
             }
             self.y += i32::from(sy);
             self.k += 1;
-            return Some(tick_xy(self.dir as i8, sy));
+            return Some(event_xy(self.dir as i8, sy));
         }
         if self.second != 0 {
             let s = Self::climb(&mut self.second);
             self.y += i32::from(s);
-            return Some(tick_xy(0, s));
+            return Some(event_xy(0, s));
         }
         self.plan_column();
-        self.next_tick()
+        self.next_event()
     }
 }
 
@@ -228,7 +228,7 @@ mod tests {
     fn run(mut it: impl Interpolate, start: StepPos) -> Vec<StepPos> {
         let mut p = start;
         let mut v = std::vec![p];
-        while let Some(t) = it.next_tick() {
+        while let Some(t) = it.next_event() {
             t.apply(&mut p);
             v.push(p);
         }
@@ -260,7 +260,7 @@ mod tests {
             let mut it = CurveTrace::new(start, target, s, method);
             let mut p = start;
             let f = |u: f32| s.eval(u);
-            while let Some(t) = it.next_tick() {
+            while let Some(t) = it.next_event() {
                 if classic {
                     prop_assert_eq!(t.steps().count_ones(), 1);
                 }

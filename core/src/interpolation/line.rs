@@ -1,22 +1,22 @@
 //! Straight lines in up to three axes.
 //!
 //! [`DdaLine`] is Bresenham's algorithm generalised to three axes: the axis with the
-//! longest travel steps on every tick, each other axis steps when its exact position
+//! longest travel steps on every step event, each other axis steps when its exact position
 //! `k * d_i / D` rounds to the next integer, so every position is the nearest grid
 //! point to the line at that major-axis coordinate (per-axis error <= 0.5).
 //!
 //! [`ClassicLine`] is the lab report's point-by-point comparison, F = y*xe - x*ye,
 //! generalised: the axis whose progress `s_i / |d_i|` lags most steps next (ties go to
-//! the lower axis, which is the report's "F >= 0: step X"). One axis per tick,
-//! |dx| + |dy| + |dz| ticks, within 1 step of the line (in 3D: less than one step on
+//! the lower axis, which is the report's "F >= 0: step X"). One axis per step event,
+//! |dx| + |dy| + |dz| step events, within 1 step of the line (in 3D: less than one step on
 //! every axis from some point of the line).
 //!
 //! Counters are u32: every travel of two i32 positions fits, and the DDA's doubled
 //! remainders fit as long as the travel is below 2^31 steps, which the planner
 //! guarantees ([`crate::motion::POS_LIMIT`]: every move starts and ends within
-//! +-2^30). Outside that range nothing panics; the ticks are then simply wrong.
+//! +-2^30). Outside that range nothing panics; the step events are then simply wrong.
 
-use super::{Interpolate, Tick};
+use super::{Interpolate, StepEvent};
 use crate::motion::{StepPos, AXES};
 
 /// Per-axis absolute travel and direction of a line.
@@ -34,12 +34,12 @@ fn travel(start: StepPos, target: StepPos) -> ([u32; AXES], [i8; AXES]) {
 /// Bresenham / DDA line: axes may step together.
 #[derive(Clone, Debug)]
 pub struct DdaLine {
-    /// Per axis: what a tick without a step adds to the remainder (2 |d_i|) and the
+    /// Per axis: what a step event without a step adds to the remainder (2 |d_i|) and the
     /// remainder from which the axis steps (2 D - 2 |d_i|, D the major travel).
     inc: [u32; AXES],
     thr: [u32; AXES],
     dir: [i8; AXES],
-    /// Major-axis travel (number of ticks).
+    /// Major-axis travel (number of step events).
     major: u32,
     /// Per-axis remainder 2 k |d_i| - (2 m_i - 1) D, in [0, 2 D).
     rem: [u32; AXES],
@@ -60,14 +60,14 @@ impl DdaLine {
             done: 0,
         }
     }
-    /// Number of ticks the line takes.
+    /// Number of step events the line takes.
     pub fn ticks(&self) -> u32 {
         self.major
     }
 }
 
 impl Interpolate for DdaLine {
-    fn next_tick(&mut self) -> Option<Tick> {
+    fn next_event(&mut self) -> Option<StepEvent> {
         if self.done >= self.major {
             return None;
         }
@@ -89,11 +89,11 @@ impl Interpolate for DdaLine {
                 *rem = rem.wrapping_add(inc);
             }
         }
-        Some(Tick::from_deltas(d))
+        Some(StepEvent::from_deltas(d))
     }
 }
 
-/// Point-by-point comparison line: one axis per tick.
+/// Point-by-point comparison line: one axis per step event.
 #[derive(Clone, Debug)]
 pub struct ClassicLine {
     len: [u32; AXES],
@@ -114,7 +114,7 @@ impl ClassicLine {
 }
 
 impl Interpolate for ClassicLine {
-    fn next_tick(&mut self) -> Option<Tick> {
+    fn next_event(&mut self) -> Option<StepEvent> {
         // Pick the unfinished axis with the smallest progress taken/len; compare
         // fractions by cross-multiplication (u32 x u32 in u64: one multiply).
         let mut best: Option<usize> = None;
@@ -139,7 +139,7 @@ impl Interpolate for ClassicLine {
         self.taken[axis] += 1;
         let mut d = [0i8; AXES];
         d[axis] = self.dir[axis];
-        Some(Tick::from_deltas(d))
+        Some(StepEvent::from_deltas(d))
     }
 }
 
@@ -149,7 +149,7 @@ const FINE_LIMIT: i64 = 1 << 21;
 /// XY line between ideal (sub-step) end points, in 1/256 step: at every integer
 /// major-axis coordinate the minor axis takes the integer nearest the ideal line
 /// (per-axis error <= 0.5 against the unrounded path). Incremental: the rounding
-/// remainder is kept as an exact integer, one add and compare per tick.
+/// remainder is kept as an exact integer, one add and compare per step event.
 #[derive(Clone, Debug)]
 pub struct FineLine {
     /// Major axis index (0 = X, 1 = Y) and directions.
@@ -167,8 +167,8 @@ pub struct FineLine {
     /// Minor-only steps before the first column (signed): a start more than a step off
     /// the line's first column catches up first.
     catch_up: i32,
-    /// The ticks of a column whose minor moves by -1, 0 and +1.
-    column: [Tick; 3],
+    /// The step events of a column whose minor moves by -1, 0 and +1.
+    column: [StepEvent; 3],
 }
 
 impl FineLine {
@@ -233,7 +233,7 @@ impl FineLine {
             inc,
             den: q,
             catch_up: 0,
-            column: [Tick(0); 3],
+            column: [StepEvent(0); 3],
         };
         line.column = [-1, 0, 1].map(|g| line.tick(line.dir_maj, g));
         if line.pos.0 != line.end.0 {
@@ -257,10 +257,10 @@ impl FineLine {
         }
     }
 
-    /// Up to `out.len()` ticks of the main run (no catch-up step pending, and at most
-    /// the columns left): one remainder update per tick, in locals (the fields are
+    /// Up to `out.len()` step events of the main run (no catch-up step pending, and at most
+    /// the columns left): one remainder update per step event, in locals (the fields are
     /// written back once).
-    fn run_into(&mut self, out: &mut [Tick]) -> usize {
+    fn run_into(&mut self, out: &mut [StepEvent]) -> usize {
         let (mut n, mut r, mut minor) = (self.n, self.r, self.pos.1);
         let (inc, den, column) = (self.inc, self.den, self.column);
         for slot in out.iter_mut() {
@@ -286,18 +286,18 @@ impl FineLine {
         self.catch_up != 0 || (self.pos.0 == self.end.0 && self.pos.1 != self.end.1)
     }
 
-    fn tick(&self, d_maj: i32, d_min: i32) -> Tick {
+    fn tick(&self, d_maj: i32, d_min: i32) -> StepEvent {
         let (d_maj, d_min) = (d_maj as i8, d_min as i8);
         if self.major == 0 {
-            super::tick_xy(d_maj, d_min)
+            super::event_xy(d_maj, d_min)
         } else {
-            super::tick_xy(d_min, d_maj)
+            super::event_xy(d_min, d_maj)
         }
     }
 }
 
 impl Interpolate for FineLine {
-    fn next_tick(&mut self) -> Option<Tick> {
+    fn next_event(&mut self) -> Option<StepEvent> {
         if self.catch_up != 0 {
             // Steeper than one step per column right at the start: catch up first.
             let s = self.catch_up.signum();
@@ -342,7 +342,7 @@ impl Line {
 }
 
 impl Line {
-    /// Ticks that advance along the line (the major-axis count for DDA, every step for
+    /// Step events that advance along the line (the major-axis count for DDA, every step for
     /// classic), each by the same length. A fine line may add a catch-up step at either
     /// end.
     pub fn ticks(&self) -> u64 {
@@ -353,7 +353,7 @@ impl Line {
         }
     }
 
-    /// What comes next: a run of equal ticks, a catch-up step, or nothing.
+    /// What comes next: a run of equal step events, a catch-up step, or nothing.
     pub fn next(&self) -> super::Next {
         let left = match self {
             Line::Dda(l) => l.major - l.done,
@@ -368,8 +368,8 @@ impl Line {
         }
     }
 
-    /// Up to `out.len()` ticks of the present run (or the one catch-up step).
-    pub fn ticks_into(&mut self, out: &mut [Tick]) -> usize {
+    /// Up to `out.len()` step events of the present run (or the one catch-up step).
+    pub fn events_into(&mut self, out: &mut [StepEvent]) -> usize {
         match self {
             Line::Dda(l) => fill(l, out),
             Line::Classic(l) => fill(l, out),
@@ -384,10 +384,10 @@ impl Line {
 
 /// Fills `out` from `it` (one monomorphic loop per interpolator): the count written.
 #[inline(always)]
-pub(crate) fn fill(it: &mut impl Interpolate, out: &mut [Tick]) -> usize {
+pub(crate) fn fill(it: &mut impl Interpolate, out: &mut [StepEvent]) -> usize {
     let mut n = 0;
     for slot in out.iter_mut() {
-        match it.next_tick() {
+        match it.next_event() {
             Some(t) => *slot = t,
             None => break,
         }
@@ -397,11 +397,11 @@ pub(crate) fn fill(it: &mut impl Interpolate, out: &mut [Tick]) -> usize {
 }
 
 impl Interpolate for Line {
-    fn next_tick(&mut self) -> Option<Tick> {
+    fn next_event(&mut self) -> Option<StepEvent> {
         match self {
-            Line::Dda(l) => l.next_tick(),
-            Line::Classic(l) => l.next_tick(),
-            Line::Fine(l) => l.next_tick(),
+            Line::Dda(l) => l.next_event(),
+            Line::Classic(l) => l.next_event(),
+            Line::Fine(l) => l.next_event(),
         }
     }
 }
@@ -415,7 +415,7 @@ mod tests {
     fn run(mut it: impl Interpolate, start: StepPos) -> std::vec::Vec<StepPos> {
         let mut p = start;
         let mut out = std::vec![p];
-        while let Some(t) = it.next_tick() {
+        while let Some(t) = it.next_event() {
             t.apply(&mut p);
             out.push(p);
         }
@@ -526,8 +526,8 @@ mod tests {
     }
 
     /// The DDA line as it was with i64 error terms (2 k |d_i| - (2 m_i + 1) D in
-    /// [-2 D, 0)): the u32 remainders must give the same ticks.
-    fn i64_dda(start: StepPos, target: StepPos) -> impl Iterator<Item = Tick> {
+    /// [-2 D, 0)): the u32 remainders must give the same step events.
+    fn i64_dda(start: StepPos, target: StepPos) -> impl Iterator<Item = StepEvent> {
         let len: std::vec::Vec<i64> = (0..AXES)
             .map(|i| (i64::from(target[i]) - i64::from(start[i])).abs())
             .collect();
@@ -545,13 +545,13 @@ mod tests {
                     d[i] = dir[i];
                 }
             }
-            Tick::from_deltas(d)
+            StepEvent::from_deltas(d)
         })
     }
 
     #[test]
     fn u32_dda_matches_the_i64_error_terms_at_the_range_limit() {
-        // Travels up to 2^31 - 2 (ends at +-(2^30 - 1)): the first ticks and a
+        // Travels up to 2^31 - 2 (ends at +-(2^30 - 1)): the first step events and a
         // window after a long run agree.
         let e = (1 << 30) - 1;
         let cases = [
@@ -564,7 +564,7 @@ mod tests {
             let mut l = DdaLine::new(s, t);
             assert_eq!(u64::from(l.ticks()), i64_dda(s, t).size_hint().0 as u64);
             for (k, want) in i64_dda(s, t).take(200_000).enumerate() {
-                assert_eq!(l.next_tick(), Some(want), "{s:?} -> {t:?} tick {k}");
+                assert_eq!(l.next_event(), Some(want), "{s:?} -> {t:?} tick {k}");
             }
         }
     }
@@ -572,11 +572,11 @@ mod tests {
     proptest! {
         #[test]
         fn u32_dda_matches_the_i64_error_terms(s in prop::array::uniform3(-3000i32..3000), t in prop::array::uniform3(-3000i32..3000)) {
-            let got: std::vec::Vec<Tick> = {
+            let got: std::vec::Vec<StepEvent> = {
                 let mut l = DdaLine::new(s, t);
-                std::iter::from_fn(|| l.next_tick()).collect()
+                std::iter::from_fn(|| l.next_event()).collect()
             };
-            let want: std::vec::Vec<Tick> = i64_dda(s, t).collect();
+            let want: std::vec::Vec<StepEvent> = i64_dda(s, t).collect();
             prop_assert_eq!(got, want);
         }
 
@@ -631,7 +631,7 @@ mod tests {
             let mut it = ClassicLine::new(start, target);
             let mut p = start;
             let mut n = 0i64;
-            while let Some(t) = it.next_tick() {
+            while let Some(t) = it.next_event() {
                 prop_assert_eq!(t.steps().count_ones(), 1);
                 t.apply(&mut p);
                 n += 1;

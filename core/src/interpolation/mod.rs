@@ -1,14 +1,14 @@
 //! Exact interpolation in integer step space: turns one move into a sequence of
-//! [`Tick`]s, each moving every axis by at most one step.
+//! [`StepEvent`]s, each moving every axis by at most one step.
 //!
 //! Owns the geometry of step sequences and nothing about time: the step engine
-//! decides when each tick happens. Every interpolator is a small state machine that
-//! yields one tick per call, so the segment preparation task can pull exactly as many
-//! ticks as fit into its queue, with no allocation and no look-ahead buffer.
+//! decides when each step event happens. Every interpolator is a small state machine that
+//! yields one step event per call, so the segment preparation task can pull exactly as many
+//! step events as fit into its queue, with no allocation and no look-ahead buffer.
 //!
 //! Two methods, as in the lab report (seed 000, 3.5-3.8) and common CNC practice:
-//! - [`Method::Classic`]: point-by-point comparison, one axis per tick, within 1 step.
-//! - [`Method::Dda`]: axes may step together; every tick lands on the grid point
+//! - [`Method::Classic`]: point-by-point comparison, one axis per step event, within 1 step.
+//! - [`Method::Dda`]: axes may step together; every step event lands on the grid point
 //!   nearest the ideal path (per-axis error <= 0.5 step).
 //!
 //! Submodules: [`line`](mod@line) (straight lines), [`circle`] (circles and arcs around any
@@ -16,9 +16,9 @@
 //! [`shapes`] (polylines such as the star).
 //!
 //! For the step timing, each interpolator tells what comes next ([`Next`]): a run of
-//! ticks along which the path position is a smooth function of the tick count (lines,
+//! step events along which the path position is a smooth function of the step event count (lines,
 //! DDA circle octants: [`Interpolator::path_ahead`]), which the segment preparation times with
-//! a few polynomials; a tick whose length is known once it is made (ellipses, sines,
+//! a few polynomials; a step event whose length is known once it is made (ellipses, sines,
 //! classic circles: [`Interpolator::tick_len`]); or an extra step onto the grid point nearest
 //! the path (a rounded start or end), which takes no path length.
 
@@ -30,19 +30,19 @@ pub mod shapes;
 
 use crate::motion::{Move, Path, StepPos, AXES, X, Y, Z};
 
-/// One interpolation tick: which axes step (bits 0..2 = X, Y, Z) and in which
+/// One interpolation step event: which axes step (bits 0..2 = X, Y, Z) and in which
 /// direction (bits 3..5 set = negative). Packed in a byte so the step queue is small.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Tick(pub u8);
+pub struct StepEvent(pub u8);
 
-impl Tick {
-    /// Builds a tick from per-axis deltas in {-1, 0, 1} (bit operations only: this
+impl StepEvent {
+    /// Builds a step event from per-axis deltas in {-1, 0, 1} (bit operations only: this
     /// runs once per step in the segment preparation).
     #[inline]
     pub fn from_deltas(d: [i8; AXES]) -> Self {
         let bit = |v: i8, i: u8| -> u8 { (u8::from(v != 0) << i) | (u8::from(v < 0) << (i + 3)) };
-        Tick(bit(d[0], 0) | bit(d[1], 1) | bit(d[2], 2))
+        StepEvent(bit(d[0], 0) | bit(d[1], 1) | bit(d[2], 2))
     }
     /// Step mask (bit i = axis i steps).
     pub const fn steps(self) -> u8 {
@@ -62,7 +62,7 @@ impl Tick {
         };
         [d(0), d(1), d(2)]
     }
-    /// Applies the tick to a position (wrapping at the i32 range, never panics).
+    /// Applies the step event to a position (wrapping at the i32 range, never panics).
     #[inline]
     pub fn apply(self, p: &mut StepPos) {
         let d = self.deltas();
@@ -76,9 +76,9 @@ impl Tick {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Method {
-    /// Point-by-point comparison: one axis per tick (the lab report's method).
+    /// Point-by-point comparison: one axis per step event (the lab report's method).
     Classic,
-    /// Digital differential analyser / Bresenham: axes may step together, each tick on
+    /// Digital differential analyser / Bresenham: axes may step together, each step event on
     /// the grid point nearest the path.
     #[default]
     Dda,
@@ -99,21 +99,21 @@ pub enum InterpError {
 /// What an interpolator makes next (see the module comment).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Next {
-    /// This many ticks, each advancing the run's parameter by one: the path position is
-    /// [`Interpolator::path_ahead`] of the tick count.
+    /// This many step events, each advancing the run's parameter by one: the path position is
+    /// [`Interpolator::path_ahead`] of the step event count.
     Run(u32),
-    /// One tick whose path length [`Interpolator::tick_len`] gives after it is made.
-    Tick,
-    /// One tick onto the grid point nearest the path or onto the target: no path length.
+    /// One step event whose path length [`Interpolator::tick_len`] gives after it is made.
+    StepEvent,
+    /// One step event onto the grid point nearest the path or onto the target: no path length.
     Extra,
     /// The move is complete.
     Done,
 }
 
-/// Something that yields ticks until the move is complete.
+/// Something that yields step events until the move is complete.
 pub trait Interpolate {
-    /// The next tick, or `None` when the end position has been reached.
-    fn next_tick(&mut self) -> Option<Tick>;
+    /// The next step event, or `None` when the end position has been reached.
+    fn next_event(&mut self) -> Option<StepEvent>;
 }
 
 /// Any interpolator for a [`Move`], chosen from its [`Path`].
@@ -184,24 +184,24 @@ impl Interpolator {
         match self {
             Interpolator::Line(l) => l.next(),
             Interpolator::Circle(c) => c.next(),
-            // Known only once tried: `ticks_into` returns 0 at the end.
-            Interpolator::Conic(_) | Interpolator::Sine(_) => Next::Tick,
+            // Known only once tried: `events_into` returns 0 at the end.
+            Interpolator::Conic(_) | Interpolator::Sine(_) => Next::StepEvent,
         }
     }
 
-    /// Up to `out.len()` ticks of what [`Interpolator::next`] announced (one for a single
-    /// tick); the count written, 0 when the move is complete.
-    pub fn ticks_into(&mut self, out: &mut [Tick]) -> usize {
+    /// Up to `out.len()` step events of what [`Interpolator::next`] announced (one for a single
+    /// step event); the count written, 0 when the move is complete.
+    pub fn events_into(&mut self, out: &mut [StepEvent]) -> usize {
         match self {
-            Interpolator::Line(l) => l.ticks_into(out),
+            Interpolator::Line(l) => l.events_into(out),
             Interpolator::Circle(c) => c.ticks(out),
             Interpolator::Conic(c) => line::fill(c, out.get_mut(..1).unwrap_or(&mut [])),
             Interpolator::Sine(c) => line::fill(c, out.get_mut(..1).unwrap_or(&mut [])),
         }
     }
 
-    /// Path position `k` ticks ahead in the present run, relative to the present point,
-    /// and its rate per tick there, in run units (a line's tick; a circle's step).
+    /// Path position `k` step events ahead in the present run, relative to the present point,
+    /// and its rate per step event there, in run units (a line's step event; a circle's step).
     pub fn path_ahead(&self, k: u32) -> (f32, f32) {
         match self {
             Interpolator::Circle(c) => c.path_ahead(k),
@@ -209,7 +209,7 @@ impl Interpolator {
         }
     }
 
-    /// Largest |d^n s / dk^n| (n = 1..4) of the path position over the next `k` ticks
+    /// Largest |d^n s / dk^n| (n = 1..4) of the path position over the next `k` step events
     /// of the present run, in run units: what bounds the timing polynomials' error.
     pub fn run_bounds(&self, k: u32) -> [f32; 4] {
         match self {
@@ -237,7 +237,7 @@ impl Interpolator {
         }
     }
 
-    /// Path length of the last tick (after [`Next::Tick`]), mm, from the axes'
+    /// Path length of the last step event (after [`Next::StepEvent`]), mm, from the axes'
     /// steps per mm.
     pub fn tick_len(&self, steps_per_mm: [f32; 2]) -> f32 {
         let [spx, spy] = steps_per_mm;
@@ -251,9 +251,9 @@ impl Interpolator {
 }
 
 impl Interpolate for Interpolator {
-    fn next_tick(&mut self) -> Option<Tick> {
-        let mut one = [Tick(0)];
-        (self.ticks_into(&mut one) == 1).then_some(one[0])
+    fn next_event(&mut self) -> Option<StepEvent> {
+        let mut one = [StepEvent(0)];
+        (self.events_into(&mut one) == 1).then_some(one[0])
     }
 }
 
@@ -270,10 +270,10 @@ pub(crate) fn sgn(v: i64) -> i8 {
     i8::from(v > 0) - i8::from(v < 0)
 }
 
-/// XY deltas to a tick with no Z motion.
-pub(crate) fn tick_xy(dx: i8, dy: i8) -> Tick {
+/// XY deltas to a step event with no Z motion.
+pub(crate) fn event_xy(dx: i8, dy: i8) -> StepEvent {
     let mut d = [0i8; AXES];
     d[X] = dx;
     d[Y] = dy;
-    Tick::from_deltas(d)
+    StepEvent::from_deltas(d)
 }

@@ -36,7 +36,7 @@ mod tests {
         let mut p = v[0];
         for w in v.windows(2) {
             let mut l = DdaLine::new(w[0], w[1]);
-            while let Some(t) = l.next_tick() {
+            while let Some(t) = l.next_event() {
                 t.apply(&mut p);
             }
             assert_eq!(p, w[1]);

@@ -18,7 +18,7 @@ const SEEK_TRAVEL_FACTOR: f32 = 1.5;
 const LOCATE_FACTOR: f32 = 5.0;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Phase {
+enum Stage {
     /// Fast move toward the switch until it triggers.
     Seek,
     /// Switch seen: wait for the debounce time to pass.
@@ -61,7 +61,7 @@ pub struct Homing {
     /// Axes to home (X = bit 0), and those not homed yet.
     axes: u8,
     left: u8,
-    phase: Phase,
+    stage: Stage,
     /// A move of the current phase has been queued.
     issued: bool,
 }
@@ -73,7 +73,7 @@ impl Homing {
         (axes != 0).then_some(Homing {
             axes,
             left: axes,
-            phase: Phase::Seek,
+            stage: Stage::Seek,
             issued: false,
         })
     }
@@ -105,9 +105,9 @@ impl Homing {
         } else {
             1.0
         };
-        match self.phase {
-            Phase::Seek | Phase::Locate => {
-                let seeking = matches!(self.phase, Phase::Seek);
+        match self.stage {
+            Stage::Seek | Stage::Locate => {
+                let seeking = matches!(self.stage, Stage::Seek);
                 if pressed {
                     m.clear();
                     let next = if seeking {
@@ -115,7 +115,7 @@ impl Homing {
                     } else {
                         After::PullOff
                     };
-                    self.phase = Phase::Debounce {
+                    self.stage = Stage::Debounce {
                         until_ms: now_ms.wrapping_add(s.homing_debounce_ms()),
                         next,
                     };
@@ -136,17 +136,17 @@ impl Homing {
                     return Progress::Failed(HomingError::NotFound);
                 }
             }
-            Phase::Debounce { until_ms, next } => {
+            Stage::Debounce { until_ms, next } => {
                 if now_ms.wrapping_sub(until_ms) as i32 >= 0 {
-                    self.phase = match next {
-                        After::Backoff => Phase::Backoff,
-                        After::PullOff => Phase::PullOff,
+                    self.stage = match next {
+                        After::Backoff => Stage::Backoff,
+                        After::PullOff => Stage::PullOff,
                     };
                     self.issued = false;
                 }
             }
-            Phase::Backoff | Phase::PullOff => {
-                let backing_off = matches!(self.phase, Phase::Backoff);
+            Stage::Backoff | Stage::PullOff => {
+                let backing_off = matches!(self.stage, Stage::Backoff);
                 if !self.issued {
                     let rate = if backing_off {
                         s.homing_seek()
@@ -159,11 +159,11 @@ impl Homing {
                         return Progress::Failed(HomingError::PullOff);
                     }
                     if backing_off {
-                        self.phase = Phase::Locate;
+                        self.stage = Stage::Locate;
                         self.issued = false;
                     } else {
                         self.left &= !(1 << axis);
-                        self.phase = Phase::Seek;
+                        self.stage = Stage::Seek;
                         self.issued = false;
                         if self.left == 0 {
                             return Progress::Done(self.home_position(s, m.position()));

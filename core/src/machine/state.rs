@@ -12,7 +12,7 @@ use super::safety::{Alarm, Inputs};
 use super::MotionControl;
 use crate::gcode::interpreter::Room;
 use crate::gcode::units::{to_mm, to_nm};
-use crate::gcode::{Interpreter, Outcome, Reject, Status, Stop};
+use crate::gcode::{ErrorCode, Interpreter, Outcome, Reject, Stop};
 use crate::motion::Command;
 use crate::motion::{Move, AXES};
 use crate::settings::{PenMode, Settings};
@@ -96,7 +96,7 @@ pub enum Prompt {
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-struct Job {
+struct JobRecord {
     running: bool,
     start_ms: u32,
     moves: u32,
@@ -147,7 +147,7 @@ pub struct Machine {
     rapid_ovr: u8,
     ovr_changed: bool,
     inputs: Inputs,
-    job: Job,
+    job: JobRecord,
     events: Deque<Event, 8>,
     settings_dirty: bool,
     coords_dirty: bool,
@@ -202,7 +202,7 @@ impl Machine {
             rapid_ovr = 100,
             ovr_changed = false,
             inputs = Inputs::default(),
-            job = Job::default(),
+            job = JobRecord::default(),
             events = Deque::new(),
             settings_dirty = false,
             coords_dirty = false,
@@ -373,9 +373,9 @@ impl Machine {
         n: u16,
         v: f32,
         m: &mut M,
-    ) -> Result<(), Status> {
+    ) -> Result<(), ErrorCode> {
         if !self.idle_or_alarm(m) {
-            return Err(Status::IdleError);
+            return Err(ErrorCode::IdleError);
         }
         self.settings.set(n, v)?;
         self.settings_dirty = true;
@@ -416,12 +416,12 @@ impl Machine {
         line_no: u32,
         m: &mut M,
         now_ms: u32,
-    ) -> Option<Result<Taken, Status>> {
+    ) -> Option<Result<Taken, ErrorCode>> {
         // G-code is locked out in alarm, homing, sleep and while jogging (Grbl's
         // error 9).
         if self.locked || self.homing.is_some() || self.jogging || self.sleeping {
             self.forget_line();
-            return Some(Err(Status::SystemLocked));
+            return Some(Err(ErrorCode::SystemLocked));
         }
         if !self.can_accept() {
             return None;
@@ -514,7 +514,7 @@ impl Machine {
     }
 
     /// Check a line (for `$N`) without running it or changing any state.
-    pub fn validate(&mut self, line: &[u8]) -> Result<(), Status> {
+    pub fn validate(&mut self, line: &[u8]) -> Result<(), ErrorCode> {
         // `room: None`: checked, never committed.
         let mut out = Outcome::default();
         match self
@@ -528,13 +528,13 @@ impl Machine {
 
     /// `$J=...`: queue a jog (only when idle or already jogging).
     /// Anything else, alarm included, is Grbl's error 8 (a `$` command outside Idle).
-    pub fn jog<M: MotionControl>(&mut self, body: &[u8], m: &mut M) -> Result<(), Status> {
+    pub fn jog<M: MotionControl>(&mut self, body: &[u8], m: &mut M) -> Result<(), ErrorCode> {
         let st = self.state(m);
         if !(matches!(st, RunState::Idle | RunState::Jog)) || self.check_mode {
-            return Err(Status::IdleError);
+            return Err(ErrorCode::IdleError);
         }
         if m.free() == 0 {
-            return Err(Status::Overflow);
+            return Err(ErrorCode::Overflow);
         }
         let mv: Move = self.interpreter.jog(body, &self.settings)?;
         if m.push(Command::Move(mv)).is_ok() {
@@ -544,14 +544,14 @@ impl Machine {
     }
 
     /// `$X`.
-    pub fn unlock(&mut self) -> Result<(), Status> {
+    pub fn unlock(&mut self) -> Result<(), ErrorCode> {
         if let Some(why) = self.refusal {
             self.event(Event::Msg(why));
-            return Err(Status::SystemLocked);
+            return Err(ErrorCode::SystemLocked);
         }
         if self.inputs.estop || self.needs_reset {
             self.event(Event::Msg("Reset to continue"));
-            return Err(Status::SystemLocked);
+            return Err(ErrorCode::SystemLocked);
         }
         if core::mem::take(&mut self.locked) {
             self.alarm = None;
@@ -561,19 +561,19 @@ impl Machine {
     }
 
     /// `$H`.
-    pub fn start_homing<M: MotionControl>(&mut self, m: &mut M) -> Result<(), Status> {
+    pub fn start_homing<M: MotionControl>(&mut self, m: &mut M) -> Result<(), ErrorCode> {
         if let Some(why) = self.refusal {
             self.event(Event::Msg(why));
-            return Err(Status::SystemLocked);
+            return Err(ErrorCode::SystemLocked);
         }
         if !self.settings.homing_enabled() {
-            return Err(Status::HomingDisabled);
+            return Err(ErrorCode::HomingDisabled);
         }
         if self.inputs.estop || self.needs_reset {
-            return Err(Status::SystemLocked);
+            return Err(ErrorCode::SystemLocked);
         }
         if !matches!(self.state(m), RunState::Idle | RunState::Alarm) || !m.is_idle() {
-            return Err(Status::IdleError);
+            return Err(ErrorCode::IdleError);
         }
         match Homing::start(&self.settings) {
             Some(h) => {
@@ -582,12 +582,12 @@ impl Machine {
                 self.homing = Some(h);
                 Ok(())
             }
-            None => Err(Status::HomingDisabled),
+            None => Err(ErrorCode::HomingDisabled),
         }
     }
 
     /// `$C`: toggle check mode. Leaving it resets like Grbl does.
-    pub fn toggle_check<M: MotionControl>(&mut self, m: &mut M) -> Result<(), Status> {
+    pub fn toggle_check<M: MotionControl>(&mut self, m: &mut M) -> Result<(), ErrorCode> {
         if self.check_mode {
             self.soft_reset(m);
             self.event(Event::Msg("Disabled"));
@@ -597,7 +597,7 @@ impl Machine {
             self.event(Event::Msg("Enabled"));
             Ok(())
         } else {
-            Err(Status::IdleError)
+            Err(ErrorCode::IdleError)
         }
     }
 
@@ -632,7 +632,7 @@ impl Machine {
         self.jogging = false;
         self.jog_cancel = false;
         self.release_holds();
-        self.job = Job::default();
+        self.job = JobRecord::default();
     }
 
     /// A pen change that has reached its place (the machine at rest) waits there
@@ -818,7 +818,7 @@ impl Machine {
 
     /// Queue a command made outside G-code (the keypad's drawing modes). Refused in
     /// alarm, homing, jogging or check mode; a line target outside travel with soft
-    /// limits on is refused with `error:15` semantics ([`Status::TravelExceeded`]);
+    /// limits on is refused with `error:15` semantics ([`ErrorCode::TravelExceeded`]);
     /// shapes check their own extent with [`crate::gcode::units::within_travel`].
     /// The interpreter continues from the command's end point.
     pub fn queue<M: MotionControl>(
@@ -826,26 +826,26 @@ impl Machine {
         cmd: Command,
         m: &mut M,
         now_ms: u32,
-    ) -> Result<(), Status> {
+    ) -> Result<(), ErrorCode> {
         if self.locked || self.homing.is_some() {
-            return Err(Status::SystemLocked);
+            return Err(ErrorCode::SystemLocked);
         }
         if self.jogging || self.check_mode {
-            return Err(Status::IdleError);
+            return Err(ErrorCode::IdleError);
         }
         if self.waiting {
             // A G-code line came first and waits for room: no overtaking.
-            return Err(Status::Overflow);
+            return Err(ErrorCode::Overflow);
         }
         if let Command::Move(mv) = &cmd {
             let end = to_nm(&mv.target, &self.settings);
             if self.settings.soft_limits()
                 && !crate::gcode::units::within_travel(&end, &self.settings)
             {
-                return Err(Status::TravelExceeded);
+                return Err(ErrorCode::TravelExceeded);
             }
         }
-        m.push(cmd).map_err(|_| Status::Overflow)?;
+        m.push(cmd).map_err(|_| ErrorCode::Overflow)?;
         if let Command::Move(mv) = cmd {
             self.interpreter.sync_position(&mv.target, &self.settings);
             self.count_move(now_ms);
@@ -856,7 +856,7 @@ impl Machine {
     /// A move was queued: the first one of a job starts it (and says so).
     fn count_move(&mut self, now_ms: u32) {
         if !self.job.running {
-            self.job = Job {
+            self.job = JobRecord {
                 running: true,
                 start_ms: now_ms,
                 moves: 0,
@@ -871,7 +871,7 @@ impl Machine {
     /// drop the queue; the position stays exact.
     pub fn stop_and_clear<M: MotionControl>(&mut self, m: &mut M) {
         self.release_holds();
-        self.job = Job::default();
+        self.job = JobRecord::default();
         if m.is_idle() && !m.is_holding() {
             return;
         }
@@ -1003,7 +1003,7 @@ impl Machine {
         if self.job.ending && m.is_idle() {
             let ms = now_ms.wrapping_sub(self.job.start_ms);
             let moves = self.job.moves;
-            self.job = Job::default();
+            self.job = JobRecord::default();
             self.event(Event::JobFinished { ms, moves });
         }
     }

@@ -6,7 +6,7 @@ use super::report::{axis_triplet, report_scale};
 use super::{OutWriter, Protocol, RX_BUFFER_SIZE, VERSION};
 use crate::decimal::{put_int, write_fixed3, Sink};
 use crate::gcode::units::nm_to_mm;
-use crate::gcode::Status;
+use crate::gcode::ErrorCode;
 use crate::gcode::{startup_line, StartupLine, STARTUP_LINES};
 use crate::machine::{Machine, MotionControl, RunState};
 use crate::settings::Settings;
@@ -74,15 +74,15 @@ fn set_setting<M: MotionControl>(
     machine: &mut Machine,
     cmd: &[u8],
     m: &mut M,
-) -> Result<(), Status> {
+) -> Result<(), ErrorCode> {
     let eq = cmd
         .iter()
         .position(|&c| c == b'=')
-        .ok_or(Status::InvalidStatement)?;
+        .ok_or(ErrorCode::InvalidStatement)?;
     let (num, val) = cmd.split_at(eq);
     let val = val.get(1..).unwrap_or(&[]);
     if num.is_empty() || !num.iter().all(u8::is_ascii_digit) || num.len() > 4 {
-        return Err(Status::InvalidStatement);
+        return Err(ErrorCode::InvalidStatement);
     }
     let n = num
         .iter()
@@ -91,7 +91,7 @@ fn set_setting<M: MotionControl>(
     // `1e30`) is a statement not understood, error 3, as in Grbl.
     let (v, used) = crate::gcode::parser::read_number(val)?;
     if used != val.len() {
-        return Err(Status::InvalidStatement);
+        return Err(ErrorCode::InvalidStatement);
     }
     machine.set_setting(n, v.to_f32(), m)
 }
@@ -101,14 +101,14 @@ fn store_startup(
     machine: &mut Machine,
     startup: &mut [StartupLine; STARTUP_LINES],
     rest: &[u8],
-) -> Result<(), Status> {
+) -> Result<(), ErrorCode> {
     let (idx, line) = match rest {
         [d @ b'0'..=b'9', b'=', line @ ..] => (usize::from(d - b'0'), line),
-        _ => return Err(Status::InvalidStatement),
+        _ => return Err(ErrorCode::InvalidStatement),
     };
-    let slot = startup.get_mut(idx).ok_or(Status::InvalidStatement)?;
+    let slot = startup.get_mut(idx).ok_or(ErrorCode::InvalidStatement)?;
     machine.validate(line)?;
-    *slot = startup_line(line).ok_or(Status::InvalidStatement)?;
+    *slot = startup_line(line).ok_or(ErrorCode::InvalidStatement)?;
     Ok(())
 }
 
@@ -117,7 +117,7 @@ impl Protocol {
     pub(super) fn system_command<M: MotionControl>(
         &mut self,
         m: &mut M,
-    ) -> Option<Result<(), Status>> {
+    ) -> Option<Result<(), ErrorCode>> {
         let at_rest = matches!(
             self.machine.state(m),
             RunState::Idle | RunState::Alarm | RunState::Check
@@ -130,7 +130,7 @@ impl Protocol {
             SysCommand::Help | SysCommand::Modal | SysCommand::Check | SysCommand::Jog
         );
         if !anytime && !at_rest {
-            return Some(Err(Status::IdleError));
+            return Some(Err(ErrorCode::IdleError));
         }
         // A board that refuses to run shows what it has but changes nothing (and
         // writes no flash): only the listings, help and `$G` / `$I` answer (and `$J=`
@@ -145,7 +145,7 @@ impl Protocol {
         );
         if let (Some(why), false) = (self.machine.refusal(), shows) {
             self.notify(why);
-            return Some(Err(Status::SystemLocked));
+            return Some(Err(ErrorCode::SystemLocked));
         }
         Some(match kind {
             SysCommand::Help => {
@@ -230,8 +230,8 @@ impl Protocol {
                 self.machine.sleep();
                 Ok(())
             }
-            SysCommand::Invalid => Err(Status::InvalidStatement),
-            SysCommand::Unknown => Err(Status::BadNumberFormat),
+            SysCommand::Invalid => Err(ErrorCode::InvalidStatement),
+            SysCommand::Unknown => Err(ErrorCode::BadNumberFormat),
         })
     }
 

@@ -27,7 +27,7 @@ mod stream;
 
 use crate::decimal::{put_int, Sink};
 use crate::gcode::units::{Nm, NmPos};
-use crate::gcode::{LineCleaner, StartupLine, Status, LINE_MAX, STARTUP_LINES};
+use crate::gcode::{ErrorCode, LineCleaner, StartupLine, LINE_MAX, STARTUP_LINES};
 use crate::machine::{Inputs, Machine, MotionControl, Taken};
 use crate::motion::AXES;
 use crate::settings::Settings;
@@ -319,7 +319,7 @@ impl Protocol {
     /// Execute the framed line. False if it must wait (planner full).
     fn run_line<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) -> bool {
         if self.line_too_long {
-            self.finish_line(Err(Status::Overflow));
+            self.finish_line(Err(ErrorCode::Overflow));
             return true;
         }
         // The line stays where it is while it runs (and if it waits): the machine
@@ -383,7 +383,7 @@ impl Protocol {
         self.machine.set_message(text);
     }
 
-    fn finish_line(&mut self, r: Result<(), Status>) {
+    fn finish_line(&mut self, r: Result<(), ErrorCode>) {
         self.finish_frame();
         self.respond(r);
         if core::mem::take(&mut self.pending_welcome) {

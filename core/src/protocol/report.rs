@@ -5,7 +5,7 @@
 use super::{OutWriter, Protocol, REFRESH_EVERY, RX_BUFFER_SIZE, WELCOME};
 use crate::decimal::{put_decimal, put_int, round_i32, write_fixed3, Sink};
 use crate::gcode::units::nm_to_mm;
-use crate::gcode::Status;
+use crate::gcode::ErrorCode;
 use crate::machine::state::Event;
 use crate::machine::{MotionControl, RunState};
 use crate::motion::AXES;
@@ -52,7 +52,7 @@ impl Protocol {
         }
     }
 
-    pub(super) fn respond(&mut self, r: Result<(), Status>) {
+    pub(super) fn respond(&mut self, r: Result<(), ErrorCode>) {
         match r {
             Ok(()) => self.say(&[b"ok"]),
             Err(e) => self.say_n(b"error:", e.code()),

@@ -24,7 +24,7 @@ use crate::fmath;
 use crate::hmi::fixed;
 use crate::hmi::job::Job;
 use crate::hmi::text::Text;
-use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Status};
+use crate::hmi::{alarm_text, Hmi, MachineState, Page, RunPhase, Snapshot};
 use crate::hmi::{MACHINE_LINES, MENU_LINES};
 use crate::motion::{X, Y};
 use framebuffer::FrameBuffer;
@@ -149,7 +149,7 @@ pub struct Screens {
     arrow: Option<([i8; 2], bool)>,
     /// What the last render drew from: the HMI's revision and the machine status
     /// (see [`Screens::render`]).
-    drawn: Option<(u32, Status)>,
+    drawn: Option<(u32, Snapshot)>,
 }
 
 impl Screens {
@@ -179,7 +179,7 @@ impl Screens {
     pub fn render(
         &mut self,
         hmi: &Hmi,
-        st: &Status,
+        st: &Snapshot,
         now_ms: u32,
         fb: &mut FrameBuffer,
     ) -> Result<(), Infallible> {
@@ -193,7 +193,7 @@ impl Screens {
         Ok(())
     }
 
-    fn draw(&mut self, hmi: &Hmi, st: &Status, now_ms: u32, fb: &mut FrameBuffer) {
+    fn draw(&mut self, hmi: &Hmi, st: &Snapshot, now_ms: u32, fb: &mut FrameBuffer) {
         let page = hmi.page();
         let key = match hmi.prompt() {
             // The prompt covers the page; M0's and each pen's are distinct pages.
@@ -359,7 +359,7 @@ impl Screens {
     fn run_page(
         &mut self,
         hmi: &Hmi,
-        st: &Status,
+        st: &Snapshot,
         now_ms: u32,
         run: &crate::hmi::RunPage,
         fresh: bool,
@@ -548,7 +548,7 @@ mod tests {
     use crate::hmi::{Config, MachineState};
     use crate::keypad::{Key, KeyEvent, KeyKind};
 
-    fn press(hmi: &mut Hmi, st: &Status, key: Key, now: u32) {
+    fn press(hmi: &mut Hmi, st: &Snapshot, key: Key, now: u32) {
         hmi.key(
             KeyEvent {
                 key,
@@ -606,7 +606,7 @@ mod tests {
     fn drawing_refresh_is_a_small_fraction_of_a_full_frame() {
         let cfg = Config::default();
         let mut hmi = Hmi::new(cfg, 0);
-        let mut st = Status::idle_at([0, 0, 500]);
+        let mut st = Snapshot::idle_at([0, 0, 500]);
         hmi.tick(&st, 2000);
         press(&mut hmi, &st, Key::Digit(5), 2100); // sine
         for _ in 0..4 {
@@ -648,7 +648,7 @@ mod tests {
     #[test]
     fn an_unchanged_page_repaints_nothing() {
         let mut hmi = Hmi::new(Config::default(), 0);
-        let st = Status::idle_at([0, 0, 500]);
+        let st = Snapshot::idle_at([0, 0, 500]);
         hmi.tick(&st, 2000);
         let mut fb = FrameBuffer::new();
         let mut screens = Screens::new();
@@ -673,7 +673,7 @@ mod tests {
     #[test]
     fn an_unchanged_state_is_not_drawn_again() {
         let mut hmi = Hmi::new(Config::default(), 0);
-        let mut st = Status::idle_at([0, 0, 500]);
+        let mut st = Snapshot::idle_at([0, 0, 500]);
         hmi.tick(&st, 2000);
         let mut fb = FrameBuffer::new();
         let mut screens = Screens::new();
@@ -720,7 +720,7 @@ mod tests {
         let steps = proptest::collection::vec((0u8..16, 0u32..1500), 1..60);
         proptest!(ProptestConfig::with_cases(200), |(steps in steps)| {
             let mut hmi = Hmi::new(Config::default(), 0);
-            let mut st = Status::idle_at([0, 0, 500]);
+            let mut st = Snapshot::idle_at([0, 0, 500]);
             let mut screens = Screens::new();
             let mut fb = FrameBuffer::new();
             let mut now = 0u32;
@@ -747,7 +747,7 @@ mod tests {
     #[test]
     fn rebuilt_drawing_page_matches_the_incremental_one() {
         let mut hmi = Hmi::new(Config::default(), 0);
-        let mut st = Status::idle_at([0, 0, 500]);
+        let mut st = Snapshot::idle_at([0, 0, 500]);
         hmi.tick(&st, 2000);
         press(&mut hmi, &st, Key::Digit(6), 2100); // star
         press(&mut hmi, &st, Key::Enter, 2200);

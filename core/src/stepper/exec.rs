@@ -34,7 +34,7 @@ pub struct IsrOut {
     /// Steps due when the period programmed now (`reload`) ends; a board that pulses
     /// in hardware arms its outputs with these, one period ahead.
     pub arm: u8,
-    /// Timer ticks until the next interrupt (>= 2); 0 = stop the timer (queue empty or
+    /// Timer counts until the next interrupt (>= 2); 0 = stop the timer (queue empty or
     /// halted).
     pub reload: u32,
 }
@@ -95,7 +95,7 @@ pub struct Executor {
     /// X and Y position, packed by [`pack_xy`].
     xy: i64,
     z: i32,
-    /// Tick bits of the command whose wait is running.
+    /// Step event bits of the command whose wait is running.
     pending: u8,
     /// Wait still to run after the present reload; [`IDLE`] when not running.
     remaining: u32,
@@ -319,7 +319,7 @@ impl Executor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interpolation::Tick;
+    use crate::interpolation::StepEvent;
     use crate::stepper::queue::StepQueue;
     use crate::stepper::CmdSink;
 
@@ -327,7 +327,10 @@ mod tests {
     fn queue_of(cmds: &[([i8; 3], u32)]) -> StepQueue<8> {
         let mut q = StepQueue::new();
         for &(d, w) in cmds {
-            assert_eq!(q.push_slice(&[StepCmd::new(Tick::from_deltas(d), w)]), 1);
+            assert_eq!(
+                q.push_slice(&[StepCmd::new(StepEvent::from_deltas(d), w)]),
+                1
+            );
         }
         q
     }
@@ -495,7 +498,7 @@ mod tests {
         }
         for bits in 0..64u8 {
             let i = usize::from(bits);
-            let d = Tick(bits).deltas();
+            let d = StepEvent(bits).deltas();
             assert_eq!(unpack_xy(STEP_DXY[i]), (i32::from(d[0]), i32::from(d[1])));
             assert_eq!(STEP_DZ[i], d[2]);
         }

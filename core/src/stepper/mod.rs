@@ -17,7 +17,7 @@ pub mod phase4;
 pub mod prep;
 pub mod queue;
 
-use crate::interpolation::Tick;
+use crate::interpolation::StepEvent;
 
 /// The step timer's clock: the board's TIM2 counts at the 72 MHz core clock, and the
 /// simulator's virtual timer at the same rate, so waits are the same numbers of ticks.
@@ -47,10 +47,10 @@ pub fn tail_period(pulse_ticks: u32) -> u32 {
 /// 100,000. The cap keeps 20 % below that first failure.
 pub const MAX_STEP_RATE: f32 = 80_000.0;
 
-/// Largest wait one command can carry (24 bits of timer ticks).
+/// Largest wait one command can carry (24 bits of timer counts).
 pub const MAX_WAIT: u32 = (1 << 24) - 1;
 
-/// One step command: wait `wait()` timer ticks after the previous command's step,
+/// One step command: wait `wait()` timer counts after the previous command's step,
 /// then emit `tick()`. A tick with no step bits is a pure wait (long pauses).
 /// Packed in a u32 so the queue stays small (4 bytes per step). Only [`StepCmd::new`]
 /// builds one, so every command's wait is in 2..=MAX_WAIT and its tick in 0..64.
@@ -61,7 +61,7 @@ pub struct StepCmd(pub(crate) u32);
 impl StepCmd {
     /// `wait` is clamped to 2..=MAX_WAIT (one tick is 14 ns; the executor promises
     /// every timer reload is at least 2).
-    pub fn new(tick: Tick, wait: u32) -> Self {
+    pub fn new(tick: StepEvent, wait: u32) -> Self {
         StepCmd((u32::from(tick.0 & 0x3f) << 24) | wait.clamp(2, MAX_WAIT))
     }
     #[inline(always)]
@@ -69,10 +69,10 @@ impl StepCmd {
         self.0 & MAX_WAIT
     }
     #[inline(always)]
-    pub fn tick(self) -> Tick {
+    pub fn tick(self) -> StepEvent {
         // The mask is free (one bit-field extract) and tells the compiler the tick's
         // range, which spares the interrupt two more masks downstream.
-        Tick(((self.0 >> 24) & 0x3f) as u8)
+        StepEvent(((self.0 >> 24) & 0x3f) as u8)
     }
 }
 
@@ -95,7 +95,7 @@ mod tests {
 
     #[test]
     fn command_packing_round_trips() {
-        let t = Tick::from_deltas([1, -1, 0]);
+        let t = StepEvent::from_deltas([1, -1, 0]);
         let c = StepCmd::new(t, 123_456);
         assert_eq!(c.tick(), t);
         assert_eq!(c.wait(), 123_456);

@@ -9,10 +9,10 @@ use crate::settings::{OutputMode, Settings};
 /// Direction hold time after a step pulse ends, before a reversal turns the pin: 1 us,
 /// above every common driver's requirement (A4988 200 ns, DRV8825 650 ns, TB6600-style
 /// opto inputs ~1 us with their set-up time counted in the rest of the wait).
-pub const DIR_HOLD_TICKS: u32 = TIMER_HZ / 1_000_000;
+pub const DIR_HOLD_COUNTS: u32 = TIMER_HZ / 1_000_000;
 
-/// The longest step pulse in timer ticks: the board's 16-bit compare register.
-const MAX_PULSE_TICKS: u32 = 0xFFFF;
+/// The longest step pulse in timer counts: the board's 16-bit compare register.
+const MAX_PULSE_COUNTS: u32 = 0xFFFF;
 
 /// How the step outputs behave.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -24,7 +24,7 @@ pub struct OutputConfig {
     pub dir_invert: u8,
     /// 4-phase half-step coils instead of step/dir ($200).
     pub four_phase: bool,
-    /// Step pulse width in timer ticks ($0), 1..=0xFFFF.
+    /// Step pulse width in timer counts ($0), 1..=0xFFFF.
     pub pulse_ticks: u32,
     /// The driver enable pin is active low ($4 = 0, A4988/DRV8825 /EN).
     pub enable_active_low: bool,
@@ -42,7 +42,7 @@ impl OutputConfig {
         if self.four_phase {
             0
         } else {
-            self.pulse_ticks + DIR_HOLD_TICKS
+            self.pulse_ticks + DIR_HOLD_COUNTS
         }
     }
 }
@@ -54,7 +54,7 @@ impl From<&Settings> for OutputConfig {
             step_invert: s.step_invert_mask() & 0b111,
             dir_invert: s.dir_invert_mask() & 0b111,
             four_phase: s.output_mode() == OutputMode::FourPhase,
-            pulse_ticks: pulse.clamp(1, MAX_PULSE_TICKS),
+            pulse_ticks: pulse.clamp(1, MAX_PULSE_COUNTS),
             enable_active_low: !s.invert_enable(),
             hard_limit_axes: if s.hard_limits() {
                 s.switch_mask() & 0b111

@@ -3,7 +3,7 @@
 //! (0x01, 0x03, 0x02, 0x06, 0x04, 0x0C, 0x08, 0x09), backwards for negative steps.
 //! Owns only the sequence index per axis; the board module writes the 4 bits to pins.
 
-use crate::interpolation::Tick;
+use crate::interpolation::StepEvent;
 use crate::motion::AXES;
 
 /// The half-step sequence (bit 0 = coil A ... bit 3 = coil D).
@@ -18,7 +18,7 @@ pub struct Phase4 {
 impl Phase4 {
     /// Advances the stepping axes and returns the coil pattern of every axis.
     #[inline]
-    pub fn step(&mut self, tick: Tick) -> [u8; AXES] {
+    pub fn step(&mut self, tick: StepEvent) -> [u8; AXES] {
         let (steps, neg) = (tick.steps(), tick.dirs());
         for (i, idx) in self.idx.iter_mut().enumerate() {
             if steps & (1 << i) != 0 {
@@ -44,13 +44,13 @@ mod tests {
     #[test]
     fn walks_the_half_step_sequence_both_ways() {
         let mut p = Phase4::default();
-        let fwd = Tick::from_deltas([1, 0, 0]);
+        let fwd = StepEvent::from_deltas([1, 0, 0]);
         let mut seen = std::vec![p.coils()[0]];
         for _ in 0..8 {
             seen.push(p.step(fwd)[0]);
         }
         assert_eq!(seen, [0x01, 0x03, 0x02, 0x06, 0x04, 0x0C, 0x08, 0x09, 0x01]);
-        let back = Tick::from_deltas([-1, 0, 0]);
+        let back = StepEvent::from_deltas([-1, 0, 0]);
         assert_eq!(p.step(back)[0], 0x09);
         assert_eq!(p.step(back)[0], 0x08);
         // Other axes untouched.

@@ -160,13 +160,13 @@ impl<const N: usize> CmdSource for StepQueue<N> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interpolation::Tick;
+    use crate::interpolation::StepEvent;
 
     #[test]
     fn fifo_order_wraparound_full_and_clear() {
         let mut q: StepQueue<4> = StepQueue::new();
         let (mut tx, mut rx) = q.split();
-        let cmd = |w| StepCmd::new(Tick(1), w);
+        let cmd = |w| StepCmd::new(StepEvent(1), w);
         for round in 0..10u32 {
             for i in 0..4 {
                 assert!(tx.push(cmd(round * 10 + i + 2)));
@@ -197,7 +197,7 @@ mod tests {
         let mut q: StepQueue<8> = StepQueue::new();
         let (mut tx, mut rx) = q.split();
         for d in [[-1, 1, 0], [0, 1, 0], [0, -1, -1], [1, 0, 0], [0, 0, 0]] {
-            tx.push(StepCmd::new(Tick::from_deltas(d), 10));
+            tx.push(StepCmd::new(StepEvent::from_deltas(d), 10));
         }
         let dirs: std::vec::Vec<u8> = core::iter::from_fn(|| rx.pop())
             .map(|c| c.tick().dirs())

@@ -8,7 +8,7 @@
 //!
 //! The counter is computed from the time, never stepped: the board asks for the next
 //! event (a compare match or an overflow) and the timer produces the output edges at
-//! exactly their timer tick. The PWM modes compare the counter with the compare
+//! exactly their timer count. The PWM modes compare the counter with the compare
 //! register continuously, so a write of the counter moves the output at once.
 //! Down-counting, centre-aligned, slave and master modes and DMA requests are refused
 //! (the run stops) rather than half-modelled.

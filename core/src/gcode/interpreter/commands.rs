@@ -24,8 +24,8 @@ pub(super) fn line_path(pos: &NmPos, target: &NmPos, s: &Settings) -> Path {
     }
 }
 
-pub(super) fn push(out: &mut Outcome, c: Command) -> Result<(), Status> {
-    out.cmds.push(c).map_err(|_| Status::Overflow)
+pub(super) fn push(out: &mut Outcome, c: Command) -> Result<(), ErrorCode> {
+    out.cmds.push(c).map_err(|_| ErrorCode::Overflow)
 }
 
 /// A rapid straight move to `p` (checked as planned; out of range is refused before
@@ -36,7 +36,7 @@ pub(super) fn push_rapid(
     s: &Settings,
     line: u32,
     planned: &mut Reach,
-) -> Result<(), Status> {
+) -> Result<(), ErrorCode> {
     planned.add(p, s);
     push(
         out,
@@ -58,7 +58,7 @@ pub(super) fn pen_move(
     s: &Settings,
     line: u32,
     planned: &mut Reach,
-) -> Result<(), Status> {
+) -> Result<(), ErrorCode> {
     match s.pen_mode() {
         PenMode::Servo => push(out, Command::Pen { level }),
         PenMode::ZAxis => {

@@ -8,11 +8,11 @@ impl Interpreter {
     /// Interpret the body of a `$J=` jog line (cleaned, without `$J=`): only G20/G21,
     /// G90/G91, G53, axis words, F and N are allowed; modal state is left unchanged.
     /// A target outside travel with soft limits on is `error:15`.
-    pub fn jog(&mut self, line: &[u8], s: &Settings) -> Result<Move, Status> {
-        let mut b = Block::default();
+    pub fn jog(&mut self, line: &[u8], s: &Settings) -> Result<Move, ErrorCode> {
+        let mut b = WordBlock::default();
         b.parse_into(line)?;
         if !b.m.is_empty() {
-            return Err(Status::InvalidJogCommand);
+            return Err(ErrorCode::InvalidJogCommand);
         }
         let mut inches = self.modal.inches;
         let mut incremental = self.modal.incremental;
@@ -24,17 +24,17 @@ impl Interpreter {
                 900 => incremental = false,
                 910 => incremental = true,
                 530 => absolute_override = true,
-                _ => return Err(Status::InvalidJogCommand),
+                _ => return Err(ErrorCode::InvalidJogCommand),
             }
         }
         let _ = b.take(b'N');
         let scale = if inches { MM_PER_INCH } else { 1.0 };
-        let f = b.take(b'F').ok_or(Status::UndefinedFeedRate)?;
+        let f = b.take(b'F').ok_or(ErrorCode::UndefinedFeedRate)?;
         if f.millionths() <= 0 {
             return Err(if f.is_negative() {
-                Status::NegativeValue
+                ErrorCode::NegativeValue
             } else {
-                Status::UndefinedFeedRate
+                ErrorCode::UndefinedFeedRate
             });
         }
         let offset = self.work_offset();
@@ -59,14 +59,14 @@ impl Interpreter {
         }
         // Value words a jog does not use (S, T, I, P, ...): Grbl's unused-words error.
         if b.any_value() {
-            return Err(Status::UnusedWords);
+            return Err(ErrorCode::UnusedWords);
         }
         if !any {
-            return Err(Status::NoAxisWords);
+            return Err(ErrorCode::NoAxisWords);
         }
-        let steps = to_steps(&target, s).ok_or(Status::InvalidTarget)?;
+        let steps = to_steps(&target, s).ok_or(ErrorCode::InvalidTarget)?;
         if s.soft_limits() && !within_travel(&target, s) {
-            return Err(Status::TravelExceeded);
+            return Err(ErrorCode::TravelExceeded);
         }
         self.pos = target;
         Ok(Move {

@@ -25,12 +25,12 @@ use super::modal::{
     group_codes, Modal, MotionMode, NonModal, GROUPS, G_CODES, MOTION_MODES, M_CODES, NONE,
     NON_MODAL,
 };
-use super::parser::{Block, Value, ONE};
+use super::parser::{Value, WordBlock, ONE};
 use super::units::{
     mm_between, mm_to_nm, nm_to_fine_steps, to_nm, to_steps, value_to_ms, value_to_nm,
     within_travel, Nm, NmPos, Reach,
 };
-use super::Status;
+use super::ErrorCode;
 use crate::decimal::{put_int, round_i32, Sink};
 use crate::fmath;
 use crate::motion::{Command, PEN_FULL};
@@ -102,13 +102,13 @@ pub struct Room {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reject {
     /// `error:N`.
-    Error(Status),
+    Error(ErrorCode),
     /// A target lies outside the travel with soft limits on (alarm 2 for G-code).
     SoftLimit,
 }
 
-impl From<Status> for Reject {
-    fn from(s: Status) -> Self {
+impl From<ErrorCode> for Reject {
+    fn from(s: ErrorCode) -> Self {
         Reject::Error(s)
     }
 }
@@ -282,7 +282,7 @@ impl Interpreter {
         out: &mut Outcome,
         room: Option<Room>,
     ) -> Result<bool, Reject> {
-        let mut b = Block::default();
+        let mut b = WordBlock::default();
         b.parse_into(line)?;
 
         // --- Stage 1, grouping. Guarantees: every G and M code is known and each modal
@@ -297,7 +297,7 @@ impl Interpreter {
         // M1 (optional stop) is ignored, as Grbl does without a stop switch, but it
         // shares the stop group.
         if m1 != NONE && stop != NONE {
-            return Err(Status::ModalGroupViolation.into());
+            return Err(ErrorCode::ModalGroupViolation.into());
         }
         let mut stop = match stop {
             0 => Some(Stop::Pause),
@@ -306,7 +306,7 @@ impl Interpreter {
         };
         if tool_change != NONE && stop.is_some() {
             // One stop per block: a pen change beside M0/M2 is ambiguous.
-            return Err(Status::ModalGroupViolation.into());
+            return Err(ErrorCode::ModalGroupViolation.into());
         }
 
         // --- Stage 2, value words and modes. Guarantees: no negative F, N, P, S, T or L,
@@ -314,17 +314,17 @@ impl Interpreter {
         // modes are in the copy `modal`, never yet in `self`. ---
         for &letter in b"FNPSTL" {
             if b.get(letter).is_some_and(Value::is_negative) {
-                return Err(Status::NegativeValue.into());
+                return Err(ErrorCode::NegativeValue.into());
             }
         }
         let n_word = b.take(b'N').map(Value::round);
         if n_word.is_some_and(|n| n > MAX_LINE_NUMBER) {
-            return Err(Status::InvalidLineNumber.into());
+            return Err(ErrorCode::InvalidLineNumber.into());
         }
         let line_tag = n_word.map_or(line_no, |n| n as u32);
         let tool = b.take(b'T');
         if tool.is_some_and(|t| t.millionths() > 255 * ONE) {
-            return Err(Status::MaxValueExceeded.into());
+            return Err(ErrorCode::MaxValueExceeded.into());
         }
         let tool = tool.map(|t| t.round() as u8);
         let spindle = b.take(b'S').map(Value::to_f32);
@@ -373,7 +373,7 @@ impl Interpreter {
         // offset, and Z is the only axis it may name: error 37), or else motion.
         let dynamic_tlo = tool_length == 1;
         if dynamic_tlo && axes & !(1 << 2) != 0 {
-            return Err(Status::G43DynamicAxisError.into());
+            return Err(ErrorCode::G43DynamicAxisError.into());
         }
         let non_modal_axes = matches!(
             non_modal,
@@ -385,7 +385,7 @@ impl Interpreter {
         let motion_conflict =
             motion.is_some_and(|m| m != MotionMode::Cancel) && (non_modal_axes || has_axis);
         if (nm_uses_axes && motion_conflict) || (non_modal_axes && dynamic_tlo) {
-            return Err(Status::AxisCommandConflict.into());
+            return Err(ErrorCode::AxisCommandConflict.into());
         }
         if let Some(m) = motion {
             modal.motion = m;
@@ -403,13 +403,13 @@ impl Interpreter {
         // Motion runs if it was named in the block, or implicitly for axis words.
         let motion_cmd = !nm_uses_axes && (motion.is_some() || has_axis);
         if motion_cmd && modal.motion == MotionMode::Cancel && has_axis {
-            return Err(Status::AxisWordsExist.into());
+            return Err(ErrorCode::AxisWordsExist.into());
         }
         let absolute_override = non_modal == Some(NonModal::Absolute);
         if absolute_override
             && !(motion_cmd && matches!(modal.motion, MotionMode::Rapid | MotionMode::Linear))
         {
-            return Err(Status::G53InvalidMotionMode.into());
+            return Err(ErrorCode::G53InvalidMotionMode.into());
         }
         let feed_motion = motion_cmd
             && matches!(
@@ -417,7 +417,7 @@ impl Interpreter {
                 MotionMode::Linear | MotionMode::ArcCw | MotionMode::ArcCcw
             );
         if feed_motion && feed <= 0.0 {
-            return Err(Status::UndefinedFeedRate.into());
+            return Err(ErrorCode::UndefinedFeedRate.into());
         }
 
         let mut coords = self.coords;
@@ -495,20 +495,20 @@ impl Interpreter {
         // `g92`, `pos`; every target reached is recorded in `planned`. ---
         match non_modal {
             Some(NonModal::Dwell) => {
-                let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
+                let p = b.take(b'P').ok_or(ErrorCode::ValueWordMissing)?;
                 push(out, Command::Dwell { ms: value_to_ms(p) })?;
             }
             Some(NonModal::SetCoord) => {
-                let l = b.take(b'L').ok_or(Status::ValueWordMissing)?;
-                let p = b.take(b'P').ok_or(Status::ValueWordMissing)?;
+                let l = b.take(b'L').ok_or(ErrorCode::ValueWordMissing)?;
+                let p = b.take(b'P').ok_or(ErrorCode::ValueWordMissing)?;
                 let (Some(l), Some(p)) = (l.whole(), p.whole()) else {
-                    return Err(Status::CommandValueNotInteger.into());
+                    return Err(ErrorCode::CommandValueNotInteger.into());
                 };
                 if p > 6 {
-                    return Err(Status::UnsupportedCoordSys.into());
+                    return Err(ErrorCode::UnsupportedCoordSys.into());
                 }
                 if !has_axis {
-                    return Err(Status::NoAxisWords.into());
+                    return Err(ErrorCode::NoAxisWords.into());
                 }
                 let idx = if p == 0 {
                     usize::from(modal.wcs)
@@ -520,7 +520,7 @@ impl Interpreter {
                 let from = match l {
                     2 => None,
                     20 => Some((&g92, tlo)),
-                    _ => return Err(Status::UnsupportedCommand.into()),
+                    _ => return Err(ErrorCode::UnsupportedCommand.into()),
                 };
                 if let Some(sys) = coords.wcs.get_mut(idx) {
                     set_axes(sys, axes, &words, &pos, from);
@@ -549,7 +549,7 @@ impl Interpreter {
             }
             Some(NonModal::SetG92) => {
                 if !has_axis {
-                    return Err(Status::NoAxisWords.into());
+                    return Err(ErrorCode::NoAxisWords.into());
                 }
                 let w = coords.wcs.get(usize::from(modal.wcs)).unwrap_or(&[0; AXES]);
                 set_axes(&mut g92, axes, &words, &pos, Some((w, tlo)));
@@ -564,10 +564,10 @@ impl Interpreter {
                 let ccw = modal.motion == MotionMode::ArcCcw;
                 let (len, path) = if arc {
                     if !has_axis {
-                        return Err(Status::NoAxisWords.into());
+                        return Err(ErrorCode::NoAxisWords.into());
                     }
                     if axes & 3 == 0 {
-                        return Err(Status::NoAxisWordsInPlane.into());
+                        return Err(ErrorCode::NoAxisWordsInPlane.into());
                     }
                     let g = arc_geometry(&mut b, &pos, &target, ccw, modal.inches)?;
                     arc_extremes(&g, &pos, &target, ccw, &mut planned, s);
@@ -608,13 +608,13 @@ impl Interpreter {
         // Everything the block asked for must have been used.
         let leftover_axes = has_axis && !motion_cmd && !nm_uses_axes;
         if leftover_axes {
-            return Err(Status::AxisWordsExist.into());
+            return Err(ErrorCode::AxisWordsExist.into());
         }
         if b.any_value() {
-            return Err(Status::UnusedWords.into());
+            return Err(ErrorCode::UnusedWords.into());
         }
         if !planned.in_range {
-            return Err(Status::InvalidTarget.into());
+            return Err(ErrorCode::InvalidTarget.into());
         }
         if s.soft_limits() && !planned.in_travel {
             return Err(Reject::SoftLimit);

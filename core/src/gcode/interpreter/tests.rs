@@ -18,7 +18,7 @@ fn moves(o: &Outcome) -> std::vec::Vec<Move> {
         .collect()
 }
 
-fn err(n: Status) -> Result<Outcome, Reject> {
+fn err(n: ErrorCode) -> Result<Outcome, Reject> {
     Err(Reject::Error(n))
 }
 
@@ -58,58 +58,70 @@ fn lines_round_to_steps_and_carry_feed_and_line_numbers() {
 fn grbl_error_numbers_for_bad_blocks() {
     let s = Settings::default();
     let mut it = Interpreter::new();
-    assert_eq!(run(&mut it, &s, "G1 X1"), err(Status::UndefinedFeedRate));
+    assert_eq!(run(&mut it, &s, "G1 X1"), err(ErrorCode::UndefinedFeedRate));
     assert_eq!(
         run(&mut it, &s, "G0 G1 X1"),
-        err(Status::ModalGroupViolation)
+        err(ErrorCode::ModalGroupViolation)
     );
-    assert_eq!(run(&mut it, &s, "G5 X1"), err(Status::UnsupportedCommand));
-    assert_eq!(run(&mut it, &s, "G0 X1 I2"), err(Status::UnusedWords));
+    assert_eq!(
+        run(&mut it, &s, "G5 X1"),
+        err(ErrorCode::UnsupportedCommand)
+    );
+    assert_eq!(run(&mut it, &s, "G0 X1 I2"), err(ErrorCode::UnusedWords));
     assert_eq!(
         run(&mut it, &s, "G0 G92 X1"),
-        err(Status::AxisCommandConflict)
+        err(ErrorCode::AxisCommandConflict)
     );
-    assert_eq!(run(&mut it, &s, "G80 X1"), err(Status::AxisWordsExist));
-    assert_eq!(run(&mut it, &s, "G4"), err(Status::ValueWordMissing));
-    assert_eq!(run(&mut it, &s, "G4 P-1"), err(Status::NegativeValue));
+    assert_eq!(run(&mut it, &s, "G80 X1"), err(ErrorCode::AxisWordsExist));
+    assert_eq!(run(&mut it, &s, "G4"), err(ErrorCode::ValueWordMissing));
+    assert_eq!(run(&mut it, &s, "G4 P-1"), err(ErrorCode::NegativeValue));
     assert_eq!(
         run(&mut it, &s, "N10000001 G0 X1"),
-        err(Status::InvalidLineNumber)
+        err(ErrorCode::InvalidLineNumber)
     );
     assert_eq!(
         run(&mut it, &s, "G59.1"),
-        err(Status::CommandValueNotInteger)
+        err(ErrorCode::CommandValueNotInteger)
     );
     assert_eq!(
         run(&mut it, &s, "G53 G2 X1 I1 F10"),
-        err(Status::G53InvalidMotionMode)
+        err(ErrorCode::G53InvalidMotionMode)
     );
-    assert_eq!(run(&mut it, &s, "G2 I1 F10"), err(Status::NoAxisWords));
+    assert_eq!(run(&mut it, &s, "G2 I1 F10"), err(ErrorCode::NoAxisWords));
     assert_eq!(
         run(&mut it, &s, "G2 Z1 I1 F10"),
-        err(Status::NoAxisWordsInPlane)
+        err(ErrorCode::NoAxisWordsInPlane)
     );
-    assert_eq!(run(&mut it, &s, "G2 X1 F10"), err(Status::NoOffsetsInPlane));
+    assert_eq!(
+        run(&mut it, &s, "G2 X1 F10"),
+        err(ErrorCode::NoOffsetsInPlane)
+    );
     assert_eq!(
         run(&mut it, &s, "G2 X10 R2 F10"),
-        err(Status::ArcRadiusError)
+        err(ErrorCode::ArcRadiusError)
     );
-    assert_eq!(run(&mut it, &s, "G2 X0 R2 F10"), err(Status::InvalidTarget));
+    assert_eq!(
+        run(&mut it, &s, "G2 X0 R2 F10"),
+        err(ErrorCode::InvalidTarget)
+    );
     assert_eq!(
         run(&mut it, &s, "G10 L3 P1 X1"),
-        err(Status::UnsupportedCommand)
+        err(ErrorCode::UnsupportedCommand)
     );
     assert_eq!(
         run(&mut it, &s, "G10 L2 P7 X1"),
-        err(Status::UnsupportedCoordSys)
+        err(ErrorCode::UnsupportedCoordSys)
     );
-    assert_eq!(run(&mut it, &s, "M62"), err(Status::UnsupportedCommand));
-    assert_eq!(run(&mut it, &s, "M0 M6"), err(Status::ModalGroupViolation));
+    assert_eq!(run(&mut it, &s, "M62"), err(ErrorCode::UnsupportedCommand));
+    assert_eq!(
+        run(&mut it, &s, "M0 M6"),
+        err(ErrorCode::ModalGroupViolation)
+    );
     assert_eq!(
         run(&mut it, &s, "G1.5 X1"),
-        err(Status::CommandValueNotInteger)
+        err(ErrorCode::CommandValueNotInteger)
     );
-    assert_eq!(run(&mut it, &s, "T300"), err(Status::MaxValueExceeded));
+    assert_eq!(run(&mut it, &s, "T300"), err(ErrorCode::MaxValueExceeded));
     // A rejected block changes nothing.
     assert_eq!(it, Interpreter::new());
 }
@@ -154,7 +166,7 @@ fn every_g_code_lands_in_its_modal_group() {
     for (a, ga) in codes {
         for (b, gb) in codes {
             let r = run(&mut Interpreter::new(), &s, &std::format!("{a} {b}"));
-            let violation = r == err(Status::ModalGroupViolation);
+            let violation = r == err(ErrorCode::ModalGroupViolation);
             assert_eq!(violation, ga == gb, "{a} {b}: {r:?}");
         }
     }
@@ -215,7 +227,7 @@ fn arcs_in_ij_and_r_form_with_cam_tolerance() {
     let mut it = Interpreter::new();
     assert_eq!(
         run(&mut it, &s, "G3 X10.1 Y0 I5 F300"),
-        err(Status::InvalidTarget)
+        err(ErrorCode::InvalidTarget)
     );
     // Full circle with I/J: target equals start.
     let mut it = Interpreter::new();
@@ -314,8 +326,11 @@ fn r_form_near_semicircle_centre_is_exact() {
 fn targets_beyond_the_step_range_are_refused() {
     let s = Settings::default();
     let mut it = Interpreter::new();
-    assert_eq!(run(&mut it, &s, "G0 X99999999"), err(Status::InvalidTarget));
-    assert_eq!(it.jog(b"X99999999F10", &s), Err(Status::InvalidTarget));
+    assert_eq!(
+        run(&mut it, &s, "G0 X99999999"),
+        err(ErrorCode::InvalidTarget)
+    );
+    assert_eq!(it.jog(b"X99999999F10", &s), Err(ErrorCode::InvalidTarget));
     assert_eq!(it, Interpreter::new());
 }
 
@@ -500,9 +515,15 @@ fn inverse_time_feed_needs_f_every_block() {
     let mut it = Interpreter::new();
     let o = run(&mut it, &s, "G93 G1 X10 F2").unwrap();
     assert_eq!(moves(&o)[0].feed, Feed::MmPerMin(20.0));
-    assert_eq!(run(&mut it, &s, "G1 X20"), err(Status::UndefinedFeedRate));
+    assert_eq!(
+        run(&mut it, &s, "G1 X20"),
+        err(ErrorCode::UndefinedFeedRate)
+    );
     run(&mut it, &s, "G94").unwrap();
-    assert_eq!(run(&mut it, &s, "G1 X20"), err(Status::UndefinedFeedRate));
+    assert_eq!(
+        run(&mut it, &s, "G1 X20"),
+        err(ErrorCode::UndefinedFeedRate)
+    );
 }
 
 #[test]
@@ -520,8 +541,8 @@ fn soft_limits_reject_targets_and_arc_extents() {
         Err(Reject::SoftLimit)
     );
     assert!(run(&mut it, &s, "G2 X100 Y100 J-50 F100").is_ok());
-    assert_eq!(it.jog(b"G91X-200F100", &s), Err(Status::TravelExceeded));
+    assert_eq!(it.jog(b"G91X-200F100", &s), Err(ErrorCode::TravelExceeded));
     assert!(it.jog(b"G91X-100F100", &s).is_ok());
-    assert_eq!(it.jog(b"G1X1F100", &s), Err(Status::InvalidJogCommand));
-    assert_eq!(it.jog(b"X1", &s), Err(Status::UndefinedFeedRate));
+    assert_eq!(it.jog(b"G1X1F100", &s), Err(ErrorCode::InvalidJogCommand));
+    assert_eq!(it.jog(b"X1", &s), Err(ErrorCode::UndefinedFeedRate));
 }

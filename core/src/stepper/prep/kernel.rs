@@ -1,7 +1,7 @@
 //! Integer timing kernels of the preparation: the per-step arithmetic that turns a run of
 //! ticks into timer counts without floating point, and the queueing of the result. It
 //! owns [`Segment`] (a run of ticks and how they are timed), [`Timing`] (a cubic in the
-//! tick count by forward differences, or an exact constant-acceleration [`Ramp`]), the
+//! tick count by forward differences, or an exact constant-acceleration [`RampTiming`]), the
 //! Q fixed-point unit and the split of a long wait into pure waits. Nothing here knows
 //! of blocks or profiles: [`super::profile`] decides each segment's coefficients, this
 //! module only executes them, so that the inner loop stays a few integer additions per
@@ -22,7 +22,7 @@
 //! ```
 
 use super::super::{CmdSink, StepCmd, MAX_STEP_RATE, MAX_WAIT};
-use crate::interpolation::Tick;
+use crate::interpolation::StepEvent;
 
 /// Distance unit of path positions: 2^-32 mm.
 pub(super) const Q: f32 = 4_294_967_296.0;
@@ -32,13 +32,13 @@ pub(super) const MAX_SEGMENT: u32 = 256;
 pub(super) const MAX_LINEAR: u32 = 2048;
 /// Ticks timed per pass of the inner loop (a stack buffer of ticks and commands).
 pub(super) const BATCH: usize = 32;
-/// Longest segment, timer ticks (its time since the segment start stays in i64 with 32
+/// Longest segment, timer counts (its time since the segment start stays in i64 with 32
 /// fractional bits).
-pub(super) const MAX_SEGMENT_TICKS: f32 = 1.0e9;
+pub(super) const MAX_SEGMENT_COUNTS: f32 = 1.0e9;
 
-/// The ticks of one segment and how they are timed; `base` is the timer tick of the
+/// The ticks of one segment and how they are timed; `base` is the timer count of the
 /// segment's start and `at` the last queued tick's time since it (a segment lasts less
-/// than 2^30 timer ticks, so 32 bits hold it).
+/// than 2^30 timer counts, so 32 bits hold it).
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Segment {
     pub(super) left: u32,
@@ -51,7 +51,7 @@ pub(super) struct Segment {
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Timing {
     /// A polynomial in the tick count: `acc` is the time since the segment's start and
-    /// `d1..d3` its forward differences, in timer ticks with 32 fractional bits;
+    /// `d1..d3` its forward differences, in timer counts with 32 fractional bits;
     /// `linear` when d2 = d3 = 0.
     Poly {
         acc: u64,
@@ -60,8 +60,8 @@ pub(super) enum Timing {
         d3: u64,
         linear: bool,
     },
-    /// A constant acceleration along a line, exact: see [`Ramp`].
-    Ramp(Ramp),
+    /// A constant acceleration along a line, exact: see [`RampTiming`].
+    Ramp(RampTiming),
 }
 
 impl Default for Timing {
@@ -76,7 +76,7 @@ impl Default for Timing {
     }
 }
 
-/// Tick times under constant acceleration, in integers. With R = v / a in timer ticks
+/// Step event times under constant acceleration, in integers. With R = v / a in timer counts
 /// (the time the speed would take to reach 0), R^2 = W grows or falls by 2 ds / a
 /// (ticks^2) per tick of length ds, and the tick's time is a fixed tick plus or minus R
 /// (the ramp's anchor: its start, or the profile's end for the last ramp). Each tick
@@ -84,9 +84,9 @@ impl Default for Timing {
 /// of R (quadratic extrapolation) and one Newton correction with a 32-bit division, then
 /// checks it exactly (one 32x32 multiply each way). Near rest the guess can be far off:
 /// the exact digit-by-digit root there. Every time is the exact one rounded down to the
-/// timer tick (up to f32 rounding of W's start and step).
+/// timer count (up to f32 rounding of W's start and step).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Ramp {
+pub(super) struct RampTiming {
     /// W and its forward differences per tick (wrapping: the differences may be
     /// negative). A line's ticks are equal, so W moves by a constant; along a curve the
     /// path position is a cubic in the tick count (within the error bound), so W is too.
@@ -102,7 +102,7 @@ pub(super) struct Ramp {
     pub(super) ddr: i32,
 }
 
-impl Ramp {
+impl RampTiming {
     /// floor(sqrt(w)) near the guess `g` (below 2^30): one Newton step from the guess
     /// with a 32-bit division, checked exactly; far from it (near rest), digit by digit.
     #[inline(always)]
@@ -152,7 +152,7 @@ impl Ramp {
 }
 
 impl Segment {
-    /// `n` ticks timed by a polynomial with the forward differences `d` (timer ticks,
+    /// `n` ticks timed by a polynomial with the forward differences `d` (timer counts,
     /// see [`fixed`]) from the cursor's time `base`; `t_last` is the last queued tick's.
     pub(super) fn poly(n: u32, d: [i64; 3], base: u64, t_last: u64) -> Self {
         let [d1, d2, d3] = d.map(|d| d as u64);
@@ -174,9 +174,9 @@ impl Segment {
     /// (linear) or six (cubic) 32-bit additions, or a ramp's integer root, and the wait
     /// since the last one.
     #[inline(always)]
-    pub(super) fn time(&mut self, ticks: &[Tick], cmds: &mut [StepCmd]) {
+    pub(super) fn time(&mut self, ticks: &[StepEvent], cmds: &mut [StepCmd]) {
         let mut prev = self.at;
-        let mut emit = |at: u32, tick: Tick, cmd: &mut StepCmd| {
+        let mut emit = |at: u32, tick: StepEvent, cmd: &mut StepCmd| {
             // At least 2 ticks apart (the executor's promise); the 24-bit bound holds
             // for every segment (a tick that may wait longer is timed on its own).
             let wait = at.wrapping_sub(prev).clamp(2, MAX_WAIT);
@@ -232,7 +232,7 @@ pub(super) fn from_q(q: u64) -> f32 {
     q as f32 * (1.0 / Q)
 }
 
-/// f32 timer ticks (at most 2^31) in i64 with 32 fractional bits.
+/// f32 timer counts (at most 2^31) in i64 with 32 fractional bits.
 pub(super) fn fixed(ticks: f32) -> i64 {
     (ticks * Q) as i64
 }
@@ -247,7 +247,7 @@ pub(super) fn hermite(n: u32, span: f32, m0: f32, m1: f32) -> [f32; 3] {
     [c3 + c2 + m0, 6.0 * c3 + 2.0 * c2, 6.0 * c3]
 }
 
-/// The shortest wait between two step events, timer ticks: one event period at the
+/// The shortest wait between two step events, timer counts: one event period at the
 /// step pipeline's cap ([`MAX_STEP_RATE`], 12.5 us), longer than any step pulse plus
 /// the drivers' low time.
 pub(super) fn min_wait(timer_hz: u32) -> u64 {
@@ -288,10 +288,10 @@ pub(super) fn commands_for_wait(wait: u64) -> usize {
 
 /// Queues `tick` `wait` ticks after the last command (pure waits first for a long
 /// one); the wait of its own command.
-pub(super) fn push_waited(sink: &mut dyn CmdSink, tick: Tick, wait: u64) -> u32 {
+pub(super) fn push_waited(sink: &mut dyn CmdSink, tick: StepEvent, wait: u64) -> u32 {
     let n = pure_waits(wait);
     for _ in 0..n {
-        sink.push_slice(&[StepCmd::new(Tick(0), PURE_WAIT as u32)]);
+        sink.push_slice(&[StepCmd::new(StepEvent(0), PURE_WAIT as u32)]);
     }
     let last = wait.max(2) - n * PURE_WAIT;
     sink.push_slice(&[StepCmd::new(tick, last as u32)]);

@@ -17,7 +17,7 @@
 //! acceleration and jerk, the speed and the path's curvature (at most 256 ticks, never
 //! across a phase of the profile). Cruising along a line the time is linear, so one
 //! segment takes up to 2048 ticks; ramps of constant acceleration are timed exactly
-//! in integers (`Ramp`), other ramps take shorter segments, and the first tick of a
+//! in integers (`RampTiming`), other ramps take shorter segments, and the first tick of a
 //! phase (or from rest) its own. Every segment starts on the exact time of its first
 //! point, so errors never add up. The resulting accuracy is asserted by the tests below
 //! against the ideal profile computed in f64.
@@ -56,7 +56,7 @@ mod profile;
 mod tests;
 
 use super::{CmdSink, StepCmd};
-use crate::interpolation::{Interpolator, Next, Tick};
+use crate::interpolation::{Interpolator, Next, StepEvent};
 use crate::motion::{StepPos, X, Y};
 use crate::planner::profile::{Phase, Shape};
 use crate::planner::{Block, Planner, PlannerConfig, Profile};
@@ -97,9 +97,9 @@ impl Default for PrepConfig {
 #[derive(Clone, Copy, Debug)]
 enum Pending {
     /// Timed on its own: its length, Q units.
-    Tick(Tick, u64),
+    StepEvent(StepEvent, u64),
     /// An extra step (no path length).
-    Extra(Tick),
+    Extra(StepEvent),
 }
 
 #[derive(Clone, Debug)]
@@ -116,12 +116,12 @@ struct Active {
     /// its last piece began in a cruise).
     exact_end: bool,
     prof: Profile,
-    /// Timer ticks of the phases' anchors: the profile's start, the cruise's start, the
+    /// Timer counts of the phases' anchors: the profile's start, the cruise's start, the
     /// profile's end (the last ramp is timed back from it).
     anchors: [u64; 3],
     /// Where the phases end, Q units from the profile's start (the last is its length).
     ends_q: [u64; 3],
-    /// Timer ticks per mm in the cruise (one division per profile, not per segment).
+    /// Timer counts per mm in the cruise (one division per profile, not per segment).
     cruise_ticks_per_mm: f32,
     at: Cursor,
     /// Ticks left in the present run (0: ask the interpolator what comes next).
@@ -134,7 +134,7 @@ struct Active {
 /// clears it.
 #[derive(Clone, Debug)]
 struct Batch {
-    ticks: [Tick; BATCH],
+    ticks: [StepEvent; BATCH],
     cmds: [StepCmd; BATCH],
 }
 
@@ -158,7 +158,7 @@ pub struct Prep {
     pos: StepPos,
     /// Blocks whose interpolation was rejected (skipped without moving).
     skipped: u32,
-    /// Wait before the last queued step, timer ticks.
+    /// Wait before the last queued step, timer counts.
     last_wait: u32,
     /// The speed limit and exit speed the present profile was built for.
     planned: (f32, f32),
@@ -192,7 +192,7 @@ impl Prep {
         Prep {
             cfg,
             batch: Batch {
-                ticks: [Tick(0); BATCH],
+                ticks: [StepEvent(0); BATCH],
                 cmds: [StepCmd(0); BATCH],
             },
             active: None,
@@ -236,7 +236,7 @@ impl Prep {
     pub fn line(&self) -> Option<u32> {
         self.active.as_ref().map(|a| a.block.mv.line)
     }
-    /// Step commands that cover `ticks` timer ticks at the present step rate (integer:
+    /// Step commands that cover `ticks` timer counts at the present step rate (integer:
     /// how far ahead of the interrupt to prepare).
     pub fn commands_for(&self, ticks: u32) -> usize {
         (ticks / self.last_wait.max(1)) as usize
@@ -306,7 +306,7 @@ impl Prep {
             // The inner loop: make a batch of the segment's ticks, time them (a few
             // additions each) and queue them in one go.
             let n = room.min(BATCH).min(a.seg.left as usize);
-            let got = a.interp.ticks_into(&mut ticks[..n]);
+            let got = a.interp.events_into(&mut ticks[..n]);
             if got < n {
                 // A run never ends early; should it, the block ends after these ticks.
                 a.seg.left = got as u32;
@@ -509,7 +509,7 @@ impl Prep {
                         return Ready::Finished;
                     }
                 }
-                Next::Tick | Next::Extra => return Ready::Single,
+                Next::StepEvent | Next::Extra => return Ready::Single,
                 Next::Done => {
                     self.finish();
                     return Ready::Finished;
@@ -546,13 +546,13 @@ impl Prep {
         let pending = match a.pending.take() {
             Some(p) => p,
             None => {
-                let mut one = [Tick(0)];
+                let mut one = [StepEvent(0)];
                 let kind = if a.run_left > 0 {
                     Next::Run(a.run_left)
                 } else {
                     a.interp.next()
                 };
-                if a.interp.ticks_into(&mut one) == 0 {
+                if a.interp.events_into(&mut one) == 0 {
                     self.finish();
                     return Some(0);
                 }
@@ -563,9 +563,9 @@ impl Prep {
                             Some(q) => q,
                             None => to_q(a.interp.path_ahead(0).1 * a.scale),
                         };
-                        Pending::Tick(one[0], q)
+                        Pending::StepEvent(one[0], q)
                     }
-                    Next::Tick => Pending::Tick(one[0], to_q(a.interp.tick_len(spm))),
+                    Next::StepEvent => Pending::StepEvent(one[0], to_q(a.interp.tick_len(spm))),
                     _ => Pending::Extra(one[0]),
                 }
             }
@@ -573,7 +573,7 @@ impl Prep {
         // Its time.
         let (tick, at, cursor) = match pending {
             Pending::Extra(tick) => (tick, self.t_last + u64::from(self.last_wait / 2), None),
-            Pending::Tick(tick, len_q) => {
+            Pending::StepEvent(tick, len_q) => {
                 let s1 = a.at.s + len_q;
                 match a.phase_of(s1) {
                     Some(p) => {

@@ -33,7 +33,7 @@ use super::Active;
 /// overestimates the slowest speed of a segment slowing down.
 const LONGEST_TICK: f32 = 1.415;
 
-/// A ramp segment's ticks as [`Ramp`] takes them: `n` ticks, W at the first and its
+/// A ramp segment's ticks as [`RampTiming`] takes them: `n` ticks, W at the first and its
 /// forward differences per tick, and where the segment ends (path position `s1`, Q units,
 /// and the run's rate there, run units per tick).
 struct RampRun {
@@ -51,7 +51,7 @@ pub(super) struct Cursor {
     /// Path position, Q units from the profile's start.
     pub(super) s: u64,
     /// Its phase, the phase-local time there (see [`Profile::phase_time`]), seconds,
-    /// and the timer tick it falls on.
+    /// and the timer count it falls on.
     pub(super) phase: Phase,
     pub(super) t: f32,
     pub(super) at: u64,
@@ -205,7 +205,7 @@ impl Active {
             let d1 = span / n as f32;
             ([fixed(d1), 0, 0], d1)
         } else {
-            // The slopes (timer ticks per tick) at both ends.
+            // The slopes (timer counts per tick) at both ends.
             let per = self.scale * hz;
             let m0 = at.rate * per / at.v;
             let m1 = rate1 * per / end.v.max(1e-9);
@@ -222,9 +222,9 @@ impl Active {
     }
 
     /// Ticks in a ramp of constant acceleration (trapezoid), timed exactly
-    /// ([`Ramp`]): a line's up to the ramp's end; a curve's as far as its path position
+    /// ([`RampTiming`]): a line's up to the ramp's end; a curve's as far as its path position
     /// stays within the error bound of a cubic in the tick count. `None` for anything
-    /// else (or a ramp so long that its times leave 2^30 timer ticks).
+    /// else (or a ramp so long that its times leave 2^30 timer counts).
     pub(super) fn ramp_segment(
         &self,
         p: Phase,
@@ -242,7 +242,7 @@ impl Active {
             _ => self.ends_q[2],
         };
         let (v0, v1) = self.prof.phase_speeds(p);
-        let per_s = hz / acc; // R per mm/s, timer ticks
+        let per_s = hz / acc; // R per mm/s, timer counts
         if v0.max(v1) * per_s >= (1u32 << 30) as f32 {
             return None;
         }
@@ -376,13 +376,13 @@ impl Active {
         } else {
             anchor.wrapping_add(u64::from(r_ref))
         };
-        let r = Ramp::root_near(w, (at.v * per_s) as u32);
+        let r = RampTiming::root_near(w, (at.v * per_s) as u32);
         let dr = if r > 0 {
             (dw1 as i64 as f32 / (2 * r) as f32) as i32
         } else {
             0
         };
-        let ramp = Ramp {
+        let ramp = RampTiming {
             w,
             dw1,
             dw2,
@@ -423,7 +423,7 @@ impl Active {
             Phase::Down => self.ends_q[2],
         };
         let to_end = from_q(end.saturating_sub(at.s)) / per_tick;
-        let by_time = MAX_SEGMENT_TICKS * at.v / (per_tick * hz);
+        let by_time = MAX_SEGMENT_COUNTS * at.v / (per_tick * hz);
         let mut n = cap
             .min(to_end.max(1.0) as u32)
             .min(by_time.max(1.0) as u32)

@@ -192,8 +192,8 @@ fn arc_error(cfg: PlannerConfig, mv: &Move, center: [f64; 2], r: f64) -> (f64, f
             Interpolator::Circle(c) => c.major(),
             _ => 0,
         };
-        let mut one = [Tick(0)];
-        if it.ticks_into(&mut one) == 0 {
+        let mut one = [StepEvent(0)];
+        if it.events_into(&mut one) == 0 {
             break;
         }
         one[0].apply(&mut p);
@@ -291,7 +291,7 @@ fn an_arc_is_timed_within_a_microsecond() {
     assert!(err <= 1e-6 + 2e-7 * total, "{} us", err * 1e6);
 }
 
-/// Every step event of `moves` prepared from rest at the origin: (timer tick,
+/// Every step event of `moves` prepared from rest at the origin: (timer count,
 /// position after it).
 fn events(cfg: PlannerConfig, moves: &[Move]) -> Vec<(u64, StepPos)> {
     let mut planner = Planner::new(cfg, [0; 3]);
@@ -322,7 +322,7 @@ fn events(cfg: PlannerConfig, moves: &[Move]) -> Vec<(u64, StepPos)> {
 }
 
 /// The shortest interval between two step events the drivers and the step
-/// pipeline take, timer ticks (1 / MAX_STEP_RATE, less a tick of rounding).
+/// pipeline take, timer counts (1 / MAX_STEP_RATE, less a tick of rounding).
 fn shortest_allowed() -> u64 {
     (HZ / f64::from(MAX_STEP_RATE)) as u64 - 1
 }
