@@ -27,10 +27,10 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 #![no_main]
 
-use core::sync::atomic::{AtomicBool, AtomicU32, AtomicU8, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use defmt_rtt as _;
 use inkstep::board;
-use inkstep::steps::{self, BoardSide, StepOutput};
+use inkstep::steps::{self, BoardSide, StepOutput, HALT};
 use inkstep_core::controller::{HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS};
 use inkstep_core::pipeline::StepSide;
 use inkstep_core::ring::{ByteRing, ByteRx, ByteTx};
@@ -39,15 +39,6 @@ use inkstep_core::stepper::output::OutputConfig;
 use inkstep_core::stepper::queue::StepCmdQueue;
 use inkstep_core::stepper::MAX_RELOAD;
 
-/// Axes (bit 0 X) whose limit switch stops stepping at once: with `$21` on, those
-/// with a switch (`$214`).
-static HARD_LIMITS_ARMED: AtomicU8 = AtomicU8::new(0);
-/// Inputs whose interrupt halted the step output since the protocol task last looked
-/// (bit 0 the e-stop, bits 1 and 2 the X and Y limits with hard limits armed). The
-/// task shows them to the machine as active even when the pin was released again
-/// before it read the pins (a glitch of a few µs), so a halted output always comes
-/// with its alarm: never a machine that says `Run` and makes no step (issue 23).
-static TRIPPED: AtomicU8 = AtomicU8::new(0);
 /// 4-phase outputs (`$200=1`): the motors are released by turning the coils off too.
 static FOUR_PHASE: AtomicBool = AtomicBool::new(false);
 /// The host has the serial port open (CDC's DTR), as the USB task last saw it.
@@ -85,7 +76,6 @@ mod app {
     use cortex_m::peripheral::syst::SystClkSource;
     use inkstep_core::controller::{Controller, HostLink};
     use inkstep_core::hmi::buzzer::Buzzer;
-    use inkstep_core::machine::InputPolarity;
     use inkstep_core::pipeline::Pipeline;
     use inkstep_core::screens::{framebuffer::FrameBuffer, st7920, Screens};
     use inkstep_core::settings_store::SettingsStore;
@@ -257,7 +247,7 @@ mod app {
     /// tick with the polarity set here.
     fn apply_output_config(cfg: &OutputConfig) {
         steps::set_output_config(cfg);
-        HARD_LIMITS_ARMED.store(cfg.hard_limit_axes, Ordering::Relaxed);
+        HALT.arm_hard_limits(cfg.hard_limit_axes);
         FOUR_PHASE.store(cfg.four_phase, Ordering::Relaxed);
         board::set_enable_polarity(cfg.enable_active_low);
     }
@@ -270,13 +260,15 @@ mod app {
     }
 
     /// Emergency stop: highest priority. Drivers off and steps halted before anything
-    /// else; the protocol task raises the alarm when it next reads the inputs (<= 1 ms).
+    /// else; the protocol task raises the alarm when it next reads the inputs (<= 1 ms:
+    /// the core's halt latch shows it the e-stop as pressed even if it was released
+    /// again meanwhile).
     #[task(binds = EXTI0, priority = 7)]
     fn estop(_: estop::Context) {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
+            HALT.trip_estop();
             steps::halt();
-            TRIPPED.fetch_or(1, Ordering::SeqCst);
             wake_protocol();
         }
     }
@@ -293,13 +285,13 @@ mod app {
         limit_switch(3);
     }
 
-    /// A limit switch on EXTI line `line` changed (one body for both axes).
+    /// A limit switch on EXTI line `line` changed (one body for both axes): the core's
+    /// halt latch decides whether it halts (hard limits armed on that axis).
     fn limit_switch(line: u8) {
         if board::exti_take_pending(line) {
-            let axis_bit = if line == 1 { 1 } else { 2 };
-            if HARD_LIMITS_ARMED.load(Ordering::Relaxed) & axis_bit != 0 {
+            let axis = if line == 1 { 0 } else { 1 };
+            if HALT.trip_limit(axis) {
                 steps::halt();
-                TRIPPED.fetch_or(if line == 1 { 2 } else { 4 }, Ordering::SeqCst);
             }
             // The machine reads the switch (alarm, homing, the `?` report's pins).
             wake_protocol();
@@ -404,26 +396,14 @@ mod app {
     /// The protocol tick: the controller's `service` (inputs, host bytes, the
     /// protocol, the HMI's timers, replies, settings and their persistence at rest),
     /// then what it asks of the hardware: the output configuration, the pen servo and
-    /// the release of a halt.
-    #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, servo, store, servo_us: Option<u32> = None, polarity: InputPolarity = InputPolarity { invert_limits: false, invert_controls: false }])]
+    /// the release of a halt (each decided by the core).
+    #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, servo, store])]
     fn protocol(mut cx: protocol::Context) {
         let started = now_ms();
         let quiet = loop {
             PROTOCOL_WAKE.store(false, Ordering::Relaxed);
             let now = now_ms();
-            let mut pins = board::Inputs::levels();
-            // An input that halted the steps is seen active at least once (TRIPPED),
-            // at the level the polarity settings read as active.
-            let tripped = TRIPPED.swap(0, Ordering::SeqCst);
-            let p = *cx.local.polarity;
-            if tripped & 1 != 0 {
-                pins.estop = !p.invert_controls;
-            }
-            for (axis, bit) in [(0, 2), (1, 4)] {
-                if tripped & bit != 0 {
-                    pins.limits[axis] = Some(!p.invert_limits);
-                }
-            }
+            let pins = board::Inputs::levels();
             let host = HostLink {
                 rx: &mut *cx.local.usb_rx_out,
                 tx: &mut *cx.local.usb_tx_in,
@@ -432,7 +412,7 @@ mod app {
             let store = &mut *cx.local.store;
             let done = cx.shared.core.lock(|c| {
                 let (ctl, pipeline) = c.parts();
-                ctl.service(host, pins, store, pipeline, now)
+                ctl.service(host, pins, &HALT, store, pipeline, now)
             });
             // The replies out now (the USB task preempts this one as soon as the lock
             // is released), and the receive side open again.
@@ -440,27 +420,19 @@ mod app {
             // the USB task's own back-pressure mask (see `usb_lp`).
             unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
             rtic::pend(Interrupt::USB_LP_CAN_RX0);
-            *cx.local.polarity = done.polarity;
             if let Some(cfg) = done.outputs {
                 apply_output_config(&cfg);
             }
-            if let Some(us) = done
-                .servo_pulse_us
-                .filter(|&us| *cx.local.servo_us != Some(us))
-            {
+            if let Some(us) = done.servo_pulse_us {
                 cx.local.servo.set_pulse_us(us);
-                *cx.local.servo_us = Some(us);
             }
-            // A reset from the alarm (soft reset / $X) releases the latched halt, only
-            // while the e-stop input is released now: an e-stop pressed after the
-            // inputs were read above must not be undone.
-            steps::release_halt(|| {
-                !done.alarmed && !done.polarity.decode(board::Inputs::levels()).estop
-            });
+            // The core's release rule, with the e-stop pin read again now: an e-stop
+            // pressed after the inputs were read above is not undone.
+            steps::release_halt(|| done.allows_release(board::Inputs::levels()));
             // One line per run, the lock released in between (so the USB task and the
             // step preparation get in, and a `?` that arrives meanwhile is answered
             // before the next line); more lines until the next tick.
-            if !done.more || now_ms() != started {
+            if !done.again(started, now_ms()) {
                 break done.quiet;
             }
         };

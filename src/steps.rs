@@ -23,6 +23,7 @@
 use crate::board::{self, StepPort, StepTimer};
 use core::cell::UnsafeCell;
 use core::sync::atomic::{AtomicU32, Ordering};
+use inkstep_core::halt::HaltLatch;
 use inkstep_core::interpolation::StepEvent;
 use inkstep_core::motion::StepPos;
 use inkstep_core::pipeline::StepSide;
@@ -34,40 +35,40 @@ use inkstep_core::stepper::tail_period;
 
 /// The interrupt's whole configuration in one word, so that it costs one load per
 /// interrupt: bits 0-2 step invert mask, bits 3-5 direction invert mask, bit 6 4-phase
-/// output (written by [`set_output_config`]), bit 31 the halt latch ([`halt`]).
+/// output (written by [`set_output_config`]).
 static STEP_STATE: AtomicU32 = AtomicU32::new(0);
+/// The core's halt latch: tripped by the e-stop and limit interrupts, looked at by the
+/// step interrupt, released by the protocol task ([`release_halt`]).
+pub static HALT: HaltLatch = HaltLatch::new();
 /// Step pulse width in timer counts (`$0`), taken when the timer starts.
 static PULSE_COUNTS: AtomicU32 = AtomicU32::new(720);
 /// The executor's reversal guard in timer counts, taken when the timer starts.
 static TURN_GUARD_COUNTS: AtomicU32 = AtomicU32::new(0);
 
 const CFG_FOUR_PHASE: u32 = 1 << 6;
-const HALT_BIT: u32 = 1 << 31;
 
-/// The e-stop (and an armed hard limit): stop the step timer at once (no update event,
-/// so no further pulse), latch the halt and pend the step interrupt, which halts the
-/// executor and emits nothing until [`release_halt`]. Any context. (The e-stop turns
-/// the drivers off too, through `board::emergency_outputs_off`; an armed hard limit
-/// leaves them on to hold the position.)
+/// [`HALT`] was tripped (the e-stop, an armed hard limit): stop the step timer at once
+/// (no update event, so no further pulse) and pend the step interrupt, which halts the
+/// executor and emits nothing until the latch is released. Any context. (The e-stop
+/// turns the drivers off too, through `board::emergency_outputs_off`; an armed hard
+/// limit leaves them on to hold the position.)
 pub fn halt() {
     board::stop_step_timer();
-    STEP_STATE.fetch_or(HALT_BIT, Ordering::SeqCst);
     cortex_m::peripheral::NVIC::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
 }
 
 /// Whether the halt latch is set.
 pub fn is_halted() -> bool {
-    STEP_STATE.load(Ordering::Relaxed) & HALT_BIT != 0
+    HALT.is_halted()
 }
 
-/// After a reset (the queue flushed): release the halt latch if `may_release` still
-/// agrees, and turn the drivers back on (an e-stop turned them off). With interrupts
-/// off, so that an e-stop cannot fall between the check and the pin write and be
-/// undone.
-pub fn release_halt(may_release: impl FnOnce() -> bool) {
+/// Release the halt latch if the core's rule allows it (`machine_allows`, with the
+/// pins read inside), and turn the drivers back on (an e-stop turned them off). With
+/// interrupts off, so that an e-stop cannot fall between the pin read and the pin
+/// write and be undone.
+pub fn release_halt(machine_allows: impl FnOnce() -> bool) {
     cortex_m::interrupt::free(|_| {
-        if is_halted() && may_release() {
-            STEP_STATE.fetch_and(!HALT_BIT, Ordering::SeqCst);
+        if HALT.is_halted() && HALT.release(machine_allows()) {
             board::drivers_enabled(true);
         }
     });
@@ -97,10 +98,7 @@ pub fn set_output_config(cfg: &OutputConfig) {
     let word = u32::from(cfg.step_invert & 0b111)
         | (u32::from(cfg.dir_invert & 0b111) << 3)
         | if cfg.four_phase { CFG_FOUR_PHASE } else { 0 };
-    // Keep the halt bit as it is (an e-stop may set it meanwhile).
-    let _ = STEP_STATE.fetch_update(Ordering::SeqCst, Ordering::Relaxed, |s| {
-        Some((s & HALT_BIT) | word)
-    });
+    STEP_STATE.store(word, Ordering::SeqCst);
     cortex_m::peripheral::NVIC::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
 }
 
@@ -179,7 +177,7 @@ impl StepSide for BoardSide {
             s.exec.halt();
             s.rx.clear();
             board::disarm_step_pulses();
-            s.exec.reset();
+            HALT.flushed();
         });
     }
     fn set_position(&mut self, p: StepPos) {
@@ -218,7 +216,13 @@ impl StepOutput {
     #[inline(always)]
     pub fn on_interrupt(&mut self) {
         if !self.timer.take_update() {
-            self.pend(STEP_STATE.load(Ordering::Relaxed));
+            if HALT.is_halted() {
+                // SAFETY: as below.
+                let st = unsafe { &mut *self.stepper };
+                self.halt_now(st);
+            } else {
+                self.pend(STEP_STATE.load(Ordering::Relaxed));
+            }
             return;
         }
         // An update that came before a halt counts the pulse that did start; the halt
@@ -254,7 +258,7 @@ impl StepOutput {
         // A halt that came while this ran stopped a timer that was not yet running:
         // stop it again (a halt after the restart stopped it itself, before any
         // update: the period cannot end within these few instructions).
-        if STEP_STATE.load(Ordering::Relaxed) & HALT_BIT != 0 {
+        if HALT.is_halted() {
             self.halt_now(st);
         }
     }
@@ -266,8 +270,8 @@ impl StepOutput {
             .write_word(self.dir_words[usize::from(dir & 0b111)]);
     }
 
-    /// A software pend (the preparation task's kick, the e-stop, a new output
-    /// configuration): halt, or start the timer if it is idle and commands wait.
+    /// A software pend with the output not halted (the preparation task's kick, a new
+    /// output configuration): start the timer if it is idle and commands wait.
     ///
     /// This and [`StepOutput::halt_now`] are kept out of line for speed: the update event
     /// path, taken once per step, costs 3 instructions less at worst (99 against 102
@@ -276,10 +280,6 @@ impl StepOutput {
     fn pend(&mut self, cfg: u32) {
         // SAFETY: as in `on_interrupt`.
         let st = unsafe { &mut *self.stepper };
-        if cfg & HALT_BIT != 0 {
-            self.halt_now(st);
-            return;
-        }
         if self.timer.is_running() {
             return;
         }

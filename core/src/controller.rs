@@ -17,6 +17,7 @@
 
 use crate::decimal::{put_int, round_i32, Sink};
 use crate::gcode::STARTUP_LINES;
+use crate::halt::HaltLatch;
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
 use crate::keypad::{Keypad, KeypadConfig};
 use crate::machine::state::Prompt;
@@ -85,12 +86,14 @@ pub struct HostLink<'a, 'r> {
 pub struct Serviced {
     /// The settings changed: apply this output configuration.
     pub outputs: Option<OutputConfig>,
-    /// The pen servo's pulse width, us, when the pen is a servo ($201 = 1).
+    /// A new pulse width for the pen servo, us: only when the pen is a servo
+    /// (`$201=1`) and the width differs from the last one handed out (the shell
+    /// writes the timer only then).
     pub servo_pulse_us: Option<u32>,
     /// The machine is in alarm: a halted step engine stays halted.
     pub alarmed: bool,
-    /// How the input pins are read now (the shell's halt release checks the e-stop
-    /// pin with it).
+    /// How the input pins are read now (the halt latch's release reads the e-stop
+    /// pin with it, [`HaltLatch::release`]).
     pub polarity: InputPolarity,
     /// A line ran and another may run at once: call again (the shell lets other
     /// work in between, see [`Controller::service`]).
@@ -99,6 +102,21 @@ pub struct Serviced {
     /// host, an input pin's edge, a key. The shell need not call again before one
     /// (the firmware's protocol task sleeps at idle); calling anyway is harmless.
     pub quiet: bool,
+}
+
+impl Serviced {
+    /// The shell calls [`Controller::service`] again at once: another line may run,
+    /// and the run that began at `started_ms` has not reached the next service
+    /// period yet (`now_ms`; from then on the next period's run goes on).
+    pub fn again(&self, started_ms: u32, now_ms: u32) -> bool {
+        self.more && now_ms == started_ms
+    }
+
+    /// The machine lets the halt latch go ([`crate::halt::HaltLatch::release`]): it is
+    /// not in alarm, and the e-stop is not active on `pins_now`, read just before.
+    pub fn allows_release(&self, pins_now: PinLevels) -> bool {
+        !self.alarmed && !self.polarity.decode(pins_now).estop
+    }
 }
 
 /// What waits to be written to flash, at rest.
@@ -135,6 +153,8 @@ pub struct Controller {
     saves: Saves,
     /// The status and power outputs' memory (when the motors last needed power).
     idle: IdleOutputs,
+    /// The pen servo's pulse width as last handed to the shell.
+    servo_us: Option<u32>,
 }
 
 /// The HMI's view of the machine's configuration, from the settings.
@@ -173,6 +193,7 @@ impl Controller {
             notice = None,
             saves = Saves::default(),
             idle = IdleOutputs::new(),
+            servo_us = None,
         })
     }
 
@@ -281,7 +302,8 @@ impl Controller {
     }
 
     /// One protocol run: the port's opening (the session starts with the welcome
-    /// line; while it is closed, output is dropped), the input pins, the host's bytes
+    /// line; while it is closed, output is dropped), the input pins (with every input
+    /// that tripped the halt latch since the last run shown active), the host's bytes
     /// (only those the protocol takes; real-time bytes act at once), at most one line
     /// with the protocol's and the HMI's periodic work, the replies, the settings'
     /// effects on the HMI and the outputs, and what changed to flash at rest. While
@@ -292,6 +314,7 @@ impl Controller {
         &mut self,
         host: HostLink<'_, '_>,
         pins: PinLevels,
+        halt: &HaltLatch,
         store: &mut SettingsStore<F>,
         m: &mut M,
         now_ms: u32,
@@ -303,7 +326,9 @@ impl Controller {
                 self.protocol.repeat_welcome();
             }
         }
-        self.set_pins(pins, m, now_ms);
+        let polarity = InputPolarity::from(self.protocol.machine().settings());
+        let pins = halt.take_tripped().fold(pins, polarity);
+        self.protocol.set_inputs(polarity.decode(pins), m, now_ms);
         let said = self.protocol.output_len();
         host.rx.pop_while(|b| self.protocol.take_byte(b, m, now_ms));
         // A real-time byte that answered (a `?`'s report) goes out before the next
@@ -323,10 +348,15 @@ impl Controller {
         }
         self.persist(changed, store, m);
         let s = self.protocol.machine().settings();
+        let servo = (s.pen_mode() == PenMode::Servo)
+            .then(|| s.pen_servo_pulse_us(m.pen_level()))
+            .filter(|&us| self.servo_us != Some(us));
+        if servo.is_some() {
+            self.servo_us = servo;
+        }
         Serviced {
             outputs: changed.then(|| OutputConfig::from(s)),
-            servo_pulse_us: (s.pen_mode() == PenMode::Servo)
-                .then(|| s.pen_servo_pulse_us(m.pen_level())),
+            servo_pulse_us: servo,
             alarmed: self.protocol.machine().alarm().is_some(),
             polarity: InputPolarity::from(s),
             more,
@@ -407,16 +437,6 @@ impl Controller {
         }
     }
 
-    /// USB bytes in; returns how many were taken (the rest stay in the endpoint).
-    pub fn usb_rx<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
-        self.protocol.receive(bytes, m, now_ms)
-    }
-
-    /// USB bytes out.
-    pub fn usb_tx(&mut self, buf: &mut [u8]) -> usize {
-        self.protocol.read_output(buf)
-    }
-
     /// The machine as the HMI sees it.
     pub fn status<M: MotionControl>(&self, m: &M) -> hmi::Snapshot {
         let state = match self.protocol.machine().state(m) {
@@ -453,13 +473,9 @@ impl Controller {
         any
     }
 
-    /// Background work: the protocol's lines and messages, then the HMI's timers (the
-    /// completion of a keypad abort, the busy LED).
-    pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
-        while self.poll_one(m, now_ms) {}
-    }
-
-    /// [`Controller::poll`] with at most one line; true when another may run now.
+    /// Background work with at most one line: the protocol's lines and messages, then
+    /// the HMI's timers (the completion of a keypad abort); true when another line
+    /// may run now.
     fn poll_one<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) -> bool {
         let more = self.protocol.poll_one(m, now_ms);
         let machine = self.protocol.machine_mut();

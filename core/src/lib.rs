@@ -39,6 +39,7 @@ pub mod crc;
 pub mod decimal;
 pub mod fmath;
 pub mod gcode;
+pub mod halt;
 pub mod hmi;
 pub mod in_place;
 pub mod interpolation;

@@ -4,8 +4,9 @@
 mod common;
 
 use common::flash::{CutFlash, STORE_RANGE};
-use common::{drain, FakePlanner};
+use common::FakePlanner;
 use inkstep_core::controller::{Controller, HostLink, Serviced, HOST_RX_RING, HOST_TX_RING};
+use inkstep_core::halt::HaltLatch;
 use inkstep_core::hmi::{Beep, MachineState, Page, BOOT_MS};
 use inkstep_core::keypad::{Key, KEYMAP};
 use inkstep_core::machine::{Inputs, MotionControl, PinLevels};
@@ -32,6 +33,7 @@ struct Shell {
     pins: PinLevels,
     port_open: bool,
     store: SettingsStore<CutFlash>,
+    halt: HaltLatch,
     now: u32,
 }
 
@@ -47,6 +49,7 @@ impl Shell {
             pins: AT_REST,
             port_open: true,
             store,
+            halt: HaltLatch::new(),
             now: 0,
         };
         (shell, c)
@@ -54,6 +57,21 @@ impl Shell {
 
     fn tick(&mut self, c: &mut Controller, m: &mut FakePlanner) -> Serviced {
         self.now += 1;
+        self.service(c, m)
+    }
+
+    /// One call of the controller's service at `self.now`.
+    fn service(&mut self, c: &mut Controller, m: &mut FakePlanner) -> Serviced {
+        let clears = m.clears;
+        let done = self.service_once(c, m);
+        // The step side's flush tells the latch (the firmware's and the simulator's).
+        if m.clears != clears {
+            self.halt.flushed();
+        }
+        done
+    }
+
+    fn service_once(&mut self, c: &mut Controller, m: &mut FakePlanner) -> Serviced {
         let (_, mut rx) = self.rx.split();
         let (mut tx, _) = self.tx.split();
         let host = HostLink {
@@ -61,7 +79,26 @@ impl Shell {
             tx: &mut tx,
             port_open: self.port_open,
         };
-        c.service(host, self.pins, &mut self.store, m, self.now)
+        c.service(host, self.pins, &self.halt, &mut self.store, m, self.now)
+    }
+
+    /// The protocol task at `t`, as the firmware runs it: service until no line may
+    /// run in this period; returns what the host received.
+    fn run(&mut self, c: &mut Controller, m: &mut FakePlanner, t: u32) -> String {
+        self.now = t;
+        let mut out = String::new();
+        loop {
+            let done = self.service(c, m);
+            out += &self.read();
+            if !done.again(t, t) {
+                return out;
+            }
+        }
+    }
+
+    /// `bytes` from the host (all of them fit the receive ring).
+    fn push(&mut self, bytes: &[u8]) {
+        assert_eq!(self.rx.split().0.push(bytes), bytes.len());
     }
 
     /// `bytes` from the host, then ticks until everything is taken and answered.
@@ -78,13 +115,20 @@ impl Shell {
     /// What the host has received.
     fn read(&mut self) -> String {
         let mut buf = [0u8; HOST_TX_RING];
-        let n = self.tx.split().1.pop_into(&mut buf);
-        String::from_utf8(buf[..n].to_vec()).unwrap()
+        let mut out = String::new();
+        loop {
+            let n = self.tx.split().1.pop_into(&mut buf);
+            if n == 0 {
+                return out;
+            }
+            out += std::str::from_utf8(&buf[..n]).unwrap();
+        }
     }
 }
 
-/// Scan the matrix every 5 ms from `from` to `to` with `held` keys down.
-fn scan(c: &mut Controller, m: &mut FakePlanner, held: &[Key], from: u32, to: u32) {
+/// Scan the matrix every 5 ms from `from` to `to` with `held` keys down, the protocol
+/// task running after each scan.
+fn scan(sh: &mut Shell, c: &mut Controller, m: &mut FakePlanner, held: &[Key], from: u32, to: u32) {
     let mut t = from;
     while t < to {
         let col = c.keypad().column();
@@ -95,23 +139,17 @@ fn scan(c: &mut Controller, m: &mut FakePlanner, held: &[Key], from: u32, to: u3
             }
         }
         c.key_scan(rows, m, t);
-        c.poll(m, t);
+        sh.run(c, m, t);
         t += 5;
     }
-}
-
-fn text(c: &mut Controller) -> String {
-    drain(c.protocol_mut())
 }
 
 #[test]
 fn gcode_from_usb_reaches_the_planner() {
     let mut m = FakePlanner::new(16);
-    let mut c = Controller::new(Settings::default(), 0);
-    let line = b"G1 X1 F600\n";
-    assert_eq!(c.usb_rx(line, &mut m, 0), line.len());
-    c.poll(&mut m, 1);
-    let out = text(&mut c);
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    sh.push(b"G1 X1 F600\n");
+    let out = sh.run(&mut c, &mut m, 1);
     assert!(out.contains("Grbl 1.1h"), "{out}");
     assert!(out.ends_with("ok\r\n"), "{out}");
     let spmm = Settings::default().steps_per_mm(X);
@@ -127,8 +165,8 @@ fn gcode_from_usb_reaches_the_planner() {
 fn keypad_jog_moves_while_held_and_stops_on_release() {
     let mut m = FakePlanner::new(16);
     m.rate = 1; // one step per poll: the jog is still under way at release
-    let mut c = Controller::new(Settings::default(), 0);
-    scan(&mut c, &mut m, &[], 0, BOOT_MS + 100);
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    scan(&mut sh, &mut c, &mut m, &[], 0, BOOT_MS + 100);
     // The boot screen has given way to the menu; '1' opens manual jog.
     assert!(
         matches!(c.hmi().page(), Page::Menu { .. }),
@@ -136,13 +174,14 @@ fn keypad_jog_moves_while_held_and_stops_on_release() {
         c.hmi().page()
     );
     scan(
+        &mut sh,
         &mut c,
         &mut m,
         &[Key::Digit(1)],
         BOOT_MS + 100,
         BOOT_MS + 300,
     );
-    scan(&mut c, &mut m, &[], BOOT_MS + 300, BOOT_MS + 500);
+    scan(&mut sh, &mut c, &mut m, &[], BOOT_MS + 300, BOOT_MS + 500);
     assert!(
         matches!(c.hmi().page(), Page::Jog(_)),
         "{:?}",
@@ -151,7 +190,7 @@ fn keypad_jog_moves_while_held_and_stops_on_release() {
     // Hold '6' (+X): a jog toward +X is queued and runs.
     let t0 = BOOT_MS + 500;
     for t in (t0..t0 + 300).step_by(5) {
-        scan(&mut c, &mut m, &[Key::Digit(6)], t, t + 5);
+        scan(&mut sh, &mut c, &mut m, &[Key::Digit(6)], t, t + 5);
         m.step();
     }
     let jog = m.log.iter().find_map(|cmd| match cmd {
@@ -163,20 +202,16 @@ fn keypad_jog_moves_while_held_and_stops_on_release() {
     assert!(m.pos[X] > 0);
     assert_eq!(c.status(&m).state, MachineState::Jog);
     // Release: the jog is cancelled (held, then dropped).
-    scan(&mut c, &mut m, &[], t0 + 300, t0 + 400);
+    scan(&mut sh, &mut c, &mut m, &[], t0 + 300, t0 + 400);
     assert!(m.holding || m.clears > 0, "jog not stopped");
 }
 
 #[test]
 fn settings_changes_reach_the_hmi() {
     let mut m = FakePlanner::new(16);
-    let mut c = Controller::new(Settings::default(), 0);
-    let line = b"$100=40\n";
-    assert_eq!(c.usb_rx(line, &mut m, 0), line.len());
-    c.poll(&mut m, 1);
-    assert!(text(&mut c).ends_with("ok\r\n"));
-    assert!(c.protocol_mut().machine_mut().take_settings_dirty());
-    c.settings_changed();
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    sh.push(b"$100=40\n");
+    assert!(sh.run(&mut c, &mut m, 1).ends_with("ok\r\n"));
     assert_eq!(c.hmi().config().steps_per_mm[X], 40.0);
 }
 
@@ -186,35 +221,32 @@ fn settings_changes_reach_the_hmi() {
 #[test]
 fn keypad_set_origin_keeps_modal_state_and_overrides() {
     let mut m = FakePlanner::new(16);
-    let mut c = Controller::new(Settings::default(), 0);
-    scan(&mut c, &mut m, &[], 0, BOOT_MS + 100);
-    let setup = b"G1 X10 Y5 F600\nG91 G20\n\x91";
-    assert_eq!(c.usb_rx(setup, &mut m, BOOT_MS + 100), setup.len());
-    c.poll(&mut m, BOOT_MS + 101);
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    scan(&mut sh, &mut c, &mut m, &[], 0, BOOT_MS + 100);
+    sh.push(b"G1 X10 Y5 F600\nG91 G20\n\x91");
+    sh.run(&mut c, &mut m, BOOT_MS + 101);
     m.run_all();
-    c.poll(&mut m, BOOT_MS + 102);
+    sh.run(&mut c, &mut m, BOOT_MS + 102);
     assert_ne!(m.pos, [0, 0, 0]);
     let overrides = m.overrides;
-    text(&mut c);
     // Main menu '9': the machine submenu; its '2': set origin here.
     let t = BOOT_MS + 200;
-    scan(&mut c, &mut m, &[Key::Digit(9)], t, t + 200);
-    scan(&mut c, &mut m, &[], t + 200, t + 400);
-    scan(&mut c, &mut m, &[Key::Digit(2)], t + 400, t + 600);
-    scan(&mut c, &mut m, &[], t + 600, t + 800);
+    scan(&mut sh, &mut c, &mut m, &[Key::Digit(9)], t, t + 200);
+    scan(&mut sh, &mut c, &mut m, &[], t + 200, t + 400);
+    scan(&mut sh, &mut c, &mut m, &[Key::Digit(2)], t + 400, t + 600);
+    scan(&mut sh, &mut c, &mut m, &[], t + 600, t + 800);
     assert_eq!(&m.pos[..2], &[0, 0]);
     assert_eq!(m.overrides, overrides, "the feed override survives");
-    assert_eq!(c.usb_rx(b"$G\n", &mut m, t + 800), 3);
-    c.poll(&mut m, t + 801);
-    let out = text(&mut c);
+    sh.push(b"$G\n");
+    let out = sh.run(&mut c, &mut m, t + 801);
     assert!(!out.contains("Grbl 1.1h"), "no reset: {out}");
     assert!(
         out.contains("G20") && out.contains("G91"),
         "modal state kept: {out}"
     );
     // 0.1 inch relative from the new zero.
-    assert_eq!(c.usb_rx(b"G1 X0.1 F20\n", &mut m, t + 900), 12);
-    c.poll(&mut m, t + 901);
+    sh.push(b"G1 X0.1 F20\n");
+    sh.run(&mut c, &mut m, t + 901);
     let spmm = Settings::default().steps_per_mm(X);
     let want = (2.54 * spmm).round() as i32;
     assert!(
@@ -364,6 +396,7 @@ fn the_power_up_notice_waits_for_the_host() {
         pins: AT_REST,
         port_open: false,
         store,
+        halt: HaltLatch::new(),
         now: 0,
     };
     let mut m = FakePlanner::new(16);
@@ -387,12 +420,12 @@ fn the_completion_beep_survives_the_protocol_tick() {
     }
     let t = sh.now;
     // The star: '6', Enter (preview), Enter (draw).
-    scan(&mut c, &mut m, &[Key::Digit(6)], t, t + 200);
-    scan(&mut c, &mut m, &[], t + 200, t + 400);
-    scan(&mut c, &mut m, &[Key::Enter], t + 400, t + 600);
-    scan(&mut c, &mut m, &[], t + 600, t + 800);
-    scan(&mut c, &mut m, &[Key::Enter], t + 800, t + 1000);
-    scan(&mut c, &mut m, &[], t + 1000, t + 1200);
+    scan(&mut sh, &mut c, &mut m, &[Key::Digit(6)], t, t + 200);
+    scan(&mut sh, &mut c, &mut m, &[], t + 200, t + 400);
+    scan(&mut sh, &mut c, &mut m, &[Key::Enter], t + 400, t + 600);
+    scan(&mut sh, &mut c, &mut m, &[], t + 600, t + 800);
+    scan(&mut sh, &mut c, &mut m, &[Key::Enter], t + 800, t + 1000);
+    scan(&mut sh, &mut c, &mut m, &[], t + 1000, t + 1200);
     assert!(!m.queue.is_empty(), "the star is queued");
     sh.now = t + 1200;
     let _ = c.take_outputs();
@@ -564,4 +597,52 @@ fn motors_are_released_step_idle_delay_after_the_motion_and_busy_clears_with_it(
         !c.outputs_now(&m, sh.now + 6000).motors,
         "$SLP releases them"
     );
+}
+
+/// The halt latch's release rule through the service: an e-stop whose interrupt comes
+/// after the protocol task read the inputs is not undone, even with its pin up again
+/// when the release reads it (a glitch); the next run shows it to the machine, and
+/// the latch holds until the machine is out of alarm with the e-stop released.
+#[test]
+fn an_estop_after_the_inputs_were_read_is_not_undone() {
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let mut m = FakePlanner::new(16);
+    m.rate = 1;
+    sh.send(&mut c, &mut m, b"G1 X10 F600\n");
+    assert!(m.is_moving());
+    let done = sh.tick(&mut c, &mut m);
+    // The e-stop's interrupt, after that run read the pins; released again at once.
+    sh.halt.trip_estop();
+    assert!(!sh.halt.release(done.allows_release(AT_REST)));
+    assert!(sh.halt.is_halted());
+    let done = sh.tick(&mut c, &mut m);
+    assert!(done.alarmed, "the machine saw the e-stop");
+    assert!(!m.is_moving(), "the queue was dropped");
+    assert!(!sh.halt.release(done.allows_release(AT_REST)));
+    // Out of alarm with the e-stop up: released.
+    sh.send(&mut c, &mut m, b"\x18");
+    sh.send(&mut c, &mut m, b"$X\n");
+    let done = sh.tick(&mut c, &mut m);
+    assert!(!done.alarmed);
+    // Pressed when the release looks: held.
+    let pressed = PinLevels {
+        estop: true,
+        ..AT_REST
+    };
+    assert!(!sh.halt.release(done.allows_release(pressed)));
+    assert!(sh.halt.release(done.allows_release(AT_REST)));
+    assert!(!sh.halt.is_halted());
+}
+
+/// The pen servo's pulse is handed out when it changes, not every run.
+#[test]
+fn the_servo_pulse_is_handed_out_once_per_change() {
+    let mut s = Settings::default();
+    s.set(201, 1.0).unwrap();
+    let (mut sh, mut c) = Shell::boot(&s);
+    let mut m = FakePlanner::new(16);
+    let up = sh.tick(&mut c, &mut m).servo_pulse_us;
+    assert!(up.is_some());
+    assert_eq!(sh.tick(&mut c, &mut m).servo_pulse_us, None);
+    assert_eq!(sh.tick(&mut c, &mut m).servo_pulse_us, None);
 }

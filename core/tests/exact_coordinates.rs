@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{drain, FakePlanner};
+use common::{drain, Drive, FakePlanner};
 use inkstep_core::gcode::parser::clean_line;
 use inkstep_core::gcode::Interpreter;
 use inkstep_core::motion::Command;

@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{drain, FakePlanner};
+use common::{drain, Drive, FakePlanner};
 use inkstep_core::protocol::Protocol;
 use inkstep_core::settings::Settings;
 use std::time::Instant;

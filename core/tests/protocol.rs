@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{drain, send, FakePlanner};
+use common::{drain, send, Drive, FakePlanner};
 use inkstep_core::machine::{Inputs, MotionControl, RunState};
 use inkstep_core::motion::Command;
 use inkstep_core::motion::{Feed, Move, Path};
@@ -557,10 +557,13 @@ fn job_messages_pause_and_overrides() {
     p.poll(&mut m, 0);
     assert_eq!(drain(&mut p), "", "M2 waits for the motion before it");
     m.run_all();
+    // As the protocol task runs lines: the machine looks again after M2's line, and
+    // finds the job done.
     p.poll(&mut m, 1500);
-    assert_eq!(drain(&mut p), "[MSG:Pgm End]\r\nok\r\n");
-    p.poll(&mut m, 1500);
-    assert_eq!(drain(&mut p), "[MSG:Job finished: 1.500 s, 2 moves]\r\n");
+    assert_eq!(
+        drain(&mut p),
+        "[MSG:Pgm End]\r\nok\r\n[MSG:Job finished: 1.500 s, 2 moves]\r\n"
+    );
     send(&mut p, &mut m, "\u{91}\u{91}\u{96}");
     assert_eq!(m.overrides, (120, 50));
     assert!(send(&mut p, &mut m, "?").contains("|Ov:120,50,100"));

@@ -8,6 +8,7 @@
 //! lie within half a step of the same lines; and nothing may be drawn twice beyond
 //! the line resumed.
 
+use inkstep_core::machine::PinLevels;
 use inkstep_core::settings::{PenMode, Settings};
 use inkstep_host::resume::{resume_lines, resume_point, spans_of, Seen};
 use inkstep_serial::grbl::Reply;
@@ -185,9 +186,15 @@ fn check(name: &str, program: &str, stops: &[Stop], seed: u64) {
                 idle(&mut b, 100, &mut first.events);
             }
             Stop::Alarm => {
-                b.pins.estop = true;
+                b.set_pins(PinLevels {
+                    estop: true,
+                    ..b.pins()
+                });
                 idle(&mut b, 100, &mut first.events);
-                b.pins.estop = false;
+                b.set_pins(PinLevels {
+                    estop: false,
+                    ..b.pins()
+                });
                 idle(&mut b, 20, &mut first.events);
                 // The e-stop's alarm wants a reset before the unlock.
                 b.usb_write(&[0x18]);

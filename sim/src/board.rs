@@ -7,12 +7,16 @@
 //! [`Controller::service`], with the host's bytes crossing the same byte rings as the
 //! USB task's), every 5 ms one keypad column scan of the simulated matrix, every
 //! 100 ms the LCD. Settings persist through the core's store on a flash in memory.
-//! Nothing here decides anything about motion, G-code, menus or persistence.
+//! The e-stop and limit inputs trip the core's halt latch at once, as their interrupts
+//! do on the board ([`Board::set_pins`]), and the protocol task releases it by the
+//! same rule. Nothing here decides anything about motion, G-code, menus, halts or
+//! persistence.
 
 use inkstep_core::controller::{
     Controller, HostLink, HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS,
     SERVICE_PERIOD_MS,
 };
+use inkstep_core::halt::HaltLatch;
 use inkstep_core::keypad::{Key, KEYMAP};
 use inkstep_core::machine::{MotionControl, PinLevels};
 use inkstep_core::motion::StepPos;
@@ -30,6 +34,7 @@ use inkstep_core::stepper::queue::StepCmdQueue;
 use inkstep_core::stepper::{tail_period, MAX_RELOAD, TIMER_HZ};
 
 use crate::flash::{RamFlash, STORE_RANGE};
+use std::rc::Rc;
 
 /// The step timer's clock: the board's.
 pub const TICK_HZ: u64 = TIMER_HZ as u64;
@@ -58,6 +63,8 @@ pub struct Lcd {
 pub struct SimSide {
     pub exec: Executor,
     pub queue: StepCmdQueue,
+    /// The halt latch, shared with the board's input interrupts and protocol task.
+    pub halt: Rc<HaltLatch>,
 }
 
 impl StepSide for SimSide {
@@ -77,7 +84,7 @@ impl StepSide for SimSide {
     fn flush(&mut self) {
         self.exec.halt();
         self.queue.clear();
-        self.exec.reset();
+        self.halt.flushed();
     }
     fn set_position(&mut self, p: StepPos) {
         self.exec.set_position(p);
@@ -102,8 +109,10 @@ pub struct Board {
     /// Host -> board and board -> host bytes (the USB task's rings).
     host_rx: ByteRing<HOST_RX_RING>,
     host_tx: ByteRing<HOST_TX_RING>,
-    /// The input pins' levels.
-    pub pins: PinLevels,
+    /// The input pins' levels (change them through [`Board::set_pins`]).
+    pins: PinLevels,
+    /// The halt latch (the pipeline's side holds the same).
+    halt: Rc<HaltLatch>,
     /// The host has the port open (CDC's DTR).
     port_open: bool,
     /// The step outputs' configuration, as the step interrupt applies it.
@@ -152,9 +161,11 @@ impl Board {
         let mut store = SettingsStore::new(flash, STORE_RANGE).expect("store range");
         let ctl = inkstep_core::in_place::build(|slot| Controller::boot_in(slot, &mut store, 0));
         let settings = ctl.protocol().machine().settings();
+        let halt = Rc::new(HaltLatch::new());
         let side = SimSide {
             exec: Executor::new([0; 3], MAX_RELOAD),
             queue: StepCmdQueue::new(),
+            halt: halt.clone(),
         };
         let prep = PrepConfig {
             timer_hz: TIMER_HZ,
@@ -162,6 +173,7 @@ impl Board {
         };
         let pipeline = Pipeline::new(settings, prep, side);
         let outputs = OutputConfig::from(settings);
+        halt.arm_hard_limits(outputs.hard_limit_axes);
         Board {
             ctl,
             pipeline,
@@ -169,6 +181,7 @@ impl Board {
             host_rx: ByteRing::new(),
             host_tx: ByteRing::new(),
             pins: PINS_AT_REST,
+            halt,
             port_open: true,
             outputs,
             servo_pulse_us: None,
@@ -241,6 +254,46 @@ impl Board {
         }
     }
 
+    /// The input pins' levels.
+    pub fn pins(&self) -> PinLevels {
+        self.pins
+    }
+
+    /// New levels of the input pins, as their interrupts see them on the board: an
+    /// e-stop edge, or a limit switch's on an axis with hard limits armed, trips the
+    /// halt latch and stops the step output at once; every change wakes the protocol
+    /// task (the feed-hold and cycle-start inputs also reach the machine at once).
+    pub fn set_pins(&mut self, pins: PinLevels) {
+        let was = core::mem::replace(&mut self.pins, pins);
+        let mut halted = false;
+        if pins.estop != was.estop {
+            self.halt.trip_estop();
+            halted = true;
+        }
+        for axis in 0..2 {
+            if pins.limits[axis] != was.limits[axis] {
+                halted |= self.halt.trip_limit(axis);
+            }
+        }
+        if halted {
+            // The firmware stops the timer and halts the executor in the interrupt.
+            self.pipeline.side_mut().exec.halt();
+            self.next_irq = None;
+        }
+        if pins.feed_hold != was.feed_hold || pins.cycle_start != was.cycle_start {
+            let now = self.ms;
+            self.ctl.set_pins(pins, &mut self.pipeline, now);
+        }
+        if pins != was {
+            self.run_protocol();
+        }
+    }
+
+    /// The step output is halted (the halt latch is set).
+    pub fn is_halted(&self) -> bool {
+        self.halt.is_halted()
+    }
+
     /// Nothing moving, nothing queued, every byte from the host taken and framed.
     pub fn is_idle(&self) -> bool {
         self.next_irq.is_none()
@@ -252,7 +305,7 @@ impl Board {
     /// Starts the step timer if it is stopped and commands wait (the preparation
     /// task's kick and the interrupt's pend in the firmware).
     fn kick(&mut self) {
-        if self.next_irq.is_some() || self.pipeline.side().queued() == 0 {
+        if self.next_irq.is_some() || self.pipeline.side().queued() == 0 || self.halt.is_halted() {
             return;
         }
         let side = self.pipeline.side_mut();
@@ -315,6 +368,9 @@ impl Board {
     fn run_protocol(&mut self) {
         let now = self.ms;
         loop {
+            // The firmware's task reads the pins again for the release (no time
+            // passes here).
+            let pins_now = self.pins;
             let (_, mut rx) = self.host_rx.split();
             let (mut tx, _) = self.host_tx.split();
             let host = HostLink {
@@ -322,14 +378,23 @@ impl Board {
                 tx: &mut tx,
                 port_open: self.port_open,
             };
-            let done = self
-                .ctl
-                .service(host, self.pins, &mut self.store, &mut self.pipeline, now);
+            let done = self.ctl.service(
+                host,
+                self.pins,
+                &self.halt,
+                &mut self.store,
+                &mut self.pipeline,
+                now,
+            );
             if let Some(cfg) = done.outputs {
                 self.outputs = cfg;
+                self.halt.arm_hard_limits(cfg.hard_limit_axes);
             }
-            self.servo_pulse_us = done.servo_pulse_us;
-            if !done.more {
+            if let Some(us) = done.servo_pulse_us {
+                self.servo_pulse_us = Some(us);
+            }
+            self.halt.release(done.allows_release(pins_now));
+            if !done.again(now, now) {
                 break;
             }
         }

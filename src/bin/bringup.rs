@@ -126,6 +126,7 @@ mod app {
     fn estop(_: estop::Context) {
         if board::exti_take_pending(0) {
             board::emergency_outputs_off();
+            steps::HALT.trip_estop();
             steps::halt();
         }
     }
@@ -213,6 +214,9 @@ mod app {
             beep_ms = beep_ms.saturating_sub(5);
             if !moving {
                 // E-stop released and no key held: re-arm (the drivers come back on).
+                // No machine here to see the trip and flush the queue: both done here.
+                let _ = steps::HALT.take_tripped();
+                steps::HALT.flushed();
                 steps::release_halt(|| !board::Inputs::levels().estop);
             }
             cx.local.watchdog.feed();

@@ -1,8 +1,9 @@
 //! Interrupt-cost bench: runs the firmware's real step path on a Cortex-M3 (in the
 //! unicorn emulator, see measure.py) over the reference programs in bench/*.nc.
 //!
-//! The programs go through the core's protocol and G-code interpreter into the pipeline
-//! (planner + segment preparation), whose step commands cross the same SPSC queue to
+//! The programs go through the core's controller (`Controller::service` with the host's
+//! byte rings, as the firmware's protocol task runs it), protocol and G-code
+//! interpreter into the pipeline (planner + segment preparation), whose step commands cross the same SPSC queue to
 //! the firmware's `StepOutput::on_interrupt` (src/steps.rs), i.e. the whole TIM2
 //! interrupt body with its register accesses. The emulator has no timer, so before each
 //! call the bench sets the status flag the hardware would (the update event; the timer
@@ -15,11 +16,15 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 
 use defmt_rtt as _;
+use embedded_storage::nor_flash::{ErrorType, NorFlash, NorFlashErrorKind, ReadNorFlash};
 use inkstep::board::{self, StepPins};
 use inkstep::steps::{self, BoardSide, StepOutput};
-use inkstep_core::controller::Controller;
+use inkstep_core::controller::{Controller, HostLink, HOST_RX_RING, HOST_TX_RING};
+use inkstep_core::machine::PinLevels;
 use inkstep_core::pipeline::{Pipeline, StepSide};
+use inkstep_core::ring::ByteRing;
 use inkstep_core::settings::Settings;
+use inkstep_core::settings_store::SettingsStore;
 use inkstep_core::stepper::exec::Executor;
 use inkstep_core::stepper::output::OutputConfig;
 use inkstep_core::stepper::prep::PrepConfig;
@@ -61,6 +66,61 @@ fn log(bytes: &[u8]) {
             }
             *at += 1;
         }
+    }
+}
+
+/// The input pins at rest with the board's wiring (nothing pressed).
+const PINS_AT_REST: PinLevels = PinLevels {
+    estop: false,
+    limits: [Some(false), Some(false), None],
+    feed_hold: true,
+    cycle_start: true,
+};
+
+/// The settings store's flash: two erased 1 KB pages in RAM, NOR semantics (the
+/// programs change no setting, so nothing is written in practice).
+struct RamFlash([u8; 2 * 1024]);
+
+impl ErrorType for RamFlash {
+    type Error = NorFlashErrorKind;
+}
+
+impl ReadNorFlash for RamFlash {
+    const READ_SIZE: usize = 1;
+    fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+        let at = offset as usize;
+        let src = self
+            .0
+            .get(at..at + bytes.len())
+            .ok_or(NorFlashErrorKind::OutOfBounds)?;
+        bytes.copy_from_slice(src);
+        Ok(())
+    }
+    fn capacity(&self) -> usize {
+        self.0.len()
+    }
+}
+
+impl NorFlash for RamFlash {
+    const WRITE_SIZE: usize = 2;
+    const ERASE_SIZE: usize = 1024;
+    fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+        self.0
+            .get_mut(from as usize..to as usize)
+            .ok_or(NorFlashErrorKind::OutOfBounds)?
+            .fill(0xFF);
+        Ok(())
+    }
+    fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+        let at = offset as usize;
+        let dst = self
+            .0
+            .get_mut(at..at + bytes.len())
+            .ok_or(NorFlashErrorKind::OutOfBounds)?;
+        for (d, b) in dst.iter_mut().zip(bytes) {
+            *d &= b;
+        }
+        Ok(())
     }
 }
 
@@ -178,6 +238,14 @@ fn main() -> ! {
         let mut out = steps::install(Executor::new([0; 3], MAX_RELOAD), rx, pins, tim);
         let mut pipeline = Pipeline::new(&settings, prep, BoardSide { tx });
         let mut ctl = Controller::new(settings.clone(), 0);
+        let Ok(mut store) = SettingsStore::new(RamFlash([0xFF; 2 * 1024]), 0..2 * 1024) else {
+            break;
+        };
+        // The USB task's byte rings between the host and the protocol task.
+        let mut host_rx: ByteRing<HOST_RX_RING> = ByteRing::new();
+        let mut host_tx: ByteRing<HOST_TX_RING> = ByteRing::new();
+        let (mut usb_rx_in, mut usb_rx_out) = host_rx.split();
+        let (mut usb_tx_in, mut usb_tx_out) = host_tx.split();
         // SAFETY: single-threaded bench; measure.py charges each call to this program.
         unsafe { core::ptr::write_volatile(core::ptr::addr_of_mut!(BENCH_PROGRAM), p as u32) };
         let (mut sent, mut events, mut irqs, mut dry) = (0usize, 0u32, 0u32, 0u32);
@@ -197,7 +265,8 @@ fn main() -> ! {
                 let after = steps::position();
                 if after != before {
                     events += 1;
-                    axis_steps += before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
+                    axis_steps +=
+                        before.iter().zip(after).filter(|(a, b)| **a != *b).count() as u32;
                 }
                 next_irq = out.timer.is_running().then(|| at + period());
                 if next_irq.is_none() && pipeline.in_move() {
@@ -209,17 +278,37 @@ fn main() -> ! {
             }
             let now = (next_ms / 72_000) as u32;
             next_ms += 72_000;
+            // The USB task: the host's bytes in as far as the ring has room.
             if sent < prog.len() {
-                sent += ctl.usb_rx(prog.get(sent..).unwrap_or(&[]), &mut pipeline, now);
+                sent += usb_rx_in.push(prog.get(sent..).unwrap_or(&[]));
             }
+            // The protocol task: the controller's service until no line may run now,
+            // the replies out.
             loop {
-                let n = ctl.usb_tx(&mut sink);
-                if n == 0 {
+                let host = HostLink {
+                    rx: &mut usb_rx_out,
+                    tx: &mut usb_tx_in,
+                    port_open: true,
+                };
+                let done = ctl.service(
+                    host,
+                    PINS_AT_REST,
+                    &steps::HALT,
+                    &mut store,
+                    &mut pipeline,
+                    now,
+                );
+                loop {
+                    let n = usb_tx_out.pop_into(&mut sink);
+                    if n == 0 {
+                        break;
+                    }
+                    log(sink.get(..n).unwrap_or(&[]));
+                }
+                if !done.again(now, now) {
                     break;
                 }
-                log(sink.get(..n).unwrap_or(&[]));
             }
-            ctl.poll(&mut pipeline, now);
             bench_prepare(&mut pipeline);
             if next_irq.is_none() && pipeline.side().queued() > 0 {
                 // Start the timer as the firmware's kick does (a pend with no flags).
@@ -231,6 +320,7 @@ fn main() -> ! {
             // receive buffer), and the machine is at rest.
             let drained = ctl.protocol().rx_free() == inkstep_core::protocol::RX_BUFFER_SIZE;
             let done = sent >= prog.len()
+                && usb_rx_out.is_empty()
                 && drained
                 && next_irq.is_none()
                 && pipeline.side().queued() == 0;

@@ -186,21 +186,6 @@ impl Protocol {
         self.out.pop_front()
     }
 
-    /// Take up to `buf.len()` bytes of responses.
-    pub fn read_output(&mut self, buf: &mut [u8]) -> usize {
-        let mut n = 0;
-        for slot in buf.iter_mut() {
-            match self.pop_output() {
-                Some(b) => {
-                    *slot = b;
-                    n += 1;
-                }
-                None => break,
-            }
-        }
-        n
-    }
-
     fn room(&self) -> usize {
         OUT_CAP - self.out.len()
     }
@@ -324,14 +309,8 @@ impl Protocol {
         true
     }
 
-    /// Make progress: run every buffered line that can run now, continue listings,
-    /// emit messages.
-    pub fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
-        self.machine.poll(m, now_ms);
-        while self.work(m, now_ms) {}
-    }
-
-    /// [`Protocol::poll`] that runs at most one line (a buffered or a startup line):
+    /// Make progress with at most one line (a buffered or a startup line), continue
+    /// listings, emit messages:
     /// the shell's protocol task calls it in a loop and lets other work in between
     /// lines (a line with its planning can take a millisecond on the board, and a
     /// `?` must not wait for a whole window of them). True when it ran a line and

@@ -13,15 +13,6 @@ impl Protocol {
         RX_BUFFER_SIZE - self.rx.len()
     }
 
-    /// Feed received bytes; returns how many were consumed. Bytes not consumed must be
-    /// offered again later (the receive buffer was full).
-    pub fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
-        bytes
-            .iter()
-            .take_while(|&&b| self.take_byte(b, m, now_ms))
-            .count()
-    }
-
     /// One received byte: a real-time command acts at once, any other byte goes into
     /// the receive buffer. False if the buffer is full: the byte was not taken and must
     /// be offered again later (back-pressure).

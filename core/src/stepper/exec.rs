@@ -6,9 +6,10 @@
 //! command is fetched), which gives every driver its direction set-up time for free;
 //! a reversal of an axis whose pulse is still high first runs a short turn guard
 //! period ([`Executor::set_turn_guard`]). Every reload is at least 2 ticks, so a board
-//! can program a timer with `reload - 1` without a check. The emergency stop latches
-//! [`Executor::halt`]: from then on no step is emitted until [`Executor::reset`],
-//! whatever is still queued.
+//! can program a timer with `reload - 1` without a check. [`Executor::halt`] stops the
+//! command in flight; that nothing starts again until the queue was flushed and the
+//! halt released is the shell's [`HaltLatch`](crate::halt::HaltLatch), which it looks
+//! at before [`Executor::start`].
 //!
 //! Shaped for the interrupt's instruction count: idle and "more of a long wait" share
 //! one test of `remaining` (idle is a sentinel value), the position changes come from
@@ -98,7 +99,6 @@ pub struct Executor {
     pending: u8,
     /// Wait still to run after the present reload; [`IDLE`] when not running.
     remaining: u32,
-    halted: bool,
     /// Direction pins as last output.
     dir: u8,
     /// Direction pins to output when the turn guard period ends.
@@ -119,7 +119,6 @@ impl Executor {
             z: position[2],
             pending: 0,
             remaining: IDLE,
-            halted: false,
             dir: 0,
             turn_dir: 0,
             turning: false,
@@ -135,9 +134,6 @@ impl Executor {
     }
     pub fn is_running(&self) -> bool {
         self.remaining != IDLE
-    }
-    pub fn is_halted(&self) -> bool {
-        self.halted
     }
 
     /// Direction pins must not change while a step pulse of their axis is high. With a
@@ -159,7 +155,7 @@ impl Executor {
     /// Starts the timer if it is idle and a command is ready: returns the outputs for
     /// the start (direction pins, first reload). `None` if nothing to do.
     pub fn start(&mut self, q: &mut impl CmdSource) -> Option<IsrOut> {
-        if self.is_running() || self.halted {
+        if self.is_running() {
             return None;
         }
         let c = q.pop()?;
@@ -297,15 +293,9 @@ impl Executor {
         }
     }
 
-    /// Emergency stop: no further step until [`Executor::reset`].
+    /// Emergency stop: the command in flight ends here, and no step comes until the
+    /// next [`Executor::start`] (which the shell's halt latch holds back).
     pub fn halt(&mut self) {
-        self.halted = true;
-        self.idle();
-    }
-
-    /// Clears a halt (after the queue was flushed), keeping the position.
-    pub fn reset(&mut self) {
-        self.halted = false;
         self.idle();
     }
 
@@ -525,7 +515,6 @@ mod tests {
             let o = e.on_interrupt(&mut q);
             assert_eq!((o.step, o.reload), (0, 0));
         }
-        assert!(e.start(&mut q).is_none());
         assert_eq!(e.position(), [1, 0, 0]);
     }
 }

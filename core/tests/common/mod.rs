@@ -11,6 +11,41 @@ use inkstep_core::motion::StepPos;
 use inkstep_core::protocol::Protocol;
 use std::collections::VecDeque;
 
+/// The protocol driven as the controller's service drives it (bytes in one by one
+/// until one is refused, responses out one by one, lines one at a time), for the
+/// tests of the protocol alone.
+pub trait Drive {
+    /// Offer `bytes`; returns how many were taken (the rest come again later).
+    fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize;
+    /// Up to `buf.len()` bytes of responses.
+    fn read_output(&mut self, buf: &mut [u8]) -> usize;
+    /// Every line that can run now.
+    fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32);
+}
+
+impl Drive for Protocol {
+    fn receive<M: MotionControl>(&mut self, bytes: &[u8], m: &mut M, now_ms: u32) -> usize {
+        bytes
+            .iter()
+            .take_while(|&&b| self.take_byte(b, m, now_ms))
+            .count()
+    }
+
+    fn read_output(&mut self, buf: &mut [u8]) -> usize {
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            let Some(b) = self.pop_output() else { break };
+            *slot = b;
+            n += 1;
+        }
+        n
+    }
+
+    fn poll<M: MotionControl>(&mut self, m: &mut M, now_ms: u32) {
+        while self.poll_one(m, now_ms) {}
+    }
+}
+
 pub struct FakePlanner {
     pub queue: VecDeque<Command>,
     pub cap: usize,
