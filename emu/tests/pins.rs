@@ -908,11 +908,13 @@ fn cruise_mm_per_min(t: &[u64]) -> f64 {
 /// slow locate and the pull-off, each read from the step pin's edges at cruise; `$26`
 /// (debounce) is the wait between the step that trips the switch and the first step
 /// away from it, and between the locate's last step and the pull-off's first. Two
-/// boards with the rates swapped round and debounce times 200 ms apart.
+/// boards with the rates swapped round and debounce times 200 ms apart, and one whose
+/// locate feed is below the start rate.
 #[test]
 fn homing_seeks_at_25_locates_at_24_and_waits_26_after_each_trip() {
     let mut seek_waits = Vec::new();
-    for (feed, seek, debounce) in [(80.0, 600.0, 40u32), (150.0, 300.0, 240)] {
+    // The third board locates below the start rate `$213` (60 mm/min): at its own feed.
+    for (feed, seek, debounce) in [(80.0, 600.0, 40u32), (150.0, 300.0, 240), (40.0, 600.0, 40)] {
         let ph = homing_phases((feed, seek, debounce));
         let rates: Vec<f64> = ph.iter().map(|p| cruise_mm_per_min(p)).collect();
         let waits = [
@@ -931,13 +933,15 @@ fn homing_seeks_at_25_locates_at_24_and_waits_26_after_each_trip() {
                 rates[i]
             );
         }
-        for w in waits {
-            // The wait, then the next move's first step: it starts from rest at the
-            // start rate `$213` (60 mm/min, 12.5 ms a step), and the trip and the
-            // wait's end are seen at the protocol's polls.
+        // After each trip: the wait, then the next move's first step (the back-off at
+        // `$25`, the pull-off at `$24`), which starts from rest at the start rate
+        // `$213` (60 mm/min) or its own feed if slower, one step's time; the trip and
+        // the wait's end are seen at the protocol's polls (10 ms of slack).
+        for (w, next) in waits.into_iter().zip([seek, feed]) {
+            let first_step_ms = 60_000.0 / (next.min(60.0) * STEPS_PER_MM);
             assert!(
-                w >= f64::from(debounce) && w <= f64::from(debounce) + 25.0,
-                "wait after a trip {w:.2} ms, $26={debounce}"
+                w >= f64::from(debounce) && w <= f64::from(debounce) + first_step_ms + 10.0,
+                "wait after a trip {w:.2} ms, $26={debounce}, first step {first_step_ms} ms"
             );
         }
         seek_waits.push(waits[0]);

@@ -405,8 +405,12 @@ impl Prep {
             return;
         };
         let running = self.hold == HoldState::Running;
+        // A block never runs above its own speed: not to reach the next block's entry,
+        // nor from the start rate ($213 lets a move start at once up to that rate; a
+        // slower move runs at its own feed).
         let planned = if running {
-            (planner.max_speed(&a.block), planner.exit_speed())
+            let v_max = planner.max_speed(&a.block);
+            (v_max, planner.exit_speed().min(v_max))
         } else {
             (0.0, 0.0)
         };
@@ -417,7 +421,7 @@ impl Prep {
         let cfg = planner.config();
         let (s_now, v_now, t0) = a.now(self.t_last);
         let v0 = if running {
-            v_now.max(cfg.start_speed)
+            v_now.max(cfg.start_speed.min(planned.0))
         } else {
             v_now
         };
