@@ -15,7 +15,7 @@
 //! Kept small on purpose: no decision of the protocol, the planner or the HMI is made
 //! here, only their wiring and the shell's own rules (what to save, and when).
 
-use crate::decimal::{put_int, round_i32, Sink};
+use crate::gcode::interpreter::{Jog, JogFrame};
 use crate::gcode::STARTUP_LINES;
 use crate::halt::HaltLatch;
 use crate::hmi::{self, Action, Beep, Hmi, MachineState};
@@ -32,7 +32,6 @@ use crate::stepper::idle::{Activity, IdleOutputs, Levels};
 use crate::stepper::output::OutputConfig;
 use core::mem::MaybeUninit;
 use embedded_storage::nor_flash::NorFlash;
-use heapless::Vec;
 
 /// The protocol tick, ms: the protocol and segment preparation run once per tick.
 pub const SERVICE_PERIOD_MS: u32 = 1;
@@ -68,8 +67,8 @@ pub const NEEDED_FLASH_KB: u32 = 128;
 /// would unlock or change something).
 pub const WRONG_CHIP: &str = "Wrong chip: this image needs an STM32F103CB (128 KB flash)";
 
-/// Jog moves run this far (mm) unless stopped; key release stops them.
-const JOG_REACH_MM: i32 = 1000;
+/// Keypad jogs run this far (1 m, in nanometres) unless stopped; key release stops them.
+const JOG_REACH_NM: i64 = 1_000_000_000;
 
 /// What the shell hands the controller each protocol tick.
 pub struct HostLink<'a, 'r> {
@@ -510,18 +509,15 @@ impl Controller {
             // that fits the queue.
             Action::Queue(mv) => machine.queue(Command::Move(mv), m, now_ms).is_err(),
             Action::JogStart { dir, feed_mm_min } => {
-                // Whole numbers only, through the protocol's number writer.
-                let mut body: Vec<u8, 64> = Vec::new();
-                body.put(b"G91G21");
-                for (d, name) in [(dir[X], b"X"), (dir[Y], b"Y")] {
-                    if d != 0 {
-                        body.put(name);
-                        put_int(&mut body, i32::from(d) * JOG_REACH_MM);
-                    }
-                }
-                body.put(b"F");
-                put_int(&mut body, round_i32(feed_mm_min));
-                machine.jog(&body, m).is_err()
+                // A jog as a value, as `$J=G91 X.. Y.. F..` would make it: the keypad
+                // holds the key, the jog reaches far and is cancelled on release.
+                let reach = |d: i8| (d != 0).then(|| i64::from(d) * JOG_REACH_NM);
+                let jog = Jog {
+                    axes: [reach(dir[X]), reach(dir[Y]), None],
+                    frame: JogFrame::Incremental,
+                    feed_mm_min,
+                };
+                machine.jog(&jog, m).is_err()
             }
             Action::JogStop => {
                 machine.jog_cancel(m);

@@ -10,7 +10,7 @@
 use super::homing::{Homing, HomingError, Progress};
 use super::safety::{Alarm, Inputs};
 use super::MotionControl;
-use crate::gcode::interpreter::Room;
+use crate::gcode::interpreter::{Jog, Room};
 use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{ErrorCode, Interpreter, Outcome, Reject, Stop};
 use crate::motion::Command;
@@ -497,17 +497,31 @@ impl Machine {
 
     /// `$J=...`: queue a jog (only when idle or already jogging).
     /// Anything else, alarm included, is Grbl's error 8 (a `$` command outside Idle).
-    pub fn jog<M: MotionControl>(&mut self, body: &[u8], m: &mut M) -> Result<(), ErrorCode> {
+    pub fn jog_line<M: MotionControl>(&mut self, body: &[u8], m: &mut M) -> Result<(), ErrorCode> {
+        self.may_jog(m)?;
+        let jog = self.interpreter.parse_jog(body)?;
+        self.jog(&jog, m)
+    }
+
+    /// A jog (from `$J=` or the keypad): queued when the machine is idle or jogging.
+    pub fn jog<M: MotionControl>(&mut self, jog: &Jog, m: &mut M) -> Result<(), ErrorCode> {
+        self.may_jog(m)?;
+        let mv: Move = self.interpreter.jog_move(jog, &self.settings)?;
+        if m.push(Command::Move(mv)).is_ok() {
+            self.jogging = true;
+        }
+        Ok(())
+    }
+
+    /// Whether a jog may be queued now: idle or jogging, not in check mode, room in
+    /// the queue.
+    fn may_jog<M: MotionControl>(&self, m: &M) -> Result<(), ErrorCode> {
         let st = self.state(m);
         if !(matches!(st, RunState::Idle | RunState::Jog)) || self.check_mode {
             return Err(ErrorCode::IdleError);
         }
         if m.free() == 0 {
             return Err(ErrorCode::Overflow);
-        }
-        let mv: Move = self.interpreter.jog(body, &self.settings)?;
-        if m.push(Command::Move(mv)).is_ok() {
-            self.jogging = true;
         }
         Ok(())
     }

@@ -213,7 +213,7 @@ impl Protocol {
                 if m.free() == 0 {
                     return None;
                 }
-                self.machine.jog(self.line.get(3..).unwrap_or(&[]), m)
+                self.machine.jog_line(self.line.get(3..).unwrap_or(&[]), m)
             }
             SysCommand::Startup => {
                 let rest = self.line.get(2..).unwrap_or(&[]);

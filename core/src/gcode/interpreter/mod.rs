@@ -17,6 +17,7 @@
 
 mod commands;
 mod jog;
+pub use jog::{Jog, JogFrame};
 #[cfg(test)]
 mod tests;
 

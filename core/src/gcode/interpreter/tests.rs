@@ -546,3 +546,37 @@ fn soft_limits_reject_targets_and_arc_extents() {
     assert_eq!(it.jog(b"G1X1F100", &s), Err(ErrorCode::InvalidJogCommand));
     assert_eq!(it.jog(b"X1", &s), Err(ErrorCode::UndefinedFeedRate));
 }
+
+/// The keypad's jog is a value, not text: the move it makes is the one the `$J=` line
+/// that says the same makes, whatever the modal units and offsets (the keypad always
+/// jogs in mm from where the machine is), and the interpreter continues from the same
+/// end either way.
+#[test]
+fn a_keypad_jog_value_moves_as_its_j_line_does() {
+    let s = Settings::default();
+    for setup in ["G21 G90", "G20 G90", "G21 G91", "G21 G90 G92 X5 Y-3"] {
+        let mut by_line = Interpreter::new();
+        let mut by_value = Interpreter::new();
+        for it in [&mut by_line, &mut by_value] {
+            run(it, &s, "G0 X10 Y20").unwrap();
+            run(it, &s, setup).unwrap();
+        }
+        let line = by_line.jog(b"G91G21X-7.5Y2F450", &s).unwrap();
+        let value = by_value
+            .jog_move(
+                &Jog {
+                    axes: [Some(-7_500_000), Some(2_000_000), None],
+                    frame: JogFrame::Incremental,
+                    feed_mm_min: 450.0,
+                },
+                &s,
+            )
+            .unwrap();
+        assert_eq!(line, value, "{setup}");
+        // 80 steps/mm: X 10 - 7.5 = 2.5 mm, Y 20 + 2 = 22 mm.
+        assert_eq!(line.target[..2], [200, 1760], "{setup}");
+        // Both interpreters continue from the jog's end.
+        let next = |it: &mut Interpreter| moves(&run(it, &s, "G91 G21 G1 X1 F100").unwrap());
+        assert_eq!(next(&mut by_line), next(&mut by_value), "{setup}");
+    }
+}
