@@ -87,7 +87,8 @@ impl Interpreter {
     /// The move of a jog, from where the interpreter is; the interpreter continues
     /// from its end. A target outside travel with soft limits on is `error:15`.
     pub fn jog_move(&mut self, jog: &Jog, s: &Settings) -> Result<Move, ErrorCode> {
-        if !(jog.feed_mm_min > 0.0) {
+        // NaN and anything not above zero: no feed to jog at.
+        if jog.feed_mm_min.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
             return Err(ErrorCode::UndefinedFeedRate);
         }
         let offset = self.work_offset();
