@@ -187,10 +187,9 @@ impl PenMove {
         if k == n {
             return Some((self.to, self.settle_ms));
         }
-        // turn_ms * k / n, exactly, in 32 bits (a very slow servo turns for hours:
-        // turn_ms * k would overflow; a u64 division costs the image 866 bytes).
-        let (q, r) = (self.turn_ms / n, self.turn_ms % n);
-        let at = |k: u32| q * k + r * k / n;
+        // turn_ms * k / n in 64 bits: a very slow servo turns for hours, and
+        // turn_ms * k would overflow 32.
+        let at = |k: u32| (u64::from(self.turn_ms) * u64::from(k) / u64::from(n)) as u32;
         let (from, to) = (i32::from(self.from), i32::from(self.to));
         let level = from + (to - from) * (k as i32 + 1) / n as i32;
         Some((level as u16, at(k + 1) - at(k)))
