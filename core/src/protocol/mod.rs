@@ -1,12 +1,12 @@
 //! The Grbl 1.1 line protocol over a byte stream (USB CDC-ACM in the firmware, a pty in
 //! the simulator).
 //!
-//! Bytes go in with [`Protocol::receive`]; real-time commands (`?`, `!`, `~`, 0x18,
-//! 0x85, overrides, every byte >= 0x80) act at once, even mid-line, and never take
-//! buffer space. Other bytes wait in a 128-byte receive buffer, the one senders count
-//! characters against; when it is full `receive` stops consuming and returns how many
-//! bytes it took, so the caller leaves the rest in its endpoint (back-pressure, no
-//! byte is ever dropped). [`Protocol::poll`] frames lines, runs them through the
+//! Bytes go in one at a time with [`Protocol::take_byte`]; real-time commands (`?`,
+//! `!`, `~`, 0x18, 0x85, overrides, every byte >= 0x80) act at once, even mid-line,
+//! and never take buffer space. Other bytes wait in a 128-byte receive buffer, the one
+//! senders count characters against; when it is full `take_byte` refuses the byte, so
+//! the caller leaves it and the rest in its ring (back-pressure, no byte is ever
+//! dropped). [`Protocol::poll_one`] frames a line, runs it through the
 //! [`Machine`] and answers `ok` / `error:N`; a line whose motion does not fit the
 //! planner queue waits, and so does everything behind it (the machine interprets it
 //! once and keeps its commands until they fit). Responses collect in an
