@@ -320,7 +320,8 @@ fn homing_both_axes_onto_switches_at_positions_and_a_hard_limit() {
     }
     let got = s.command("$H", 60 * T_PER_S).unwrap();
     assert!(got.contains("ok"), "$H: {got:?}");
-    s.wait_idle(10 * T_PER_S).unwrap();
+    // The locate and pull-off run at `$24` (25 mm/min by default): seconds.
+    s.wait_idle(40 * T_PER_S).unwrap();
     let pos = s.m.state().board.pos;
     let mm = [pos[0] as f64 / STEPS_PER_MM, pos[1] as f64 / STEPS_PER_MM];
     eprintln!("homed at {mm:?} mm from power-up");
@@ -735,7 +736,8 @@ fn inverted_limit_pins_home_and_trip_hard_limits_at_the_inverted_level() {
     }
     let got = s.command("$H", 60 * T_PER_S).unwrap();
     assert!(got.contains("ok"), "$H with $5=1: {got:?}");
-    s.wait_idle(10 * T_PER_S).unwrap();
+    // The locate and pull-off run at `$24` (25 mm/min by default): seconds.
+    s.wait_idle(40 * T_PER_S).unwrap();
     let pos = s.m.state().board.pos;
     let mm = [pos[0] as f64 / STEPS_PER_MM, pos[1] as f64 / STEPS_PER_MM];
     eprintln!("homed with $5=1 at {mm:?} mm");
@@ -936,11 +938,11 @@ fn homing_seeks_at_25_locates_at_24_and_waits_26_after_each_trip() {
         // After each trip: the wait, then the next move's first step (the back-off at
         // `$25`, the pull-off at `$24`), which starts from rest at the start rate
         // `$213` (60 mm/min) or its own feed if slower, one step's time; the trip and
-        // the wait's end are seen at the protocol's polls (10 ms of slack).
+        // the wait's end are seen at the protocol's polls (15 ms of slack).
         for (w, next) in waits.into_iter().zip([seek, feed]) {
             let first_step_ms = 60_000.0 / (next.min(60.0) * STEPS_PER_MM);
             assert!(
-                w >= f64::from(debounce) && w <= f64::from(debounce) + first_step_ms + 10.0,
+                w >= f64::from(debounce) && w <= f64::from(debounce) + first_step_ms + 15.0,
                 "wait after a trip {w:.2} ms, $26={debounce}, first step {first_step_ms} ms"
             );
         }
@@ -1075,7 +1077,8 @@ fn soft_limits_refuse_a_move_past_130_or_131_before_any_step() {
     }
     let got = s.command("$H", 60 * T_PER_S).unwrap();
     assert!(got.contains("ok"), "$H: {got:?}");
-    s.wait_idle(10 * T_PER_S).unwrap();
+    // The locate and pull-off run at `$24` (25 mm/min by default): seconds.
+    s.wait_idle(40 * T_PER_S).unwrap();
     // Homed toward minus: the travel is [0, $130] x [0, $131] from the switches.
     ok(&mut s, "G21 G90 G53 G0 X19 Y14");
     let rest = s.wait_idle(10 * T_PER_S).unwrap();
