@@ -755,19 +755,7 @@ impl Walker<'_> {
                 .or_else(|| cur.last().copied())
                 .unwrap_or(start);
             match seg {
-                PathSegment::QuadTo(c, p) => {
-                    let (c, p3) = (mm(c), mm(p));
-                    // Degree elevation: the quadratic as a cubic.
-                    let c1 = Pt::new(
-                        last.x + 2.0 / 3.0 * (c.x - last.x),
-                        last.y + 2.0 / 3.0 * (c.y - last.y),
-                    );
-                    let c2 = Pt::new(
-                        p3.x + 2.0 / 3.0 * (c.x - p3.x),
-                        p3.y + 2.0 / 3.0 * (c.y - p3.y),
-                    );
-                    run.push([last, c1, c2, p3]);
-                }
+                PathSegment::QuadTo(c, p) => run.push(quad_as_cubic(last, mm(c), mm(p))),
                 PathSegment::CubicTo(c1, c2, p) => run.push([last, mm(c1), mm(c2), mm(p)]),
                 other => {
                     flush(&mut cur, &mut run, &mut hints);
@@ -960,18 +948,7 @@ fn flatten_path(
             PathSegment::LineTo(p) => cur.push(map(ts, p)),
             PathSegment::QuadTo(c, p) => {
                 let p0 = *cur.last().unwrap_or(&start);
-                let c = map(ts, c);
-                let p3 = map(ts, p);
-                // Degree elevation: the quadratic as a cubic.
-                let c1 = Pt::new(
-                    p0.x + 2.0 / 3.0 * (c.x - p0.x),
-                    p0.y + 2.0 / 3.0 * (c.y - p0.y),
-                );
-                let c2 = Pt::new(
-                    p3.x + 2.0 / 3.0 * (c.x - p3.x),
-                    p3.y + 2.0 / 3.0 * (c.y - p3.y),
-                );
-                flatten_cubic([p0, c1, c2, p3], tol, &mut cur);
+                flatten_cubic(quad_as_cubic(p0, map(ts, c), map(ts, p)), tol, &mut cur);
             }
             PathSegment::CubicTo(c1, c2, p) => {
                 let p0 = *cur.last().unwrap_or(&start);
@@ -987,6 +964,13 @@ fn flatten_path(
     if open {
         finish(&mut cur, out);
     }
+}
+
+/// The quadratic Bézier p0-c-p3 as the cubic that draws the same curve (degree
+/// elevation).
+fn quad_as_cubic(p0: Pt, c: Pt, p3: Pt) -> [Pt; 4] {
+    let towards = |a: Pt| Pt::new(a.x + 2.0 / 3.0 * (c.x - a.x), a.y + 2.0 / 3.0 * (c.y - a.y));
+    [p0, towards(p0), towards(p3), p3]
 }
 
 /// Appends points (after the first) of a cubic flattened within `tol`.
