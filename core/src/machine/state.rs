@@ -10,7 +10,7 @@
 use super::homing::{Homing, HomingError, Progress};
 use super::safety::{Alarm, Inputs};
 use super::MotionControl;
-use crate::gcode::interpreter::{Jog, Room};
+use crate::gcode::interpreter::Jog;
 use crate::gcode::units::{to_mm, to_nm};
 use crate::gcode::{ErrorCode, Interpreter, Outcome, Reject, Stop};
 use crate::motion::Command;
@@ -399,22 +399,19 @@ impl Machine {
             if self.sync_waiting && !m.is_idle() {
                 return None;
             }
-            // Check mode queues nothing, so a sync point need not wait.
-            let room = Room {
-                idle: self.check_mode || m.is_idle(),
-            };
-            self.outcome = Outcome::default();
-            match self.interpreter.execute_into(
-                line,
-                &self.settings,
-                line_no,
-                &mut self.outcome,
-                Some(room),
-            ) {
-                Ok(true) => self.sync_waiting = false,
-                Ok(false) => {
+            match self
+                .interpreter
+                .interpret(line, &self.settings, line_no, &mut self.outcome)
+            {
+                // A sync point runs only at rest: read again once the machine is (check
+                // mode queues nothing, so it need not wait).
+                Ok(()) if self.outcome.sync && !(self.check_mode || m.is_idle()) => {
                     self.sync_waiting = true;
                     return None;
+                }
+                Ok(()) => {
+                    self.interpreter.commit(&self.outcome);
+                    self.sync_waiting = false;
                 }
                 Err(Reject::Error(e)) => return Some(Err(e)),
                 Err(Reject::SoftLimit) => {
@@ -433,7 +430,7 @@ impl Machine {
         if stop == Some(Stop::End) {
             self.event(Event::Msg("Pgm End"));
         }
-        if self.outcome.coords_changed {
+        if self.outcome.coords.is_some() {
             self.coords_dirty = true;
         }
         if self.check_mode {
@@ -484,11 +481,11 @@ impl Machine {
 
     /// Check a line (for `$N`) without running it or changing any state.
     pub fn validate(&mut self, line: &[u8]) -> Result<(), ErrorCode> {
-        // `room: None`: checked, never committed.
+        // Read, never committed.
         let mut out = Outcome::default();
         match self
             .interpreter
-            .execute_into(line, &self.settings, 0, &mut out, None)
+            .interpret(line, &self.settings, 0, &mut out)
         {
             Err(Reject::Error(e)) => Err(e),
             _ => Ok(()),

@@ -1,7 +1,8 @@
-//! What a block's stages queue and how targets become paths: the commands of one block
+//! What a block's reading queues and how targets become paths: the commands of one block
 //! (rapid moves, pen moves, straight paths with their fine end points) and the offset
-//! arithmetic of G10 / G92. Shared by [`Interpreter::execute_into`] and the jog; each
-//! function pushes to the outcome or computes, and none changes the interpreter.
+//! arithmetic of G10 / G92. Shared by the parts of [`Interpreter::interpret`] and the
+//! jog; each function pushes to a block's commands or computes, and none changes the
+//! interpreter.
 
 use super::*;
 
@@ -24,14 +25,14 @@ pub(super) fn line_path(pos: &NmPos, target: &NmPos, s: &Settings) -> Path {
     }
 }
 
-pub(super) fn push(out: &mut Outcome, c: Command) -> Result<(), ErrorCode> {
-    out.cmds.push(c).map_err(|_| ErrorCode::Overflow)
+pub(super) fn push(cmds: &mut BlockCommands, c: Command) -> Result<(), ErrorCode> {
+    cmds.push(c).map_err(|_| ErrorCode::Overflow)
 }
 
 /// A rapid straight move to `p` (checked as planned; out of range is refused before
 /// anything commits).
 pub(super) fn push_rapid(
-    out: &mut Outcome,
+    cmds: &mut BlockCommands,
     p: &NmPos,
     s: &Settings,
     line: u32,
@@ -39,7 +40,7 @@ pub(super) fn push_rapid(
 ) -> Result<(), ErrorCode> {
     planned.add(p, s);
     push(
-        out,
+        cmds,
         Command::Move(Move {
             target: to_steps(p, s).unwrap_or([0; AXES]),
             path: Path::Line,
@@ -52,7 +53,7 @@ pub(super) fn push_rapid(
 /// Move the pen to `level` (0 = up, [`PEN_FULL`] = down): a servo command, or a
 /// rapid Z move to its place between $205 and $206.
 pub(super) fn pen_move(
-    out: &mut Outcome,
+    cmds: &mut BlockCommands,
     pos: &mut NmPos,
     level: u16,
     s: &Settings,
@@ -60,10 +61,10 @@ pub(super) fn pen_move(
     planned: &mut Reach,
 ) -> Result<(), ErrorCode> {
     match s.pen_mode() {
-        PenMode::Servo => push(out, Command::Pen { level }),
+        PenMode::Servo => push(cmds, Command::Pen { level }),
         PenMode::ZAxis => {
             pos[2] = mm_to_nm(s.pen_z_at(level));
-            push_rapid(out, pos, s, line, planned)
+            push_rapid(cmds, pos, s, line, planned)
         }
     }
 }

@@ -1,6 +1,6 @@
 //! Jogging: a [`Jog`] is one jog as a value, read from a `$J=` line's words (checked
 //! against what a jog may name) or made by the keypad, and turned into one move,
-//! leaving the modal state as it was. Apart from [`Interpreter::execute_into`]
+//! leaving the modal state as it was. Apart from [`Interpreter::interpret`]
 //! because a jog is not a block: it shares the parser and the unit conversions only.
 
 use super::*;
@@ -36,8 +36,8 @@ impl Interpreter {
         if !b.m.is_empty() {
             return Err(ErrorCode::InvalidJogCommand);
         }
-        let mut inches = self.modal.inches;
-        let mut incremental = self.modal.incremental;
+        let mut inches = self.state.modal.inches;
+        let mut incremental = self.state.modal.incremental;
         let mut machine = false;
         for &code in b.g.iter() {
             match code {
@@ -92,12 +92,12 @@ impl Interpreter {
             return Err(ErrorCode::UndefinedFeedRate);
         }
         let offset = self.work_offset();
-        let mut target = self.pos;
+        let mut target = self.state.pos;
         for (axis, v) in jog.axes.iter().enumerate() {
             if let (Some(v), Some(t), Some(&p), Some(&o)) = (
                 *v,
                 target.get_mut(axis),
-                self.pos.get(axis),
+                self.state.pos.get(axis),
                 offset.get(axis),
             ) {
                 *t = match jog.frame {
@@ -111,7 +111,7 @@ impl Interpreter {
         if s.soft_limits() && !within_travel(&target, s) {
             return Err(ErrorCode::TravelExceeded);
         }
-        self.pos = target;
+        self.state.pos = target;
         Ok(Move {
             target: steps,
             path: Path::Line,

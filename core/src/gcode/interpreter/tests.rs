@@ -580,3 +580,48 @@ fn a_keypad_jog_value_moves_as_its_j_line_does() {
         assert_eq!(next(&mut by_line), next(&mut by_value), "{setup}");
     }
 }
+
+#[test]
+fn interpret_changes_nothing_until_commit() {
+    // The machine reads a sync point while moving, waits for rest and reads it again:
+    // the first reading must leave no trace, whatever the block changes.
+    let s = Settings::default();
+    let mut it = Interpreter::new();
+    run(&mut it, &s, "G1 X5 Y5 F600").unwrap();
+    let before = it.clone();
+    for line in [
+        "G10L2P2X10Y20",
+        "G10L20P1X0",
+        "G28.1",
+        "G30.1",
+        "G92X1",
+        "G55G91G20G0X1",
+        "M3S500",
+        "G43.1Z2",
+        "M6T3",
+        "G20M2",
+    ] {
+        let mut out = Outcome::default();
+        it.interpret(line.as_bytes(), &s, 1, &mut out).unwrap();
+        assert_eq!(it, before, "{line}");
+        // Committed, the block has its effect: the same as `execute`.
+        let mut committed = it.clone();
+        committed.commit(&out);
+        let mut executed = it.clone();
+        executed.execute(line.as_bytes(), &s, 1).unwrap();
+        assert_eq!(committed, executed, "{line}");
+        assert_ne!(committed, before, "{line}");
+    }
+    // The stored coordinates change only through `out.coords`.
+    let mut out = Outcome::default();
+    it.interpret(b"G10L2P2X10Y20", &s, 1, &mut out).unwrap();
+    assert_eq!(
+        out.coords,
+        Some(CoordChange::Wcs {
+            index: 1,
+            offset: [10_000_000, 20_000_000, 0]
+        })
+    );
+    it.commit(&out);
+    assert_eq!(it.coords().wcs[1], [10_000_000, 20_000_000, 0]);
+}
