@@ -63,6 +63,11 @@ impl<S: StepSide> Pipeline<S> {
         }
     }
 
+    /// A feed hold is in effect (braking, or at rest until resumed).
+    pub(super) fn held(&self) -> bool {
+        self.prep.hold_state() != HoldState::Running
+    }
+
     /// Nothing runs and no pen move is under way (a hold may lift the pen).
     fn at_rest(&self) -> bool {
         self.prep.hold_state() != HoldState::Holding
@@ -85,7 +90,7 @@ impl<S: StepSide> Pipeline<S> {
     /// A held machine at rest whose Z pen is still to be lifted (at the next
     /// [`Pipeline::fill`]): it is not at rest yet.
     pub(super) fn z_lift_due(&self) -> bool {
-        self.held && self.at_rest() && self.z_to_lift().is_some()
+        self.held() && self.at_rest() && self.z_to_lift().is_some()
     }
 
     /// Queue the Z pen's trip under way; true when no Z move of a hold is under way
@@ -100,7 +105,7 @@ impl<S: StepSide> Pipeline<S> {
         let up = self.pen_timing.z_up;
         loop {
             let (from, to) = match t.stage {
-                ZStage::Up if self.held => {
+                ZStage::Up if self.held() => {
                     self.z_trip = Some(t);
                     return true;
                 }
@@ -150,6 +155,6 @@ impl<S: StepSide> Pipeline<S> {
     /// A Z pen's trip for a hold is under way (or due: up and resumed).
     pub(super) fn z_moving(&self) -> bool {
         self.z_trip
-            .is_some_and(|t| t.stage != ZStage::Up || !self.held)
+            .is_some_and(|t| t.stage != ZStage::Up || !self.held())
     }
 }

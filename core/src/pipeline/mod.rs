@@ -226,7 +226,6 @@ pub struct Pipeline<S: StepSide> {
     pen_timing: PenTiming,
     /// [`z_down_side`]: a Z pen's down side, 0 for a servo pen.
     z_down: i8,
-    held: bool,
     /// Calls of [`Pipeline::fill`] spent waiting at rest for a second move.
     gather: u8,
 }
@@ -263,7 +262,6 @@ impl<S: StepSide> Pipeline<S> {
             dwell = false,
             pen_timing = PenTiming::from(s),
             z_down = z_down_side(s),
-            held = false,
             gather = 0,
         })
     }
@@ -311,8 +309,8 @@ impl<S: StepSide> Pipeline<S> {
     /// The segment-preparation task: fill the step queue, run dwells and pen commands
     /// in order once the moves before them have been prepared.
     pub fn fill(&mut self) {
-        if self.held && self.prep.hold_state() == HoldState::Running {
-            // Hold asked between blocks: start nothing new until resumed, but let a
+        if self.prep.hold_state() == HoldState::Held && !self.prep.in_block() {
+            // Held between blocks: start nothing new until resumed, but let a
             // wait under way (a pen move, a dwell) end, so that the machine comes to
             // rest (and the pen up).
             self.run_waits();
@@ -321,7 +319,7 @@ impl<S: StepSide> Pipeline<S> {
             self.run_z();
             return;
         }
-        if self.held {
+        if self.held() {
             self.run_z();
             self.lift_when_stopped();
             if self.z_trip.is_some() {
@@ -369,6 +367,12 @@ impl<S: StepSide> Pipeline<S> {
             }
             // The path before the head of `pending` is fully prepared: start it.
             if !self.prep.is_idle(&self.planner) {
+                return;
+            }
+            if self.held() && !matches!(self.pending.front(), Some(Command::Move(_))) {
+                // A hold that came to rest at the end of the planned path: a dwell or
+                // a pen move behind it waits for the resume (moves are still planned,
+                // into the held queue).
                 return;
             }
             if matches!(self.pending.front(), Some(Command::Pen { .. })) && self.side.is_running() {
@@ -508,7 +512,6 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     }
 
     fn hold(&mut self) {
-        self.held = true;
         self.prep.hold();
         // Already at rest (M0, `!` at rest): the pen lifts now, before the shell
         // reads the servo's level and may sleep until the next event.
@@ -516,7 +519,6 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
     }
 
     fn resume(&mut self) {
-        self.held = false;
         self.prep.resume(&mut self.planner);
         if let Some(level) = self.lifted.take() {
             // Down again where it was lifted, the drop time waited, before XY goes on.
@@ -526,11 +528,10 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
 
     fn motion(&self) -> MotionState {
         let hold = self.prep.hold_state();
-        if self.held || hold != HoldState::Running {
-            let braking = if hold == HoldState::Held
-                || (self.held && hold == HoldState::Running && self.wait_left == 0 && !self.waiting)
-            {
-                // At rest in the block, or asked between blocks with no wait under
+        if hold != HoldState::Running {
+            let waits = self.wait_left > 0 || self.waiting;
+            let braking = if hold == HoldState::Held && (self.prep.in_block() || !waits) {
+                // At rest in the block, or held between blocks with no wait under
                 // way (nothing is in execution, the queue waits): only what runs
                 // out of the step queue, and the Z pen's trip, still move.
                 self.side.is_running() || self.z_moving() || self.z_lift_due()
@@ -564,7 +565,6 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
         self.wait_left = 0;
         self.waiting = false;
         self.dwell = false;
-        self.held = false;
         // An abort or an alarm leaves the pen up.
         self.pen = 0;
         self.shown = 0;

@@ -510,3 +510,52 @@ fn the_motion_state_follows_a_hold_from_braking_to_rest_and_back() {
     p.clear();
     assert_eq!(p.motion(), MotionState::Idle, "a clear ends the hold");
 }
+
+/// A hold that comes to rest at the end of the last planned move (asked while that
+/// move was still being prepared, in its last ramp) holds what follows too: the dwell
+/// after it and the move after that wait for the resume, as with a hold asked
+/// mid-move.
+#[test]
+fn a_hold_in_the_last_ramp_holds_the_dwell_and_moves_behind_it() {
+    let job = |p: &mut Pipeline<TestSide>| {
+        p.push(mv([800, 0, 0], Feed::MmPerMin(600.0))).unwrap();
+        p.push(Command::Dwell { ms: 500 }).unwrap();
+        p.push(mv([1600, 0, 0], Feed::MmPerMin(600.0))).unwrap();
+    };
+    // The latest moment the move is still in preparation, and the hold then comes
+    // to rest at its end.
+    let mut found = None;
+    for ms in (300..1500).step_by(5) {
+        let (mut log, mut p) = (Vec::new(), test_pipeline(&Settings::default()));
+        job(&mut p);
+        run_timed(&mut p, ms, &mut log);
+        if !p.prep.in_block() {
+            break;
+        }
+        p.hold();
+        run_timed(&mut p, 1000, &mut log);
+        if p.position() == [800, 0, 0] {
+            found = Some(ms);
+        }
+    }
+    let ms = found.expect("no hold in the last ramp that ends at the move's end");
+    let (mut log, mut p) = (Vec::new(), test_pipeline(&Settings::default()));
+    job(&mut p);
+    run_timed(&mut p, ms, &mut log);
+    p.hold();
+    run_timed(&mut p, 2000, &mut log);
+    assert_eq!(
+        (p.motion(), p.position()),
+        (MotionState::Held, [800, 0, 0]),
+        "held at the move's end"
+    );
+    p.resume();
+    // The dwell runs now, after the resume, whole.
+    run_timed(&mut p, 450, &mut log);
+    assert_eq!(p.position(), [800, 0, 0], "the dwell waited for the resume");
+    ms_to_rest(&mut p, &mut log);
+    assert_eq!(
+        (p.motion(), p.position()),
+        (MotionState::Idle, [1600, 0, 0])
+    );
+}

@@ -63,14 +63,16 @@ use crate::planner::{Block, Planner, PlannerConfig, Profile};
 use kernel::*;
 use profile::Cursor;
 
-/// Feed-hold state of the preparation.
+/// Feed-hold state: the one record of a hold, kept by the preparation (the
+/// pipeline's motion state and its pen trip ask it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum HoldState {
     Running,
     /// Braking to rest.
     Holding,
-    /// At rest, with the rest of the path kept.
+    /// At rest, with the rest of the path kept (in a block, or between blocks: no
+    /// block starts until resumed).
     Held,
 }
 
@@ -242,12 +244,23 @@ impl Prep {
         (ticks / self.last_wait.max(1)) as usize
     }
 
-    /// Feed hold: brake to rest as fast as the limits allow.
+    /// Feed hold: brake to rest as fast as the limits allow; between blocks, start
+    /// none until resumed.
     pub fn hold(&mut self) {
-        if self.hold == HoldState::Running && self.active.is_some() {
+        if self.hold != HoldState::Running {
+            return;
+        }
+        if self.active.is_some() {
             self.hold = HoldState::Holding;
             self.stale = self.stale.max(Stale::Plan);
+        } else {
+            self.hold = HoldState::Held;
         }
+    }
+
+    /// A block is in execution (the hold, if any, is within it).
+    pub fn in_block(&self) -> bool {
+        self.active.is_some()
     }
 
     /// Cycle start after a hold.
