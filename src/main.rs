@@ -117,8 +117,6 @@ mod app {
         indicators: board::Indicators,
         busy: board::BusyOutputs,
         lcd_spi: board::LcdSpi,
-        screens: &'static mut Screens,
-        fb: &'static mut FrameBuffer,
         watchdog: board::Watchdog,
         store: Store,
         usb_rx_in: ByteTx<'static, HOST_RX_RING>,
@@ -133,8 +131,6 @@ mod app {
         usb_rxq: ByteRing<HOST_RX_RING> = ByteRing::new(),
         usb_txq: ByteRing<HOST_TX_RING> = ByteRing::new(),
         ctl_cell: MaybeUninit<Controller> = MaybeUninit::uninit(),
-        screens_cell: MaybeUninit<Screens> = MaybeUninit::uninit(),
-        fb_cell: MaybeUninit<FrameBuffer> = MaybeUninit::uninit(),
         pipeline_cell: MaybeUninit<Pipeline<BoardSide>> = MaybeUninit::uninit(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
@@ -212,11 +208,6 @@ mod app {
                 indicators: b.indicators,
                 busy: b.busy,
                 lcd_spi: b.lcd_spi,
-                // The LCD task's retained state: the screens and the 1 KB frame buffer
-                // (entirely dirty from the start: the first flush sends the whole
-                // screen), built here in .bss rather than on that task's stack.
-                screens: cx.local.screens_cell.write(Screens::new()),
-                fb: cx.local.fb_cell.write(FrameBuffer::new()),
                 watchdog: b.watchdog,
                 store,
                 usb_rx_in,
@@ -506,8 +497,10 @@ mod app {
     /// count has grown, once the queue is empty (from the task with time to spare).
     #[task(binds = USART2, priority = 1, shared = [core], local = [
         lcd_spi,
-        screens,
-        fb,
+        // The task's retained state, static: the screens, and the 1 KB frame buffer
+        // (entirely dirty from the start: the first flush sends the whole screen).
+        screens: Screens = Screens::new(),
+        fb: FrameBuffer = FrameBuffer::new(),
         // Power-up steps done (0: none; past `INIT_SEQUENCE.len() + 1`: up).
         init_step: usize = 0,
         init_due: u32 = 0,
@@ -546,7 +539,7 @@ mod app {
             LCD_DUE_MS.store(0, Ordering::Relaxed);
             *cx.local.init_step = step + 1;
         }
-        let (screens, fb) = (&mut **cx.local.screens, &mut **cx.local.fb);
+        let (screens, fb) = (cx.local.screens, cx.local.fb);
         let now = now_ms();
         // Bound by reference: the snapshot stays where the lock returned it, rather
         // than being moved again into locals of this task's stack.

@@ -139,7 +139,7 @@ fn time_text(ms: u32) -> Line {
 }
 
 /// The screens' retained state.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct Screens {
     key: Option<PageKey>,
     plot: Option<Plot>,
@@ -152,9 +152,23 @@ pub struct Screens {
     drawn: Option<(u32, Snapshot)>,
 }
 
+impl Default for Screens {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl Screens {
-    pub fn new() -> Self {
-        Self::default()
+    pub const fn new() -> Self {
+        Screens {
+            key: None,
+            plot: None,
+            trace: Trace::new(),
+            trace_run: None,
+            ticks: None,
+            arrow: None,
+            drawn: None,
+        }
     }
 
     /// Rebuild the whole screen on the next render (e.g. after an LCD reset).
