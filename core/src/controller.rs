@@ -172,7 +172,7 @@ impl Controller {
     }
 
     /// [`Controller::new`] built in `slot`, the firmware's static cell: field by field,
-    /// so that no whole controller (2 KB), protocol or machine is built on init's stack
+    /// so that no whole controller, protocol or machine is built on init's stack
     /// and copied.
     #[allow(unsafe_code)]
     pub fn init_in<'a>(

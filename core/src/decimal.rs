@@ -2,14 +2,14 @@
 //! the number writers and float-to-integer conversions the protocol, the settings
 //! listing and the G-code interpreter share; and the one long division ([`div_rem`])
 //! that wide integers (the interpreter's exact lengths, the digits of a number) go
-//! through, so that no 64- or 128-bit division routine lands in the image (on the
-//! Cortex-M3 those cost kilobytes of flash).
+//! through, in 32-bit steps the Cortex-M3 divides in hardware.
 
 use crate::fmath;
 
 /// A byte sink for the protocol's responses: replies are built from byte strings and
-/// the number writers below, never through `core::fmt` (its machinery costs several KB
-/// of flash on the Cortex-M3).
+/// the number writers below, never through `core::fmt`: integer digits, the exact
+/// decimal rounding Grbl's replies use, and no formatting machinery in the protocol
+/// task's time.
 pub trait Sink {
     fn put(&mut self, bytes: &[u8]);
 }

@@ -831,7 +831,7 @@ impl Settings {
     /// everything first: on an error nothing changes. An image from an older build
     /// with fewer (appended-to) settings loads too: the settings it lacks keep their
     /// values (the defaults, read into `Settings::default()`), so an update keeps the
-    /// user's values. In place, so the ~180-byte value table is not copied around.
+    /// user's values. In place, so the value table is not copied around.
     pub fn read_image(&mut self, img: &[u8]) -> Result<(), ImageError> {
         let version = *img.get(2).ok_or(ImageError::Length)?;
         // Version 1 had one more slot (the retired `$211`).

@@ -203,8 +203,9 @@ impl Field {
 }
 
 /// Parse what a field can hold: optional '-', digits, optional '.' and digits.
-/// Done by hand because core's float parser costs kilobytes of flash for input that is
-/// at most 8 characters; None for empty, lone "-" or "." and anything else.
+/// By hand, because the parser is also what decides what a field accepts (no sign but
+/// '-', no exponent, no "inf" or "NaN", which core's float parser would take); None for
+/// empty, lone "-" or "." and anything else.
 pub fn parse_decimal(text: &[u8]) -> Option<f32> {
     // Byte-wise: anything but ASCII digits and one '.' is refused anyway.
     let (neg, body) = match text {

@@ -1,9 +1,8 @@
 //! Fixed-point text formatting of f32 values ("-12.35") for the LCD and messages.
 //!
-//! core's `{:.2}` float formatting pulls several KB of flash into the firmware; the
-//! screens only ever need a few decimals of a bounded value, so it is done here with
-//! integer formatting, through the same decimal writer as the protocol's replies
-//! ([`crate::decimal`]). Values too large for the requested width print as "----".
+//! The screens only ever need a few decimals of a bounded value, rounded the way the
+//! protocol's replies round them, so it is done with integer formatting, through the
+//! same decimal writer as those replies ([`crate::decimal`]), not `core::fmt`. Values too large for the requested width print as "----".
 
 use super::text::Text;
 use crate::decimal::{decimal, round_i32, DECIMAL_MAX};

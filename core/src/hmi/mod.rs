@@ -597,7 +597,7 @@ impl Hmi {
             let values = form.values();
             // Planned once from the origin only to check it: into `out` (empty here:
             // nothing is pushed before a commit succeeds) and dropped again, so that
-            // no second 440-byte action list sits on the keypad task's stack.
+            // no second action list sits on the keypad task's stack.
             let before = out.len();
             let checked = job.plan([0; 3], &self.cfg, out);
             out.truncate(before);

@@ -296,14 +296,9 @@ impl<S: StepSide> Pipeline<S> {
         self.prep.line()
     }
 
-    /// ms * timer_hz / 1000 (floored) with 32-bit divisions only (a u64 division pulls
-    /// in an 866-byte runtime routine): split ms into seconds and the rest, hz likewise.
+    /// `ms` milliseconds in timer counts (floored).
     fn ms_ticks(&self, ms: u32) -> u64 {
-        let hz = self.timer_hz;
-        let (sec, rest) = (u64::from(ms / 1000), ms % 1000);
-        sec * u64::from(hz)
-            + u64::from(rest) * u64::from(hz / 1000)
-            + u64::from(rest * (hz % 1000) / 1000)
+        u64::from(ms) * u64::from(self.timer_hz) / 1000
     }
 
     /// The segment-preparation task: fill the step queue, run dwells and pen commands

@@ -242,8 +242,7 @@ fn planar(start: StepPos, mv: &Move) -> Result<(), GeometryError> {
     }
 }
 
-/// Angle wrapped into [0, 2 pi).
-/// `floor`, not `%`: f32 remainder links fmodf and a u64 division (~1 KB).
+/// Angle wrapped into [0, 2 pi), negative angles too (`%` would keep the sign).
 fn wrap(a: f32) -> f32 {
     let w = a - crate::fmath::floor(a / TAU) * TAU;
     if w >= TAU {

@@ -188,7 +188,7 @@ impl Planner {
 
     /// [`Planner::new`] built in `slot` (the firmware's static pipeline cell, through
     /// [`Pipeline::init_in`](crate::pipeline::Pipeline::init_in)): field by field, so that the
-    /// block buffer (1.7 KB) is not built on the stack and copied.
+    /// block buffer is not built on the stack and copied.
     #[allow(unsafe_code)]
     pub fn init_in(
         slot: &mut core::mem::MaybeUninit<Planner>,

@@ -118,7 +118,7 @@ impl Protocol {
 
     /// [`Protocol::new`] built in `slot` (the firmware's static cell, through
     /// [`Controller::init_in`](crate::controller::Controller::init_in)): field by field,
-    /// so that no whole protocol (1.5 KB) is built on the stack and copied.
+    /// so that no whole protocol is built on the stack and copied.
     #[allow(unsafe_code)]
     pub fn init_in<'a>(
         slot: &'a mut MaybeUninit<Protocol>,

@@ -9,8 +9,8 @@
 //!
 //! 4x6 was rejected: its digits are 3 pixels wide, "8", "0" and "B" blur together on
 //! this panel, and STN response smear makes changing values unreadable. A 10x20 title
-//! font was tried for the boot and alarm pages and dropped: 2.4 KB of flash for two
-//! words; inverted 6x10 banners do the job.
+//! font was tried for the boot and alarm pages and dropped: a whole font for two words;
+//! inverted 6x10 banners do the job.
 //!
 //! The painter ([`super::widgets::put`]) reads the bitmaps directly: [`BODY_BITS`] and
 //! [`SMALL_BITS`] hold, glyph after glyph, the 1-bit images of embedded-graphics'
