@@ -295,7 +295,7 @@ impl Hmi {
     /// This and [`Hmi::tick`] are the HMI's entry points, kept out of line so that their
     /// working state is gone before the controller applies their actions (through the
     /// machine and the planner, the deepest path of the keypad and protocol tasks; the
-    /// RAM budget needs it: docs/architecture.md, "Kept for RAM").
+    /// RAM budget needs it: docs/architecture.md, "Kept for RAM or speed").
     #[inline(never)]
     pub fn key(&mut self, ev: KeyEvent, st: &Snapshot, now_ms: u32) -> Actions {
         // Keys are rare: any of them counts as a change.
