@@ -159,8 +159,8 @@ pub struct BoardSide {
 }
 
 impl StepSide for BoardSide {
-    type Sink = StepTx;
-    fn sink(&mut self) -> &mut Self::Sink {
+    type Queue = StepTx;
+    fn sink(&mut self) -> &mut Self::Queue {
         &mut self.tx
     }
     fn position(&self) -> StepPos {

@@ -68,8 +68,8 @@ pub struct SimSide {
 }
 
 impl StepSide for SimSide {
-    type Sink = StepCmdQueue;
-    fn sink(&mut self) -> &mut Self::Sink {
+    type Queue = StepCmdQueue;
+    fn sink(&mut self) -> &mut Self::Queue {
         &mut self.queue
     }
     fn position(&self) -> StepPos {

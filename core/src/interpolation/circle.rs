@@ -54,9 +54,10 @@ struct Piece {
     last: bool,
 }
 
-/// What comes after the trace.
+/// The leg of the arc being stepped: settling onto the circle, tracing it, the
+/// straight tail to the target, done.
 #[derive(Clone, Debug)]
-enum Stage {
+enum Leg {
     /// Minor-only steps onto the grid point nearest the circle before the first DDA
     /// piece (the rounded start can be up to a step off it; signed count).
     Settle(i32),
@@ -97,7 +98,7 @@ pub struct Circle {
     max_pieces: u32,
     /// Target relative to the centre, 1/256 step.
     target: [i32; 2],
-    stage: Stage,
+    leg: Leg,
     /// The point before the last step event (classic and tail step events: their length).
     prev: [i32; 2],
     /// See [`Circle::entry_shift`].
@@ -185,7 +186,7 @@ impl Circle {
             hit_at_end: false,
             max_pieces: 0,
             target: [t[0] as i32, t[1] as i32],
-            stage: Stage::Trace,
+            leg: Leg::Trace,
             prev: [0; 2],
             entry: 0.0,
             last_end: core::cell::Cell::new((2, 0, 0.0)),
@@ -269,7 +270,7 @@ impl Circle {
             // one-sided test continues from.
             let catch = self.to_nearest_minor();
             if catch != 0 {
-                self.stage = Stage::Settle(catch);
+                self.leg = Leg::Settle(catch);
             }
         }
     }
@@ -301,7 +302,7 @@ impl Circle {
         j * sigma
     }
 
-    /// One minor-only step of the settle stage.
+    /// One minor-only step of the settle leg.
     fn settle_tick(&mut self, sigma: i32) -> StepEvent {
         let n = 1 - self.piece.major;
         self.prev = self.p;
@@ -505,7 +506,7 @@ impl Circle {
             (self.target[0] - self.p[0]) / ONE,
             (self.target[1] - self.p[1]) / ONE,
         ];
-        self.stage = Stage::Tail(Line::new([0; 3], [d[0], d[1], 0], self.method));
+        self.leg = Leg::Tail(Line::new([0; 3], [d[0], d[1], 0], self.method));
     }
 
     /// What comes next (moving on to the next piece when this one is used up): a DDA
@@ -514,18 +515,18 @@ impl Circle {
     #[allow(clippy::should_implement_trait)]
     pub fn next(&mut self) -> Next {
         loop {
-            match (&self.stage, self.method) {
-                (Stage::Done, _) => return Next::Done,
-                (Stage::Settle(_), _) => return Next::Extra,
+            match (&self.leg, self.method) {
+                (Leg::Done, _) => return Next::Done,
+                (Leg::Settle(_), _) => return Next::Extra,
                 // A tail step has a length (straight, [`Circle::last_tick_len`]): it is
                 // timed along the profile like a trace step event. A tail can be many steps (a
                 // classic trace stops where the next step event would pass the target's
                 // coordinate, e.g. along a near-vertical stretch), and timed as
                 // catch-up steps they would come at ever shorter intervals.
-                (Stage::Tail(_), _) => return Next::StepEvent,
-                (Stage::Trace, Method::Dda) if self.piece.left == 0 => self.next_piece(),
-                (Stage::Trace, Method::Dda) => return Next::Run(self.piece.left),
-                (Stage::Trace, Method::Classic) => return Next::StepEvent,
+                (Leg::Tail(_), _) => return Next::StepEvent,
+                (Leg::Trace, Method::Dda) if self.piece.left == 0 => self.next_piece(),
+                (Leg::Trace, Method::Dda) => return Next::Run(self.piece.left),
+                (Leg::Trace, Method::Classic) => return Next::StepEvent,
             }
         }
     }
@@ -553,7 +554,7 @@ impl Circle {
 
     /// The present run is the arc's last (it ends at the target's coordinate).
     pub fn in_last_piece(&self) -> bool {
-        self.piece.last && matches!(self.stage, Stage::Trace)
+        self.piece.last && matches!(self.leg, Leg::Trace)
     }
 
     /// The major axis of the present piece (0 = X): which coordinate a run's path
@@ -668,7 +669,7 @@ impl Circle {
         let mut d = [0i8; 2];
         d[i] = sgn(self.dir[i]) as i8;
         if self.p == self.target && self.piece.last {
-            self.stage = Stage::Done;
+            self.leg = Leg::Done;
         } else if sgn(self.p[i]) != before && i == self.piece.major {
             // The inward axis crossed (or reached) the centre's line: next quadrant.
             self.piece.left = 0;
@@ -680,23 +681,23 @@ impl Circle {
     /// DDA piece is filled in one tight loop; classic and tail step events come one by one.
     pub fn ticks(&mut self, out: &mut [StepEvent]) -> usize {
         loop {
-            match &mut self.stage {
-                Stage::Done => return 0,
-                Stage::Settle(left) => {
+            match &mut self.leg {
+                Leg::Done => return 0,
+                Leg::Settle(left) => {
                     let Some(slot) = out.first_mut() else {
                         return 0;
                     };
                     let sigma = sgn(*left);
                     *left -= sigma;
                     if *left == 0 {
-                        self.stage = Stage::Trace;
+                        self.leg = Leg::Trace;
                     }
                     *slot = self.settle_tick(sigma);
                     return 1;
                 }
-                Stage::Tail(line) => {
+                Leg::Tail(line) => {
                     let Some(t) = line.next_event() else {
-                        self.stage = Stage::Done;
+                        self.leg = Leg::Done;
                         return 0;
                     };
                     let Some(slot) = out.first_mut() else {
@@ -709,7 +710,7 @@ impl Circle {
                     *slot = t;
                     return 1;
                 }
-                Stage::Trace => {}
+                Leg::Trace => {}
             }
             if out.is_empty() {
                 return 0;
@@ -745,7 +746,7 @@ impl Circle {
     pub fn last_tick_len(&self) -> f32 {
         let s = 1.0 / ONE as f32;
         let (a, b) = (self.prev, self.p);
-        if !matches!(self.stage, Stage::Trace) || self.method == Method::Dda {
+        if !matches!(self.leg, Leg::Trace) || self.method == Method::Dda {
             let (dx, dy) = ((b[0] - a[0]) as f32 * s, (b[1] - a[1]) as f32 * s);
             return crate::fmath::sqrt(dx * dx + dy * dy);
         }

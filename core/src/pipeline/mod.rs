@@ -29,9 +29,10 @@ use hold::ZTrip;
 
 /// The interrupt side, as the pipeline sees it.
 pub trait StepSide {
-    type Sink: CmdSink;
-    /// Where prepared step commands go (the SPSC producer on the board).
-    fn sink(&mut self) -> &mut Self::Sink;
+    /// The step queue's producing end (the SPSC producer on the board).
+    type Queue: CmdSink;
+    /// Where prepared step commands go.
+    fn sink(&mut self) -> &mut Self::Queue;
     /// Position after every step emitted so far.
     fn position(&self) -> StepPos;
     /// Steps are still to come: the timer runs or commands wait in the queue.

@@ -15,8 +15,8 @@ struct TestSide {
 }
 
 impl StepSide for TestSide {
-    type Sink = StepQueue<256>;
-    fn sink(&mut self) -> &mut Self::Sink {
+    type Queue = StepQueue<256>;
+    fn sink(&mut self) -> &mut Self::Queue {
         &mut self.queue
     }
     fn position(&self) -> StepPos {

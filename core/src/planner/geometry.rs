@@ -159,7 +159,7 @@ fn shape_of(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometry, 
             let dir = dx.signum();
             let periods = crate::decimal::to_u32(omega.abs() * dx.abs() / TAU);
             let curv = (amp * omega * omega).abs();
-            let c = Curve {
+            let c = CurveVelocity {
                 sx: sp(cfg, X),
                 sy: sp(cfg, Y),
                 x0: dir,
@@ -218,7 +218,7 @@ fn conic(
             axis[usize::from(k & 1 == 0)] = 1.0;
         }
     }
-    let c = Curve {
+    let c = CurveVelocity {
         sx: sp(cfg, X),
         sy: sp(cfg, Y),
         x0: 0.0,
@@ -270,7 +270,7 @@ fn sweep(a0: f32, a1: f32, ccw: bool, full: bool) -> f32 {
 /// sines (one sampler instead of a copy per curve): at parameter theta =
 /// theta0 + w * (span * i / n), velocity = ((x0 + xa sin theta) / sx * sign,
 /// ya cos theta / sy * sign).
-struct Curve {
+struct CurveVelocity {
     sx: f32,
     sy: f32,
     x0: f32,
@@ -282,7 +282,7 @@ struct Curve {
     span: f32,
 }
 
-impl Curve {
+impl CurveVelocity {
     fn vel(&self, i: u32, n: u32) -> [f32; AXES] {
         let theta = self.theta0 + self.w * (self.span * i as f32 / n as f32);
         let (sin, cos) = crate::fmath::sin_cos(theta);
@@ -294,7 +294,7 @@ impl Curve {
     }
 }
 
-impl Curve {
+impl CurveVelocity {
     /// Simpson integral of |vel(t)| over a parameter span `span` sampled at n (even)
     /// intervals, the tightest per-axis limits over the samples (and `axis`, known
     /// largest tangent components), the centripetal limit at the smallest radius of

@@ -67,7 +67,7 @@ fn page_key(page: &Page) -> PageKey {
 }
 
 /// One line of text being built.
-type Line = Text<32>;
+type TextLine = Text<32>;
 
 /// Line templates: ASCII text with value slots. `FIX + d` is the next value with d
 /// (0..=3) decimals, `UINT + w` the next value as an unsigned integer right-aligned in
@@ -79,7 +79,7 @@ const UINT: u8 = 8;
 const AXIS: u8 = 16;
 
 /// Build `tpl` with `vals` into `l` (cleared first); its bytes.
-fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
+fn fill<'a>(l: &'a mut TextLine, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
     l.clear();
     let mut v = vals.iter().copied();
     for &b in tpl {
@@ -104,12 +104,12 @@ fn fill<'a>(l: &'a mut Line, tpl: &[u8], vals: &[f32]) -> &'a [u8] {
 }
 
 /// Put the line of template `tpl` with `vals` in cell `c`.
-fn put_line(fb: &mut FrameBuffer, c: Cell, l: &mut Line, tpl: &[u8], vals: &[f32]) {
+fn put_line(fb: &mut FrameBuffer, c: Cell, l: &mut TextLine, tpl: &[u8], vals: &[f32]) {
     put(fb, c, fill(l, tpl, vals));
 }
 
 /// Append "+X-Y" for a direction; "--" for none.
-fn push_dir(l: &mut Line, dir: [i8; 2]) {
+fn push_dir(l: &mut TextLine, dir: [i8; 2]) {
     let at = l.len();
     for (v, axis) in [(dir[0], b'X'), (dir[1], b'Y')] {
         if v != 0 {
@@ -123,8 +123,8 @@ fn push_dir(l: &mut Line, dir: [i8; 2]) {
 }
 
 /// "12.3s" or "2m05s".
-fn time_text(ms: u32) -> Line {
-    let mut s = Line::new();
+fn time_text(ms: u32) -> TextLine {
+    let mut s = TextLine::new();
     let tenths = ms / 100;
     if tenths < 600 {
         s.push_number(Some((false, tenths)), 1, 0);
@@ -234,7 +234,7 @@ impl Screens {
         let p = hmi.pos_mm(st);
         let pen_down = hmi.pen_is_down(st);
         let state = st.state.name().as_bytes();
-        let mut l = Line::new();
+        let mut l = TextLine::new();
         if let Some(prompt) = hmi.prompt() {
             prompt_page(fb, prompt, state, &mut l);
             return;
@@ -422,7 +422,7 @@ impl Screens {
         }
         // Live values.
         let p = hmi.pos_mm(st);
-        let mut l = Line::new();
+        let mut l = TextLine::new();
         put_line(fb, Cell::at(76, 11, 8), &mut l, b"X\x17", &[p[X]]);
         put_line(fb, Cell::at(76, 21, 8), &mut l, b"Y\x17", &[p[Y]]);
         // (`as u32` saturates: a negative or NaN feed shows 0.)
@@ -469,7 +469,7 @@ impl Screens {
 }
 
 fn preview_page(hmi: &Hmi, job: &Job, fb: &mut FrameBuffer) {
-    let mut t = Line::new();
+    let mut t = TextLine::new();
     t.push_str(job.name());
     t.push_str(": preview");
     title_bar(fb, t.bytes(), b"");
@@ -533,7 +533,12 @@ fn boot(fb: &mut FrameBuffer) {
 
 /// The machine waits for the user: M0's pause or M6's pen change, with the last
 /// `(MSG, ...)` text on two lines, and what D does.
-fn prompt_page(fb: &mut FrameBuffer, prompt: &crate::hmi::PromptView, state: &[u8], l: &mut Line) {
+fn prompt_page(
+    fb: &mut FrameBuffer,
+    prompt: &crate::hmi::PromptView,
+    state: &[u8],
+    l: &mut TextLine,
+) {
     fb.fill(0, 11, 128, 43, false);
     let row = |i| Cell::at(0, row_y(i), 21);
     match prompt.pen {
@@ -599,7 +604,7 @@ mod tests {
     #[test]
     fn text_helpers() {
         let dir_text = |d| {
-            let mut l = Line::new();
+            let mut l = TextLine::new();
             push_dir(&mut l, d);
             l
         };
@@ -608,7 +613,7 @@ mod tests {
         assert_eq!(dir_text([0, 0]).as_str(), "--");
         assert_eq!(time_text(12_345).as_str(), "12.3s");
         assert_eq!(time_text(125_000).as_str(), "2m05s");
-        let mut l = Line::new();
+        let mut l = TextLine::new();
         assert_eq!(fill(&mut l, b"X\x17", &[-12.345]), b"X -12.35");
         assert_eq!(fill(&mut l, b"F \x0c mm/m", &[600.9]), b"F  600 mm/m");
         assert_eq!(fill(&mut l, b"X\x02 Y\x01s", &[1.0, -2.5]), b"X1.0 Y-3s");
