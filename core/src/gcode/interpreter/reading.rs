@@ -432,8 +432,10 @@ pub(super) fn motion(
     if !owner.motion || !(arc || (v.has_axis() && mode != MotionMode::Cancel)) {
         return Ok(());
     }
-    let pos = &next.pos;
+    let pos = next.pos;
     let ccw = mode == MotionMode::ArcCcw;
+    // The way there: one path, or an arc's two halves.
+    let mut half: Option<(NmPos, Path)> = None;
     let (len, path) = if arc {
         if !v.has_axis() {
             return Err(ErrorCode::NoAxisWords.into());
@@ -441,14 +443,40 @@ pub(super) fn motion(
         if v.axes & 3 == 0 {
             return Err(ErrorCode::NoAxisWordsInPlane.into());
         }
-        let g = arc_geometry(b, pos, target, ccw, next.modal.inches)?;
-        arc_extremes(&g, pos, target, ccw, planned, s);
+        let g = arc_geometry(b, &pos, target, ccw, next.modal.inches)?;
+        arc_extremes(&g, &pos, target, ccw, planned, s);
         let rise = mm_between(pos[2], target[2]);
         let arc_len = fmath::hypot(g.radius * g.sweep, rise);
-        (arc_len, arc_path(&g, pos, ccw, s))
+        // An arc's path ends at the first pass of its target in step space (a whole
+        // turn when the target is the start), so ends on one XY step or close to it
+        // are ambiguous:
+        // - an arc of at most half a turn there is a sliver (CAM's arcs of a few
+        //   micrometres): its nearest grid points are its ends, so it goes straight
+        //   (Z only, if the ends are one step);
+        // - a full circle, or a nearly closed one, goes as two halves, to the point
+        //   opposite its start and on, each with ends far apart.
+        let near = |d: u32| match (to_steps(&pos, s), to_steps(target, s)) {
+            (Some(a), Some(b)) => a[0].abs_diff(b[0]) <= d && a[1].abs_diff(b[1]) <= d,
+            _ => false,
+        };
+        if g.sweep <= core::f32::consts::PI && near(1) {
+            (arc_len, line_path(&pos, target, s))
+        } else if g.sweep > core::f32::consts::PI && near(2) {
+            let mid_angle = g.start_angle + if ccw { 0.5 } else { -0.5 } * g.sweep;
+            let (sin, cos) = fmath::sin_cos(mid_angle);
+            let mid = [
+                g.center[0].saturating_add(mm_to_nm(g.radius * cos)),
+                g.center[1].saturating_add(mm_to_nm(g.radius * sin)),
+                pos[2].saturating_add((target[2] - pos[2]) / 2),
+            ];
+            half = Some((mid, arc_path(&g, &pos, ccw, s)));
+            (arc_len, arc_path(&g, &mid, ccw, s))
+        } else {
+            (arc_len, arc_path(&g, &pos, ccw, s))
+        }
     } else {
         planned.add(target, s);
-        (path_length(pos, target), line_path(pos, target, s))
+        (path_length(&pos, target), line_path(&pos, target, s))
     };
     let feed = if mode == MotionMode::Rapid {
         Feed::Rapid
@@ -457,18 +485,24 @@ pub(super) fn motion(
     } else {
         Feed::MmPerMin(v.feed)
     };
-    // Out of range is refused at completeness (`planned`), before anything commits.
-    let steps = to_steps(target, s);
-    if arc || steps != to_steps(pos, s) {
-        push(
-            cmds,
-            Command::Move(Move {
-                target: steps.unwrap_or([0; AXES]),
-                path,
-                feed,
-                line: v.line_tag,
-            }),
-        )?;
+    let mut from = pos;
+    for (to, path) in half.into_iter().chain(core::iter::once((*target, path))) {
+        // Out of range is refused at completeness (`planned`), before anything
+        // commits.
+        let steps = to_steps(&to, s);
+        let curved = !matches!(path, Path::Line | Path::LineFine { .. });
+        if curved || steps != to_steps(&from, s) {
+            push(
+                cmds,
+                Command::Move(Move {
+                    target: steps.unwrap_or([0; AXES]),
+                    path,
+                    feed,
+                    line: v.line_tag,
+                }),
+            )?;
+        }
+        from = to;
     }
     next.pos = *target;
     Ok(())

@@ -229,11 +229,16 @@ fn arcs_in_ij_and_r_form_with_cam_tolerance() {
         run(&mut it, &s, "G3 X10.1 Y0 I5 F300"),
         err(ErrorCode::InvalidTarget)
     );
-    // Full circle with I/J: target equals start.
+    // Full circle with I/J (target equals start): two halves, to the point opposite
+    // the start and back, so that the path's end is never ambiguous.
     let mut it = Interpreter::new();
-    let full = moves(&run(&mut it, &s, "G3 X0 Y0 I5 F300").unwrap())[0];
-    assert_eq!(full.target, [0, 0, 0]);
-    assert_eq!(fine_arc(&full), ([0, 0], [102_400, 0], true));
+    let full = moves(&run(&mut it, &s, "G3 X0 Y0 I5 F300").unwrap());
+    assert_eq!(full.len(), 2);
+    assert_eq!(full[0].target, [800, 0, 0]);
+    assert_eq!(fine_arc(&full[0]), ([0, 0], [102_400, 0], true));
+    assert_eq!(full[1].target, [0, 0, 0]);
+    assert_eq!(fine_arc(&full[1]), ([204_800, 0], [102_400, 0], true));
+    assert_eq!(full[0].feed, full[1].feed);
     // Inch units and offsets between steps: the centre keeps its fraction of a step.
     let mut it = Interpreter::new();
     let inch = moves(&run(&mut it, &s, "G20 G3 X0 Y0 I0.123 J0.0457 F10").unwrap())[0];
@@ -624,4 +629,25 @@ fn interpret_changes_nothing_until_commit() {
     );
     it.commit(&out);
     assert_eq!(it.coords().wcs[1], [10_000_000, 20_000_000, 0]);
+}
+
+#[test]
+fn an_arc_sliver_whose_ends_share_a_step_is_not_a_full_circle() {
+    // CAM output has arcs of a few micrometres; ends that round to the same step made
+    // the path's whole turn: a 10 mm circle drawn for a 0.005 mm arc.
+    let s = Settings::default();
+    let mut it = Interpreter::new();
+    run(&mut it, &s, "G0 X10 Y0").unwrap();
+    let o = run(&mut it, &s, "G3 X9.999999 Y0.005 I-10 J0 F600").unwrap();
+    assert!(moves(&o).is_empty(), "no step to make: {o:?}");
+    // Rising meanwhile: straight up, no circle.
+    let o = run(&mut it, &s, "G2 X10 Y0 Z1 I-9.999999 J-0.005").unwrap();
+    assert_eq!(moves(&o).len(), 1);
+    assert!(matches!(moves(&o)[0].path, Path::Line), "{o:?}");
+    // The same ends the other way round are nearly a whole turn: a circle.
+    let o = run(&mut it, &s, "G3 X9.999999 Y-0.005 I-10 J0").unwrap();
+    assert!(matches!(moves(&o)[0].path, Path::ArcFine { .. }), "{o:?}");
+    // And a full circle stays one (in two halves).
+    let o = run(&mut it, &s, "G2 X9.999999 Y-0.005 I-9.999999 J0.005").unwrap();
+    assert!(matches!(moves(&o)[0].path, Path::ArcFine { .. }), "{o:?}");
 }
