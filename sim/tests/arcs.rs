@@ -14,42 +14,54 @@ use inkstep_core::settings::Settings;
 use inkstep_sim::analysis::{Analyzer, Ideal};
 use proptest::prelude::*;
 
-/// The arc's move from running `lines` (a G0 to the start, then the arc).
-fn arc_move(lines: &[String], s: &Settings) -> (Move, [i32; 3]) {
+/// The arc's moves from running `lines` (a G0 to the start, then the arc: one move, or
+/// two halves for a full circle), and where they start.
+fn arc_move(lines: &[String], s: &Settings) -> (Vec<Move>, [i32; 3]) {
     let mut it = Interpreter::new();
     let mut start = [0; 3];
-    let mut arc = None;
+    let mut arc = Vec::new();
     for line in lines {
         let mut buf: heapless::Vec<u8, 128> = heapless::Vec::new();
         clean_line(line.as_bytes(), &mut buf).expect("clean");
         let o = it.execute(&buf, s, 0).expect("accepted");
         for c in o.cmds.iter() {
             if let Command::Move(m) = c {
-                if arc.is_none() && line.contains("G0") {
+                if line.contains("G0") {
                     start = m.target;
                 } else {
-                    arc = Some(*m);
+                    arc.push(*m);
                 }
             }
         }
     }
-    (arc.expect("an arc"), start)
+    assert!(!arc.is_empty(), "an arc");
+    (arc, start)
 }
 
 /// Largest distance (steps) of the trace's steps from the circle around `c` with radius
-/// `r` (mm), and whether it ended at the move's target.
-fn deviation(mv: &Move, start: [i32; 3], c: [f64; 2], r: f64, spm: f64) -> (f64, bool) {
-    let mut it = Interpolator::new(start, mv, Method::Dda).expect("an arc");
+/// `r` (mm), whether it ended at the last move's target, and the angle its steps swept
+/// around `c` (radians, counter-clockwise positive).
+fn deviation(mvs: &[Move], start: [i32; 3], c: [f64; 2], r: f64, spm: f64) -> (f64, bool, f64) {
     let mut a = Analyzer::new(Ideal::Circle { c, r }, [spm, spm], start);
     let mut p = start;
     let mut n = 0u64;
-    while let Some(t) = it.next_event() {
-        t.apply(&mut p);
-        a.step(n as f64, t.steps(), p);
-        n += 1;
-        assert!(n < 10_000_000);
+    let angle = |p: [i32; 3]| (f64::from(p[1]) - c[1] * spm).atan2(f64::from(p[0]) - c[0] * spm);
+    let mut swept = 0.0f64;
+    for mv in mvs {
+        let mut it = Interpolator::new(p, mv, Method::Dda).expect("an arc");
+        while let Some(t) = it.next_event() {
+            let before = angle(p);
+            t.apply(&mut p);
+            let d = angle(p) - before;
+            swept +=
+                (d + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+            a.step(n as f64, t.steps(), p);
+            n += 1;
+            assert!(n < 10_000_000);
+        }
     }
-    (a.finish().max_dev, p == mv.target)
+    let last = mvs.last().map(|m| m.target);
+    (a.finish().max_dev, Some(p) == last, swept)
 }
 
 fn settings(spm: f32) -> Settings {
@@ -90,9 +102,15 @@ proptest! {
         let p = |v: &str| -> f64 { v.parse().unwrap() };
         let (x0, y0, i, j) = (p(&f(x0)), p(&f(y0)), p(&f(i)), p(&f(j)));
         let c = [(x0 + i) * unit, (y0 + j) * unit];
-        let (dev, ended) = deviation(&mv, start, c, i.hypot(j) * unit, f64::from(spm));
+        let r = i.hypot(j) * unit;
+        let (dev, ended, swept) = deviation(&mv, start, c, r, f64::from(spm));
         prop_assert!(ended, "did not end at the target");
         prop_assert!(dev <= 0.71, "deviation {} steps", dev);
+        // Drawn once, the right way round, within a step or two at the rounded ends.
+        let want = if full { std::f64::consts::TAU } else { sweep };
+        let got = if ccw { swept } else { -swept };
+        let r_steps = r * f64::from(spm);
+        prop_assert!((got - want).abs() * r_steps < 2.0, "swept {got} rad, the arc {want} rad, r {r_steps} steps");
     }
 
     /// R-form arcs, positive R (at most half a turn) and negative R (more than half).
@@ -119,7 +137,7 @@ proptest! {
         let h = ((r * r - d * d / 4.0).max(0.0)).sqrt() / d;
         let side = if ccw != neg { 1.0 } else { -1.0 };
         let c = [x0 + dx / 2.0 - side * h * dy, y0 + dy / 2.0 + side * h * dx];
-        let (dev, ended) = deviation(&mv, start, c, r, 80.0);
+        let (dev, ended, _) = deviation(&mv, start, c, r, 80.0);
         prop_assert!(ended, "did not end at the target");
         prop_assert!(dev <= 0.71, "deviation {} steps", dev);
     }
