@@ -69,6 +69,23 @@ fn status_report_fields_and_realtime_mid_line() {
     assert!(out.starts_with("<Idle|MPos:10.000,0.000,0.000|"), "{out}");
 }
 
+/// The shell's USB task hands the protocol a packet at once when it holds a byte that
+/// `is_realtime` names: exactly the bytes that act without entering the line.
+#[test]
+fn is_realtime_names_exactly_the_bytes_that_bypass_the_receive_buffer() {
+    for b in 0..=255u8 {
+        let (mut p, mut m) = boot();
+        let before = p.rx_free();
+        assert_eq!(p.receive(&[b], &mut m, 0), 1, "byte {b:#04x} taken");
+        let buffered = p.rx_free() < before;
+        assert_eq!(
+            inkstep_core::protocol::is_realtime(b),
+            !buffered,
+            "byte {b:#04x}: real-time or into the receive buffer"
+        );
+    }
+}
+
 #[test]
 fn full_queue_applies_back_pressure_without_losing_bytes() {
     let (mut p, mut m) = boot();

@@ -105,6 +105,9 @@ pub struct Machine {
     /// The line being taken is a sync point that waits for the machine to come to
     /// rest before it is interpreted again.
     sync_waiting: bool,
+    /// The last [`Machine::execute`] interpreted a curve and left its planning to the
+    /// next call ([`Machine::take_yielded`]).
+    yielded: bool,
 }
 
 impl Machine {
@@ -150,6 +153,7 @@ impl Machine {
             outcome = Outcome::default(),
             waiting = false,
             sync_waiting = false,
+            yielded = false,
         });
         m.lock_if_unhomed();
         m
@@ -412,6 +416,15 @@ impl Machine {
                 Ok(()) => {
                     self.interpreter.commit(&self.outcome);
                     self.sync_waiting = false;
+                    // A curve's line is interpreted in this call and planned in the
+                    // next (its commands wait as for planner room): each half is
+                    // about half a millisecond of the shell's lock on the board, and
+                    // a `?` that comes meanwhile is answered in between (issue 20).
+                    if !self.check_mode && self.outcome.has_curve() {
+                        self.waiting = true;
+                        self.yielded = true;
+                        return None;
+                    }
                 }
                 Err(Reject::Error(e)) => return Some(Err(e)),
                 Err(Reject::SoftLimit) => {
@@ -477,6 +490,12 @@ impl Machine {
         } else {
             Taken::Now
         }))
+    }
+
+    /// The last [`Machine::execute`] returned `None` only to plan the line's motion in
+    /// the next call (not for lack of room): call again at once, with the same line.
+    pub fn take_yielded(&mut self) -> bool {
+        core::mem::take(&mut self.yielded)
     }
 
     /// Check a line (for `$N`) without running it or changing any state.
