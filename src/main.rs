@@ -427,15 +427,19 @@ mod app {
                     tx: &mut c.tx,
                     port_open,
                 };
-                c.ctl
-                    .service(host, pins, &HALT, store, &mut *c.pipeline, now)
+                let done = c
+                    .ctl
+                    .service(host, pins, &HALT, store, &mut *c.pipeline, now);
+                // The replies out now, and the receive side open again: pended before
+                // the lock is released, so that the USB task runs first (ahead of a
+                // preparation the tick pended meanwhile: same priority, lower
+                // interrupt number) and the sender's next line is not held up by it.
+                // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only
+                // undoes the USB task's own back-pressure mask (see `usb_lp`).
+                unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
+                rtic::pend(Interrupt::USB_LP_CAN_RX0);
+                done
             });
-            // The replies out now (the USB task preempts this one as soon as the lock
-            // is released), and the receive side open again.
-            // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes
-            // the USB task's own back-pressure mask (see `usb_lp`).
-            unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
-            rtic::pend(Interrupt::USB_LP_CAN_RX0);
             if let Some(cfg) = done.outputs {
                 apply_output_config(&cfg);
             }
