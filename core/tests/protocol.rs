@@ -101,7 +101,10 @@ fn an_arc_line_is_planned_in_the_call_after_its_interpretation() {
     assert_eq!(drain(&mut p), "");
     assert_eq!(p.receive(b"?", &mut m, 0), 1);
     let report = drain(&mut p);
-    assert!(report.starts_with("<Idle|MPos:0.000,0.000,0.000|Bf:16,128|"), "{report:?}");
+    assert!(
+        report.starts_with("<Idle|MPos:0.000,0.000,0.000|Bf:16,128|"),
+        "{report:?}"
+    );
     assert!(p.poll_one(&mut m, 0), "planned");
     assert!(drain(&mut p).ends_with("ok\r\n"));
     let arc = moves(&m);
