@@ -9,8 +9,9 @@
 //!      tick (SysTick, above every lock so that no millisecond is lost): the clock and
 //!      the start of the periodic tasks below
 //!   6  step timer (TIM2): the core's `Executor`, integer work only
-//!   5  USB (endpoint <-> byte queues) and segment preparation (`Pipeline::fill`, every
-//!      tick)
+//!   5  USB (endpoint <-> byte queues; a packet with a real-time byte is handed to
+//!      the controller at once, so a `?` is answered before the preparation's next
+//!      run) and segment preparation (`Pipeline::fill`, every tick)
 //!   4  protocol / G-code / machine state (`Controller::service`, every tick while
 //!      it has work; at idle only when bytes, an input edge or a key wake it),
 //!      feed-hold and cycle-start inputs
@@ -31,7 +32,9 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use defmt_rtt as _;
 use inkstep::board;
 use inkstep::steps::{self, BoardSide, StepOutput, HALT};
-use inkstep_core::controller::{HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS};
+use inkstep_core::controller::{
+    is_realtime, HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS,
+};
 use inkstep_core::pipeline::StepSide;
 use inkstep_core::ring::{ByteRing, ByteRx, ByteTx};
 use inkstep_core::stepper::exec::Executor;
@@ -120,8 +123,6 @@ mod app {
         watchdog: board::Watchdog,
         store: Store,
         usb_rx_in: ByteTx<'static, HOST_RX_RING>,
-        usb_rx_out: ByteRx<'static, HOST_RX_RING>,
-        usb_tx_in: ByteTx<'static, HOST_TX_RING>,
         usb_tx_out: ByteRx<'static, HOST_TX_RING>,
     }
 
@@ -197,7 +198,12 @@ mod app {
         rtic::pend(Interrupt::USART2);
         (
             Shared {
-                core: Core { ctl, pipeline },
+                core: Core {
+                    ctl,
+                    pipeline,
+                    rx: usb_rx_out,
+                    tx: usb_tx_in,
+                },
             },
             Local {
                 usb: b.usb,
@@ -211,8 +217,6 @@ mod app {
                 watchdog: b.watchdog,
                 store,
                 usb_rx_in,
-                usb_rx_out,
-                usb_tx_in,
                 usb_tx_out,
             },
         )
@@ -220,10 +224,14 @@ mod app {
 
     /// The controller and the motion pipeline, one resource: every task that uses the
     /// controller also drives the pipeline, so one lock (at the tick's priority, where
-    /// the segment preparation runs) covers both.
+    /// the segment preparation runs) covers both. With them the controller's ends of
+    /// the host's byte rings (received bytes out, replies in), which the protocol task
+    /// and the USB task (real-time bytes) both hand to it.
     pub struct Core {
         ctl: &'static mut Controller,
         pipeline: &'static mut Pipeline<BoardSide>,
+        rx: ByteRx<'static, HOST_RX_RING>,
+        tx: ByteTx<'static, HOST_TX_RING>,
     }
 
     impl Core {
@@ -297,9 +305,13 @@ mod app {
 
     /// USB: poll the device, take bytes from the endpoint only while the RX queue has
     /// room (so a full queue NAKs the host instead of dropping), send queued output,
-    /// and publish whether the host has the port open.
-    #[task(binds = USB_LP_CAN_RX0, priority = 5, local = [usb, serial, usb_rx_in, usb_tx_out])]
-    fn usb_lp(cx: usb_lp::Context) {
+    /// and publish whether the host has the port open. A packet that brings a real-time
+    /// byte goes to the controller at once (`Controller::take_realtime`): this task
+    /// runs between two lock sections, before the segment preparation when both wait
+    /// (same priority, lower interrupt number), so a `?`'s report waits for neither
+    /// the preparation nor the protocol task's next run.
+    #[task(binds = USB_LP_CAN_RX0, priority = 5, shared = [core], local = [usb, serial, usb_rx_in, usb_tx_out])]
+    fn usb_lp(mut cx: usb_lp::Context) {
         let rx = cx.local.usb_rx_in;
         let tx = cx.local.usb_tx_out;
         let serial = &mut **cx.local.serial;
@@ -309,7 +321,19 @@ mod app {
         if rx.free() >= board::USB_PACKET {
             let mut buf = [0u8; board::USB_PACKET];
             let n = serial.read_packet(&mut buf);
-            arrived |= rx.push(buf.get(..n).unwrap_or(&[])) > 0;
+            let packet = buf.get(..n).unwrap_or(&[]);
+            arrived |= rx.push(packet) > 0;
+            if packet.iter().any(|&b| is_realtime(b)) {
+                let now = now_ms();
+                cx.shared.core.lock(|c| {
+                    let host = HostLink {
+                        rx: &mut c.rx,
+                        tx: &mut c.tx,
+                        port_open: open,
+                    };
+                    c.ctl.take_realtime(host, &mut *c.pipeline, now);
+                });
+            }
         } else {
             // A packet left in the endpoint keeps the peripheral's transfer flag set,
             // and with it this interrupt: it would fire again at once, forever, and
@@ -388,29 +412,34 @@ mod app {
     /// protocol, the HMI's timers, replies, settings and their persistence at rest),
     /// then what it asks of the hardware: the output configuration, the pen servo and
     /// the release of a halt (each decided by the core).
-    #[task(binds = SPI1, priority = 4, shared = [core], local = [usb_rx_out, usb_tx_in, servo, store])]
+    #[task(binds = SPI1, priority = 4, shared = [core], local = [servo, store])]
     fn protocol(mut cx: protocol::Context) {
         let started = now_ms();
         let quiet = loop {
             PROTOCOL_WAKE.store(false, Ordering::Relaxed);
             let now = now_ms();
             let pins = board::Inputs::levels();
-            let host = HostLink {
-                rx: &mut *cx.local.usb_rx_out,
-                tx: &mut *cx.local.usb_tx_in,
-                port_open: PORT_OPEN.load(Ordering::Relaxed),
-            };
+            let port_open = PORT_OPEN.load(Ordering::Relaxed);
             let store = &mut *cx.local.store;
             let done = cx.shared.core.lock(|c| {
-                let (ctl, pipeline) = c.parts();
-                ctl.service(host, pins, &HALT, store, pipeline, now)
+                let host = HostLink {
+                    rx: &mut c.rx,
+                    tx: &mut c.tx,
+                    port_open,
+                };
+                let done = c
+                    .ctl
+                    .service(host, pins, &HALT, store, &mut *c.pipeline, now);
+                // The replies out now, and the receive side open again: pended before
+                // the lock is released, so that the USB task runs first (ahead of a
+                // preparation the tick pended meanwhile: same priority, lower
+                // interrupt number) and the sender's next line is not held up by it.
+                // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only
+                // undoes the USB task's own back-pressure mask (see `usb_lp`).
+                unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
+                rtic::pend(Interrupt::USB_LP_CAN_RX0);
+                done
             });
-            // The replies out now (the USB task preempts this one as soon as the lock
-            // is released), and the receive side open again.
-            // SAFETY: RTIC's locks use BASEPRI, not NVIC masks; unmasking only undoes
-            // the USB task's own back-pressure mask (see `usb_lp`).
-            unsafe { cortex_m::peripheral::NVIC::unmask(Interrupt::USB_LP_CAN_RX0) };
-            rtic::pend(Interrupt::USB_LP_CAN_RX0);
             if let Some(cfg) = done.outputs {
                 apply_output_config(&cfg);
             }

@@ -24,6 +24,7 @@ use crate::machine::state::Prompt;
 use crate::machine::{InputPolarity, MotionControl, PinLevels, RunState};
 use crate::motion::{Command, StepPos, X, Y, Z};
 use crate::pending::Work;
+pub use crate::protocol::is_realtime;
 use crate::protocol::Protocol;
 use crate::ring::{ByteRx, ByteTx};
 use crate::settings::{PenMode, Settings};
@@ -319,12 +320,7 @@ impl Controller {
         now_ms: u32,
     ) -> Serviced {
         self.port(host.port_open, now_ms);
-        if let (Some(since), false) = (self.session_quiet_since, host.rx.is_empty()) {
-            self.session_quiet_since = None;
-            if now_ms.wrapping_sub(since) >= WELCOME_REPEAT_MS {
-                self.protocol.repeat_welcome();
-            }
-        }
+        self.greet_late(host.rx.is_empty(), now_ms);
         let polarity = InputPolarity::from(self.protocol.machine().settings());
         let pins = halt.take_tripped().fold(pins, polarity);
         self.protocol.set_inputs(polarity.decode(pins), m, now_ms);
@@ -334,11 +330,7 @@ impl Controller {
         // line runs: this call ends here and the shell calls again.
         let answered = self.protocol.output_len() > said;
         let more = answered || self.poll_one(m, now_ms);
-        if !host.port_open {
-            self.protocol.discard_output();
-        }
-        host.tx
-            .push_from(TX_PER_TICK, || self.protocol.pop_output());
+        self.reply(host.tx, host.port_open, TX_PER_TICK);
         // The planner took new settings when they changed (at rest, before the next
         // line); what is left is the HMI, the outputs and the save.
         let changed = self.protocol.machine_mut().take_settings_dirty();
@@ -361,6 +353,48 @@ impl Controller {
             more,
             quiet: !more && self.pending(host.rx.is_empty(), m).is_none(),
         }
+    }
+
+    /// The host's bytes taken between two runs of the protocol task, by the shell's
+    /// USB task when a packet brought a real-time byte ([`is_realtime`]): a `?`'s
+    /// report (and a `!`, `~` or override) then goes out at once instead of after the
+    /// segment preparation and the protocol task's next run, which can be 2 ms on the
+    /// board (issue 20). What [`Controller::service`] does with the bytes, and
+    /// nothing more: the session and the late welcome, the bytes into the protocol
+    /// (lines wait there for `service`), the replies out. The report is the one
+    /// `service` would give at this point: the machine's inputs as `service` last
+    /// read them.
+    pub fn take_realtime<M: MotionControl>(
+        &mut self,
+        host: HostLink<'_, '_>,
+        m: &mut M,
+        now_ms: u32,
+    ) {
+        self.port(host.port_open, now_ms);
+        self.greet_late(host.rx.is_empty(), now_ms);
+        host.rx.pop_while(|b| self.protocol.take_byte(b, m, now_ms));
+        // The whole report if the ring has room: its tail must not wait for `service`.
+        self.reply(host.tx, host.port_open, HOST_TX_RING);
+    }
+
+    /// A session's first byte after a quiet start gets the welcome again
+    /// ([`WELCOME_REPEAT_MS`]).
+    fn greet_late(&mut self, rx_empty: bool, now_ms: u32) {
+        if let (Some(since), false) = (self.session_quiet_since, rx_empty) {
+            self.session_quiet_since = None;
+            if now_ms.wrapping_sub(since) >= WELCOME_REPEAT_MS {
+                self.protocol.repeat_welcome();
+            }
+        }
+    }
+
+    /// The replies into the host's ring, `max` bytes at most (dropped with the port
+    /// closed).
+    fn reply(&mut self, tx: &mut ByteTx<'_, HOST_TX_RING>, port_open: bool, max: usize) {
+        if !port_open {
+            self.protocol.discard_output();
+        }
+        tx.push_from(max, || self.protocol.pop_output());
     }
 
     /// The first work any layer still holds, which goes on without an outside event:

@@ -82,6 +82,20 @@ impl Shell {
         c.service(host, self.pins, &self.halt, &mut self.store, m, self.now)
     }
 
+    /// The USB task's hand-over of a packet with a real-time byte, between two runs
+    /// of the protocol task; returns what the host received.
+    fn realtime(&mut self, c: &mut Controller, m: &mut FakePlanner) -> String {
+        let (_, mut rx) = self.rx.split();
+        let (mut tx, _) = self.tx.split();
+        let host = HostLink {
+            rx: &mut rx,
+            tx: &mut tx,
+            port_open: self.port_open,
+        };
+        c.take_realtime(host, m, self.now);
+        self.read()
+    }
+
     /// The protocol task at `t`, as the firmware runs it: service until no line may
     /// run in this period; returns what the host received.
     fn run(&mut self, c: &mut Controller, m: &mut FakePlanner, t: u32) -> String {
@@ -159,6 +173,38 @@ fn gcode_from_usb_reaches_the_planner() {
         "{:?}",
         m.log
     );
+}
+
+/// A `?` that arrives with a line is answered by the USB task's hand-over at once,
+/// before the protocol task runs the line (issue 20: the report does not wait for the
+/// segment preparation and the next protocol run), and the line then runs as it
+/// would have; the report is what the protocol task would have said at that point.
+#[test]
+fn a_status_request_is_answered_on_arrival_and_the_line_runs_after() {
+    let mut m = FakePlanner::new(16);
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    let hello = sh.run(&mut c, &mut m, 1);
+    assert!(hello.contains("Grbl 1.1h"), "{hello}");
+    sh.push(b"G1 X1 F600\n?");
+    sh.now = 2;
+    let report = sh.realtime(&mut c, &mut m);
+    assert!(
+        report.starts_with("<Idle|MPos:0.000,0.000,0.000|Bf:16,117|"),
+        "{report:?}"
+    );
+    assert!(m.log.is_empty(), "the line waits for the protocol task");
+    let out = sh.run(&mut c, &mut m, 2);
+    assert!(out.ends_with("ok\r\n") && !out.contains('<'), "{out:?}");
+    assert_eq!(m.log.len(), 1, "{:?}", m.log);
+
+    // The same bytes through the protocol task alone: the same report, then the ok.
+    let mut m2 = FakePlanner::new(16);
+    let (mut sh2, mut c2) = Shell::boot(&Settings::default());
+    sh2.run(&mut c2, &mut m2, 1);
+    sh2.push(b"G1 X1 F600\n?");
+    let both = sh2.run(&mut c2, &mut m2, 2);
+    assert_eq!(both, format!("{report}{out}"));
+    assert_eq!(m2.log, m.log);
 }
 
 #[test]

@@ -69,6 +69,57 @@ fn status_report_fields_and_realtime_mid_line() {
     assert!(out.starts_with("<Idle|MPos:10.000,0.000,0.000|"), "{out}");
 }
 
+/// The shell's USB task hands the protocol a packet at once when it holds a byte that
+/// `is_realtime` names: exactly the bytes that act without entering the line.
+#[test]
+fn is_realtime_names_exactly_the_bytes_that_bypass_the_receive_buffer() {
+    for b in 0..=255u8 {
+        let (mut p, mut m) = boot();
+        let before = p.rx_free();
+        assert_eq!(p.receive(&[b], &mut m, 0), 1, "byte {b:#04x} taken");
+        let buffered = p.rx_free() < before;
+        assert_eq!(
+            inkstep_core::protocol::is_realtime(b),
+            !buffered,
+            "byte {b:#04x}: real-time or into the receive buffer"
+        );
+    }
+}
+
+/// An arc's line is interpreted in one call and planned in the next, the shell's lock
+/// released in between (issue 20: each half about half a millisecond on the board); a
+/// `?` answered between them sees the line taken and not yet planned, and the arc
+/// then runs as one block with its `ok`. A straight line is still one call.
+#[test]
+fn an_arc_line_is_planned_in_the_call_after_its_interpretation() {
+    let (mut p, mut m) = boot();
+    assert_eq!(send(&mut p, &mut m, "G21 G90 G1 F600\n"), "ok\r\n");
+    let line = b"G2 X10 Y0 I5 J0\n";
+    assert_eq!(p.receive(line, &mut m, 0), line.len());
+    assert!(p.poll_one(&mut m, 0), "interpreted: call again at once");
+    assert!(moves(&m).is_empty(), "not planned yet");
+    assert_eq!(drain(&mut p), "");
+    assert_eq!(p.receive(b"?", &mut m, 0), 1);
+    let report = drain(&mut p);
+    assert!(
+        report.starts_with("<Idle|MPos:0.000,0.000,0.000|Bf:16,128|"),
+        "{report:?}"
+    );
+    assert!(p.poll_one(&mut m, 0), "planned");
+    assert!(drain(&mut p).ends_with("ok\r\n"));
+    let arc = moves(&m);
+    assert!(
+        matches!(arc.as_slice(), [mv] if mv.target == [800, 0, 0] && !matches!(mv.path, Path::Line)),
+        "{arc:?}"
+    );
+    // A straight line: interpreted and planned in one call.
+    let line = b"G1 X0\n";
+    assert_eq!(p.receive(line, &mut m, 0), line.len());
+    assert!(p.poll_one(&mut m, 0));
+    assert_eq!(moves(&m).len(), 2);
+    assert_eq!(drain(&mut p), "ok\r\n");
+}
+
 #[test]
 fn full_queue_applies_back_pressure_without_losing_bytes() {
     let (mut p, mut m) = boot();

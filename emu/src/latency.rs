@@ -153,12 +153,14 @@ impl Latency {
         self.quantile_us(1.0)
     }
 
-    /// Every `?` answered within [`BOUND`], and the stream accepted.
+    /// Every `?` answered within [`BOUND`], from its OUT packet and from the sender's
+    /// write (issue 20 point 5), and the stream accepted.
     pub fn within_bound(&self) -> bool {
         self.unanswered == 0
             && self.complaints.is_empty()
             && !self.answers.is_empty()
             && self.answers.iter().all(|&a| a <= BOUND)
+            && self.over_bound_from_write == 0
     }
 
     /// The table row: load, lines, questions, median, p99, max, virtual time.

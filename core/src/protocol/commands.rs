@@ -262,7 +262,7 @@ impl Protocol {
         }
         let Some(r) = self.machine.execute(text.as_bytes(), 0, m, now_ms) else {
             self.startup_next = Some(i);
-            return false;
+            return self.machine.take_yielded();
         };
         self.flush_events();
         let text = self.startup.get(i).map_or(&[][..], |t| t.as_bytes());

@@ -35,6 +35,7 @@ use crate::settings::Settings;
 use commands::Listing;
 use core::mem::MaybeUninit;
 use heapless::{Deque, String, Vec};
+pub use stream::is_realtime;
 
 /// Receive buffer size advertised to character-counting senders (`Bf:` and `$I`).
 pub const RX_BUFFER_SIZE: usize = 128;
@@ -399,7 +400,8 @@ impl Protocol {
             }
         };
         let Some(r) = r else {
-            return false;
+            // Interpreted, planned in the next call (true), or waiting (false).
+            return self.machine.take_yielded();
         };
         self.flush_events();
         if self.listing.is_none() || r.is_err() {

@@ -7,6 +7,13 @@
 use super::{Protocol, OUT_RESERVE, RX_BUFFER_SIZE, STATUS_PENDING_MAX};
 use crate::machine::MotionControl;
 
+/// Whether `b` is a real-time command: acted on when it arrives, never part of a line
+/// (`?`, `!`, `~`, Ctrl-X and every byte from 0x80). The shell's USB task hands a
+/// packet holding one to the protocol at once ([`crate::controller::Controller::take_realtime`]).
+pub fn is_realtime(b: u8) -> bool {
+    matches!(b, b'?' | b'!' | b'~' | 0x18 | 0x80..=0xFF)
+}
+
 impl Protocol {
     /// Free bytes in the receive buffer (what `Bf:` reports).
     pub fn rx_free(&self) -> usize {
@@ -20,7 +27,7 @@ impl Protocol {
         self.realtime(b, m, now_ms) || self.rx.push_back(b).is_ok()
     }
 
-    /// Handle `b` if it is a real-time command.
+    /// Handle `b` if it is a real-time command ([`is_realtime`]).
     fn realtime<M: MotionControl>(&mut self, b: u8, m: &mut M, now_ms: u32) -> bool {
         match b {
             // Every `?` gets its own report: now, or as soon as the output buffer has

@@ -95,6 +95,14 @@ impl Outcome {
     pub fn has_dwell(&self) -> bool {
         self.cmds.iter().any(|c| matches!(c, Command::Dwell { .. }))
     }
+
+    /// The block queued a curve (an arc, an ellipse, a sine): planning it (the
+    /// curve's geometry) costs about as much again as interpreting it.
+    pub fn has_curve(&self) -> bool {
+        self.cmds.iter().any(|c| {
+            matches!(c, Command::Move(mv) if !matches!(mv.path, Path::Line | Path::LineFine { .. }))
+        })
+    }
 }
 
 /// Why a block was refused.
