@@ -93,14 +93,15 @@ pub fn put(fb: &mut FrameBuffer, c: Cell, s: &[u8]) {
         } else {
             text.next().unwrap_or(b' ')
         };
-        // The glyph's rows follow each other from this bit on.
+        // The glyph's rows follow each other from this bit on; each row is painted
+        // whole (its `gw` bits, left-aligned).
         let mut i = glyph(lead) * gw * h;
+        let invert = if inverse { u32::MAX } else { 0 };
         for y in y0..y0 + h as i32 {
-            for dx in 0..gw {
-                let b = (i + dx) as usize;
-                let on = bits.get(b / 8).is_some_and(|v| v & (0x80 >> (b % 8)) != 0);
-                fb.set(x + dx as i32, y, on != inverse);
-            }
+            let at = (i / 8) as usize;
+            let two = u32::from(bits.get(at).copied().unwrap_or(0)) << 24
+                | u32::from(bits.get(at + 1).copied().unwrap_or(0)) << 16;
+            fb.set_bits(x, y, (two << (i % 8)) ^ invert, gw);
             i += gw;
         }
         x += gw as i32;
@@ -308,6 +309,54 @@ mod tests {
                 .fill_solid(&Rectangle::new(Point::new(pad_x, 7), blank), bg)
                 .unwrap();
             assert!(ours.bytes() == reference.bytes(), "{s:?}");
+        }
+    }
+
+    /// The glyph painter as first written, a pixel at a time: the reference for the
+    /// row-at-once painter at every bit alignment and clipped at the screen's edges.
+    fn put_by_pixel(fb: &mut FrameBuffer, x0: i32, y0: i32, small: bool, inverse: bool, s: &[u8]) {
+        let (bits, gw, h): (&[u8], u32, u32) = if small {
+            (&SMALL_BITS, 5, 8)
+        } else {
+            (&BODY_BITS, 6, 10)
+        };
+        let mut x = x0;
+        for &lead in s {
+            let mut i = glyph(lead) * gw * h;
+            for y in y0..y0 + h as i32 {
+                for dx in 0..gw {
+                    let b = (i + dx) as usize;
+                    let on = bits.get(b / 8).is_some_and(|v| v & (0x80 >> (b % 8)) != 0);
+                    fb.set(x + dx as i32, y, on != inverse);
+                }
+                i += gw;
+            }
+            x += gw as i32;
+        }
+    }
+
+    #[test]
+    fn glyph_rows_paint_like_single_pixels_at_every_alignment() {
+        let text = b"Xy-0.9~|@#{}";
+        for small in [false, true] {
+            for inverse in [false, true] {
+                for (x, y) in (0..12).map(|x| (x, 3)).chain([(120, 0), (97, 58)]) {
+                    // Over a busy background, so that every pixel is really painted.
+                    let mut ours = FrameBuffer::new();
+                    for i in 0..64 {
+                        ours.fill(2 * i, 0, 1, 64, true);
+                    }
+                    ours.mark_clean();
+                    let mut theirs = ours.clone();
+                    let mut c = Cell::at(x, y, text.len()).inverse(inverse);
+                    if small {
+                        c = c.small();
+                    }
+                    put(&mut ours, c, text);
+                    put_by_pixel(&mut theirs, x, y, small, inverse, text);
+                    assert_eq!(ours, theirs, "x {x} y {y} small {small} inverse {inverse}");
+                }
+            }
         }
     }
 
