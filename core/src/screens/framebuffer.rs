@@ -93,32 +93,42 @@ impl FrameBuffer {
         if x >= WIDTH as i32 {
             return;
         }
-        n = n.min(WIDTH as u32 - x as u32);
-        let mask = !(u32::MAX.checked_shr(n).unwrap_or(0));
-        // A 40-bit window whose top byte is the byte holding pixel x.
-        let sh = x as u32 % 8;
-        let v = (u64::from(bits & mask) << 8) >> sh;
-        let m = (u64::from(mask) << 8) >> sh;
+        let x = x as u32;
+        n = n.min(WIDTH as u32 - x);
+        // 32-bit arithmetic only (the Cortex-M3 shifts 64 bits in a library call): a
+        // run that does not fit the four bytes from x's goes in two.
+        if x % 8 + n > 32 {
+            self.paint(x, y as usize, bits, 24);
+            self.paint(x + 24, y as usize, bits << 24, n - 24);
+        } else {
+            self.paint(x, y as usize, bits, n);
+        }
+    }
+
+    /// [`Self::set_bits`] on screen, with `x % 8 + n <= 32` and `x + n <= WIDTH`.
+    fn paint(&mut self, x: u32, y: usize, bits: u32, n: u32) {
+        let mask = !(u32::MAX >> n);
+        let sh = x % 8;
+        let v = (bits & mask) >> sh;
+        let m = mask >> sh;
         let first = x as usize / 8;
-        let row = y as usize * ROW_BYTES;
-        for k in 0..5 {
-            let shift = 32 - 8 * k as u32;
-            let mk = (m >> shift) as u8;
-            if mk == 0 {
-                continue;
-            }
-            let vk = (v >> shift) as u8;
-            let bx = first + k;
+        let last = (x + n - 1) as usize / 8;
+        let row = y * ROW_BYTES;
+        let mut changed = 0u8;
+        for bx in first..=last {
+            let shift = 24 - 8 * (bx - first) as u32;
+            let (mk, vk) = ((m >> shift) as u8, (v >> shift) as u8);
             let Some(byte) = self.buf.get_mut(row + bx) else {
                 return;
             };
             let new = (*byte & !mk) | vk;
             if new != *byte {
                 *byte = new;
-                if let Some(d) = self.dirty.get_mut(y as usize) {
-                    *d |= 1 << (bx / 2);
-                }
+                changed |= 1 << (bx / 2);
             }
+        }
+        if let Some(d) = self.dirty.get_mut(y) {
+            *d |= changed;
         }
     }
 
@@ -131,7 +141,7 @@ impl FrameBuffer {
         for yy in y.max(0)..y1 {
             let mut xx = x0;
             while xx < x1 {
-                let n = (x1 - xx).min(32);
+                let n = (x1 - xx).min(24);
                 self.set_bits(xx, yy, bits, n as u32);
                 xx += n;
             }

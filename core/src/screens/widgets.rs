@@ -85,28 +85,45 @@ pub fn put(fb: &mut FrameBuffer, c: Cell, s: &[u8]) {
         .copied()
         .filter(starts_char)
         .skip(if right { count - n } else { 0 });
-    let mut x = x0;
-    for slot in 0..chars {
+    // Where each slot's glyph starts in the bitmap (its rows follow each other from
+    // there). Slots from the 26th on start past the screen's right edge (x0 >= 0,
+    // glyphs 5 or more wide): they paint nothing and are not looked up.
+    let mut starts = [0u16; SLOTS_ON_SCREEN];
+    for (slot, start) in starts.iter_mut().enumerate().take(chars) {
         // Right-aligned: the padding first; otherwise it follows the text.
         let lead = if right && slot < pad {
             b' '
         } else {
             text.next().unwrap_or(b' ')
         };
-        // The glyph's rows follow each other from this bit on; each row is painted
-        // whole (its `gw` bits, left-aligned).
-        let mut i = glyph(lead) * gw * h;
-        let invert = if inverse { u32::MAX } else { 0 };
-        for y in y0..y0 + h as i32 {
+        *start = (glyph(lead) * gw * h) as u16;
+    }
+    let slots = starts.get(..chars).unwrap_or(&starts);
+    // Row by row, the glyph rows side by side, painted up to 24 pixels at a time.
+    let glyph_mask = !(u32::MAX >> gw);
+    let invert = if inverse { u32::MAX } else { 0 };
+    for row in 0..h {
+        let y = y0 + row as i32;
+        let (mut run, mut run_n, mut run_x) = (0u32, 0u32, x0);
+        for &start in slots {
+            let i = u32::from(start) + row * gw;
             let at = (i / 8) as usize;
             let two = u32::from(bits.get(at).copied().unwrap_or(0)) << 24
                 | u32::from(bits.get(at + 1).copied().unwrap_or(0)) << 16;
-            fb.set_bits(x, y, (two << (i % 8)) ^ invert, gw);
-            i += gw;
+            if run_n + gw > 24 {
+                fb.set_bits(run_x, y, run ^ invert, run_n);
+                run_x += run_n as i32;
+                (run, run_n) = (0, 0);
+            }
+            run |= ((two << (i % 8)) & glyph_mask) >> run_n;
+            run_n += gw;
         }
-        x += gw as i32;
+        fb.set_bits(run_x, y, run ^ invert, run_n);
     }
 }
+
+/// Character slots that can start on screen (the narrow font's 5 pixels into 128).
+const SLOTS_ON_SCREEN: usize = 26;
 
 /// The inverted title bar (rows 0..=9): title on the left, `right` on the right.
 pub fn title_bar(fb: &mut FrameBuffer, title: &[u8], right: &[u8]) {
@@ -337,10 +354,18 @@ mod tests {
 
     #[test]
     fn glyph_rows_paint_like_single_pixels_at_every_alignment() {
-        let text = b"Xy-0.9~|@#{}";
+        let short = b"Xy-0.9~|@#{}";
+        // Wider than the screen: the slots past its edge paint nothing.
+        let long = b"abcdefghijklmnopqrstuvwxyz0123";
         for small in [false, true] {
             for inverse in [false, true] {
-                for (x, y) in (0..12).map(|x| (x, 3)).chain([(120, 0), (97, 58)]) {
+                let cases = (0..12).map(|x| (x, 3, &short[..])).chain([
+                    (120, 0, &short[..]),
+                    (97, 58, &short[..]),
+                    (3, 20, &long[..]),
+                    (0, 30, &long[..]),
+                ]);
+                for (x, y, text) in cases {
                     // Over a busy background, so that every pixel is really painted.
                     let mut ours = FrameBuffer::new();
                     for i in 0..64 {
