@@ -34,12 +34,12 @@ const IRQ_NAMES: [(usize, &str); 12] = [
     (7, "EXTI1"),
     (9, "EXTI3"),
     (10, "EXTI4"),
+    (15, "DMA1_CHANNEL5"),
     (20, "USB_LP_CAN_RX0"),
     (23, "EXTI9_5"),
     (28, "TIM2"),
     (31, "I2C1_EV"),
     (35, "SPI1"),
-    (38, "USART2"),
     (39, "USART3"),
     (40, "EXTI15_10"),
 ];

@@ -15,9 +15,10 @@
 //!   bytes and the address auto-increments across the whole 16-word GDRAM row.
 //!
 //! Chosen SPI clock: 72 MHz / 256 = 281.25 kHz (SPI1 on APB2, or SPI2 at 36 MHz / 128).
-//! One 24-bit frame then takes 85.3 us >= 72 us, so the SPI itself paces the writes: a
-//! span can go out by DMA without CPU-timed gaps, from the lowest-priority task, and
-//! never touches the step timer. Worst case (every pixel changed): 32 spans of
+//! One 24-bit frame then takes 85.3 us >= 72 us, so the SPI itself paces the writes:
+//! the firmware sends the spans by DMA ([`encode_chunk`] packs them a buffer at a
+//! time) without CPU-timed gaps, from the lowest-priority task, and never touches the
+//! step timer. Worst case (every pixel changed): 32 spans of
 //! (2 address commands + 32 data bytes) = 1088 frames = 3264 SPI bytes = 92.8 ms, so a
 //! full refresh still fits a 10 Hz frame (100 ms). Typical drawing-screen updates are a
 //! small fraction of that (see the tests and the README).

@@ -79,6 +79,12 @@ fn size_of(bits: u32) -> Result<usize, BusError> {
     }
 }
 
+impl Default for Dma {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl Dma {
     pub fn new() -> Dma {
         Dma {
@@ -286,7 +292,7 @@ fn channel_reg(off: u32) -> Result<(usize, u32), BusError> {
     let rel = off.wrapping_sub(0x08);
     let c = (rel / 0x14) as usize;
     let reg = (rel % 0x14) / 4;
-    if off < 0x08 || c >= CHANNELS || reg > 3 || off % 4 != 0 {
+    if off < 0x08 || c >= CHANNELS || reg > 3 || !off.is_multiple_of(4) {
         return Err(unknown("DMA1", off));
     }
     Ok((c, reg))
