@@ -550,16 +550,8 @@ mod app {
         }
         let fb = cx.local.fb;
         if let Some(at) = *cx.local.sending {
-            // The next buffer of the refresh under way, once the last one is in SPI2.
-            let Some(buf) = spi.buffer() else {
-                return;
-            };
-            let (n, next) = st7920::encode_chunk(fb, at, buf);
-            spi.send(n);
-            *cx.local.sending = next;
-            if next.is_none() {
-                fb.mark_clean();
-            }
+            // The next buffer of the refresh under way.
+            *cx.local.sending = send_chunk(spi, fb, at);
             return;
         }
         // A new refresh once per period, once the last one is sent: a tick that found
@@ -595,17 +587,29 @@ mod app {
             return;
         }
         // The last refresh's last bytes leave SPI2 two frames (57 µs) after its
-        // transfer ended, about as long as a render takes: this task, the lowest, may
-        // wait out what is left of them.
+        // transfer ended, less than a render takes: this task, the lowest, may wait
+        // out what is left of them.
         while !spi.idle() {}
+        *cx.local.sending = send_chunk(spi, fb, st7920::Cursor::START);
+    }
+
+    /// The refresh's bytes from `at` on: as many as fill the LCD's buffer, sent by
+    /// DMA once the last transfer is done. Returns where the next buffer starts (None:
+    /// the refresh is all sent, and the frame buffer is marked clean).
+    fn send_chunk(
+        spi: &mut board::LcdSpi,
+        fb: &mut FrameBuffer,
+        at: st7920::Cursor,
+    ) -> Option<st7920::Cursor> {
         let Some(buf) = spi.buffer() else {
-            return;
+            // A transfer still reads the buffer; its end starts the task again.
+            return Some(at);
         };
-        let (n, next) = st7920::encode_chunk(fb, st7920::Cursor::START, buf);
+        let (n, next) = st7920::encode_chunk(fb, at, buf);
         spi.send(n);
-        *cx.local.sending = next;
         if next.is_none() {
             fb.mark_clean();
         }
+        next
     }
 }
