@@ -16,13 +16,13 @@
 //!      it has work; at idle only when bytes, an input edge or a key wake it),
 //!      feed-hold and cycle-start inputs
 //!   3  keypad scan (one column every 5 ms), buzzer, the watchdog
-//!   1  LCD refresh (every 100 ms): the only task that waits (on its SPI); everything
-//!      preempts it
+//!   1  LCD refresh (every 100 ms; its bytes go out by DMA, a buffer per transfer, and
+//!      each transfer's end starts the task again for the next): everything preempts it
 //!   0  idle: WFI
 //!
 //! Every task is an interrupt handler: the periodic ones run on interrupts that the
-//! tick pends (I2C1_EV, SPI1, USART3, USART2, otherwise unused), so the image carries
-//! no async executor and no timer queue.
+//! tick pends (I2C1_EV, SPI1, USART3, otherwise unused, and the LCD's DMA channel),
+//! so the image carries no async executor and no timer queue. No task waits.
 #![no_std]
 // Every unsafe block says why it is sound (a `SAFETY:` comment).
 #![deny(clippy::undocumented_unsafe_blocks)]
@@ -195,7 +195,7 @@ mod app {
         // at once (the tick starts the rest).
         let mut keypad = b.keypad;
         keypad.select_column(ctl.keypad().column());
-        rtic::pend(Interrupt::USART2);
+        rtic::pend(Interrupt::DMA1_CHANNEL5);
         (
             Shared {
                 core: Core {
@@ -373,7 +373,7 @@ mod app {
         }
         let lcd_due = LCD_DUE_MS.load(Ordering::Relaxed);
         if now.is_multiple_of(LCD_REFRESH_MS) || (lcd_due != 0 && now == lcd_due) {
-            rtic::pend(Interrupt::USART2);
+            rtic::pend(Interrupt::DMA1_CHANNEL5);
         }
     }
 
@@ -520,23 +520,31 @@ mod app {
     }
 
     /// The LCD at 10 Hz, lowest priority: take a snapshot of the HMI and the status
-    /// under a short lock, draw it into the frame buffer, send only the changed words.
-    /// The SPI waits here are the only blocking waits in the firmware; every other
-    /// task preempts them. Also logs the step interrupt's late armings when their
-    /// count has grown, once the queue is empty (from the task with time to spare).
-    #[task(binds = USART2, priority = 1, shared = [core], local = [
+    /// under a short lock, draw it into the frame buffer, and send only the changed
+    /// words by DMA, a buffer at a time. Started by the tick (the refresh, the
+    /// power-up's steps) and by the end of each DMA transfer (the next buffer of the
+    /// refresh under way); it never waits. Also logs the step interrupt's late armings
+    /// when their count has grown, once the queue is empty (from the task with time to
+    /// spare).
+    #[task(binds = DMA1_CHANNEL5, priority = 1, shared = [core], local = [
         lcd_spi,
         // The task's retained state, static: the screens, and the 1 KB frame buffer
-        // (entirely dirty from the start: the first flush sends the whole screen).
+        // (entirely dirty from the start: the first refresh sends the whole screen).
         screens: Screens = Screens::new(),
         fb: FrameBuffer = FrameBuffer::new(),
         // Power-up steps done (0: none; past `INIT_SEQUENCE.len() + 1`: up).
         init_step: usize = 0,
         init_due: u32 = 0,
+        // Where the next buffer of the refresh under way starts (None: none under way).
+        sending: Option<st7920::Cursor> = None,
+        // The refresh period the last refresh belonged to (its first millisecond).
+        drawn_ms: Option<u32> = None,
         late_seen: u32 = 0,
     ])]
     fn lcd_refresh(mut cx: lcd_refresh::Context) {
         let spi = cx.local.lcd_spi;
+        // A transfer's end raised this interrupt (or the tick did): the line drops.
+        spi.ack();
         let init = board::INIT_SEQUENCE;
         let step = *cx.local.init_step;
         if step <= init.len() + 1 {
@@ -552,8 +560,9 @@ mod app {
                 let wait_ms = match step.checked_sub(1).and_then(|i| init.get(i)) {
                     None => board::POWER_UP_MS,
                     Some(&(cmd, wait_us)) => {
-                        if spi.command(cmd).is_err() {
-                            defmt::warn!("LCD init failed");
+                        // Each wait is far longer than a frame: the link is free.
+                        if !spi.command(cmd) {
+                            defmt::warn!("LCD init: link busy");
                         }
                         wait_us.div_ceil(1000)
                     }
@@ -568,8 +577,21 @@ mod app {
             LCD_DUE_MS.store(0, Ordering::Relaxed);
             *cx.local.init_step = step + 1;
         }
-        let (screens, fb) = (cx.local.screens, cx.local.fb);
+        let fb = cx.local.fb;
+        if let Some(at) = *cx.local.sending {
+            // The next buffer of the refresh under way.
+            *cx.local.sending = send_chunk(spi, fb, at);
+            return;
+        }
+        // A new refresh once per period, once the last one is sent: a tick that found
+        // a refresh still under way is served when its last transfer ends.
         let now = now_ms();
+        let period = now - now % LCD_REFRESH_MS;
+        if *cx.local.drawn_ms == Some(period) || !spi.sent() {
+            return;
+        }
+        *cx.local.drawn_ms = Some(period);
+        let screens = cx.local.screens;
         // Bound by reference: the snapshot stays where the lock returned it, rather
         // than being moved again into locals of this task's stack.
         let (ref hmi, ref status) = cx.shared.core.lock(|c| {
@@ -590,8 +612,33 @@ mod app {
             );
         }
         let _ = screens.render(hmi, status, now, fb);
-        if st7920::flush(fb, |bytes| spi.write(bytes)).is_err() {
-            defmt::warn!("LCD write failed");
+        if !fb.is_dirty() {
+            return;
         }
+        // The last refresh's last bytes leave SPI2 two frames (57 µs) after its
+        // transfer ended, less than a render takes: this task, the lowest, may wait
+        // out what is left of them.
+        while !spi.idle() {}
+        *cx.local.sending = send_chunk(spi, fb, st7920::Cursor::START);
+    }
+
+    /// The refresh's bytes from `at` on: as many as fill the LCD's buffer, sent by
+    /// DMA once the last transfer is done. Returns where the next buffer starts (None:
+    /// the refresh is all sent, and the frame buffer is marked clean).
+    fn send_chunk(
+        spi: &mut board::LcdSpi,
+        fb: &mut FrameBuffer,
+        at: st7920::Cursor,
+    ) -> Option<st7920::Cursor> {
+        let Some(buf) = spi.buffer() else {
+            // A transfer still reads the buffer; its end starts the task again.
+            return Some(at);
+        };
+        let (n, next) = st7920::encode_chunk(fb, at, buf);
+        spi.send(n);
+        if next.is_none() {
+            fb.mark_clean();
+        }
+        next
     }
 }

@@ -10,8 +10,12 @@
 //! which is always a firmware bug.
 
 use crate::clock::t_per_cycle;
+#[cfg(test)]
+use crate::clock::T_PER_US;
 use crate::debug::Debug;
+use crate::machine::RAM_SIZE;
 use crate::nvic::Nvic;
+use crate::periph::dma::{Dma, Item};
 use crate::periph::flash::{self, Flash, Op};
 use crate::periph::gpio::{exti_irq, Afio, Exti, Port};
 use crate::periph::iwdg::Iwdg;
@@ -22,15 +26,22 @@ use crate::periph::timer::{Edge, Timer};
 use crate::periph::usb::Usb;
 use crate::periph::BusError;
 use crate::pins::{phase_index, Decode, PosSwitch};
+use crate::sram::Sram;
 use crate::usb_host::Host;
 
 /// IRQ numbers (RM0008 table 63).
+/// DMA1 channel 1; channels 2-7 follow.
+pub const IRQ_DMA1_CH1: usize = 11;
 pub const IRQ_USB_LP: usize = 20;
 pub const IRQ_TIM1_UP: usize = 25;
 pub const IRQ_TIM1_CC: usize = 27;
 pub const IRQ_TIM2: usize = 28;
 pub const IRQ_TIM3: usize = 29;
 pub const IRQ_SPI2: usize = 36;
+
+/// DMA1's request lines (RM0008 table 78), as bits of the controller's request mask
+/// (bit c: channel c + 1). Channel 5: SPI2's transmit buffer empty.
+pub const DMA_SPI2_TX: u32 = 1 << 4;
 
 /// Flash size register value (RM0008 30.1): 128 KB on the STM32F103CB.
 pub const F_SIZE_KB: u16 = 128;
@@ -87,6 +98,9 @@ pub struct Board {
     /// TIM3: the counter, flags and interrupt; its compare outputs reach no pin.
     pub tim3: Timer,
     pub spi2: Spi,
+    pub dma1: Dma,
+    /// The SRAM (the CPU's RAM, which the DMA controller reads and writes too).
+    pub sram: Sram,
     pub lcd: St7920,
     pub iwdg: Iwdg,
     pub usb: Usb,
@@ -151,6 +165,8 @@ impl Board {
             tim2: Timer::new("TIM2", false),
             tim3: Timer::new("TIM3", false),
             spi2: Spi::new("SPI2"),
+            dma1: Dma::new(),
+            sram: Sram::new(RAM_SIZE as usize),
             lcd: St7920::new(),
             iwdg: Iwdg::new(),
             usb: Usb::new(),
@@ -198,6 +214,7 @@ impl Board {
         self.tim2.reset();
         self.tim3.reset();
         self.spi2.reset();
+        self.dma1.reset();
         self.iwdg = Iwdg::new();
         self.usb = Usb::new();
         self.af_a = 0;
@@ -231,6 +248,7 @@ impl Board {
         self.tim2.tick_t = tim2;
         self.tim3.tick_t = tim2;
         self.spi2.pclk_t = t_per_cycle(self.rcc.pclk1_hz());
+        self.dma1.hclk_t = t_per_cycle(self.rcc.hclk_hz());
     }
 
     /// The earliest time anything on the board happens by itself.
@@ -242,6 +260,7 @@ impl Board {
             self.tim2.next_event(),
             self.tim3.next_event(),
             self.spi2.next_event(),
+            self.dma1.next_event(),
             self.iwdg.deadline(),
         ]
         .into_iter()
@@ -269,23 +288,123 @@ impl Board {
         edges.clear();
         self.tim3.advance(now, &mut edges);
         self.edges = edges;
-        let mut out = std::mem::take(&mut self.spi_out);
-        out.clear();
-        self.spi2.advance(now, &mut out);
-        for &(t, frame) in &out {
-            if self.lcd_cs {
-                if let Err(e) = self.lcd.byte(t, frame as u8) {
-                    self.halt = Some(Halt::Bus(e));
-                }
-            }
-        }
-        self.spi_out = out;
+        self.spi_and_dma(now);
         self.host.advance(now, &mut self.usb);
         if self.pins_dirty {
             self.pins_changed();
         }
         self.update_irqs();
         self.iwdg.deadline().is_some_and(|d| d <= now)
+    }
+
+    /// SPI2 and DMA1 up to `now`, event by event in time order: a frame leaving the
+    /// shift register empties the transmit buffer, whose DMA request the controller
+    /// takes; the byte it moves lands in DR some bus cycles later and shifts out next.
+    fn spi_and_dma(&mut self, now: u64) {
+        let mut out = std::mem::take(&mut self.spi_out);
+        loop {
+            let next = [self.spi2.next_event(), self.dma1.next_event()]
+                .into_iter()
+                .flatten()
+                .min();
+            let Some(t) = next.filter(|&t| t <= now) else {
+                break;
+            };
+            if self.dma1.next_event() == Some(t) {
+                self.dma_move(t);
+            }
+            out.clear();
+            self.spi2.advance(t, &mut out);
+            for &(t, frame) in &out {
+                if self.lcd_cs {
+                    if let Err(e) = self.lcd.byte(t, frame as u8) {
+                        self.halt = Some(Halt::Bus(e));
+                    }
+                }
+            }
+            self.dma_arbitrate(t);
+        }
+        self.spi_out = out;
+    }
+
+    /// The peripherals' DMA requests (see [`DMA_SPI2_TX`]).
+    fn dma_requests(&self) -> u32 {
+        let mut r = 0;
+        if self.spi2.tx_dma_request() {
+            r |= DMA_SPI2_TX;
+        }
+        r
+    }
+
+    /// DMA1 takes a pending request at `t` if its bus is free.
+    fn dma_arbitrate(&mut self, t: u64) {
+        let requests = self.dma_requests();
+        if requests == 0 {
+            return;
+        }
+        let (r1, r2) = self.apb_ratios();
+        self.dma1
+            .arbitrate(requests, t, |item| dma_cycles(item, r1, r2));
+    }
+
+    /// The transfer on DMA1's bus lands at `t`: the read and the write, as the CPU's
+    /// would be, at that time (the CPU executes meanwhile and is not charged).
+    fn dma_move(&mut self, t: u64) {
+        let Some(item) = self.dma1.landed(t) else {
+            return;
+        };
+        let now = std::mem::replace(&mut self.now, t);
+        // A narrower destination takes the low bytes, a wider one is zero-padded
+        // (RM0008 table 76).
+        let moved = match self.dma_read(item.from, item.from_size) {
+            Ok(Some(v)) => {
+                let v = if item.to_size < 4 {
+                    v & ((1u32 << (8 * item.to_size)) - 1)
+                } else {
+                    v
+                };
+                self.dma_write(item.to, item.to_size, v)
+            }
+            Ok(None) => Ok(false),
+            Err(e) => Err(e),
+        };
+        self.now = now;
+        match moved {
+            Ok(ok) => self.dma1.done(ok),
+            Err(e) => {
+                self.dma1.done(false);
+                self.halt = Some(Halt::Bus(e));
+            }
+        }
+    }
+
+    /// A DMA read: Ok(None) where nothing answers (the transfer error of 13.3.7), an
+    /// error where a model refuses (the run stops, as for the CPU).
+    fn dma_read(&mut self, addr: u32, size: usize) -> Result<Option<u32>, BusError> {
+        let ram = addr.wrapping_sub(crate::machine::RAM_BASE) as usize;
+        let flash = addr.wrapping_sub(FLASH_BASE) as usize;
+        Ok(if ram < self.sram.len() {
+            self.sram.read(ram, size)
+        } else if flash < self.flash.array.len() {
+            Some(self.flash.read_array(flash, size))
+        } else if (0x4000_0000..0x4002_4000).contains(&addr) {
+            Some(self.read(addr, size)?)
+        } else {
+            None
+        })
+    }
+
+    /// A DMA write: Ok(false) where nothing answers (flash is read-only to it).
+    fn dma_write(&mut self, addr: u32, size: usize, v: u32) -> Result<bool, BusError> {
+        let ram = addr.wrapping_sub(crate::machine::RAM_BASE) as usize;
+        if ram < self.sram.len() {
+            return Ok(self.sram.write(ram, size, v).is_some());
+        }
+        if (0x4000_0000..0x4002_4000).contains(&addr) {
+            self.write(addr, size, v)?;
+            return Ok(true);
+        }
+        Ok(false)
     }
 
     /// Timer output edges onto the pins, in time order (TIM1 CH1 = PA8; TIM2 CH1-4 =
@@ -534,6 +653,11 @@ impl Board {
         if self.spi2.irq() {
             lines |= 1 << IRQ_SPI2;
         }
+        for c in 0..crate::periph::dma::CHANNELS {
+            if self.dma1.irq(c) {
+                lines |= 1 << (IRQ_DMA1_CH1 + c);
+            }
+        }
         if self.usb.irq() {
             lines |= 1 << IRQ_USB_LP;
         }
@@ -553,6 +677,13 @@ impl Board {
             self.rcc.apb1enr
         };
         if en & (1 << bit) == 0 {
+            return Err(BusError(format!("{name} accessed with its clock off")));
+        }
+        Ok(())
+    }
+
+    fn clock_on_ahb(&self, bit: u32, name: &str) -> Result<(), BusError> {
+        if self.rcc.ahbenr & (1 << bit) == 0 {
             return Err(BusError(format!("{name} accessed with its clock off")));
         }
         Ok(())
@@ -600,6 +731,10 @@ impl Board {
             0x4001_2C00 => {
                 self.clock_on(true, 11, "TIM1")?;
                 self.tim1.read(off, now)?
+            }
+            0x4002_0000 => {
+                self.clock_on_ahb(0, "DMA1")?;
+                self.dma1.read(off)?
             }
             0x4002_1000 => self.rcc.read(off)?,
             0x4002_2000 => self.flash.read_reg(off)?,
@@ -676,6 +811,10 @@ impl Board {
                 self.tim1.write(off, v, now, &mut edges)?;
                 self.apply_edges(&edges, true);
             }
+            0x4002_0000 => {
+                self.clock_on_ahb(0, "DMA1")?;
+                self.dma1.write(off, v)?;
+            }
             0x4002_1000 => {
                 self.rcc.write(off, v)?;
                 self.clocks_changed();
@@ -690,6 +829,8 @@ impl Board {
         if self.pins_dirty {
             self.pins_changed();
         }
+        // A write may raise a DMA request (TXDMAEN set) or arm a channel for one.
+        self.dma_arbitrate(self.now);
         self.update_irqs();
         Ok(())
     }
@@ -763,6 +904,19 @@ impl Board {
     }
 }
 
+/// Bus clocks from a DMA request taken to its item landing: one to arbitrate, then
+/// the read and the write, each 1 on the AHB (SRAM, flash, DMA) or the bridge's
+/// 2 x HCLK/PCLK + 1 on an APB (as the CPU's read is costed, emu/README.md). An
+/// estimate: RM0008 13.3.2 gives the steps, not their cycles.
+fn dma_cycles(item: &Item, hclk_per_pclk1: u32, hclk_per_pclk2: u32) -> u64 {
+    let access = |addr: u32| match addr {
+        0x4000_0000..=0x4000_FFFF => 2 * hclk_per_pclk1 + 1,
+        0x4001_0000..=0x4001_FFFF => 2 * hclk_per_pclk2 + 1,
+        _ => 1,
+    };
+    u64::from(1 + access(item.from) + access(item.to))
+}
+
 fn ppb_unknown(off: u32, size: usize) -> BusError {
     BusError(format!(
         "private peripheral bus: no register at 0x{:08X} ({size} bytes)",
@@ -791,7 +945,6 @@ fn unmodelled(base: u32) -> BusError {
         (0x4001_2800, "ADC2"),
         (0x4001_3000, "SPI1"),
         (0x4001_3800, "USART1"),
-        (0x4002_0000, "DMA1"),
         (0x4002_3000, "CRC"),
     ];
     match NAMES.iter().find(|(a, _)| *a == base) {
@@ -801,3 +954,103 @@ fn unmodelled(base: u32) -> BusError {
 }
 
 pub use flash::BASE as FLASH_BASE;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::periph::dma::{DIR, EN, GIF, HTIF, MINC, TCIE, TCIF};
+
+    const SPI2_DR: u32 = 0x4000_380C;
+    const CCR5: u32 = 0x4002_0000 + 0x08 + 0x14 * 4;
+
+    /// A board at the 8 MHz reset clock with SPI2 (master, f_PCLK/256, so one byte
+    /// is 256 µs), the ST7920 selected (PB12 high) and DMA1 clocked.
+    fn lcd_board() -> Board {
+        let mut b = Board::new(Flash::new(None).unwrap(), 0x2_0000..0x2_0000);
+        b.write(0x4002_1014, 4, 0x15).unwrap(); // AHBENR: DMA1
+        b.write(0x4002_1018, 4, 1 << 3).unwrap(); // APB2ENR: GPIOB
+        b.write(0x4002_101C, 4, 1 << 14).unwrap(); // APB1ENR: SPI2
+        b.write(0x4001_0C04, 4, 0x4441_4444).unwrap(); // PB12 push-pull output
+        b.write(0x4001_0C10, 4, 1 << 12).unwrap(); // CS high
+        b.write(0x4000_3800, 4, 0x4 | 0x38 | 0x40 | 0x300).unwrap();
+        b
+    }
+
+    /// ST7920 serial frames: (RS, byte) each as start byte and two nibble bytes.
+    fn frames(items: &[(bool, u8)]) -> Vec<u8> {
+        items
+            .iter()
+            .flat_map(|&(rs, v)| [if rs { 0xFA } else { 0xF8 }, v & 0xF0, v << 4])
+            .collect()
+    }
+
+    #[test]
+    fn spi2_tx_by_dma_channel_5_streams_back_to_back_without_the_cpu() {
+        let mut b = lcd_board();
+        // Extended set, graphics on, GDRAM row 3 word 2, one word 0xA53C.
+        let bytes = frames(&[
+            (false, 0x34),
+            (false, 0x36),
+            (false, 0x83),
+            (false, 0x82),
+            (true, 0xA5),
+            (true, 0x3C),
+        ]);
+        for (i, &v) in bytes.iter().enumerate() {
+            b.sram.write(0x100 + i, 1, u32::from(v)).unwrap();
+        }
+        b.write(CCR5 + 4, 4, bytes.len() as u32).unwrap();
+        b.write(CCR5 + 8, 4, SPI2_DR).unwrap();
+        b.write(CCR5 + 12, 4, 0x2000_0100).unwrap();
+        b.write(CCR5, 4, EN | DIR | MINC | TCIE).unwrap();
+        assert_eq!(b.dma1.next_event(), None, "no request before TXDMAEN");
+        let t0 = 1000;
+        b.advance(t0);
+        b.write(0x4000_3804, 4, 1 << 1).unwrap(); // CR2.TXDMAEN
+                                                  // The request is taken at once; the byte lands in DR 5 bus cycles later (SRAM
+                                                  // read 1, APB1 write 3 at HCLK = PCLK1, arbitration 1).
+        let cycle = t_per_cycle(8_000_000);
+        let byte_t = 256 * T_PER_US;
+        assert_eq!(b.dma1.next_event(), Some(t0 + 5 * cycle));
+        // Half-way: the transfer is still running, no interrupt yet.
+        b.advance(t0 + 5 * cycle + 9 * byte_t);
+        assert_eq!(b.last_irq_lines & (1 << (IRQ_DMA1_CH1 + 4)), 0);
+        assert_eq!(b.read(CCR5 + 4, 4), Ok(bytes.len() as u32 - 10));
+        b.advance(t0 + 20_000 * T_PER_US);
+        // Every byte reached the LCD, each one frame after the one before.
+        assert_eq!(b.lcd.gdram[3][2], 0xA53C);
+        assert_eq!(b.lcd.lost, 0);
+        assert_eq!(
+            b.lcd.last_byte_t,
+            t0 + 5 * cycle + bytes.len() as u64 * byte_t
+        );
+        assert_eq!(b.dma1.moved[4], bytes.len() as u64);
+        // Transfer complete: the flag, channel 5's interrupt (IRQ 15), SPI2 idle.
+        assert_eq!(b.read(0x4002_0000, 4), Ok((TCIF | HTIF | GIF) << 16));
+        assert_ne!(b.last_irq_lines & (1 << 15), 0);
+        assert_eq!(b.read(0x4000_3808, 4).map(|sr| sr & 0x82), Ok(0x02)); // TXE, not BSY
+        b.write(0x4002_0004, 4, 1 << 16).unwrap(); // CGIF5
+        assert_eq!(b.last_irq_lines & (1 << 15), 0);
+    }
+
+    #[test]
+    fn a_dma_read_where_nothing_answers_is_a_transfer_error() {
+        let mut b = lcd_board();
+        b.write(CCR5 + 4, 4, 3).unwrap();
+        b.write(CCR5 + 8, 4, SPI2_DR).unwrap();
+        b.write(CCR5 + 12, 4, 0x3000_0000).unwrap();
+        b.write(CCR5, 4, EN | DIR | MINC | (1 << 3)).unwrap();
+        b.write(0x4000_3804, 4, 1 << 1).unwrap();
+        b.advance(10 * T_PER_US);
+        assert_eq!(b.read(0x4002_0000, 4), Ok((8 | 1) << 16));
+        assert_eq!(b.read(CCR5, 4).map(|v| v & EN), Ok(0));
+        assert_ne!(b.last_irq_lines & (1 << 15), 0);
+        assert_eq!(b.spi2.next_event(), None, "nothing was sent");
+    }
+
+    #[test]
+    fn dma1_needs_its_clock() {
+        let mut b = Board::new(Flash::new(None).unwrap(), 0x2_0000..0x2_0000);
+        assert!(b.read(CCR5, 4).is_err());
+    }
+}

@@ -19,5 +19,6 @@ pub mod profiler;
 pub mod rtt;
 pub mod session;
 pub mod soak;
+pub mod sram;
 pub mod target_tests;
 pub mod usb_host;

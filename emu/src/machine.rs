@@ -269,7 +269,11 @@ impl<'a> Machine<'a> {
             )
             .map_err(e)?;
         }
-        uc.mem_map(u64::from(RAM_BASE), u64::from(RAM_SIZE), Prot::ALL)
+        // The SRAM is the board's (the DMA controller reads and writes it too).
+        let sram = uc.get_data().board.sram.as_ptr();
+        // SAFETY: the board's SRAM is RAM_SIZE bytes (Board::new) and lives in
+        // unicorn's data, so it outlives the mapping (freed after uc_close).
+        unsafe { uc.mem_map_ptr(u64::from(RAM_BASE), u64::from(RAM_SIZE), Prot::ALL, sram) }
             .map_err(e)?;
         // Peripherals: APB1, APB2 and AHB up to the CRC unit.
         uc.mmio_map(

@@ -226,9 +226,7 @@ mod app {
     #[task(priority = 1, shared = [last_key, usb_bytes], local = [lcd_spi])]
     async fn lcd_refresh(mut cx: lcd_refresh::Context) {
         let spi = cx.local.lcd_spi;
-        if board::lcd_init(spi).is_err() {
-            defmt::warn!("LCD init failed");
-        }
+        board::lcd_init(spi);
         let mut fb = FrameBuffer::new();
         fb.mark_all_dirty();
         let style = MonoTextStyle::new(&FONT_6X10, BinaryColor::On);
@@ -265,9 +263,10 @@ mod app {
                     Text::with_baseline(l, Point::new(1, 1 + 12 * i as i32), style, Baseline::Top)
                         .draw(&mut fb);
             }
-            if st7920::flush(&mut fb, |b| spi.write(b)).is_err() {
-                defmt::warn!("LCD write failed");
-            }
+            let _ = st7920::flush(&mut fb, |b| {
+                spi.write_blocking(b);
+                Ok::<(), core::convert::Infallible>(())
+            });
             Mono::delay(100.millis()).await;
         }
     }

@@ -30,8 +30,8 @@
 //! | PB6-PB9  | keypad rows 1-4                 | pull-up inputs, read together from GPIOB IDR   |
 //! | PB10     | keypad column 1                 | open-drain                                     |
 //! | PB11     | keypad column 2                 | open-drain                                     |
-//! | PB12     | LCD CS (ST7920 RS)              | active high                                    |
-//! | PB13     | LCD SCK (ST7920 E)              | SPI2 mode 0, 281 kHz                           |
+//! | PB12     | LCD CS (ST7920 RS)              | active high, held high (frames sync themselves)|
+//! | PB13     | LCD SCK (ST7920 E)              | SPI2 mode 0, 281 kHz, fed by DMA1 channel 5    |
 //! | PB15     | LCD MOSI (ST7920 R/W)           | ST7920 PSB tied low (serial mode)              |
 //! | PC13     | busy LED (on board)             | active low                                     |
 //! | PC14     | keypad column 4                 | open-drain (low-speed pin, fine for a keypad)  |
@@ -54,7 +54,7 @@ pub use flash::{
 pub use indicators::{BusyOutputs, Indicators};
 pub use inputs::{exti_take_pending, Inputs};
 pub use keypad::KeypadMatrix;
-pub use lcd::{lcd_init, LcdSpi, INIT_SEQUENCE, LCD_SPI_HZ, POWER_UP_MS};
+pub use lcd::{lcd_init, LcdSpi, INIT_SEQUENCE, LCD_CHUNK, LCD_SPI_HZ, POWER_UP_MS};
 pub use servo::PenServo;
 pub use step_port::{
     bsrr_word, coils_off, drivers_enabled, emergency_outputs_off, set_enable_polarity,
@@ -67,6 +67,7 @@ pub use watchdog::{Watchdog, WATCHDOG_MS};
 
 use stm32f1xx_hal::{
     afio,
+    dma::DmaExt,
     flash::FlashExt,
     gpio::{self, Edge, ExtiPin, Input, PinState},
     pac,
@@ -227,10 +228,19 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
         LCD_SPI_HZ.Hz(),
         &mut rcc,
     );
-    let lcd_spi = LcdSpi {
-        spi,
-        cs: gpiob.pb12.into_push_pull_output(&mut gpiob.crh),
-    };
+    // Its transmit DMA, DMA1 channel 5 (the only channel SPI2_TX has, RM0008 table
+    // 78), reading a static buffer. Chip select high for good (see `lcd`).
+    let dma1 = dp.DMA1.split(&mut rcc);
+    let lcd_buf = cortex_m::singleton!(: [u8; LCD_CHUNK] = [0; LCD_CHUNK])
+        // `init` runs once.
+        .unwrap_or_else(|| defmt::panic!("lcd buffer"));
+    let lcd_spi = LcdSpi::new(
+        spi.with_tx_dma(dma1.5),
+        gpiob
+            .pb12
+            .into_push_pull_output_with_state(&mut gpiob.crh, PinState::High),
+        lcd_buf,
+    );
 
     // USB: force a re-enumeration by pulling D+ low briefly (the Blue Pill has a fixed
     // pull-up on D+), then hand the pins to the USB peripheral.

@@ -215,6 +215,9 @@ impl Screens {
             None => page_key(page),
         };
         let fresh = self.key != Some(key);
+        // The HMI is as the last render drew it (only the status moved on): what
+        // depends on the HMI alone is on the screen already.
+        let hmi_drawn = !fresh && self.drawn.is_some_and(|(r, _)| r == hmi.revision());
         if fresh {
             fb.fill(0, 0, 128, 64, false);
             self.arrow = None;
@@ -255,14 +258,18 @@ impl Screens {
                 };
                 let count = lines.len();
                 title_bar(fb, title, state);
-                let top = sel.saturating_sub(ROWS - 1).min(count.saturating_sub(ROWS));
-                for row in 0..ROWS {
-                    let i = top + row;
-                    let line = lines.get(i).map_or(&[][..], |s| s.as_bytes());
-                    put(fb, Cell::at(0, row_y(row), 20).inverse(i == *sel), line);
-                }
-                if count > ROWS {
-                    scroll_bar(fb, top, count);
+                // The rows and the scroll bar follow the selection only (the moving
+                // machine repaints just the title's state and the bottom line).
+                if !hmi_drawn {
+                    let top = sel.saturating_sub(ROWS - 1).min(count.saturating_sub(ROWS));
+                    for row in 0..ROWS {
+                        let i = top + row;
+                        let line = lines.get(i).map_or(&[][..], |s| s.as_bytes());
+                        put(fb, Cell::at(0, row_y(row), 20).inverse(i == *sel), line);
+                    }
+                    if count > ROWS {
+                        scroll_bar(fb, top, count);
+                    }
                 }
                 // "X12.3 Y-4.5 pen up" for the menus' bottom line.
                 let tpl: &[u8] = if pen_down {

@@ -15,9 +15,10 @@
 //!   bytes and the address auto-increments across the whole 16-word GDRAM row.
 //!
 //! Chosen SPI clock: 72 MHz / 256 = 281.25 kHz (SPI1 on APB2, or SPI2 at 36 MHz / 128).
-//! One 24-bit frame then takes 85.3 us >= 72 us, so the SPI itself paces the writes: a
-//! span can go out by DMA without CPU-timed gaps, from the lowest-priority task, and
-//! never touches the step timer. Worst case (every pixel changed): 32 spans of
+//! One 24-bit frame then takes 85.3 us >= 72 us, so the SPI itself paces the writes:
+//! the firmware sends the spans by DMA ([`encode_chunk`] packs them a buffer at a
+//! time) without CPU-timed gaps, from the lowest-priority task, and never touches the
+//! step timer. Worst case (every pixel changed): 32 spans of
 //! (2 address commands + 32 data bytes) = 1088 frames = 3264 SPI bytes = 92.8 ms, so a
 //! full refresh still fits a 10 Hz frame (100 ms). Typical drawing-screen updates are a
 //! small fraction of that (see the tests and the README).
@@ -167,6 +168,50 @@ pub fn flush<E>(
     Ok(total)
 }
 
+/// Where the next chunk of a refresh starts: a GDRAM row and word (see
+/// [`encode_chunk`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cursor {
+    row: u8,
+    word: u8,
+}
+
+impl Cursor {
+    /// The top of the screen: a refresh starts here.
+    pub const START: Cursor = Cursor { row: 0, word: 0 };
+}
+
+/// The bytes of a refresh, a buffer at a time, for a transfer that sends each buffer
+/// whole (DMA): encode the dirty spans of `fb` from `at` on into `out`, as many whole
+/// spans as fit, in the order [`flush`] sends them. Returns the bytes written and where
+/// the next chunk starts (None: the last span is in, the caller marks `fb` clean once
+/// it is sent). An `out` of [`MAX_SPAN_BYTES`] holds at least one span, so every
+/// chunk makes progress; a smaller one that cannot hold the next span gets 0 bytes
+/// and the same cursor back.
+pub fn encode_chunk(fb: &FrameBuffer, at: Cursor, out: &mut [u8]) -> (usize, Option<Cursor>) {
+    let mut n = 0;
+    let mut r = at.row as usize;
+    let mut w = at.word as usize;
+    while r < GDRAM_ROWS {
+        let mask = gdram_mask(fb, r);
+        let mut next = w;
+        while let Some(span) = next_span(mask, r, &mut next) {
+            let room = out.len() - n;
+            if span.bytes() > room {
+                let cursor = Cursor {
+                    row: r as u8,
+                    word: span.first,
+                };
+                return (n, Some(cursor));
+            }
+            n += encode(fb, span, out.get_mut(n..).unwrap_or(&mut []));
+        }
+        r += 1;
+        w = 0;
+    }
+    (n, None)
+}
+
 /// Time to clock `bytes` out at [`SPI_HZ`], in microseconds.
 pub fn transfer_us(bytes: usize) -> u32 {
     ((bytes as u64 * 8 * 1_000_000).div_ceil(SPI_HZ as u64)) as u32
@@ -243,6 +288,61 @@ mod tests {
         assert_eq!(
             &out[..n],
             [0xF8, 0x80, 0x10, 0xF8, 0x80, 0x90, 0xFA, 0xF0, 0x00, 0xFA, 0x00, 0x00]
+        );
+    }
+
+    /// Chunks of any size from one span up carry exactly the bytes that `flush`
+    /// sends, in its order, each chunk whole spans only.
+    #[test]
+    fn chunks_carry_the_flush_bytes_in_order() {
+        let mut seed = 0x2468_ace1u32;
+        let mut next = move || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            seed >> 8
+        };
+        for case in 0..40 {
+            let mut fb = FrameBuffer::new();
+            if case > 0 {
+                fb.mark_clean();
+                for _ in 0..(next() % 300) {
+                    fb.set((next() % 128) as i32, (next() % 64) as i32, true);
+                }
+            }
+            let mut spans_sent = std::vec::Vec::new();
+            let mut reference = fb.clone();
+            flush(&mut reference, |b: &[u8]| {
+                spans_sent.push(b.to_vec());
+                Ok::<(), ()>(())
+            })
+            .unwrap();
+            let expected: std::vec::Vec<u8> = spans_sent.concat();
+            for size in [
+                MAX_SPAN_BYTES,
+                MAX_SPAN_BYTES + 7,
+                3 * MAX_SPAN_BYTES,
+                FULL_FRAME_BYTES,
+            ] {
+                let mut out = std::vec![0u8; size];
+                let mut got = std::vec::Vec::new();
+                let mut at = Some(Cursor::START);
+                let mut chunks = 0;
+                while let Some(c) = at {
+                    let (n, rest) = encode_chunk(&fb, c, &mut out);
+                    assert!(n > 0 || expected.is_empty());
+                    got.extend_from_slice(&out[..n]);
+                    at = rest;
+                    chunks += 1;
+                    assert!(chunks <= spans_sent.len().max(1));
+                }
+                assert_eq!(got, expected, "case {case}, chunk of {size}");
+            }
+        }
+        // Too small for the next span: nothing, and the same place again.
+        let fb = FrameBuffer::new();
+        let mut tiny = [0u8; 5];
+        assert_eq!(
+            encode_chunk(&fb, Cursor::START, &mut tiny),
+            (0, Some(Cursor::START))
         );
     }
 

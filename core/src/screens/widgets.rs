@@ -85,27 +85,45 @@ pub fn put(fb: &mut FrameBuffer, c: Cell, s: &[u8]) {
         .copied()
         .filter(starts_char)
         .skip(if right { count - n } else { 0 });
-    let mut x = x0;
-    for slot in 0..chars {
+    // Where each slot's glyph starts in the bitmap (its rows follow each other from
+    // there). Slots from the 26th on start past the screen's right edge (x0 >= 0,
+    // glyphs 5 or more wide): they paint nothing and are not looked up.
+    let mut starts = [0u16; SLOTS_ON_SCREEN];
+    for (slot, start) in starts.iter_mut().enumerate().take(chars) {
         // Right-aligned: the padding first; otherwise it follows the text.
         let lead = if right && slot < pad {
             b' '
         } else {
             text.next().unwrap_or(b' ')
         };
-        // The glyph's rows follow each other from this bit on.
-        let mut i = glyph(lead) * gw * h;
-        for y in y0..y0 + h as i32 {
-            for dx in 0..gw {
-                let b = (i + dx) as usize;
-                let on = bits.get(b / 8).is_some_and(|v| v & (0x80 >> (b % 8)) != 0);
-                fb.set(x + dx as i32, y, on != inverse);
+        *start = (glyph(lead) * gw * h) as u16;
+    }
+    let slots = starts.get(..chars).unwrap_or(&starts);
+    // Row by row, the glyph rows side by side, painted up to 24 pixels at a time.
+    let glyph_mask = !(u32::MAX >> gw);
+    let invert = if inverse { u32::MAX } else { 0 };
+    for row in 0..h {
+        let y = y0 + row as i32;
+        let (mut run, mut run_n, mut run_x) = (0u32, 0u32, x0);
+        for &start in slots {
+            let i = u32::from(start) + row * gw;
+            let at = (i / 8) as usize;
+            let two = u32::from(bits.get(at).copied().unwrap_or(0)) << 24
+                | u32::from(bits.get(at + 1).copied().unwrap_or(0)) << 16;
+            if run_n + gw > 24 {
+                fb.set_bits(run_x, y, run ^ invert, run_n);
+                run_x += run_n as i32;
+                (run, run_n) = (0, 0);
             }
-            i += gw;
+            run |= ((two << (i % 8)) & glyph_mask) >> run_n;
+            run_n += gw;
         }
-        x += gw as i32;
+        fb.set_bits(run_x, y, run ^ invert, run_n);
     }
 }
+
+/// Character slots that can start on screen (the narrow font's 5 pixels into 128).
+const SLOTS_ON_SCREEN: usize = 26;
 
 /// The inverted title bar (rows 0..=9): title on the left, `right` on the right.
 pub fn title_bar(fb: &mut FrameBuffer, title: &[u8], right: &[u8]) {
@@ -308,6 +326,62 @@ mod tests {
                 .fill_solid(&Rectangle::new(Point::new(pad_x, 7), blank), bg)
                 .unwrap();
             assert!(ours.bytes() == reference.bytes(), "{s:?}");
+        }
+    }
+
+    /// The glyph painter as first written, a pixel at a time: the reference for the
+    /// row-at-once painter at every bit alignment and clipped at the screen's edges.
+    fn put_by_pixel(fb: &mut FrameBuffer, x0: i32, y0: i32, small: bool, inverse: bool, s: &[u8]) {
+        let (bits, gw, h): (&[u8], u32, u32) = if small {
+            (&SMALL_BITS, 5, 8)
+        } else {
+            (&BODY_BITS, 6, 10)
+        };
+        let mut x = x0;
+        for &lead in s {
+            let mut i = glyph(lead) * gw * h;
+            for y in y0..y0 + h as i32 {
+                for dx in 0..gw {
+                    let b = (i + dx) as usize;
+                    let on = bits.get(b / 8).is_some_and(|v| v & (0x80 >> (b % 8)) != 0);
+                    fb.set(x + dx as i32, y, on != inverse);
+                }
+                i += gw;
+            }
+            x += gw as i32;
+        }
+    }
+
+    #[test]
+    fn glyph_rows_paint_like_single_pixels_at_every_alignment() {
+        let short = b"Xy-0.9~|@#{}";
+        // Wider than the screen: the slots past its edge paint nothing.
+        let long = b"abcdefghijklmnopqrstuvwxyz0123";
+        for small in [false, true] {
+            for inverse in [false, true] {
+                let cases = (0..12).map(|x| (x, 3, &short[..])).chain([
+                    (120, 0, &short[..]),
+                    (97, 58, &short[..]),
+                    (3, 20, &long[..]),
+                    (0, 30, &long[..]),
+                ]);
+                for (x, y, text) in cases {
+                    // Over a busy background, so that every pixel is really painted.
+                    let mut ours = FrameBuffer::new();
+                    for i in 0..64 {
+                        ours.fill(2 * i, 0, 1, 64, true);
+                    }
+                    ours.mark_clean();
+                    let mut theirs = ours.clone();
+                    let mut c = Cell::at(x, y, text.len()).inverse(inverse);
+                    if small {
+                        c = c.small();
+                    }
+                    put(&mut ours, c, text);
+                    put_by_pixel(&mut theirs, x, y, small, inverse, text);
+                    assert_eq!(ours, theirs, "x {x} y {y} small {small} inverse {inverse}");
+                }
+            }
         }
     }
 

@@ -3,6 +3,7 @@
 //! types. A register a model does not know is an error that stops the run; nothing
 //! reads a silent zero.
 
+pub mod dma;
 pub mod flash;
 pub mod gpio;
 pub mod iwdg;

@@ -2,7 +2,8 @@
 //! register, TXE, RXNE, BSY and OVR, the baud-rate prescaler, 8- and 16-bit frames.
 //! Each frame leaves the shift register 8 (or 16) SCK periods after it entered it and
 //! is handed to the device on the bus; MISO is not wired on this board, so the
-//! received frames are 0. Slave mode, CRC, I2S and DMA are refused.
+//! received frames are 0. The transmit DMA request (TXE with TXDMAEN) goes to DMA1
+//! channel 5 (`board.rs`). Slave mode, CRC, I2S and receive DMA are refused.
 
 use super::{unknown, Access, BusError};
 
@@ -25,6 +26,8 @@ const TXE: u32 = 1 << 1;
 const RXNE: u32 = 1 << 0;
 const OVR: u32 = 1 << 6;
 const BSY: u32 = 1 << 7;
+const RXDMAEN: u32 = 1 << 0;
+const TXDMAEN: u32 = 1 << 1;
 
 impl Spi {
     pub fn new(name: &'static str) -> Spi {
@@ -98,6 +101,12 @@ impl Spi {
         }
     }
 
+    /// The transmit DMA request (CR2.TXDMAEN): raised while the transmit buffer is
+    /// empty, dropped by the write of DR that fills it (25.3.9).
+    pub fn tx_dma_request(&self) -> bool {
+        self.cr2 & TXDMAEN != 0 && self.sr & TXE != 0
+    }
+
     pub fn irq(&self) -> bool {
         (self.cr2 & (1 << 7) != 0 && self.sr & TXE != 0)
             || (self.cr2 & (1 << 6) != 0 && self.sr & RXNE != 0)
@@ -138,8 +147,11 @@ impl Spi {
                 self.load(now);
             }
             0x04 => {
-                if v & 3 != 0 {
-                    return Err(BusError(format!("{}: DMA is not modelled", self.name)));
+                if v & RXDMAEN != 0 {
+                    return Err(BusError(format!(
+                        "{}: receive DMA is not modelled",
+                        self.name
+                    )));
                 }
                 self.cr2 = v & 0xE7;
             }
