@@ -28,7 +28,6 @@ pub(super) struct Groups {
 
 /// Part 1, grouping. Guarantees: every G and M code is known and each modal group is
 /// named at most once (M1 not beside M0/M2, one stop per block).
-#[inline(never)]
 pub(super) fn groups(b: &WordBlock) -> Result<Groups, Reject> {
     let mut groups = [NONE; GROUPS];
     group_codes(&b.g, &G_CODES, &mut groups, true)?;
@@ -87,7 +86,6 @@ impl Values {
 /// in range, the feed in mm/min (or per block in inverse time); the new units,
 /// distance, coordinate system and feed modes, the S value and the T word are in
 /// `next`.
-#[inline(never)]
 pub(super) fn values(
     b: &mut WordBlock,
     g: &Groups,
@@ -246,7 +244,6 @@ pub(super) fn axis_owner(
 /// (a new height, in order with the strokes), and M6's way to the pen-change place
 /// and back. Guarantees: `out` holds the pen's commands in order, `next` its level and
 /// the position after them, `out.stop` the block's stop (M6 makes one).
-#[inline(never)]
 pub(super) fn pen(
     r: &Read,
     s: &Settings,
@@ -515,7 +512,6 @@ pub(super) fn motion(
 /// Part 8, completeness and program end. Guarantees: every word was used, every target
 /// is in the step range and (with soft limits) in travel; M2/M30 lifts the pen and
 /// resets the modes in `next`; `out` says whether the block is a sync point.
-#[inline(never)]
 pub(super) fn complete(
     before: &Interpreter,
     b: &WordBlock,
