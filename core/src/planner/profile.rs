@@ -138,13 +138,14 @@ impl Ramp {
                     }
                     let next = if v > 0.0 { t - f / v } else { -1.0 };
                     // Converged too when Newton's step is below f32's resolution of
-                    // the ramp's time. The bracket's test once asked for 1e-9 of the
-                    // ramp, under f32's resolution: a bracket shrunk to two
-                    // neighbouring floats then bisected for all 40 rounds (~110,000
+                    // the ramp's time: at the root `f` is an ulp of `s` or so, and the
+                    // step lands on `t` itself, at the bracket's end. Without this,
+                    // such a call bisected until the bracket reached 1e-9 of the
+                    // ramp, under f32's resolution: all 40 rounds (~110,000
                     // instructions, 1.5 ms on the image, where the step queue ran dry:
                     // S-curve jobs 3-4 % longer than in the simulator, issue 23).
-                    if next > lo && next < hi && crate::fmath::abs(next - t) <= TIME_EPS * self.t {
-                        return (next, self.forward(shape, next).1);
+                    if crate::fmath::abs(next - t) <= TIME_EPS * self.t {
+                        return (t, v);
                     }
                     t = if next > lo && next < hi {
                         next
