@@ -108,13 +108,7 @@ impl Ramp {
             return (0.0, self.v0);
         }
         match shape {
-            Shape::Trapezoid => {
-                let acc = (self.v1 - self.v0) / self.t;
-                let v = crate::fmath::sqrt((self.v0 * self.v0 + 2.0 * acc * d).max(0.0));
-                let sum = self.v0 + v;
-                let t = if sum > 0.0 { 2.0 * d / sum } else { 0.0 };
-                (t.min(self.t), v)
-            }
+            Shape::Trapezoid => self.trapezoid_time_for(d),
             Shape::Cosine => {
                 let (mut lo, mut hi) = (0.0f32, self.t);
                 // Without a hint (a phase's first step), the trapezoid's closed form at
@@ -123,7 +117,7 @@ impl Ramp {
                 let mut t = if hint > 0.0 {
                     hint.min(self.t)
                 } else {
-                    Ramp::time_for(self, Shape::Trapezoid, d, 0.0).0
+                    self.trapezoid_time_for(d).0
                 };
                 for _ in 0..40 {
                     let (s, v) = self.forward(shape, t);
@@ -156,6 +150,15 @@ impl Ramp {
                 (t, self.forward(shape, t).1)
             }
         }
+    }
+
+    /// [`Ramp::time_for`] of a trapezoid ramp (`d > 0`, `self.t > 0`).
+    fn trapezoid_time_for(&self, d: f32) -> (f32, f32) {
+        let acc = (self.v1 - self.v0) / self.t;
+        let v = crate::fmath::sqrt((self.v0 * self.v0 + 2.0 * acc * d).max(0.0));
+        let sum = self.v0 + v;
+        let t = if sum > 0.0 { 2.0 * d / sum } else { 0.0 };
+        (t.min(self.t), v)
     }
 
     /// Bounds of |acceleration|, |jerk| and |d jerk/dt| along the ramp (mm/s^2, /s^3,
