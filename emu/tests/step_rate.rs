@@ -129,6 +129,28 @@ fn an_r20_circle_at_f4000_and_16x_microstepping_has_no_gap() {
 }
 
 #[test]
+fn an_s_curve_diagonal_at_f4000_and_16x_microstepping_has_no_gap() {
+    // $210=1: cosine ramps, whose step times come from Newton's method on the distance
+    // law. It once ran out its 40 rounds on most steps (its tolerance was below f32's
+    // resolution), ~40,000 instructions a step: the preparation fell behind and the
+    // job ran 3-4 % longer on the image than in the simulator (issue 23, seed
+    // 1265515129).
+    let settings = ["$100=1280", "$101=1280", "$110=4000", "$111=4000", "$210=1"];
+    let train = run(&settings, "G21 G90\nG1 X30 Y30 F4000\n");
+    let (jump, at) = train.worst_jump();
+    eprintln!(
+        "S-curve diagonal: {} steps, cruise {:.0} events/s, worst interval {jump:.2} x its neighbours ({at:.1} us)",
+        train.t.len(),
+        train.cruise_rate()
+    );
+    assert_eq!(train.end, [38_400, 38_400, 0]);
+    assert!(
+        jump <= MAX_JUMP,
+        "a gap: interval {at:.1} us, {jump:.2} x its neighbours"
+    );
+}
+
+#[test]
 fn a_move_asking_for_more_than_the_step_rate_cap_runs_at_the_cap_without_gaps() {
     // Point by point ($212=0) every event steps one axis: a diagonal at F6600 asks for
     // 2 x 1280 x 6600 / 60 / sqrt 2 = 199,000 events/s (99.6 kHz per axis, within the

@@ -91,6 +91,11 @@ impl Ramp {
     }
 }
 
+/// Newton's step on a cosine ramp's time below which it has converged, relative to the
+/// ramp's length: one ulp of f32 at the ramp's end (of a 0.1 s ramp 7 ns, half a tick
+/// of the 72 MHz step timer), what a bracket of two neighbouring floats always reaches.
+const TIME_EPS: f32 = f32::EPSILON;
+
 impl Ramp {
     /// Time into the ramp at which it has covered `d` (0 <= d <= dist), and the speed
     /// there; `hint` is a guess of the time (the last answer on this ramp).
@@ -103,16 +108,17 @@ impl Ramp {
             return (0.0, self.v0);
         }
         match shape {
-            Shape::Trapezoid => {
-                let acc = (self.v1 - self.v0) / self.t;
-                let v = crate::fmath::sqrt((self.v0 * self.v0 + 2.0 * acc * d).max(0.0));
-                let sum = self.v0 + v;
-                let t = if sum > 0.0 { 2.0 * d / sum } else { 0.0 };
-                (t.min(self.t), v)
-            }
+            Shape::Trapezoid => self.trapezoid_time_for(d),
             Shape::Cosine => {
                 let (mut lo, mut hi) = (0.0f32, self.t);
-                let mut t = hint.max(0.0).min(self.t);
+                // Without a hint (a phase's first step), the trapezoid's closed form at
+                // the same mean acceleration: from t = 0 at a slow start speed, Newton's
+                // first step overshoots the ramp and bisection takes ~20 rounds.
+                let mut t = if hint > 0.0 {
+                    hint.min(self.t)
+                } else {
+                    self.trapezoid_time_for(d).0
+                };
                 for _ in 0..40 {
                     let (s, v) = self.forward(shape, t);
                     let f = s - d;
@@ -121,10 +127,20 @@ impl Ramp {
                     } else {
                         lo = t;
                     }
-                    if crate::fmath::abs(f) <= 1e-7 * d.max(1e-3) || hi - lo <= 1e-9 * self.t {
+                    if crate::fmath::abs(f) <= 1e-7 * d.max(1e-3) || hi - lo <= TIME_EPS * self.t {
                         return (t, v);
                     }
                     let next = if v > 0.0 { t - f / v } else { -1.0 };
+                    // Converged too when Newton's step is below f32's resolution of
+                    // the ramp's time: at the root `f` is an ulp of `s` or so, and the
+                    // step lands on `t` itself, at the bracket's end. Without this,
+                    // such a call bisected until the bracket reached 1e-9 of the
+                    // ramp, under f32's resolution: all 40 rounds (~110,000
+                    // instructions, 1.5 ms on the image, where the step queue ran dry:
+                    // S-curve jobs 3-4 % longer than in the simulator, issue 23).
+                    if crate::fmath::abs(next - t) <= TIME_EPS * self.t {
+                        return (t, v);
+                    }
                     t = if next > lo && next < hi {
                         next
                     } else {
@@ -134,6 +150,15 @@ impl Ramp {
                 (t, self.forward(shape, t).1)
             }
         }
+    }
+
+    /// [`Ramp::time_for`] of a trapezoid ramp (`d > 0`, `self.t > 0`).
+    fn trapezoid_time_for(&self, d: f32) -> (f32, f32) {
+        let acc = (self.v1 - self.v0) / self.t;
+        let v = crate::fmath::sqrt((self.v0 * self.v0 + 2.0 * acc * d).max(0.0));
+        let sum = self.v0 + v;
+        let t = if sum > 0.0 { 2.0 * d / sum } else { 0.0 };
+        (t.min(self.t), v)
     }
 
     /// Bounds of |acceleration|, |jerk| and |d jerk/dt| along the ramp (mm/s^2, /s^3,
