@@ -77,6 +77,10 @@ pub struct Profile {
     pub entries: Vec<u64>,
     /// Time asleep in WFI.
     pub sleep: u64,
+    /// Exception entries whose handler began with SP not 8-byte aligned (CCR.STKALIGN
+    /// clear and SP at 4 mod 8): compiled code assumes an 8-byte aligned stack
+    /// (AAPCS), so such a handler may address its locals wrongly.
+    pub misaligned_entries: u64,
 }
 
 /// Everything the hooks reach: the board and the CPU-side bookkeeping.
@@ -167,6 +171,23 @@ pub struct Lateness {
 /// The IT (If-Then) execution state bits of xPSR (ARMv7-M B1.4.2: ICI/IT).
 const IT_BITS: u64 = 0x0600_FC00;
 
+/// The CPU's IT state, in xPSR's bit positions. Unicorn reads EPSR (where the IT bits
+/// live) as zero through its XPSR register, as MRS does; its CPSR view has them, at the
+/// same positions.
+fn it_state(uc: &Unicorn<State>) -> u32 {
+    (uc.reg_read(RegisterARM::CPSR).unwrap_or(0) & IT_BITS) as u32
+}
+
+/// Sets the CPU's IT state (`bits` in xPSR's positions): a read-modify-write of the
+/// CPSR view, which leaves every other field as it was.
+fn set_it_state(uc: &mut Unicorn<State>, bits: u32) {
+    let c = uc.reg_read(RegisterARM::CPSR).unwrap_or(0);
+    let _ = uc.reg_write(
+        RegisterARM::CPSR,
+        (c & !IT_BITS) | (u64::from(bits) & IT_BITS),
+    );
+}
+
 /// Instructions in `code` (Thumb-2: 16- and 32-bit encodings).
 fn count_instructions(code: &[u8]) -> u32 {
     let mut n = 0;
@@ -223,6 +244,7 @@ impl<'a> Machine<'a> {
                 busy: vec![0; crate::nvic::EXC_COUNT],
                 entries: vec![0; crate::nvic::EXC_COUNT],
                 sleep: 0,
+                misaligned_entries: 0,
             },
             profile_mark: 0,
             runs: None,
@@ -599,9 +621,9 @@ impl<'a> Machine<'a> {
         // instruction, and unicorn leaves it there: the next block would then run as
         // if inside that IT block (its instructions skipped). The translated block
         // tracks IT itself, and writes the state out if it ends inside an IT block.
-        let xpsr = uc.reg_read(RegisterARM::XPSR).unwrap_or(0);
-        if xpsr & IT_BITS != 0 {
-            let _ = uc.reg_write(RegisterARM::XPSR, xpsr & !IT_BITS);
+        // (Unicorn's XPSR view reads the IT bits as zero: `it_state` reads them.)
+        if it_state(uc) != 0 {
+            set_it_state(uc, 0);
         }
         let b = uc.get_data().block;
         let done = if b.n > 0 && pc >= b.addr && pc - b.addr < 4 * b.n {
@@ -635,9 +657,8 @@ impl<'a> Machine<'a> {
     fn flash_data_read(uc: &mut Unicorn<State>) {
         // A memory hook brings back the IT state of the accessing instruction, which
         // unicorn then keeps (see `mmio_time`): clear it.
-        let xpsr = uc.reg_read(RegisterARM::XPSR).unwrap_or(0);
-        if xpsr & IT_BITS != 0 {
-            let _ = uc.reg_write(RegisterARM::XPSR, xpsr & !IT_BITS);
+        if it_state(uc) != 0 {
+            set_it_state(uc, 0);
         }
         let s = uc.get_data_mut();
         let ws = s.board.flash.latency();
@@ -942,7 +963,12 @@ impl<'a> Machine<'a> {
         let stkalign = s.board.nvic.ccr & (1 << 9) != 0;
         let vtor = s.board.nvic.vtor;
         let mut sp = self.reg(RegisterARM::SP);
-        let mut xpsr = (self.reg(RegisterARM::XPSR) & !0x1FF) | current;
+        // The frame's xPSR: flags, the interrupted IT state (an exception may come
+        // between the instructions of an IT block: its rest runs after the return) and
+        // the Thumb bit, which unicorn's XPSR view reads as zero.
+        let it = it_state(&self.uc);
+        let mut xpsr =
+            (self.reg(RegisterARM::XPSR) & !0x1FF & !(IT_BITS as u32)) | it | 1 << 24 | current;
         if stkalign && sp & 4 != 0 {
             sp -= 4;
             xpsr |= 1 << 9;
@@ -964,6 +990,9 @@ impl<'a> Machine<'a> {
             return self.stacking_fault(pc, e);
         }
         let _ = self.uc.reg_write(RegisterARM::SP, u64::from(sp));
+        if sp & 7 != 0 {
+            self.uc.get_data_mut().profile.misaligned_entries += 1;
+        }
         let exc_return: u32 = if current == 0 {
             0xFFFF_FFF9
         } else {
@@ -1017,6 +1046,7 @@ impl<'a> Machine<'a> {
         let _ = self
             .uc
             .reg_write(RegisterARM::XPSR, u64::from(x | 1 << 24 | e as u32));
+        set_it_state(&mut self.uc, 0);
         Ok(())
     }
 
@@ -1076,6 +1106,9 @@ impl<'a> Machine<'a> {
         let sp = sp + 32 + if xpsr & (1 << 9) != 0 { 4 } else { 0 };
         let _ = self.uc.reg_write(RegisterARM::SP, u64::from(sp));
         let _ = self.uc.reg_write(RegisterARM::XPSR, u64::from(xpsr));
+        // The IT state goes back too: the rest of an interrupted IT block runs as
+        // conditionally as it would have (unicorn's XPSR write sets the flags only).
+        set_it_state(&mut self.uc, xpsr & IT_BITS as u32);
         let _ = self.uc.reg_write(RegisterARM::PC, u64::from(w(6) & !1));
         let s = self.uc.get_data_mut();
         let back = s.board.nvic.current();

@@ -170,3 +170,37 @@ fn a_missed_watchdog_reload_resets_the_mcu_10_1_ms_after_the_last_one() {
     // Five reloads ~5 ms apart kept it from firing before.
     assert!(last_reload > 20 * T_PER_MS);
 }
+
+#[test]
+fn an_interrupt_inside_an_it_block_leaves_the_handler_unconditional_and_the_rest_conditional() {
+    let mut m = load("itstate");
+    let l = run(&mut m);
+    assert_eq!(l.len(), 4, "{l:x?}");
+    // The handler's first instruction ran (7), and the interrupted block's `movne`
+    // stayed skipped after the return (r5 = 1, not 2).
+    assert_eq!([l[0], l[2], l[3]], [7, 1, ch('e')], "{l:x?}");
+    // The frame's xPSR: Z and C from the `cmp`, the Thumb bit, and the IT state of
+    // the one instruction left (`ne`: ITSTATE 0x18, bits 15:10 and 26:25).
+    assert_eq!(l[1], 0x6000_0000 | 1 << 24 | 0x18 << 8, "{:08x}", l[1]);
+}
+
+#[test]
+fn exception_entry_aligns_the_frame_to_8_bytes_only_with_ccr_stkalign() {
+    let mut m = load("stkalign");
+    let l = run(&mut m);
+    let thread_sp = 0x2000_5000 - 4;
+    assert_eq!(
+        l,
+        [
+            // STKALIGN clear (reset): the frame right below the SP, 4 mod 8.
+            thread_sp - 32,
+            0,
+            // STKALIGN set: a padding word, the stacked xPSR's bit 9 set.
+            thread_sp - 4 - 32,
+            1,
+            // Both returns gave the thread its SP back.
+            thread_sp,
+        ],
+        "{l:x?}"
+    );
+}
