@@ -108,6 +108,7 @@ pub struct Board {
 /// `usb` is the 'static home of the USB stack (an RTIC init local); each call needs
 /// its own (init runs once).
 pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
+    align_exception_frames();
     let mut flash = dp.FLASH.constrain();
     let mut rcc = dp.RCC.freeze(
         rcc::Config::hse(8.MHz())
@@ -292,4 +293,23 @@ fn interrupt_on(pin: &mut impl ExtiPin, edge: Edge, afio: &mut afio::Parts, exti
     pin.make_interrupt_source(afio);
     pin.trigger_on_edge(exti, edge);
     pin.enable_interrupt(exti);
+}
+
+/// SCB.CCR.STKALIGN (ARMv7-M B3.2.8): exception entry aligns the stack to 8 bytes.
+const STKALIGN: u32 = 1 << 9;
+
+/// Makes exception entry keep the stack 8-byte aligned. The compiler relies on that
+/// alignment in every function, handlers included (it forms the address of a stack
+/// slot with ORR where that equals ADD), but the STM32F103's Cortex-M3 r1p1 resets
+/// with CCR.STKALIGN clear: an interrupt taken with SP at 4 mod 8 then ran its task on
+/// a misaligned stack and read the wrong locals (the preparation task traced an arc
+/// the wrong way round: emu/tests/stack.rs). Called first in [`init`], before any
+/// interrupt is enabled.
+fn align_exception_frames() {
+    // SAFETY: a read-modify-write of the core's configuration register during init,
+    // with interrupts masked; nothing else writes CCR.
+    unsafe {
+        let scb = &*cortex_m::peripheral::SCB::PTR;
+        scb.ccr.modify(|r| r | STKALIGN);
+    }
 }

@@ -1,6 +1,6 @@
 ; realtime: 1012ms:! 1309ms:~ 1091ms:! 1428ms:~ 404ms:0x95
 ; random program, seed 268613718 (.ci/emu-random)
-; on main's image (0b6fe48) too: the G2 with R-4.3823 (a sweep over 180 degrees) is drawn the short way from its 10th step (1519 step events, the simulator 2772), without the real-time bytes as well
+; the image traced a G2 the wrong way round when the preparation task was entered with SP at 4 mod 8 (CCR.STKALIGN was left clear: emu/tests/stack.rs); fixed by setting it in init
 $122=59.6
 $11=0.007
 $121=202.0

@@ -1,5 +1,6 @@
 ; realtime: 
-; seed 308716653 (.ci/emu-random) without its zero-length G1 before the last G2: on main's image (0b6fe48) too, the board draws that G2 as the short counter-clockwise arc (3175 step events, the simulator 4105), a timing-dependent defect of the image (issue 23)
+; random program, seed 308716653 (.ci/emu-random)
+; the image traced a G2 the wrong way round when the preparation task was entered with SP at 4 mod 8 (CCR.STKALIGN was left clear: emu/tests/stack.rs); fixed by setting it in init
 $11=0.012
 $213=1
 G21 G90 G17 G94
@@ -13,6 +14,7 @@ G2 X6.3828 Y-4.6020 I2.8799 J0.6952
 G0 X7.7739 Y-0.0402
 G4 P0.01
 $121=413.5
+G1 X7.7739 Y-0.0402
 G2 X4.9996 Y-3.0915 I0.6418 J-3.3705
 G3 X5.6565 Y-2.4087 I-1.9307 J2.5148
 M5
