@@ -53,6 +53,9 @@ static PROTOCOL_WAKE: AtomicBool = AtomicBool::new(false);
 /// The protocol task has periodic work (a line, motion to follow, a timer): the tick
 /// starts it every millisecond. Otherwise it sleeps until `wake_protocol`.
 static PROTOCOL_BUSY: AtomicBool = AtomicBool::new(true);
+/// How far into SysTick's period the last tick's handler ran (cycles): the service
+/// tick's time, from which a start from rest runs (`ticks_since_tick`).
+static TICK_TAKEN: AtomicU32 = AtomicU32::new(0);
 
 /// Run the protocol task now: what just happened (bytes, an input, a key) is
 /// answered at once, and a sleeping protocol task wakes up.
@@ -95,6 +98,24 @@ mod app {
 
     fn now_ms() -> u32 {
         NOW_MS.load(Ordering::Relaxed)
+    }
+
+    /// SysTick's count since its reload when the tick's handler ran (a flash stall
+    /// delays it: the ticks that fell in the stall are taken as one when it ends).
+    fn into_period() -> u32 {
+        // SAFETY: read-only register reads.
+        let syst = unsafe { &*cortex_m::peripheral::SYST::PTR };
+        syst.rvr.read() - syst.cvr.read()
+    }
+
+    /// Step-timer ticks (72 MHz, the core clock's) since the service tick `ms` was
+    /// taken (its handler ran), plus whole periods if ticks have come since.
+    fn ticks_since_tick(ms: u32) -> u32 {
+        // SAFETY: a read-only register read.
+        let period = unsafe { (*cortex_m::peripheral::SYST::PTR).rvr.read() } + 1;
+        let whole = now_ms().wrapping_sub(ms);
+        let into = into_period().wrapping_sub(TICK_TAKEN.load(Ordering::Relaxed));
+        whole.saturating_mul(period).saturating_add(into)
     }
 
     type Store = SettingsStore<board::SettingsFlash>;
@@ -362,6 +383,7 @@ mod app {
     /// not the clock.
     #[task(binds = SysTick, priority = 7)]
     fn tick(_: tick::Context) {
+        TICK_TAKEN.store(into_period(), Ordering::Relaxed);
         let now = NOW_MS.load(Ordering::Relaxed).wrapping_add(1);
         NOW_MS.store(now, Ordering::Relaxed);
         rtic::pend(Interrupt::I2C1_EV);
@@ -388,7 +410,7 @@ mod app {
         let now = now_ms();
         let (kick, levels) = cx.shared.core.lock(|c| {
             let (ctl, pipeline) = c.parts();
-            pipeline.fill();
+            pipeline.fill_at(now);
             let levels = ctl.outputs_now(pipeline, now);
             (pipeline.side().queued() > 0, levels)
         });
@@ -404,7 +426,7 @@ mod app {
             }
         }
         if kick {
-            steps::kick();
+            steps::kick_since(ticks_since_tick(now));
         }
     }
 

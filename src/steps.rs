@@ -315,7 +315,8 @@ impl StepOutput {
             if !four_phase {
                 self.timer.arm_pulses(out.arm);
             }
-            self.timer.start(out.reload);
+            self.timer
+                .start(out.reload, KICK_SINCE.swap(0, Ordering::Relaxed));
         }
     }
 
@@ -327,9 +328,22 @@ impl StepOutput {
     }
 }
 
+/// Step-timer ticks from the service tick whose preparation queued the commands to
+/// the kick that starts them ([`kick_since`]): a start from rest runs its first period
+/// from that tick, as the simulator does, so that the steps keep the simulator's times
+/// whatever the preparation's latency (see `Pipeline::fill_at`).
+static KICK_SINCE: AtomicU32 = AtomicU32::new(0);
+
 /// Ask the step interrupt to start if commands wait (it ignores the pend if running).
 pub fn kick() {
+    kick_since(0);
+}
+
+/// [`kick`], for commands that the preparation of the service tick `since` ticks ago
+/// queued.
+pub fn kick_since(since: u32) {
     if !is_halted() {
+        KICK_SINCE.store(since, Ordering::Relaxed);
         cortex_m::peripheral::NVIC::pend(stm32f1xx_hal::pac::Interrupt::TIM2);
     }
 }

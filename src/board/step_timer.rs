@@ -260,14 +260,33 @@ impl StepTimer {
     }
 
     /// Start from rest with a first period of `ticks`; the schedule begins now.
-    pub fn start(&mut self, ticks: u32) {
+    ///
+    /// The period began `since` ticks ago (the service tick whose preparation queued
+    /// it, on which the simulator starts it too): it ends `ticks` after that, or, if
+    /// that leaves less than `MIN_LATE_COUNTS`, that short rest from now (a late
+    /// arming).
+    pub fn start(&mut self, ticks: u32, since: u32) {
         // SAFETY: any 16-bit auto-reload; `ticks` is 2..=0x10000.
         self.tim
             .arr()
             .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
         let now = self.now();
-        self.run(0);
-        self.due_early = now.wrapping_add(ticks).wrapping_sub(RESTART_LEAD);
+        let most = ticks.saturating_sub(MIN_LATE_COUNTS);
+        let gone = if since > most {
+            // The step interrupt is the only writer.
+            LATE_STEP_ARMINGS.store(
+                LATE_STEP_ARMINGS.load(Ordering::Relaxed).wrapping_add(1),
+                Ordering::Relaxed,
+            );
+            most
+        } else {
+            since
+        };
+        self.run(gone);
+        self.due_early = now
+            .wrapping_sub(gone)
+            .wrapping_add(ticks)
+            .wrapping_sub(RESTART_LEAD);
     }
 
     pub fn stop(&mut self) {

@@ -123,6 +123,7 @@ impl<S: StepSide> Pipeline<S> {
             while u32::from(t.sent) < n && budget > 0 && self.side.sink().room() > 0 {
                 let wait = self.z_wait(u32::from(t.sent), n);
                 self.side.sink().push_slice(&[StepCmd::new(tick, wait)]);
+                self.queue_end = self.queue_end.wrapping_add(wait);
                 t.sent += 1;
                 budget -= 1;
             }

@@ -229,6 +229,12 @@ pub struct Pipeline<S: StepSide> {
     z_down: i8,
     /// Calls of [`Pipeline::fill`] spent waiting at rest for a second move.
     gather: u8,
+    /// The step timeline ([`Pipeline::fill_at`]): the service tick (ms) of the last
+    /// call, and where on the timeline that tick was (timer counts, wrapping: what is
+    /// compared on it is less than a second apart).
+    clock: (u32, u32),
+    /// Where on the step timeline the last queued command ends.
+    queue_end: u32,
 }
 
 impl<S: StepSide> Pipeline<S> {
@@ -264,6 +270,8 @@ impl<S: StepSide> Pipeline<S> {
             pen_timing = PenTiming::from(s),
             z_down = z_down_side(s),
             gather = 0,
+            clock = (0, 0),
+            queue_end = 0,
         })
     }
 
@@ -297,14 +305,62 @@ impl<S: StepSide> Pipeline<S> {
         self.prep.line()
     }
 
+    /// How far the queue reaches past `now` on the step timeline (timer counts), and
+    /// how many of the commands after `now` it holds, up to [`MIN_AHEAD`] (the last
+    /// command's wait tells whether the one before it is after `now` too).
+    fn ahead_of(&self, now: u32) -> (u32, usize) {
+        // Signed distances on the wrapping timeline (a queue end behind `now`: the
+        // interrupt has run it all).
+        let to_end = self.queue_end.wrapping_sub(now) as i32;
+        let before_last = to_end.saturating_sub_unsigned(self.prep.last_wait());
+        let after = if to_end <= 0 {
+            0
+        } else if before_last <= 0 {
+            1
+        } else {
+            MIN_AHEAD
+        };
+        (to_end.max(0) as u32, after)
+    }
+
     /// `ms` milliseconds in timer counts (floored).
     fn ms_ticks(&self, ms: u32) -> u64 {
         u64::from(ms) * u64::from(self.timer_hz) / 1000
     }
 
-    /// The segment-preparation task: fill the step queue, run dwells and pen commands
-    /// in order once the moves before them have been prepared.
+    /// [`Pipeline::fill_at`] one service tick after the last call (tests and benches
+    /// that call it once per tick).
     pub fn fill(&mut self) {
+        self.fill_at(self.clock.0.wrapping_add(1));
+    }
+
+    /// The segment-preparation task at service tick `now_ms`: fill the step queue, run
+    /// dwells and pen commands in order once the moves before them have been prepared.
+    ///
+    /// How much to prepare is decided on the step timeline, not from how much of the
+    /// queue the interrupt has taken by the time this runs: the timeline starts at the
+    /// tick whose call queued the first command after rest (the board starts its step
+    /// timer on that tick's schedule, the simulator at that instant) and runs on with
+    /// the ticks, and the queue ends where the waits queued since add up to. So the
+    /// firmware, whatever this call's latency, and the simulator prepare the same
+    /// commands at the same ticks, and a feed hold, which brakes from the end of what
+    /// is prepared, stops both at the same step.
+    pub fn fill_at(&mut self, now_ms: u32) {
+        let per_ms = self.timer_hz / 1000;
+        if self.side.queued() == 0 && !self.side.is_running() {
+            // At rest: the timeline goes on from here.
+            self.clock = (now_ms, self.queue_end);
+        } else {
+            let (ms, t) = self.clock;
+            self.clock = (
+                now_ms,
+                t.wrapping_add(now_ms.wrapping_sub(ms).wrapping_mul(per_ms)),
+            );
+        }
+        self.fill_queue();
+    }
+
+    fn fill_queue(&mut self) {
         if self.prep.hold_state() == HoldState::Held && !self.prep.in_block() {
             // Held between blocks: start nothing new until resumed, but let a
             // wait under way (a pen move, a dwell) end, so that the machine comes to
@@ -329,6 +385,7 @@ impl<S: StepSide> Pipeline<S> {
         }
         let horizon = self.timer_hz / 1000 * HORIZON_MS;
         let queued = self.side.queued();
+        let now = self.clock.1;
         if queued == 0
             && self.prep.is_idle_block()
             && (1..=MIN_AHEAD).contains(&self.planner.len())
@@ -344,20 +401,27 @@ impl<S: StepSide> Pipeline<S> {
             }
         }
         self.gather = 0;
-        if queued > 0 && 2 * queued >= self.prep.commands_for(horizon).max(MIN_AHEAD) {
+        let (ahead, after) = self.ahead_of(now);
+        if queued > 0 && 2 * ahead >= horizon && after >= MIN_AHEAD {
             // More than half the horizon is still queued: refill later, in one go.
             return;
         }
         loop {
-            let ahead = self.prep.commands_for(horizon).max(MIN_AHEAD);
-            let left = ahead.saturating_sub(self.side.queued());
+            let (ahead, after) = self.ahead_of(now);
+            let left = self
+                .prep
+                .commands_for(horizon.saturating_sub(ahead))
+                .max(MIN_AHEAD - after);
             if self.pen_move.is_some() && !self.run_waits() {
                 // The pen goes down again after a hold before anything moves (its
                 // waits first in the step queue); a pen move from the queue is
                 // only started with nothing prepared, so it is the same there.
                 return;
             }
+            let before = self.prep.prepared_until();
             self.prep.fill(&mut self.planner, self.side.sink(), left);
+            let made = self.prep.prepared_until().wrapping_sub(before);
+            self.queue_end = self.queue_end.wrapping_add(made as u32);
             if !self.run_waits() {
                 return;
             }
@@ -419,6 +483,7 @@ impl<S: StepSide> Pipeline<S> {
                         .sink()
                         .push_slice(&[StepCmd::new(StepEvent(0), w)]);
                     self.wait_left -= u64::from(w);
+                    self.queue_end = self.queue_end.wrapping_add(w);
                 }
                 if self.wait_left > 0 {
                     return false;

@@ -238,6 +238,15 @@ impl Prep {
     pub fn line(&self) -> Option<u32> {
         self.active.as_ref().map(|a| a.block.mv.line)
     }
+    /// Timer counts from the preparation's epoch to its last prepared step command
+    /// (what it has queued takes the time between two readings).
+    pub fn prepared_until(&self) -> u64 {
+        self.t_last
+    }
+    /// The wait of the last prepared step command, timer counts.
+    pub fn last_wait(&self) -> u32 {
+        self.last_wait
+    }
     /// Step commands that cover `ticks` timer counts at the present step rate (integer:
     /// how far ahead of the interrupt to prepare).
     pub fn commands_for(&self, ticks: u32) -> usize {
