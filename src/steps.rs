@@ -167,7 +167,9 @@ impl StepSide for BoardSide {
         position()
     }
     fn is_running(&self) -> bool {
-        with_stepper(|s| s.exec.is_running()).unwrap_or(false) || !self.tx.is_empty()
+        // Commands queued answer it without the critical section (which holds the
+        // step interrupt back).
+        !self.tx.is_empty() || with_stepper(|s| s.exec.is_running()).unwrap_or(false)
     }
     fn queued(&self) -> usize {
         self.tx.len()
