@@ -155,6 +155,8 @@ pub struct Controller {
     idle: IdleOutputs,
     /// The pen servo's pulse width as last handed to the shell.
     servo_us: Option<u32>,
+    /// The input pins as the last call of `service` read them.
+    pins: PinLevels,
 }
 
 /// The HMI's view of the machine's configuration, from the settings.
@@ -194,6 +196,7 @@ impl Controller {
             saves = Saves::default(),
             idle = IdleOutputs::new(),
             servo_us = None,
+            pins = PinLevels::default(),
         })
     }
 
@@ -323,6 +326,7 @@ impl Controller {
         self.greet_late(host.rx.is_empty(), now_ms);
         let polarity = InputPolarity::from(self.protocol.machine().settings());
         let pins = halt.take_tripped().fold(pins, polarity);
+        self.pins = pins;
         self.protocol.set_inputs(polarity.decode(pins), m, now_ms);
         let said = self.protocol.output_len();
         host.rx.pop_while(|b| self.protocol.take_byte(b, m, now_ms));
@@ -336,6 +340,13 @@ impl Controller {
         let changed = self.protocol.machine_mut().take_settings_dirty();
         if changed {
             self.settings_changed();
+            // A new polarity ($5, $215) applies to the levels at once: a real-time
+            // byte handled before the next call (a soft reset, which raises the
+            // e-stop alarm if the e-stop reads active) must not read them as the old
+            // polarity decoded them.
+            let polarity = InputPolarity::from(self.protocol.machine().settings());
+            self.protocol
+                .set_inputs(polarity.decode(self.pins), m, now_ms);
         }
         self.persist(changed, store, m);
         let s = self.protocol.machine().settings();

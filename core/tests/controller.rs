@@ -343,6 +343,34 @@ fn setting_215_inverts_feed_hold_and_cycle_start_too() {
     assert!(!m.holding, "released and cycle start: resumed");
 }
 
+/// A soft reset right after `$215=1` (the e-stop rewired the other way, so that its
+/// pin now reads released) clears the e-stop alarm: the new polarity applies to the
+/// levels in the run that changed it, not at the next run, which a real-time byte
+/// handled in between would not wait for (the image's pins test met it).
+#[test]
+fn a_reset_right_after_215_reads_the_inputs_with_the_new_polarity() {
+    let mut m = FakePlanner::new(16);
+    let (mut sh, mut c) = Shell::boot(&Settings::default());
+    // Wired for the inversion before the setting: the e-stop pin high reads pressed.
+    sh.pins.estop = true;
+    sh.pins.feed_hold = false;
+    sh.pins.cycle_start = false;
+    sh.tick(&mut c, &mut m);
+    assert!(c.protocol().machine().inputs().estop);
+    sh.push(b"$215=1\n");
+    sh.now += 1;
+    sh.service(&mut c, &mut m);
+    let out = sh.read();
+    assert!(out.contains("ok"), "{out:?}");
+    // The reset comes before the protocol task's next call (the firmware's shell
+    // lets the USB task run between two calls of one run).
+    sh.push(&[0x18]);
+    let out = sh.realtime(&mut c, &mut m);
+    assert!(!out.contains("ALARM:10"), "{out:?}");
+    let out = sh.send(&mut c, &mut m, b"$X\n");
+    assert!(out.contains("ok") && !out.contains("error"), "{out:?}");
+}
+
 /// A save that fails is reported to the sender after the `ok` (which has gone out
 /// when the save runs, at rest): the setting is in force until power-off.
 #[test]
