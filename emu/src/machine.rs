@@ -188,6 +188,13 @@ fn set_it_state(uc: &mut Unicorn<State>, bits: u32) {
     );
 }
 
+/// Clears a stale IT state (see `Machine::mmio_time`), writing only if there is one.
+fn clear_it_state(uc: &mut Unicorn<State>) {
+    if it_state(uc) != 0 {
+        set_it_state(uc, 0);
+    }
+}
+
 /// Instructions in `code` (Thumb-2: 16- and 32-bit encodings).
 fn count_instructions(code: &[u8]) -> u32 {
     let mut n = 0;
@@ -622,9 +629,7 @@ impl<'a> Machine<'a> {
         // if inside that IT block (its instructions skipped). The translated block
         // tracks IT itself, and writes the state out if it ends inside an IT block.
         // (Unicorn's XPSR view reads the IT bits as zero: `it_state` reads them.)
-        if it_state(uc) != 0 {
-            set_it_state(uc, 0);
-        }
+        clear_it_state(uc);
         let b = uc.get_data().block;
         let done = if b.n > 0 && pc >= b.addr && pc - b.addr < 4 * b.n {
             let mut code = vec![0u8; (pc - b.addr) as usize + 2];
@@ -657,9 +662,7 @@ impl<'a> Machine<'a> {
     fn flash_data_read(uc: &mut Unicorn<State>) {
         // A memory hook brings back the IT state of the accessing instruction, which
         // unicorn then keeps (see `mmio_time`): clear it.
-        if it_state(uc) != 0 {
-            set_it_state(uc, 0);
-        }
+        clear_it_state(uc);
         let s = uc.get_data_mut();
         let ws = s.board.flash.latency();
         s.block.stall += s.model.flash_read(ws);

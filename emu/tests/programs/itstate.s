@@ -9,15 +9,12 @@
 .include "common.inc"
 .text
 vectors:
-    vector_table unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected, unexpected, irq0
+    vectors_irq0 irq0
 
 .thumb_func
 .global _start
 _start:
-    ldr r0, =ISER0
-    movs r1, #1
-    str r1, [r0]
-    ldr r4, =ISPR0
+    irq0_enabled
     movs r3, #0
     movs r5, #0
     b.w near_end

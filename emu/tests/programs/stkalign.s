@@ -8,15 +8,12 @@
 .equ CCR, 0xE000ED14
 .text
 vectors:
-    vector_table unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected,unexpected, unexpected, irq0
+    vectors_irq0 irq0
 
 .thumb_func
 .global _start
 _start:
-    ldr r0, =ISER0
-    movs r1, #1
-    str r1, [r0]
-    ldr r4, =ISPR0
+    irq0_enabled
     sub sp, #4
     str r1, [r4]
     dsb
