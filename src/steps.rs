@@ -317,8 +317,12 @@ impl StepOutput {
             if !four_phase {
                 self.timer.arm_pulses(out.arm);
             }
-            self.timer
-                .start(out.reload, KICK_SINCE.swap(0, Ordering::Relaxed));
+            // No pins armed: the first period is a part of a longer wait.
+            self.timer.start(
+                out.reload,
+                KICK_SINCE.swap(0, Ordering::Relaxed),
+                out.arm == 0,
+            );
         }
     }
 

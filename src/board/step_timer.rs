@@ -36,6 +36,10 @@ const CR1_STOPPED: u32 = 0b1100;
 const CLOCK_SHIFT: u32 = 1;
 /// The schedule's times are step-timer counts modulo 2^17 (TIM3's count, doubled).
 const CLOCK_MASK: u32 = (0x1_0000 << CLOCK_SHIFT) - 1;
+/// How far behind its schedule a start may leave the restart after it (`start`): the
+/// restart reads a lateness up to half the clock's round (0.91 ms); a quarter of that
+/// is kept for the restart's own latency (49 µs at most: stm32-usbd's masked copy).
+const LATE_REACH: u32 = CLOCK_MASK / 2 - CLOCK_MASK / 8;
 /// How much longer [`StepTimer::restart`] takes from its clock read to the counter's
 /// start than [`StepTimer::start`] does: 4 instructions (9 against 5 in the release
 /// image) at one cycle each, the least they can take. The schedule begins at the start's
@@ -263,28 +267,37 @@ impl StepTimer {
     ///
     /// The period began `since` ticks ago (the service tick whose preparation queued
     /// it, on which the simulator starts it too): it ends `ticks` after that, or, if
-    /// that leaves less than `MIN_LATE_COUNTS`, that short rest from now (a late
-    /// arming).
-    pub fn start(&mut self, ticks: u32, since: u32) {
+    /// that leaves less than `MIN_LATE_COUNTS`, that short rest from now. If it is the
+    /// last part of its wait (`more` false: a step comes at its end), that is a late
+    /// arming and the schedule moves. If more parts follow (a long wait; the
+    /// preparation, an arc's start say, took longer than this part), the schedule
+    /// stays the tick's: the next part's restart takes the rest of the lateness, so the
+    /// first step still comes on time. That restart reads at most `LATE_REACH` of it
+    /// (the clock's half round, less a margin for the restart's own latency); beyond,
+    /// the schedule moves, counted as a late arming.
+    pub fn start(&mut self, ticks: u32, since: u32, more: bool) {
         // SAFETY: any 16-bit auto-reload; `ticks` is 2..=0x10000.
         self.tim
             .arr()
             .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
         let now = self.now();
         let most = ticks.saturating_sub(MIN_LATE_COUNTS);
-        let gone = if since > most {
+        let gone = since.min(most);
+        let behind = if more {
+            since.min(most + LATE_REACH)
+        } else {
+            gone
+        };
+        if since > behind {
             // The step interrupt is the only writer.
             LATE_STEP_ARMINGS.store(
                 LATE_STEP_ARMINGS.load(Ordering::Relaxed).wrapping_add(1),
                 Ordering::Relaxed,
             );
-            most
-        } else {
-            since
-        };
+        }
         self.run(gone);
         self.due_early = now
-            .wrapping_sub(gone)
+            .wrapping_sub(behind)
             .wrapping_add(ticks)
             .wrapping_sub(RESTART_LEAD);
     }
