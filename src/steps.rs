@@ -317,11 +317,12 @@ impl StepOutput {
             if !four_phase {
                 self.timer.arm_pulses(out.arm);
             }
-            // No pins armed: the first period is a part of a longer wait.
+            // Armed pins: a step comes when this period ends (else it is a part of
+            // a longer wait, or a wait with no step).
             self.timer.start(
                 out.reload,
                 KICK_SINCE.swap(0, Ordering::Relaxed),
-                out.arm == 0,
+                out.arm != 0,
             );
         }
     }

@@ -80,7 +80,7 @@ mod tests {
         let (mut high_since, mut first_rise, mut last_rise) = (None, 0u32, 0u32);
         let start = cortex_m::peripheral::DWT::cycle_count();
         let late_before = board::late_step_armings();
-        b.step_timer.start(PERIOD, 0, false);
+        b.step_timer.start(PERIOD, 0, true);
         // N + 3 periods: room to see that no pulse follows the N-th.
         let span = (N + 3) * PERIOD * (board::SYSCLK_HZ / board::STEP_TIMER_HZ);
         loop {
@@ -152,7 +152,7 @@ mod tests {
         b.step_timer.take_update();
         let late_before = board::late_step_armings();
         let start = cortex_m::peripheral::DWT::cycle_count();
-        b.step_timer.start(PERIOD, 0, false);
+        b.step_timer.start(PERIOD, 0, true);
         let span = (N + 8) * PERIOD;
         loop {
             let now = cortex_m::peripheral::DWT::cycle_count();

@@ -267,15 +267,14 @@ impl StepTimer {
     ///
     /// The period began `since` ticks ago (the service tick whose preparation queued
     /// it, on which the simulator starts it too): it ends `ticks` after that, or, if
-    /// that leaves less than `MIN_LATE_COUNTS`, that short rest from now. If it is the
-    /// last part of its wait (`more` false: a step comes at its end), that is a late
-    /// arming and the schedule moves. If more parts follow (a long wait; the
-    /// preparation, an arc's start say, took longer than this part), the schedule
-    /// stays the tick's: the next part's restart takes the rest of the lateness, so the
-    /// first step still comes on time. That restart reads at most `LATE_REACH` of it
-    /// (the clock's half round, less a margin for the restart's own latency); beyond,
-    /// the schedule moves, counted as a late arming.
-    pub fn start(&mut self, ticks: u32, since: u32, more: bool) {
+    /// that leaves less than `MIN_LATE_COUNTS`, that short rest from now. If a step
+    /// comes at its end (`step_due`), that is a late arming and the schedule moves.
+    /// If not (a part of a long wait; the preparation, an arc's start say, took longer
+    /// than this part), the schedule stays the tick's: the next period's restart takes
+    /// the rest of the lateness, so the first step still comes on time. That restart
+    /// reads at most `LATE_REACH` of it (the clock's half round, less a margin for the
+    /// restart's own latency); beyond, the schedule moves, counted as a late arming.
+    pub fn start(&mut self, ticks: u32, since: u32, step_due: bool) {
         // SAFETY: any 16-bit auto-reload; `ticks` is 2..=0x10000.
         self.tim
             .arr()
@@ -283,10 +282,10 @@ impl StepTimer {
         let now = self.now();
         let most = ticks.saturating_sub(MIN_LATE_COUNTS);
         let gone = since.min(most);
-        let behind = if more {
-            since.min(most + LATE_REACH)
-        } else {
+        let behind = if step_due {
             gone
+        } else {
+            since.min(most + LATE_REACH)
         };
         if since > behind {
             // The step interrupt is the only writer.
