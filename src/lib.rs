@@ -6,4 +6,5 @@
 
 pub mod board;
 pub mod fault;
+pub mod service_tick;
 pub mod steps;

@@ -53,9 +53,6 @@ static PROTOCOL_WAKE: AtomicBool = AtomicBool::new(false);
 /// The protocol task has periodic work (a line, motion to follow, a timer): the tick
 /// starts it every millisecond. Otherwise it sleeps until `wake_protocol`.
 static PROTOCOL_BUSY: AtomicBool = AtomicBool::new(true);
-/// How far into SysTick's period the last tick's handler ran (cycles): the service
-/// tick's time, from which a start from rest runs (`ticks_since_tick`).
-static TICK_TAKEN: AtomicU32 = AtomicU32::new(0);
 
 /// Run the protocol task now: what just happened (bytes, an input, a key) is
 /// answered at once, and a sleeping protocol task wakes up.
@@ -80,6 +77,7 @@ mod app {
     use super::*;
     use core::mem::MaybeUninit;
     use cortex_m::peripheral::syst::SystClkSource;
+    use inkstep::service_tick::{now_ms, ticks_since_tick};
     use inkstep_core::controller::{Controller, HostLink};
     use inkstep_core::hmi::buzzer::Buzzer;
     use inkstep_core::pipeline::Pipeline;
@@ -88,35 +86,9 @@ mod app {
     use inkstep_core::stepper::prep::PrepConfig;
     use stm32f1xx_hal::pac::Interrupt;
 
-    /// Milliseconds since boot, the core's clock: counted by the tick (its only
-    /// writer), read by every task.
-    static NOW_MS: AtomicU32 = AtomicU32::new(0);
-
     /// While the LCD powers up: the millisecond its next step is due (0: none). The
     /// tick pends the LCD task then, so the power-up waits cost no CPU.
     static LCD_DUE_MS: AtomicU32 = AtomicU32::new(0);
-
-    fn now_ms() -> u32 {
-        NOW_MS.load(Ordering::Relaxed)
-    }
-
-    /// SysTick's count since its reload when the tick's handler ran (a flash stall
-    /// delays it: the ticks that fell in the stall are taken as one when it ends).
-    fn into_period() -> u32 {
-        // SAFETY: read-only register reads.
-        let syst = unsafe { &*cortex_m::peripheral::SYST::PTR };
-        syst.rvr.read() - syst.cvr.read()
-    }
-
-    /// Step-timer ticks (72 MHz, the core clock's) since the service tick `ms` was
-    /// taken (its handler ran), plus whole periods if ticks have come since.
-    fn ticks_since_tick(ms: u32) -> u32 {
-        // SAFETY: a read-only register read.
-        let period = unsafe { (*cortex_m::peripheral::SYST::PTR).rvr.read() } + 1;
-        let whole = now_ms().wrapping_sub(ms);
-        let into = into_period().wrapping_sub(TICK_TAKEN.load(Ordering::Relaxed));
-        whole.saturating_mul(period).saturating_add(into)
-    }
 
     type Store = SettingsStore<board::SettingsFlash>;
 
@@ -383,9 +355,7 @@ mod app {
     /// not the clock.
     #[task(binds = SysTick, priority = 7)]
     fn tick(_: tick::Context) {
-        TICK_TAKEN.store(into_period(), Ordering::Relaxed);
-        let now = NOW_MS.load(Ordering::Relaxed).wrapping_add(1);
-        NOW_MS.store(now, Ordering::Relaxed);
+        let now = inkstep::service_tick::count_tick();
         rtic::pend(Interrupt::I2C1_EV);
         if PROTOCOL_BUSY.load(Ordering::Relaxed) {
             rtic::pend(Interrupt::SPI1);

@@ -185,6 +185,10 @@ impl StepSide for BoardSide {
     fn set_position(&mut self, p: StepPos) {
         with_stepper(|s| s.exec.set_position(p));
     }
+    fn start_now(&mut self, now_ms: u32) {
+        // The step interrupt, above the preparation, starts the lead at once.
+        kick_since(crate::service_tick::ticks_since_tick(now_ms));
+    }
 }
 
 /// The interrupt-owned output state (from [`install`]).
@@ -253,7 +257,9 @@ impl StepOutput {
             tail_period(self.timer.pulse_ticks())
         } else {
             // That period is over (or the queue ran dry after a pure wait): no pulse
-            // is in flight, and the timer stopped itself at the update event.
+            // is in flight, and the timer stopped itself at the update event. When:
+            // a start after it may not begin its first period earlier (`pend`).
+            STOPPED_AT.store(crate::service_tick::stamp(), Ordering::Relaxed);
             return;
         };
         self.timer.restart(ticks);
@@ -317,13 +323,23 @@ impl StepOutput {
             if !four_phase {
                 self.timer.arm_pulses(out.arm);
             }
+            // The first period runs from the service tick whose preparation queued
+            // it, as on the simulator's timeline, but never from before the last
+            // period's end: a preparation that took longer than the queue lasted
+            // (the step queue ran dry in the middle of it, under the pessimistic
+            // cycle model) would otherwise start it from its own tick, before the last
+            // step, and put the next step out early (seed 1165205060: 35 µs after the
+            // one before instead of 481).
+            // That is a late start too, counted as one.
+            let idle =
+                crate::service_tick::stamp().wrapping_sub(STOPPED_AT.load(Ordering::Relaxed));
+            let since = KICK_SINCE.swap(0, Ordering::Relaxed);
+            if since > idle {
+                board::count_late_step_arming();
+            }
             // Armed pins: a step comes when this period ends (else it is a part of
             // a longer wait, or a wait with no step).
-            self.timer.start(
-                out.reload,
-                KICK_SINCE.swap(0, Ordering::Relaxed),
-                out.arm != 0,
-            );
+            self.timer.start(out.reload, since.min(idle), out.arm != 0);
         }
     }
 
@@ -340,6 +356,10 @@ impl StepOutput {
 /// from that tick, as the simulator does, so that the steps keep the simulator's times
 /// whatever the preparation's latency (see `Pipeline::fill_at`).
 static KICK_SINCE: AtomicU32 = AtomicU32::new(0);
+
+/// When the step timer last stopped with its queue run dry, on the service tick's
+/// clock (`service_tick::stamp`): a start may not reach back before it.
+static STOPPED_AT: AtomicU32 = AtomicU32::new(0);
 
 /// Ask the step interrupt to start if commands wait (it ignores the pend if running).
 pub fn kick() {

@@ -286,7 +286,7 @@ fn cmd_run(
         .iter()
         .map(|r| inkstep_sim::run::Realtime::parse(r))
         .collect::<Result<_, _>>()?;
-    s.realtime.sort_by_key(|r| r.at_us);
+    s.realtime.sort_by_key(|r| (r.after_step, r.at_us));
     if let Some(script) = keys {
         inkstep_emu::demo::play(&mut s, script, lcd.unwrap_or(Path::new(".")))?;
     }
@@ -365,6 +365,14 @@ fn cmd_run(
             "flash programming stalls during the job: {:.6} s",
             stalled as f64 / T_PER_S as f64
         );
+    }
+    // The step interrupt's late armings (steps delayed, none lost: the preparation
+    // could not keep the step queue filled), as the firmware counts them.
+    if let Some(late) = s
+        .symbol("inkstep_late_step_armings")
+        .and_then(|a| s.read_u32(a))
+    {
+        println!("late step armings since power-up: {late}");
     }
     for e in done.errors.iter().chain(&done.alarms) {
         println!("{e}");

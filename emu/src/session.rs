@@ -94,12 +94,13 @@ impl<'a> Session<'a> {
                 Some(t) if t < until => t,
                 _ => until,
             };
-            if self.realtime_sent < self.realtime.len() {
-                let t = match self.m.state().board.steps.first() {
-                    Some(first) => {
-                        first.t + self.realtime[self.realtime_sent].at_us * (T_PER_MS / 1000)
-                    }
-                    None => self.now() + crate::usb_host::SLOT_T,
+            if let Some(r) = self.realtime.get(self.realtime_sent) {
+                let d = r.at_us * (T_PER_MS / 1000);
+                let t = match self.m.state().board.steps.get(r.after_step) {
+                    Some(from) => from.t + d,
+                    // Its step has not come yet: look again no later than the byte's
+                    // offset after it, so that it goes out on time.
+                    None => self.now() + crate::usb_host::SLOT_T.min(d.max(1)),
                 };
                 to = to.min(t.max(self.now()));
             }
@@ -111,11 +112,11 @@ impl<'a> Session<'a> {
                 inputs.apply_due(self);
                 self.inputs = inputs;
             }
-            while let (Some(r), Some(first)) = (
-                self.realtime.get(self.realtime_sent),
-                self.m.state().board.steps.first(),
-            ) {
-                if first.t + r.at_us * (T_PER_MS / 1000) > self.now() {
+            while let Some(r) = self.realtime.get(self.realtime_sent) {
+                let Some(from) = self.m.state().board.steps.get(r.after_step) else {
+                    break;
+                };
+                if from.t + r.at_us * (T_PER_MS / 1000) > self.now() {
                     break;
                 }
                 let bytes = r.bytes.clone();

@@ -13,6 +13,7 @@
 mod common;
 
 use common::{booted, STEPS_PER_MM};
+use inkstep_core::pipeline::{RESUME_MS, START_LEAD_MS};
 use inkstep_emu::clock::{T_PER_MS, T_PER_S};
 use inkstep_emu::pins::{InputEvent, PosSwitch, Schedule, OUTPUT_WATCH};
 use inkstep_emu::session::Session;
@@ -936,14 +937,18 @@ fn homing_seeks_at_25_locates_at_24_and_waits_26_after_each_trip() {
             );
         }
         // After each trip: the wait, then the next move's first step (the back-off at
-        // `$25`, the pull-off at `$24`), which starts from rest at the start rate
-        // `$213` (60 mm/min) or its own feed if slower, one step's time; the trip and
-        // the wait's end are seen at the protocol's polls (15 ms of slack).
+        // `$25`, the pull-off at `$24`), which starts from rest: the pipeline's resume
+        // wait and the start's lead, then the first period at the start rate `$213`
+        // (60 mm/min) or its own feed if slower; the trip and the wait's end are seen
+        // at the protocol's polls (15 ms of slack).
+        let start_ms = f64::from(RESUME_MS) + f64::from(START_LEAD_MS);
         for (w, next) in waits.into_iter().zip([seek, feed]) {
             let first_step_ms = 60_000.0 / (next.min(60.0) * STEPS_PER_MM);
             assert!(
-                w >= f64::from(debounce) && w <= f64::from(debounce) + first_step_ms + 15.0,
-                "wait after a trip {w:.2} ms, $26={debounce}, first step {first_step_ms} ms"
+                w >= f64::from(debounce)
+                    && w <= f64::from(debounce) + start_ms + first_step_ms + 15.0,
+                "wait after a trip {w:.2} ms, $26={debounce}, start {start_ms} ms, \
+                 first step {first_step_ms} ms"
             );
         }
         seek_waits.push(waits[0]);

@@ -12,6 +12,7 @@
 //! same rule. Nothing here decides anything about motion, G-code, menus, halts or
 //! persistence.
 
+use crate::flash::PAGE_ERASE_NS;
 use inkstep_core::controller::{
     Controller, HostLink, HOST_RX_RING, HOST_TX_RING, KEYPAD_SCAN_MS, LCD_REFRESH_MS,
     SERVICE_PERIOD_MS,
@@ -20,7 +21,7 @@ use inkstep_core::halt::HaltLatch;
 use inkstep_core::keypad::{Key, KEYMAP};
 use inkstep_core::machine::{MotionControl, PinLevels};
 use inkstep_core::motion::StepPos;
-use inkstep_core::pipeline::{Pipeline, StepSide};
+use inkstep_core::pipeline::{Pipeline, StepSide, START_LEAD_MS};
 use inkstep_core::protocol::RX_BUFFER_SIZE;
 use inkstep_core::ring::ByteRing;
 use inkstep_core::screens::framebuffer::FrameBuffer;
@@ -39,10 +40,10 @@ use std::rc::Rc;
 /// The step timer's clock: the board's.
 pub const TICK_HZ: u64 = TIMER_HZ as u64;
 /// The CPU time a settings save takes on the board beyond the flash's own stall (the
-/// store's search, encoding and verification around the programming), µs: the
-/// image's job time exceeds the simulator's by -1.3 to 5.3 ms per mid-job save (the
-/// ends are a service tick apart) on 150 random programs without holds
-/// (.ci/emu-random), 2.0 ms in the middle.
+/// store's search, encoding and verification around the programming), µs. It runs in
+/// the protocol task under the core's lock: the tick's count goes on (SysTick is above
+/// every lock), the tasks wait for it. The motion after a save starts at the end of
+/// the pipeline's resume wait, which covers it on both boards.
 const SAVE_CPU_US: u64 = 2_000;
 
 /// The input pins at rest with the board's wiring: switches closed (low), the
@@ -66,6 +67,10 @@ pub struct SimSide {
     pub queue: StepCmdQueue,
     /// The halt latch, shared with the board's input interrupts and protocol task.
     pub halt: Rc<HaltLatch>,
+    /// A start from rest queued its lead ([`StepSide::start_now`]): the motion
+    /// begins when the lead ends (the job's time counts from there, as Grbl's from
+    /// the stepper's start).
+    pub lead_queued: bool,
 }
 
 impl StepSide for SimSide {
@@ -89,6 +94,11 @@ impl StepSide for SimSide {
     }
     fn set_position(&mut self, p: StepPos) {
         self.exec.set_position(p);
+    }
+    fn start_now(&mut self, _now_ms: u32) {
+        // The board starts the timer at the end of the tick's tasks (no time passes
+        // in them here).
+        self.lead_queued = true;
     }
 }
 
@@ -133,8 +143,13 @@ pub struct Board {
     /// The flash's stall counter (ns), and how far it had got at the last look.
     flash_busy: std::rc::Rc<std::cell::Cell<u64>>,
     flash_busy_seen: u64,
+    /// The flash's page erases, and how many had been seen at the last look.
+    flash_erases: std::rc::Rc<std::cell::Cell<u64>>,
+    flash_erases_seen: u64,
     /// The CPU stalls on flash programming until this tick (a settings save).
     stall_until: u64,
+    /// The tasks wait for a save's CPU work until this tick (the tick count goes on).
+    tasks_from: u64,
     /// Ticks the millisecond grid runs ahead of the tick count: SysTick interrupts
     /// lost while the CPU stalled on the flash (one pending tick is taken when the
     /// stall ends, the others are lost, as on the chip and in the emulator).
@@ -159,6 +174,7 @@ impl Board {
         // The store again over the same flash, to keep a handle on its stall counter.
         let flash = store.into_flash();
         let flash_busy = flash.busy_ns.clone();
+        let flash_erases = flash.erases.clone();
         let mut store = SettingsStore::new(flash, STORE_RANGE).expect("store range");
         let ctl = inkstep_core::in_place::build(|slot| Controller::boot_in(slot, &mut store, 0));
         let settings = ctl.protocol().machine().settings();
@@ -167,6 +183,7 @@ impl Board {
             exec: Executor::new([0; 3], MAX_RELOAD),
             queue: StepCmdQueue::new(),
             halt: halt.clone(),
+            lead_queued: false,
         };
         let prep = PrepConfig {
             timer_hz: TIMER_HZ,
@@ -194,7 +211,10 @@ impl Board {
             lcd: None,
             flash_busy_seen: flash_busy.get(),
             flash_busy,
+            flash_erases_seen: flash_erases.get(),
+            flash_erases,
             stall_until: 0,
+            tasks_from: 0,
             lag: 0,
         }
     }
@@ -311,8 +331,14 @@ impl Board {
         }
         let side = self.pipeline.side_mut();
         side.exec.set_turn_guard(self.outputs.turn_guard_ticks());
+        let lead = std::mem::take(&mut side.lead_queued);
         if let Some(o) = side.exec.start(&mut side.queue) {
-            self.first_motion.get_or_insert(self.now);
+            let lead_ticks = if lead {
+                Self::ms_to_ticks(u64::from(START_LEAD_MS))
+            } else {
+                0
+            };
+            self.first_motion.get_or_insert(self.now + lead_ticks);
             self.next_irq = Some(self.now + u64::from(o.reload));
         }
     }
@@ -361,6 +387,10 @@ impl Board {
     /// Bytes arrived: the protocol task runs now, not at the next tick, as the
     /// firmware's USB task wakes it (a real-time byte such as `!` acts at once).
     pub fn wake_protocol(&mut self) {
+        if self.now < self.tasks_from {
+            // A save's CPU work holds the task: it runs at the tick after it.
+            return;
+        }
         self.run_protocol();
     }
 
@@ -423,28 +453,42 @@ impl Board {
         grid.max(self.stall_until)
     }
 
-    /// After a tick: flash programming in it stalls the CPU, and the save's own CPU
-    /// work ([`SAVE_CPU_US`]) holds the tasks as long (settings saves run at rest, so
-    /// no step is due); the SysTick interrupts that fall in the stall
-    /// collapse into one taken when it ends, and the grid goes on after it.
+    /// After a tick: what a settings save in it cost. The CPU stalls on the flash
+    /// while it is programmed or erased (it fetches its code from there). A
+    /// half-word's programming (52.5 µs) only delays the tick's interrupt; a page
+    /// erase (20 ms) stalls it past many: the SysTick interrupts that fall in it
+    /// collapse into one taken when it ends, and the grid goes on after it (as on the
+    /// chip and in the emulator). Then the programming and the save's own CPU work
+    /// ([`SAVE_CPU_US`]) hold the tasks, not the tick count (settings saves run at
+    /// rest, so no step is due).
     fn flash_stall(&mut self, tick_at: u64) {
         let busy = self.flash_busy.get();
         let d_ns = busy - self.flash_busy_seen;
         self.flash_busy_seen = busy;
+        let erases = self.flash_erases.get() - self.flash_erases_seen;
+        self.flash_erases_seen = self.flash_erases.get();
         if d_ns == 0 {
             return;
         }
-        let d = ((u128::from(d_ns) + u128::from(SAVE_CPU_US) * 1000) * u128::from(TICK_HZ)
-            / 1_000_000_000) as u64;
-        self.stall_until = self.now.max(tick_at) + d;
-        let period = Self::ms_to_ticks(u64::from(SERVICE_PERIOD_MS));
-        let grid = Self::ms_to_ticks(u64::from(self.ms) + u64::from(SERVICE_PERIOD_MS)) + self.lag;
-        if grid < self.stall_until {
-            // The first grid tick after the stall's end follows the one taken at it.
-            let next = grid + period * ((self.stall_until - grid) / period + 1);
-            let lost = (next - grid) / period - 1;
-            self.lag += lost * period;
+        let to_ticks = |ns: u64| (u128::from(ns) * u128::from(TICK_HZ) / 1_000_000_000) as u64;
+        let erase_ns = erases * PAGE_ERASE_NS;
+        let from = self.now.max(tick_at);
+        self.stall_until = from + to_ticks(erase_ns);
+        if erases > 0 {
+            // One tick taken at the end of each erase: those before the last are
+            // counted here (their tasks wait for the save), the last by the run.
+            self.ms += (erases - 1) as u32 * SERVICE_PERIOD_MS;
+            let period = Self::ms_to_ticks(u64::from(SERVICE_PERIOD_MS));
+            let grid =
+                Self::ms_to_ticks(u64::from(self.ms) + u64::from(SERVICE_PERIOD_MS)) + self.lag;
+            if grid < self.stall_until {
+                // The first grid tick after the stall's end follows the one taken at it.
+                let next = grid + period * ((self.stall_until - grid) / period + 1);
+                let lost = (next - grid) / period - 1;
+                self.lag += lost * period;
+            }
         }
+        self.tasks_from = self.stall_until + to_ticks(d_ns - erase_ns + SAVE_CPU_US * 1000);
     }
 
     /// Runs virtual time up to `until` ticks, calling `on_step` for every step.
@@ -463,8 +507,10 @@ impl Board {
             }
             if t == tick {
                 self.ms += SERVICE_PERIOD_MS;
-                self.tick();
-                self.flash_stall(t);
+                if t >= self.tasks_from {
+                    self.tick();
+                    self.flash_stall(t);
+                }
             }
         }
     }

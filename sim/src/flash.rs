@@ -42,6 +42,8 @@ pub struct RamFlash {
     /// datasheet's typical figures the emulator uses too (half-word 52.5 µs, page
     /// erase 20 ms): shared with the board, which stops its clock for them.
     pub busy_ns: std::rc::Rc<std::cell::Cell<u64>>,
+    /// Page erases so far (each stalls the CPU longer than a service tick).
+    pub erases: std::rc::Rc<std::cell::Cell<u64>>,
 }
 
 /// Programming one half-word and erasing one page, ns (STM32F103 datasheet, typical).
@@ -54,6 +56,7 @@ impl Default for RamFlash {
             mem: vec![0xFF; PAGE * PAGES],
             fail_writes: false,
             busy_ns: Default::default(),
+            erases: Default::default(),
         }
     }
 }
@@ -95,6 +98,7 @@ impl NorFlash for RamFlash {
         let pages = r.len().div_ceil(PAGE) as u64;
         self.mem[r].fill(0xFF);
         self.busy_ns.set(self.busy_ns.get() + pages * PAGE_ERASE_NS);
+        self.erases.set(self.erases.get() + pages);
         Ok(())
     }
     fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), FlashError> {

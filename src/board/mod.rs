@@ -61,7 +61,9 @@ pub use step_port::{
     step_outputs, StepPins, StepPort, DIR_SHIFT, MOTION_PINS, STEP_MASK_X, STEP_MASK_Y,
     STEP_MASK_Z,
 };
-pub use step_timer::{disarm_step_pulses, late_step_armings, stop_step_timer, StepTimer};
+pub use step_timer::{
+    count_late_step_arming, disarm_step_pulses, late_step_armings, stop_step_timer, StepTimer,
+};
 pub use usb::{Usb, UsbCells, UsbSerial, USB_PACKET};
 pub use watchdog::{Watchdog, WATCHDOG_MS};
 

@@ -340,6 +340,15 @@ pub fn stop_step_timer() {
     }
 }
 
+/// Count a late arming found outside the timer (a start that the last stop held
+/// back: `steps::StepOutput::pend`). The step interrupt only.
+pub fn count_late_step_arming() {
+    LATE_STEP_ARMINGS.store(
+        LATE_STEP_ARMINGS.load(Ordering::Relaxed).wrapping_add(1),
+        Ordering::Relaxed,
+    );
+}
+
 /// Late step armings since power-up (see `LATE_STEP_ARMINGS`).
 pub fn late_step_armings() -> u32 {
     LATE_STEP_ARMINGS.load(Ordering::Relaxed)

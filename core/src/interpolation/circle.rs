@@ -144,6 +144,7 @@ impl Circle {
     /// centre anywhere in the step range fits; `from` is the exact start, which `start`
     /// rounds). `turns` extra revolutions; `target == start` is a full
     /// circle.
+    #[inline(always)]
     pub fn new(
         start: StepPos,
         from: [i64; 2],

@@ -68,10 +68,17 @@ impl<S: StepSide> Pipeline<S> {
         self.prep.hold_state() != HoldState::Running
     }
 
-    /// Nothing runs and no pen move is under way (a hold may lift the pen).
+    /// Nothing runs and no pen move is under way (a hold may lift the pen): at rest
+    /// as the service tick saw it ([`Pipeline::fill_at`]), the same tick on every
+    /// board.
     fn at_rest(&self) -> bool {
+        self.rest_ms != super::MOVING && self.braked()
+    }
+
+    /// The hold has braked XY to its end and no pen move, wait or Z trip is under
+    /// way (the rest itself may not be seen yet).
+    fn braked(&self) -> bool {
         self.prep.hold_state() != HoldState::Holding
-            && !self.side.is_running()
             && self.pen_move.is_none()
             && self.wait_left == 0
             && !self.waiting
@@ -90,7 +97,7 @@ impl<S: StepSide> Pipeline<S> {
     /// A held machine at rest whose Z pen is still to be lifted (at the next
     /// [`Pipeline::fill`]): it is not at rest yet.
     pub(super) fn z_lift_due(&self) -> bool {
-        self.held() && self.at_rest() && self.z_to_lift().is_some()
+        self.held() && self.braked() && self.z_to_lift().is_some()
     }
 
     /// Queue the Z pen's trip under way; true when no Z move of a hold is under way

@@ -44,6 +44,12 @@ pub trait StepSide {
     fn flush(&mut self);
     /// Redefine the position (at rest).
     fn set_position(&mut self, p: StepPos);
+    /// What is queued may run from now: the first command of a start from rest (its
+    /// lead, [`START_LEAD_MS`]) is queued, and the rest follow while it runs. The
+    /// firmware starts its step timer at once, on the schedule of the service tick
+    /// `now_ms`; the simulator, whose preparation takes no time, at the end of the
+    /// call as always.
+    fn start_now(&mut self, _now_ms: u32) {}
 }
 
 /// Non-move commands waiting behind moves, and moves behind them.
@@ -64,13 +70,46 @@ const HORIZON_MS: u32 = 5;
 /// (12.4717 s); 2 runs them at their junction speeds (12.4619 s, the time-optimal
 /// bound of the planner's limits).
 const MIN_AHEAD: usize = 2;
-/// Longest wait at rest for more moves before the first starts, in calls of
-/// [`Pipeline::fill`] (milliseconds in the firmware): it waits while the planner holds
-/// no more moves than [`MIN_AHEAD`] (each has a step at least), so the steps prepared
-/// at the start never reach the end of what is queued. Measured on the zigzag
-/// benchmark: without it the first moves stop at their ends (the planner had nothing
-/// behind them yet).
-const START_GATHER_MS: u8 = 8;
+/// How long work that arrives at rest waits before it starts, in service ticks (ms):
+/// counted from the rest's start if it arrives within that time, else from its
+/// arrival. Two things come of it:
+/// - A job's first moves run into the next instead of stopping at their ends: the
+///   next lines of a stream are usually a millisecond or two behind the first
+///   (measured on the zigzag benchmark, 4 steps a move: without a wait the first
+///   moves stop at their ends, the planner has nothing behind them yet).
+/// - The lines after a sync point (G4, G92, a settings save: the sender's next line
+///   comes after the `ok` that waited for rest) start at the same tick however long
+///   the link and the CPU took to bring them, so a job's timing depends on neither,
+///   and the simulator runs it as the board does. 20 ms covers a settings save (5.8 ms
+///   of flash programming and the store's CPU work under the pessimistic cycle model)
+///   and the lines around it (`.ci/emu-random`: step times equal on both boards).
+///
+/// Work that was already waiting when the motion came to rest (a pen move behind the
+/// last steps, a held block) goes on at once.
+pub const RESUME_MS: u8 = 20;
+/// A move that starts from rest (a job's first, the next after a sync point, a
+/// resume after a hold) begins with a wait this long, ms, on every board: the
+/// firmware starts its step timer on it at once, and prepares the move's first steps
+/// while it runs. So its first step comes when the step timeline says, however long
+/// that preparation takes (an arc's start under the S-curve took 2.0 ms under the
+/// pessimistic cycle model, and may follow a protocol lock section of up to 1 ms):
+/// without it such a start came up to 0.5 ms late on the board, and the simulator
+/// could not say when (`.ci/emu-random`).
+pub const START_LEAD_MS: u32 = 4;
+/// How far the step timeline must be past the last command's end for a service tick
+/// to see the machine at rest, µs: longer than a last pulse's tail (the pulse, `$0`
+/// up to 255 µs, and the direction hold) and the firmware's call latency, so that
+/// every board sees the rest at the same tick.
+const REST_GUARD_US: u32 = 400;
+/// [`Pipeline::rest_ms`]: the machine is not at rest.
+const MOVING: u8 = u8::MAX;
+/// [`Pipeline::rest_ms`]: at rest for [`RESUME_MS`] or longer, with nothing to start.
+const IDLE: u8 = u8::MAX - 1;
+/// [`Pipeline::rest_ms`]: the work that was waiting when the motion came to rest (a
+/// pen move or a dwell behind the last steps, the moves behind them, a stream that
+/// ran dry) goes on at once, without a lead: this is the motion going on, not a
+/// start.
+const GOING_ON: u8 = RESUME_MS + 1;
 
 /// The planner's configuration from the machine settings.
 pub fn planner_config(s: &Settings) -> PlannerConfig {
@@ -227,8 +266,10 @@ pub struct Pipeline<S: StepSide> {
     pen_timing: PenTiming,
     /// [`z_down_side`]: a Z pen's down side, 0 for a servo pen.
     z_down: i8,
-    /// Calls of [`Pipeline::fill`] spent waiting at rest for a second move.
-    gather: u8,
+    /// At rest: service ticks since the rest began (since the step timeline passed
+    /// the end of the last queued command), or since work arrived after a long rest,
+    /// up to [`RESUME_MS`] (work starts there); [`IDLE`], [`MOVING`].
+    rest_ms: u8,
     /// The step timeline ([`Pipeline::fill_at`]): the service tick (ms) of the last
     /// call, and where on the timeline that tick was (timer counts, wrapping: what is
     /// compared on it is less than a second apart).
@@ -269,7 +310,7 @@ impl<S: StepSide> Pipeline<S> {
             dwell = false,
             pen_timing = PenTiming::from(s),
             z_down = z_down_side(s),
-            gather = 0,
+            rest_ms = IDLE,
             clock = (0, 0),
             queue_end = 0,
         })
@@ -347,17 +388,92 @@ impl<S: StepSide> Pipeline<S> {
     /// is prepared, stops both at the same step.
     pub fn fill_at(&mut self, now_ms: u32) {
         let per_ms = self.timer_hz / 1000;
-        if self.side.queued() == 0 && !self.side.is_running() {
-            // At rest: the timeline goes on from here.
-            self.clock = (now_ms, self.queue_end);
+        let (ms, t) = self.clock;
+        let on_timeline = t.wrapping_add(now_ms.wrapping_sub(ms).wrapping_mul(per_ms));
+        // At rest once the side has stopped and the timeline is [`REST_GUARD_US`] past
+        // the last command's end: a last step just before the tick leaves its pulse's
+        // tail running at the tick on the simulator, and stopped by the time the
+        // firmware's call (a little after its tick) looks; with the guard both see
+        // the rest at the same tick.
+        let guard = (self.timer_hz / 1000 * REST_GUARD_US / 1000) as i32;
+        let ended = on_timeline.wrapping_sub(self.queue_end) as i32 >= guard;
+        if ended && self.side.queued() == 0 && !self.side.is_running() {
+            self.count_rest(now_ms);
         } else {
-            let (ms, t) = self.clock;
-            self.clock = (
-                now_ms,
-                t.wrapping_add(now_ms.wrapping_sub(ms).wrapping_mul(per_ms)),
-            );
+            self.rest_ms = MOVING;
+            self.clock = (now_ms, on_timeline);
         }
         self.fill_queue();
+    }
+
+    /// At rest: whether work waits ([`RESUME_MS`]; true: nothing starts now); else a
+    /// move that starts gets its lead ([`START_LEAD_MS`]) first, running while the
+    /// move is prepared. (Not inlined: the preparation task's own frame is on its
+    /// deepest stack path.)
+    #[inline(never)]
+    fn leave_rest(&mut self) -> bool {
+        if self.rest_ms < RESUME_MS {
+            return self.has_work();
+        }
+        if self.rest_ms != RESUME_MS
+            || self.side.queued() > 0
+            || self.pen_move.is_some()
+            || self.prep.hold_state() != HoldState::Running
+            || (!self.prep.in_block() && self.planner.is_empty())
+        {
+            return false;
+        }
+        let lead = self.ms_ticks(START_LEAD_MS) as u32;
+        self.side
+            .sink()
+            .push_slice(&[StepCmd::new(StepEvent(0), lead)]);
+        self.queue_end = self.queue_end.wrapping_add(lead);
+        self.rest_ms = MOVING;
+        self.side.start_now(self.clock.0);
+        false
+    }
+
+    /// Work to do: a block under way (held) or waiting, or a command behind it.
+    fn has_work(&self) -> bool {
+        self.prep.in_block() || !self.planner.is_empty() || !self.pending.is_empty()
+    }
+
+    /// A call at rest at the service tick `now_ms`: the timeline goes on from here,
+    /// and [`Pipeline::rest_ms`] counts. (Not inlined: the preparation task's own
+    /// frame is on its deepest stack path.)
+    #[inline(never)]
+    fn count_rest(&mut self, now_ms: u32) {
+        let (ms, t) = self.clock;
+        let elapsed = now_ms.wrapping_sub(ms);
+        let on_timeline = t.wrapping_add(elapsed.wrapping_mul(self.timer_hz / 1000));
+        self.clock = (now_ms, self.queue_end);
+        let resume = u32::from(RESUME_MS);
+        let work = self.has_work();
+        let rest = match self.rest_ms {
+            // Work that was waiting for the motion to end goes on at once.
+            MOVING if work => {
+                self.rest_ms = GOING_ON;
+                return;
+            }
+            GOING_ON if work => return,
+            // The rest began where the timeline ended, not at the call that saw it
+            // (the firmware's runs a little after its tick, and may see a last step's
+            // end a tick before the simulator does): counted from there.
+            MOVING => {
+                let past = (on_timeline.wrapping_sub(self.queue_end) as i32).max(0) as u32;
+                past / (self.timer_hz / 1000).max(1)
+            }
+            // Work after a long rest: it waits from its arrival.
+            IDLE if work => 0,
+            IDLE => return,
+            GOING_ON => resume,
+            r => u32::from(r).saturating_add(elapsed),
+        };
+        self.rest_ms = if rest >= resume && !work {
+            IDLE
+        } else {
+            rest.min(resume) as u8
+        };
     }
 
     fn fill_queue(&mut self) {
@@ -386,21 +502,9 @@ impl<S: StepSide> Pipeline<S> {
         let horizon = self.timer_hz / 1000 * HORIZON_MS;
         let queued = self.side.queued();
         let now = self.clock.1;
-        if queued == 0
-            && self.prep.is_idle_block()
-            && (1..=MIN_AHEAD).contains(&self.planner.len())
-            && self.pending.is_empty()
-        {
-            // At rest with a move or two planned: the next ones of a stream are
-            // usually a millisecond or two behind. Waiting that long for them (at most
-            // START_GATHER_MS) lets the first moves run into the next instead of
-            // stopping at their ends; the job still starts with its first step.
-            if self.gather < START_GATHER_MS {
-                self.gather += 1;
-                return;
-            }
+        if self.rest_ms != MOVING && self.leave_rest() {
+            return;
         }
-        self.gather = 0;
         let (ahead, after) = self.ahead_of(now);
         if queued > 0 && 2 * ahead >= horizon && after >= MIN_AHEAD {
             // More than half the horizon is still queued: refill later, in one go.
@@ -539,7 +643,11 @@ impl<S: StepSide> Pipeline<S> {
     }
 
     fn executing(&self) -> bool {
-        !self.prep.is_idle(&self.planner)
+        // At rest only once a service tick has seen it (the rest then begins where
+        // the timeline ended on every board, and work that comes after it, a sync
+        // point's next line, waits for `RESUME_MS`).
+        self.rest_ms == MOVING
+            || !self.prep.is_idle(&self.planner)
             || self.side.is_running()
             || self.wait_left > 0
             || self.waiting
@@ -581,6 +689,10 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
 
     fn resume(&mut self) {
         self.prep.resume(&mut self.planner);
+        if self.rest_ms != MOVING {
+            // Held at rest: the held path starts again, with its lead.
+            self.rest_ms = RESUME_MS;
+        }
         if let Some(level) = self.lifted.take() {
             // Down again where it was lifted, the drop time waited, before XY goes on.
             self.pen_move = Some(PenMove::new(0, level, &self.pen_timing));
@@ -633,6 +745,9 @@ impl<S: StepSide> MotionControl for Pipeline<S> {
         self.lifted = None;
         // A Z pen stays where the stop found it (its steps end with the rest).
         self.z_trip = None;
+        // At rest from now: nothing queued is left on the timeline either.
+        self.rest_ms = 0;
+        self.queue_end = self.clock.1;
     }
 
     fn set_overrides(&mut self, feed_percent: u8, rapid_percent: u8) {

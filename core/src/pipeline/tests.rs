@@ -74,7 +74,8 @@ fn a_dwell_alone_is_dwelling_and_nothing_else_is() {
     s.set(201, 1.0).unwrap(); // servo pen: its lift is a timed wait too
     let mut pipeline = test_pipeline(&s);
     pipeline.push(Command::Dwell { ms: 50 }).unwrap();
-    pipeline.fill();
+    // Seen at one tick, started RESUME_MS later.
+    assert_eq!(start_from_rest(&mut pipeline), super::RESUME_MS + 1);
     assert!(pipeline.dwelling() && pipeline.is_moving(), "running");
     run(&mut pipeline, X);
     assert!(pipeline.is_idle());
@@ -88,7 +89,7 @@ fn a_dwell_alone_is_dwelling_and_nothing_else_is() {
     pipeline.push(Command::Pen { level: PEN_FULL }).unwrap();
     run(&mut pipeline, X);
     pipeline.push(Command::Pen { level: 0 }).unwrap();
-    pipeline.fill();
+    start_from_rest(&mut pipeline);
     assert!(pipeline.is_moving() && !pipeline.dwelling(), "a pen lift");
 }
 
@@ -109,15 +110,21 @@ fn test_pipeline(s: &Settings) -> Pipeline<TestSide> {
 /// millisecond, as the firmware's task).
 fn run_for(pipeline: &mut Pipeline<TestSide>, ms: u32) {
     let per_ms = u64::from(TIMER_HZ / 1000);
+    // Ticks already run into the next millisecond (a command longer than the rest of
+    // this one, such as a start's lead).
+    let mut t = 0u64;
     for _ in 0..ms {
         pipeline.fill();
-        let mut t = 0u64;
         let side = pipeline.side_mut();
         while t < per_ms {
-            let Some(c) = side.queue.pop() else { break };
+            let Some(c) = side.queue.pop() else {
+                t = per_ms;
+                break;
+            };
             c.tick().apply(&mut side.pos);
             t += u64::from(c.wait());
         }
+        t -= per_ms;
     }
 }
 
@@ -212,8 +219,20 @@ fn servo_settings(speed: f32) -> Settings {
     s
 }
 
-/// Milliseconds until the pipeline is at rest.
+/// Service ticks until work pushed at rest starts ([`super::RESUME_MS`]); their count.
+fn start_from_rest(pipeline: &mut Pipeline<TestSide>) -> u8 {
+    let mut ms = 0;
+    while MotionControl::queued(pipeline) > 0 && !pipeline.is_moving() {
+        pipeline.fill();
+        ms += 1;
+        assert!(ms <= super::RESUME_MS + 1, "never started");
+    }
+    ms
+}
+
+/// Milliseconds until the pipeline is at rest, from the start of the work pushed.
 fn ms_to_rest(pipeline: &mut Pipeline<TestSide>, log: &mut Vec<(u16, StepPos)>) -> usize {
+    start_from_rest(pipeline);
     let from = log.len();
     while pipeline.is_moving() || MotionControl::queued(pipeline) > 0 {
         run_timed(pipeline, 1, log);
