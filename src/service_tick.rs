@@ -33,21 +33,25 @@ fn into_period() -> u32 {
     syst.rvr.read() - syst.cvr.read()
 }
 
+/// SysTick's period, and its counts since the last tick's handler ran.
+fn period_and_into() -> (u32, u32) {
+    // SAFETY: a read-only register read.
+    let period = unsafe { (*cortex_m::peripheral::SYST::PTR).rvr.read() } + 1;
+    let into = into_period().wrapping_sub(TICK_TAKEN.load(Ordering::Relaxed));
+    (period, into)
+}
+
 /// Step-timer ticks (72 MHz, the core clock's) since the service tick `ms` was
 /// taken (its handler ran), plus whole periods if ticks have come since.
 pub fn ticks_since_tick(ms: u32) -> u32 {
-    // SAFETY: a read-only register read.
-    let period = unsafe { (*cortex_m::peripheral::SYST::PTR).rvr.read() } + 1;
+    let (period, into) = period_and_into();
     let whole = now_ms().wrapping_sub(ms);
-    let into = into_period().wrapping_sub(TICK_TAKEN.load(Ordering::Relaxed));
     whole.saturating_mul(period).saturating_add(into)
 }
 
 /// Now, in step-timer ticks on the service tick's clock (wrapping every 59.6 s): the
 /// same measure as [`ticks_since_tick`], so that `stamp() - ms * period` is that.
 pub fn stamp() -> u32 {
-    // SAFETY: a read-only register read.
-    let period = unsafe { (*cortex_m::peripheral::SYST::PTR).rvr.read() } + 1;
-    let into = into_period().wrapping_sub(TICK_TAKEN.load(Ordering::Relaxed));
+    let (period, into) = period_and_into();
     now_ms().wrapping_mul(period).wrapping_add(into)
 }

@@ -398,7 +398,7 @@ impl<S: StepSide> Pipeline<S> {
         let guard = (self.timer_hz / 1000 * REST_GUARD_US / 1000) as i32;
         let ended = on_timeline.wrapping_sub(self.queue_end) as i32 >= guard;
         if ended && self.side.queued() == 0 && !self.side.is_running() {
-            self.count_rest(now_ms);
+            self.count_rest(now_ms, on_timeline);
         } else {
             self.rest_ms = MOVING;
             self.clock = (now_ms, on_timeline);
@@ -406,12 +406,12 @@ impl<S: StepSide> Pipeline<S> {
         self.fill_queue();
     }
 
-    /// At rest: whether work waits ([`RESUME_MS`]; true: nothing starts now); else a
-    /// move that starts gets its lead ([`START_LEAD_MS`]) first, running while the
-    /// move is prepared. (Not inlined: the preparation task's own frame is on its
+    /// At rest: true while work waits for [`RESUME_MS`] to end (nothing starts now);
+    /// once it may start, a move gets its lead ([`START_LEAD_MS`]) first, running
+    /// while the move is prepared. (Not inlined: the preparation task's own frame is on its
     /// deepest stack path.)
     #[inline(never)]
-    fn leave_rest(&mut self) -> bool {
+    fn wait_at_rest(&mut self) -> bool {
         if self.rest_ms < RESUME_MS {
             return self.has_work();
         }
@@ -438,14 +438,13 @@ impl<S: StepSide> Pipeline<S> {
         self.prep.in_block() || !self.planner.is_empty() || !self.pending.is_empty()
     }
 
-    /// A call at rest at the service tick `now_ms`: the timeline goes on from here,
-    /// and [`Pipeline::rest_ms`] counts. (Not inlined: the preparation task's own
-    /// frame is on its deepest stack path.)
+    /// A call at rest at the service tick `now_ms`, where the timeline would be at
+    /// `on_timeline`: the timeline goes on from here, and [`Pipeline::rest_ms`]
+    /// counts. (Not inlined: the preparation task's own frame is on its deepest
+    /// stack path.)
     #[inline(never)]
-    fn count_rest(&mut self, now_ms: u32) {
-        let (ms, t) = self.clock;
-        let elapsed = now_ms.wrapping_sub(ms);
-        let on_timeline = t.wrapping_add(elapsed.wrapping_mul(self.timer_hz / 1000));
+    fn count_rest(&mut self, now_ms: u32, on_timeline: u32) {
+        let elapsed = now_ms.wrapping_sub(self.clock.0);
         self.clock = (now_ms, self.queue_end);
         let resume = u32::from(RESUME_MS);
         let work = self.has_work();
@@ -502,7 +501,7 @@ impl<S: StepSide> Pipeline<S> {
         let horizon = self.timer_hz / 1000 * HORIZON_MS;
         let queued = self.side.queued();
         let now = self.clock.1;
-        if self.rest_ms != MOVING && self.leave_rest() {
+        if self.rest_ms != MOVING && self.wait_at_rest() {
             return;
         }
         let (ahead, after) = self.ahead_of(now);

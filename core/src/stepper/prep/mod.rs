@@ -213,11 +213,6 @@ impl Prep {
     pub fn hold_state(&self) -> HoldState {
         self.hold
     }
-    /// No block in execution (at rest between blocks, or idle).
-    pub fn is_idle_block(&self) -> bool {
-        self.active.is_none() && self.v_last <= 0.0
-    }
-
     /// Nothing in execution and nothing left to prepare.
     pub fn is_idle(&self, planner: &Planner) -> bool {
         self.active.is_none() && planner.is_empty()
