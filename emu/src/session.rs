@@ -131,6 +131,20 @@ impl<'a> Session<'a> {
         Ok(())
     }
 
+    /// Why a real-time byte is still unsent, if it waits for a step event that has
+    /// not come (a resume timed from a step the hold stopped short of leaves the
+    /// hold waiting for ever), for a time-out's message.
+    fn realtime_waiting(&self) -> String {
+        let made = self.m.state().board.steps.len();
+        match self.realtime.get(self.realtime_sent) {
+            Some(r) if r.after_step >= made => format!(
+                " (a real-time byte was never sent: it is timed from step event #{}, and the job made {made})",
+                r.after_step
+            ),
+            _ => String::new(),
+        }
+    }
+
     /// The message for a stop, with the last lines of the defmt log.
     pub fn stopped(&self, stop: Stop) -> String {
         let mut msg = format!(
@@ -284,7 +298,10 @@ impl<'a> Session<'a> {
             note(sender.received(got.as_bytes()), &mut out);
             each(self)?;
             if self.now() - start > limit {
-                return Err("the job was not answered in time".into());
+                return Err(format!(
+                    "the job was not answered in time{}",
+                    self.realtime_waiting()
+                ));
             }
         }
         Ok(out)

@@ -493,6 +493,17 @@ impl Board {
 
     /// Runs virtual time up to `until` ticks, calling `on_step` for every step.
     pub fn run_until(&mut self, until: u64, on_step: &mut impl FnMut(StepEvent)) {
+        self.run(until, false, on_step);
+    }
+
+    /// As [`Board::run_until`], but returns at the first step event's interrupt if
+    /// one comes before `until` (a real-time byte timed from a step goes out at that
+    /// step's time plus its offset, however long the wait before the step).
+    pub fn run_until_a_step(&mut self, until: u64, on_step: &mut impl FnMut(StepEvent)) {
+        self.run(until, true, on_step);
+    }
+
+    fn run(&mut self, until: u64, stop_at_step: bool, on_step: &mut impl FnMut(StepEvent)) {
         loop {
             let tick = self.next_event();
             let t = self.next_irq.map_or(tick, |irq| irq.min(tick));
@@ -502,8 +513,12 @@ impl Board {
             }
             self.now = t;
             // The step interrupt preempts the tasks the tick starts at the same time.
+            let mut stepped = false;
             if self.next_irq == Some(t) {
-                self.step_interrupt(t, on_step);
+                self.step_interrupt(t, &mut |e| {
+                    stepped = true;
+                    on_step(e)
+                });
             }
             if t == tick {
                 self.ms += SERVICE_PERIOD_MS;
@@ -511,6 +526,9 @@ impl Board {
                     self.tick();
                     self.flash_stall(t);
                 }
+            }
+            if stepped && stop_at_step {
+                return;
             }
         }
     }

@@ -302,6 +302,11 @@ fn cmd_run(
     if r.timed_out {
         eprintln!("the job did not finish within the virtual time limit");
     }
+    if let Some((at, made)) = r.realtime_waiting {
+        eprintln!(
+            "a real-time byte was never sent: it is timed from step event #{at}, and the job made {made}"
+        );
+    }
     Ok(if r.ok() {
         ExitCode::SUCCESS
     } else {

@@ -40,6 +40,11 @@ pub struct RunResult {
     /// Virtual time at the end of the stream, ticks.
     pub end: u64,
     pub timed_out: bool,
+    /// At a time-out, the first real-time byte not sent because its step event never
+    /// came: (that step's number, step events made). A byte timed from a step the
+    /// job does not reach (a resume after a step the hold stopped short of) leaves a
+    /// hold waiting for ever.
+    pub realtime_waiting: Option<(usize, usize)>,
     /// Settings in force at the end (steps/mm etc. for the analysis).
     pub settings: Settings,
 }
@@ -284,21 +289,24 @@ pub fn run_on_each(
         }
         if !progressed {
             let mut until = board.now() + step;
-            if let Some(t) = due(&anchors, rt_next) {
+            let due_at = due(&anchors, rt_next);
+            if let Some(t) = due_at {
                 until = until.min(t.max(board.now() + 1));
-            } else if let Some(r) = realtime.get(rt_next) {
-                // Its step has not come: never run past that step by more than the
-                // byte's offset after it.
-                let d = (r.at_us as u128 * u128::from(TICK_HZ) / 1_000_000) as u64;
-                until = until.min(board.now() + d.max(1));
             }
-            board.run_until(until, &mut |e| {
+            let mut note = |e: StepEvent| {
                 if let Some(at) = anchors.get_mut(&steps_seen) {
                     *at = Some(e.t);
                 }
                 steps_seen += 1;
                 on_step(e)
-            });
+            };
+            if rt_next < realtime.len() && due_at.is_none() {
+                // Its step has not come: stop at each step, to see whether it is the
+                // one the byte is timed from.
+                board.run_until_a_step(until, &mut note);
+            } else {
+                board.run_until(until, &mut note);
+            }
             each_ms(board);
         }
     }
@@ -312,6 +320,10 @@ pub fn run_on_each(
         final_pos: board.pipeline.side().exec.position(),
         end: board.now(),
         timed_out,
+        realtime_waiting: realtime
+            .get(rt_next)
+            .filter(|r| timed_out && r.after_step >= steps_seen)
+            .map(|r| (r.after_step, steps_seen)),
         settings: board.ctl.protocol().machine().settings().clone(),
     }
 }
@@ -367,6 +379,33 @@ mod tests {
         let longer = held.job_time_s() - plain.job_time_s();
         // Held for 1 s, less what the stop and the restart cost in ramps.
         assert!((0.8..1.2).contains(&longer), "{longer} s longer");
+    }
+
+    /// A resume timed from a step the held job never reaches leaves the hold waiting:
+    /// the run says which byte, instead of only that it timed out.
+    #[test]
+    fn a_byte_timed_from_a_step_that_never_comes_is_named_at_the_time_out() {
+        let rt = [
+            Realtime::parse("#100+0ms:!").unwrap(),
+            Realtime::parse("#5000+0ms:~").unwrap(),
+        ];
+        let mut board = Board::new(Settings::default());
+        let r = run_on_each(
+            &mut board,
+            "G21 G91 G1 F600 X20\n",
+            Flow::SendResponse,
+            5,
+            &rt,
+            &mut |_| {},
+            &mut |_| {},
+        );
+        assert!(r.timed_out);
+        let (at, made) = r.realtime_waiting.expect("the resume is named");
+        assert_eq!(at, 5000);
+        assert!(
+            (100..200).contains(&made),
+            "{made} step events before the hold"
+        );
     }
 
     #[test]
