@@ -43,7 +43,7 @@ struct RampRun {
     s1: u64,
     rate1: f32,
 }
-use crate::planner::profile::Phase;
+use crate::planner::profile::{Near, Phase};
 
 /// Where the profile stands at the last timed tick (the end of the present segment).
 #[derive(Clone, Copy, Debug)]
@@ -76,7 +76,7 @@ impl Active {
         };
         let s = self.at.s.saturating_sub(ahead);
         let p = self.phase_of(s).unwrap_or(Phase::Down);
-        let (_, v) = self.prof.phase_time(p, self.local(p, s), self.at.t);
+        let (_, v) = self.prof.phase_time(p, self.local(p, s), self.near(p));
         (s, v, t_last)
     }
 
@@ -117,6 +117,16 @@ impl Active {
         }
     }
 
+    /// The cursor as a known point of phase `p` (see [`Profile::phase_time`]), if it
+    /// lies in that phase.
+    fn near(&self, p: Phase) -> Option<Near> {
+        (p == self.at.phase).then(|| Near {
+            t: self.at.t,
+            d: self.local(p, self.at.s),
+            v: self.at.v,
+        })
+    }
+
     /// The exact time of position `s` in phase `p`: the cursor there.
     pub(super) fn exact(&self, p: Phase, s: u64, hz: f32) -> Cursor {
         let (t, v, ticks) = if p == Phase::Cruise {
@@ -125,8 +135,7 @@ impl Active {
             let ticks = self.local(p, s) * self.cruise_ticks_per_mm;
             (0.0, self.prof.phase_speeds(p).0, ticks)
         } else {
-            let hint = if p == self.at.phase { self.at.t } else { 0.0 };
-            let (t, v) = self.prof.phase_time(p, self.local(p, s), hint);
+            let (t, v) = self.prof.phase_time(p, self.local(p, s), self.near(p));
             (t, v, t * hz)
         };
         let ticks = (ticks + 0.5) as u64;
