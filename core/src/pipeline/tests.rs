@@ -578,3 +578,75 @@ fn a_hold_in_the_last_ramp_holds_the_dwell_and_moves_behind_it() {
         (MotionState::Idle, [1600, 0, 0])
     );
 }
+
+/// No call prepares more than twice its horizon, however uneven the step waits:
+/// point by point (`$212=0`) a circle's minor-axis step comes a few tens of µs after
+/// a major one, and the count of commands estimated from that last wait once
+/// prepared 77 single ticks, 45 ms of motion, in one call (every one of them
+/// committed before a hold or an override could shape it, and 19 ms of the
+/// preparation task under the emulator's pessimistic cycle model).
+#[test]
+fn no_call_prepares_far_past_its_horizon_after_a_short_wait() {
+    let mut s = Settings::default();
+    s.set(212, 0.0).unwrap(); // point by point
+    s.set(210, 1.0).unwrap(); // S-curve
+    let mut pipeline = test_pipeline(&s);
+    pipeline
+        .push(Command::Move(Move {
+            target: [0, 0, 0],
+            path: Path::Arc {
+                center: [-400, 80],
+                ccw: false,
+                turns: 0,
+            },
+            feed: Feed::MmPerMin(1200.0),
+            line: 0,
+        }))
+        .unwrap();
+    let horizon = u64::from(TIMER_HZ / 1000 * HORIZON_MS);
+    let per_ms = u64::from(TIMER_HZ / 1000);
+    // The commands handed to the "timer", and the timer counts left of the first.
+    let mut running: std::collections::VecDeque<StepCmd> = Default::default();
+    let (mut left, mut worst, mut calls, mut steps) = (0u64, 0.0f64, 0, 0);
+    for _ in 0..20_000 {
+        pipeline.fill();
+        calls += 1;
+        let side = pipeline.side_mut();
+        // What this call prepared: at most twice the horizon, and the steps the
+        // queue keeps at least (`MIN_AHEAD`, each as long as the longest of the
+        // call's), and the step that crosses the bound.
+        let (mut span, mut longest) = (0u64, 0u64);
+        while let Some(c) = side.queue.pop() {
+            span += u64::from(c.wait());
+            longest = longest.max(u64::from(c.wait()));
+            running.push_back(c);
+        }
+        let bound = (2 * horizon).max(MIN_AHEAD as u64 * longest) + longest;
+        worst = worst.max(span as f64 / bound as f64);
+        let mut budget = per_ms;
+        while budget > 0 {
+            if left == 0 {
+                let Some(c) = running.front() else { break };
+                left = u64::from(c.wait());
+            }
+            let take = left.min(budget);
+            left -= take;
+            budget -= take;
+            if left == 0 {
+                if let Some(c) = running.pop_front() {
+                    c.tick().apply(&mut side.pos);
+                    steps += c.tick().steps().count_ones();
+                }
+            }
+        }
+        side.busy = running.iter().map(|c| u64::from(c.wait())).sum::<u64>();
+        if side.busy == 0 && !pipeline.executing() && calls > 100 {
+            break;
+        }
+    }
+    // Point by point, one axis a step: the circle's length in steps (radius 408)
+    // times 4/pi, about 3,260.
+    assert!(steps > 3000, "{steps} steps");
+    assert_eq!(pipeline.position(), [0, 0, 0], "the whole circle ran");
+    assert!(worst <= 1.0, "a call prepared {worst:.1} times its bound");
+}

@@ -291,11 +291,32 @@ impl Prep {
     }
 
     /// Prepares up to `limit` commands (fewer if `sink` fills up, the path ends, or a
-    /// hold comes to rest). `dyn`: one copy compiled in the core (size-optimised), not
-    /// one per caller; the sink takes a batch per call.
+    /// hold comes to rest).
     pub fn fill(&mut self, planner: &mut Planner, sink: &mut dyn CmdSink, limit: usize) {
-        let mut room = sink.room().min(limit);
+        self.fill_until(planner, sink, limit, limit, u64::MAX);
+    }
+
+    /// Prepares at least `at_least` and at most `at_most` commands (fewer if `sink`
+    /// fills up, the path ends, or a hold comes to rest), and beyond `at_least` only
+    /// while the prepared steps end before `until` ([`Prep::prepared_until`]'s
+    /// timeline): a count from the last wait ([`Prep::commands_for`]) overshoots
+    /// after a short wait among long ones (see the pipeline's `fill_queue`). `dyn`:
+    /// one copy compiled in the core (size-optimised), not one per caller; the sink
+    /// takes a batch per call.
+    pub fn fill_until(
+        &mut self,
+        planner: &mut Planner,
+        sink: &mut dyn CmdSink,
+        at_least: usize,
+        at_most: usize,
+        until: u64,
+    ) {
+        let mut room = sink.room().min(at_most);
+        let enough = room.saturating_sub(at_least);
         while room > 0 {
+            if room <= enough && self.t_last >= until {
+                return;
+            }
             if self.hold == HoldState::Held {
                 return;
             }
