@@ -37,7 +37,8 @@ pub(super) struct ZTrip {
 }
 
 /// Most Z steps of a hold's trip queued per [`Pipeline::fill`] (each costs a square
-/// root): 32 a millisecond is far above a Z axis' rate.
+/// root and two divisions, about 880 instructions): 32 a millisecond is far above a
+/// Z axis' rate. Fewer where the horizon is reached first (see `run_z`).
 const Z_STEPS_PER_FILL: u32 = 32;
 
 impl<S: StepSide> Pipeline<S> {
@@ -127,7 +128,18 @@ impl<S: StepSide> Pipeline<S> {
             let n = from.abs_diff(to);
             let tick = StepEvent::from_deltas([0, 0, if to > from { 1 } else { -1 }]);
             let mut budget = Z_STEPS_PER_FILL;
-            while u32::from(t.sent) < n && budget > 0 && self.side.sink().room() > 0 {
+            // Up to the preparation's horizon past the timeline, as for XY: 32 steps
+            // at once, when a hold at rest lifted the pen, took the call 1.6 ms under
+            // the pessimistic cycle model before the step timer was started, past what
+            // the trip's first 5 ms wait absorbs (`.ci/emu-random`, seed 456428396:
+            // the lift 20 µs late on the image).
+            let horizon = (self.timer_hz / 1000 * super::HORIZON_MS) as i32;
+            while u32::from(t.sent) < n
+                && budget > 0
+                && self.side.sink().room() > 0
+                && (self.side.queued() < super::MIN_AHEAD
+                    || (self.queue_end.wrapping_sub(self.clock.1) as i32) < horizon)
+            {
                 let wait = self.z_wait(u32::from(t.sent), n);
                 self.side.sink().push_slice(&[StepCmd::new(tick, wait)]);
                 self.queue_end = self.queue_end.wrapping_add(wait);

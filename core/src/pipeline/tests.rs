@@ -650,3 +650,44 @@ fn no_call_prepares_far_past_its_horizon_after_a_short_wait() {
     assert_eq!(pipeline.position(), [0, 0, 0], "the whole circle ran");
     assert!(worst <= 1.0, "a call prepared {worst:.1} times its bound");
 }
+
+/// A hold at rest lifts a Z pen a horizon at a time, as XY is prepared: each step's
+/// wait costs a square root and two divisions, and 32 at once took the call that
+/// starts the step timer 1.6 ms under the emulator's pessimistic cycle model, past
+/// what the lift's first wait absorbs (`.ci/emu-random`, seed 456428396).
+#[test]
+fn a_hold_at_rest_queues_the_z_lift_a_horizon_at_a_time() {
+    let s = Settings::default();
+    let spm = s.steps_per_mm(2);
+    let (up, down) = (
+        crate::fmath::round(s.pen_z_up() * spm) as i32,
+        crate::fmath::round(s.pen_z_down() * spm) as i32,
+    );
+    let mut p = test_pipeline(&s);
+    p.push(mv([0, 0, down], Feed::MmPerMin(600.0))).unwrap();
+    let mut log = Vec::new();
+    run_steps(&mut p, &mut log, |_| false);
+    assert_eq!(p.position(), [0, 0, down]);
+    for _ in 0..30 {
+        p.fill();
+    }
+    p.hold();
+    p.fill();
+    let horizon = u64::from(TIMER_HZ / 1000 * HORIZON_MS);
+    let mut waits = Vec::new();
+    let side = p.side_mut();
+    while let Some(c) = side.queue.pop() {
+        c.tick().apply(&mut side.pos);
+        waits.push(u64::from(c.wait()));
+    }
+    assert!(!waits.is_empty(), "the lift began");
+    let before_last: u64 = waits[..waits.len() - 1].iter().sum();
+    assert!(
+        waits.len() <= MIN_AHEAD || before_last < horizon,
+        "{} Z steps queued at once, {:?}",
+        waits.len(),
+        waits
+    );
+    run_steps(&mut p, &mut log, |p| p.position()[2] == up);
+    assert_eq!(p.position(), [0, 0, up], "the pen went all the way up");
+}
