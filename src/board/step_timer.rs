@@ -216,11 +216,22 @@ impl StepTimer {
             .arr()
             .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
         let due_early = self.due_early;
+        // From the clock's read to the counter's start with interrupts masked (a few
+        // instructions): a handler above this one (SysTick, the inputs) taken in
+        // between started the counter late by its own length, the period ended that
+        // much after the schedule, and the next restart, on schedule, cut that
+        // pulse by as much (a `$0=10` pulse of 8.1 µs after one of 11.9 µs:
+        // emu/tests/pins.rs).
+        cortex_m::interrupt::disable();
         let gone = self.now().wrapping_sub(due_early) & CLOCK_MASK;
         if gone + MIN_LATE_COUNTS <= ticks {
             self.run(gone);
+            // SAFETY: the step interrupt runs unmasked; it masks only the lines above.
+            unsafe { cortex_m::interrupt::enable() };
             self.due_early = due_early.wrapping_add(ticks);
         } else {
+            // SAFETY: as above.
+            unsafe { cortex_m::interrupt::enable() };
             self.late(gone, ticks);
         }
     }
@@ -279,6 +290,8 @@ impl StepTimer {
         self.tim
             .arr()
             .write(|w| unsafe { w.bits(ticks.wrapping_sub(1)) });
+        // Masked from the clock's read to the counter's start, as in `restart`.
+        cortex_m::interrupt::disable();
         let now = self.now();
         let most = ticks.saturating_sub(MIN_LATE_COUNTS);
         let gone = since.min(most);
@@ -295,6 +308,9 @@ impl StepTimer {
             );
         }
         self.run(gone);
+        // SAFETY: the step interrupt runs unmasked (this is called from it, for a
+        // start from rest); it masks only the lines above.
+        unsafe { cortex_m::interrupt::enable() };
         self.due_early = now
             .wrapping_sub(behind)
             .wrapping_add(ticks)
