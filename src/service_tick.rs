@@ -33,25 +33,48 @@ fn into_period() -> u32 {
     syst.rvr.read() - syst.cvr.read()
 }
 
-/// SysTick's period, and its counts since the last tick's handler ran.
-fn period_and_into() -> (u32, u32) {
-    // SAFETY: a read-only register read.
+/// SysTick's period, the tick count and SysTick's counts since that tick's handler
+/// ran, read together. A SysTick whose handler has not run yet (masked, by a
+/// critical section or stm32-usbd's packet copy) is counted: its period began, so
+/// the counts since the last tick taken run on past it. Read without that, the time
+/// came out a whole period short (`stamp`), or wrapped (`ticks_since_tick`, then
+/// bounded by a stop stamped a period early): a start from rest after a Z pen's
+/// trip began its first period as if 0.9 ms had gone, and its step came 0.9 ms
+/// early (`.ci/emu-random`, seed 1729238220).
+fn snapshot() -> (u32, u32, u32) {
+    // SAFETY: read-only register reads.
     let period = unsafe { (*cortex_m::peripheral::SYST::PTR).rvr.read() } + 1;
-    let into = into_period().wrapping_sub(TICK_TAKEN.load(Ordering::Relaxed));
-    (period, into)
+    loop {
+        let ms = NOW_MS.load(Ordering::Relaxed);
+        let taken = TICK_TAKEN.load(Ordering::Relaxed);
+        let pending = cortex_m::peripheral::SCB::is_pendst_pending();
+        let into = into_period();
+        // The same tick throughout: no handler ran, no reload came in between.
+        if pending == cortex_m::peripheral::SCB::is_pendst_pending()
+            && ms == NOW_MS.load(Ordering::Relaxed)
+        {
+            let since = if pending {
+                into.wrapping_add(period).wrapping_sub(taken)
+            } else {
+                into.wrapping_sub(taken)
+            };
+            return (period, ms, since);
+        }
+    }
 }
 
 /// Step-timer ticks (72 MHz, the core clock's) since the service tick `ms` was
 /// taken (its handler ran), plus whole periods if ticks have come since.
 pub fn ticks_since_tick(ms: u32) -> u32 {
-    let (period, into) = period_and_into();
-    let whole = now_ms().wrapping_sub(ms);
-    whole.saturating_mul(period).saturating_add(into)
+    let (period, now, into) = snapshot();
+    now.wrapping_sub(ms)
+        .saturating_mul(period)
+        .saturating_add(into)
 }
 
 /// Now, in step-timer ticks on the service tick's clock (wrapping every 59.6 s): the
 /// same measure as [`ticks_since_tick`], so that `stamp() - ms * period` is that.
 pub fn stamp() -> u32 {
-    let (period, into) = period_and_into();
-    now_ms().wrapping_mul(period).wrapping_add(into)
+    let (period, now, into) = snapshot();
+    now.wrapping_mul(period).wrapping_add(into)
 }
