@@ -407,6 +407,15 @@ fn run_steps(
     panic!("never at rest");
 }
 
+/// A Z pen's up and down places ($205, $206) in steps.
+fn z_places(s: &Settings) -> (i32, i32) {
+    let spm = s.steps_per_mm(2);
+    (
+        crate::fmath::round(s.pen_z_up() * spm) as i32,
+        crate::fmath::round(s.pen_z_down() * spm) as i32,
+    )
+}
+
 /// A Z pen ($201=0): a hold mid-stroke lifts Z to $205 once XY is at rest (XY
 /// still, Hold:0 only once Z is up), resume brings it back to the same step before
 /// XY moves on, and the steps drawn with the pen down are exactly those of the
@@ -414,11 +423,7 @@ fn run_steps(
 #[test]
 fn a_z_pen_goes_up_for_a_hold_and_back_down_before_the_stroke_goes_on() {
     let s = Settings::default();
-    let spm = s.steps_per_mm(2);
-    let (up, down) = (
-        crate::fmath::round(s.pen_z_up() * spm) as i32,
-        crate::fmath::round(s.pen_z_down() * spm) as i32,
-    );
+    let (up, down) = z_places(&s);
     assert!(down < up, "default: down below up");
     let job = |p: &mut Pipeline<TestSide>| {
         for target in [[0, 0, down], [8000, 3000, down], [8000, 3000, up]] {
@@ -658,11 +663,7 @@ fn no_call_prepares_far_past_its_horizon_after_a_short_wait() {
 #[test]
 fn a_hold_at_rest_queues_the_z_lift_a_horizon_at_a_time() {
     let s = Settings::default();
-    let spm = s.steps_per_mm(2);
-    let (up, down) = (
-        crate::fmath::round(s.pen_z_up() * spm) as i32,
-        crate::fmath::round(s.pen_z_down() * spm) as i32,
-    );
+    let (up, down) = z_places(&s);
     let mut p = test_pipeline(&s);
     p.push(mv([0, 0, down], Feed::MmPerMin(600.0))).unwrap();
     let mut log = Vec::new();

@@ -435,6 +435,24 @@ impl Profile {
     }
 }
 
+/// The time at which an S-curve's ramp from `v0`, changing speed by `dv` in `t_end`
+/// seconds, has covered `d`: in f64, by bisection, the tests' reference.
+#[cfg(test)]
+pub(crate) fn reference_ramp_time(v0: f64, dv: f64, t_end: f64, d: f64) -> f64 {
+    let w = core::f64::consts::PI / t_end;
+    let s = |t: f64| v0 * t + 0.5 * dv * (t - (w * t).sin() / w);
+    let (mut lo, mut hi) = (0.0, t_end);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if s(mid) < d {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -508,21 +526,9 @@ mod tests {
         }
     }
 
-    /// The time of a distance on an S-curve's ramp, in f64 by bisection.
+    /// The time of a distance on an S-curve's ramp, in f64.
     fn reference_time(r: &Ramp, d: f64) -> f64 {
-        let (v0, dv, t_end) = (f64::from(r.v0), f64::from(r.v1 - r.v0), f64::from(r.t));
-        let w = core::f64::consts::PI / t_end;
-        let s = |t: f64| v0 * t + 0.5 * dv * (t - (w * t).sin() / w);
-        let (mut lo, mut hi) = (0.0, t_end);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if s(mid) < d {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
+        reference_ramp_time(f64::from(r.v0), f64::from(r.v1 - r.v0), f64::from(r.t), d)
     }
 
     proptest::proptest! {

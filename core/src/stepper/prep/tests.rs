@@ -85,18 +85,7 @@ impl Ideal {
         match self.shape {
             Shape::Trapezoid => (2.0 * d / self.a).sqrt(),
             Shape::Cosine => {
-                let w = std::f64::consts::PI / self.ramp_t;
-                let s = |t: f64| 0.5 * self.peak * (t - (w * t).sin() / w);
-                let (mut lo, mut hi) = (0.0, self.ramp_t);
-                for _ in 0..100 {
-                    let mid = 0.5 * (lo + hi);
-                    if s(mid) < d {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                0.5 * (lo + hi)
+                crate::planner::profile::reference_ramp_time(0.0, self.peak, self.ramp_t, d)
             }
         }
     }
