@@ -133,12 +133,11 @@ impl<S: StepSide> Pipeline<S> {
             // the pessimistic cycle model before the step timer was started, past what
             // the trip's first 5 ms wait absorbs (`.ci/emu-random`, seed 456428396:
             // the lift 20 µs late on the image).
-            let horizon = (self.timer_hz / 1000 * super::HORIZON_MS) as i32;
             while u32::from(t.sent) < n
                 && budget > 0
                 && self.side.sink().room() > 0
                 && (self.side.queued() < super::MIN_AHEAD
-                    || (self.queue_end.wrapping_sub(self.clock.1) as i32) < horizon)
+                    || self.ahead_of(self.clock.1).0 < self.horizon())
             {
                 let wait = self.z_wait(u32::from(t.sent), n);
                 self.side.sink().push_slice(&[StepCmd::new(tick, wait)]);

@@ -364,6 +364,12 @@ impl<S: StepSide> Pipeline<S> {
         (to_end.max(0) as u32, after)
     }
 
+    /// How far ahead of the step timeline steps are prepared ([`HORIZON_MS`]), timer
+    /// counts.
+    fn horizon(&self) -> u32 {
+        self.timer_hz / 1000 * HORIZON_MS
+    }
+
     /// `ms` milliseconds in timer counts (floored).
     fn ms_ticks(&self, ms: u32) -> u64 {
         u64::from(ms) * u64::from(self.timer_hz) / 1000
@@ -498,7 +504,7 @@ impl<S: StepSide> Pipeline<S> {
             // Back down after a hold before XY moves on.
             return;
         }
-        let horizon = self.timer_hz / 1000 * HORIZON_MS;
+        let horizon = self.horizon();
         let queued = self.side.queued();
         let now = self.clock.1;
         if self.rest_ms != MOVING && self.wait_at_rest() {

@@ -291,7 +291,8 @@ impl Prep {
     }
 
     /// Prepares up to `limit` commands (fewer if `sink` fills up, the path ends, or a
-    /// hold comes to rest).
+    /// hold comes to rest): the tests' call; the pipeline bounds its calls in time.
+    #[cfg(test)]
     pub fn fill(&mut self, planner: &mut Planner, sink: &mut dyn CmdSink, limit: usize) {
         self.fill_until(planner, sink, limit, limit, u64::MAX);
     }
