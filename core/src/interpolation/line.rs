@@ -94,52 +94,73 @@ impl Interpolate for DdaLine {
 }
 
 /// Point-by-point comparison line: one axis per step event.
+///
+/// The axis whose progress `taken_i / len_i` is least steps next, the lowest such axis
+/// on a tie. Kept incrementally, as the lab report keeps its F: for each pair of axes
+/// (0,1), (0,2), (1,2) the cross difference `g = taken_i len_j - taken_j len_i`
+/// (negative or zero: axis i has come no further than j), which a step of i raises by
+/// `len_j` and a step of j lowers by `len_i`. Choosing the next axis is then two or
+/// three sign tests, with no multiplication (it runs once per step event, up to 100,000
+/// times a second). A pair with an axis that does not move is held at a constant
+/// that decides it: the moving axis always wins.
 #[derive(Clone, Debug)]
 pub struct ClassicLine {
+    /// The cross differences of the pairs (0,1), (0,2), (1,2).
+    g: [i64; 3],
     len: [u32; AXES],
-    dir: [i8; AXES],
-    /// Steps taken per axis.
-    taken: [u32; AXES],
+    /// The step event of each axis (its direction).
+    events: [StepEvent; AXES],
+    /// Step events left.
+    left: u64,
 }
+
+/// The decided value of a pair whose first axis does not move (the second always
+/// wins); the negated value when only the second does not move. Steps never change it
+/// (a non-moving axis adds nothing), and live values stay within +-2^62.
+const DECIDED: i64 = i64::MAX;
 
 impl ClassicLine {
     pub fn new(start: StepPos, target: StepPos) -> Self {
         let (len, dir) = travel(start, target);
+        let pair = |i: usize, j: usize| match (len[i] > 0, len[j] > 0) {
+            (false, _) => DECIDED,
+            (true, false) => -DECIDED,
+            (true, true) => 0,
+        };
         ClassicLine {
+            g: [pair(0, 1), pair(0, 2), pair(1, 2)],
             len,
-            dir,
-            taken: [0; AXES],
+            events: core::array::from_fn(|a| {
+                let mut d = [0i8; AXES];
+                d[a] = dir[a];
+                StepEvent::from_deltas(d)
+            }),
+            left: len.iter().map(|&l| u64::from(l)).sum(),
         }
     }
 }
 
 impl Interpolate for ClassicLine {
     fn next_event(&mut self) -> Option<StepEvent> {
-        // Pick the unfinished axis with the smallest progress taken/len; compare
-        // fractions by cross-multiplication (u32 x u32 in u64: one multiply).
-        let mut best: Option<usize> = None;
-        for i in 0..AXES {
-            if self.taken[i] >= self.len[i] {
-                continue;
-            }
-            best = match best {
-                None => Some(i),
-                Some(b) => {
-                    let lhs = u64::from(self.taken[i]) * u64::from(self.len[b]);
-                    let rhs = u64::from(self.taken[b]) * u64::from(self.len[i]);
-                    if lhs < rhs {
-                        Some(i)
-                    } else {
-                        Some(b)
-                    }
-                }
-            };
-        }
-        let axis = best?;
-        self.taken[axis] += 1;
-        let mut d = [0i8; AXES];
-        d[axis] = self.dir[axis];
-        Some(StepEvent::from_deltas(d))
+        self.left = self.left.checked_sub(1)?;
+        // An axis that has finished is at progress 1, ahead of every unfinished one, so
+        // while events are left it is never chosen.
+        let g = &mut self.g;
+        let len = |a: usize| i64::from(self.len[a]);
+        let axis = if g[0] <= 0 && g[1] <= 0 {
+            g[0] += len(1);
+            g[1] += len(2);
+            0
+        } else if g[0] > 0 && g[2] <= 0 {
+            g[0] -= len(0);
+            g[2] += len(2);
+            1
+        } else {
+            g[1] -= len(0);
+            g[2] -= len(1);
+            2
+        };
+        self.events.get(axis).copied()
     }
 }
 
@@ -357,7 +378,7 @@ impl Line {
     pub fn next(&self) -> super::Next {
         let left = match self {
             Line::Dda(l) => l.major - l.done,
-            Line::Classic(l) => l.len.iter().zip(&l.taken).map(|(&n, &t)| n - t).sum(),
+            Line::Classic(l) => u32::try_from(l.left).unwrap_or(u32::MAX),
             Line::Fine(l) if l.extra_ticks() => return super::Next::Extra,
             Line::Fine(l) => (l.end.0 - l.pos.0).unsigned_abs(),
         };
@@ -569,6 +590,28 @@ mod tests {
         }
     }
 
+    /// The point-by-point rule stated directly (the implementation before the
+    /// incremental one): the unfinished axis of least progress `taken / len`, compared
+    /// by cross-multiplication, the lowest on a tie.
+    fn reference_classic_axis(len: &[u32; AXES], taken: &[u32; AXES]) -> Option<usize> {
+        let mut best: Option<usize> = None;
+        for i in 0..AXES {
+            if taken[i] >= len[i] {
+                continue;
+            }
+            best = match best {
+                Some(b)
+                    if u64::from(taken[i]) * u64::from(len[b])
+                        >= u64::from(taken[b]) * u64::from(len[i]) =>
+                {
+                    Some(b)
+                }
+                _ => Some(i),
+            };
+        }
+        best
+    }
+
     proptest! {
         #[test]
         fn u32_dda_matches_the_i64_error_terms(s in prop::array::uniform3(-3000i32..3000), t in prop::array::uniform3(-3000i32..3000)) {
@@ -623,6 +666,35 @@ mod tests {
             prop_assert_eq!(*pts.last().unwrap(), target);
             for p in &pts {
                 prop_assert!(dda_error(start, target, *p) <= 0.5 + 1e-9, "{:?}", p);
+            }
+        }
+
+        #[test]
+        fn classic_lines_choose_as_the_cross_multiplied_rule(
+            start in pos(),
+            target in pos(),
+            still in 0u8..8,
+        ) {
+            // Some axes not moving at all (bit i: axis i stays), as planar moves do.
+            let target: StepPos = core::array::from_fn(|i| if still >> i & 1 != 0 { start[i] } else { target[i] });
+            let (len, dir) = travel(start, target);
+            let mut it = ClassicLine::new(start, target);
+            let mut taken = [0u32; AXES];
+            loop {
+                let want = reference_classic_axis(&len, &taken);
+                let got = it.next_event();
+                match want {
+                    None => {
+                        prop_assert_eq!(got, None);
+                        break;
+                    }
+                    Some(a) => {
+                        let mut d = [0i8; AXES];
+                        d[a] = dir[a];
+                        prop_assert_eq!(got, Some(StepEvent::from_deltas(d)), "after {:?}", taken);
+                        taken[a] += 1;
+                    }
+                }
             }
         }
 
