@@ -563,7 +563,9 @@ fn info_modal_state_offsets_and_startup_lines() {
     let out = send(&mut p, &mut m, "$I\n");
     assert!(out.starts_with("[VER:1.1h.inkstep"), "{out}");
     assert!(
-        out.contains("[OPT:NL,16,128]\r\n[MSG:Max step rate "),
+        out.contains(
+            "[OPT:NL,16,128]\r\n[MSG:Max step rate 80000/s; ellipses, sines, point-by-point arcs 7000/s]\r\n"
+        ),
         "{out}"
     );
     send(&mut p, &mut m, "G10 L2 P1 X5\n");

@@ -19,7 +19,7 @@
 mod common;
 
 use common::booted;
-use inkstep_core::stepper::MAX_STEP_RATE;
+use inkstep_core::stepper::{MAX_SINGLE_EVENT_RATE, MAX_STEP_RATE};
 use inkstep_emu::clock::{T_PER_MS, T_PER_S, T_PER_US};
 use inkstep_emu::count_trial::{self, Counted, Course};
 use inkstep_serial::sender::Flow;
@@ -173,6 +173,144 @@ fn a_move_asking_for_more_than_the_step_rate_cap_runs_at_the_cap_without_gaps() 
     assert!(
         rate <= cap * 1.01 && rate >= cap * 0.95,
         "cruise {rate:.0} events/s, cap {cap:.0}"
+    );
+}
+
+/// The step interval train of a curve asking for more than its cap, read off the pins:
+/// it ends where it must, and the planner held it to the cap (the event rate over the
+/// whole curve at most the cap, and within 10 % of it: the cap bound).
+fn curve_at_the_cap(name: &str, cap: f32, settings: &[&str], job: &str, end: [i32; 3]) -> Train {
+    let cap = f64::from(cap);
+    let train = run(settings, job);
+    let (jump, at) = train.worst_jump();
+    let span = (train.t.last().unwrap_or(&0) - train.t.first().unwrap_or(&0)) as f64;
+    let mean = (train.t.len() - 1) as f64 / (span / T_PER_S as f64);
+    let longest = train.t.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+    eprintln!(
+        "{name}: {} steps, {mean:.0} events/s over the curve (cap {cap:.0}), longest interval {:.1} us, worst {jump:.2} x its neighbours ({at:.1} us)",
+        train.t.len(),
+        longest as f64 / T_PER_US as f64,
+    );
+    assert_eq!(train.end, end, "{name}: end position");
+    assert!(
+        mean <= cap * 1.01 && mean >= cap * 0.5,
+        "{name}: {mean:.0} events/s over the curve against the cap {cap:.0}"
+    );
+    train
+}
+
+/// At 1280 steps/mm an axis may run 4687 mm/min (100 kHz, the settings' limit): an R20
+/// circle at that feed asks for up to 100,000 events/s traced by DDA and 141,000
+/// point by point. Each job starts at the origin with the curve, so that the train is
+/// the curve's.
+const CAP_CIRCLE: [&str; 4] = ["$100=1280", "$101=1280", "$110=4687", "$111=4687"];
+
+#[test]
+fn a_circle_asking_for_more_than_the_cap_runs_at_the_cap_without_gaps() {
+    let train = curve_at_the_cap(
+        "DDA circle",
+        MAX_STEP_RATE,
+        &CAP_CIRCLE,
+        "G21 G90\nG2 X0 Y0 I20 J0 F4687\n",
+        [0, 0, 0],
+    );
+    let (jump, at) = train.worst_jump();
+    assert!(
+        jump <= MAX_JUMP,
+        "a gap: interval {at:.1} us, {jump:.2} x its neighbours"
+    );
+}
+
+/// Curves whose events the preparation times one by one (an ellipse, a circle point by
+/// point) cost it a profile evaluation per event, about 100 µs under the pessimistic
+/// cycle model: asked for 80,000 events/s the preparation fell behind, kept every task
+/// below it from running and the watchdog reset the board mid-circle (position lost).
+/// The planner holds them to `MAX_SINGLE_EVENT_RATE`; their intervals vary with each
+/// event's length (a point-by-point step across the path is short), so a gap is an
+/// interval at cruise longer than twice the longest event at the cap (a dry queue stops the
+/// timer for up to a millisecond), and the board must not have reset.
+fn assert_single_events_keep_up(name: &str, settings: &[&str], job: &str, end: [i32; 3]) {
+    let train = curve_at_the_cap(name, MAX_SINGLE_EVENT_RATE, settings, job, end);
+    // At cruise: the middle 60 % of the events (the ramps from and to rest begin with
+    // intervals of milliseconds).
+    let n = train.t.len();
+    let longest = train.t[n / 5..n * 4 / 5]
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .max()
+        .unwrap_or(0) as f64
+        / T_PER_S as f64;
+    let bound = 2.0 * std::f64::consts::SQRT_2 / f64::from(MAX_SINGLE_EVENT_RATE);
+    assert!(
+        longest <= bound,
+        "{name}: a gap: {:.1} us (bound {:.1} us)",
+        longest * 1e6,
+        bound * 1e6
+    );
+}
+
+#[test]
+fn a_point_by_point_circle_asking_for_more_than_its_cap_keeps_up() {
+    let mut settings = CAP_CIRCLE.to_vec();
+    settings.push("$212=0");
+    assert_single_events_keep_up(
+        "point-by-point circle",
+        &settings,
+        "G21 G90\nG2 X0 Y0 I20 J0 F4687\n",
+        [0, 0, 0],
+    );
+}
+
+#[test]
+fn an_ellipse_asking_for_more_than_its_cap_keeps_up() {
+    // X and Y of different resolutions: the programmed circle is an ellipse in steps.
+    assert_single_events_keep_up(
+        "ellipse",
+        &["$100=1280", "$101=1000", "$110=4687", "$111=4687"],
+        "G21 G90\nG2 X0 Y0 I20 J0 F4687\n",
+        [0, 0, 0],
+    );
+}
+
+#[test]
+fn an_off_grid_arc_asking_for_more_than_the_cap_runs_at_the_cap_without_gaps() {
+    // A centre between steps: every step on the grid point nearest the circle.
+    let train = curve_at_the_cap(
+        "off-grid arc",
+        MAX_STEP_RATE,
+        &CAP_CIRCLE,
+        "G21 G90\nG3 X20 Y19.3326 I0.3337 J19.6663 F4687\n",
+        [25_600, 24_746, 0],
+    );
+    let (jump, at) = train.worst_jump();
+    assert!(
+        jump <= MAX_JUMP,
+        "a gap: interval {at:.1} us, {jump:.2} x its neighbours"
+    );
+}
+
+#[test]
+fn long_step_pulses_never_run_into_each_other_on_the_pin() {
+    // $0=20 µs with an axis set for 60,000 steps/s: a 16.7 µs period is shorter than the
+    // pulse, and the pulses ran into one high level on the pin (624 rising edges for
+    // 8,000 steps, while MPos said 10 mm). The planner now keeps every period at least
+    // the pulse and the drivers' low time (2 µs): 22 µs, 45,454 events/s.
+    let train = run(
+        &["$0=20", "$100=800", "$110=4500", "$120=5000"],
+        "G21 G91\nG1 X10 F4500\n",
+    );
+    let shortest = train.t.windows(2).map(|w| w[1] - w[0]).min().unwrap_or(0);
+    eprintln!(
+        "$0=20: {} rising edges, shortest period {:.2} us",
+        train.t.len(),
+        shortest as f64 / T_PER_US as f64
+    );
+    assert_eq!(train.t.len(), 8_000, "every step a rising edge");
+    assert_eq!(train.end, [8_000, 0, 0]);
+    assert!(
+        shortest as f64 >= 21.9 * T_PER_US as f64,
+        "a period of {:.2} us under 20 us of pulse and 2 of low time",
+        shortest as f64 / T_PER_US as f64
     );
 }
 

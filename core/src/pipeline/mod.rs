@@ -130,6 +130,7 @@ pub fn planner_config(s: &Settings) -> PlannerConfig {
             Interpolation::PointByPoint => crate::interpolation::Method::Classic,
             Interpolation::Dda => crate::interpolation::Method::Dda,
         },
+        max_event_rate: crate::stepper::event_rate_for_pulse(s.step_pulse_us()),
     }
 }
 

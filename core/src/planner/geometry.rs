@@ -11,7 +11,7 @@
 use super::PlannerConfig;
 use crate::interpolation::Method;
 use crate::motion::{Move, Path, StepPos, AXES, X, Y, Z};
-use crate::stepper::MAX_STEP_RATE;
+use crate::stepper::MAX_SINGLE_EVENT_RATE;
 use core::f32::consts::{PI, SQRT_2, TAU};
 
 /// The planner's view of one move.
@@ -73,8 +73,29 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
     let mut g = shape_of(cfg, start, mv)?;
     g.speed_limit = g
         .speed_limit
-        .min(MAX_STEP_RATE / events_per_mm(cfg, start, mv, g.length));
+        .min(event_cap(cfg, mv) / events_per_mm(cfg, start, mv, g.length));
     Ok(g)
+}
+
+/// The step-event rate `mv` may ask for: [`MAX_SINGLE_EVENT_RATE`] when the preparation
+/// times its step events one by one (an ellipse, a sine, a circle traced point by point:
+/// each event's length is known only once it is made, `interpolation::Next::StepEvent`),
+/// which costs far more per event than the runs of lines and DDA circles
+/// (the configuration's `max_event_rate`: [`MAX_STEP_RATE`], or less for long step
+/// pulses). Out of line: inlined, it grew the planning task's deepest
+/// stack frame.
+#[inline(never)]
+fn event_cap(cfg: &PlannerConfig, mv: &Move) -> f32 {
+    let one_by_one = match mv.path {
+        Path::Ellipse { .. } | Path::Sine { .. } => true,
+        Path::Arc { .. } | Path::ArcFine { .. } => cfg.method == Method::Classic,
+        Path::Line | Path::LineFine { .. } => false,
+    };
+    if one_by_one {
+        MAX_SINGLE_EVENT_RATE.min(cfg.max_event_rate)
+    } else {
+        cfg.max_event_rate
+    }
 }
 
 /// Step events (interpolation ticks) per mm of path along `mv` (of `length` mm), at
@@ -343,6 +364,7 @@ impl CurveVelocity {
 mod tests {
     use super::*;
     use crate::motion::Feed;
+    use crate::stepper::MAX_STEP_RATE;
 
     fn mv(target: StepPos, path: Path) -> Move {
         Move {
@@ -360,6 +382,60 @@ mod tests {
         assert!((g.length - 200f32.sqrt()).abs() < 1e-4);
         assert!((g.accel - 500.0 * 2f32.sqrt()).abs() < 0.1);
         assert!((g.speed_limit - 5000.0 / 60.0 * 2f32.sqrt()).abs() < 0.1);
+    }
+
+    #[test]
+    fn events_timed_one_by_one_are_held_to_their_own_cap() {
+        // 1280 steps/mm and fast axes: the step pipeline's caps bind, not the axes.
+        let mut cfg = PlannerConfig::default();
+        for a in &mut cfg.axes {
+            a.steps_per_mm = 1280.0;
+            a.max_rate = 100_000.0;
+        }
+        let circle = Path::Arc {
+            center: [-12_800, 0],
+            ccw: true,
+            turns: 0,
+        };
+        let end = [-25_600, 0, 0];
+        let dda = of_move(&cfg, [0; 3], &mv(end, circle)).unwrap();
+        assert!((dda.speed_limit - MAX_STEP_RATE / 1280.0).abs() < 1e-3);
+        cfg.method = Method::Classic;
+        let classic = of_move(&cfg, [0; 3], &mv(end, circle)).unwrap();
+        let single = MAX_SINGLE_EVENT_RATE / (1280.0 * SQRT_2);
+        assert!((classic.speed_limit - single).abs() < 1e-3);
+        // A point-by-point line is a run: the common cap, per event of its own.
+        let line = of_move(&cfg, [0; 3], &mv([12_800, 12_800, 0], Path::Line)).unwrap();
+        let per_mm = 25_600.0 / (10.0 * SQRT_2);
+        assert!((line.speed_limit - MAX_STEP_RATE / per_mm).abs() < 1e-2);
+        cfg.method = Method::Dda;
+        let ellipse = Path::Ellipse {
+            center: [-12_800, 0],
+            a: 12_800,
+            b: 10_000,
+            ccw: true,
+        };
+        let e = of_move(&cfg, [0; 3], &mv(end, ellipse)).unwrap();
+        assert!((e.speed_limit - MAX_SINGLE_EVENT_RATE / 1280.0).abs() < 1e-3);
+    }
+
+    #[test]
+    fn long_step_pulses_lower_the_event_cap() {
+        let mut cfg = PlannerConfig::default();
+        for a in &mut cfg.axes {
+            a.steps_per_mm = 800.0;
+            a.max_rate = 100_000.0;
+        }
+        let line = mv([8_000, 0, 0], Path::Line);
+        let at = |pulse_us: u8, cfg: &mut PlannerConfig| {
+            cfg.max_event_rate = crate::stepper::event_rate_for_pulse(pulse_us);
+            of_move(cfg, [0; 3], &line).unwrap().speed_limit * 800.0
+        };
+        // $0=10: 10 + 2 µs allow 83,333 events/s, above the pipeline's cap.
+        assert!((at(10, &mut cfg) - MAX_STEP_RATE).abs() < 1.0);
+        // $0=20: a period of at least 22 µs.
+        assert!((at(20, &mut cfg) - 1e6 / 22.0).abs() < 1.0);
+        assert!((at(255, &mut cfg) - 1e6 / 257.0).abs() < 0.1);
     }
 
     #[test]

@@ -55,6 +55,10 @@ pub struct PlannerConfig {
     pub shape: Shape,
     /// Interpolation method.
     pub method: Method,
+    /// Step events per second no block may exceed: the step pipeline's cap, or less
+    /// where the step pulse (`$0`) needs longer periods
+    /// ([`crate::stepper::event_rate_for_pulse`]).
+    pub max_event_rate: f32,
 }
 
 impl Default for PlannerConfig {
@@ -77,6 +81,7 @@ impl Default for PlannerConfig {
             start_speed: 0.0,
             shape: Shape::Trapezoid,
             method: Method::Dda,
+            max_event_rate: crate::stepper::MAX_STEP_RATE,
         }
     }
 }

@@ -10,7 +10,7 @@ use crate::gcode::ErrorCode;
 use crate::gcode::{startup_line, StartupLine, STARTUP_LINES};
 use crate::machine::{Machine, MotionControl, RunState};
 use crate::settings::Settings;
-use crate::stepper::MAX_STEP_RATE;
+use crate::stepper::{MAX_SINGLE_EVENT_RATE, MAX_STEP_RATE};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Listing {
@@ -180,8 +180,11 @@ impl Protocol {
                 put_int(&mut w, RX_BUFFER_SIZE as i32);
                 // The step-event rate the planner caps moves at: a feedback message,
                 // which Grbl 1.1 senders show (or skip) wherever it comes.
+                // Curves whose steps are timed one by one have a cap of their own.
                 w.put(b"]\r\n[MSG:Max step rate ");
                 put_int(&mut w, MAX_STEP_RATE as i32);
+                w.put(b"/s; ellipses, sines, point-by-point arcs ");
+                put_int(&mut w, MAX_SINGLE_EVENT_RATE as i32);
                 w.put(b"/s]\r\n");
                 Ok(())
             }

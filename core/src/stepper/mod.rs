@@ -47,6 +47,30 @@ pub fn tail_period(pulse_ticks: u32) -> u32 {
 /// 100,000. The cap keeps 20 % below that first failure.
 pub const MAX_STEP_RATE: f32 = 80_000.0;
 
+/// The shortest low time a step pin keeps between two pulses, µs: what stepper drivers
+/// ask between pulses (A4988 1 µs, DRV8825 1.9 µs), with room for the timing
+/// polynomials' error (0.5 µs).
+pub const STEP_LOW_US: f32 = 2.0;
+
+/// The step-event rate the step pins can carry with pulses of `pulse_us` (`$0`): every
+/// period at least the pulse and [`STEP_LOW_US`] after it, and never above
+/// [`MAX_STEP_RATE`]. Longer pulses than a period allows would run into each other on
+/// the pin: the driver would see one step where the firmware counted several.
+pub fn event_rate_for_pulse(pulse_us: u8) -> f32 {
+    MAX_STEP_RATE.min(1e6 / (f32::from(pulse_us) + STEP_LOW_US))
+}
+
+/// The step-event rate the planner lets a move whose events are timed one by one ask
+/// for (an ellipse, a sine, a circle traced point by point; see
+/// `planner::geometry`): each such event costs the preparation a profile evaluation of
+/// its own, about 100 µs under the pessimistic cycle model. Measured on the product
+/// image (emu/tests/step_rate.rs, an R20 circle point by point and as an ellipse at
+/// 1280 steps/mm asking for more): both keep up with the cap at 9,000 events/s; at
+/// 10,000 the preparation falls behind, the tasks below it stop running and the
+/// watchdog resets the board (at the old common cap of 80,000 it did so within 3,500
+/// steps). The cap keeps 22 % below 9,000.
+pub const MAX_SINGLE_EVENT_RATE: f32 = 7_000.0;
+
 /// Largest wait one command can carry (24 bits of timer counts).
 pub const MAX_WAIT: u32 = (1 << 24) - 1;
 

@@ -248,10 +248,10 @@ pub(super) fn hermite(n: u32, span: f32, m0: f32, m1: f32) -> [f32; 3] {
 }
 
 /// The shortest wait between two step events, timer counts: one event period at the
-/// step pipeline's cap ([`MAX_STEP_RATE`], 12.5 us), longer than any step pulse plus
-/// the drivers' low time.
-pub(super) fn min_wait(timer_hz: u32) -> u64 {
-    let w = timer_hz as f32 / MAX_STEP_RATE;
+/// configuration's cap `max_event_rate` (at most [`MAX_STEP_RATE`], 12.5 us; less for
+/// long step pulses: the pulse plus the drivers' low time).
+pub(super) fn min_wait(timer_hz: u32, max_event_rate: f32) -> u64 {
+    let w = timer_hz as f32 / max_event_rate.min(MAX_STEP_RATE);
     (w as u64 + u64::from((w as u64 as f32) < w)).max(2)
 }
 

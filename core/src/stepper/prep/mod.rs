@@ -644,13 +644,13 @@ impl Prep {
                 }
             }
         };
-        // No step comes sooner than the step pipeline's cap allows after the last one
+        // No step comes sooner than the event cap allows after the last one
         // (a classic tick across the circle's radius has almost no path length; a
         // catch-up step is timed off the last wait): later steps keep their profile
         // times, so the delay is made up where the profile leaves room.
         let wait = at
             .saturating_sub(self.t_last)
-            .max(min_wait(self.cfg.timer_hz));
+            .max(min_wait(self.cfg.timer_hz, cfg.max_event_rate));
         let needed = commands_for_wait(wait);
         if needed > room {
             a.pending = Some(pending);
