@@ -21,4 +21,5 @@ pub mod session;
 pub mod soak;
 pub mod sram;
 pub mod target_tests;
+pub mod timeline;
 pub mod usb_host;

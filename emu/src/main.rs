@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use inkstep_emu::clock::{T_PER_MS, T_PER_S};
 use inkstep_emu::cpu_model::CpuModel;
 use inkstep_emu::session::{product_elf, Session};
+use inkstep_emu::timeline::Timeline;
 use inkstep_serial::sender::Flow;
 use inkstep_sim::trace::TraceWriter;
 use std::path::{Path, PathBuf};
@@ -141,6 +142,10 @@ enum Cmd {
         /// G-code line.
         #[arg(long, value_name = "N")]
         profile: Option<usize>,
+        /// Print each task's share of the CPU and the step events per second for every
+        /// window of MS milliseconds of virtual time while the file runs.
+        #[arg(long, value_name = "MS")]
+        timeline: Option<u64>,
         /// Send real-time bytes at a time after the first step, e.g. `250ms:!`,
         /// `1.2s:~`, `700ms:0x91` (repeatable; as `cargo sim run --realtime`).
         #[arg(long = "realtime", value_name = "TIME:BYTES")]
@@ -272,6 +277,7 @@ fn cmd_run(
     flash: Option<&Path>,
     keys: Option<&str>,
     profile: Option<usize>,
+    timeline: Option<u64>,
     realtime: &[String],
     io: &Io,
 ) -> Result<ExitCode, String> {
@@ -304,7 +310,12 @@ fn cmd_run(
     };
     let mut next_lcd = s.now();
     let mut frame = 0;
+    let mut windows = timeline.map(|ms| Timeline::new(&mut s, ms));
+    let resets_before = s.m.state().watchdog_resets;
     let streamed = s.stream(&text, flow, RUN_LIMIT, |s| {
+        if let Some(t) = windows.as_mut() {
+            t.poll(s);
+        }
         if let Some(dir) = lcd {
             if s.now() >= next_lcd {
                 save_lcd(s, dir, &format!("{frame:04}"))?;
@@ -314,7 +325,15 @@ fn cmd_run(
         }
         Ok(())
     });
-    let result = streamed.and_then(|r| Ok((r, s.wait_idle(RUN_LIMIT)?)));
+    let result = streamed.and_then(|r| {
+        let report = s.wait_idle_each(RUN_LIMIT, |s| {
+            if let Some(t) = windows.as_mut() {
+                t.poll(s);
+            }
+            Ok(())
+        })?;
+        Ok((r, report))
+    });
     if let Some(dir) = lcd {
         save_lcd(&s, dir, "last")?;
     }
@@ -377,14 +396,25 @@ fn cmd_run(
     for e in done.errors.iter().chain(&done.alarms) {
         println!("{e}");
     }
+    // A watchdog reset mid-job restarts the firmware: the position and the job are
+    // lost, and the run must not pass for a good one.
+    let resets = s.m.state().watchdog_resets - resets_before;
+    if resets > 0 {
+        println!("watchdog resets during the job: {resets} (the firmware restarted)");
+    }
     if let (Some(top), Some(p)) = (profile, s.m.state().profiler.as_ref()) {
         print!("{}", p.report(top, done.lines.max(1) as f64, "line"));
     }
-    Ok(if done.errors.is_empty() && done.alarms.is_empty() {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    })
+    if let Some(t) = &windows {
+        print!("{}", t.report());
+    }
+    Ok(
+        if done.errors.is_empty() && done.alarms.is_empty() && resets == 0 {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        },
+    )
 }
 
 fn write_trace(s: &Session, path: &Path) -> Result<(), String> {
@@ -625,6 +655,7 @@ fn main() -> ExitCode {
             flash,
             keys,
             profile,
+            timeline,
             realtime,
             io,
         } => cmd_run(
@@ -637,6 +668,7 @@ fn main() -> ExitCode {
             flash.as_deref(),
             keys.as_deref(),
             profile,
+            timeline,
             &realtime,
             &io,
         ),

@@ -234,10 +234,20 @@ impl<'a> Session<'a> {
 
     /// Ask `?` until the status report says `Idle` (or the limit).
     pub fn wait_idle(&mut self, limit: u64) -> Result<String, String> {
+        self.wait_idle_each(limit, |_| Ok(()))
+    }
+
+    /// [`Session::wait_idle`], calling `each` after every status query (20 ms).
+    pub fn wait_idle_each(
+        &mut self,
+        limit: u64,
+        mut each: impl FnMut(&mut Session) -> Result<(), String>,
+    ) -> Result<String, String> {
         let end = self.now() + limit;
         loop {
             self.send(b"?");
             self.run_for(20 * T_PER_MS)?;
+            each(self)?;
             let got = self.take_received();
             if let Some(report) = got.lines().find(|l| l.starts_with("<Idle")) {
                 return Ok(report.to_string());

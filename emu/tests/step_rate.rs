@@ -22,6 +22,7 @@ use common::booted;
 use inkstep_core::stepper::{MAX_SINGLE_EVENT_RATE, MAX_STEP_RATE};
 use inkstep_emu::clock::{T_PER_MS, T_PER_S, T_PER_US};
 use inkstep_emu::count_trial::{self, Counted, Course};
+use inkstep_emu::timeline::Timeline;
 use inkstep_serial::sender::Flow;
 
 /// The largest ratio of a step interval to the longer of its two neighbours that the
@@ -64,6 +65,11 @@ impl Train {
 /// Streams `settings` and `job` (character counting, `?` every 100 ms, the LCD
 /// running) and reads the step pins until the machine is at rest.
 fn run(settings: &[&str], job: &str) -> Train {
+    run_timed(settings, job).0
+}
+
+/// [`run`], with the CPU load per 50 ms window of the job.
+fn run_timed(settings: &[&str], job: &str) -> (Train, Timeline) {
     let mut s = booted(None);
     for c in settings {
         let got = s.command(c, T_PER_S).expect("answer");
@@ -71,8 +77,10 @@ fn run(settings: &[&str], job: &str) -> Train {
     }
     let first = s.m.state().board.steps.len();
     let mut next_q = s.now();
+    let mut timeline = Timeline::new(&mut s, 50);
     let r = s
         .stream(job, Flow::CharCount(128), 120 * T_PER_S, |s| {
+            timeline.poll(s);
             if s.now() >= next_q {
                 s.send(b"?");
                 next_q = s.now() + 100 * T_PER_MS;
@@ -86,12 +94,22 @@ fn run(settings: &[&str], job: &str) -> Train {
         r.errors,
         r.alarms
     );
-    s.wait_idle(120 * T_PER_S).expect("at rest");
+    s.wait_idle_each(120 * T_PER_S, |s| {
+        timeline.poll(s);
+        Ok(())
+    })
+    .expect("at rest");
+    assert_eq!(
+        s.m.state().watchdog_resets,
+        0,
+        "the watchdog reset the board"
+    );
     let steps = &s.m.state().board.steps[first..];
-    Train {
+    let train = Train {
         t: steps.iter().map(|st| st.t).collect(),
         end: steps.last().map_or([0; 3], |st| st.pos),
-    }
+    };
+    (train, timeline)
 }
 
 const FINE: [&str; 4] = ["$100=1280", "$101=1280", "$110=4000", "$111=4000"];
@@ -179,9 +197,15 @@ fn a_move_asking_for_more_than_the_step_rate_cap_runs_at_the_cap_without_gaps() 
 /// The step interval train of a curve asking for more than its cap, read off the pins:
 /// it ends where it must, and the planner held it to the cap (the event rate over the
 /// whole curve at most the cap, and within 10 % of it: the cap bound).
-fn curve_at_the_cap(name: &str, cap: f32, settings: &[&str], job: &str, end: [i32; 3]) -> Train {
+fn curve_at_the_cap(
+    name: &str,
+    cap: f32,
+    settings: &[&str],
+    job: &str,
+    end: [i32; 3],
+) -> (Train, Timeline) {
     let cap = f64::from(cap);
-    let train = run(settings, job);
+    let (train, timeline) = run_timed(settings, job);
     let (jump, at) = train.worst_jump();
     let span = (train.t.last().unwrap_or(&0) - train.t.first().unwrap_or(&0)) as f64;
     let mean = (train.t.len() - 1) as f64 / (span / T_PER_S as f64);
@@ -196,7 +220,7 @@ fn curve_at_the_cap(name: &str, cap: f32, settings: &[&str], job: &str, end: [i3
         mean <= cap * 1.01 && mean >= cap * 0.5,
         "{name}: {mean:.0} events/s over the curve against the cap {cap:.0}"
     );
-    train
+    (train, timeline)
 }
 
 /// At 1280 steps/mm an axis may run 4687 mm/min (100 kHz, the settings' limit): an R20
@@ -207,7 +231,7 @@ const CAP_CIRCLE: [&str; 4] = ["$100=1280", "$101=1280", "$110=4687", "$111=4687
 
 #[test]
 fn a_circle_asking_for_more_than_the_cap_runs_at_the_cap_without_gaps() {
-    let train = curve_at_the_cap(
+    let (train, _) = curve_at_the_cap(
         "DDA circle",
         MAX_STEP_RATE,
         &CAP_CIRCLE,
@@ -230,7 +254,16 @@ fn a_circle_asking_for_more_than_the_cap_runs_at_the_cap_without_gaps() {
 /// interval at cruise longer than twice the longest event at the cap (a dry queue stops the
 /// timer for up to a millisecond), and the board must not have reset.
 fn assert_single_events_keep_up(name: &str, settings: &[&str], job: &str, end: [i32; 3]) {
-    let train = curve_at_the_cap(name, MAX_SINGLE_EVENT_RATE, settings, job, end);
+    let (train, timeline) = curve_at_the_cap(name, MAX_SINGLE_EVENT_RATE, settings, job, end);
+    // The tasks below the preparation kept running: the keypad scan (which feeds the
+    // watchdog, USART3: exception 16 + 39) had the CPU in every 50 ms window.
+    let keypad = timeline.shares(16 + 39);
+    assert!(
+        keypad.iter().all(|&k| k > 0.0),
+        "{name}: the keypad task starved in {} of {} windows",
+        keypad.iter().filter(|&&k| k == 0.0).count(),
+        keypad.len()
+    );
     // At cruise: the middle 60 % of the events (the ramps from and to rest begin with
     // intervals of milliseconds).
     let n = train.t.len();
@@ -275,7 +308,7 @@ fn an_ellipse_asking_for_more_than_its_cap_keeps_up() {
 #[test]
 fn an_off_grid_arc_asking_for_more_than_the_cap_runs_at_the_cap_without_gaps() {
     // A centre between steps: every step on the grid point nearest the circle.
-    let train = curve_at_the_cap(
+    let (train, _) = curve_at_the_cap(
         "off-grid arc",
         MAX_STEP_RATE,
         &CAP_CIRCLE,
