@@ -3,7 +3,8 @@
 //! speed that every axis can follow along it (Grbl's per-axis semantics: a path
 //! direction u limits acceleration to min_i a_i / |u_i| and speed to min_i v_i / |u_i|),
 //! and for curves the centripetal limit v^2 <= a * r_min; and the speed at which its
-//! step events come no faster than the step pipeline sustains ([`MAX_STEP_RATE`]).
+//! step events come no faster than the step side sustains (`event_cap`: the step
+//! pipeline's cap, lower for long step pulses and for curves timed event by event).
 //!
 //! Lengths of curves are integrated numerically (Simpson); floating point is fine
 //! here because this runs once per move in the planning task.
@@ -25,7 +26,7 @@ pub struct Geometry {
     /// Largest path acceleration every axis can follow along the whole move, mm/s^2.
     pub accel: f32,
     /// Largest path speed every axis can follow (axis max rates, centripetal) and the
-    /// step pipeline can time ([`MAX_STEP_RATE`]), mm/s.
+    /// step side can time (`event_cap`), mm/s.
     pub speed_limit: f32,
 }
 
@@ -81,8 +82,8 @@ pub fn of_move(cfg: &PlannerConfig, start: StepPos, mv: &Move) -> Result<Geometr
 /// times its step events one by one (an ellipse, a sine, a circle traced point by point:
 /// each event's length is known only once it is made, `interpolation::Next::StepEvent`),
 /// which costs far more per event than the runs of lines and DDA circles
-/// (the configuration's `max_event_rate`: [`MAX_STEP_RATE`], or less for long step
-/// pulses). Out of line: inlined, it grew the planning task's deepest
+/// (the configuration's `max_event_rate`: [`crate::stepper::MAX_STEP_RATE`], or less
+/// for long step pulses). Out of line: inlined, it grew the planning task's deepest
 /// stack frame.
 #[inline(never)]
 fn event_cap(cfg: &PlannerConfig, mv: &Move) -> f32 {
