@@ -101,27 +101,31 @@ pub struct Block {
     pub limit: f32,
     /// Junction limit on the entry speed, mm/s.
     pub max_entry: f32,
-    /// Planned entry speed, mm/s.
-    pub entry: f32,
+    /// Planned entry speed squared, mm^2/s^2 (the passes work in squares: no root
+    /// per block; [`Block::entry`] takes it).
+    entry_sq: f32,
     /// What the planning passes last computed for this block (see [`Planner::replan`]).
     passes: Passes,
 }
 
 /// The planning passes' results for one block, kept so that a pass stops where
-/// nothing changes instead of taking two soft-float square roots per queued block
-/// every time a move is added (on the M3 that was most of a G-code line's cost).
+/// nothing changes. All of them are squared speeds (mm^2/s^2): a pass then costs one
+/// soft-float addition and an integer comparison per block, where speeds cost a
+/// square, an addition and often a root (with speeds, the protocol task took 28,500
+/// instructions a line on bench/dashes.nc, whose every new move raises the whole
+/// queue; now 22,500: `cargo emu run bench/dashes.nc --profile 10`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Passes {
     /// `2 a L`: the change of squared speed this block allows (its planning
-    /// acceleration a, its length L), mm^2/s^2.
+    /// acceleration a, its length L).
     reach: f32,
-    /// The entry limit: junction limit and maximum speed with the overrides, mm/s.
-    limit: f32,
-    /// Reverse pass: the fastest entry from which the rest of the queue can still
-    /// stop, mm/s. It depends only on this block and those after it.
-    reverse: f32,
-    /// Forward pass: the square of the fastest exit reachable from `entry` (its exact
-    /// bits), mm^2/s^2; NaN until computed. (Exact bits because these passes must give
+    /// The entry limit squared: junction limit and maximum speed with the overrides.
+    limit_sq: f32,
+    /// Reverse pass: the square of the fastest entry from which the rest of the queue
+    /// can still stop. It depends only on this block and those after it.
+    reverse_sq: f32,
+    /// Forward pass: the square of the fastest exit reachable from the entry (its
+    /// exact bits); NaN until computed. (Exact bits because these passes must give
     /// exactly what full passes give: the simulator's figures and golden tests depend
     /// on them.)
     exit_sq: f32,
@@ -140,6 +144,11 @@ enum Reverse {
 }
 
 impl Block {
+    /// Planned entry speed, mm/s.
+    pub fn entry(&self) -> f32 {
+        crate::fmath::sqrt(self.entry_sq)
+    }
+
     pub fn is_rapid(&self) -> bool {
         self.mv.feed == Feed::Rapid
     }
@@ -281,16 +290,16 @@ impl Planner {
             nominal,
             limit: g.speed_limit,
             max_entry,
-            entry: floor,
+            entry_sq: floor * floor,
             passes: Passes {
                 reach: 0.0,
-                limit: 0.0,
-                reverse: floor,
+                limit_sq: 0.0,
+                reverse_sq: floor * floor,
                 exit_sq: f32::NAN,
             },
         };
         block.passes.reach = 2.0 * self.plan_accel(&block) * block.length;
-        block.passes.limit = block.max_entry.min(self.max_speed(&block));
+        block.passes.limit_sq = square(block.max_entry.min(self.max_speed(&block)));
         self.prev = Some((g.unit_end, g.speed_limit.min(nominal)));
         self.next_start = mv.target;
         // Cannot fail: checked for room above.
@@ -322,7 +331,7 @@ impl Planner {
     pub fn exit_speed(&self) -> f32 {
         self.blocks
             .front()
-            .map(|b| b.entry)
+            .map(Block::entry)
             .unwrap_or(self.cfg.start_speed)
     }
 
@@ -341,9 +350,11 @@ impl Planner {
         if (cap - self.head_cap).abs() <= 1e-3 {
             return;
         }
-        // The cap only matters if it binds the first block's entry now or did before.
-        let entry = self.blocks.front().map(|b| b.entry).unwrap_or(0.0);
-        let binds = entry >= self.head_cap - 1e-3 || entry > cap;
+        // The cap only matters if it binds the first block's entry now or did before
+        // (compared as squares: no root).
+        let entry_sq = self.blocks.front().map_or(0.0, |b| b.entry_sq);
+        let was = (self.head_cap - 1e-3).max(0.0);
+        let binds = entry_sq >= was * was || entry_sq > cap * cap;
         self.head_cap = cap;
         if binds {
             self.replan(Reverse::None);
@@ -408,8 +419,8 @@ impl Planner {
     ///   head cap, after pops);
     /// - the forward pass reuses a block's exit speed while its entry is unchanged.
     ///
-    /// Squares are compared exactly in integers (`square_at_most`), so a root is taken
-    /// only where its value is the result.
+    /// Everything is in squared speeds, compared as integers ([`at_most`]): no root at
+    /// all (the step engine takes one, of the first block's entry, [`Planner::exit_speed`]).
     fn replan(&mut self, reverse: Reverse) {
         if reverse != Reverse::None {
             self.reverse_pass(reverse == Reverse::FromTail);
@@ -421,10 +432,10 @@ impl Planner {
         self.generation = self.generation.wrapping_add(1);
     }
 
-    /// The fastest entry into `b` from which it can still slow to `next_entry`:
-    /// min(limit, sqrt(next^2 + 2 a L)), the root taken only when it is the smaller.
-    fn reverse_of(b: &Block, next_entry: f32) -> f32 {
-        min_root(b.passes.limit, next_entry * next_entry + b.passes.reach)
+    /// The square of the fastest entry into `b` from which it can still slow to an
+    /// entry of `next_sq` into the next: min(limit^2, next^2 + 2 a L).
+    fn reverse_of(b: &Block, next_sq: f32) -> f32 {
+        min_sq(b.passes.limit_sq, next_sq + b.passes.reach)
     }
 
     /// Reverse results from the tail down; after a push (`added`) only as far as
@@ -435,11 +446,11 @@ impl Planner {
             let (feed, rapid) = (self.feed_override, self.rapid_override);
             for i in 0..self.blocks.len() {
                 if let Some(b) = self.blocks.get_mut(i) {
-                    b.passes.limit = b.max_entry.min(b.max_speed(feed, rapid));
+                    b.passes.limit_sq = square(b.max_entry.min(b.max_speed(feed, rapid)));
                 }
             }
         }
-        let mut next_entry = self.cfg.start_speed;
+        let mut next_sq = square(self.cfg.start_speed);
         let mut rising = added;
         let capped = self.capped;
         for i in (0..self.blocks.len()).rev() {
@@ -450,15 +461,15 @@ impl Planner {
             let Some(b) = self.blocks.get_mut(i) else {
                 return;
             };
-            let r = Planner::reverse_of(b, next_entry);
-            let old = b.passes.reverse;
-            b.passes.reverse = r;
-            next_entry = r;
+            let r = Planner::reverse_of(b, next_sq);
+            let old = b.passes.reverse_sq;
+            b.passes.reverse_sq = r;
+            next_sq = r;
             if rising {
                 if r.to_bits() == old.to_bits() {
                     return; // i >= capped >= stale: `old` was exact
                 }
-                rising = r >= old;
+                rising = at_most(old, r);
             }
         }
         self.stale = 0;
@@ -467,14 +478,14 @@ impl Planner {
     /// Exact reverse results for the `stale` front blocks.
     fn refresh_stale(&mut self) {
         let stale = core::mem::take(&mut self.stale);
-        let mut next_entry = match self.blocks.get(stale) {
-            Some(b) => b.passes.reverse,
-            None => self.cfg.start_speed,
+        let mut next_sq = match self.blocks.get(stale) {
+            Some(b) => b.passes.reverse_sq,
+            None => square(self.cfg.start_speed),
         };
         for i in (0..stale).rev() {
             if let Some(b) = self.blocks.get_mut(i) {
-                next_entry = Planner::reverse_of(b, next_entry);
-                b.passes.reverse = next_entry;
+                next_sq = Planner::reverse_of(b, next_sq);
+                b.passes.reverse_sq = next_sq;
             }
         }
     }
@@ -482,82 +493,53 @@ impl Planner {
     /// Entries from the head cap forward; false (and to be run again after
     /// [`Planner::refresh_stale`]) when a stale reverse result would bind.
     fn forward_pass(&mut self) -> bool {
-        // The cap on the next entry: a speed at the head, then the square of the
-        // previous block's exit (its root taken only when it binds).
-        let head = self.head_cap.max(self.cfg.start_speed);
-        let mut cap_sq = None;
+        // The cap on the next entry (squared): the head's, then the previous block's
+        // exit.
+        let mut cap_sq = square(self.head_cap.max(self.cfg.start_speed));
         let mut capped = 0;
         for i in 0..self.blocks.len() {
             let Some(b) = self.blocks.get_mut(i) else {
                 break;
             };
-            let r = b.passes.reverse;
-            // entry = min(r, cap), with cap = sqrt(cap_sq) after the first block.
-            let (entry, at_cap) = match cap_sq.map(|y| (y, square_at_most(r, y))) {
-                // r^2 <= y exactly: the rounded root is at least r. (It may equal r;
-                // counting the block as not capped then only makes the next reverse
-                // pass go further, or refreshes stale blocks.)
-                Some((_, Some(true))) => (r, false),
-                // r^2 > y: the rounded root is at most r, and is the entry.
-                Some((y, Some(false))) => (crate::fmath::sqrt(y), true),
-                other => {
-                    let cap = match other {
-                        Some((y, _)) => crate::fmath::sqrt(y),
-                        None => head,
-                    };
-                    (if r > cap { cap } else { r }, r >= cap)
-                }
-            };
+            let r = b.passes.reverse_sq;
+            // entry = min(r, cap); a reverse result at the cap counts as capped (its
+            // entry stays the cap however far it rises).
+            let at_cap = at_most(cap_sq, r);
+            let entry_sq = if at_cap { cap_sq } else { r };
             if i < self.stale && !at_cap {
                 return false;
             }
             if at_cap && capped == i {
                 capped = i + 1;
             }
-            if entry.to_bits() != b.entry.to_bits() || is_nan(b.passes.exit_sq) {
-                b.entry = entry;
-                b.passes.exit_sq = entry * entry + b.passes.reach;
+            if entry_sq.to_bits() != b.entry_sq.to_bits() || is_nan(b.passes.exit_sq) {
+                b.entry_sq = entry_sq;
+                b.passes.exit_sq = entry_sq + b.passes.reach;
             }
-            cap_sq = Some(b.passes.exit_sq);
+            cap_sq = b.passes.exit_sq;
         }
         self.capped = capped;
         true
     }
 }
 
-/// min(limit, sqrt(y)) with the root taken only when it is the smaller (exactly what
-/// `limit.min(sqrt(y))` gives, root correctly rounded).
-fn min_root(limit: f32, y: f32) -> f32 {
-    match square_at_most(limit, y) {
-        Some(true) => limit,
-        Some(false) => crate::fmath::sqrt(y),
-        None => limit.min(crate::fmath::sqrt(y)),
-    }
+fn square(v: f32) -> f32 {
+    v * v
 }
 
-/// Whether r^2 <= y exactly (not in rounded f32), for r zero or positive normal and
-/// y positive normal, in integers; None for anything else (subnormal, infinite, NaN,
-/// negative), which callers take the plain way. With r^2 <= y the correctly rounded
-/// sqrt(y) is at least r; with r^2 > y it is at most r.
-fn square_at_most(r: f32, y: f32) -> Option<bool> {
-    let (rb, yb) = (r.to_bits(), y.to_bits());
-    let normal = |b: u32| (0x0080_0000..0x7F80_0000).contains(&b);
-    if !normal(yb) || !(rb == 0 || normal(rb)) {
-        return None;
+/// `a <= b` for squared speeds (zero or positive, infinity included, never NaN): the
+/// order of their bits, with no soft-float comparison.
+fn at_most(a: f32, b: f32) -> bool {
+    a.to_bits() <= b.to_bits()
+}
+
+/// The smaller of two squared speeds (see [`at_most`]).
+fn min_sq(a: f32, b: f32) -> f32 {
+    if at_most(a, b) {
+        a
+    } else {
+        b
     }
-    if rb == 0 {
-        return Some(true);
-    }
-    let mant = |b: u32| u64::from(b & 0x007F_FFFF | 0x0080_0000);
-    let (er, ey) = ((rb >> 23) as i32, (yb >> 23) as i32);
-    // r^2 = mr^2 * 2^(2 er - 2 bias - 46), y = my * 2^(ey - bias - 23): compare
-    // mr^2 (in [2^46, 2^48)) with my * 2^d (my in [2^23, 2^24)).
-    let d = ey - 2 * er + 127 + 23;
-    Some(match d {
-        ..=22 => false, // my * 2^d < 2^46 <= mr^2
-        25.. => true,   // my * 2^d >= 2^48 > mr^2
-        _ => mant(rb) * mant(rb) <= mant(yb) << d,
-    })
 }
 
 /// NaN, by its bits (no soft-float comparison).
@@ -600,54 +582,43 @@ mod tests {
 
     /// Entry speeds from full reverse and forward passes over the whole queue (what
     /// `replan` computed before it learnt to stop where nothing changes).
+    /// Full passes over the queue, in squared speeds: the entries squared.
     fn full_passes(p: &Planner) -> std::vec::Vec<f32> {
         let floor = p.cfg.start_speed;
         let mut entries: std::vec::Vec<f32> = std::vec::Vec::new();
-        let mut next_entry = floor;
+        let mut next = floor * floor;
         for b in p.blocks.iter().rev() {
-            let ae = p.plan_accel(b);
-            let reach = crate::fmath::sqrt(next_entry * next_entry + 2.0 * ae * b.length);
-            next_entry = b.max_entry.min(p.max_speed(b)).min(reach);
-            entries.push(next_entry);
+            let limit = b.max_entry.min(p.max_speed(b));
+            let reach = next + 2.0 * p.plan_accel(b) * b.length;
+            next = if limit * limit <= reach { limit * limit } else { reach };
+            entries.push(next);
         }
         entries.reverse();
-        let mut cap = p.head_cap.max(floor);
+        let head = p.head_cap.max(floor);
+        let mut cap = head * head;
         for (e, b) in entries.iter_mut().zip(p.blocks.iter()) {
             if *e > cap {
                 *e = cap;
             }
-            cap = crate::fmath::sqrt(*e * *e + 2.0 * p.plan_accel(b) * b.length);
+            cap = *e + 2.0 * p.plan_accel(b) * b.length;
         }
         entries
     }
 
     proptest::proptest! {
-        /// The exact square comparison agrees with f64 (where r^2 is exact).
+        /// Squared speeds compared by their bits order as f32 does (zero, positive,
+        /// infinity).
         #[test]
-        fn square_comparison_is_exact(rb in 0u32..0x7F80_0000, yb in 0u32..0x7F80_0000, near: bool) {
-            let r = f32::from_bits(rb);
-            // Near: y within a few ulps of r^2, where rounding would decide.
-            let y = if near {
-                let sq = (f64::from(r) * f64::from(r)) as f32;
-                f32::from_bits(sq.to_bits().wrapping_add(yb % 5).wrapping_sub(2))
-            } else {
-                f32::from_bits(yb)
-            };
-            if let Some(le) = square_at_most(r, y) {
-                proptest::prop_assert_eq!(le, f64::from(r) * f64::from(r) <= f64::from(y));
-            }
-            if r.is_finite() && y.is_finite() && y > 0.0 {
-                proptest::prop_assert_eq!(
-                    min_root(r, y).to_bits(),
-                    r.min(crate::fmath::sqrt(y)).to_bits()
-                );
-            }
+        fn bit_order_is_the_order_of_squared_speeds(ab in 0u32..=0x7F80_0000, bb in 0u32..=0x7F80_0000) {
+            let (a, b) = (f32::from_bits(ab), f32::from_bits(bb));
+            proptest::prop_assert_eq!(at_most(a, b), a <= b);
+            proptest::prop_assert_eq!(min_sq(a, b).to_bits(), if a <= b { ab } else { bb });
         }
     }
 
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(300))]
-        /// Incremental replanning gives bit for bit the entry speeds of full passes
+        /// Incremental replanning gives bit for bit the squared entries of full passes
         /// whenever it replans, through pushes, pops, head caps and overrides.
         #[test]
         fn incremental_replan_equals_full_passes(
@@ -709,7 +680,7 @@ mod tests {
                 if p.generation() == generation {
                     continue; // nothing replanned
                 }
-                let got: std::vec::Vec<u32> = p.blocks.iter().map(|b| b.entry.to_bits()).collect();
+                let got: std::vec::Vec<u32> = p.blocks.iter().map(|b| b.entry_sq.to_bits()).collect();
                 let want: std::vec::Vec<u32> = full_passes(&p).iter().map(|e| e.to_bits()).collect();
                 proptest::prop_assert_eq!(got, want);
             }
@@ -740,16 +711,16 @@ mod tests {
             p.push(&line(800 * i, 0, 3000.0)).unwrap();
         }
         // Middle blocks enter at full speed (50 mm/s); the first from rest.
-        assert_eq!(p.blocks.get(0).unwrap().entry, 0.0);
-        assert!((p.blocks.get(5).unwrap().entry - 50.0).abs() < 1e-3);
+        assert_eq!(p.blocks.get(0).unwrap().entry(), 0.0);
+        assert!((p.blocks.get(5).unwrap().entry() - 50.0).abs() < 1e-3);
         // The last block (10 mm) must be able to stop: entry <= sqrt(2 a d) = 100.
         let last = p.blocks.get(9).unwrap();
-        assert!(last.entry <= (2.0 * 500.0 * 10.0f32).sqrt() + 1e-3);
+        assert!(last.entry() <= (2.0 * 500.0 * 10.0f32).sqrt() + 1e-3);
         // Every block can decelerate to its successor's entry.
         for i in 0..9 {
             let (a, b) = (p.blocks.get(i).unwrap(), p.blocks.get(i + 1).unwrap());
-            assert!(b.entry * b.entry <= a.entry * a.entry + 2.0 * a.accel * a.length + 1e-2);
-            assert!(a.entry * a.entry <= b.entry * b.entry + 2.0 * a.accel * a.length + 1e-2);
+            assert!(b.entry() * b.entry() <= a.entry() * a.entry() + 2.0 * a.accel * a.length + 1e-2);
+            assert!(a.entry() * a.entry() <= b.entry() * b.entry() + 2.0 * a.accel * a.length + 1e-2);
         }
     }
 
@@ -760,7 +731,7 @@ mod tests {
         for i in 1..=20 {
             p.push(&line(40 * i, 0, 3000.0)).unwrap();
         }
-        let entries: std::vec::Vec<f32> = (0..20).map(|i| p.blocks.get(i).unwrap().entry).collect();
+        let entries: std::vec::Vec<f32> = (0..20).map(|i| p.blocks.get(i).unwrap().entry()).collect();
         // Symmetric triangle: rises then falls, peak sqrt(a * L) = sqrt(500*10) in the middle.
         assert!(entries[10] > 60.0 || (entries[10] - 50.0).abs() < 1e-3);
         assert!(entries[1] > entries[0] && entries[19] < entries[15]);
@@ -805,7 +776,7 @@ mod tests {
         }
         assert_eq!(p.push(&line(5, 5, 3000.0)), Err(PlanError::Full));
         // Reversals: junction speed is the start speed.
-        assert!(p.blocks.iter().all(|b| (b.entry - 2.0).abs() < 1e-4));
+        assert!(p.blocks.iter().all(|b| (b.entry() - 2.0).abs() < 1e-4));
         assert_eq!(p.exit_speed(), 2.0);
     }
 
