@@ -42,6 +42,11 @@ use inkstep_core::stepper::output::OutputConfig;
 use inkstep_core::stepper::queue::StepCmdQueue;
 use inkstep_core::stepper::MAX_RELOAD;
 
+/// The priority of `usb_lp`, the one task that uses the USB device (RTIC's attribute
+/// takes a literal: keep the two equal). The USB driver's sections mask only the
+/// interrupts at or below it (`board::init`).
+const USB_PRIORITY: u8 = 5;
+
 /// 4-phase outputs (`$200=1`): the motors are released by turning the coils off too.
 static FOUR_PHASE: AtomicBool = AtomicBool::new(false);
 /// The host has the serial port open (CDC's DTR), as the USB task last saw it.
@@ -128,7 +133,7 @@ mod app {
         pipeline_cell: MaybeUninit<Pipeline<BoardSide>> = MaybeUninit::uninit(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let b = board::init(cx.device, cx.local.usb_cells);
+        let b = board::init(cx.device, cx.local.usb_cells, USB_PRIORITY);
         // The 1 ms tick from the core clock.
         let mut syst = cx.core.SYST;
         syst.set_clock_source(SystClkSource::Core);

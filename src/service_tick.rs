@@ -34,8 +34,8 @@ fn into_period() -> u32 {
 }
 
 /// SysTick's period, the tick count and SysTick's counts since that tick's handler
-/// ran, read together. A SysTick whose handler has not run yet (masked, by a
-/// critical section or stm32-usbd's packet copy) is counted: its period began, so
+/// ran, read together. A SysTick whose handler has not run yet (masked by a
+/// critical section) is counted: its period began, so
 /// the counts since the last tick taken run on past it. Read without that, the time
 /// came out a whole period short (`stamp`), or wrapped (`ticks_since_tick`, then
 /// bounded by a stop stamped a period early): a start from rest after a Z pen's

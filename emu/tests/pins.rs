@@ -108,8 +108,8 @@ fn step_pulses_follow_0_2_3_and_4_and_decode_to_the_reported_position() {
                 let us = (w[1].0 - w[0].0) as f64 / T_PER_US as f64;
                 // Never shorter than $0 (what a driver needs). A step interrupt that
                 // restarts the one-pulse timer late stretches the pulse by its lateness:
-                // at most the longest masked section (stm32-usbd's copy of a 64-byte
-                // packet, 49 µs), and only now and then (a USB packet mid-pulse).
+                // at most the longest section that holds it back (under 50 µs), and
+                // only now and then.
                 assert!(
                     us > f64::from(width) - 0.1 && us < f64::from(width) + 50.0,
                     "{case}: PA{a} pulse {us} µs"

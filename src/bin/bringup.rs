@@ -29,6 +29,11 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     inkstep::fault::on_panic(info)
 }
 
+/// The priority of `usb_lp`, the one task that uses the USB device (RTIC's attribute
+/// takes a literal: keep the two equal). The USB driver's sections mask only the
+/// interrupts at or below it (`board::init`).
+const USB_PRIORITY: u8 = 5;
+
 #[rtic::app(device = stm32f1xx_hal::pac, peripherals = true, dispatchers = [USART1, USART2, USART3])]
 mod app {
     use super::board;
@@ -82,7 +87,7 @@ mod app {
         steps: StepCmdQueue = StepCmdQueue::new(),
     ])]
     fn init(cx: init::Context) -> (Shared, Local) {
-        let b = board::init(cx.device, cx.local.usb_cells);
+        let b = board::init(cx.device, cx.local.usb_cells, super::USB_PRIORITY);
         Mono::start(cx.core.SYST, b.sysclk_hz);
         let (steps_tx, steps_rx) = cx.local.steps.split();
         let mut port = b.step_port;

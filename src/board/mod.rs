@@ -109,7 +109,13 @@ pub struct Board {
 ///
 /// `usb` is the 'static home of the USB stack (an RTIC init local); each call needs
 /// its own (init runs once).
-pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
+///
+/// `usb_priority` is the RTIC priority of the one task that uses the USB device and
+/// serial port: stm32-usbd's sections mask only the interrupts at or below it (see
+/// `vendor/stm32-usbd`), so the step timer, the tick and the e-stop above it are never
+/// held back by a packet copy. A priority above every level (`u8::MAX`) keeps the
+/// driver's upstream sections, which mask every interrupt.
+pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells, usb_priority: u8) -> Board {
     align_exception_frames();
     let mut flash = dp.FLASH.constrain();
     let mut rcc = dp.RCC.freeze(
@@ -256,6 +262,12 @@ pub fn init(dp: pac::Peripherals, usb: &'static mut UsbCells) -> Board {
         pin_dp: usb_dp.into_floating_input(&mut gpioa.crh),
     };
     let bus: &'static UsbBusAllocator<UsbBusType> = usb.bus.write(UsbBus::new(usb_periph));
+    // RTIC's hardware value of that priority (a higher priority is a lower value).
+    let bits = pac::NVIC_PRIO_BITS;
+    let level = ((1u8 << bits) - usb_priority.min(1 << bits).max(1)) << (8 - bits);
+    // SAFETY: the caller's task at `usb_priority` is the only user of the bus and its
+    // endpoints after `init` (which runs with interrupts off).
+    unsafe { stm32_usbd::mask::mask_at_or_below(level) };
     let serial = usb.serial.write(UsbSerial::new(bus));
     let usb = usb.dev.write(
         UsbDeviceBuilder::new(bus, UsbVidPid(0x16c0, 0x27dd))

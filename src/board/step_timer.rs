@@ -38,7 +38,8 @@ const CLOCK_SHIFT: u32 = 1;
 const CLOCK_MASK: u32 = (0x1_0000 << CLOCK_SHIFT) - 1;
 /// How far behind its schedule a start may leave the restart after it (`start`): the
 /// restart reads a lateness up to half the clock's round (0.91 ms); a quarter of that
-/// is kept for the restart's own latency (49 µs at most: stm32-usbd's masked copy).
+/// is kept for the restart's own latency (the longest masked section, a defmt log
+/// line, is about 35 µs; the USB driver's packet copies no longer mask it).
 const LATE_REACH: u32 = CLOCK_MASK / 2 - CLOCK_MASK / 8;
 /// How much longer [`StepTimer::restart`] takes from its clock read to the counter's
 /// start than [`StepTimer::start`] does: 4 instructions (9 against 5 in the release
@@ -241,7 +242,8 @@ impl StepTimer {
     /// A time past the schedule by more than half the clock's round (0.9 ms) reads as
     /// one before it: the period runs in full from now, uncounted, so that a step can
     /// never come early. (Only a debugger's halt can hold the interrupt that long: the
-    /// longest masked section is 49 µs, and settings are written to flash at rest.)
+    /// longest masked section is about 35 µs, and settings are written to flash at
+    /// rest.)
     #[inline(never)]
     fn late(&mut self, gone: u32, ticks: u32) {
         let start = if gone > CLOCK_MASK / 2 {
