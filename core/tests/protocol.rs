@@ -568,6 +568,15 @@ fn info_modal_state_offsets_and_startup_lines() {
         ),
         "{out}"
     );
+    // A longer step pulse lowers the cap, and $I says so: 20 us of pulse and 2 of low
+    // time, 45,454 events/s.
+    assert_eq!(send(&mut p, &mut m, "$0=20\n"), "ok\r\n");
+    let out = send(&mut p, &mut m, "$I\n");
+    assert!(
+        out.contains("[MSG:Max step rate 45454/s; ellipses, sines, point-by-point arcs 7000/s]"),
+        "{out}"
+    );
+    assert_eq!(send(&mut p, &mut m, "$0=10\n"), "ok\r\n");
     send(&mut p, &mut m, "G10 L2 P1 X5\n");
     let out = send(&mut p, &mut m, "$#\n");
     assert!(out.starts_with("[G54:5.000,0.000,0.000]\r\n[G55:"), "{out}");

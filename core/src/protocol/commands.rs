@@ -10,7 +10,7 @@ use crate::gcode::ErrorCode;
 use crate::gcode::{startup_line, StartupLine, STARTUP_LINES};
 use crate::machine::{Machine, MotionControl, RunState};
 use crate::settings::Settings;
-use crate::stepper::{MAX_SINGLE_EVENT_RATE, MAX_STEP_RATE};
+use crate::stepper::{event_rate_for_pulse, MAX_SINGLE_EVENT_RATE};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Listing {
@@ -173,18 +173,21 @@ impl Protocol {
                     b":inkstep pen plotter]",
                 ]);
                 let cap = m.capacity();
+                let rate = event_rate_for_pulse(self.machine.settings().step_pulse_us());
                 let mut w = self.w();
                 w.put(b"[OPT:NL,");
                 put_int(&mut w, cap as i32);
                 w.put(b",");
                 put_int(&mut w, RX_BUFFER_SIZE as i32);
-                // The step-event rate the planner caps moves at: a feedback message,
-                // which Grbl 1.1 senders show (or skip) wherever it comes.
-                // Curves whose steps are timed one by one have a cap of their own.
+                // The step-event rate the planner caps moves at with these settings
+                // (`$0` lowers it: every period at least the pulse and the low time):
+                // a feedback message, which Grbl 1.1 senders show (or skip) wherever
+                // it comes. Curves whose steps are timed one by one have a cap of
+                // their own.
                 w.put(b"]\r\n[MSG:Max step rate ");
-                put_int(&mut w, MAX_STEP_RATE as i32);
+                put_int(&mut w, rate as i32);
                 w.put(b"/s; ellipses, sines, point-by-point arcs ");
-                put_int(&mut w, MAX_SINGLE_EVENT_RATE as i32);
+                put_int(&mut w, MAX_SINGLE_EVENT_RATE.min(rate) as i32);
                 w.put(b"/s]\r\n");
                 Ok(())
             }
