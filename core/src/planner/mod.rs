@@ -590,7 +590,11 @@ mod tests {
         for b in p.blocks.iter().rev() {
             let limit = b.max_entry.min(p.max_speed(b));
             let reach = next + 2.0 * p.plan_accel(b) * b.length;
-            next = if limit * limit <= reach { limit * limit } else { reach };
+            next = if limit * limit <= reach {
+                limit * limit
+            } else {
+                reach
+            };
             entries.push(next);
         }
         entries.reverse();
@@ -719,8 +723,12 @@ mod tests {
         // Every block can decelerate to its successor's entry.
         for i in 0..9 {
             let (a, b) = (p.blocks.get(i).unwrap(), p.blocks.get(i + 1).unwrap());
-            assert!(b.entry() * b.entry() <= a.entry() * a.entry() + 2.0 * a.accel * a.length + 1e-2);
-            assert!(a.entry() * a.entry() <= b.entry() * b.entry() + 2.0 * a.accel * a.length + 1e-2);
+            assert!(
+                b.entry() * b.entry() <= a.entry() * a.entry() + 2.0 * a.accel * a.length + 1e-2
+            );
+            assert!(
+                a.entry() * a.entry() <= b.entry() * b.entry() + 2.0 * a.accel * a.length + 1e-2
+            );
         }
     }
 
@@ -731,7 +739,8 @@ mod tests {
         for i in 1..=20 {
             p.push(&line(40 * i, 0, 3000.0)).unwrap();
         }
-        let entries: std::vec::Vec<f32> = (0..20).map(|i| p.blocks.get(i).unwrap().entry()).collect();
+        let entries: std::vec::Vec<f32> =
+            (0..20).map(|i| p.blocks.get(i).unwrap().entry()).collect();
         // Symmetric triangle: rises then falls, peak sqrt(a * L) = sqrt(500*10) in the middle.
         assert!(entries[10] > 60.0 || (entries[10] - 50.0).abs() < 1e-3);
         assert!(entries[1] > entries[0] && entries[19] < entries[15]);
