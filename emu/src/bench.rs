@@ -63,6 +63,21 @@ pub fn task_name(e: usize, tasks: &[(String, String)]) -> String {
     }
 }
 
+/// The exception number of the vector that RTIC task `task` binds in src/main.rs
+/// (16 + its IRQ number; 15 for SysTick), so that a check on a task follows it when it
+/// moves to another vector.
+pub fn task_exception(task: &str) -> Option<usize> {
+    let tasks = rtic_tasks();
+    let (vector, _) = tasks.iter().find(|(_, t)| t == task)?;
+    if vector == "SysTick" {
+        return Some(15);
+    }
+    IRQ_NAMES
+        .iter()
+        .find(|(_, v)| v == vector)
+        .map(|(n, _)| 16 + n)
+}
+
 /// (vector, task) pairs from the product's source.
 pub fn rtic_tasks() -> Vec<(String, String)> {
     let src = std::fs::read_to_string(repo_root().join("src/main.rs")).unwrap_or_default();
@@ -621,4 +636,18 @@ the LCD task is over its CPU budget"
         return Err(format!("{out}\na pulse was added or lost"));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Tasks are found by the vector they bind in src/main.rs, whichever it is.
+    #[test]
+    fn tasks_map_to_their_exception_numbers() {
+        assert_eq!(task_exception("tick"), Some(15));
+        assert_eq!(task_exception("step"), Some(16 + 28));
+        assert_eq!(task_exception("keypad_scan"), Some(16 + 39));
+        assert_eq!(task_exception("no_such_task"), None);
+    }
 }

@@ -20,6 +20,7 @@ mod common;
 
 use common::booted;
 use inkstep_core::stepper::{MAX_SINGLE_EVENT_RATE, MAX_STEP_RATE};
+use inkstep_emu::bench;
 use inkstep_emu::clock::{T_PER_MS, T_PER_S, T_PER_US};
 use inkstep_emu::count_trial::{self, Counted, Course};
 use inkstep_emu::timeline::Timeline;
@@ -256,8 +257,9 @@ fn a_circle_asking_for_more_than_the_cap_runs_at_the_cap_without_gaps() {
 fn assert_single_events_keep_up(name: &str, settings: &[&str], job: &str, end: [i32; 3]) {
     let (train, timeline) = curve_at_the_cap(name, MAX_SINGLE_EVENT_RATE, settings, job, end);
     // The tasks below the preparation kept running: the keypad scan (which feeds the
-    // watchdog, USART3: exception 16 + 39) had the CPU in every 50 ms window.
-    let keypad = timeline.shares(16 + 39);
+    // watchdog) had the CPU in every 50 ms window.
+    let scan = bench::task_exception("keypad_scan").expect("the keypad task's vector");
+    let keypad = timeline.shares(scan);
     assert!(
         keypad.iter().all(|&k| k > 0.0),
         "{name}: the keypad task starved in {} of {} windows",
