@@ -13,7 +13,7 @@
 //! the image, and the LCD's drawing adds its own load. Every trial also reads the
 //! firmware's count of late step armings (see `src/steps.rs`) when the image has one.
 
-use crate::clock::{T_PER_MS, T_PER_S};
+use crate::clock::{T_PER_MS, T_PER_S, T_PER_US};
 use crate::session::Session;
 use inkstep_serial::grbl::{parse_reply, Reply};
 use inkstep_serial::sender::Flow;
@@ -79,6 +79,9 @@ pub struct Counted {
     /// The count the firmware's log gave last (its LCD task logs the total since
     /// power-up when it grows), read 300 ms after the machine came to rest.
     pub logged_late: Option<u32>,
+    /// The shortest interval between two step events of the trial, µs (rising edges:
+    /// along X each is an X step, so no period of the X step pin was shorter).
+    pub shortest_us: f64,
 }
 
 impl Counted {
@@ -162,6 +165,17 @@ const LATE_SYMBOL: &str = "inkstep_late_step_armings";
 /// Boot a board with `elf`, set it up for `course`, wait until 2 s after power-up,
 /// then stream the job and count.
 pub fn run(elf: &Path, course: Course, rate: f64, seconds: f64) -> Result<Counted, String> {
+    run_with(elf, course, rate, seconds, &[])
+}
+
+/// [`run`] with more settings after the trial's own (`$0=20`, ...).
+pub fn run_with(
+    elf: &Path,
+    course: Course,
+    rate: f64,
+    seconds: f64,
+    settings: &[&str],
+) -> Result<Counted, String> {
     let mut s = Session::new(elf, None)?;
     s.boot()?;
     let mut setup = vec!["$100=160", "$101=160", "$110=33751", "$111=33751"];
@@ -169,6 +183,7 @@ pub fn run(elf: &Path, course: Course, rate: f64, seconds: f64) -> Result<Counte
     if course == Course::Diagonal {
         setup.push("$212=0");
     }
+    setup.extend(settings);
     for c in setup {
         let got = s.command(c, T_PER_S)?;
         if got.contains("error") {
@@ -233,6 +248,7 @@ pub fn run(elf: &Path, course: Course, rate: f64, seconds: f64) -> Result<Counte
     let b = &s.m.state().board;
     let steps = &b.steps[first_step..];
     let cruise = cruise_rate(steps.iter().map(|st| st.t).collect());
+    let shortest = steps.windows(2).map(|w| w[1].t - w[0].t).min().unwrap_or(0);
     let to_steps = |mm: f64| (mm * STEPS_PER_MM).round() as i64;
     Ok(Counted {
         course,
@@ -249,6 +265,7 @@ pub fn run(elf: &Path, course: Course, rate: f64, seconds: f64) -> Result<Counte
         reported: reported.map(to_steps),
         late,
         logged_late,
+        shortest_us: shortest as f64 / T_PER_US as f64,
     })
 }
 

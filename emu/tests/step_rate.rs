@@ -19,7 +19,7 @@
 mod common;
 
 use common::booted;
-use inkstep_core::stepper::{MAX_SINGLE_EVENT_RATE, MAX_STEP_RATE};
+use inkstep_core::stepper::{event_rate_for_pulse, MAX_SINGLE_EVENT_RATE, MAX_STEP_RATE};
 use inkstep_emu::bench;
 use inkstep_emu::clock::{T_PER_MS, T_PER_S, T_PER_US};
 use inkstep_emu::count_trial::{self, Counted, Course};
@@ -326,26 +326,30 @@ fn an_off_grid_arc_asking_for_more_than_the_cap_runs_at_the_cap_without_gaps() {
 
 #[test]
 fn long_step_pulses_never_run_into_each_other_on_the_pin() {
-    // $0=20 µs with an axis set for 60,000 steps/s: a 16.7 µs period is shorter than the
-    // pulse, and the pulses ran into one high level on the pin (624 rising edges for
-    // 8,000 steps, while MPos said 10 mm). The planner now keeps every period at least
-    // the pulse and the drivers' low time (2 µs): 22 µs, 45,454 events/s.
-    let train = run(
-        &["$0=20", "$100=800", "$110=4500", "$120=5000"],
-        "G21 G91\nG1 X10 F4500\n",
-    );
-    let shortest = train.t.windows(2).map(|w| w[1] - w[0]).min().unwrap_or(0);
+    // $0=20 µs with a job asking for 60,000 steps/s: a 16.7 µs period is shorter than
+    // the pulse, and the pulses ran into one high level on the pin (624 rising edges
+    // for 8,000 steps, while MPos said 10 mm). The planner now keeps every period at
+    // least the pulse and the drivers' low time (2 µs): 22 µs, 45,454 events/s. A
+    // counting trial: realistic lines streamed with character counting, `?` every
+    // 100 ms, the LCD drawing.
+    let cap = f64::from(event_rate_for_pulse(20));
+    let c = count_trial::run_with(common::elf(), Course::AlongX, 60_000.0, 0.7, &["$0=20"])
+        .expect("trial");
     eprintln!(
-        "$0=20: {} rising edges, shortest period {:.2} us",
-        train.t.len(),
-        shortest as f64 / T_PER_US as f64
+        "$0=20: {}; shortest interval {:.2} us",
+        c.summary(),
+        c.shortest_us
     );
-    assert_eq!(train.t.len(), 8_000, "every step a rising edge");
-    assert_eq!(train.end, [8_000, 0, 0]);
+    assert_every_pulse_counts(&c);
     assert!(
-        shortest as f64 >= 21.9 * T_PER_US as f64,
+        c.shortest_us >= 21.9,
         "a period of {:.2} us under 20 us of pulse and 2 of low time",
-        shortest as f64 / T_PER_US as f64
+        c.shortest_us
+    );
+    assert!(
+        c.cruise >= 0.97 * cap && c.cruise <= 1.01 * cap,
+        "cruise {:.0} events/s at the cap {cap:.0} that $0=20 leaves",
+        c.cruise
     );
 }
 
