@@ -39,12 +39,14 @@ pub fn tail_period(pulse_ticks: u32) -> u32 {
 /// for: every block's speed is capped so that its events come no faster
 /// ([`crate::planner::geometry`]), so a program that asks for more runs slower, and the
 /// step queue never runs dry. Measured on the product image in the emulator under its
-/// pessimistic cycle model (emu/README.md "Cycle model"; emu/tests/step_rate.rs): with
-/// a job streaming over USB, `?` polling and the LCD refreshing, a diagonal traced
-/// point by point (one axis per event, the costlier tracing) asking for more than the
-/// cap runs with a worst interval of 1.26 times its neighbours at 70,000 events/s,
-/// 1.43 at 80,000, 1.46 at 90,000, and leaves a 168 µs gap (the queue ran dry) at
-/// 100,000. The cap keeps 20 % below that first failure.
+/// pessimistic cycle model (emu/README.md "Cycle model"; emu/tests/step_rate.rs,
+/// docs/performance.md): with realistic lines streaming over USB, `?` polling and the
+/// LCD drawing, the counting trials at the cap have no late arming along X or on a
+/// diagonal traced point by point. A build with the cap lifted (and `$0=3`) carried
+/// lines at up to 105,000 events/s with none; what keeps the cap here is `$0`'s
+/// default (10 µs: 83,333 events/s, [`event_rate_for_pulse`]) and programs of short
+/// blocks, whose fixed cost per block the preparation pays: bench/isr-cost's sine.nc
+/// keeps up with 88,000 events/s only with the whole CPU.
 pub const MAX_STEP_RATE: f32 = 80_000.0;
 
 /// The shortest low time a step pin keeps between two pulses, µs: what stepper drivers
