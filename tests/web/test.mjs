@@ -35,6 +35,21 @@ function figure(name, ms, slow) {
   console.log(`fig  ${name}: ${v.length} paints, median ${at(0.5).toFixed(1)} ms, 95th ${at(0.95).toFixed(1)} ms, worst ${v[v.length - 1].toFixed(1)} ms${slow && slow !== "[]" ? ", slow ones (size/grid/job/ink/copy ms) " + slow : ""}`);
 }
 
+// Pixels of the drawing canvas whose red, green and blue lie within [lo, hi]:
+// what the page shows, not the state behind it.
+async function plotPixels(page, lo, hi) {
+  return page.$eval("#plot", (c, lo, hi) => {
+    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      if (d[i] >= lo[0] && d[i] <= hi[0] && d[i + 1] >= lo[1] && d[i + 1] <= hi[1] && d[i + 2] >= lo[2] && d[i + 2] <= hi[2]) n++;
+    }
+    return n;
+  }, lo, hi);
+}
+const PLANNED = [[200, 200, 200], [200, 200, 200]]; // the job's pen-down moves, #c8c8c8
+const INK = [[10, 45, 120], [40, 80, 160]]; // the pen's drawn path, #143c8c
+
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
 async function waitFor(page, fn, arg, what, timeout = 30000) {
@@ -170,12 +185,7 @@ try {
   const svgLoaded = await waitFor(page, () => window.inkstep.job && window.inkstep.job.name === "label.svg" && window.inkstep.job.complete && !window.inkstep.loading, null, "svg loaded");
   const left = await page.evaluate(() => window.inkstep.job.left_out.map((o) => o.kind + ": " + o.name));
   const logged = await page.$eval("#log", (e) => e.textContent.includes('not drawn (text): label "Left out"'));
-  const orange = await page.$eval("#plot", (c) => {
-    const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
-    let n = 0;
-    for (let i = 0; i < d.length; i += 4) if (d[i] > 220 && d[i + 1] > 110 && d[i + 1] < 190 && d[i + 2] < 90) n++;
-    return n;
-  });
+  const orange = await plotPixels(page, [221, 111, 0], [255, 189, 89]);
   check("an SVG's text is named as left out and shown in orange",
     svgLoaded && left.length === 1 && left[0] === 'text: label "Left out"' && logged && orange > 50,
     `${JSON.stringify(left)}, logged ${logged}, ${orange} orange pixels`);
@@ -270,6 +280,10 @@ try {
   // The job's layer is laid out once, a slice a frame; repaints after that only
   // copy it (a jog moves the pen's mark, not the view).
   const laidOut = await waitFor(page, () => window.inkstep.planDrawn === window.inkstep.job.preview.moves, null, "big.nc laid out", 60000);
+  await sleep(100);
+  const bigShown = await plotPixels(page, ...PLANNED);
+  const heapMB = (await page.metrics()).JSHeapUsedSize / 1e6;
+  check("the 10 MB job is shown", laidOut && bigShown > 20000, `${bigShown} pixels of its pen-down moves on the page; the page's JS heap ${heapMB.toFixed(0)} MB`);
   await page.evaluate(() => { window.inkstep.paints = []; window.inkstep.slow = []; });
   await page.evaluate(() => command("$J=G91 G21 X5 F600"));
   await sleep(1500);
@@ -374,10 +388,13 @@ try {
   await phone.click("#run");
   await waitFor(phone, () => window.inkstep.status.state === "Run", null, "phone: running");
   await phone.evaluate(() => { window.inkstep.paints = []; window.inkstep.slow = []; });
+  const ink0 = await plotPixels(phone, ...INK);
   await waitFor(phone, () => window.inkstep.status.state === "Run" && window.inkstep.status.job && window.inkstep.status.job.done > 0.4, null, "phone: drawing");
   if (shots) await phone.screenshot({ path: path.join(shots, "web-view-phone.png") });
+  const ink1 = await plotPixels(phone, ...INK);
   const paints = await phone.evaluate(() => window.inkstep.paints.slice(-200));
-  check("phone: the page repaints while drawing", paints.length > 5, `${paints.length} paints`);
+  check("phone: the drawing grows on the page while the pen moves", paints.length > 5 && ink1 > ink0 + 100,
+    `${paints.length} paints; ink pixels ${ink0} -> ${ink1}`);
   figure("phone: repaint while drawing (goal: under 16 ms)", paints, await phone.evaluate(() => JSON.stringify(window.inkstep.slow || [])));
   await waitFor(phone, () => window.inkstep.done && window.inkstep.status.state === "Idle", null, "phone: text done", 60000);
   await phone.close();

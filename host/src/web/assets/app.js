@@ -26,8 +26,8 @@ let nextId = 1;
 // A piece of the job's preview, binary: the job's generation (u32), then rows of
 // five f32 (x0, y0, x1, y1, drawn), little-endian (the page's own byte order on
 // every browser that runs it). The pieces are kept as they come, typed arrays:
-// a 10 MB job is half a million moves, and as many small arrays would give the
-// garbage collector pauses of a hundred ms and more on a busy phone.
+// a 10 MB job is half a million moves, 10 MB of f32 this way, where as many small
+// arrays would be that many objects for the garbage collector to mark.
 function previewRows(buf) {
   const gen = new DataView(buf).getUint32(0, true);
   if (!S.job || gen !== S.job.gen) return;
