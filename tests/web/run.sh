@@ -33,7 +33,13 @@ if [ $# -eq 0 ]; then set -- "$BIN/inkstep-sim" serve; fi
 dir=$(mktemp -d)
 pids=()
 cleanup() {
+  local rc=$?
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; wait "$p" 2>/dev/null || true; done
+  # A failed run shows what the machine and the web server logged (the only trace
+  # of a race between them once the directory is gone).
+  if [ "$rc" != 0 ]; then
+    for f in machine serve; do echo "--- $f.log (last 60 lines)"; tail -n 60 "$dir/$f.log" 2>/dev/null || true; done
+  fi
   rm -rf "$dir"
 }
 trap cleanup EXIT
